@@ -1,0 +1,315 @@
+"""The batched engine: MuJoCo multibody plus six drive chains per run, stepped in lockstep.
+
+Runs of one batch share a trajectory; each has its own MuJoCo model copy (payload, TCP)
+and data, its own parameter row (:mod:`ur5fault.run_arrays`) and its own random stream
+(seeded by the run's ``seed`` only, so a faulty run and its healthy twin with the same
+seed see the same sensor noise).  Per physics step the drive chain is one set of numpy
+expressions over ``(n_runs, 6)`` arrays; only ``mj_step`` is called per run.
+
+Step order (semi-implicit Euler for the whole chain):
+
+1. at servo instants: sample the sensors (noise, sample-and-hold, quantisation) and run
+   position -> speed -> current loops; the inverter limits and holds the voltage;
+2. winding currents (exact R-L decay);
+3. gear torque, eq. (1), from rotor and link states; friction, eq. (2);
+4. rotor speed and angle; link torque ``T = T_id - T_f`` into ``qfrc_applied``; ``mj_step``;
+5. analog sensor filters; logging.
+"""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+import enum
+from collections.abc import Callable, Sequence
+from pathlib import Path
+
+import mujoco
+import numpy as np
+from numpy.typing import NDArray
+
+from .axes import N_JOINTS
+from .drive import controller as ctl
+from .drive import friction as fr
+from .drive import gearbox, motor, power, sensors
+from .effects import EffectSpec
+from .errors import ParameterError
+from .params import RobotParams, load_params
+from .result import SimResult
+from .run_arrays import RunArrays, build_run_arrays
+from .trajectory import Trajectory
+
+DEFAULT_MODEL_PATH = Path(__file__).resolve().parents[1] / "models" / "ur5.xml"
+
+#: Tracking error that trips a protective stop [rad] (assumption: UR stops on large
+#: position deviation; 0.1 rad is far above any healthy or modelled-fault value).
+PROTECTIVE_STOP_RAD = 0.1
+NOISE_CHUNK_SAMPLES = 2000
+
+
+class Status(str, enum.Enum):
+    """Outcome of a run."""
+
+    OK = "ok"
+    DIVERGED = "diverged"
+    PROTECTIVE_STOP = "protective_stop"
+
+
+@dataclasses.dataclass(frozen=True)
+class RunSpec:
+    """One run of a batch: identifier, noise seed and the effects it carries."""
+
+    run_id: str
+    seed: int = 0
+    effects: tuple[EffectSpec, ...] = ()
+
+
+class Simulator:
+    """Loads the MJCF once; :meth:`run` simulates batches of runs on a trajectory.
+
+    Args:
+        params: robot and drive parameters (default: ``data/ur5_drive.yaml``).
+        model_path: MJCF file (default: ``models/ur5.xml``).
+    """
+
+    def __init__(self, params: RobotParams | None = None, model_path: str | Path | None = None) -> None:
+        self.params = params if params is not None else load_params()
+        self.model_path = Path(model_path) if model_path is not None else DEFAULT_MODEL_PATH
+        self.model = mujoco.MjModel.from_xml_path(str(self.model_path))
+        self.model.opt.timestep = self.params.physics_dt_s
+        m = self.model
+        self._tcp_site = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SITE, "tcp")
+        self._payload_body = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "payload")
+        self._m_diag = np.asarray(m.M_rowadr) + np.asarray(m.M_rownnz) - 1
+        p = self.params
+        self.gains = ctl.design_gains(
+            p.controller,
+            p.motor.inductance_H,
+            p.motor.resistance_ohm,
+            p.motor.rotor_inertia_kgm2,
+            p.motor.torque_constant_Nm_per_A,
+            p.gear.ratio,
+        )
+
+    # ------------------------------------------------------------------ model copies
+    def _run_model(self, a: RunArrays, row: int) -> mujoco.MjModel:
+        m = copy.deepcopy(self.model)
+        tcp = np.asarray(self.params.tcp_offset_m)
+        m.site_pos[self._tcp_site] = tcp
+        m.body_pos[self._payload_body] = tcp
+        m.body_ipos[self._payload_body] = a.payload_com_m[row]
+        return m
+
+    def _set_payload(self, m: mujoco.MjModel, mass_kg: float) -> None:
+        """Attach (``mass_kg > 0``) or release the payload: a 6 cm cube of that mass."""
+        m.body_mass[self._payload_body] = mass_kg
+        m.body_inertia[self._payload_body] = mass_kg * (0.06**2) / 6.0
+
+    # ------------------------------------------------------------------ public API
+    def run(
+        self,
+        trajectory: Trajectory,
+        runs: Sequence[RunSpec],
+        *,
+        log_period_s: float = 1e-3,
+        duration_s: float | None = None,
+        progress: Callable[[float], None] | None = None,
+    ) -> SimResult:
+        """Simulate ``runs`` in lockstep on ``trajectory``.
+
+        Args:
+            trajectory: setpoints and payload events shared by the batch.
+            runs: the runs; one run is a batch of one.
+            log_period_s: spacing of logged samples [s]; a multiple of the physics step.
+            duration_s: simulated time [s] (default: the trajectory's duration).
+            progress: called with the finished fraction (0..1) about every 2 % of the run.
+
+        Returns:
+            A :class:`SimResult` with signals shaped ``(n_runs, n_log, 6)``.
+        """
+        if not runs:
+            raise ParameterError("run() needs at least one RunSpec")
+        p = self.params
+        dt = p.physics_dt_s
+        log_every = round(log_period_s / dt)
+        if log_every < 1 or abs(log_every * dt - log_period_s) > 1e-12:
+            raise ParameterError(f"log_period_s = {log_period_s:g} must be a whole multiple of physics_dt_s = {dt:g}")
+        duration = trajectory.duration_s if duration_s is None else float(duration_s)
+        n_steps = int(round(duration / dt))
+        if n_steps < 1:
+            raise ParameterError(f"duration_s = {duration} s is shorter than one physics step")
+        a = build_run_arrays(p, [r.effects for r in runs], trajectory.default_payload_kg)
+        return _integrate(self, trajectory, list(runs), a, n_steps, log_every, progress)
+
+
+def _integrate(sim: Simulator, traj: Trajectory, runs: list[RunSpec], a: RunArrays, n_steps: int,
+               log_every: int, progress) -> SimResult:
+    p = sim.params
+    dt = p.physics_dt_s
+    sps = p.steps_per_servo
+    ts = p.controller.servo_period_s
+    n = len(runs)
+    g = sim.gains
+
+    # -------------------------------------------------------------- setpoints and events
+    n_servo = n_steps // sps + 1
+    q_set_s, qd_set_s = traj.interpolate(np.arange(n_servo) * ts)
+    gripped_step = traj.gripped(np.arange(n_steps + 1) * dt)
+    change_steps = set((np.flatnonzero(np.diff(gripped_step.astype(int))) + 1).tolist())
+
+    # -------------------------------------------------------------- models and data
+    models = [sim._run_model(a, r) for r in range(n)]
+    datas = [mujoco.MjData(m) for m in models]
+    q = np.tile(q_set_s[0], (n, 1))
+    qd = np.zeros((n, N_JOINTS))
+    bias = np.empty((n, N_JOINTS))
+    for r, (m, d) in enumerate(zip(models, datas)):
+        sim._set_payload(m, a.payload_kg[r] if gripped_step[0] else 0.0)
+        d.qpos[:] = q[r]
+        mujoco.mj_forward(m, d)
+        bias[r] = d.qfrc_bias
+    qpos = [d.qpos for d in datas]
+    qvel = [d.qvel for d in datas]
+    qfrc = [d.qfrc_applied for d in datas]
+    m_diag = sim._m_diag
+
+    # -------------------------------------------------------------- constant coefficients
+    N = a.gear_ratio
+    k, c, alpha = a.gear_stiffness_Nm_per_rad, a.gear_damping_Nms_per_rad, a.backlash_rad
+    fv = fr.viscous_coefficient(a.friction_viscous_Nms_per_rad, a.friction_temp_coeff_per_K, a.temperature_C,
+                                p.friction.reference_temp_C)
+    tc, tsf, eps = a.friction_coulomb_Nm, a.friction_static_Nm, a.friction_sign_smoothing_rad_s
+    stribeck = p.friction.stribeck_rate_s_per_rad
+    R, L = a.motor_resistance_ohm, a.motor_inductance_H
+    decay = np.exp(-R * dt / L)
+    gain_iv = (1.0 - decay) / R
+    cross = np.where(a.motor_is_pmsm, a.motor_pole_pairs * L, 0.0)
+    kt, ke, jr = a.motor_kt_Nm_per_A, a.motor_ke_V_s_per_rad, a.motor_rotor_inertia_kgm2
+    cog_amp, cog_per = a.cogging_Nm, a.cogging_periods_per_rev
+    has_cogging = bool(np.any(cog_amp != 0.0))
+    # the controller uses nominal motor constants (it is not retuned for a fault)
+    ke_nom = np.where(a.motor_is_pmsm[0], np.asarray(p.motor.torque_constant_Nm_per_A) / 1.5,
+                      np.asarray(p.motor.torque_constant_Nm_per_A))
+    cross_nom = np.where(a.motor_is_pmsm[0], np.asarray(p.motor.pole_pairs) * np.asarray(p.motor.inductance_H), 0.0)
+    ratio_nom = np.asarray(p.gear.ratio)
+    v_lim = power.voltage_limit(p.power.bus_voltage_V, a.motor_is_pmsm)
+    i_max = a.current_limit_A
+    s = p.sensors
+    c_res = sensors.second_order_coefficients(s.resolver_bw_Hz, s.resolver_damping, dt).T.copy()
+    c_enc = sensors.second_order_coefficients(s.encoder_bw_Hz, s.encoder_damping, dt).T.copy()
+    a_cur = sensors.first_order_coefficient(s.current_bw_Hz, dt)
+    ff = p.controller.velocity_feedforward
+
+    # -------------------------------------------------------------- consistent initial state
+    # gear deflected to carry the static gravity load (contact on the flank the load pushes)
+    th_rel = np.where(bias >= 0.0, alpha + bias / k, bias / k)
+    th_m = N * (q + th_rel)
+    w_m = np.zeros((n, N_JOINTS))
+    i_q = bias / (N * kt)
+    i_d = np.zeros((n, N_JOINTS))
+    integ_v = a.current_gain * i_q + a.current_offset_A  # the current the controller sees and holds
+    integ_q = R * i_q
+    integ_d = np.zeros((n, N_JOINTS))
+    v_d, v_q = np.zeros((n, N_JOINTS)), R * i_q
+    y_res, dy_res = q.copy(), np.zeros((n, N_JOINTS))
+    y_enc, dy_enc = th_m.copy(), np.zeros((n, N_JOINTS))
+    y_iq, y_id = i_q.copy(), np.zeros((n, N_JOINTS))
+    m_ii = np.stack([d.M[m_diag] for d in datas])
+    q_fb = th_fb = w_fb = iq_fb = id_fb = i_ref = None
+
+    rngs = [np.random.default_rng(r.seed) for r in runs]
+    noise = np.empty((n, NOISE_CHUNK_SAMPLES, 5, N_JOINTS))
+
+    # -------------------------------------------------------------- logs
+    n_log = n_steps // log_every
+    log = {name: np.full((n, n_log, N_JOINTS), np.nan) for name in SimResult.JOINT_SIGNALS}
+    active = np.ones(n, dtype=bool)
+    status = [Status.OK] * n
+    reason = [""] * n
+    next_progress = 0.0
+
+    for step in range(n_steps):
+        if step % sps == 0:
+            si = step // sps
+            ci = si % NOISE_CHUNK_SAMPLES
+            if ci == 0:
+                for r in range(n):
+                    noise[r] = rngs[r].standard_normal((NOISE_CHUNK_SAMPLES, 5, N_JOINTS))
+            nz = noise[:, ci]
+            # sensors: noise, sample-and-hold, quantisation
+            q_fb = sensors.read(y_res, a.resolver_noise_rad, nz[:, 0], a.resolver_lsb_rad) + a.resolver_offset_rad
+            th_fb = sensors.read(y_enc, a.encoder_noise_rad, nz[:, 1], a.encoder_lsb_rad)
+            w_fb = sensors.read(dy_enc, a.encoder_speed_noise_rad_s, nz[:, 2], a.encoder_speed_lsb_rad_s)
+            iq_fb = a.current_gain * sensors.read(y_iq, a.current_noise_A, nz[:, 3], a.current_lsb_A) + a.current_offset_A
+            id_fb = a.current_gain * sensors.read(y_id, a.current_noise_A, nz[:, 4], a.current_lsb_A)
+            # cascade
+            w_ref = ctl.position_loop(q_set_s[si], qd_set_s[si], q_fb, g.pos_kp_per_s, ff, ratio_nom)
+            i_ref, integ_v = ctl.speed_loop(w_ref, w_fb, integ_v, g.speed_kp_A_s_per_rad, g.speed_ki_A_per_rad,
+                                            ts, i_max)
+            vd_ref, vq_ref, integ_d, integ_q = ctl.current_loop(i_ref, id_fb, iq_fb, w_fb, integ_d, integ_q,
+                                                                g.cur_kp_V_per_A, g.cur_ki_V_per_A_s, ts,
+                                                                ke_nom, cross_nom, v_lim)
+            v_d, v_q = power.limit_voltage(vd_ref, vq_ref, v_lim)
+            # run health: a diverged or tripped run is frozen and its remaining log left NaN
+            bad = ~np.all(np.isfinite(q), axis=1) | np.any(np.abs(q) > 50.0, axis=1)
+            trip = np.any(np.abs(q_set_s[si] - q_fb) > PROTECTIVE_STOP_RAD, axis=1)
+            for r in np.flatnonzero(active & (bad | trip)):
+                active[r] = False
+                if bad[r]:
+                    status[r], reason[r] = Status.DIVERGED, f"non-finite or runaway joint state at t={step * dt:.4f} s"
+                else:
+                    j = int(np.argmax(np.abs(q_set_s[si] - q_fb[r])))
+                    status[r], reason[r] = Status.PROTECTIVE_STOP, (
+                        f"tracking error of joint {j + 1} above {PROTECTIVE_STOP_RAD} rad at t={step * dt:.4f} s")
+            m_ii = np.stack([d.M[m_diag] for d in datas])
+            if progress is not None and step >= next_progress * n_steps:
+                progress(step / n_steps)
+                next_progress += 0.02
+
+        # motor windings
+        i_d, i_q = motor.electrical_step(i_d, i_q, v_d, v_q, w_m, decay, gain_iv, cross, ke)
+        # gear, eq. (1), and friction, eq. (2)
+        t_id = gearbox.gear_torque(th_m / N - q, w_m / N - qd, k, c, alpha)
+        t_f, slope = fr.friction_torque(qd, tc, tsf, fv, stribeck, eps)
+        t_f = fr.implicit_friction(t_f, slope, m_ii, dt)
+        # rotor
+        t_m = kt * i_q
+        if has_cogging:
+            t_m = t_m + cog_amp * np.sin(cog_per * th_m)
+        w_m = w_m + dt * (t_m - t_id / N) / jr
+        th_m = th_m + dt * w_m
+        # multibody
+        tau = t_id - t_f
+        if step in change_steps:
+            for r in range(n):
+                sim._set_payload(models[r], a.payload_kg[r] if gripped_step[step] else 0.0)
+        for r in range(n):
+            if active[r]:
+                qfrc[r][:] = tau[r]
+                mujoco.mj_step(models[r], datas[r])
+                q[r] = qpos[r]
+                qd[r] = qvel[r]
+        # analog sensor filters
+        y_res, dy_res = sensors.second_order_step(y_res, dy_res, q, c_res)
+        y_enc, dy_enc = sensors.second_order_step(y_enc, dy_enc, th_m, c_enc)
+        y_iq = a_cur * y_iq + (1.0 - a_cur) * i_q
+        y_id = a_cur * y_id + (1.0 - a_cur) * i_d
+
+        if (step + 1) % log_every == 0:
+            li = (step + 1) // log_every - 1
+            live = active[:, None]
+            for name, val in (
+                ("q_rad", q), ("q_FB_rad", q_fb), ("q_M_rad", th_m), ("q_M_FB_rad", th_fb),
+                ("w_M_FB_rad_s", w_fb), ("i_ref_A", i_ref), ("i_FB_A", iq_fb), ("i_q_A", i_q), ("i_d_A", i_d),
+                ("v_q_V", v_q), ("v_d_V", v_d), ("T_gear_Nm", t_id), ("T_f_Nm", t_f),
+            ):
+                log[name][:, li] = np.where(live, val, np.nan)
+
+    if progress is not None:
+        progress(1.0)
+    for r, d in enumerate(datas):
+        if status[r] is Status.OK and any(w.number > 0 for w in d.warning):
+            status[r], reason[r] = Status.DIVERGED, "MuJoCo reported a simulation warning (instability)"
+    t_log = (np.arange(n_log) + 1) * log_every * dt
+    q_set_log, _ = traj.interpolate(t_log)
+    return SimResult.build(sim, traj, runs, a, t_log, q_set_log, log, [s.value for s in status], reason, models)

@@ -1,0 +1,39 @@
+"""Exception family of ur5fault.
+
+Every error a user can cause (bad YAML, unknown joint, value out of range) is a
+:class:`Ur5FaultError`; the subclasses also derive from the matching built-in
+(:class:`ValueError`, :class:`KeyError`) so callers can catch either.  Messages
+name the offending field, its value and the valid choices or range, in one line.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+
+
+class Ur5FaultError(Exception):
+    """Base class of every error ur5fault raises on bad input."""
+
+    def __str__(self) -> str:  # KeyError would otherwise quote the message
+        return str(self.args[0]) if self.args else ""
+
+
+class ParameterError(Ur5FaultError, ValueError):
+    """A parameter has a wrong type or a value outside its valid range."""
+
+
+class UnknownNameError(Ur5FaultError, KeyError):
+    """A name (joint, effect, YAML key, trajectory) does not exist."""
+
+    def __init__(self, kind: str, name: object, choices: Iterable[str], where: str = "") -> None:
+        self.kind, self.name, self.choices = kind, name, sorted(choices)
+        loc = f"{where}: " if where else ""
+        super().__init__(f"{loc}unknown {kind} {name!r}; valid: {', '.join(self.choices)}")
+
+
+class ConfigFileError(Ur5FaultError, ValueError):
+    """A configuration file cannot be read or parsed."""
+
+
+class LogFormatError(Ur5FaultError, ValueError):
+    """A measured log lacks a column, has NaN or non-monotonic time, or is not a UR5."""

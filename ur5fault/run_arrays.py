@@ -1,0 +1,119 @@
+"""Per-run parameter arrays: the robot's parameters broadcast over the batch, with each
+run's effects applied to its row.
+
+Shapes: ``(n_runs, 6)`` per joint, ``(n_runs,)`` or ``(n_runs, 3)`` per run.  The engine
+reads only these arrays, so an effect never needs code in the engine.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Sequence
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .axes import N_JOINTS
+from .effects import REGISTRY, EffectSpec
+from .params import RobotParams
+
+
+@dataclasses.dataclass
+class RunArrays:
+    """Actual (possibly faulty) parameters of every run in a batch."""
+
+    gear_ratio: NDArray
+    gear_stiffness_Nm_per_rad: NDArray
+    gear_damping_Nms_per_rad: NDArray
+    backlash_rad: NDArray
+    friction_coulomb_Nm: NDArray
+    friction_static_Nm: NDArray
+    friction_viscous_Nms_per_rad: NDArray
+    friction_temp_coeff_per_K: NDArray
+    friction_sign_smoothing_rad_s: NDArray
+    temperature_C: NDArray
+    motor_is_pmsm: NDArray
+    motor_kt_Nm_per_A: NDArray
+    motor_ke_V_s_per_rad: NDArray
+    motor_resistance_ohm: NDArray
+    motor_inductance_H: NDArray
+    motor_rotor_inertia_kgm2: NDArray
+    motor_pole_pairs: NDArray
+    cogging_Nm: NDArray
+    cogging_periods_per_rev: NDArray
+    current_limit_A: NDArray
+    resolver_noise_rad: NDArray
+    resolver_lsb_rad: NDArray
+    resolver_offset_rad: NDArray
+    encoder_noise_rad: NDArray
+    encoder_lsb_rad: NDArray
+    encoder_speed_noise_rad_s: NDArray
+    encoder_speed_lsb_rad_s: NDArray
+    current_noise_A: NDArray
+    current_lsb_A: NDArray
+    current_gain: NDArray
+    current_offset_A: NDArray
+    payload_kg: NDArray
+    payload_com_m: NDArray
+
+    @property
+    def n_runs(self) -> int:
+        return self.gear_ratio.shape[0]
+
+
+def build_run_arrays(params: RobotParams, effects: Sequence[Sequence[EffectSpec]], payload_kg: float) -> RunArrays:
+    """Broadcast ``params`` over ``len(effects)`` runs and apply each run's effects.
+
+    Args:
+        params: the nominal robot.
+        effects: per run, the effects it carries (applied in order).
+        payload_kg: payload mass of the trajectory, before any payload effect [kg].
+    """
+    n = len(effects)
+
+    def joint(values) -> NDArray:
+        return np.tile(np.asarray(values, dtype=float), (n, 1))
+
+    two_pi = 2.0 * np.pi
+    g, f, m, s = params.gear, params.friction, params.motor, params.sensors
+    is_pmsm = np.array([k == "pmsm" for k in m.kind])
+    kt = np.asarray(m.torque_constant_Nm_per_A)
+    arrays = RunArrays(
+        gear_ratio=joint(g.ratio),
+        gear_stiffness_Nm_per_rad=joint(g.stiffness_Nm_per_rad),
+        gear_damping_Nms_per_rad=joint(g.damping_Nms_per_rad),
+        backlash_rad=joint(g.backlash_rad),
+        friction_coulomb_Nm=joint(f.coulomb_Nm),
+        friction_static_Nm=joint(f.static_Nm),
+        friction_viscous_Nms_per_rad=joint(f.viscous_Nms_per_rad),
+        friction_temp_coeff_per_K=joint(f.viscous_temp_coeff_per_K),
+        friction_sign_smoothing_rad_s=joint(f.sign_smoothing_rad_s),
+        temperature_C=joint(params.joint_temperature_C),
+        motor_is_pmsm=np.tile(is_pmsm, (n, 1)),
+        motor_kt_Nm_per_A=joint(kt),
+        motor_ke_V_s_per_rad=joint(np.where(is_pmsm, kt / 1.5, kt)),
+        motor_resistance_ohm=joint(m.resistance_ohm),
+        motor_inductance_H=joint(m.inductance_H),
+        motor_rotor_inertia_kgm2=joint(m.rotor_inertia_kgm2),
+        motor_pole_pairs=joint(m.pole_pairs),
+        cogging_Nm=np.zeros((n, N_JOINTS)),
+        cogging_periods_per_rev=np.ones((n, N_JOINTS)),
+        current_limit_A=joint(params.power.current_limit_A),
+        resolver_noise_rad=joint(s.resolver_noise_rad),
+        resolver_lsb_rad=joint(two_pi / np.asarray(s.resolver_counts_per_rev)),
+        resolver_offset_rad=np.zeros((n, N_JOINTS)),
+        encoder_noise_rad=joint(s.encoder_noise_rad),
+        encoder_lsb_rad=joint(two_pi / np.asarray(s.encoder_counts_per_rev)),
+        encoder_speed_noise_rad_s=joint(s.encoder_speed_noise_rad_s),
+        encoder_speed_lsb_rad_s=joint(s.encoder_speed_lsb_rad_s),
+        current_noise_A=joint(s.current_noise_A),
+        current_lsb_A=joint(s.current_lsb_A),
+        current_gain=np.ones((n, N_JOINTS)),
+        current_offset_A=np.zeros((n, N_JOINTS)),
+        payload_kg=np.full(n, float(payload_kg)),
+        payload_com_m=np.zeros((n, 3)),
+    )
+    for row, run_effects in enumerate(effects):
+        for spec in run_effects:
+            REGISTRY[spec.name].apply(arrays, row, spec.joint, dict(spec.values))
+    return arrays
