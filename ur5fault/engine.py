@@ -195,8 +195,8 @@ def _integrate(sim: Simulator, traj: Trajectory, runs: list[RunSpec], a: RunArra
     v_lim = power.voltage_limit(p.power.bus_voltage_V, a.motor_is_pmsm)
     i_max = a.current_limit_A
     s = p.sensors
-    c_res = sensors.second_order_coefficients(s.resolver_bw_Hz, s.resolver_damping, dt).T.copy()
-    c_enc = sensors.second_order_coefficients(s.encoder_bw_Hz, s.encoder_damping, dt).T.copy()
+    c_res = sensors.second_order_coefficients(s.resolver_bw_Hz, s.resolver_damping, dt)
+    c_enc = sensors.second_order_coefficients(s.encoder_bw_Hz, s.encoder_damping, dt)
     a_cur = sensors.first_order_coefficient(s.current_bw_Hz, dt)
     ff = p.controller.velocity_feedforward
 
@@ -273,6 +273,7 @@ def _integrate(sim: Simulator, traj: Trajectory, runs: list[RunSpec], a: RunArra
         t_f, slope = fr.friction_torque(qd, tc, tsf, fv, stribeck, eps)
         t_f = fr.implicit_friction(t_f, slope, m_ii, dt)
         # rotor
+        q_prev, th_prev = q.copy(), th_m
         t_m = kt * i_q
         if has_cogging:
             t_m = t_m + cog_amp * np.sin(cog_per * th_m)
@@ -290,8 +291,8 @@ def _integrate(sim: Simulator, traj: Trajectory, runs: list[RunSpec], a: RunArra
                 q[r] = qpos[r]
                 qd[r] = qvel[r]
         # analog sensor filters
-        y_res, dy_res = sensors.second_order_step(y_res, dy_res, q, c_res)
-        y_enc, dy_enc = sensors.second_order_step(y_enc, dy_enc, th_m, c_enc)
+        y_res, dy_res = sensors.second_order_step(y_res, dy_res, q_prev, q, c_res)
+        y_enc, dy_enc = sensors.second_order_step(y_enc, dy_enc, th_prev, th_m, c_enc)
         y_iq = a_cur * y_iq + (1.0 - a_cur) * i_q
         y_id = a_cur * y_id + (1.0 - a_cur) * i_d
 

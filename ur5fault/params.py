@@ -79,7 +79,7 @@ class ControllerParams(Validated):
     design_link_inertia_kgm2: tuple[float, ...] = param(
         0, 100, unit="kg*m^2", doc="nominal link inertia seen by the joint, used to set the speed-loop gain"
     )
-    velocity_feedforward: float = param(0, 1, per_joint=False, unit="-", doc="share of setpoint velocity fed forward")
+    velocity_feedforward: tuple[float, ...] = param(0, 1.2, unit="-", doc="share of setpoint velocity fed forward")
 
 
 @dataclasses.dataclass(frozen=True)

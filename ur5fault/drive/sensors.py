@@ -28,27 +28,36 @@ def _expm(a: NDArray[np.float64]) -> NDArray[np.float64]:
 
 
 def second_order_coefficients(bandwidth_Hz: ArrayLike, damping: ArrayLike, dt_s: float) -> NDArray[np.float64]:
-    """Exact ZOH discretisation of ``y'' = wn^2 (u - y) - 2 zeta wn y'`` per joint.
+    """Exact first-order-hold (ramp-invariant) discretisation of
+    ``y'' = wn^2 (u - y) - 2 zeta wn y'`` per joint.
 
-    Returns an array ``(6, 6)`` of coefficients ``(p00, p01, g0, p10, p11, g1)`` per joint, so
-    that ``y+ = p00 y + p01 y' + g0 u`` and ``y'+ = p10 y + p11 y' + g1 u``.
+    The input is taken as piecewise linear between steps (exact for a ramp, so the filter's
+    derivative state is an unbiased speed estimate; a zero-order hold reads a ramp's slope
+    about 20 % low at a 5 kHz filter and 20 kHz step).
+
+    Returns ``(8, n_joints)`` coefficients ``(p00, p01, a0, b0, p10, p11, a1, b1)`` so that
+    ``y+ = p00 y + p01 y' + a0 u + b0 u+`` and ``y'+ = p10 y + p11 y' + a1 u + b1 u+``,
+    with ``u`` the input at the start of the step and ``u+`` at its end.
     """
     wn = 2.0 * np.pi * np.asarray(bandwidth_Hz, dtype=float)
     z = np.asarray(damping, dtype=float) * np.ones_like(wn)
-    out = np.empty((wn.size, 6))
+    out = np.empty((8, wn.size))
     for j, (w, zj) in enumerate(zip(wn, z)):
-        m = np.zeros((3, 3))
+        m = np.zeros((4, 4))
         m[0, 1] = 1.0
         m[1, 0], m[1, 1], m[1, 2] = -w * w, -2.0 * zj * w, w * w
+        m[2, 3] = 1.0  # u' = constant slope over the step
         e = _expm(m * dt_s)
-        out[j] = e[0, 0], e[0, 1], e[0, 2], e[1, 0], e[1, 1], e[1, 2]
+        for row in (0, 1):
+            out[4 * row : 4 * row + 4, j] = e[row, 0], e[row, 1], e[row, 2] - e[row, 3] / dt_s, e[row, 3] / dt_s
     return out
 
 
-def second_order_step(y: NDArray, dy: NDArray, u: NDArray, c: NDArray) -> tuple[NDArray, NDArray]:
+def second_order_step(y: NDArray, dy: NDArray, u: NDArray, u_new: NDArray, c: NDArray) -> tuple[NDArray, NDArray]:
     """Advance a second-order sensor filter one physics step (``c`` from
-    :func:`second_order_coefficients`, transposed to ``(6 coefficients, 6 joints)``)."""
-    return c[0] * y + c[1] * dy + c[2] * u, c[3] * y + c[4] * dy + c[5] * u
+    :func:`second_order_coefficients`; ``u``, ``u_new`` the input at the step's start and end)."""
+    return (c[0] * y + c[1] * dy + c[2] * u + c[3] * u_new,
+            c[4] * y + c[5] * dy + c[6] * u + c[7] * u_new)
 
 
 def first_order_coefficient(bandwidth_Hz: ArrayLike, dt_s: float) -> NDArray[np.float64]:

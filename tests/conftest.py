@@ -1,0 +1,41 @@
+"""Shared fixtures: the real NIST log (skipped with a message when absent) and cached
+simulations reused by several physics tests."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+REPO = Path(__file__).resolve().parents[1]
+NIST_LOG = REPO.parent / "shared" / "data" / "nist-ur5" / "ur5testresult_halfspeed_payload1.6lb_1.csv.gz"
+
+
+@pytest.fixture(scope="session")
+def nist_path() -> Path:
+    if not NIST_LOG.exists():
+        pytest.skip(f"real UR5 log not found at {NIST_LOG} (needs ../shared beside the repository)")
+    return NIST_LOG
+
+
+@pytest.fixture(scope="session")
+def shoulder_backlash_batch():
+    """Pick-and-place: healthy twin and shoulder backlash 0.05, 0.1, 0.2 deg, same noise seed."""
+    from ur5fault import RunSpec, Simulator, make_effect, pick_and_place
+
+    alphas = (0.0, 0.05, 0.1, 0.2)
+    runs = [RunSpec(f"a{a}", 7, (make_effect("backlash", "shoulder_lift_joint", backlash_deg=a),) if a else ())
+            for a in alphas]
+    return alphas, Simulator().run(pick_and_place(), runs)
+
+
+def torque_reversal_times(t_s: np.ndarray, torque: np.ndarray, min_gap_s: float = 0.2) -> np.ndarray:
+    """Times where a (noisy) torque changes sign, hysteresis of 0.5 N*m against chatter."""
+    out, state, last = [], np.sign(torque[0]), -np.inf
+    for t, v in zip(t_s, torque):
+        if state >= 0 and v < -0.5 or state <= 0 and v > 0.5:
+            if t - last > min_gap_s:
+                out.append(t)
+            state, last = np.sign(v), t
+    return np.array(out)
