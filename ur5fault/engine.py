@@ -18,7 +18,6 @@ Step order (semi-implicit Euler for the whole chain):
 
 from __future__ import annotations
 
-import copy
 import dataclasses
 import enum
 from collections.abc import Callable, Sequence
@@ -34,6 +33,7 @@ from .drive import friction as fr
 from .drive import gearbox, motor, power, sensors
 from .effects import EffectSpec
 from .errors import ParameterError
+from .multibody import BatchMultibody, LoopMultibody
 from .params import RobotParams, load_params
 from .result import SimResult
 from .run_arrays import RunArrays, build_run_arrays
@@ -72,7 +72,11 @@ class Simulator:
         model_path: MJCF file (default: ``models/ur5.xml``).
     """
 
-    def __init__(self, params: RobotParams | None = None, model_path: str | Path | None = None) -> None:
+    def __init__(self, params: RobotParams | None = None, model_path: str | Path | None = None,
+                 stepper: str = "batch", nthread: int = 1) -> None:
+        if stepper not in ("batch", "loop"):
+            raise ParameterError(f"stepper = {stepper!r} is not valid; choose one of: batch, loop")
+        self.stepper, self.nthread = stepper, int(nthread)
         self.params = params if params is not None else load_params()
         self.model_path = Path(model_path) if model_path is not None else DEFAULT_MODEL_PATH
         self.model = mujoco.MjModel.from_xml_path(str(self.model_path))
@@ -80,7 +84,6 @@ class Simulator:
         m = self.model
         self._tcp_site = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SITE, "tcp")
         self._payload_body = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "payload")
-        self._m_diag = np.asarray(m.M_rowadr) + np.asarray(m.M_rownnz) - 1
         p = self.params
         self.gains = ctl.design_gains(
             p.controller,
@@ -91,19 +94,11 @@ class Simulator:
             p.gear.ratio,
         )
 
-    # ------------------------------------------------------------------ model copies
-    def _run_model(self, a: RunArrays, row: int) -> mujoco.MjModel:
-        m = copy.deepcopy(self.model)
+    def _multibody(self, a: RunArrays):
         tcp = np.asarray(self.params.tcp_offset_m)
-        m.site_pos[self._tcp_site] = tcp
-        m.body_pos[self._payload_body] = tcp
-        m.body_ipos[self._payload_body] = a.payload_com_m[row]
-        return m
-
-    def _set_payload(self, m: mujoco.MjModel, mass_kg: float) -> None:
-        """Attach (``mass_kg > 0``) or release the payload: a 6 cm cube of that mass."""
-        m.body_mass[self._payload_body] = mass_kg
-        m.body_inertia[self._payload_body] = mass_kg * (0.06**2) / 6.0
+        if self.stepper == "loop":
+            return LoopMultibody(self.model, a.n_runs, tcp, a.payload_com_m)
+        return BatchMultibody(self.model, a.n_runs, tcp, a.payload_com_m, self.nthread)
 
     # ------------------------------------------------------------------ public API
     def run(
@@ -157,21 +152,12 @@ def _integrate(sim: Simulator, traj: Trajectory, runs: list[RunSpec], a: RunArra
     gripped_step = traj.gripped(np.arange(n_steps + 1) * dt)
     change_steps = set((np.flatnonzero(np.diff(gripped_step.astype(int))) + 1).tolist())
 
-    # -------------------------------------------------------------- models and data
-    models = [sim._run_model(a, r) for r in range(n)]
-    datas = [mujoco.MjData(m) for m in models]
+    # -------------------------------------------------------------- multibody
+    mb = sim._multibody(a)
+    mb.set_payload(a.payload_kg * gripped_step[0])
     q = np.tile(q_set_s[0], (n, 1))
+    bias = mb.start(q)
     qd = np.zeros((n, N_JOINTS))
-    bias = np.empty((n, N_JOINTS))
-    for r, (m, d) in enumerate(zip(models, datas)):
-        sim._set_payload(m, a.payload_kg[r] if gripped_step[0] else 0.0)
-        d.qpos[:] = q[r]
-        mujoco.mj_forward(m, d)
-        bias[r] = d.qfrc_bias
-    qpos = [d.qpos for d in datas]
-    qvel = [d.qvel for d in datas]
-    qfrc = [d.qfrc_applied for d in datas]
-    m_diag = sim._m_diag
 
     # -------------------------------------------------------------- constant coefficients
     N = a.gear_ratio
@@ -214,7 +200,7 @@ def _integrate(sim: Simulator, traj: Trajectory, runs: list[RunSpec], a: RunArra
     y_res, dy_res = q.copy(), np.zeros((n, N_JOINTS))
     y_enc, dy_enc = th_m.copy(), np.zeros((n, N_JOINTS))
     y_iq, y_id = i_q.copy(), np.zeros((n, N_JOINTS))
-    m_ii = np.stack([d.M[m_diag] for d in datas])
+    m_ii = mb.mass_diagonal()
     q_fb = th_fb = w_fb = iq_fb = id_fb = i_ref = None
 
     rngs = [np.random.default_rng(r.seed) for r in runs]
@@ -261,7 +247,7 @@ def _integrate(sim: Simulator, traj: Trajectory, runs: list[RunSpec], a: RunArra
                     j = int(np.argmax(np.abs(q_set_s[si] - q_fb[r])))
                     status[r], reason[r] = Status.PROTECTIVE_STOP, (
                         f"tracking error of joint {j + 1} above {PROTECTIVE_STOP_RAD} rad at t={step * dt:.4f} s")
-            m_ii = np.stack([d.M[m_diag] for d in datas])
+            m_ii = mb.mass_diagonal()
             if progress is not None and step >= next_progress * n_steps:
                 progress(step / n_steps)
                 next_progress += 0.02
@@ -273,7 +259,7 @@ def _integrate(sim: Simulator, traj: Trajectory, runs: list[RunSpec], a: RunArra
         t_f, slope = fr.friction_torque(qd, tc, tsf, fv, stribeck, eps)
         t_f = fr.implicit_friction(t_f, slope, m_ii, dt)
         # rotor
-        q_prev, th_prev = q.copy(), th_m
+        q_prev, th_prev = q, th_m  # q and th_m are rebound below, never written in place
         t_m = kt * i_q
         if has_cogging:
             t_m = t_m + cog_amp * np.sin(cog_per * th_m)
@@ -282,14 +268,11 @@ def _integrate(sim: Simulator, traj: Trajectory, runs: list[RunSpec], a: RunArra
         # multibody
         tau = t_id - t_f
         if step in change_steps:
-            for r in range(n):
-                sim._set_payload(models[r], a.payload_kg[r] if gripped_step[step] else 0.0)
-        for r in range(n):
-            if active[r]:
-                qfrc[r][:] = tau[r]
-                mujoco.mj_step(models[r], datas[r])
-                q[r] = qpos[r]
-                qd[r] = qvel[r]
+            mb.set_payload(a.payload_kg * gripped_step[step])
+        mb.qfrc_applied[:] = tau
+        mb.step(active)
+        q = mb.qpos.copy()
+        qd = mb.qvel.copy()
         # analog sensor filters
         y_res, dy_res = sensors.second_order_step(y_res, dy_res, q_prev, q, c_res)
         y_enc, dy_enc = sensors.second_order_step(y_enc, dy_enc, th_prev, th_m, c_enc)
@@ -308,9 +291,10 @@ def _integrate(sim: Simulator, traj: Trajectory, runs: list[RunSpec], a: RunArra
 
     if progress is not None:
         progress(1.0)
-    for r, d in enumerate(datas):
-        if status[r] is Status.OK and any(w.number > 0 for w in d.warning):
+    for r in np.flatnonzero(mb.warnings() > 0):
+        if status[r] is Status.OK:
             status[r], reason[r] = Status.DIVERGED, "MuJoCo reported a simulation warning (instability)"
     t_log = (np.arange(n_log) + 1) * log_every * dt
     q_set_log, _ = traj.interpolate(t_log)
-    return SimResult.build(sim, traj, runs, a, t_log, q_set_log, log, [s.value for s in status], reason, models)
+    return SimResult.build(sim, traj, runs, a, t_log, q_set_log, log, [s.value for s in status], reason,
+                           mb.run_models())

@@ -97,7 +97,7 @@ def build_run_arrays(params: RobotParams, effects: Sequence[Sequence[EffectSpec]
         motor_rotor_inertia_kgm2=joint(m.rotor_inertia_kgm2),
         motor_pole_pairs=joint(m.pole_pairs),
         cogging_Nm=np.zeros((n, N_JOINTS)),
-        cogging_periods_per_rev=np.ones((n, N_JOINTS)),
+        cogging_periods_per_rev=np.full((n, N_JOINTS), 6.0),  # the cogging effect's absent value
         current_limit_A=joint(params.power.current_limit_A),
         resolver_noise_rad=joint(s.resolver_noise_rad),
         resolver_lsb_rad=joint(two_pi / np.asarray(s.resolver_counts_per_rev)),
