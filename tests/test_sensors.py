@@ -40,9 +40,21 @@ def test_second_order_attenuates_at_bandwidth_like_the_continuous_filter():
     assert amp == pytest.approx(1 / (2 * z) * np.sinc(f * DT) ** 2, rel=1e-3)
 
 
-def test_first_order_coefficient():
-    a = sensors.first_order_coefficient(5000.0, DT)
-    assert a == pytest.approx(np.exp(-2 * np.pi * 5000 * DT))
+def test_first_order_exact_for_step_and_ramp():
+    f = 5000.0
+    c = sensors.first_order_coefficients([f], DT)
+    assert c[0, 0] == pytest.approx(np.exp(-2 * np.pi * f * DT))
+    y, u = np.zeros(1), np.zeros(1)
+    for k in range(1, 400):
+        un = np.array([2.0 * k * DT])
+        y = sensors.first_order_step(y, u, un, c)
+        u = un
+    tau = 1 / (2 * np.pi * f)
+    assert y[0] == pytest.approx(2.0 * (399 * DT - tau), rel=1e-9)  # a ramp lags by exactly tau
+    y = np.zeros(1)
+    for _ in range(3):
+        y = sensors.first_order_step(y, np.ones(1), np.ones(1), c)
+    assert y[0] == pytest.approx(1 - np.exp(-3 * DT / tau), rel=1e-12)
 
 
 def test_quantise():

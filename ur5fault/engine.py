@@ -183,7 +183,7 @@ def _integrate(sim: Simulator, traj: Trajectory, runs: list[RunSpec], a: RunArra
     s = p.sensors
     c_res = sensors.second_order_coefficients(s.resolver_bw_Hz, s.resolver_damping, dt)
     c_enc = sensors.second_order_coefficients(s.encoder_bw_Hz, s.encoder_damping, dt)
-    a_cur = sensors.first_order_coefficient(s.current_bw_Hz, dt)
+    c_cur = sensors.first_order_coefficients(s.current_bw_Hz, dt)
     ff = p.controller.velocity_feedforward
 
     # -------------------------------------------------------------- consistent initial state
@@ -253,6 +253,7 @@ def _integrate(sim: Simulator, traj: Trajectory, runs: list[RunSpec], a: RunArra
                 next_progress += 0.02
 
         # motor windings
+        iq_prev, id_prev = i_q, i_d
         i_d, i_q = motor.electrical_step(i_d, i_q, v_d, v_q, w_m, decay, gain_iv, cross, ke)
         # gear, eq. (1), and friction, eq. (2)
         t_id = gearbox.gear_torque(th_m / N - q, w_m / N - qd, k, c, alpha)
@@ -276,8 +277,8 @@ def _integrate(sim: Simulator, traj: Trajectory, runs: list[RunSpec], a: RunArra
         # analog sensor filters
         y_res, dy_res = sensors.second_order_step(y_res, dy_res, q_prev, q, c_res)
         y_enc, dy_enc = sensors.second_order_step(y_enc, dy_enc, th_prev, th_m, c_enc)
-        y_iq = a_cur * y_iq + (1.0 - a_cur) * i_q
-        y_id = a_cur * y_id + (1.0 - a_cur) * i_d
+        y_iq = sensors.first_order_step(y_iq, iq_prev, i_q, c_cur)
+        y_id = sensors.first_order_step(y_id, id_prev, i_d, c_cur)
 
         if (step + 1) % log_every == 0:
             li = (step + 1) // log_every - 1

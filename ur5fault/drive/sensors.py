@@ -60,9 +60,21 @@ def second_order_step(y: NDArray, dy: NDArray, u: NDArray, u_new: NDArray, c: ND
             c[4] * y + c[5] * dy + c[6] * u + c[7] * u_new)
 
 
-def first_order_coefficient(bandwidth_Hz: ArrayLike, dt_s: float) -> NDArray[np.float64]:
-    """``a = exp(-2 pi f dt)`` of the exactly discretised first-order lag ``y+ = a y + (1-a) u``."""
-    return np.exp(-2.0 * np.pi * np.asarray(bandwidth_Hz, dtype=float) * dt_s)
+def first_order_coefficients(bandwidth_Hz: ArrayLike, dt_s: float) -> NDArray[np.float64]:
+    """Exact first-order-hold discretisation of the lag ``y' = 2 pi f (u - y)``.
+
+    Returns ``(3, n)`` coefficients ``(a, c0, c1)``: ``y+ = a y + c0 u + c1 u+`` with ``u`` and
+    ``u+`` the input at the start and end of the step (exact for an input linear in the step).
+    """
+    lam_dt = 2.0 * np.pi * np.asarray(bandwidth_Hz, dtype=float) * dt_s
+    a = np.exp(-lam_dt)
+    c1 = 1.0 - (1.0 - a) / lam_dt
+    return np.stack([a, (1.0 - a) - c1, c1])
+
+
+def first_order_step(y: NDArray, u: NDArray, u_new: NDArray, c: NDArray) -> NDArray:
+    """Advance a first-order sensor lag one physics step (``c`` from :func:`first_order_coefficients`)."""
+    return c[0] * y + c[1] * u + c[2] * u_new
 
 
 def quantise(x: NDArray, lsb: NDArray) -> NDArray:

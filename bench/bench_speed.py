@@ -1,0 +1,125 @@
+"""Speed benchmark (not a timed test): figures are printed, never asserted.
+
+Measures in one process, on the same model, physics step and number of steps:
+  (a) bare mj_step of the UR5 model, no drive models (the floor);
+  (b) the full-fidelity simulation of one run (batch of one);
+  (c) the same in lockstep batches of 8, 32 and 128 runs;
+  (d) optionally (--campaign), the default campaign end to end on all cores, Parquet included.
+Prints one JSON line: per-run-step cost of each in microseconds, ratios to (a) per core,
+and peak memory per run.
+
+    python bench/bench_speed.py            # full figures (minutes)
+    python bench/bench_speed.py --quick    # a few hundred ms of simulated time, for the test suite
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import resource
+import sys
+import time
+import tracemalloc
+
+import mujoco
+import numpy as np
+
+from ur5fault import RunSpec, Simulator, make_effect, pick_and_place
+
+
+def bare_mj_step_us(sim: Simulator, n_steps: int) -> float:
+    m = sim.model
+    d = mujoco.MjData(m)
+    d.qpos[:] = pick_and_place().q_set_rad[0]
+    mujoco.mj_forward(m, d)
+    step = mujoco.mj_step
+    t = time.perf_counter()
+    for _ in range(n_steps):
+        step(m, d)
+    return (time.perf_counter() - t) / n_steps * 1e6
+
+
+def runs_for(n: int) -> list[RunSpec]:
+    levels = (0.0, 0.02, 0.05, 0.1, 0.2, 0.5)
+    out = []
+    for i in range(n):
+        a, j = levels[i % len(levels)], 1 + (i // len(levels)) % 6
+        out.append(RunSpec(f"r{i}", i % 4, (make_effect("backlash", j, backlash_deg=a),) if a else ()))
+    return out
+
+
+def full_fidelity_us(sim: Simulator, n_runs: int, duration_s: float) -> tuple[float, float]:
+    """Per-run-step wall cost [us] and peak traced memory per run [MB] of one batch."""
+    traj = pick_and_place()
+    n_steps = round(duration_s / sim.params.physics_dt_s)
+    tracemalloc.start()
+    t = time.perf_counter()
+    sim.run(traj, runs_for(n_runs), duration_s=duration_s)
+    wall = time.perf_counter() - t
+    peak = tracemalloc.get_traced_memory()[1]
+    tracemalloc.stop()
+    return wall / (n_runs * n_steps) * 1e6, peak / n_runs / 1e6
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--quick", action="store_true", help="short durations; figures are rough")
+    ap.add_argument("--campaign", action="store_true", help="also time the default campaign end to end")
+    args = ap.parse_args(argv)
+    dur = 0.2 if args.quick else 13.0  # the whole 2 kg pick-and-place
+    sim = Simulator()
+    n_steps = round(dur / sim.params.physics_dt_s)
+    out: dict = {
+        "machine": f"{platform.machine()} {os.cpu_count()} cores, {platform.python_implementation()} "
+                   f"{platform.python_version()}, mujoco {mujoco.__version__}, numpy {np.__version__}",
+        "physics_dt_s": sim.params.physics_dt_s,
+        "simulated_s_per_run": dur,
+        "steps_per_run": n_steps,
+    }
+    out["a_bare_mj_step_us"] = bare_mj_step_us(sim, max(n_steps, 20000))
+    b, mem1 = full_fidelity_us(sim, 1, dur)
+    out["b_one_run_us_per_step"] = b
+    out["b_one_run_wall_s"] = b * n_steps / 1e6
+    best = None
+    for n in (8, 32, 128):
+        us, mem = full_fidelity_us(sim, n, dur if n <= 32 or args.quick else dur / 4)
+        out[f"c_batch{n}_us_per_run_step"] = us
+        out[f"c_batch{n}_peak_MB_per_run"] = mem
+        if best is None or us < best[1]:
+            best = (n, us)
+    out["c_batch32_wall_s"] = out["c_batch32_us_per_run_step"] * 32 * n_steps / 1e6
+    out["ratio_b_to_a"] = b / out["a_bare_mj_step_us"]
+    out["best_batch"] = best[0]
+    out["ratio_c_best_to_a_per_core"] = best[1] / out["a_bare_mj_step_us"]
+    out["b_peak_MB_per_run"] = mem1
+    if args.campaign:
+        out.update(campaign_figures(out["a_bare_mj_step_us"]))
+    out["max_rss_MB"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    print(json.dumps({k: (round(v, 4) if isinstance(v, float) else v) for k, v in out.items()}))
+    return 0
+
+
+def campaign_figures(bare_us: float) -> dict:
+    """(d) the default campaign end to end on all cores (needs the campaign runner)."""
+    import tempfile
+    from pathlib import Path
+
+    from ur5fault.campaign import load_campaign, run_campaign
+
+    root = Path(__file__).resolve().parents[1]
+    camp = load_campaign(root / "campaigns" / "default.yaml")
+    with tempfile.TemporaryDirectory() as tmp:
+        t = time.perf_counter()
+        manifest = run_campaign(camp, Path(tmp) / "out", jobs=os.cpu_count() or 1, progress=False)
+        wall = time.perf_counter() - t
+    steps = manifest["n_steps_total"]
+    cores = os.cpu_count() or 1
+    bare_wall = steps * bare_us / 1e6 / cores
+    return {"d_campaign_wall_s": wall, "d_campaign_run_steps": steps, "d_bare_wall_same_steps_over_cores_s": bare_wall,
+            "ratio_d_to_a_over_cores": wall / bare_wall}
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,75 @@
+"""The command line: a real run, and one-line errors with exit status 2 on bad input."""
+
+import subprocess
+import sys
+
+import pandas as pd
+import pytest
+
+CMD = [sys.executable, "-m", "ur5fault.cli"]
+
+
+def run(*args, cwd=None):
+    return subprocess.run([*CMD, *args], capture_output=True, text=True, cwd=cwd, timeout=600)
+
+
+def test_simulate_writes_parquet_with_documented_columns(tmp_path):
+    out = tmp_path / "run.parquet"
+    r = run("simulate", "--backlash", "shoulder_lift_joint:0.1", "--duration-s", "0.3", "--out", str(out), "--quiet")
+    assert r.returncode == 0, r.stderr
+    assert "backlash on shoulder_lift_joint" in r.stdout
+    df = pd.read_parquet(out)
+    for col in ("t_s", "q_set_rad_j2", "q_rad_j2", "q_FB_rad_j2", "q_M_rad_j2", "q_M_FB_rad_j2", "i_ref_A_j2",
+                "i_FB_A_j2", "v_q_V_j2", "T_gear_Nm_j2", "T_f_Nm_j2", "tcp_x_m", "tcp_des_x_m", "i_a_A_j2"):
+        assert col in df.columns
+    assert len(df) == 300
+
+
+def test_simulate_from_yaml(tmp_path):
+    cfg = tmp_path / "run.yaml"
+    cfg.write_text("trajectory: pick_and_place\nseed: 3\nduration_s: 0.2\ntemperature_C: 40\n"
+                   "effects:\n  - {effect: backlash, joint: elbow, backlash_deg: 0.2}\n")
+    out = tmp_path / "x.parquet"
+    r = run("simulate", "--config", str(cfg), "--out", str(out), "--quiet")
+    assert r.returncode == 0, r.stderr
+    assert "backlash on elbow_joint (backlash_deg=0.2)" in r.stdout and "temperature" in r.stdout
+
+
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["--backlash", "knee:0.1"], "unknown joint 'knee'; valid: 1..6, elbow_joint,"),
+        (["--backlash", "elbow:-0.1"], "backlash.backlash_deg = -0.1 is out of range [0, 5] deg"),
+        (["--backlash", "elbow"], "expected JOINT:DEGREES"),
+        (["--effect", "rust@1:scale=2"], "unknown effect 'rust'; valid: backlash,"),
+        (["--trajectory", "zigzag"], "unknown trajectory 'zigzag'; valid: hold, pick_and_place"),
+        (["--config", "/nonexistent.yaml"], "/nonexistent.yaml: cannot read"),
+    ],
+)
+def test_bad_input_one_line_exit_2(args, message):
+    r = run("simulate", *args, "--quiet")
+    assert r.returncode == 2
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("ur5fault: error: "), r.stderr
+    assert message in lines[0]
+    assert "Traceback" not in r.stderr
+
+
+def test_bad_yaml_files(tmp_path):
+    cases = {
+        "broken.yaml": ("a: [1, 2", "is not valid YAML"),
+        "key.yaml": ("trajectori: pick_and_place\n", "unknown key 'trajectori'; valid: duration_s, effects,"),
+        "type.yaml": ("seed: -3\n", "seed = -3 must be a non-negative integer"),
+        "param.yaml": ("params: {gear: {stiffness_Nm_per_rad: -1}}\n", "gear.stiffness_Nm_per_rad[1] = -1"),
+    }
+    for name, (text, message) in cases.items():
+        f = tmp_path / name
+        f.write_text(text)
+        r = run("simulate", "--config", str(f), "--quiet")
+        assert r.returncode == 2 and message in r.stderr, (name, r.stderr)
+        assert len(r.stderr.strip().splitlines()) == 1
+
+
+def test_effects_lists_registry():
+    r = run("effects")
+    assert r.returncode == 0 and "backlash" in r.stdout and "torque_constant" in r.stdout
