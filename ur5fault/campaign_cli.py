@@ -1,0 +1,74 @@
+"""``ur5fault campaign run|status`` and ``ur5fault plot``."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+
+def register(sub) -> None:
+    c = sub.add_parser("campaign", help="run a YAML fault campaign into Parquet feature tables")
+    csub = c.add_subparsers(dest="campaign_command", required=True, parser_class=type(c))
+    r = csub.add_parser("run", help="run (or resume) a campaign")
+    r.add_argument("file", help="campaign YAML, e.g. campaigns/default.yaml")
+    r.add_argument("--out", help="output folder (default: the file's `out`)")
+    r.add_argument("--jobs", type=int, help="worker processes (default: all cores)")
+    r.add_argument("--backend", choices=("loky", "dask"), default="loky")
+    r.add_argument("--scheduler", help="Dask scheduler address for --backend dask, e.g. tcp://127.0.0.1:8786")
+    r.add_argument("--save-timeseries", action="store_true", help="also write each run's time series")
+    r.add_argument("--threshold-mm", type=float, help="TCP acceptability threshold of the summary [mm]")
+    r.add_argument("--quiet", action="store_true")
+    r.set_defaults(func=cmd_run)
+    s = csub.add_parser("status", help="what a campaign folder holds")
+    s.add_argument("dir")
+    s.set_defaults(func=cmd_status)
+    p = sub.add_parser("plot", help="draw the paper's figures and a feature heat map as PNG")
+    p.add_argument("dir", help="campaign output folder")
+    p.add_argument("--feature", default="tcp_dev_max_mm", help="feature of the heat map (a features.parquet column)")
+    p.add_argument("--out", help="folder for the PNG files (default: DIR/plots)")
+    p.set_defaults(func=cmd_plot)
+
+
+def cmd_run(args: argparse.Namespace) -> int:
+    from .campaign import acceptable_backlash, load_campaign, run_campaign, tcp_table
+    from .errors import ParameterError
+
+    camp = load_campaign(args.file, args.out)
+    if args.jobs is not None and args.jobs < 1:
+        raise ParameterError(f"--jobs {args.jobs}: must be at least 1")
+    print(f"campaign {camp.name}: {len(camp.runs)} runs (twins included) -> {camp.out}", file=sys.stderr)
+    manifest = run_campaign(camp, camp.out, jobs=args.jobs, backend=args.backend, scheduler=args.scheduler,
+                            progress=not args.quiet, save_timeseries=args.save_timeseries or None)
+    import pandas as pd
+
+    features = pd.read_parquet(Path(camp.out) / "features.parquet")
+    thr = args.threshold_mm if args.threshold_mm is not None else camp.threshold_mm
+    table = tcp_table(features)
+    if not table.empty:
+        print("\nmax TCP deviation from the healthy twin [mm], fault joint x backlash [deg]:")
+        print(table.to_string(float_format=lambda v: f"{v:.3f}"))
+        print(f"\nlargest backlash keeping the TCP within {thr:g} mm [deg]:")
+        print(acceptable_backlash(features, thr).to_string(float_format=lambda v: f"{v:g}"))
+    bad = features[features["status"] != "ok"]
+    if len(bad):
+        print(f"\n{len(bad)} run(s) not ok:\n" + bad[["run_id", "status", "reason"]].to_string(index=False))
+    print(f"\nwrote {camp.out}/features.parquet ({manifest['n_runs']} rows) and manifest.json "
+          f"in {manifest['wall_s_this_invocation']:.1f} s")
+    return 0
+
+
+def cmd_status(args: argparse.Namespace) -> int:
+    from .campaign import status
+
+    print(json.dumps(status(Path(args.dir)), indent=2, default=str))
+    return 0
+
+
+def cmd_plot(args: argparse.Namespace) -> int:
+    from .plotting import plot_campaign
+
+    for path in plot_campaign(Path(args.dir), args.feature, Path(args.out) if args.out else None):
+        print(f"wrote {path}")
+    return 0
