@@ -11,7 +11,8 @@ Definitions (``j`` = joint 1..6; signals at the log rate):
 * ``track_err_rms_rad_j``, ``track_err_max_rad_j``: q_set - q_FB.
 * ``enc_mismatch_p2p_rad_j``, ``enc_mismatch_rms_rad_j``: m = q_M,FB / N - q_FB, peak-to-peak and
   RMS about its mean; ``enc_mismatch_hyst_rad_j``: median jump of m across torque reversals
-  (mean over 0.2 s after minus 0.2 s before; ~alpha for a backlash, the load change / k if healthy).
+  (mean over 0.25 s after minus 0.25 s before, leaving out 20 ms either side of the reversal;
+  ~alpha for a backlash, the load change / k if healthy).
 * current residual r = i_FB - (its 20 ms moving average): ``current_spike_max_A_j`` its largest
   magnitude within 0.25 s of a torque reversal (sign change of the smoothed current);
   ``current_spike_count_j`` reversals whose residual exceeds ``SPIKE_THRESHOLD_A``;
@@ -71,6 +72,7 @@ def run_features(t_s: NDArray, q_set: NDArray, q_fb: NDArray, q_m_fb: NDArray, i
     smooth = moving_average(i_fb, round(SMOOTH_S / dt))
     resid = i_fb - smooth
     win = round(SPIKE_WINDOW_S / dt)
+    guard = round(SMOOTH_S / dt)  # the reversal is located to within the smoothing window
     for j in range(N_JOINTS):
         s = f"_j{j + 1}"
         f["track_err_rms_rad" + s] = float(np.sqrt(np.nanmean(err[:, j] ** 2)))
@@ -81,7 +83,7 @@ def run_features(t_s: NDArray, q_set: NDArray, q_fb: NDArray, q_m_fb: NDArray, i
         rev = sign_changes(smooth[:, j], REVERSAL_HYSTERESIS_A)
         jumps, spikes = [], []
         for k in rev:
-            before, after = m[max(0, k - win) : k], m[k : k + win]
+            before, after = m[max(0, k - guard - win) : max(0, k - guard)], m[k + guard : k + guard + win]
             if before.size and after.size:
                 jumps.append(abs(np.nanmean(after) - np.nanmean(before)))
             spikes.append(np.nanmax(np.abs(resid[max(0, k - win) : k + win, j])))
