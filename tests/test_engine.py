@@ -52,6 +52,21 @@ def test_fast_batch_stepper_equals_simple_loop_bit_for_bit(runs, batch):
         _same(batch, loop, i, i)
 
 
+def test_fast_path_equals_simple_one_run_path_bit_for_bit(runs, batch):
+    """Fast: compiled kernel over a lockstep batch on MuJoCo's threaded batch stepper.
+    Simple: one run at a time through a plain mj_step loop."""
+    simple = Simulator(stepper="loop", nthread=1)
+    for i, r in enumerate(runs):
+        _same(batch, simple.run(pick_and_place(), [r], duration_s=DUR), i, 0)
+
+
+def test_numpy_reference_drive_batch_equals_singles(runs):
+    sim = Simulator(drive="numpy")
+    b = sim.run(pick_and_place(), runs[:2], duration_s=0.3)
+    for i, r in enumerate(runs[:2]):
+        _same(b, sim.run(pick_and_place(), [r], duration_s=0.3), i, 0)
+
+
 def test_two_threads_equal_one(runs, batch):
     two = Simulator(nthread=2).run(pick_and_place(), runs, duration_s=DUR)
     for i in range(len(runs)):
@@ -117,6 +132,8 @@ def test_bad_arguments():
         sim.run(pick_and_place(), [])
     with pytest.raises(ParameterError, match="choose one of: batch, loop"):
         Simulator(stepper="fast")
+    with pytest.raises(ParameterError, match="choose one of: numpy, numba"):
+        Simulator(drive="c")
 
 
 def test_protective_stop_is_recorded_and_batch_goes_on():

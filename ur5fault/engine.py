@@ -29,8 +29,7 @@ from numpy.typing import NDArray
 
 from .axes import N_JOINTS
 from .drive import controller as ctl
-from .drive import friction as fr
-from .drive import gearbox, motor, power, sensors
+from .drive.state import DRIVES, initial_state, pack_params
 from .effects import EffectSpec
 from .errors import ParameterError
 from .multibody import BatchMultibody, LoopMultibody
@@ -70,13 +69,18 @@ class Simulator:
     Args:
         params: robot and drive parameters (default: ``data/ur5_drive.yaml``).
         model_path: MJCF file (default: ``models/ur5.xml``).
+        stepper: ``"batch"`` (MuJoCo's threaded ``mujoco.batch``) or ``"loop"`` (plain ``mj_step`` per run).
+        nthread: threads of the batch stepper.
+        drive: ``"numba"`` (compiled kernel, fast) or ``"numpy"`` (the reference modules).
     """
 
     def __init__(self, params: RobotParams | None = None, model_path: str | Path | None = None,
-                 stepper: str = "batch", nthread: int = 1) -> None:
+                 stepper: str = "batch", nthread: int = 1, drive: str = "numba") -> None:
         if stepper not in ("batch", "loop"):
             raise ParameterError(f"stepper = {stepper!r} is not valid; choose one of: batch, loop")
-        self.stepper, self.nthread = stepper, int(nthread)
+        if drive not in DRIVES:
+            raise ParameterError(f"drive = {drive!r} is not valid; choose one of: {', '.join(DRIVES)}")
+        self.stepper, self.nthread, self.drive = stepper, int(nthread), drive
         self.params = params if params is not None else load_params()
         self.model_path = Path(model_path) if model_path is not None else DEFAULT_MODEL_PATH
         self.model = mujoco.MjModel.from_xml_path(str(self.model_path))
@@ -144,71 +148,29 @@ def _integrate(sim: Simulator, traj: Trajectory, runs: list[RunSpec], a: RunArra
     sps = p.steps_per_servo
     ts = p.controller.servo_period_s
     n = len(runs)
-    g = sim.gains
 
-    # -------------------------------------------------------------- setpoints and events
+    # setpoints at servo instants and payload events at physics steps
     n_servo = n_steps // sps + 1
     q_set_s, qd_set_s = traj.interpolate(np.arange(n_servo) * ts)
     gripped_step = traj.gripped(np.arange(n_steps + 1) * dt)
     change_steps = set((np.flatnonzero(np.diff(gripped_step.astype(int))) + 1).tolist())
 
-    # -------------------------------------------------------------- multibody
+    # multibody, consistent start at rest, drive chain
     mb = sim._multibody(a)
     mb.set_payload(a.payload_kg * gripped_step[0])
     q = np.tile(q_set_s[0], (n, 1))
     bias = mb.start(q)
     qd = np.zeros((n, N_JOINTS))
-
-    # -------------------------------------------------------------- constant coefficients
-    N = a.gear_ratio
-    k, c, alpha = a.gear_stiffness_Nm_per_rad, a.gear_damping_Nms_per_rad, a.backlash_rad
-    fv = fr.viscous_coefficient(a.friction_viscous_Nms_per_rad, a.friction_temp_coeff_per_K, a.temperature_C,
-                                p.friction.reference_temp_C)
-    tc, tsf, eps = a.friction_coulomb_Nm, a.friction_static_Nm, a.friction_sign_smoothing_rad_s
-    stribeck = p.friction.stribeck_rate_s_per_rad
-    R, L = a.motor_resistance_ohm, a.motor_inductance_H
-    decay = np.exp(-R * dt / L)
-    gain_iv = (1.0 - decay) / R
-    cross = np.where(a.motor_is_pmsm, a.motor_pole_pairs * L, 0.0)
-    kt, ke, jr = a.motor_kt_Nm_per_A, a.motor_ke_V_s_per_rad, a.motor_rotor_inertia_kgm2
-    cog_amp, cog_per = a.cogging_Nm, a.cogging_periods_per_rev
-    has_cogging = bool(np.any(cog_amp != 0.0))
-    # the controller uses nominal motor constants (it is not retuned for a fault)
-    ke_nom = np.where(a.motor_is_pmsm[0], np.asarray(p.motor.torque_constant_Nm_per_A) / 1.5,
-                      np.asarray(p.motor.torque_constant_Nm_per_A))
-    cross_nom = np.where(a.motor_is_pmsm[0], np.asarray(p.motor.pole_pairs) * np.asarray(p.motor.inductance_H), 0.0)
-    ratio_nom = np.asarray(p.gear.ratio)
-    v_lim = power.voltage_limit(p.power.bus_voltage_V, a.motor_is_pmsm)
-    i_max = a.current_limit_A
-    s = p.sensors
-    c_res = sensors.second_order_coefficients(s.resolver_bw_Hz, s.resolver_damping, dt)
-    c_enc = sensors.second_order_coefficients(s.encoder_bw_Hz, s.encoder_damping, dt)
-    c_cur = sensors.first_order_coefficients(s.current_bw_Hz, dt)
-    ff = p.controller.velocity_feedforward
-
-    # -------------------------------------------------------------- consistent initial state
-    # gear deflected to carry the static gravity load (contact on the flank the load pushes)
-    th_rel = np.where(bias >= 0.0, alpha + bias / k, bias / k)
-    th_m = N * (q + th_rel)
-    w_m = np.zeros((n, N_JOINTS))
-    i_q = bias / (N * kt)
-    i_d = np.zeros((n, N_JOINTS))
-    integ_v = a.current_gain * i_q + a.current_offset_A  # the current the controller sees and holds
-    integ_q = R * i_q
-    integ_d = np.zeros((n, N_JOINTS))
-    v_d, v_q = np.zeros((n, N_JOINTS)), R * i_q
-    y_res, dy_res = q.copy(), np.zeros((n, N_JOINTS))
-    y_enc, dy_enc = th_m.copy(), np.zeros((n, N_JOINTS))
-    y_iq, y_id = i_q.copy(), np.zeros((n, N_JOINTS))
+    P = pack_params(sim, a)
+    drive = DRIVES[sim.drive](P, initial_state(P, q, bias), dt, ts, p.friction.stribeck_rate_s_per_rad)
     m_ii = mb.mass_diagonal()
-    q_fb = th_fb = w_fb = iq_fb = id_fb = i_ref = None
 
     rngs = [np.random.default_rng(r.seed) for r in runs]
     noise = np.empty((n, NOISE_CHUNK_SAMPLES, 5, N_JOINTS))
 
-    # -------------------------------------------------------------- logs
     n_log = n_steps // log_every
     log = {name: np.full((n, n_log, N_JOINTS), np.nan) for name in SimResult.JOINT_SIGNALS}
+    logged = [(log[name], name) for name in SimResult.JOINT_SIGNALS]
     active = np.ones(n, dtype=bool)
     status = [Status.OK] * n
     reason = [""] * n
@@ -221,74 +183,41 @@ def _integrate(sim: Simulator, traj: Trajectory, runs: list[RunSpec], a: RunArra
             if ci == 0:
                 for r in range(n):
                     noise[r] = rngs[r].standard_normal((NOISE_CHUNK_SAMPLES, 5, N_JOINTS))
-            nz = noise[:, ci]
-            # sensors: noise, sample-and-hold, quantisation
-            q_fb = sensors.read(y_res, a.resolver_noise_rad, nz[:, 0], a.resolver_lsb_rad) + a.resolver_offset_rad
-            th_fb = sensors.read(y_enc, a.encoder_noise_rad, nz[:, 1], a.encoder_lsb_rad)
-            w_fb = sensors.read(dy_enc, a.encoder_speed_noise_rad_s, nz[:, 2], a.encoder_speed_lsb_rad_s)
-            iq_fb = a.current_gain * sensors.read(y_iq, a.current_noise_A, nz[:, 3], a.current_lsb_A) + a.current_offset_A
-            id_fb = a.current_gain * sensors.read(y_id, a.current_noise_A, nz[:, 4], a.current_lsb_A)
-            # cascade
-            w_ref = ctl.position_loop(q_set_s[si], qd_set_s[si], q_fb, g.pos_kp_per_s, ff, ratio_nom)
-            i_ref, integ_v = ctl.speed_loop(w_ref, w_fb, integ_v, g.speed_kp_A_s_per_rad, g.speed_ki_A_per_rad,
-                                            ts, i_max)
-            vd_ref, vq_ref, integ_d, integ_q = ctl.current_loop(i_ref, id_fb, iq_fb, w_fb, integ_d, integ_q,
-                                                                g.cur_kp_V_per_A, g.cur_ki_V_per_A_s, ts,
-                                                                ke_nom, cross_nom, v_lim)
-            v_d, v_q = power.limit_voltage(vd_ref, vq_ref, v_lim)
+            drive.servo(q_set_s[si], qd_set_s[si], noise[:, ci])
             # run health: a diverged or tripped run is frozen and its remaining log left NaN
             bad = ~np.all(np.isfinite(q), axis=1) | np.any(np.abs(q) > 50.0, axis=1)
-            trip = np.any(np.abs(q_set_s[si] - q_fb) > PROTECTIVE_STOP_RAD, axis=1)
-            for r in np.flatnonzero(active & (bad | trip)):
-                active[r] = False
-                if bad[r]:
-                    status[r], reason[r] = Status.DIVERGED, f"non-finite or runaway joint state at t={step * dt:.4f} s"
-                else:
-                    j = int(np.argmax(np.abs(q_set_s[si] - q_fb[r])))
-                    status[r], reason[r] = Status.PROTECTIVE_STOP, (
-                        f"tracking error of joint {j + 1} above {PROTECTIVE_STOP_RAD} rad at t={step * dt:.4f} s")
+            trip = np.any(np.abs(q_set_s[si] - drive.q_fb) > PROTECTIVE_STOP_RAD, axis=1)
+            if bad.any() or trip.any():
+                for r in np.flatnonzero(active & (bad | trip)):
+                    active[r] = False
+                    if bad[r]:
+                        status[r] = Status.DIVERGED
+                        reason[r] = f"non-finite or runaway joint state at t={step * dt:.4f} s"
+                    else:
+                        j = int(np.argmax(np.abs(q_set_s[si] - drive.q_fb[r])))
+                        status[r] = Status.PROTECTIVE_STOP
+                        reason[r] = f"tracking error of joint {j + 1} above {PROTECTIVE_STOP_RAD} rad at t={step * dt:.4f} s"
             m_ii = mb.mass_diagonal()
             if progress is not None and step >= next_progress * n_steps:
                 progress(step / n_steps)
                 next_progress += 0.02
 
-        # motor windings
-        iq_prev, id_prev = i_q, i_d
-        i_d, i_q = motor.electrical_step(i_d, i_q, v_d, v_q, w_m, decay, gain_iv, cross, ke)
-        # gear, eq. (1), and friction, eq. (2)
-        t_id = gearbox.gear_torque(th_m / N - q, w_m / N - qd, k, c, alpha)
-        t_f, slope = fr.friction_torque(qd, tc, tsf, fv, stribeck, eps)
-        t_f = fr.implicit_friction(t_f, slope, m_ii, dt)
-        # rotor
-        q_prev, th_prev = q, th_m  # q and th_m are rebound below, never written in place
-        t_m = kt * i_q
-        if has_cogging:
-            t_m = t_m + cog_amp * np.sin(cog_per * th_m)
-        w_m = w_m + dt * (t_m - t_id / N) / jr
-        th_m = th_m + dt * w_m
-        # multibody
-        tau = t_id - t_f
+        tau = drive.physics(q, qd, m_ii)
         if step in change_steps:
             mb.set_payload(a.payload_kg * gripped_step[step])
         mb.qfrc_applied[:] = tau
         mb.step(active)
         q = mb.qpos.copy()
         qd = mb.qvel.copy()
-        # analog sensor filters
-        y_res, dy_res = sensors.second_order_step(y_res, dy_res, q_prev, q, c_res)
-        y_enc, dy_enc = sensors.second_order_step(y_enc, dy_enc, th_prev, th_m, c_enc)
-        y_iq = sensors.first_order_step(y_iq, iq_prev, i_q, c_cur)
-        y_id = sensors.first_order_step(y_id, id_prev, i_d, c_cur)
+        drive.sensors(q)
 
         if (step + 1) % log_every == 0:
             li = (step + 1) // log_every - 1
-            live = active[:, None]
-            for name, val in (
-                ("q_rad", q), ("q_FB_rad", q_fb), ("q_M_rad", th_m), ("q_M_FB_rad", th_fb),
-                ("w_M_FB_rad_s", w_fb), ("i_ref_A", i_ref), ("i_FB_A", iq_fb), ("i_q_A", i_q), ("i_d_A", i_d),
-                ("v_q_V", v_q), ("v_d_V", v_d), ("T_gear_Nm", t_id), ("T_f_Nm", t_f),
-            ):
-                log[name][:, li] = np.where(live, val, np.nan)
+            for arr, name in logged:
+                arr[:, li] = getattr(drive, LOG_SOURCES[name]) if name != "q_rad" else q
+            if not active.all():
+                for arr, _ in logged:
+                    arr[~active, li] = np.nan
 
     if progress is not None:
         progress(1.0)
@@ -299,3 +228,11 @@ def _integrate(sim: Simulator, traj: Trajectory, runs: list[RunSpec], a: RunArra
     q_set_log, _ = traj.interpolate(t_log)
     return SimResult.build(sim, traj, runs, a, t_log, q_set_log, log, [s.value for s in status], reason,
                            mb.run_models())
+
+
+#: logged signal -> drive state row
+LOG_SOURCES = {
+    "q_rad": "q", "q_FB_rad": "q_fb", "q_M_rad": "th_m", "q_M_FB_rad": "th_fb", "w_M_FB_rad_s": "w_fb",
+    "i_ref_A": "i_ref", "i_FB_A": "iq_fb", "i_q_A": "i_q", "i_d_A": "i_d", "v_q_V": "v_q", "v_d_V": "v_d",
+    "T_gear_Nm": "t_id", "T_f_Nm": "t_f",
+}

@@ -121,3 +121,88 @@ def read_nist(path: str | Path) -> MeasuredLog:
         target_current_A=None if ct is None else ct * UR_CURRENT_SIGN, temperature_C=opt(temp), tcp_m=opt(tcp),
         payload_kg=NIST_PAYLOAD_KG, tcp_offset_m=NIST_TOOL_OFFSET_M,
     )
+
+
+def read_rtde(path: str | Path, payload_kg: float = 0.0,
+              tcp_offset_m: tuple[float, float, float] = (0.0, 0.0, 0.15)) -> MeasuredLog:
+    """Read a UR RTDE CSV as the ``rtde`` recorder writes it (radians, amperes, metres).
+
+    Required columns: ``timestamp``, ``target_q_0..5``, ``actual_q_0..5``, ``actual_current_0..5``;
+    optional: ``target_current_0..5``, ``joint_temperatures_0..5``, ``actual_TCP_pose_0..5``.
+    The payload and tool offset are not in the recording and are given by the caller.
+    """
+    path = Path(path)
+    src = path.name
+    try:
+        df = pd.read_csv(path, sep=None, engine="python") if path.suffix != ".gz" else pd.read_csv(path)
+    except (OSError, pd.errors.ParserError) as exc:
+        raise LogFormatError(f"{src}: cannot read as CSV ({exc})") from None
+    qt = [f"target_q_{j}" for j in range(6)]
+    qa = [f"actual_q_{j}" for j in range(6)]
+    ia = [f"actual_current_{j}" for j in range(6)]
+    _require(df, ["timestamp", *qt, *qa, *ia], src)
+    t = df["timestamp"].to_numpy(float)
+    arrays = {"target_q": df[qt].to_numpy(float), "actual_q": df[qa].to_numpy(float),
+              "actual_current": df[ia].to_numpy(float)}
+    _check(src, t, arrays)
+    _plausible_ur5(src, arrays["actual_q"])
+    opt = lambda cols: df[cols].to_numpy(float) if all(c in df.columns for c in cols) else None  # noqa: E731
+    ct = opt([f"target_current_{j}" for j in range(6)])
+    tcp = opt([f"actual_TCP_pose_{j}" for j in range(3)])
+    return MeasuredLog(
+        source=src, t_s=t - t[0], q_target_rad=arrays["target_q"], q_actual_rad=arrays["actual_q"],
+        current_A=arrays["actual_current"] * UR_CURRENT_SIGN,
+        target_current_A=None if ct is None else ct * UR_CURRENT_SIGN,
+        temperature_C=opt([f"joint_temperatures_{j}" for j in range(6)]), tcp_m=tcp,
+        payload_kg=payload_kg, tcp_offset_m=tuple(tcp_offset_m),
+    )
+
+
+def read_sim(path: str | Path) -> MeasuredLog:
+    """Read a time series written by ``ur5fault simulate`` (or a campaign's ``timeseries/``).
+
+    Uses ``q_set_rad_j*`` as target, ``q_FB_rad_j*`` as the measured position, ``i_FB_A_j*`` as the
+    current, and ``q_M_FB_rad_j*`` (motor encoders) when present.
+    """
+    import json
+
+    import pyarrow.parquet as pq
+
+    path = Path(path)
+    src = path.name
+    try:
+        table = pq.read_table(path)
+    except (OSError, ValueError) as exc:
+        raise LogFormatError(f"{src}: cannot read as Parquet ({exc})") from None
+    df = table.to_pandas()
+    cols = lambda name: [f"{name}_j{j}" for j in range(1, 7)]  # noqa: E731
+    _require(df, ["t_s", *cols("q_set_rad"), *cols("q_FB_rad"), *cols("i_FB_A")], src)
+    t = df["t_s"].to_numpy(float)
+    arrays = {"q_set_rad": df[cols("q_set_rad")].to_numpy(float), "q_FB_rad": df[cols("q_FB_rad")].to_numpy(float),
+              "i_FB_A": df[cols("i_FB_A")].to_numpy(float)}
+    _check(src, t, arrays)
+    _plausible_ur5(src, arrays["q_FB_rad"])
+    meta = json.loads((table.schema.metadata or {}).get(b"ur5fault", b"{}"))
+    tcp = df[["tcp_x_m", "tcp_y_m", "tcp_z_m"]].to_numpy(float) if "tcp_x_m" in df.columns else None
+    qm = df[cols("q_M_FB_rad")].to_numpy(float) if all(c in df.columns for c in cols("q_M_FB_rad")) else None
+    return MeasuredLog(
+        source=src, t_s=t, q_target_rad=arrays["q_set_rad"], q_actual_rad=arrays["q_FB_rad"],
+        current_A=arrays["i_FB_A"], tcp_m=tcp, q_motor_rad=qm,
+        payload_kg=float(meta.get("payload_kg", 0.0) or 0.0),
+        tcp_offset_m=tuple(meta.get("tcp_offset_m", (0.0, 0.0, 0.15))),
+    )
+
+
+READERS = {"nist": read_nist, "rtde": read_rtde, "sim": read_sim}
+
+
+def read_log(path: str | Path, fmt: str, **kwargs) -> MeasuredLog:
+    """Read a log in one of the formats of :data:`READERS` (``nist``, ``rtde``, ``sim``)."""
+    from .errors import UnknownNameError
+
+    if fmt not in READERS:
+        raise UnknownNameError("log format", fmt, READERS)
+    p = Path(path)
+    if not p.exists():
+        raise LogFormatError(f"{p}: no such file")
+    return READERS[fmt](p, **kwargs)

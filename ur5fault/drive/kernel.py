@@ -1,0 +1,156 @@
+"""The drive step compiled with numba: the equations of ``gearbox.py``, ``friction.py``,
+``motor.py``, ``power.py``, ``controller.py`` and ``sensors.py`` in the same order, as loops
+over runs and joints.  Row indices come from ``state.PI`` / ``state.XI`` (frozen here as
+constants).  Keep in step with the numpy modules: ``tests/test_kernel.py`` compares them.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from .state import PI, XI
+
+# parameter rows
+RATIO, K, C, ALPHA, TC, TS, FV, EPS = (PI[n] for n in ("ratio", "k", "c", "alpha", "tc", "ts", "fv", "eps"))
+DECAY, GAIN_IV, CROSS, KE, KT, JR = (PI[n] for n in ("decay", "gain_iv", "cross", "ke", "kt", "jr"))
+COG_AMP, COG_PER, V_LIM, I_MAX = (PI[n] for n in ("cog_amp", "cog_per", "v_lim", "i_max"))
+RES_NOISE, RES_LSB, RES_OFF, ENC_NOISE, ENC_LSB = (PI[n] for n in ("res_noise", "res_lsb", "res_off", "enc_noise",
+                                                                    "enc_lsb"))
+ENCV_NOISE, ENCV_LSB, CUR_NOISE, CUR_LSB, CUR_GAIN, CUR_OFF = (
+    PI[n] for n in ("encv_noise", "encv_lsb", "cur_noise", "cur_lsb", "cur_gain", "cur_off"))
+POS_KP, SPD_KP, SPD_KI, CUR_KP, CUR_KI, FF = (PI[n] for n in ("pos_kp", "spd_kp", "spd_ki", "cur_kp", "cur_ki", "ff"))
+RATIO_NOM, KE_NOM, CROSS_NOM = PI["ratio_nom"], PI["ke_nom"], PI["cross_nom"]
+RES_C0, ENC_C0, CUR_A, CUR_C0, CUR_C1 = PI["res_c0"], PI["enc_c0"], PI["cur_a"], PI["cur_c0"], PI["cur_c1"]
+# state rows
+TH_M, W_M, I_Q, I_D, V_Q, V_D = (XI[n] for n in ("th_m", "w_m", "i_q", "i_d", "v_q", "v_d"))
+INTEG_V, INTEG_Q, INTEG_D = XI["integ_v"], XI["integ_q"], XI["integ_d"]
+Y_RES, DY_RES, Y_ENC, DY_ENC, Y_IQ, Y_ID = (XI[n] for n in ("y_res", "dy_res", "y_enc", "dy_enc", "y_iq", "y_id"))
+Q_FB, TH_FB, W_FB, IQ_FB, ID_FB, I_REF = (XI[n] for n in ("q_fb", "th_fb", "w_fb", "iq_fb", "id_fb", "i_ref"))
+T_ID, T_F, Q_PREV, TH_PREV, IQ_PREV, ID_PREV = (XI[n] for n in ("t_id", "t_f", "q_prev", "th_prev", "iq_prev",
+                                                               "id_prev"))
+
+
+@njit(cache=True, inline="always")
+def _read(x, noise_std, z, lsb):
+    v = x + noise_std * z
+    if lsb > 0.0:
+        return np.rint(v / lsb) * lsb
+    return v
+
+
+@njit(cache=True, inline="always")
+def _clip(x, lim):
+    return min(max(x, -lim), lim)
+
+
+@njit(cache=True)
+def servo(X, P, q_set, qd_set, nz, ts):
+    """Sensors sampled (noise, hold, quantisation), then position -> speed -> current loops
+    and the inverter limit (``sensors.read``, ``controller.*``, ``power.limit_voltage``)."""
+    n, nj = X.shape[1], X.shape[2]
+    for r in range(n):
+        for j in range(nj):
+            q_fb = _read(X[Y_RES, r, j], P[RES_NOISE, r, j], nz[r, 0, j], P[RES_LSB, r, j]) + P[RES_OFF, r, j]
+            th_fb = _read(X[Y_ENC, r, j], P[ENC_NOISE, r, j], nz[r, 1, j], P[ENC_LSB, r, j])
+            w_fb = _read(X[DY_ENC, r, j], P[ENCV_NOISE, r, j], nz[r, 2, j], P[ENCV_LSB, r, j])
+            g = P[CUR_GAIN, r, j]
+            iq_fb = g * _read(X[Y_IQ, r, j], P[CUR_NOISE, r, j], nz[r, 3, j], P[CUR_LSB, r, j]) + P[CUR_OFF, r, j]
+            id_fb = g * _read(X[Y_ID, r, j], P[CUR_NOISE, r, j], nz[r, 4, j], P[CUR_LSB, r, j])
+            # position loop
+            w_ref = P[RATIO_NOM, r, j] * (P[FF, r, j] * qd_set[j] + P[POS_KP, r, j] * (q_set[j] - q_fb))
+            # speed loop
+            i_max = P[I_MAX, r, j]
+            err = w_ref - w_fb
+            integ_v = _clip(X[INTEG_V, r, j] + P[SPD_KI, r, j] * ts * err, i_max)
+            i_ref = _clip(P[SPD_KP, r, j] * err + integ_v, i_max)
+            # current loops
+            v_max = P[V_LIM, r, j]
+            cross = P[CROSS_NOM, r, j]
+            kp, ki = P[CUR_KP, r, j], P[CUR_KI, r, j]
+            e_q = i_ref - iq_fb
+            e_d = -id_fb
+            integ_q = _clip(X[INTEG_Q, r, j] + ki * ts * e_q, v_max)
+            integ_d = _clip(X[INTEG_D, r, j] + ki * ts * e_d, v_max) if cross != 0.0 else 0.0
+            v_q = kp * e_q + integ_q + P[KE_NOM, r, j] * w_fb + cross * w_fb * id_fb
+            v_d = kp * e_d + integ_d - cross * w_fb * iq_fb if cross != 0.0 else 0.0
+            # inverter
+            mag = math.sqrt(v_d * v_d + v_q * v_q)
+            scale = min(1.0, v_max / max(mag, 1e-300))
+            X[Q_FB, r, j], X[TH_FB, r, j], X[W_FB, r, j] = q_fb, th_fb, w_fb
+            X[IQ_FB, r, j], X[ID_FB, r, j], X[I_REF, r, j] = iq_fb, id_fb, i_ref
+            X[INTEG_V, r, j], X[INTEG_Q, r, j], X[INTEG_D, r, j] = integ_v, integ_q, integ_d
+            X[V_D, r, j], X[V_Q, r, j] = v_d * scale, v_q * scale
+
+
+@njit(cache=True)
+def physics(X, P, q, qd, m_ii, tau, dt, stribeck, has_cogging):
+    """Windings, gear eq. (1), friction eq. (2), rotor; writes the link torque ``tau``."""
+    n, nj = X.shape[1], X.shape[2]
+    for r in range(n):
+        for j in range(nj):
+            i_d, i_q, w_m, th_m = X[I_D, r, j], X[I_Q, r, j], X[W_M, r, j], X[TH_M, r, j]
+            X[IQ_PREV, r, j], X[ID_PREV, r, j] = i_q, i_d
+            # motor.electrical_step
+            coupling = P[CROSS, r, j] * w_m
+            decay, gain = P[DECAY, r, j], P[GAIN_IV, r, j]
+            i_d_new = decay * i_d + gain * (X[V_D, r, j] + coupling * i_q)
+            i_q_new = decay * i_q + gain * (X[V_Q, r, j] - coupling * i_d - P[KE, r, j] * w_m)
+            # gearbox.gear_torque
+            N = P[RATIO, r, j]
+            th = th_m / N - q[r, j]
+            dth = w_m / N - qd[r, j]
+            k, c, a = P[K, r, j], P[C, r, j], P[ALPHA, r, j]
+            t_low = k * th + c * dth
+            t_high = t_low - k * a
+            if a == 0.0:
+                t_id = t_low
+            elif th > a:
+                t_id = max(t_high, 0.0)
+            elif th < 0.0:
+                t_id = min(t_low, 0.0)
+            else:
+                t_id = 0.0
+            # friction.friction_torque + implicit_friction
+            w = qd[r, j]
+            eps = P[EPS, r, j]
+            tc = P[TC, r, j]
+            s = np.tanh(w / eps)
+            level = (P[TS, r, j] - tc) * (1.0 - np.tanh(stribeck * abs(w))) + tc
+            fv = P[FV, r, j]
+            t_f = s * level + fv * w
+            slope = level * (1.0 - s * s) / eps + fv
+            t_f = t_f / (1.0 + slope * dt / m_ii[r, j])
+            # rotor
+            t_m = P[KT, r, j] * i_q_new
+            if has_cogging:
+                t_m = t_m + P[COG_AMP, r, j] * np.sin(P[COG_PER, r, j] * th_m)
+            X[TH_PREV, r, j], X[Q_PREV, r, j] = th_m, q[r, j]
+            w_new = w_m + dt * (t_m - t_id / N) / P[JR, r, j]
+            X[W_M, r, j] = w_new
+            X[TH_M, r, j] = th_m + dt * w_new  # symplectic: the new speed
+            X[I_D, r, j], X[I_Q, r, j] = i_d_new, i_q_new
+            X[T_ID, r, j], X[T_F, r, j] = t_id, t_f
+            tau[r, j] = t_id - t_f
+
+
+@njit(cache=True)
+def sensors(X, P, q):
+    """Analog sensor filters after the MuJoCo step (first-order-hold discretisations)."""
+    n, nj = X.shape[1], X.shape[2]
+    for r in range(n):
+        for j in range(nj):
+            y, dy, u0 = X[Y_RES, r, j], X[DY_RES, r, j], X[Q_PREV, r, j]
+            u1 = q[r, j]
+            c = RES_C0
+            X[Y_RES, r, j] = P[c, r, j] * y + P[c + 1, r, j] * dy + P[c + 2, r, j] * u0 + P[c + 3, r, j] * u1
+            X[DY_RES, r, j] = P[c + 4, r, j] * y + P[c + 5, r, j] * dy + P[c + 6, r, j] * u0 + P[c + 7, r, j] * u1
+            y, dy, u0, u1 = X[Y_ENC, r, j], X[DY_ENC, r, j], X[TH_PREV, r, j], X[TH_M, r, j]
+            c = ENC_C0
+            X[Y_ENC, r, j] = P[c, r, j] * y + P[c + 1, r, j] * dy + P[c + 2, r, j] * u0 + P[c + 3, r, j] * u1
+            X[DY_ENC, r, j] = P[c + 4, r, j] * y + P[c + 5, r, j] * dy + P[c + 6, r, j] * u0 + P[c + 7, r, j] * u1
+            a, c0, c1 = P[CUR_A, r, j], P[CUR_C0, r, j], P[CUR_C1, r, j]
+            X[Y_IQ, r, j] = a * X[Y_IQ, r, j] + c0 * X[IQ_PREV, r, j] + c1 * X[I_Q, r, j]
+            X[Y_ID, r, j] = a * X[Y_ID, r, j] + c0 * X[ID_PREV, r, j] + c1 * X[I_D, r, j]
