@@ -22,7 +22,7 @@ campaign: $(STAMP)
 	$(BIN)/ur5fault campaign run campaigns/default.yaml --out results/default
 
 bench: $(STAMP)
-	$(BIN)/python bench/bench_speed.py
+	$(BIN)/python bench/bench_speed.py --campaign
 
 lint: $(STAMP)
 	$(BIN)/ruff check ur5fault tests bench

@@ -1,0 +1,17 @@
+"""The speed benchmark runs (quick mode) and prints its JSON line; its figures are not asserted."""
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+BENCH = Path(__file__).resolve().parents[1] / "bench" / "bench_speed.py"
+
+
+def test_bench_quick_prints_figures():
+    r = subprocess.run([sys.executable, str(BENCH), "--quick"], capture_output=True, text=True, timeout=900)
+    assert r.returncode == 0, r.stderr
+    out = json.loads(r.stdout.strip().splitlines()[-1])
+    for key in ("a_bare_mj_step_us", "b_one_run_us_per_step", "c_batch8_us_per_run_step", "c_batch32_us_per_run_step",
+                "c_batch128_us_per_run_step", "ratio_c_best_to_a_per_core", "peak_MB_per_run_batch32"):
+        assert key in out and out[key] > 0
