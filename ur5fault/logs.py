@@ -185,9 +185,11 @@ def read_sim(path: str | Path) -> MeasuredLog:
     meta = json.loads((table.schema.metadata or {}).get(b"ur5fault", b"{}"))
     tcp = df[["tcp_x_m", "tcp_y_m", "tcp_z_m"]].to_numpy(float) if "tcp_x_m" in df.columns else None
     qm = df[cols("q_M_FB_rad")].to_numpy(float) if all(c in df.columns for c in cols("q_M_FB_rad")) else None
+    temp = meta.get("joint_temperature_C")
     return MeasuredLog(
         source=src, t_s=t, q_target_rad=arrays["q_set_rad"], q_actual_rad=arrays["q_FB_rad"],
         current_A=arrays["i_FB_A"], tcp_m=tcp, q_motor_rad=qm,
+        temperature_C=None if temp is None else np.tile(np.asarray(temp, float), (t.size, 1)),
         payload_kg=float(meta.get("payload_kg", 0.0) or 0.0),
         tcp_offset_m=tuple(meta.get("tcp_offset_m", (0.0, 0.0, 0.15))),
     )

@@ -113,6 +113,7 @@ class SimResult:
             "motor_kind": list(p.motor.kind),
             "tcp_offset_m": list(p.tcp_offset_m),
             "payload_kg": a.payload_kg.tolist(),
+            "joint_temperature_C": a.temperature_C.tolist(),
             "mujoco_version": mujoco.__version__,
             "model_path": str(sim.model_path),
         }
@@ -147,7 +148,7 @@ class SimResult:
         return {
             "run_id": self.run_ids[run], "seed": self.seeds[run], "status": self.status[run],
             "reason": self.reason[run], "effects": list(self.effects[run]), "joint_names": list(JOINT_NAMES),
-            **{k: (v[run] if k == "payload_kg" else v) for k, v in self.meta.items()},
+            **{k: (v[run] if k in ("payload_kg", "joint_temperature_C") else v) for k, v in self.meta.items()},
         }
 
     def to_parquet(self, path: str | Path, run: int | str = 0) -> Path:

@@ -182,7 +182,26 @@ def hold(q_rad=PICK_APPROACH, seconds: float = 1.0, payload_kg: float = 0.0) -> 
     return Trajectory("hold", CB3_SETPOINT_PERIOD_S, np.vstack([q, q[-1:]]), (), payload_kg > 0, payload_kg)
 
 
-TRAJECTORIES: dict[str, Callable[..., Trajectory]] = {"pick_and_place": pick_and_place, "hold": hold}
+def joint_sweep(speed_scale: float = 1.0, payload_kg: float = 1.0) -> Trajectory:
+    """Every joint out and back twice, holding a payload throughout; about 10 s.
+
+    The outward pose leans the arm over the top, so the shoulder and elbow gravity torques
+    change sign (-41 -> +20 N*m and -19 -> +2 N*m with 1 kg); every joint reverses its velocity.
+    Used to test the discrepancy workflow on a motion it was not developed on.
+    """
+    v, a, ts = UR_DEFAULT_SPEED_RAD_S * speed_scale, UR_DEFAULT_ACCEL_RAD_S2 * speed_scale, CB3_SETPOINT_PERIOD_S
+    home = np.asarray(PICK_APPROACH)
+    out_ = np.array([0.5, -2.0, 0.2, -1.5, -1.2, 0.9])
+    back = home + np.array([-0.35, -0.25, 0.3, -0.4, -0.5, -0.6])
+    parts = [_dwell(home, 0.4, ts)]
+    for target in (out_, back, out_, home):
+        parts.append(movej(parts[-1][-1], target, v, a, ts))
+    parts.append(_dwell(home, 0.4, ts))
+    return Trajectory("joint_sweep", ts, np.concatenate(parts), (), payload_kg > 0, float(payload_kg))
+
+
+TRAJECTORIES: dict[str, Callable[..., Trajectory]] = {"pick_and_place": pick_and_place, "hold": hold,
+                                                      "joint_sweep": joint_sweep}
 
 
 def get_trajectory(name: str, **kwargs) -> Trajectory:
