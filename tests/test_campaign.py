@@ -14,7 +14,14 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from ur5fault.campaign import CampaignLockedError, _Lock, build_campaign, load_campaign, plan_batches, run_campaign
+from ur5fault.campaign import (
+    CampaignLockedError,
+    _Lock,
+    build_campaign,
+    load_campaign,
+    plan_batches,
+    run_campaign,
+)
 from ur5fault.errors import ParameterError, UnknownNameError
 from ur5fault.features import FEATURE_UNITS
 

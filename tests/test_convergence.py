@@ -13,7 +13,8 @@ from ur5fault.params import load_params
 
 def features(dt):
     p = load_params(overrides={"physics_dt_s": dt})
-    runs = [RunSpec("healthy", 11), RunSpec("bl", 11, (make_effect("backlash", "shoulder_lift_joint", backlash_deg=0.1),))]
+    fault = (make_effect("backlash", "shoulder_lift_joint", backlash_deg=0.1),)
+    runs = [RunSpec("healthy", 11), RunSpec("bl", 11, fault)]
     res = Simulator(p).run(pick_and_place(), runs, log_period_s=1e-3)
     assert res.status == ("ok", "ok")
     tcp_dev = np.max(np.linalg.norm(res.tcp_m[1] - res.tcp_m[0], axis=-1))

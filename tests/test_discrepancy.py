@@ -37,11 +37,20 @@ KINDS = {
 
 
 def generate(tmp_path, effects, seed, name="measured", sim=None):
-    """Write a 'measured' log of the joint sweep with the given effects and noise seed."""
+    """Write a 'measured' log of the joint sweep with the given effects and noise seed; the log
+    declares the nominal 1 kg payload (what the user believes), whatever the hidden truth."""
+    import json
+
+    import pyarrow.parquet as pq
+
     res = (sim or Simulator()).run(joint_sweep(payload_kg=1.0), [RunSpec(name, seed, tuple(effects))],
                                    log_period_s=0.008)
     path = tmp_path / f"{name}.parquet"
     res.to_parquet(path, 0)
+    table = pq.read_table(path)
+    meta = json.loads(table.schema.metadata[b"ur5fault"])
+    meta["payload_kg"] = 1.0
+    pq.write_table(table.replace_schema_metadata({**table.schema.metadata, b"ur5fault": json.dumps(meta)}), path)
     return path
 
 
@@ -61,10 +70,13 @@ def test_hidden_effect_is_named_estimated_and_removed(tmp_path, kind):
     model = DiscrepancyModel().fit(log)
     assert model.effects_, f"nothing named for {eff.describe()}; search: {model.log_}"
     first = model.effects_[0]
-    assert first.candidate.effect == kind, f"{eff.describe()} named as {first.candidate.label}"
-    assert first.candidate.joint == j
-    estimate = first.value if kind != "payload" else first.value
-    assert abs(estimate - truth) <= 0.25 * abs(truth - first.candidate.x0) + 1e-12, (estimate, truth)
+    # the right kind is named, or named as indistinguishable in this log (e.g. a current-sensor gain
+    # and a torque-constant change both scale current per torque); its own estimate is then checked
+    options = [(first.candidate, first.value), *first.alternatives]
+    match = [(c, v) for c, v in options if c.effect == kind and c.joint == j]
+    assert match, f"{eff.describe()} named as {first.sentence()}"
+    cand, estimate = match[0]
+    assert abs(estimate - truth) <= 0.25 * abs(truth - cand.x0), (estimate, truth)
     jn = JOINT_NAMES[j] if j is not None else max(model.rms_before_[signal], key=model.rms_before_[signal].get)
     before, after = model.rms_before_[signal][jn], model.rms_after_[signal][jn]
     assert after <= 0.3 * before, f"held-out {signal} gap on {jn}: {before:.4g} -> {after:.4g}"

@@ -3,7 +3,12 @@
 import numpy as np
 import pytest
 
-from ur5fault.drive.friction import friction_as_printed, friction_torque, implicit_friction, viscous_coefficient
+from ur5fault.drive.friction import (
+    friction_as_printed,
+    friction_torque,
+    implicit_friction,
+    viscous_coefficient,
+)
 
 TC, TS, FV, RATE, EPS = 6.8, 8.2, 19.9, 10.0, 1e-3
 

@@ -60,7 +60,8 @@ def parse_trajectory(spec: Any, where: str) -> Trajectory:
             return get_trajectory(str(spec["name"]), **kwargs)
         except TypeError as exc:
             raise ParameterError(f"{where}: {exc}") from None
-    raise ParameterError(f"{where}: expected a trajectory name or a mapping with 'name'; valid: {', '.join(TRAJECTORIES)}")
+    raise ParameterError(
+        f"{where}: expected a trajectory name or a mapping with 'name'; valid: {', '.join(TRAJECTORIES)}")
 
 
 def check_keys(data: Mapping[str, Any], valid: Sequence[str], where: str) -> None:

@@ -108,13 +108,13 @@ class Replay:
     """Simulates a log's target trajectory under a model (overlay params + effects)."""
 
     def __init__(self, log: MeasuredLog, params_overrides: dict | None = None,
-                 base_effects: Sequence[EffectSpec] = (), seed: int = WORKFLOW_SEED) -> None:
+                 base_effects: Sequence[EffectSpec] = (), seed: int = WORKFLOW_SEED, jobs: int = 1) -> None:
         self.log = log
+        self.jobs = max(1, int(jobs))
         over = {"tcp_offset_m": list(log.tcp_offset_m)}
         if log.temperature_C is not None:
             over["joint_temperature_C"] = np.clip(log.temperature_C.mean(axis=0), -20, 120).tolist()
         self.params = load_params(overrides=deep_merge(over, dict(params_overrides or {})))
-        self.sim = Simulator(self.params)
         self.traj = log.to_trajectory()
         self.base = tuple(base_effects)
         self.seed = seed
@@ -128,11 +128,22 @@ class Replay:
     def signals(self, effect_sets: Sequence[Sequence[EffectSpec]], n_samples: int) -> list[dict[str, np.ndarray]]:
         """Simulated signals at log samples 1..n_samples, one dict per effect set."""
         runs = [RunSpec(f"c{i}", self.seed, self.base + tuple(e)) for i, e in enumerate(effect_sets)]
-        res = self.sim.run(self.traj, runs, log_period_s=self.log.period_s, duration_s=n_samples * self.log.period_s)
         self.n_sim += len(runs)
+        if self.jobs > 1 and len(runs) >= 2 * self.jobs:
+            # a batch equals its single runs bit for bit, so splitting over processes changes nothing
+            import joblib
+
+            size = -(-len(runs) // self.jobs)
+            parts = joblib.Parallel(n_jobs=self.jobs)(
+                joblib.delayed(_simulate_part)(self.params, self.traj, runs[i : i + size], self.log.period_s, n_samples)
+                for i in range(0, len(runs), size))
+            return [d for part in parts for d in self._unpack(part)]
+        return self._unpack(_simulate_part(self.params, self.traj, runs, self.log.period_s, n_samples))
+
+    def _unpack(self, res) -> list[dict[str, np.ndarray]]:
         ratio = np.asarray(self.params.gear.ratio)
         out = []
-        for i in range(len(runs)):
+        for i in range(res.n_runs):
             d = {"current_A": res["i_FB_A"][i], "position_rad": res["q_FB_rad"][i], "T_gear_Nm": res["T_gear_Nm"][i],
                  "status": res.status[i]}
             if self.log.q_motor_rad is not None:
@@ -147,6 +158,10 @@ class Replay:
             ratio = np.asarray(self.params.gear.ratio)
             m["mismatch_rad"] = L.q_motor_rad[1 : n_samples + 1] / ratio - L.q_actual_rad[1 : n_samples + 1]
         return m
+
+
+def _simulate_part(params, traj, runs, period_s: float, n_samples: int):
+    return Simulator(params).run(traj, runs, log_period_s=period_s, duration_s=n_samples * period_s)
 
 
 def weighted_rss(meas: dict, sim: dict, sl: slice = slice(None)) -> float:
@@ -215,8 +230,27 @@ def conditions(log: MeasuredLog, n: int, torque: np.ndarray) -> dict[str, np.nda
                     near[max(0, k - win) : k + win, j] = True
                 last = sign[k, j]
     peak = lambda x: np.abs(x) > 0.5 * np.maximum(np.abs(x).max(axis=0), 1e-12)  # noqa: E731
-    return {"at speed": peak(qd), "near velocity reversals": near, "accelerating": peak(qdd),
-            "at rest": ~moving, "under high load": peak(torque)}
+    out = {"at speed": peak(qd), "near velocity reversals": near, "accelerating": peak(qdd),
+           "at rest": ~moving, "under high load": peak(torque)}
+    if log.temperature_C is not None and np.ptp(log.temperature_C) > 0.5:
+        temp = log.temperature_C[1 : n + 1]
+        out["warmer half"] = temp > np.median(temp, axis=0)
+    return out
+
+
+def localise(log: MeasuredLog, residual: dict, torque: np.ndarray, top: int = 3) -> list[dict[str, Any]]:
+    """The largest residuals (signal, joint) with their RMS under each operating condition."""
+    n = next(iter(residual.values())).shape[0]
+    masks = conditions(log, n, torque)
+    ranked = sorted(((float(np.sqrt(np.nanmean(r[:, j] ** 2))) / NOISE_SIGMA[s], s, j)
+                     for s, r in residual.items() for j in range(N_JOINTS)), reverse=True)[:top]
+    out = []
+    for ratio, s, j in ranked:
+        r = residual[s][:, j]
+        by = {k: float(np.sqrt(np.nanmean(r[m[:, j]] ** 2))) for k, m in masks.items() if m[:, j].any()}
+        out.append({"signal": s, "joint": JOINT_NAMES[j], "rms": float(np.sqrt(np.nanmean(r**2))),
+                    "rms_over_noise": ratio, "rms_by_condition": by, "largest_where": max(by, key=by.get)})
+    return out
 
 
 @dataclasses.dataclass
@@ -226,21 +260,30 @@ class FoundEffect:
     interval: tuple[float, float]
     delta_bic: float
     share_explained: dict[str, float]
+    alternatives: list[tuple[Candidate, float]] = dataclasses.field(default_factory=list)
 
     def to_json(self) -> dict[str, Any]:
         c = self.candidate
         return {"name": c.effect, "joint": JOINT_NAMES[c.joint] if c.joint is not None else None,
                 "parameters": {c.param: self.value}, "interval": {c.param: list(self.interval)},
-                "delta_bic": self.delta_bic, "share_explained": self.share_explained}
+                "delta_bic": self.delta_bic, "share_explained": self.share_explained,
+                "indistinguishable_from": [
+                    {"name": a.effect, "joint": JOINT_NAMES[a.joint] if a.joint is not None else None,
+                     "parameters": {a.param: v}} for a, v in self.alternatives]}
 
     def sentence(self) -> str:
         c = self.candidate
         where = JOINT_NAMES[c.joint] if c.joint is not None else "robot"
         unit = REGISTRY[c.effect].param(c.param).unit
         best = max(self.share_explained, key=self.share_explained.get)
+        alt = ""
+        if self.alternatives:
+            alt = "; indistinguishable in this log from " + ", ".join(
+                f"{a.effect} {a.param} {v:.4g}" + (f" on {JOINT_NAMES[a.joint]}" if a.joint is not None else "")
+                for a, v in self.alternatives)
         return (f"{where}: {REGISTRY[c.effect].doc} - {c.param} {self.value:.4g} {unit} "
                 f"({self.interval[0]:.4g}..{self.interval[1]:.4g}) explains "
-                f"{100 * self.share_explained[best]:.0f} % of the {best} residual")
+                f"{100 * self.share_explained[best]:.0f} % of the {best} residual{alt}")
 
 
 class DiscrepancyModel:
@@ -256,7 +299,7 @@ class DiscrepancyModel:
     """
 
     def __init__(self, fit_fraction: float = 0.6, max_effects: int = 3, min_delta_bic: float = 10.0,
-                 kinds: Sequence[str] | None = None, refine: int = 6, jobs: int = 1, min_share: float = 0.2) -> None:
+                 kinds: Sequence[str] | None = None, refine: int = 6, jobs: int = 1, min_share: float = 0.5) -> None:
         if not 0.2 <= fit_fraction <= 0.9:
             raise ParameterError(f"fit_fraction = {fit_fraction} is out of range [0.2, 0.9]")
         self.fit_fraction, self.max_effects, self.min_delta_bic = fit_fraction, max_effects, min_delta_bic
@@ -268,7 +311,7 @@ class DiscrepancyModel:
         t0 = time.perf_counter()
         n_all = log.t_s.size - 1
         n_fit = int(n_all * self.fit_fraction)
-        rp = Replay(log, params_overrides, base_effects)
+        rp = Replay(log, params_overrides, base_effects, jobs=self.jobs)
         self.replay_ = rp
         meas = rp.measured(n_fit)
         found: list[FoundEffect] = []
@@ -286,7 +329,7 @@ class DiscrepancyModel:
             best = self._search(rp, meas, base_sim, current, cands, n_fit, n_eff, len(current))
             if best is None:
                 break
-            cand, value, sim_best, rss1, sens = best
+            cand, value, sim_best, rss1, sens, alternatives = best
             bic1 = bic(rss1, n_eff, len(current) + 1)
             channel_share = max(
                 1 - float(np.nansum((meas[s][:, j] - sim_best[s][:, j]) ** 2))
@@ -304,7 +347,8 @@ class DiscrepancyModel:
                 before = float(np.nansum((meas[s] - base_sim[s]) ** 2))
                 after = float(np.nansum((meas[s] - sim_best[s]) ** 2))
                 share[s] = 1 - after / before if before > 0 else 0.0
-            found.append(FoundEffect(cand, value, (value - 1.96 * sigma, value + 1.96 * sigma), bic1 - bic0, share))
+            found.append(FoundEffect(cand, value, (value - 1.96 * sigma, value + 1.96 * sigma), bic1 - bic0, share,
+                                     alternatives))
             current.append(cand.spec(value))
             base_sim = sim_best
         self.effects_ = found
@@ -321,6 +365,7 @@ class DiscrepancyModel:
         self.residual_before_, self.residual_after_ = (
             {s: meas_all[s] - b[s] for s in meas_all} for b in both)
         self.unexplained_ = self._unexplained(meas_all, both[1], n_fit, n_all)
+        self.localisation_ = localise(log, self.residual_before_, both[0]["T_gear_Nm"])
         self.n_fit_, self.n_all_ = n_fit, n_all
         self.wall_s_ = time.perf_counter() - t0
         self.n_simulated_runs_ = rp.n_sim
@@ -361,7 +406,7 @@ class DiscrepancyModel:
         # secant refinements of the top candidates, one batch per round, in a variable u in which the
         # effect is about linear; a step that lands worse than the best point is halved back towards it
         states = []
-        for _, c, x_est, sim_probe, sens in top:
+        for _gain, c, _x_est, sim_probe, _sens in top:
             p = REGISTRY[c.effect].param(c.param)
             fwd, inv = TRANSFORMS.get((c.effect, c.param), _IDENTITY)
             u0, u1 = fwd(c.x0), fwd(c.probe)
@@ -393,7 +438,11 @@ class DiscrepancyModel:
                 st["sens_u"] = su
                 st["next"] = _clip(inv(ua + num / den), st["p"]) if den > 0 else xa
         best = None
+        per_state = []
         for st in states:
+            ok = [(x, r) for x, sim, r in st["pts"][1:] if sim["status"] == "ok" and math.isfinite(r)]
+            if ok:
+                per_state.append((st["c"], *min(ok, key=lambda t: t[1])))
             for x, sim, rss in st["pts"][1:]:
                 if sim["status"] != "ok" or not math.isfinite(rss):
                     continue
@@ -404,7 +453,14 @@ class DiscrepancyModel:
                     xo, yo = others[0][0], others[0][1]
                     sens = {s: (sim[s] - yo[s]) / (x - xo) for s in meas}
                     best = (st["c"], float(x), sim, rss, sens)
-        return best
+        if best is None:
+            return None
+        # other effects that explain (almost) as much, >= 98 % of the best one's improvement: this log
+        # cannot tell them apart (e.g. a current-sensor gain and a torque-constant change)
+        gain = weighted_rss(meas, base_sim) - best[3]
+        alts = [(c, float(x)) for c, x, r in per_state
+                if c is not best[0] and gain > 0 and (r - best[3]) < 0.02 * gain]
+        return (*best, alts)
 
     def _unexplained(self, meas, sim, n_fit, n_all) -> list[dict[str, Any]]:
         """Signal/joint pairs whose held-out residual stays above 3x the noise floor."""
@@ -445,6 +501,7 @@ class DiscrepancyModel:
             "rms_fit_before": self.rms_fit_before_,
             "rms_fit_after": self.rms_fit_after_,
             "unexplained": self.unexplained_,
+            "localisation_before": self.localisation_,
             "search": self.log_,
             "fit_fraction": self.fit_fraction,
             "held_out_s": [self.n_fit_ * self.replay_.log.period_s, self.n_all_ * self.replay_.log.period_s],
@@ -487,7 +544,12 @@ def write_report(model: DiscrepancyModel, out: Path) -> list[Path]:
         fig.savefig(p, dpi=80)
         plt.close(fig)
         figs.append(p)
-    lines = [f"# Discrepancy report: {log.source}", ""]
+    lines = [f"# Discrepancy report: {log.source}", "", "## Where the starting model disagrees", "",
+             "| signal | joint | RMS | RMS / noise | largest where |", "| --- | --- | --- | --- | --- |"]
+    for loc in summ["localisation_before"]:
+        lines.append(f"| {loc['signal']} | {loc['joint']} | {loc['rms']:.4g} | {loc['rms_over_noise']:.1f} | "
+                     f"{loc['largest_where']} ({loc['rms_by_condition'][loc['largest_where']]:.4g}) |")
+    lines.append("")
     lines += ["## Effects found", ""]
     lines += [f"- {s}" for s in summ["named"]] or ["- none: no candidate lowered the information criterion enough"]
     lines += ["", "## Held-out gap (RMS, measured - simulated)", "",

@@ -17,6 +17,7 @@ def register(sub) -> None:
     d.add_argument("--tcp-offset-m", type=float, nargs=3, help="tool offset in the flange frame [m] (rtde)")
     d.add_argument("--fit-fraction", type=float, default=0.6, help="share of the log used for fitting (0.2..0.9)")
     d.add_argument("--max-effects", type=int, default=3)
+    d.add_argument("--jobs", type=int, help="worker processes for the candidate batches (default: all cores)")
     d.set_defaults(func=cmd_discrepancy)
 
 
@@ -34,7 +35,10 @@ def cmd_discrepancy(args: argparse.Namespace) -> int:
     log = read_log(args.log, args.fmt, **kwargs)
     overlay = Overlay.load(args.model) if args.model else None
     print(f"{log.source}: {log.t_s[-1]:.1f} s at {1 / log.period_s:.0f} Hz; fitting...", file=sys.stderr)
-    model = DiscrepancyModel(fit_fraction=args.fit_fraction, max_effects=args.max_effects).fit(
+    import os
+
+    jobs = args.jobs or os.cpu_count() or 1
+    model = DiscrepancyModel(fit_fraction=args.fit_fraction, max_effects=args.max_effects, jobs=jobs).fit(
         log, dict(overlay.params) if overlay else None, overlay.effects if overlay else ())
     paths = write_report(model, Path(args.out))
     summ = model.summary()

@@ -99,7 +99,7 @@ def make_effect(name: str, joint: int | str | None = None, where: str = "", **va
         j = None
     known = {p.name: p for p in eff.params}
     out = []
-    for key, v in values.items():
+    for key in values:
         if key not in known:
             raise UnknownNameError(f"parameter of effect {name!r}", key, known, where)
     for p in eff.params:

@@ -25,7 +25,6 @@ from pathlib import Path
 
 import mujoco
 import numpy as np
-from numpy.typing import NDArray
 
 from .axes import N_JOINTS
 from .drive import controller as ctl
@@ -85,6 +84,10 @@ class Simulator:
         self.model_path = Path(model_path) if model_path is not None else DEFAULT_MODEL_PATH
         self.model = mujoco.MjModel.from_xml_path(str(self.model_path))
         self.model.opt.timestep = self.params.physics_dt_s
+        # the payload's centre of mass may move off its body origin at run time (effect payload_com):
+        # MuJoCo skips body_ipos for bodies compiled with coinciding frames, so clear that flag
+        payload = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_BODY, "payload")
+        self.model.body_sameframe[payload] = 0
         m = self.model
         self._tcp_site = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SITE, "tcp")
         self._payload_body = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "payload")
@@ -196,7 +199,8 @@ def _integrate(sim: Simulator, traj: Trajectory, runs: list[RunSpec], a: RunArra
                     else:
                         j = int(np.argmax(np.abs(q_set_s[si] - drive.q_fb[r])))
                         status[r] = Status.PROTECTIVE_STOP
-                        reason[r] = f"tracking error of joint {j + 1} above {PROTECTIVE_STOP_RAD} rad at t={step * dt:.4f} s"
+                        reason[r] = (f"tracking error of joint {j + 1} above {PROTECTIVE_STOP_RAD} rad "
+                                     f"at t={step * dt:.4f} s")
             m_ii = mb.mass_diagonal()
             if progress is not None and step >= next_progress * n_steps:
                 progress(step / n_steps)

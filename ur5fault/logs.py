@@ -117,7 +117,8 @@ def read_nist(path: str | Path) -> MeasuredLog:
     opt = lambda cols: df[cols].to_numpy(float) if all(c in df.columns for c in cols) else None  # noqa: E731
     ct = opt(cur_t)
     return MeasuredLog(
-        source=src, t_s=t - t[0], q_target_rad=qt, q_actual_rad=qa, current_A=arrays["actual currents"] * UR_CURRENT_SIGN,
+        source=src, t_s=t - t[0], q_target_rad=qt, q_actual_rad=qa,
+        current_A=arrays["actual currents"] * UR_CURRENT_SIGN,
         target_current_A=None if ct is None else ct * UR_CURRENT_SIGN, temperature_C=opt(temp), tcp_m=opt(tcp),
         payload_kg=NIST_PAYLOAD_KG, tcp_offset_m=NIST_TOOL_OFFSET_M,
     )
