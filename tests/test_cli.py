@@ -73,3 +73,14 @@ def test_bad_yaml_files(tmp_path):
 def test_effects_lists_registry():
     r = run("effects")
     assert r.returncode == 0 and "backlash" in r.stdout and "torque_constant" in r.stdout
+
+
+def test_discrepancy_bad_input(tmp_path):
+    r = run("discrepancy", str(tmp_path / "nope.csv"), "--format", "rtde", "--out", str(tmp_path / "o"))
+    assert r.returncode == 2 and "no such file" in r.stderr and len(r.stderr.strip().splitlines()) == 1
+    r = run("discrepancy", "x.csv", "--format", "excel", "--out", str(tmp_path / "o"))
+    assert r.returncode == 2 and "invalid choice: 'excel'" in r.stderr
+    bad = tmp_path / "log.csv"
+    bad.write_text("timestamp,target_q_0\n0,0\n")
+    r = run("discrepancy", str(bad), "--format", "rtde", "--out", str(tmp_path / "o"))
+    assert r.returncode == 2 and "missing required column 'target_q_1'" in r.stderr
