@@ -90,7 +90,6 @@ class Simulator:
         self.model.body_sameframe[payload] = 0
         m = self.model
         self._tcp_site = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SITE, "tcp")
-        self._payload_body = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "payload")
         p = self.params
         self.gains = ctl.design_gains(
             p.controller,

@@ -43,6 +43,20 @@ def _resimulate(out: Path, features: pd.DataFrame, run_ids: list[str]) -> dict[s
         return {rc.run_id: pd.read_parquet(Path(tmp) / f"{rc.run_id}.parquet") for rc in batch}
 
 
+def _finish(fig, ax, ylabel: str, title: str, path: Path) -> Path:
+    """Label a time plot, save it as PNG and close it."""
+    import matplotlib.pyplot as plt
+
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel(ylabel)
+    ax.set_title(title)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
 def plot_campaign(out: Path, feature: str = "tcp_dev_max_mm", plot_dir: Path | None = None) -> list[Path]:
     import matplotlib
 
@@ -75,15 +89,9 @@ def plot_campaign(out: Path, feature: str = "tcp_dev_max_mm", plot_dir: Path | N
                                  b[["tcp_x_m", "tcp_y_m", "tcp_z_m"]].to_numpy(), axis=1) * 1e3
             ax.plot(a["t_s"], dev, lw=0.8, label=f"J{row['fault_joint']} {JOINT_NAMES[row['fault_joint'] - 1]}")
         ax.axhline(0.5, color="k", ls="--", lw=0.8, label="0.5 mm threshold")
-        ax.set_xlabel("time [s]")
-        ax.set_ylabel("TCP deviation from healthy twin [mm]")
-        ax.set_title("Backlash 0.1 deg in each joint (cf. paper Fig. 3)")
-        ax.legend(fontsize=8)
-        fig.tight_layout()
-        p = plot_dir / "fig3_tcp_deviation_alpha0.1.png"
-        fig.savefig(p, dpi=110)
-        plt.close(fig)
-        written.append(p)
+        written.append(_finish(fig, ax, "TCP deviation from healthy twin [mm]",
+                               "Backlash 0.1 deg in each joint (cf. paper Fig. 3)",
+                               plot_dir / "fig3_tcp_deviation_alpha0.1.png"))
 
     # Fig. 4: shoulder current for several alpha
     fig4 = bl[bl["fault_joint"] == 2].sort_values("backlash_deg")
@@ -96,15 +104,9 @@ def plot_campaign(out: Path, feature: str = "tcp_dev_max_mm", plot_dir: Path | N
         for _, row in fig4.iterrows():
             s = series[row["run_id"]]
             ax.plot(s["t_s"], s["i_FB_A_j2"], lw=0.7, label=f"alpha = {row['backlash_deg']:g} deg")
-        ax.set_xlabel("time [s]")
-        ax.set_ylabel("shoulder motor current i_FB (q axis) [A]")
-        ax.set_title("Shoulder backlash: current spikes at torque reversals (cf. paper Fig. 4)")
-        ax.legend(fontsize=8)
-        fig.tight_layout()
-        p = plot_dir / "fig4_shoulder_current.png"
-        fig.savefig(p, dpi=110)
-        plt.close(fig)
-        written.append(p)
+        written.append(_finish(fig, ax, "shoulder motor current i_FB (q axis) [A]",
+                               "Shoulder backlash: current spikes at torque reversals (cf. paper Fig. 4)",
+                               plot_dir / "fig4_shoulder_current.png"))
 
     # heat map of a feature over joint x level
     if not bl.empty:
