@@ -83,6 +83,19 @@ def test_cli_rejects_bad_campaign_before_simulating(tmp_path):
 
 
 # ----------------------------------------------------------------------------- grid
+def test_model_overlay_applies_to_every_run(tmp_path):
+    ov = write(tmp_path, "params: {gear: {damping_Nms_per_rad: 18.0}}\n"
+                         "effects:\n  - {effect: current_sensor_offset, joint: wrist_3_joint, offset_A: -0.12}\n",
+               "overlay.yaml")
+    camp = load_campaign(REPO / "campaigns" / "default.yaml", overlay=ov)
+    assert camp.base_params["gear"]["damping_Nms_per_rad"] == 18.0
+    assert camp.base_effects[0].name == "current_sensor_offset" and camp.base_effects[0].joint == 5
+    assert "current_sensor_offset" in camp.text  # the manifest records what was run
+    bad = write(tmp_path, "effects:\n  - {effect: rust}\n", "bad_overlay.yaml")
+    with pytest.raises(UnknownNameError, match="bad_overlay.yaml: effects\\[0\\]: unknown effect 'rust'"):
+        load_campaign(REPO / "campaigns" / "default.yaml", overlay=bad)
+
+
 def test_default_grid():
     camp = load_campaign(REPO / "campaigns" / "default.yaml")
     # 6 joints x 5 non-zero levels, the level-0 runs are all the one healthy baseline

@@ -45,7 +45,7 @@ from .axes import JOINT_NAMES, joint_index
 from .config import check_keys, parse_effects, parse_trajectory
 from .effects import REGISTRY, EffectSpec, make_effect
 from .errors import ConfigFileError, ParameterError, UnknownNameError, Ur5FaultError
-from .params import load_params, read_yaml
+from .params import deep_merge, load_params, read_yaml
 from .result import write_parquet_atomic
 
 CAMPAIGN_KEYS = ("name", "out", "trajectory", "base", "sweep", "zip", "threshold_mm", "batch_size",
@@ -158,11 +158,28 @@ def _check_value(key: str, value: Any, where: str) -> Any:
     return float(value)
 
 
-def load_campaign(path: str | Path, out: str | Path | None = None) -> Campaign:
-    """Read and validate a campaign file; every error names the file and key path."""
+def load_campaign(path: str | Path, out: str | Path | None = None, overlay: str | Path | None = None) -> Campaign:
+    """Read and validate a campaign file; every error names the file and key path.
+
+    ``overlay``: a model overlay YAML (``params`` and ``effects``, e.g. written by ``ur5fault
+    discrepancy``) merged into the campaign's ``base``: its parameters under the campaign's own, its
+    effects before them.  The merged text is what the manifest records.
+    """
     path = Path(path)
     data = read_yaml(path)
-    return build_campaign(data, path.name, path.read_text(), path, out)
+    text = path.read_text()
+    if overlay is not None:
+        from .config import Overlay
+
+        ov_path = Path(overlay)
+        Overlay.load(ov_path)  # validated with its own file name in messages
+        ov = read_yaml(ov_path)
+        base = dict(data.get("base") or {})
+        base["params"] = deep_merge(dict(ov.get("params") or {}), dict(base.get("params") or {}))
+        base["effects"] = list(ov.get("effects") or []) + list(base.get("effects") or [])
+        data = {**data, "base": base}
+        text = yaml.safe_dump(dict(data), sort_keys=False)
+    return build_campaign(data, path.name, text, path, out)
 
 
 def build_campaign(data: Mapping[str, Any], where: str, text: str = "", path: Path | None = None,

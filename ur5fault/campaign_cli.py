@@ -14,6 +14,7 @@ def register(sub) -> None:
     r = csub.add_parser("run", help="run (or resume) a campaign")
     r.add_argument("file", help="campaign YAML, e.g. campaigns/default.yaml")
     r.add_argument("--out", help="output folder (default: the file's `out`)")
+    r.add_argument("--model", help="model overlay YAML (e.g. from `ur5fault discrepancy`) applied to every run")
     r.add_argument("--jobs", type=int, help="worker processes (default: all cores)")
     r.add_argument("--backend", choices=("loky", "dask"), default="loky")
     r.add_argument("--scheduler", help="Dask scheduler address for --backend dask, e.g. tcp://127.0.0.1:8786")
@@ -35,7 +36,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     from .campaign import acceptable_backlash, load_campaign, run_campaign, tcp_table
     from .errors import ParameterError
 
-    camp = load_campaign(args.file, args.out)
+    camp = load_campaign(args.file, args.out, args.model)
     if args.jobs is not None and args.jobs < 1:
         raise ParameterError(f"--jobs {args.jobs}: must be at least 1")
     print(f"campaign {camp.name}: {len(camp.runs)} runs (twins included) -> {camp.out}", file=sys.stderr)
