@@ -42,7 +42,7 @@ def test_simulate_from_yaml(tmp_path):
         (["--backlash", "elbow:-0.1"], "backlash.backlash_deg = -0.1 is out of range [0, 5] deg"),
         (["--backlash", "elbow"], "expected JOINT:DEGREES"),
         (["--effect", "rust@1:scale=2"], "unknown effect 'rust'; valid: backlash,"),
-        (["--trajectory", "zigzag"], "unknown trajectory 'zigzag'; valid: hold, pick_and_place"),
+        (["--trajectory", "zigzag"], "unknown trajectory 'zigzag'; valid: hold, joint_sweep, pick_and_place"),
         (["--config", "/nonexistent.yaml"], "/nonexistent.yaml: cannot read"),
     ],
 )
