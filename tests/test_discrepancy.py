@@ -31,6 +31,7 @@ KINDS = {
     "resolver_offset": ("offset_deg", (0.02, 0.1), (0, 1, 2, 3, 4, 5), "mismatch_rad"),
     "gear_stiffness": ("scale", (0.3, 0.6), (1, 2), "mismatch_rad"),
     "cogging": ("amplitude_Nm", (0.03, 0.08), (0, 1, 2), "current_A"),
+    "delay": ("delay_ms", (3.0, 10.0), (None,), "position_rad"),
     "payload": ("mass_kg", (1.5, 2.2), (None,), "current_A"),
     "payload_com": ("dz_m", (0.06, 0.12), (None,), "current_A"),
 }

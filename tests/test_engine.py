@@ -180,3 +180,14 @@ def test_to_pandas_and_parquet_roundtrip(batch, tmp_path):
     out = batch.to_parquet(tmp_path / "run.parquet", "bl_shoulder")
     back = pd.read_parquet(out)
     pd.testing.assert_frame_equal(back, df)
+
+
+def test_setpoint_delay_shifts_the_motion_in_time():
+    runs = [RunSpec("now", 2), RunSpec("late", 2, (make_effect("delay", delay_ms=5.0),))]
+    res = Simulator().run(pick_and_place(), runs, duration_s=4.0)
+    q0, q1 = res["q_rad"][0], res["q_rad"][1]
+    moving = np.abs(np.gradient(q0[:, 1], 1e-3)) > 0.1
+    assert moving.sum() > 200
+    shifted = np.abs(q1[5:] - q0[:-5])[moving[5:]]  # 5 ms = 5 log samples
+    unshifted = np.abs(q1 - q0)[moving]
+    assert shifted.max() < 0.1 * unshifted.max()

@@ -40,7 +40,7 @@ def test_one_step_agrees_to_rounding(packed, seed):
     qd[0, :2] = [1e-4, -3e-4]  # inside the smooth sign
     m_ii = rng.uniform(1e-4, 3.0, q.shape)
     nz = rng.standard_normal((q.shape[0], 5, 6))
-    q_set, qd_set = q[0] + 1e-3, rng.normal(0, 0.5, 6)
+    q_set, qd_set = q + 1e-3, rng.normal(0, 0.5, q.shape)
     outs = []
     for cls in (NumpyDrive, NumbaDrive):
         d = cls(P, X0.copy(), 5e-5, 1e-4, 10.0)

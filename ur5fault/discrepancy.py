@@ -72,6 +72,7 @@ PROBES = {
     ("current_sensor_gain", "gain"): 1.1,
     ("current_sensor_offset", "offset_A"): 0.1,
     ("cogging", "amplitude_Nm"): 0.02,
+    ("delay", "delay_ms"): 4.0,
     ("payload", "mass_kg"): None,  # nominal + 0.5 kg
     ("payload_com", "dx_m"): 0.05, ("payload_com", "dy_m"): 0.05, ("payload_com", "dz_m"): 0.05,
 }

@@ -152,6 +152,10 @@ def _payload(a, row, j, v):
     a.payload_kg[row] = v["mass_kg"]
 
 
+def _delay(a, row, j, v):
+    a.setpoint_delay_s[row] = v["delay_ms"] * 1e-3
+
+
 def _payload_com(a, row, j, v):
     a.payload_com_m[row, :] = (v["dx_m"], v["dy_m"], v["dz_m"])
 
@@ -245,6 +249,14 @@ REGISTRY: dict[str, Effect] = {
             (EffectParam("offset_A", "A", -2.0, 2.0, 0.0, "added to the reading"),),
             True,
             _add("current_offset_A", "offset_A"),
+        ),
+        Effect(
+            "delay",
+            "time delay between the logged setpoints and their execution (communication latency)",
+            (EffectParam("delay_ms", "ms", 0.0, 50.0, 0.0, "in whole servo periods (0.1 ms)"),),
+            False,
+            _delay,
+            signal="position_rad",
         ),
         Effect(
             "cogging",

@@ -167,6 +167,9 @@ def _integrate(sim: Simulator, traj: Trajectory, runs: list[RunSpec], a: RunArra
     drive = DRIVES[sim.drive](P, initial_state(P, q, bias), dt, ts, p.friction.stribeck_rate_s_per_rad)
     m_ii = mb.mass_diagonal()
 
+    # setpoint latency per run, in whole servo samples (effect "delay")
+    delay_k = np.rint(a.setpoint_delay_s / ts).astype(int)
+    delayed = bool(np.any(delay_k))
     rngs = [np.random.default_rng(r.seed) for r in runs]
     noise = np.empty((n, NOISE_CHUNK_SAMPLES, 5, N_JOINTS))
 
@@ -185,10 +188,16 @@ def _integrate(sim: Simulator, traj: Trajectory, runs: list[RunSpec], a: RunArra
             if ci == 0:
                 for r in range(n):
                     noise[r] = rngs[r].standard_normal((NOISE_CHUNK_SAMPLES, 5, N_JOINTS))
-            drive.servo(q_set_s[si], qd_set_s[si], noise[:, ci])
+            if delayed:
+                k = np.maximum(si - delay_k, 0)
+                q_set_now, qd_set_now = q_set_s[k], qd_set_s[k]
+            else:
+                q_set_now = np.broadcast_to(q_set_s[si], (n, N_JOINTS))
+                qd_set_now = np.broadcast_to(qd_set_s[si], (n, N_JOINTS))
+            drive.servo(q_set_now, qd_set_now, noise[:, ci])
             # run health: a diverged or tripped run is frozen and its remaining log left NaN
             bad = ~np.all(np.isfinite(q), axis=1) | np.any(np.abs(q) > 50.0, axis=1)
-            trip = np.any(np.abs(q_set_s[si] - drive.q_fb) > PROTECTIVE_STOP_RAD, axis=1)
+            trip = np.any(np.abs(q_set_now - drive.q_fb) > PROTECTIVE_STOP_RAD, axis=1)
             if bad.any() or trip.any():
                 for r in np.flatnonzero(active & (bad | trip)):
                     active[r] = False
@@ -196,7 +205,7 @@ def _integrate(sim: Simulator, traj: Trajectory, runs: list[RunSpec], a: RunArra
                         status[r] = Status.DIVERGED
                         reason[r] = f"non-finite or runaway joint state at t={step * dt:.4f} s"
                     else:
-                        j = int(np.argmax(np.abs(q_set_s[si] - drive.q_fb[r])))
+                        j = int(np.argmax(np.abs(q_set_now[r] - drive.q_fb[r])))
                         status[r] = Status.PROTECTIVE_STOP
                         reason[r] = (f"tracking error of joint {j + 1} above {PROTECTIVE_STOP_RAD} rad "
                                      f"at t={step * dt:.4f} s")

@@ -55,6 +55,7 @@ class RunArrays:
     current_offset_A: NDArray
     payload_kg: NDArray
     payload_com_m: NDArray
+    setpoint_delay_s: NDArray
 
     @property
     def n_runs(self) -> int:
@@ -112,6 +113,7 @@ def build_run_arrays(params: RobotParams, effects: Sequence[Sequence[EffectSpec]
         current_offset_A=np.zeros((n, N_JOINTS)),
         payload_kg=np.full(n, float(payload_kg)),
         payload_com_m=np.zeros((n, 3)),
+        setpoint_delay_s=np.zeros(n),
     )
     for row, run_effects in enumerate(effects):
         for spec in run_effects:

@@ -60,7 +60,7 @@ def servo(X, P, q_set, qd_set, nz, ts):
             iq_fb = g * _read(X[Y_IQ, r, j], P[CUR_NOISE, r, j], nz[r, 3, j], P[CUR_LSB, r, j]) + P[CUR_OFF, r, j]
             id_fb = g * _read(X[Y_ID, r, j], P[CUR_NOISE, r, j], nz[r, 4, j], P[CUR_LSB, r, j])
             # position loop
-            w_ref = P[RATIO_NOM, r, j] * (P[FF, r, j] * qd_set[j] + P[POS_KP, r, j] * (q_set[j] - q_fb))
+            w_ref = P[RATIO_NOM, r, j] * (P[FF, r, j] * qd_set[r, j] + P[POS_KP, r, j] * (q_set[r, j] - q_fb))
             # speed loop
             i_max = P[I_MAX, r, j]
             err = w_ref - w_fb

@@ -129,6 +129,7 @@ class NumpyDrive(_Views):
         return self.P[PI[name]]
 
     def servo(self, q_set: NDArray, qd_set: NDArray, nz: NDArray) -> None:
+        """``q_set``, ``qd_set``: each run's setpoint ``(n_runs, 6)``; ``nz``: unit noise ``(n_runs, 5, 6)``."""
         p, X = self._p, self.X
         X[XI["q_fb"]] = sensors.read(self.y_res, p("res_noise"), nz[:, 0], p("res_lsb")) + p("res_off")
         X[XI["th_fb"]] = sensors.read(self.y_enc, p("enc_noise"), nz[:, 1], p("enc_lsb"))
