@@ -33,7 +33,7 @@ import os
 import socket
 import sys
 import time
-from collections.abc import Callable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -592,8 +592,3 @@ def status(out: Path) -> dict[str, Any]:
         df = pd.read_parquet(out / "features.parquet")
         info["status_counts"] = df["status"].value_counts().to_dict()
     return info
-
-
-def iter_rows(out: Path) -> Iterator[dict[str, Any]]:
-    for f in sorted(runs_dir(out).glob("r*.parquet")):
-        yield pd.read_parquet(f).iloc[0].to_dict()

@@ -42,7 +42,6 @@ class Effect:
         params: its parameters.
         per_joint: the effect sits on one joint (``joint`` required) or on the whole robot.
         apply: ``apply(arrays, row, joint_index_or_None, values)`` changes the run's row.
-        signal: the measured signal it shows in first (``current_A``, ``position_rad``...).
     """
 
     name: str
@@ -50,7 +49,6 @@ class Effect:
     params: tuple[EffectParam, ...]
     per_joint: bool
     apply: Callable[[Any, int, int | None, Mapping[str, float]], None]
-    signal: str = "current_A"
 
     def param(self, name: str) -> EffectParam:
         for p in self.params:
@@ -234,7 +232,6 @@ REGISTRY: dict[str, Effect] = {
             (EffectParam("offset_deg", "deg", -5.0, 5.0, 0.0, "added to the reading"),),
             True,
             _add("resolver_offset_rad", "offset_deg", DEG),
-            signal="position_rad",
         ),
         Effect(
             "current_sensor_gain",
@@ -256,7 +253,6 @@ REGISTRY: dict[str, Effect] = {
             (EffectParam("delay_ms", "ms", 0.0, 50.0, 0.0, "in whole servo periods (0.1 ms)"),),
             False,
             _delay,
-            signal="position_rad",
         ),
         Effect(
             "cogging",
@@ -270,16 +266,3 @@ REGISTRY: dict[str, Effect] = {
         ),
     ]
 }
-
-
-def list_effects() -> list[dict[str, Any]]:
-    """The registry as plain data (for docs and ``ur5fault effects``)."""
-    return [
-        {
-            "name": e.name,
-            "per_joint": e.per_joint,
-            "doc": e.doc,
-            "params": [dataclasses.asdict(p) for p in e.params],
-        }
-        for e in REGISTRY.values()
-    ]

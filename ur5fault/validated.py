@@ -12,7 +12,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from collections.abc import Mapping
-from typing import Any, ClassVar, TypeVar
+from typing import Any, TypeVar
 
 from .axes import N_JOINTS
 from .errors import ParameterError, UnknownNameError
@@ -81,8 +81,6 @@ def _check_scalar(where: str, value: Any, meta: Mapping[str, Any]) -> Any:
 @dataclasses.dataclass(frozen=True)
 class Validated:
     """Base of frozen parameter objects; subclasses declare fields with :func:`param`."""
-
-    _where: ClassVar[str] = ""
 
     def __post_init__(self) -> None:
         prefix = type(self).__name__
