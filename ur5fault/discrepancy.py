@@ -239,6 +239,12 @@ def conditions(log: MeasuredLog, n: int, torque: np.ndarray) -> dict[str, np.nda
     return out
 
 
+def rms_by_condition(r: np.ndarray, masks: dict[str, np.ndarray], j: int) -> tuple[dict[str, float], str]:
+    """RMS of one joint's residual ``r`` under each condition that occurs, and the largest one."""
+    by = {k: float(np.sqrt(np.nanmean(r[m[:, j]] ** 2))) for k, m in masks.items() if m[:, j].any()}
+    return by, max(by, key=by.get)
+
+
 def localise(log: MeasuredLog, residual: dict, torque: np.ndarray, top: int = 3) -> list[dict[str, Any]]:
     """The largest residuals (signal, joint) with their RMS under each operating condition."""
     n = next(iter(residual.values())).shape[0]
@@ -248,9 +254,9 @@ def localise(log: MeasuredLog, residual: dict, torque: np.ndarray, top: int = 3)
     out = []
     for ratio, s, j in ranked:
         r = residual[s][:, j]
-        by = {k: float(np.sqrt(np.nanmean(r[m[:, j]] ** 2))) for k, m in masks.items() if m[:, j].any()}
+        by, worst = rms_by_condition(r, masks, j)
         out.append({"signal": s, "joint": JOINT_NAMES[j], "rms": float(np.sqrt(np.nanmean(r**2))),
-                    "rms_over_noise": ratio, "rms_by_condition": by, "largest_where": max(by, key=by.get)})
+                    "rms_over_noise": ratio, "rms_by_condition": by, "largest_where": worst})
     return out
 
 
@@ -474,9 +480,7 @@ class DiscrepancyModel:
             for j in range(N_JOINTS):
                 rms = float(np.sqrt(np.nanmean(r[n_fit:, j] ** 2)))
                 if rms > 3 * floor:
-                    where = {name: float(np.sqrt(np.nanmean(r[m[:, j], j] ** 2))) if m[:, j].any() else None
-                             for name, m in masks.items()}
-                    worst = max((k for k, v in where.items() if v is not None), key=lambda k: where[k])
+                    where, worst = rms_by_condition(r[:, j], masks, j)
                     out.append({"signal": s, "joint": JOINT_NAMES[j], "rms_held_out": rms,
                                 "noise_floor": floor, "rms_by_condition": where, "largest_where": worst})
         return out
