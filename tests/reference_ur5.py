@@ -2,7 +2,7 @@
 
 Written from Universal Robots' published standard (distal) DH table, link masses and centres of
 mass, and the thin-cylinder inertia tensors used by public models (see ../shared/ur5-facts.md).
-The values are typed in here on purpose: this module must NOT read models/ur5.xml and must NOT
+The values are typed in here on purpose: this module must NOT read ur5fault/models/ur5.xml and must NOT
 import mujoco, so that agreement with the MuJoCo model is evidence rather than a tautology.
 
 Conventions:

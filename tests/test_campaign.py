@@ -16,7 +16,7 @@ import pytest
 
 from ur5fault.campaign import (
     CampaignLockedError,
-    _Lock,
+    Lock,
     build_campaign,
     load_campaign,
     plan_batches,
@@ -182,7 +182,7 @@ def test_resume_after_sigkill_gives_identical_table(tmp_path, small_reference):
 
 def test_second_campaign_on_same_folder_refused(tmp_path):
     out = tmp_path / "out"
-    with _Lock(out):  # this (live) process holds it
+    with Lock(out):  # this (live) process holds it
         f = write(tmp_path, SMALL.format(dur=0.1))
         with pytest.raises(CampaignLockedError, match="another campaign is writing this folder"):
             run_campaign(load_campaign(f), out, jobs=1, progress=False)

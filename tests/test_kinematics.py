@@ -1,4 +1,4 @@
-"""MuJoCo forward kinematics of models/ur5.xml against the independent DH reference (reference_ur5)."""
+"""MuJoCo forward kinematics of ur5fault/models/ur5.xml against the independent DH reference (reference_ur5)."""
 
 from __future__ import annotations
 
@@ -12,7 +12,7 @@ import pytest
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import reference_ur5 as ref  # noqa: E402
 
-MODEL_XML = Path(__file__).resolve().parents[1] / "models" / "ur5.xml"
+MODEL_XML = Path(__file__).resolve().parents[1] / "ur5fault" / "models" / "ur5.xml"
 JOINT_NAMES = (
     "shoulder_pan_joint",
     "shoulder_lift_joint",

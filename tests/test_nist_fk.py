@@ -18,7 +18,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 import reference_ur5 as ref  # noqa: E402
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
-MODEL_XML = REPO_ROOT / "models" / "ur5.xml"
+MODEL_XML = REPO_ROOT / "ur5fault" / "models" / "ur5.xml"
 NIST_CSV = REPO_ROOT.parent / "shared" / "data" / "nist-ur5" / "ur5testresult_halfspeed_payload1.6lb_1.csv.gz"
 JOINT_NAMES = (
     "shoulder_pan_joint",

@@ -9,31 +9,13 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-import time
 from collections.abc import Sequence
 from pathlib import Path
 
+from . import progress
 from .errors import Ur5FaultError
 
 EXIT_USAGE = 2
-
-
-def _progress_printer(label: str):
-    start = time.perf_counter()
-    last = [-1.0]
-
-    def show(frac: float) -> None:
-        if not sys.stderr.isatty() and frac < 1.0 and frac - last[0] < 0.1:
-            return
-        last[0] = frac
-        el = time.perf_counter() - start
-        left = el / frac - el if frac > 0 else float("nan")
-        bar = "#" * int(30 * frac)
-        end = "\n" if frac >= 1.0 else ("\r" if sys.stderr.isatty() else "\n")
-        sys.stderr.write(f"{label} [{bar:<30}] {100 * frac:5.1f} %  {el:6.1f} s, ~{left:5.0f} s left{end}")
-        sys.stderr.flush()
-
-    return show
 
 
 def cmd_simulate(args: argparse.Namespace) -> int:
@@ -62,9 +44,10 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     overlay = Overlay.load(args.model) if args.model else None
     cfg = build_run_config(data, where, overlay)
     sim = Simulator(cfg.params)
-    show = None if args.quiet else _progress_printer("simulate")
-    res = sim.run(cfg.trajectory, [RunSpec("run", cfg.seed, cfg.effects)], log_period_s=cfg.log_period_s,
-                  duration_s=cfg.duration_s, progress=show)
+    with progress.bar(1.0, "simulate", "run", enabled=not args.quiet,
+                      bar_format="{desc}: {percentage:3.0f}%|{bar}| {elapsed}<{remaining}") as pbar:
+        res = sim.run(cfg.trajectory, [RunSpec("run", cfg.seed, cfg.effects)], log_period_s=cfg.log_period_s,
+                      duration_s=cfg.duration_s, progress=progress.fraction_callback(pbar))
     out = Path(args.out)
     res.to_parquet(out)
     summ = res.summary(0)
@@ -133,19 +116,13 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _add_optional_commands(sub) -> None:
-    """Commands of later modules register themselves here if present."""
-    try:
-        from . import campaign_cli
+    """The campaign and discrepancy command groups (imported directly: a broken module is an error,
+    not a silently missing command)."""
+    from . import discrepancy_cli
+    from .campaign import cli as campaign_cli
 
-        campaign_cli.register(sub)
-    except ImportError:
-        pass
-    try:
-        from . import discrepancy_cli
-
-        discrepancy_cli.register(sub)
-    except ImportError:
-        pass
+    campaign_cli.register(sub)
+    discrepancy_cli.register(sub)
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -21,6 +21,7 @@ from __future__ import annotations
 import dataclasses
 import enum
 from collections.abc import Callable, Sequence
+from importlib import resources
 from pathlib import Path
 
 import mujoco
@@ -37,7 +38,8 @@ from .result import SimResult
 from .run_arrays import RunArrays, build_run_arrays
 from .trajectory import Trajectory
 
-DEFAULT_MODEL_PATH = Path(__file__).resolve().parents[1] / "models" / "ur5.xml"
+#: the packaged MJCF (package data, so it is found from an installed wheel too)
+DEFAULT_MODEL_PATH = Path(str(resources.files("ur5fault") / "models" / "ur5.xml"))
 
 #: Tracking error that trips a protective stop [rad] (assumption: UR stops on large
 #: position deviation; 0.1 rad is far above any healthy or modelled-fault value).
@@ -67,7 +69,7 @@ class Simulator:
 
     Args:
         params: robot and drive parameters (default: ``data/ur5_drive.yaml``).
-        model_path: MJCF file (default: ``models/ur5.xml``).
+        model_path: MJCF file (default: the packaged ``ur5fault/models/ur5.xml``).
         stepper: ``"batch"`` (MuJoCo's threaded ``mujoco.batch``) or ``"loop"`` (plain ``mj_step`` per run).
         nthread: threads of the batch stepper.
         drive: ``"numba"`` (compiled kernel, fast) or ``"numpy"`` (the reference modules).

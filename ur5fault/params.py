@@ -9,6 +9,7 @@ One frozen class per drive-chain component, mirroring the paper's Fig. 1.  The v
 from __future__ import annotations
 
 import dataclasses
+from importlib import resources
 from pathlib import Path
 from typing import Any
 
@@ -17,7 +18,7 @@ import yaml
 from .errors import ConfigFileError, ParameterError
 from .validated import Validated, param
 
-DEFAULT_PARAMS_PATH = Path(__file__).with_name("data") / "ur5_drive.yaml"
+DEFAULT_PARAMS_PATH = Path(str(resources.files("ur5fault") / "data" / "ur5_drive.yaml"))
 
 
 @dataclasses.dataclass(frozen=True)

@@ -10,8 +10,6 @@ from __future__ import annotations
 
 import dataclasses
 import json
-import os
-import tempfile
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -22,6 +20,7 @@ from numpy.typing import NDArray
 
 from .axes import JOINT_NAMES, N_JOINTS
 from .drive.motor import phase_currents
+from .io import write_parquet_atomic
 
 if TYPE_CHECKING:  # pragma: no cover
     from .engine import RunSpec, Simulator
@@ -170,24 +169,3 @@ class SimResult:
             "peak_current_A": float(np.nanmax(np.abs(self.signals["i_FB_A"][run]))),
             "peak_gear_torque_Nm": float(np.nanmax(np.abs(self.signals["T_gear_Nm"][run]))),
         }
-
-
-def write_parquet_atomic(df: pd.DataFrame, path: str | Path, metadata: dict[str, str] | None = None) -> Path:
-    """Write ``df`` to ``path`` via a temporary file and an atomic rename (no half-written file)."""
-    import pyarrow as pa
-    import pyarrow.parquet as pq
-
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    table = pa.Table.from_pandas(df, preserve_index=False)
-    if metadata:
-        table = table.replace_schema_metadata({**(table.schema.metadata or {}), **metadata})
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    os.close(fd)
-    try:
-        pq.write_table(table, tmp)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-    return path

@@ -14,6 +14,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .axes import N_JOINTS
+from .drive.motor import back_emf_constant
 from .effects import REGISTRY, EffectSpec
 from .params import RobotParams
 
@@ -92,7 +93,7 @@ def build_run_arrays(params: RobotParams, effects: Sequence[Sequence[EffectSpec]
         temperature_C=joint(params.joint_temperature_C),
         motor_is_pmsm=np.tile(is_pmsm, (n, 1)),
         motor_kt_Nm_per_A=joint(kt),
-        motor_ke_V_s_per_rad=joint(np.where(is_pmsm, kt / 1.5, kt)),
+        motor_ke_V_s_per_rad=joint(back_emf_constant(kt, is_pmsm)),
         motor_resistance_ohm=joint(m.resistance_ohm),
         motor_inductance_H=joint(m.inductance_H),
         motor_rotor_inertia_kgm2=joint(m.rotor_inertia_kgm2),

@@ -128,7 +128,7 @@ def _dwell(q: NDArray, seconds: float, period_s: float) -> NDArray[np.float64]:
 
 
 # Pick-and-place waypoints [rad], tool pointing down (z axis of the TCP = -z of the base within 1e-3).
-# Found by numerical IK on models/ur5.xml with TCP offset 0.15 m: the TCP drops 0.12 m from each
+# Found by numerical IK on ur5fault/models/ur5.xml with TCP offset 0.15 m: the TCP drops 0.12 m from each
 # approach pose; the transfer takes the arm over the top, so the shoulder and elbow gravity torques
 # change sign (checked by tests/test_trajectory.py).
 PICK_APPROACH = (-0.4, -1.0, 1.6, -2.17, -1.5708, 0.0)

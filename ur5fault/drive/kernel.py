@@ -11,10 +11,11 @@ import math
 import numpy as np
 from numba import njit
 
-from .state import PI, XI
+from .layout import PI, XI
 
 # parameter rows
-RATIO, K, C, ALPHA, TC, TS, FV, EPS = (PI[n] for n in ("ratio", "k", "c", "alpha", "tc", "ts", "fv", "eps"))
+RATIO, K, C, ALPHA, T_COULOMB, T_STATIC, FV, EPS = (PI[n] for n in ("ratio", "k", "c", "alpha", "t_coulomb", "t_static",
+                                                                   "fv", "eps"))
 DECAY, GAIN_IV, CROSS, KE, KT, JR = (PI[n] for n in ("decay", "gain_iv", "cross", "ke", "kt", "jr"))
 COG_AMP, COG_PER, V_LIM, I_MAX = (PI[n] for n in ("cog_amp", "cog_per", "v_lim", "i_max"))
 RES_NOISE, RES_LSB, RES_OFF, ENC_NOISE, ENC_LSB = (PI[n] for n in ("res_noise", "res_lsb", "res_off", "enc_noise",
@@ -116,9 +117,9 @@ def physics(X, P, q, qd, m_ii, tau, dt, stribeck, has_cogging):
             # friction.friction_torque + implicit_friction
             w = qd[r, j]
             eps = P[EPS, r, j]
-            tc = P[TC, r, j]
+            tc = P[T_COULOMB, r, j]
             s = np.tanh(w / eps)
-            level = (P[TS, r, j] - tc) * (1.0 - np.tanh(stribeck * abs(w))) + tc
+            level = (P[T_STATIC, r, j] - tc) * (1.0 - np.tanh(stribeck * abs(w))) + tc
             fv = P[FV, r, j]
             t_f = s * level + fv * w
             slope = level * (1.0 - s * s) / eps + fv

@@ -20,27 +20,7 @@ from numpy.typing import NDArray
 from . import controller as ctl
 from . import friction as fr
 from . import gearbox, motor, power, sensors
-
-# names of the per-run, per-joint parameters (rows of the packed array P)
-PARAM_NAMES = (
-    "ratio", "k", "c", "alpha", "tc", "ts", "fv", "eps", "decay", "gain_iv", "cross", "ke", "kt", "jr",
-    "cog_amp", "cog_per", "v_lim", "i_max", "res_noise", "res_lsb", "res_off", "enc_noise", "enc_lsb",
-    "encv_noise", "encv_lsb", "cur_noise", "cur_lsb", "cur_gain", "cur_off",
-    # controller (nominal: the controller does not know the faults)
-    "pos_kp", "spd_kp", "spd_ki", "cur_kp", "cur_ki", "ff", "ratio_nom", "ke_nom", "cross_nom",
-    # sensor filter coefficients (per joint, broadcast over runs)
-    "res_c0", "res_c1", "res_c2", "res_c3", "res_c4", "res_c5", "res_c6", "res_c7",
-    "enc_c0", "enc_c1", "enc_c2", "enc_c3", "enc_c4", "enc_c5", "enc_c6", "enc_c7",
-    "cur_a", "cur_c0", "cur_c1",
-)
-#: drive state (rows of the packed array X)
-STATE_NAMES = (
-    "th_m", "w_m", "i_q", "i_d", "v_q", "v_d", "integ_v", "integ_q", "integ_d",
-    "y_res", "dy_res", "y_enc", "dy_enc", "y_iq", "y_id",
-    "q_fb", "th_fb", "w_fb", "iq_fb", "id_fb", "i_ref", "t_id", "t_f", "q_prev", "th_prev", "iq_prev", "id_prev",
-)
-PI = {name: i for i, name in enumerate(PARAM_NAMES)}
-XI = {name: i for i, name in enumerate(STATE_NAMES)}
+from .layout import PARAM_NAMES, PI, STATE_NAMES, XI  # noqa: F401  (re-exported for callers)
 
 
 def pack_params(sim, a) -> NDArray:
@@ -60,7 +40,7 @@ def pack_params(sim, a) -> NDArray:
     c_cur = sensors.first_order_coefficients(s.current_bw_Hz, dt)
     values = {
         "ratio": a.gear_ratio, "k": a.gear_stiffness_Nm_per_rad, "c": a.gear_damping_Nms_per_rad,
-        "alpha": a.backlash_rad, "tc": a.friction_coulomb_Nm, "ts": a.friction_static_Nm,
+        "alpha": a.backlash_rad, "t_coulomb": a.friction_coulomb_Nm, "t_static": a.friction_static_Nm,
         "fv": fr.viscous_coefficient(a.friction_viscous_Nms_per_rad, a.friction_temp_coeff_per_K, a.temperature_C,
                                      p.friction.reference_temp_C),
         "eps": a.friction_sign_smoothing_rad_s, "decay": decay, "gain_iv": (1.0 - decay) / R,
@@ -74,7 +54,7 @@ def pack_params(sim, a) -> NDArray:
         "cur_off": a.current_offset_A,
         "pos_kp": g.pos_kp_per_s, "spd_kp": g.speed_kp_A_s_per_rad, "spd_ki": g.speed_ki_A_per_rad,
         "cur_kp": g.cur_kp_V_per_A, "cur_ki": g.cur_ki_V_per_A_s, "ff": np.asarray(p.controller.velocity_feedforward),
-        "ratio_nom": np.asarray(p.gear.ratio), "ke_nom": np.where(pmsm0, kt_nom / 1.5, kt_nom),
+        "ratio_nom": np.asarray(p.gear.ratio), "ke_nom": motor.back_emf_constant(kt_nom, pmsm0),
         "cross_nom": np.where(pmsm0, np.asarray(p.motor.pole_pairs) * np.asarray(p.motor.inductance_H), 0.0),
         **{f"res_c{i}": c_res[i] for i in range(8)}, **{f"enc_c{i}": c_enc[i] for i in range(8)},
         "cur_a": c_cur[0], "cur_c0": c_cur[1], "cur_c1": c_cur[2],
@@ -151,7 +131,7 @@ class NumpyDrive(_Views):
                                                            p("decay"), p("gain_iv"), p("cross"), p("ke"))
         N = p("ratio")
         X[XI["t_id"]] = gearbox.gear_torque(self.th_m / N - q, self.w_m / N - qd, p("k"), p("c"), p("alpha"))
-        t_f, slope = fr.friction_torque(qd, p("tc"), p("ts"), p("fv"), self.stribeck, p("eps"))
+        t_f, slope = fr.friction_torque(qd, p("t_coulomb"), p("t_static"), p("fv"), self.stribeck, p("eps"))
         X[XI["t_f"]] = fr.implicit_friction(t_f, slope, m_ii, dt)
         t_m = p("kt") * self.i_q
         if self.has_cogging:

@@ -33,8 +33,8 @@ def register(sub) -> None:
 
 
 def cmd_run(args: argparse.Namespace) -> int:
-    from .campaign import acceptable_backlash, load_campaign, run_campaign, tcp_table
-    from .errors import ParameterError
+    from ..errors import ParameterError
+    from . import acceptable_backlash, load_campaign, run_campaign, tcp_table
 
     camp = load_campaign(args.file, args.out, args.model)
     if args.jobs is not None and args.jobs < 1:
@@ -61,14 +61,14 @@ def cmd_run(args: argparse.Namespace) -> int:
 
 
 def cmd_status(args: argparse.Namespace) -> int:
-    from .campaign import status
+    from . import status
 
     print(json.dumps(status(Path(args.dir)), indent=2, default=str))
     return 0
 
 
 def cmd_plot(args: argparse.Namespace) -> int:
-    from .plotting import plot_campaign
+    from ..plotting import plot_campaign
 
     for path in plot_campaign(Path(args.dir), args.feature, Path(args.out) if args.out else None):
         print(f"wrote {path}")

@@ -1,0 +1,13 @@
+"""Fault campaigns: a YAML sweep expanded into runs (:mod:`.spec`), run in lockstep batches spread
+over processes (:mod:`.execute`), stored atomically and resumably (:mod:`.store`), summarised
+(:mod:`.summary`).  The campaign file's format is documented in :mod:`.spec`."""
+
+from .execute import plan_batches, run_batch, run_campaign
+from .spec import Campaign, CampaignRun, build_campaign, load_campaign
+from .store import CampaignLockedError, Lock, consolidate, status
+from .summary import acceptable_backlash, tcp_table
+
+__all__ = [
+    "Campaign", "CampaignRun", "CampaignLockedError", "Lock", "acceptable_backlash", "build_campaign", "consolidate",
+    "load_campaign", "plan_batches", "run_batch", "run_campaign", "status", "tcp_table",
+]

@@ -1,0 +1,252 @@
+"""Campaign specification: the YAML file validated and expanded into runs (before any simulation).
+
+Campaign YAML (see campaigns/default.yaml)::
+
+    name: default
+    out: results/default            # output folder (``--out`` overrides)
+    trajectory: pick_and_place      # name or {name: ..., speed_scale: ...}; may also be swept
+    base: {seed: 0, payload_kg: 2.0, temperature_C: 28.0, effects: [], params: {}}
+    sweep:                          # Cartesian product of every key's list
+      backlash.joint: [1, 2, 3, 4, 5, 6]
+      backlash.backlash_deg: [0, 0.02, 0.05, 0.1, 0.2, 0.5]
+    zip:                            # groups whose lists vary together (one axis per group)
+      - {payload_kg: [1.0, 2.0], temperature_C: [25.0, 40.0]}
+    threshold_mm: 0.5               # TCP acceptability threshold of the summary
+    batch_size: 32                  # runs stepped in lockstep per batch
+    log_period_s: 0.001
+    save_timeseries: false
+
+Sweep keys: ``seed``, ``payload_kg``, ``temperature_C``, ``trajectory`` (conditions), and
+``<effect>.<parameter>`` / ``<effect>.joint`` for any entry of the effect registry (faults).
+Each run is compared with its *healthy twin*: the run with the same conditions and no swept
+fault, which the campaign adds and simulates in the same batch.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import itertools
+import json
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from ..axes import joint_index
+from ..config import Overlay, check_keys, parse_effects, parse_trajectory
+from ..effects import REGISTRY, EffectSpec, make_effect
+from ..errors import ParameterError, UnknownNameError
+from ..params import deep_merge, load_params, read_yaml
+
+CAMPAIGN_KEYS = ("name", "out", "trajectory", "base", "sweep", "zip", "threshold_mm", "batch_size",
+                 "log_period_s", "save_timeseries", "duration_s")
+BASE_KEYS = ("seed", "payload_kg", "temperature_C", "effects", "params")
+CONDITION_KEYS = ("seed", "payload_kg", "temperature_C", "trajectory")
+
+
+@dataclasses.dataclass(frozen=True)
+class CampaignRun:
+    """One run of a campaign, fully specified (hashable, JSON-able)."""
+
+    conditions: tuple[tuple[str, Any], ...]  # seed, payload_kg, temperature_C, trajectory
+    faults: tuple[tuple[str, Any], ...]  # swept fault keys -> values, sorted
+
+    @property
+    def cond(self) -> dict[str, Any]:
+        return dict(self.conditions)
+
+    def is_healthy(self) -> bool:
+        return not self.fault_effects()
+
+    def fault_effects(self) -> tuple[EffectSpec, ...]:
+        """Effects of the swept faults; those at their 'absent' value are dropped."""
+        by_effect: dict[str, dict[str, Any]] = {}
+        for key, v in self.faults:
+            name, _, par = key.partition(".")
+            by_effect.setdefault(name, {})[par] = v
+        out = []
+        for name, vals in sorted(by_effect.items()):
+            joint = vals.pop("joint", None)
+            spec = make_effect(name, joint, **vals)
+            absent = all(REGISTRY[name].param(k).absent == v for k, v in spec.values)
+            if not absent:
+                out.append(spec)
+        return tuple(out)
+
+    def twin(self) -> CampaignRun:
+        return CampaignRun(self.conditions, ())
+
+    @property
+    def run_id(self) -> str:
+        """Stable identifier: a hash of the run's conditions and (effective) faults."""
+        eff = [(e.name, e.joint, e.values) for e in self.fault_effects()]
+        key = json.dumps([sorted(self.conditions), eff], sort_keys=True, default=str)
+        return "r" + hashlib.sha1(key.encode()).hexdigest()[:12]
+
+
+@dataclasses.dataclass(frozen=True)
+class Campaign:
+    """A validated campaign file."""
+
+    name: str
+    path: Path | None
+    text: str
+    out: Path
+    base_effects: tuple[EffectSpec, ...]
+    base_params: Mapping[str, Any]
+    runs: tuple[CampaignRun, ...]  # unique, twins included
+    swept_keys: tuple[str, ...]
+    threshold_mm: float
+    batch_size: int
+    log_period_s: float
+    save_timeseries: bool
+    duration_s: float | None
+
+    @property
+    def sha256(self) -> str:
+        return hashlib.sha256(self.text.encode()).hexdigest()
+
+
+def _as_list(value: Any, where: str) -> list:
+    if not isinstance(value, list) or not value:
+        raise ParameterError(f"{where}: expected a non-empty list of values")
+    return value
+
+
+def _check_value(key: str, value: Any, where: str) -> Any:
+    """Validate one swept value now, before any simulation starts."""
+    if key == "seed":
+        if isinstance(value, bool) or not isinstance(value, int) or value < 0:
+            raise ParameterError(f"{where}: seed = {value!r} must be a non-negative integer")
+        return value
+    if key == "payload_kg":
+        make_effect("payload", where=where, mass_kg=value)
+        return float(value)
+    if key == "temperature_C":
+        make_effect("temperature", where=where, temperature_C=value)
+        return float(value)
+    if key == "trajectory":
+        parse_trajectory(value, where)
+        return value if isinstance(value, str) else dict(value)
+    name, dot, par = key.partition(".")
+    if not dot or name not in REGISTRY:
+        valid = list(CONDITION_KEYS) + [f"{e}.<param>" for e in REGISTRY]
+        raise UnknownNameError("sweep key", key, valid, where)
+    eff = REGISTRY[name]
+    if par == "joint":
+        if not eff.per_joint:
+            raise ParameterError(f"{where}: effect {name!r} acts on the whole robot and takes no joint")
+        return joint_index(value, where) + 1
+    p = eff.param(par)
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not p.lo <= float(value) <= p.hi:
+        raise ParameterError(f"{where}: {key} = {value!r} is out of range [{p.lo:g}, {p.hi:g}] {p.unit}")
+    return float(value)
+
+
+def load_campaign(path: str | Path, out: str | Path | None = None, overlay: str | Path | None = None) -> Campaign:
+    """Read and validate a campaign file; every error names the file and key path.
+
+    ``overlay``: a model overlay YAML (``params`` and ``effects``, e.g. written by ``ur5fault
+    discrepancy``) merged into the campaign's ``base``: its parameters under the campaign's own, its
+    effects before them.  The merged text is what the manifest records.
+    """
+    path = Path(path)
+    data = read_yaml(path)
+    text = path.read_text()
+    if overlay is not None:
+        ov_path = Path(overlay)
+        Overlay.load(ov_path)  # validated with its own file name in messages
+        ov = read_yaml(ov_path)
+        base = dict(data.get("base") or {})
+        base["params"] = deep_merge(dict(ov.get("params") or {}), dict(base.get("params") or {}))
+        base["effects"] = list(ov.get("effects") or []) + list(base.get("effects") or [])
+        data = {**data, "base": base}
+        text = yaml.safe_dump(dict(data), sort_keys=False)
+    return build_campaign(data, path.name, text, path, out)
+
+
+def build_campaign(data: Mapping[str, Any], where: str, text: str = "", path: Path | None = None,
+                   out: str | Path | None = None) -> Campaign:
+    check_keys(data, CAMPAIGN_KEYS, where)
+    base = data.get("base") or {}
+    if not isinstance(base, Mapping):
+        raise ParameterError(f"{where}: base must be a mapping")
+    check_keys(base, BASE_KEYS, f"{where}: base")
+    params = dict(base.get("params") or {})
+    load_params(overrides=params)  # validate robot overrides now
+    base_effects = parse_effects(base.get("effects"), f"{where}: base.effects")
+    cond0 = {
+        "seed": _check_value("seed", base.get("seed", 0), f"{where}: base.seed"),
+        "payload_kg": _check_value("payload_kg", base.get("payload_kg", 2.0), f"{where}: base.payload_kg"),
+        "temperature_C": _check_value("temperature_C", base.get("temperature_C", 28.0),
+                                      f"{where}: base.temperature_C"),
+        "trajectory": _check_value("trajectory", data.get("trajectory", "pick_and_place"), f"{where}: trajectory"),
+    }
+    axes: list[list[dict[str, Any]]] = []
+    swept: list[str] = []
+    sweep = data.get("sweep") or {}
+    if not isinstance(sweep, Mapping):
+        raise ParameterError(f"{where}: sweep must be a mapping of key -> list of values")
+    for key, values in sweep.items():
+        loc = f"{where}: sweep.{key}"
+        vals = [_check_value(key, v, loc) for v in _as_list(values, loc)]
+        axes.append([{key: v} for v in vals])
+        swept.append(key)
+    zips = data.get("zip") or []
+    if not isinstance(zips, list):
+        raise ParameterError(f"{where}: zip must be a list of groups (mappings of key -> list)")
+    for g, group in enumerate(zips):
+        loc = f"{where}: zip[{g}]"
+        if not isinstance(group, Mapping) or not group:
+            raise ParameterError(f"{loc}: expected a mapping of key -> list of values")
+        lists = {k: _as_list(v, f"{loc}.{k}") for k, v in group.items()}
+        lengths = {len(v) for v in lists.values()}
+        if len(lengths) != 1:
+            raise ParameterError(f"{loc}: zipped lists must have equal lengths, got {sorted(lengths)}")
+        axes.append([{k: _check_value(k, lists[k][i], f"{loc}.{k}[{i}]") for k in lists}
+                     for i in range(lengths.pop())])
+        swept.extend(lists)
+    if len(set(swept)) != len(swept):
+        dup = sorted({k for k in swept if swept.count(k) > 1})
+        raise ParameterError(f"{where}: key swept twice: {', '.join(dup)}")
+    _check_fault_keys(swept, where)
+    runs: dict[str, CampaignRun] = {}
+    for combo in itertools.product(*axes) if axes else [()]:
+        values: dict[str, Any] = {}
+        for part in combo:
+            values.update(part)
+        cond = {**cond0, **{k: v for k, v in values.items() if k in CONDITION_KEYS}}
+        faults = tuple(sorted((k, v) for k, v in values.items() if k not in CONDITION_KEYS))
+        rc = CampaignRun(tuple(sorted(cond.items(), key=lambda kv: kv[0])), faults)
+        rc.fault_effects()  # validate the combination (e.g. joint present)
+        for r in (rc, rc.twin()):
+            runs.setdefault(r.run_id, r)
+    thr = data.get("threshold_mm", 0.5)
+    if isinstance(thr, bool) or not isinstance(thr, (int, float)) or thr <= 0:
+        raise ParameterError(f"{where}: threshold_mm = {thr!r} must be a positive number of mm")
+    bs = data.get("batch_size", 32)
+    if isinstance(bs, bool) or not isinstance(bs, int) or not 1 <= bs <= 1024:
+        raise ParameterError(f"{where}: batch_size = {bs!r} must be an integer in [1, 1024]")
+    lp = data.get("log_period_s", 1e-3)
+    if isinstance(lp, bool) or not isinstance(lp, (int, float)) or lp <= 0:
+        raise ParameterError(f"{where}: log_period_s = {lp!r} must be a positive number of seconds")
+    dur = data.get("duration_s")
+    if dur is not None and (isinstance(dur, bool) or not isinstance(dur, (int, float)) or dur <= 0):
+        raise ParameterError(f"{where}: duration_s = {dur!r} must be a positive number of seconds")
+    name = str(data.get("name") or (path.stem if path else "campaign"))
+    out_dir = Path(out) if out is not None else Path(data.get("out") or Path("results") / name)
+    return Campaign(name, path, text or yaml.safe_dump(dict(data)), out_dir, base_effects, params,
+                    tuple(runs.values()), tuple(swept), float(thr), int(bs), float(lp),
+                    bool(data.get("save_timeseries", False)), None if dur is None else float(dur))
+
+
+def _check_fault_keys(swept: Sequence[str], where: str) -> None:
+    """A per-joint effect that is swept needs its joint swept (or a single joint) too."""
+    effects = {k.partition(".")[0] for k in swept if "." in k}
+    for name in effects:
+        if REGISTRY[name].per_joint and f"{name}.joint" not in swept:
+            raise ParameterError(f"{where}: sweep of effect {name!r} needs '{name}.joint' (list of joints 1..6)")
+
+

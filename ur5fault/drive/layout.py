@@ -1,0 +1,29 @@
+"""Row layout of the packed drive arrays, shared by the numpy reference (``state.py``) and the
+compiled kernel (``kernel.py``) so that neither imports the other.
+
+``P`` holds per-run, per-joint parameters ``(len(PARAM_NAMES), n_runs, 6)``; ``X`` the drive state
+``(len(STATE_NAMES), n_runs, 6)``.  ``PI`` / ``XI`` map a name to its row.
+"""
+
+from __future__ import annotations
+
+# names of the per-run, per-joint parameters (rows of the packed array P)
+PARAM_NAMES = (
+    "ratio", "k", "c", "alpha", "t_coulomb", "t_static", "fv", "eps", "decay", "gain_iv", "cross", "ke", "kt", "jr",
+    "cog_amp", "cog_per", "v_lim", "i_max", "res_noise", "res_lsb", "res_off", "enc_noise", "enc_lsb",
+    "encv_noise", "encv_lsb", "cur_noise", "cur_lsb", "cur_gain", "cur_off",
+    # controller (nominal: the controller does not know the faults)
+    "pos_kp", "spd_kp", "spd_ki", "cur_kp", "cur_ki", "ff", "ratio_nom", "ke_nom", "cross_nom",
+    # sensor filter coefficients (per joint, broadcast over runs)
+    "res_c0", "res_c1", "res_c2", "res_c3", "res_c4", "res_c5", "res_c6", "res_c7",
+    "enc_c0", "enc_c1", "enc_c2", "enc_c3", "enc_c4", "enc_c5", "enc_c6", "enc_c7",
+    "cur_a", "cur_c0", "cur_c1",
+)
+#: drive state (rows of the packed array X)
+STATE_NAMES = (
+    "th_m", "w_m", "i_q", "i_d", "v_q", "v_d", "integ_v", "integ_q", "integ_d",
+    "y_res", "dy_res", "y_enc", "dy_enc", "y_iq", "y_id",
+    "q_fb", "th_fb", "w_fb", "iq_fb", "id_fb", "i_ref", "t_id", "t_f", "q_prev", "th_prev", "iq_prev", "id_prev",
+)
+PI = {name: i for i, name in enumerate(PARAM_NAMES)}
+XI = {name: i for i, name in enumerate(STATE_NAMES)}
