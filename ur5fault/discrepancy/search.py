@@ -1,0 +1,280 @@
+"""The search: forward selection over the candidates' columns of the linearised problem, every step
+judged by :func:`judge` (a rejected candidate does not end the search: the next one is tried), a final
+backward check of every finding against all the others (:func:`backward`), and refinement of the
+found coefficients by re-simulation (:func:`refine`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Callable, Sequence
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .candidates import Candidate
+from .statistics import (
+    MIN_DELTA_BIC,
+    MIN_Z,
+    BlockGram,
+    Stability,
+    amplitude_z,
+    bic,
+    effective_n,
+    jackknife_se,
+    rss_of,
+    stability,
+)
+
+#: other candidates that achieve at least this share of the chosen one's improvement are reported with
+#: it as indistinguishable in this log (e.g. a current-sensor gain g and a torque-constant change 1/g)
+ALTERNATIVE_SHARE = 0.98
+#: candidates judged per step at most, in order of improvement (the rest cannot beat them on BIC either)
+MAX_TRIES_PER_STEP = 12
+#: refinement rounds by re-simulation at most (each one lockstep batch) ...
+REFINE_ROUNDS = 3
+#: ... stopping early when the next Gauss-Newton step promises less than this share of the weighted RSS
+REFINE_RTOL = 0.01
+
+
+@dataclasses.dataclass(frozen=True)
+class Verdict:
+    """How one candidate fared against noise, autocorrelation and time blocks, given the others."""
+
+    label: str
+    theta: tuple[float, ...]
+    se: tuple[float, ...]
+    delta_bic: float
+    z: float
+    stability: Stability
+    accepted: bool
+    reason: str  # why it was rejected ("" when accepted)
+
+
+def judge(bg: BlockGram, e_fit: NDArray, X: NDArray, cols: list[list[int]], others: list[int], cand: int,
+          fixed: Sequence[int] = ()) -> Verdict:
+    """Judge candidate ``cand`` in the joint fit with ``others`` (candidate indices) and ``fixed`` columns.
+
+    Args:
+        bg: block statistics of ``e ~ X theta``.
+        e_fit: the weighted residual ``(n, n_channels)`` the statistics were built from.
+        X: all columns ``(p, n, n_channels)``.
+        cols: column indices of each candidate.
+    """
+    G, g, ee = bg.total()
+    base = list(fixed) + [c for o in others for c in cols[o]]
+    idx = base + cols[cand]
+    rss0, th0 = rss_of(G, g, ee, base)
+    rss1, th = rss_of(G, g, ee, idx)
+    e_res = e_fit - np.tensordot(th, X[idx], axes=1)
+    n_eff = effective_n(e_res)
+    dbic = bic(rss1, n_eff, len(idx)) - bic(rss0, n_eff, len(base))
+    own = list(range(len(base), len(idx)))
+    se = jackknife_se(bg, idx)
+    z = amplitude_z(th[own], se[own])
+    stab = stability(bg, idx, own, th, rss1 / n_eff)
+    reasons = []
+    if dbic > -MIN_DELTA_BIC:
+        reasons.append(f"delta BIC {dbic:.1f} > -{MIN_DELTA_BIC:g}")
+    if z < MIN_Z:
+        reasons.append(f"z {z:.1f} < {MIN_Z:g}")
+    if not stab.stable:
+        reasons.append("unstable across time blocks (" + ", ".join(f"{r:.2f}" for r in stab.ratios) + ")")
+    return Verdict("", tuple(float(t) for t in th[own]), tuple(float(s) for s in se[own]), float(dbic), float(z),
+                   stab, not reasons, "; ".join(reasons))
+
+
+@dataclasses.dataclass
+class Selection:
+    """Result of a forward selection: chosen candidates (indices, in order), their joint coefficients,
+    the indistinguishable alternatives of each, and the trace of every judgement."""
+
+    chosen: list[int]
+    verdicts: list[Verdict]
+    alternatives: list[list[tuple[int, NDArray]]]
+    trace: list[Verdict]
+
+    def theta(self, bg: BlockGram, cols: list[list[int]], fixed: Sequence[int] = ()) -> NDArray:
+        G, g, ee = bg.total()
+        idx = list(fixed) + [c for k in self.chosen for c in cols[k]]
+        return rss_of(G, g, ee, idx)[1][len(fixed):]
+
+
+def columns_of(cands: Sequence[Candidate], start: int = 0) -> list[list[int]]:
+    out, k = [], start
+    for c in cands:
+        out.append(list(range(k, k + c.n_coef)))
+        k += c.n_coef
+    return out
+
+
+def forward(bg: BlockGram, e_fit: NDArray, X: NDArray, cands: Sequence[Candidate], cols: list[list[int]],
+            max_n: int, fixed: Sequence[int] = (), labels: Callable[[int], str] | None = None) -> Selection:
+    """Forward selection: at each step the candidates are tried in order of the improvement they add to the
+    joint fit; the first one :func:`judge` accepts is taken.  Stops when no candidate can lower BIC enough
+    or none of the :data:`MAX_TRIES_PER_STEP` best is accepted."""
+    G, g, ee = bg.total()
+    chosen: list[int] = []
+    verdicts: list[Verdict] = []
+    alts: list[list[tuple[int, NDArray]]] = []
+    trace: list[Verdict] = []
+    label = labels or (lambda k: cands[k].label)
+    while len(chosen) < max_n:
+        base = list(fixed) + [c for k in chosen for c in cols[k]]
+        rss0, th0 = rss_of(G, g, ee, base)
+        n_eff = effective_n(e_fit - np.tensordot(th0, X[base], axes=1)) if base else effective_n(e_fit)
+        gains = []
+        for k in range(len(cands)):
+            if k in chosen:
+                continue
+            rss1, _ = rss_of(G, g, ee, base + cols[k])
+            gains.append((rss0 - rss1, k))
+        gains.sort(reverse=True)
+        taken = None
+        for gain, k in gains[:MAX_TRIES_PER_STEP]:
+            # early rejection: even ignoring its extra parameters the gain cannot lower BIC enough
+            if gain <= 0 or n_eff * math.log(max(rss0 - gain, 1e-300) / rss0) > -MIN_DELTA_BIC:
+                break
+            v = dataclasses.replace(judge(bg, e_fit, X, cols, chosen, k, fixed), label=label(k))
+            trace.append(v)
+            if v.accepted:
+                taken = (k, v, gain)
+                break
+        if taken is None:
+            break
+        k, v, gain = taken
+        alt = []
+        for gain2, k2 in gains:
+            if k2 != k and gain2 >= ALTERNATIVE_SHARE * gain:
+                alt.append((k2, rss_of(G, g, ee, base + cols[k2])[1][len(base):]))
+        chosen.append(k)
+        verdicts.append(v)
+        alts.append(alt)
+    return Selection(chosen, verdicts, alts, trace)
+
+
+def backward(bg: BlockGram, e_fit: NDArray, X: NDArray, cands: Sequence[Candidate], cols: list[list[int]],
+             chosen: list[int], fixed: Sequence[int] = ()) -> tuple[list[int], list[Verdict], list[Verdict]]:
+    """Judge every finding against all the others; drop the weakest failing one and repeat.
+
+    Returns:
+        The kept candidates, their final verdicts, and the verdicts of the dropped ones.
+    """
+    kept = list(chosen)
+    dropped: list[Verdict] = []
+    while kept:
+        vs = [dataclasses.replace(judge(bg, e_fit, X, cols, [o for o in kept if o != k], k, fixed),
+                                  label=cands[k].label) for k in kept]
+        failing = [(v.delta_bic, i) for i, v in enumerate(vs) if not v.accepted]
+        if not failing:
+            return kept, vs, dropped
+        _, i = max(failing)
+        dropped.append(vs[i])
+        kept.pop(i)
+    return kept, [], dropped
+
+
+# ------------------------------------------------------------------------------------------ refinement
+@dataclasses.dataclass(frozen=True)
+class RefineStep:
+    """One simulated point of the refinement: coefficients, weighted RSS on the fitting part."""
+
+    theta: tuple[float, ...]
+    rss: float
+
+
+@dataclasses.dataclass
+class Refined:
+    """Refined coefficients, the secant Jacobian at them (``(n_coef, n, n_channels)``, change of the
+    weighted *simulated* readings per unit coefficient), the replay there and its weighted residual."""
+
+    theta: NDArray
+    J: NDArray
+    sim: object
+    e: NDArray
+    steps: list[RefineStep]
+
+
+class _Evaluations:
+    """Simulated points, the best one, and a Broyden-updated Jacobian (in coordinates scaled by ``scale``)."""
+
+    def __init__(self, evaluate, e_at_zero: NDArray, J0: NDArray, scale: NDArray) -> None:
+        self.evaluate, self.scale = evaluate, scale
+        self.J = J0.reshape(J0.shape[0], -1).T.copy()  # (N, k): e(theta) ~ e0 - J theta
+        self.last = (np.zeros(J0.shape[0]), e_at_zero.ravel())
+        self.best = (np.zeros(J0.shape[0]), e_at_zero.ravel(), None, float(e_at_zero.ravel() @ e_at_zero.ravel()))
+        self.steps: list[RefineStep] = []
+
+    def __call__(self, thetas: list[NDArray]) -> list[tuple[NDArray, float]]:
+        out = []
+        for th, (sim, e) in zip(thetas, self.evaluate(thetas)):
+            e = e.ravel() if sim.ok else None
+            rss = float(e @ e) if e is not None else math.inf
+            self.steps.append(RefineStep(tuple(float(t) for t in th), rss))
+            if e is not None:
+                self._broyden(th, e)
+                if rss < self.best[3]:
+                    self.best = (th.copy(), e, sim, rss)
+            out.append((e, rss))
+        return out
+
+    def _broyden(self, th: NDArray, e: NDArray) -> None:
+        th_prev, e_prev = self.last
+        dz = (th - th_prev) / self.scale
+        if np.any(dz):
+            Js = self.J * self.scale
+            Js += np.outer((e_prev - e) - Js @ dz, dz) / (dz @ dz)
+            self.J = Js / self.scale
+        self.last = (th.copy(), e)
+
+
+def refine(evaluate, e_at_zero: NDArray, theta0: NDArray, J0: NDArray, bounds: tuple[NDArray, NDArray],
+           method: str = "secant") -> Refined:
+    """Refine coefficients by re-simulation.
+
+    Args:
+        evaluate: ``evaluate(list of theta) -> list of (replay, weighted residual)``, one lockstep batch.
+        e_at_zero: weighted residual with all coefficients zero (the model before these findings).
+        theta0: the linearised estimate; J0: the columns ``(k, n, n_channels)`` it came from.
+        bounds: coefficient bounds (the effects' valid ranges).
+        method: ``"secant"`` (Gauss-Newton steps on a Broyden-updated Jacobian, one simulation per round) or
+            ``"minimize"`` (``mujoco.minimize.least_squares`` with finite differences in scaled coordinates).
+    """
+    lo, hi = bounds
+    scale = np.maximum(np.abs(theta0), 1e-9)
+    ev = _Evaluations(evaluate, e_at_zero, J0, scale)
+    theta = np.clip(theta0, lo, hi)
+    if method == "secant":
+        for _ in range(REFINE_ROUNDS):
+            (e, rss), = ev([theta])
+            if e is None or rss > ev.best[3]:  # worse than the best point: halve back towards it
+                theta = np.clip(ev.best[0] + 0.5 * (theta - ev.best[0]), lo, hi)
+                continue
+            step = np.linalg.lstsq(ev.J, e, rcond=None)[0]
+            if float((ev.J @ step) @ e) < REFINE_RTOL * rss:
+                break
+            theta = np.clip(theta + step, lo, hi)
+    elif method == "minimize":
+        from mujoco import minimize
+
+        def residual(z: NDArray) -> NDArray:
+            outs = ev([col * scale for col in z.T])
+            return np.stack([e if e is not None else np.full(e_at_zero.size, 1e6) for e, _ in outs], axis=1)
+
+        minimize.least_squares(theta / scale, residual, bounds=(lo / scale, hi / scale), eps=FD_STEP,
+                               max_iter=REFINE_ROUNDS, verbose=0)
+    else:
+        raise ValueError(f"method = {method!r}; choose secant or minimize")
+    th, e, sim, _ = ev.best
+    if sim is None:  # nothing simulated was better than zero: keep the last evaluation's model
+        th = theta
+        (e, _), = ev([theta])
+        sim = ev.best[2]
+    n, C = e_at_zero.shape
+    return Refined(th, ev.J.T.reshape(-1, n, C), sim, e.reshape(n, C), ev.steps)
+
+
+#: finite-difference step of the ``minimize`` refinement, relative to each coefficient's first estimate
+#: (large enough that the quantised, noisy readings change by more than their resolution)
+FD_STEP = 0.05
