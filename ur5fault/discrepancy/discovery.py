@@ -40,6 +40,9 @@ COULOMB_WIDTH_RAD_S = 0.01
 STRIBECK_SPEEDS_RAD_S = (0.02, 0.05, 0.1, 0.2)
 #: a temperature column is formed when the joint's logged temperature moves at least this much [K]
 MIN_TEMPERATURE_SPAN_K = 0.5
+#: a column whose unit coefficient changes the weighted residual's sum of squares by less than this is
+#: no candidate (its term cannot act on these readings)
+MIN_COLUMN_NORM2 = 1e-6
 #: samples of the centred moving average that smooths numerical derivatives of the replayed states
 DERIVATIVE_SMOOTHING = 5
 
@@ -109,7 +112,7 @@ def dictionary(rp: Replay, sim: Replayed, n: int, joints: list[int]) -> tuple[li
         col = np.zeros((cand.n_coef, n, S, N_JOINTS))
         for s, j, v in per_channel:
             col[:, :, s, j] = np.atleast_2d(v) / sig[s, j]
-        if not np.any(col):
+        if np.sum(col**2) < MIN_COLUMN_NORM2:  # e.g. a centre-of-mass shift along the joint's own axis
             return
         cands.append(cand)
         cols.extend(col.reshape(cand.n_coef, n, -1))

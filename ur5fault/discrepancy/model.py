@@ -30,7 +30,7 @@ from . import discovery, library
 from .candidates import Candidate
 from .replay import Replay, Replayed
 from .report import localise, rms_table, unexplained
-from .search import Refined, Verdict, backward, columns_of, forward, refine
+from .search import Refined, Verdict, backward, columns_of, forward, judge, refine
 from .statistics import Z_95, BlockGram, Generalisation, generalisation, rss_of, weighted
 
 logger = logging.getLogger(__name__)
@@ -210,7 +210,18 @@ class DiscrepancyModel:
             G2, g2, ee2 = bg2.total()
             th0 = rss_of(G2, g2, ee2, fixed + tcols)[1]  # library and term coefficients, jointly
             J0 = X_all[fixed + tcols]
-            refined = self._refine(rp, n_fit, meas, found, e0, th0, J0, stages.start("refining all findings"))
+            # the terms' quasi-static columns are replaced by their simulated response: each term is also
+            # simulated removed (and, for a sine-cosine pair, turned by a quarter period) in the first batch
+            probes, off = [], len(fixed)
+            for c in terms:
+                th_c = th0[off : off + c.n_coef]
+                for d in ([-th_c] + ([np.array([-th_c[1], th_c[0]])] if c.n_coef == 2 else [])):
+                    p = np.zeros_like(th0)
+                    p[off : off + c.n_coef] = d
+                    probes.append(p)
+                off += c.n_coef
+            refined = self._refine(rp, n_fit, meas, found, e0, th0, J0, stages.start("refining all findings"),
+                                   probes)
             self.refinement_["all"] = refined.steps
         elif lib and sim_lib is not base:
             refined = Refined(th_lib, J_lib, sim_lib, e_lib, [])
@@ -235,7 +246,7 @@ class DiscrepancyModel:
 
     # --------------------------------------------------------------------------------- pieces
     def _refine(self, rp: Replay, n: int, meas: NDArray, found: list[Candidate], e0: NDArray, theta0: NDArray,
-                J0: NDArray, progress) -> Refined:
+                J0: NDArray, progress, probes: Sequence[NDArray] = ()) -> Refined:
         sizes = [c.n_coef for c in found]
         splits = np.cumsum(sizes)[:-1]
 
@@ -246,16 +257,18 @@ class DiscrepancyModel:
 
         lo = np.concatenate([c.bounds()[0] for c in found])
         hi = np.concatenate([c.bounds()[1] for c in found])
-        return refine(evaluate, e0, theta0, J0, (lo, hi), self.refiner)
+        return refine(evaluate, e0, theta0, J0, (lo, hi), self.refiner, probes)
 
     def _judge(self, found: list[Candidate], ref: Refined, alternatives) -> list[Finding]:
-        """Every finding against all the others, on the problem linearised at the refined coefficients."""
+        """Every finding against all the others, on the problem linearised at the refined coefficients:
+        selected afresh from the findings alone (so two that only cancel each other, e.g. a viscous scale
+        and a negative viscous term beside a speed-squared drag, do not both stay), then each checked
+        against all the rest."""
         cols = columns_of(found)
         e_pseudo = ref.e + np.tensordot(ref.theta, ref.J, axes=1)
         bg = BlockGram.build(ref.J, e_pseudo)
-        kept, verdicts, dropped = backward(bg, e_pseudo, ref.J, found, cols, list(range(len(found))))
-        for v in dropped:
-            self.search_.append(SearchStep.of("joint check", v))
+        again = forward(bg, e_pseudo, ref.J, found, cols, len(found))
+        kept, verdicts, _ = backward(bg, e_pseudo, ref.J, found, cols, again.chosen)
         G, g, ee = bg.total()
         idx = [c for k in kept for c in cols[k]]
         theta = rss_of(G, g, ee, idx)[1]  # the kept findings refitted without the dropped ones
@@ -265,11 +278,20 @@ class DiscrepancyModel:
             th = theta[i : i + c.n_coef]
             i += c.n_coef
             out.append(Finding(c, th, np.asarray(v.se), v, alternatives.get(c, [])))
+        for k in range(len(found)):  # the dropped ones, judged against the kept
+            if k not in kept:
+                v = dataclasses.replace(judge(bg, e_pseudo, ref.J, cols, kept, k), label=found[k].label)
+                reason = v.reason or "explains nothing the other findings do not"
+                self.search_.append(SearchStep.of("joint check", dataclasses.replace(v, accepted=False,
+                                                                                     reason=reason)))
+                out.append(Finding(found[k], np.asarray(v.theta), np.asarray(v.se), v, alternatives.get(found[k], []),
+                                   kept=False, reason=f"explains nothing the others do not ({reason})"))
         return out
 
     def _held_out(self, rp: Replay, findings: list[Finding], n_fit: int, n_all: int) -> None:
         """Simulate the whole log without findings, with all, and without each; drop findings that do not
         generalise to the held-out part, and keep the replays for the report."""
+        findings = [f for f in findings if f.kept]
         specs = [f.spec() for f in findings]
         sets = [(), tuple(specs)] + ([tuple(s for s in specs if s is not x) for x in specs] if len(specs) > 1 else [])
         sims = rp.run(sets, n_all)

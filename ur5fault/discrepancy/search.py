@@ -15,12 +15,14 @@ from numpy.typing import NDArray
 
 from .candidates import Candidate
 from .statistics import (
+    MAX_COLLINEARITY,
     MIN_DELTA_BIC,
     MIN_Z,
     BlockGram,
     Stability,
     amplitude_z,
     bic,
+    collinearity,
     effective_n,
     jackknife_se,
     rss_of,
@@ -75,6 +77,9 @@ def judge(bg: BlockGram, e_fit: NDArray, X: NDArray, cols: list[list[int]], othe
     z = amplitude_z(th[own], se[own])
     stab = stability(bg, idx, own, th, rss1 / n_eff)
     reasons = []
+    r2 = collinearity(G, base, cols[cand])
+    if r2 > MAX_COLLINEARITY:
+        reasons.append(f"collinear with the findings already in (r^2 {r2:.3f})")
     if dbic > -MIN_DELTA_BIC:
         reasons.append(f"delta BIC {dbic:.1f} > -{MIN_DELTA_BIC:g}")
     if z < MIN_Z:
@@ -197,7 +202,7 @@ class Refined:
 
 
 class _Evaluations:
-    """Simulated points, the best one, and a Broyden-updated Jacobian (in coordinates scaled by ``scale``)."""
+    """Simulated points, the best one, and a secant (Broyden) Jacobian in coordinates scaled by ``scale``."""
 
     def __init__(self, evaluate, e_at_zero: NDArray, J0: NDArray, scale: NDArray) -> None:
         self.evaluate, self.scale = evaluate, scale
@@ -206,31 +211,40 @@ class _Evaluations:
         self.best = (np.zeros(J0.shape[0]), e_at_zero.ravel(), None, float(e_at_zero.ravel() @ e_at_zero.ravel()))
         self.steps: list[RefineStep] = []
 
-    def __call__(self, thetas: list[NDArray]) -> list[tuple[NDArray, float]]:
+    def __call__(self, thetas: list[NDArray], anchored: bool = False) -> list[tuple[NDArray | None, float]]:
+        """Simulate ``thetas`` in one batch.  ``anchored``: the first point is the anchor and the others its
+        perturbations; the Jacobian takes all their secants at once (multi-secant update)."""
         out = []
         for th, (sim, e) in zip(thetas, self.evaluate(thetas)):
             e = e.ravel() if sim.ok else None
             rss = float(e @ e) if e is not None else math.inf
             self.steps.append(RefineStep(tuple(float(t) for t in th), rss))
-            if e is not None:
-                self._broyden(th, e)
-                if rss < self.best[3]:
-                    self.best = (th.copy(), e, sim, rss)
+            if e is not None and rss < self.best[3]:
+                self.best = (th.copy(), e, sim, rss)
             out.append((e, rss))
+        ok = [(th, e) for th, (e, _) in zip(thetas, out) if e is not None]
+        if anchored and out[0][0] is not None:
+            self._secants(thetas[0], out[0][0], ok[1:])
+        else:
+            for th, e in ok:
+                self._secants(self.last[0], self.last[1], [(th, e)])
+                self.last = (th.copy(), e)
         return out
 
-    def _broyden(self, th: NDArray, e: NDArray) -> None:
-        th_prev, e_prev = self.last
-        dz = (th - th_prev) / self.scale
-        if np.any(dz):
-            Js = self.J * self.scale
-            Js += np.outer((e_prev - e) - Js @ dz, dz) / (dz @ dz)
-            self.J = Js / self.scale
-        self.last = (th.copy(), e)
+    def _secants(self, th0: NDArray, e0: NDArray, points: list[tuple[NDArray, NDArray]]) -> None:
+        """Make ``J`` reproduce the secants from ``(th0, e0)`` to ``points`` (minimal change, scaled norm)."""
+        if points:
+            P = np.stack([(th - th0) / self.scale for th, _ in points], axis=1)  # (k, m)
+            if np.any(P):
+                D = np.stack([e0 - e for _, e in points], axis=1)  # (N, m)
+                Js = self.J * self.scale
+                Js += (D - Js @ P) @ np.linalg.pinv(P)
+                self.J = Js / self.scale
+        self.last = (th0.copy(), e0)
 
 
 def refine(evaluate, e_at_zero: NDArray, theta0: NDArray, J0: NDArray, bounds: tuple[NDArray, NDArray],
-           method: str = "secant") -> Refined:
+           method: str = "secant", probes: Sequence[NDArray] = ()) -> Refined:
     """Refine coefficients by re-simulation.
 
     Args:
@@ -238,16 +252,22 @@ def refine(evaluate, e_at_zero: NDArray, theta0: NDArray, J0: NDArray, bounds: t
         e_at_zero: weighted residual with all coefficients zero (the model before these findings).
         theta0: the linearised estimate; J0: the columns ``(k, n, n_channels)`` it came from.
         bounds: coefficient bounds (the effects' valid ranges).
-        method: ``"secant"`` (Gauss-Newton steps on a Broyden-updated Jacobian, one simulation per round) or
+        method: ``"secant"`` (Gauss-Newton steps on a secant-updated Jacobian, one simulation per round) or
             ``"minimize"`` (``mujoco.minimize.least_squares`` with finite differences in scaled coordinates).
+        probes: perturbations of ``theta0`` simulated with it in the first batch, whose secants replace
+            the columns they span (e.g. a quasi-static dictionary column by the simulated response).
+
+    Returns:
+        The best simulated point; ``sim`` is None when none was better than all coefficients at zero.
     """
     lo, hi = bounds
     scale = np.maximum(np.abs(theta0), 1e-9)
     ev = _Evaluations(evaluate, e_at_zero, J0, scale)
     theta = np.clip(theta0, lo, hi)
     if method == "secant":
-        for _ in range(REFINE_ROUNDS):
-            (e, rss), = ev([theta])
+        first = [theta] + [np.clip(theta + p, lo, hi) for p in probes]
+        for r in range(REFINE_ROUNDS):
+            (e, rss), *_ = ev(first, anchored=True) if r == 0 else ev([theta])
             if e is None or rss > ev.best[3]:  # worse than the best point: halve back towards it
                 theta = np.clip(ev.best[0] + 0.5 * (theta - ev.best[0]), lo, hi)
                 continue
@@ -267,10 +287,6 @@ def refine(evaluate, e_at_zero: NDArray, theta0: NDArray, J0: NDArray, bounds: t
     else:
         raise ValueError(f"method = {method!r}; choose secant or minimize")
     th, e, sim, _ = ev.best
-    if sim is None:  # nothing simulated was better than zero: keep the last evaluation's model
-        th = theta
-        (e, _), = ev([theta])
-        sim = ev.best[2]
     n, C = e_at_zero.shape
     return Refined(th, ev.J.T.reshape(-1, n, C), sim, e.reshape(n, C), ev.steps)
 

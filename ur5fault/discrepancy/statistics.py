@@ -44,6 +44,9 @@ STABILITY_RATIO = (0.5, 2.0)
 STABILITY_Z = 3.0
 #: a block constrains a finding when it holds at least this share of the finding's information
 INFORMATIVE_SHARE = 0.5 / STABILITY_BLOCKS
+#: a candidate whose columns the findings already in explain to this share (r^2; variance inflation 50)
+#: can only fit the small differences between near-identical shapes - the model's own error, not an effect
+MAX_COLLINEARITY = 0.98
 #: lag-1 autocorrelation is capped below 1 so that the effective sample count stays positive
 RHO_MAX = 0.999
 #: on the held-out part, a finding must remove at least this share of the change it makes there ...
@@ -229,3 +232,15 @@ def generalisation(e_with: NDArray, e_without: NDArray) -> Generalisation:
     # drop / energy = 1 + 2 e_with.change / energy: its noise grows with the residual's correlation time
     discount = effective_n(e_with) / e_with.size
     return Generalisation(energy * discount, drop / energy)
+
+
+def collinearity(G: NDArray, base: list[int], own: list[int]) -> float:
+    """Largest squared canonical correlation between columns ``own`` and the span of columns ``base``
+    (1: ``own`` lies in that span; 0: orthogonal to it)."""
+    if not base:
+        return 0.0
+    Goo = G[np.ix_(own, own)]
+    Gob = G[np.ix_(own, base)]
+    schur = Goo - Gob @ solve(G[np.ix_(base, base)], Gob.T)
+    lam = np.linalg.eigvals(solve(Goo, schur)).real  # 1 - r^2 along the canonical directions
+    return float(np.clip(1.0 - lam.min(), 0.0, 1.0))
