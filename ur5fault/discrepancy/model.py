@@ -90,8 +90,7 @@ class SearchStep:
 class _Stages:
     """Progress of the workflow on one tqdm bar (``ur5fault.progress``): one unit per stage."""
 
-    NAMES = ("screening the library", "refining library findings", "discovering terms", "refining all findings",
-             "held-out check")
+    NAMES = ("screening the library", "discovering terms", "refining the findings", "judging")
 
     def __init__(self, enabled: bool) -> None:
         from .. import progress
@@ -128,11 +127,13 @@ class DiscrepancyModel:
         jobs: worker processes for lockstep batches.
         refiner: ``"secant"`` or ``"minimize"`` (see :func:`ur5fault.discrepancy.search.refine`).
         progress: show a progress bar (tqdm; silent when not interactive).
+        screen_s: length of the log's first part the library is screened and the dictionary selected on
+            [s] (default: the whole fitting part); refinement and judgement use the whole fitting part.
     """
 
     def __init__(self, fit_fraction: float = 0.6, max_effects: int = 3, max_terms: int = 4,
                  kinds: Sequence[str] | None = None, jobs: int = 1, refiner: str = "secant",
-                 progress: bool = False) -> None:
+                 progress: bool = False, screen_s: float | None = None) -> None:
         lo, hi = FIT_FRACTION_RANGE
         if not lo <= fit_fraction <= hi:
             raise ParameterError(f"fit_fraction = {fit_fraction} is out of range [{lo}, {hi}]")
@@ -140,6 +141,10 @@ class DiscrepancyModel:
             raise ParameterError(f"refiner = {refiner!r} is not valid; choose one of: secant, minimize")
         self.fit_fraction, self.max_effects, self.max_terms = fit_fraction, max_effects, max_terms
         self.kinds, self.jobs, self.refiner, self.progress = kinds, jobs, refiner, progress
+        if screen_s is not None and screen_s <= 0:
+            raise ParameterError(f"screen_s = {screen_s} must be a positive number of seconds (or None: the "
+                                 "whole fitting part)")
+        self.screen_s = screen_s
 
     # ------------------------------------------------------------------------------------------- fit
     def fit(self, log: MeasuredLog, params_overrides: dict | None = None,
@@ -151,91 +156,91 @@ class DiscrepancyModel:
         self.params_overrides_ = dict(params_overrides or {})
         n_all = rp.n_samples
         n_fit = int(n_all * self.fit_fraction)
-        self.n_fit_, self.n_all_ = n_fit, n_all
-        meas = rp.measured(n_fit)
+        n_scr = n_fit if self.screen_s is None else min(n_fit, max(2, round(self.screen_s / log.period_s)))
+        self.n_fit_, self.n_all_, self.n_screen_ = n_fit, n_all, n_scr
         stages = _Stages(self.progress)
         self.search_: list[SearchStep] = []
-        self.refinement_: dict[str, list] = {}
         timings: dict[str, float] = {}
 
         # ---- 1. the library, screened in one batch and selected on the linearised problem
         t = time.perf_counter()
         cands = library.candidates(log.payload_kg, kinds=self.kinds)
-        base, X_lib, cands = library.screen(rp, n_fit, cands, progress=stages.start("screening the library"))
-        e0 = weighted(meas, base.y, rp.sigma)
+        base, X_lib, cands = library.screen(rp, n_scr, cands, progress=stages.start("screening the library"))
+        e0 = weighted(rp.measured(n_scr), base.y, rp.sigma)
         bg = BlockGram.build(X_lib, e0)
         cols = columns_of(cands)
         sel = forward(bg, e0, X_lib, cands, cols, self.max_effects)
         self.search_ += [SearchStep.of("library", v) for v in sel.trace]
-        timings["library screening"] = time.perf_counter() - t
         lib = [cands[k] for k in sel.chosen]
-        alternatives = {cands[k]: [(cands[a], th) for a, th in alt] for k, alt in zip(sel.chosen, sel.alternatives)}
-        sim_lib, e_lib, J_lib, th_lib = base, e0, np.zeros((0,) + e0.shape), np.zeros(0)
-        t = time.perf_counter()
-        if lib:
-            th0 = sel.theta(bg, cols)
-            ref = self._refine(rp, n_fit, meas, lib, e0, th0, X_lib[[c for k in sel.chosen for c in cols[k]]],
-                               stages.start("refining library findings"))
-            self.refinement_["library"] = ref.steps
-            if ref.sim is not None:
-                sim_lib, e_lib, J_lib, th_lib = ref.sim, ref.e, ref.J, ref.theta
-        timings["library refinement"] = time.perf_counter() - t
+        lib_cols = [c for k in sel.chosen for c in cols[k]]
+        alternatives = {cands[k]: [(cands[a], X_lib[cols[a]]) for a, _ in alt]
+                        for k, alt in zip(sel.chosen, sel.alternatives)}
+        timings["library screening"] = time.perf_counter() - t
 
-        # ---- 2. discovery on what the library leaves, library findings free to readjust
+        # ---- 2. discovery: the dictionary's terms on what the library leaves (library columns free to readjust)
         t = time.perf_counter()
         stages.start("discovering terms")
         terms: list[Candidate] = []
+        X_all, fixed = X_lib[lib_cols], list(range(len(lib_cols)))
         if self.max_terms > 0:
-            joints = self._joints_above_floor(e_lib, rp.sigma.shape[0])
-            dcands, X_dict = discovery.dictionary(rp, sim_lib, n_fit, joints)
-            if len(dcands):
-                X_all = np.concatenate([J_lib, X_dict]) if len(J_lib) else X_dict
-                e_pseudo = e_lib + np.tensordot(th_lib, J_lib, axes=1) if len(J_lib) else e_lib
-                fixed = list(range(len(J_lib)))
-                dcols = columns_of(dcands, start=len(J_lib))
-                bg2 = BlockGram.build(X_all, e_pseudo)
-                sel2 = forward(bg2, e_pseudo, X_all, dcands, dcols, self.max_terms, fixed=fixed)
+            G, g, ee = bg.total()
+            e_lib = e0 - np.tensordot(rss_of(G, g, ee, lib_cols)[1], X_lib[lib_cols], axes=1)
+            dcands, X_dict = discovery.dictionary(rp, base, n_scr, self._joints_above_floor(e_lib, len(rp.signals)))
+            if dcands:
+                X_all = np.concatenate([X_all, X_dict])
+                dcols = columns_of(dcands, start=len(lib_cols))
+                bg2 = BlockGram.build(X_all, e0)
+                sel2 = forward(bg2, e0, X_all, dcands, dcols, self.max_terms, fixed=fixed)
                 self.search_ += [SearchStep.of("dictionary", v) for v in sel2.trace]
                 terms = [dcands[k] for k in sel2.chosen]
+                fixed += [c for k in sel2.chosen for c in dcols[k]]
                 for k, alt in zip(sel2.chosen, sel2.alternatives):
-                    alternatives[dcands[k]] = [(dcands[a], th) for a, th in alt]
+                    alternatives[dcands[k]] = [(dcands[a], X_all[dcols[a]]) for a, _ in alt]
         timings["discovery"] = time.perf_counter() - t
 
-        # ---- 3. everything refined together, then judged against all the others
+        # ---- 3. every finding refined by re-simulating the whole log (one batch of probes), then judged;
+        # first the findings selected afresh among themselves on the linearised problem (free), so that
+        # library effects that only stood in for a term discovered later are not re-simulated
         t = time.perf_counter()
         found = lib + terms
-        refined: Refined | None = None
-        if terms:
-            tcols = [c for k in sel2.chosen for c in dcols[k]]
-            G2, g2, ee2 = bg2.total()
-            th0 = rss_of(G2, g2, ee2, fixed + tcols)[1]  # library and term coefficients, jointly
-            J0 = X_all[fixed + tcols]
-            # the terms' quasi-static columns are replaced by their simulated response: each term is also
-            # simulated removed (and, for a sine-cosine pair, turned by a quarter period) in the first batch
-            probes, off = [], len(fixed)
-            for c in terms:
-                th_c = th0[off : off + c.n_coef]
-                for d in ([-th_c] + ([np.array([-th_c[1], th_c[0]])] if c.n_coef == 2 else [])):
-                    p = np.zeros_like(th0)
-                    p[off : off + c.n_coef] = d
-                    probes.append(p)
-                off += c.n_coef
-            refined = self._refine(rp, n_fit, meas, found, e0, th0, J0, stages.start("refining all findings"),
-                                   probes)
-            self.refinement_["all"] = refined.steps
-        elif lib and sim_lib is not base:
-            refined = Refined(th_lib, J_lib, sim_lib, e_lib, [])
-        timings["joint refinement"] = time.perf_counter() - t
-        findings = self._judge(found, refined, alternatives) if refined is not None and refined.sim is not None else []
-        if found and (refined is None or refined.sim is None):
-            self.search_.append(SearchStep("refinement", ", ".join(c.label for c in found), (), 0.0, 0.0, (), False,
-                                           "re-simulation does not confirm the linearised estimate"))
-
-        # ---- 4. held-out check by simulation over the whole log
+        if len(found) > 1:
+            fcols = columns_of(found)
+            bg3 = BlockGram.build(X_all[fixed], e0)
+            again = forward(bg3, e0, X_all[fixed], found, fcols, len(found))
+            keep, _, _ = backward(bg3, e0, X_all[fixed], found, fcols, again.chosen)
+            for k in range(len(found)):
+                if k not in keep:
+                    v = dataclasses.replace(judge(bg3, e0, X_all[fixed], fcols, keep, k), label=found[k].label)
+                    self.search_.append(SearchStep.of("linear joint check", dataclasses.replace(
+                        v, accepted=False, reason=v.reason or "explains nothing the other findings do not")))
+            keep = sorted(keep)
+            fixed = [fixed[c] for k in keep for c in fcols[k]]
+            found = [found[k] for k in keep]
+        prog = stages.start("refining the findings")
+        if found:
+            G, g, ee = BlockGram.build(X_all[fixed], e0).total()
+            theta0 = rss_of(G, g, ee, list(range(len(fixed))))[1]
+            ref = self._refine(rp, found, theta0, n_fit, prog)
+            self.refinement_ = ref.steps
+        else:
+            ref = None
+            self.refinement_ = []
+            nominal = rp.run([()], n_all, prog)[0]
+        timings["refinement"] = time.perf_counter() - t
         t = time.perf_counter()
-        stages.start("held-out check")
-        self._held_out(rp, findings, n_fit, n_all)
-        timings["held-out check"] = time.perf_counter() - t
+        stages.start("judging")
+        if ref is not None:
+            findings = self._judge(found, ref, alternatives, n_fit, n_scr)
+            nominal = ref.sim0
+            kept = [f for f in findings if f.kept]
+            if len(kept) == len(found):
+                after = ref.sim
+            else:
+                after = rp.run([tuple(f.spec() for f in kept)], n_all)[0]
+        else:
+            findings, after = [], nominal
+        self._results(rp, nominal, after, n_fit, n_all)
+        timings["judging"] = time.perf_counter() - t
         stages.close()
         self.findings_ = findings
         self.timings_s_ = timings
@@ -245,82 +250,126 @@ class DiscrepancyModel:
         return self
 
     # --------------------------------------------------------------------------------- pieces
-    def _refine(self, rp: Replay, n: int, meas: NDArray, found: list[Candidate], e0: NDArray, theta0: NDArray,
-                J0: NDArray, progress, probes: Sequence[NDArray] = ()) -> Refined:
-        sizes = [c.n_coef for c in found]
-        splits = np.cumsum(sizes)[:-1]
+    @staticmethod
+    def _split(found: list[Candidate], theta: NDArray) -> list[NDArray]:
+        return np.split(theta, np.cumsum([c.n_coef for c in found])[:-1])
+
+    def _refine(self, rp: Replay, found: list[Candidate], theta0: NDArray, n_fit: int, progress) -> Refined:
+        """Re-simulate the whole log: the first batch holds the starting model, the linearised estimate and
+        each finding removed (a sine-cosine pair also turned by a quarter period), whose secants give the
+        simulated Jacobian; Gauss-Newton steps follow on the fitting part."""
+        n_all = rp.n_samples
+        meas = rp.measured(n_all)
 
         def evaluate(thetas: list[NDArray]) -> list[tuple[Replayed, NDArray]]:
-            sets = [tuple(c.spec(th) for c, th in zip(found, np.split(theta, splits))) for theta in thetas]
-            sims = rp.run(sets, n, progress)
+            sets = [tuple(c.spec(th) for c, th in zip(found, self._split(found, theta)) if np.any(th))
+                    for theta in thetas]
+            sims = rp.run(sets, n_all, progress)
             return [(s, weighted(meas, s.y, rp.sigma)) for s in sims]
 
+        probes, off = [], 0
+        for c in found:
+            th_c = theta0[off : off + c.n_coef]
+            for d in [-th_c] + ([np.array([-th_c[1], th_c[0]])] if c.n_coef == 2 else []):
+                p = np.zeros_like(theta0)
+                p[off : off + c.n_coef] = d
+                probes.append(p)
+            off += c.n_coef
         lo = np.concatenate([c.bounds()[0] for c in found])
         hi = np.concatenate([c.bounds()[1] for c in found])
-        return refine(evaluate, e0, theta0, J0, (lo, hi), self.refiner, probes)
+        return refine(evaluate, theta0, probes, (lo, hi), n_fit, self.refiner)
 
-    def _judge(self, found: list[Candidate], ref: Refined, alternatives) -> list[Finding]:
-        """Every finding against all the others, on the problem linearised at the refined coefficients:
+    def _judge(self, found: list[Candidate], ref: Refined, alternatives, n_fit: int, n_scr: int) -> list[Finding]:
+        """Every finding against all the others on the fitting part, linearised at the refined coefficients:
         selected afresh from the findings alone (so two that only cancel each other, e.g. a viscous scale
-        and a negative viscous term beside a speed-squared drag, do not both stay), then each checked
-        against all the rest."""
+        and a negative viscous term beside a speed-squared drag, do not both stay), each checked against
+        all the rest, then on the held-out part (a finding that does not generalise is dropped)."""
         cols = columns_of(found)
-        e_pseudo = ref.e + np.tensordot(ref.theta, ref.J, axes=1)
-        bg = BlockGram.build(ref.J, e_pseudo)
-        again = forward(bg, e_pseudo, ref.J, found, cols, len(found))
-        kept, verdicts, _ = backward(bg, e_pseudo, ref.J, found, cols, again.chosen)
+        J_fit, e_fit = ref.J[:, :n_fit], ref.e[:n_fit]
+        e_pseudo = e_fit + np.tensordot(ref.theta, J_fit, axes=1)
+        bg = BlockGram.build(J_fit, e_pseudo)
         G, g, ee = bg.total()
-        idx = [c for k in kept for c in cols[k]]
-        theta = rss_of(G, g, ee, idx)[1]  # the kept findings refitted without the dropped ones
-        out, i = [], 0
-        for k, v in zip(kept, verdicts):
-            c = found[k]
-            th = theta[i : i + c.n_coef]
-            i += c.n_coef
-            out.append(Finding(c, th, np.asarray(v.se), v, alternatives.get(c, [])))
+        again = forward(bg, e_pseudo, J_fit, found, cols, len(found))
+        kept, verdicts, _ = backward(bg, e_pseudo, J_fit, found, cols, again.chosen)
+        out: list[Finding] = []
+        dropped: list[Finding] = []
         for k in range(len(found)):  # the dropped ones, judged against the kept
             if k not in kept:
-                v = dataclasses.replace(judge(bg, e_pseudo, ref.J, cols, kept, k), label=found[k].label)
+                v = dataclasses.replace(judge(bg, e_pseudo, J_fit, cols, kept, k), label=found[k].label)
                 reason = v.reason or "explains nothing the other findings do not"
-                self.search_.append(SearchStep.of("joint check", dataclasses.replace(v, accepted=False,
-                                                                                     reason=reason)))
-                out.append(Finding(found[k], np.asarray(v.theta), np.asarray(v.se), v, alternatives.get(found[k], []),
-                                   kept=False, reason=f"explains nothing the others do not ({reason})"))
+                dropped.append(Finding(found[k], np.asarray(v.theta), np.asarray(v.se), v, kept=False,
+                                       reason=f"explains nothing the others do not ({reason})"))
+        # held-out part: the residual with the kept findings, and without each, from the simulated Jacobian
+        e_held = ref.e[n_fit:] + np.tensordot(ref.theta, ref.J[:, n_fit:], axes=1)  # starting model, linearised
+        while kept:
+            idx = [c for k in kept for c in cols[k]]
+            theta = rss_of(G, g, ee, idx)[1]  # the kept findings refitted without the dropped ones
+            with_all = e_held - np.tensordot(theta, ref.J[idx, n_fit:], axes=1)
+            out, i, worst = [], 0, None
+            for k in kept:
+                c = found[k]
+                th = theta[i : i + c.n_coef]
+                own = [idx.index(col) for col in cols[k]]
+                i += c.n_coef
+                ch = self._channels(c)
+                gen = generalisation(with_all[:, ch], (with_all + np.tensordot(th, ref.J[[idx[o] for o in own], n_fit:],
+                                                                                axes=1))[:, ch])
+                f = Finding(c, th, np.zeros(c.n_coef), None, held_out=gen)
+                out.append(f)
+                if not gen.passes and (worst is None or gen.ratio < worst[1].held_out.ratio):
+                    worst = (k, f)
+            if worst is None:
+                break
+            k, f = worst
+            f.kept = False
+            f.reason = (f"does not generalise: on the held-out part it removes {100 * f.held_out.ratio:.0f} % of the "
+                        "change it makes")
+            f.verdict = dataclasses.replace(judge(bg, e_pseudo, J_fit, cols, [o for o in kept if o != k], k),
+                                            label=found[k].label)
+            f.se = np.asarray(f.verdict.se)
+            dropped.append(f)
+            kept.remove(k)
+            out = []
+        final = {k: f for k, f in zip(kept, out)}
+        if not dropped:  # nothing dropped: the simulated optimum itself, not its linear refit
+            for f, th in zip(final.values(), self._split(found, ref.theta)):
+                f.theta = th
+        for f in dropped:
+            self.search_.append(SearchStep.of("held-out check" if f.held_out else "joint check", dataclasses.replace(
+                f.verdict, accepted=False, reason=f.reason)))
+        for k, f in final.items():  # final verdicts and alternatives, against the kept findings
+            f.verdict = dataclasses.replace(judge(bg, e_pseudo, J_fit, cols, [o for o in kept if o != k], k),
+                                            label=found[k].label)
+            f.se = np.asarray(f.verdict.se)
+            f.alternatives = self._alternatives(found, kept, k, alternatives.get(found[k], []), J_fit, e_pseudo,
+                                                cols, n_scr)
+        return list(final.values()) + dropped
+
+    def _channels(self, c: Candidate) -> NDArray:
+        """Flat channel mask of what a finding acts on: its joint's signals, or everything."""
+        S = len(self.replay_.signals)
+        ch = np.zeros((S, N_JOINTS), dtype=bool)
+        if c.local:
+            ch[:, c.joint] = True
+        else:
+            ch[:] = True
+        return ch.ravel()
+
+    @staticmethod
+    def _alternatives(found, kept, k, alts, J_fit, e_pseudo, cols, n_scr) -> list[tuple[Candidate, NDArray]]:
+        """Each alternative's own coefficients, in place of finding ``k`` beside the other kept findings (on the
+        screening part, where its column is known)."""
+        out = []
+        others = [c for o in kept if o != k for c in cols[o]]
+        for cand, col in alts:
+            X = np.concatenate([J_fit[others, :n_scr], col[:, :n_scr]])
+            Gb, gb, eb = BlockGram.build(X, e_pseudo[:n_scr]).total()
+            out.append((cand, rss_of(Gb, gb, eb, list(range(X.shape[0])))[1][len(others):]))
         return out
 
-    def _held_out(self, rp: Replay, findings: list[Finding], n_fit: int, n_all: int) -> None:
-        """Simulate the whole log without findings, with all, and without each; drop findings that do not
-        generalise to the held-out part, and keep the replays for the report."""
-        findings = [f for f in findings if f.kept]
-        specs = [f.spec() for f in findings]
-        sets = [(), tuple(specs)] + ([tuple(s for s in specs if s is not x) for x in specs] if len(specs) > 1 else [])
-        sims = rp.run(sets, n_all)
+    def _results(self, rp: Replay, nominal: Replayed, after: Replayed, n_fit: int, n_all: int) -> None:
         meas = rp.measured(n_all)
         held = slice(n_fit, n_all)
-        nominal, full = sims[0], sims[1]
-        without = sims[2:] if len(specs) > 1 else [nominal]
-        S = len(rp.signals)
-        for f, w in zip(findings, without):
-            ch = np.zeros((S, N_JOINTS), dtype=bool)
-            if f.candidate.local:
-                ch[:, f.candidate.joint] = True
-            else:
-                ch[:] = True
-            e_with = weighted(meas[held], full.y[held], rp.sigma)[:, ch.ravel()]
-            e_without = weighted(meas[held], w.y[held], rp.sigma)[:, ch.ravel()]
-            f.held_out = generalisation(e_with, e_without)
-            if not f.held_out.passes:
-                f.kept = False
-                f.reason = (f"does not generalise: on the held-out part it removes {100 * f.held_out.ratio:.0f} % "
-                            "of the change it makes")
-        dropped = [i for i, f in enumerate(findings) if not f.kept]
-        if len(dropped) == 1 and len(specs) > 1:
-            after = without[dropped[0]]
-        elif dropped:
-            after = rp.run([tuple(f.spec() for f in findings if f.kept)], n_all)[0]
-        else:
-            after = full
-        self.meas_all_ = meas
         self.sim_before_, self.sim_after_ = nominal, after
         self.residual_before_ = meas - nominal.y
         self.residual_after_ = meas - after.y

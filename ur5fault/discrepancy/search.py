@@ -191,104 +191,137 @@ class RefineStep:
 
 @dataclasses.dataclass
 class Refined:
-    """Refined coefficients, the secant Jacobian at them (``(n_coef, n, n_channels)``, change of the
-    weighted *simulated* readings per unit coefficient), the replay there and its weighted residual."""
+    """Refined coefficients over the whole log.
+
+    Attributes:
+        theta: the best simulated coefficients (least weighted RSS on the fitting part).
+        J: secant Jacobian there, ``(n_coef, n, n_channels)``: change of the weighted *simulated* readings
+            per unit coefficient, over the whole log.
+        sim, e: the replay at ``theta`` and its weighted residual ``(n, n_channels)``.
+        sim0, e0: the replay with every coefficient zero (the starting model) and its weighted residual.
+        steps: every simulated point.
+    """
 
     theta: NDArray
     J: NDArray
     sim: object
     e: NDArray
+    sim0: object
+    e0: NDArray
     steps: list[RefineStep]
 
 
 class _Evaluations:
-    """Simulated points, the best one, and a secant (Broyden) Jacobian in coordinates scaled by ``scale``."""
+    """Simulated points, the best one on the fitting rows, and a secant Jacobian (scaled coordinates)."""
 
-    def __init__(self, evaluate, e_at_zero: NDArray, J0: NDArray, scale: NDArray) -> None:
-        self.evaluate, self.scale = evaluate, scale
-        self.J = J0.reshape(J0.shape[0], -1).T.copy()  # (N, k): e(theta) ~ e0 - J theta
-        self.last = (np.zeros(J0.shape[0]), e_at_zero.ravel())
-        self.best = (np.zeros(J0.shape[0]), e_at_zero.ravel(), None, float(e_at_zero.ravel() @ e_at_zero.ravel()))
+    def __init__(self, evaluate, k: int, scale: NDArray, fit_rows: int) -> None:
+        self.evaluate, self.scale, self.rows = evaluate, scale, fit_rows
+        self.J: NDArray | None = None  # (N, k): e(theta) ~ e(0) - J theta
+        self.best: tuple[NDArray, NDArray, object, float] | None = None
+        self.last: tuple[NDArray, NDArray] | None = None
         self.steps: list[RefineStep] = []
 
-    def __call__(self, thetas: list[NDArray], anchored: bool = False) -> list[tuple[NDArray | None, float]]:
-        """Simulate ``thetas`` in one batch.  ``anchored``: the first point is the anchor and the others its
-        perturbations; the Jacobian takes all their secants at once (multi-secant update)."""
+    def fit_part(self, e: NDArray) -> NDArray:
+        return e[: self.rows].ravel()
+
+    def __call__(self, thetas: list[NDArray], update: bool = True) -> list[tuple[NDArray | None, float, object]]:
+        """Simulate ``thetas`` in one batch; ``update``: the Jacobian takes the secant of each new point from
+        the one before."""
         out = []
         for th, (sim, e) in zip(thetas, self.evaluate(thetas)):
-            e = e.ravel() if sim.ok else None
-            rss = float(e @ e) if e is not None else math.inf
+            ok = sim.ok and np.all(np.isfinite(e))
+            f = self.fit_part(e) if ok else None
+            rss = float(f @ f) if f is not None else math.inf
             self.steps.append(RefineStep(tuple(float(t) for t in th), rss))
-            if e is not None and rss < self.best[3]:
+            if ok and (self.best is None or rss < self.best[3]):
                 self.best = (th.copy(), e, sim, rss)
-            out.append((e, rss))
-        ok = [(th, e) for th, (e, _) in zip(thetas, out) if e is not None]
-        if anchored and out[0][0] is not None:
-            self._secants(thetas[0], out[0][0], ok[1:])
-        else:
-            for th, e in ok:
-                self._secants(self.last[0], self.last[1], [(th, e)])
-                self.last = (th.copy(), e)
+            out.append((e if ok else None, rss, sim))
+        if update:
+            for th, (e, _, _) in zip(thetas, out):
+                if e is not None:
+                    if self.last is not None:
+                        self._secants(self.last[0], self.last[1], [(th, e)])
+                    self.last = (th.copy(), e)
         return out
 
     def _secants(self, th0: NDArray, e0: NDArray, points: list[tuple[NDArray, NDArray]]) -> None:
-        """Make ``J`` reproduce the secants from ``(th0, e0)`` to ``points`` (minimal change, scaled norm)."""
+        """Make ``J`` reproduce the secants from ``(th0, e0)`` to ``points`` (least change, scaled norm)."""
+        if self.J is None:
+            self.J = np.zeros((e0.size, th0.size))
         if points:
             P = np.stack([(th - th0) / self.scale for th, _ in points], axis=1)  # (k, m)
             if np.any(P):
-                D = np.stack([e0 - e for _, e in points], axis=1)  # (N, m)
+                D = np.stack([(e0 - e).ravel() for _, e in points], axis=1)  # (N, m)
                 Js = self.J * self.scale
                 Js += (D - Js @ P) @ np.linalg.pinv(P)
                 self.J = Js / self.scale
         self.last = (th0.copy(), e0)
 
+    def step(self, e: NDArray) -> tuple[NDArray, float]:
+        """Gauss-Newton step on the fitting rows and the drop of the weighted RSS it promises."""
+        Jf = self.J.reshape(e.shape[0], -1, self.J.shape[1])[: self.rows].reshape(-1, self.J.shape[1])
+        f = self.fit_part(e)
+        step = np.linalg.lstsq(Jf, f, rcond=None)[0]
+        return step, float((Jf @ step) @ f)
 
-def refine(evaluate, e_at_zero: NDArray, theta0: NDArray, J0: NDArray, bounds: tuple[NDArray, NDArray],
-           method: str = "secant", probes: Sequence[NDArray] = ()) -> Refined:
-    """Refine coefficients by re-simulation.
+
+def refine(evaluate, theta0: NDArray, probes: Sequence[NDArray], bounds: tuple[NDArray, NDArray], fit_rows: int,
+           method: str = "secant") -> Refined:
+    """Refine coefficients by re-simulating the whole log, fitting its first ``fit_rows`` samples.
+
+    The first lockstep batch holds the starting model (all coefficients zero), ``theta0`` and ``theta0`` +
+    each of ``probes``; when the probes span every coefficient (each finding removed, a sine-cosine pair
+    also turned by a quarter period), their secants give the whole Jacobian at once.
 
     Args:
-        evaluate: ``evaluate(list of theta) -> list of (replay, weighted residual)``, one lockstep batch.
-        e_at_zero: weighted residual with all coefficients zero (the model before these findings).
-        theta0: the linearised estimate; J0: the columns ``(k, n, n_channels)`` it came from.
+        evaluate: ``evaluate(list of theta) -> list of (replay, weighted residual (n, n_channels))``.
+        theta0: the linearised estimate.
+        probes: perturbations of ``theta0`` simulated in the first batch.
         bounds: coefficient bounds (the effects' valid ranges).
-        method: ``"secant"`` (Gauss-Newton steps on a secant-updated Jacobian, one simulation per round) or
-            ``"minimize"`` (``mujoco.minimize.least_squares`` with finite differences in scaled coordinates).
-        probes: perturbations of ``theta0`` simulated with it in the first batch, whose secants replace
-            the columns they span (e.g. a quasi-static dictionary column by the simulated response).
-
-    Returns:
-        The best simulated point; ``sim`` is None when none was better than all coefficients at zero.
+        method: ``"secant"`` (Gauss-Newton steps on the secant Jacobian, one simulation per round,
+            at most :data:`REFINE_ROUNDS`) or ``"minimize"`` (``mujoco.minimize.least_squares`` from the
+            first batch's best point, finite differences in scaled coordinates).
     """
     lo, hi = bounds
+    k = theta0.size
     scale = np.maximum(np.abs(theta0), 1e-9)
-    ev = _Evaluations(evaluate, e_at_zero, J0, scale)
+    ev = _Evaluations(evaluate, k, scale, fit_rows)
     theta = np.clip(theta0, lo, hi)
+    pts = [np.zeros(k), theta] + [np.clip(theta + p, lo, hi) for p in probes]
+    first = ev(pts, update=False)
+    e0, sim0 = first[0][0], first[0][2]
+    if e0 is None:
+        raise RuntimeError("the starting model failed to replay the log")
+    # the Jacobian from the secants of the first batch, anchored at theta (at zero if theta failed)
+    anchor = 1 if first[1][0] is not None else 0
+    ev._secants(pts[anchor], first[anchor][0],
+                [(pts[i], first[i][0]) for i in range(len(pts)) if i != anchor and first[i][0] is not None])
     if method == "secant":
-        first = [theta] + [np.clip(theta + p, lo, hi) for p in probes]
-        for r in range(REFINE_ROUNDS):
-            (e, rss), *_ = ev(first, anchored=True) if r == 0 else ev([theta])
-            if e is None or rss > ev.best[3]:  # worse than the best point: halve back towards it
-                theta = np.clip(ev.best[0] + 0.5 * (theta - ev.best[0]), lo, hi)
-                continue
-            step = np.linalg.lstsq(ev.J, e, rcond=None)[0]
-            if float((ev.J @ step) @ e) < REFINE_RTOL * rss:
+        theta = ev.best[0]
+        for _ in range(REFINE_ROUNDS):
+            step, gain = ev.step(ev.best[1])
+            if gain < REFINE_RTOL * ev.best[3]:
                 break
-            theta = np.clip(theta + step, lo, hi)
+            theta = np.clip(ev.best[0] + step, lo, hi)
+            (e, rss, _), = ev([theta])
+            if e is None or rss > ev.best[3]:  # worse than the best point: try half the step once
+                theta = np.clip(ev.best[0] + 0.5 * step, lo, hi)
+                ev([theta])
     elif method == "minimize":
         from mujoco import minimize
 
         def residual(z: NDArray) -> NDArray:
             outs = ev([col * scale for col in z.T])
-            return np.stack([e if e is not None else np.full(e_at_zero.size, 1e6) for e, _ in outs], axis=1)
+            return np.stack([ev.fit_part(e) if e is not None else np.full(ev.fit_part(e0).size, 1e6)
+                             for e, _, _ in outs], axis=1)
 
-        minimize.least_squares(theta / scale, residual, bounds=(lo / scale, hi / scale), eps=FD_STEP,
+        minimize.least_squares(ev.best[0] / scale, residual, bounds=(lo / scale, hi / scale), eps=FD_STEP,
                                max_iter=REFINE_ROUNDS, verbose=0)
     else:
         raise ValueError(f"method = {method!r}; choose secant or minimize")
     th, e, sim, _ = ev.best
-    n, C = e_at_zero.shape
-    return Refined(th, ev.J.T.reshape(-1, n, C), sim, e.reshape(n, C), ev.steps)
+    n, C = e0.shape
+    return Refined(th, ev.J.T.reshape(-1, n, C), sim, e, sim0, e0, ev.steps)
 
 
 #: finite-difference step of the ``minimize`` refinement, relative to each coefficient's first estimate
