@@ -122,3 +122,32 @@ def test_harmonic_slots():
     assert a.term_joint_harmonic_Nm[0, 1, 1].tolist() == [1.0, 0.5]
     with pytest.raises(ParameterError, match="at most 3 periods per joint"):
         build_run_arrays(p, [effs + [make_effect("torque_joint_harmonic", 2, sin_Nm=1.0, periods_per_rev=4)]], 0.0)
+
+
+def test_compiled_load_torque_equals_the_numpy_reference():
+    from ur5fault.terms import TermHook
+
+    effs = [make_effect("torque_joint_harmonic", 2, sin_Nm=1.0, cos_Nm=-0.3, periods_per_rev=3),
+            make_effect("torque_motor_harmonic", 3, sin_Nm=0.2, periods_per_rev=2),
+            make_effect("torque_coulomb", 1, torque_Nm=0.5), make_effect("torque_stribeck", 4, torque_Nm=0.7),
+            make_effect("torque_viscous", 5, coeff_Nms_per_rad=2.0),
+            make_effect("torque_quadratic", 6, coeff_Nms2_per_rad2=-3.0),
+            make_effect("torque_gravity_scale", 2, scale=0.1)]
+    hook = TermHook.build(build_run_arrays(load_params(), [effs, effs[:3], ()], 1.0))
+    rng = np.random.default_rng(0)
+    q, qd, th_m = rng.uniform(-3, 3, (3, 3, 6))
+    m_ii, grav = rng.uniform(0.01, 2, (3, 6)), rng.uniform(-30, 30, (3, 6))
+    np.testing.assert_allclose(hook.load_torque(q, qd, th_m, m_ii, 5e-5, grav),
+                               hook.load_torque_reference(q, qd, th_m, m_ii, 5e-5, grav), rtol=1e-12, atol=1e-12)
+
+
+def test_gravity_torque_equals_mujocos_bias_at_rest():
+    from ur5fault.multibody import BatchMultibody, LoopMultibody
+
+    model = mujoco.MjModel.from_xml_path(str(DEFAULT_MODEL_PATH))
+    q = np.random.default_rng(1).uniform(-2, 2, (3, 6))
+    for cls in (BatchMultibody, LoopMultibody):
+        mb = cls(model, 3, np.array([0.0, 0.0, 0.15]), np.zeros((3, 3)))
+        mb.set_payload(np.array([0.0, 1.0, 2.0]))
+        mb.gravity_torque()  # binds the kinematic fields before the first step
+        np.testing.assert_allclose(mb.gravity_torque(), mb.start(q), atol=1e-9)

@@ -49,9 +49,12 @@ def gravity_torque(ids: _Ids, g_m_s2: float, mass: NDArray, xipos: NDArray, xanc
                    xaxis: NDArray) -> NDArray:
     """Static gravity torque each joint's motor supplies ``(n, 6)`` [N*m]: the weight of every body that
     moves with the joint, ``m_b g`` upwards at its centre of mass, taken about the joint's axis."""
-    arm = xipos[:, None, :, :] - xanchor[:, :N_JOINTS, None, :]  # (n, 6, nbody, 3)
-    moment = np.cross(arm, g_m_s2 * ids.up) * (mass[:, None, :, None] * ids.subtree[None, :, :, None])
-    return np.einsum("njk,njk->nj", moment.sum(axis=2), xaxis[:, :N_JOINTS])
+    from .terms import gravity_moments
+
+    out = np.empty((mass.shape[0], N_JOINTS))
+    gravity_moments(np.ascontiguousarray(mass), np.ascontiguousarray(xipos), np.ascontiguousarray(xanchor),
+                    np.ascontiguousarray(xaxis), ids.subtree, g_m_s2 * ids.up, out)
+    return out
 
 
 class LoopMultibody:

@@ -26,8 +26,10 @@ substitutes the log's temperature series for the temperature terms (``sensor_tem
 from __future__ import annotations
 
 import dataclasses
+import math
 
 import numpy as np
+from numba import njit
 from numpy.typing import ArrayLike, NDArray
 
 #: harmonic terms per joint and kind that one run can carry (slots of ``RunArrays``)
@@ -124,32 +126,35 @@ class TermHook:
     # -- link torques, every physics step
     def load_torque(self, q: NDArray, qd: NDArray, th_m: NDArray, m_ii: NDArray, dt: float,
                     gravity_Nm: NDArray | None) -> NDArray:
-        """Load torque of the terms on every joint ``(n_runs, 6)`` [N*m], velocity parts semi-implicit."""
+        """Load torque of the terms on every joint ``(n_runs, 6)`` [N*m], velocity parts semi-implicit
+        (compiled: :func:`_load_torque`; ``load_torque_reference`` is the same in numpy)."""
+        a = self.a
+        out = np.empty_like(q)
+        _load_torque(q, qd, th_m, m_ii, dt, gravity_Nm if gravity_Nm is not None else np.zeros_like(q),
+                     a.term_joint_harmonic_Nm, a.term_joint_harmonic_per_rev, a.term_motor_harmonic_Nm,
+                     a.term_motor_harmonic_per_rev, a.term_coulomb_Nm, a.term_coulomb_width_rad_s, a.term_stribeck_Nm,
+                     a.term_stribeck_speed_rad_s, a.term_viscous_Nms_per_rad, a.term_quadratic_Nms2_per_rad2,
+                     a.term_gravity_scale, STRIBECK_SIGN_WIDTH_RAD_S, out)
+        return out
+
+    def load_torque_reference(self, q: NDArray, qd: NDArray, th_m: NDArray, m_ii: NDArray, dt: float,
+                              gravity_Nm: NDArray | None) -> NDArray:
+        """:meth:`load_torque` with the numpy dictionary functions (the reference of the compiled path)."""
         a = self.a
         t = np.zeros_like(q)  # position-dependent part
         tv = np.zeros_like(q)  # velocity-dependent part
         slope = np.zeros_like(q)
         for amp, per, angle in ((a.term_joint_harmonic_Nm, a.term_joint_harmonic_per_rev, q),
                                 (a.term_motor_harmonic_Nm, a.term_motor_harmonic_per_rev, th_m)):
-            if np.any(amp != 0.0):
-                s, c = harmonic(angle[..., None], per)
-                t += np.sum(amp[..., 0] * s + amp[..., 1] * c, axis=-1)
-        if np.any(a.term_coulomb_Nm != 0.0):
-            f, df = coulomb(qd, a.term_coulomb_width_rad_s)
-            tv += a.term_coulomb_Nm * f
-            slope += a.term_coulomb_Nm * df
-        if np.any(a.term_stribeck_Nm != 0.0):
-            f, df = stribeck(qd, a.term_stribeck_speed_rad_s)
-            tv += a.term_stribeck_Nm * f
-            slope += a.term_stribeck_Nm * df
-        if np.any(a.term_viscous_Nms_per_rad != 0.0):
-            tv += a.term_viscous_Nms_per_rad * qd
-            slope += a.term_viscous_Nms_per_rad
-        if np.any(a.term_quadratic_Nms2_per_rad2 != 0.0):
-            f, df = quadratic(qd)
-            tv += a.term_quadratic_Nms2_per_rad2 * f
-            slope += a.term_quadratic_Nms2_per_rad2 * df
-        if self.gravity and gravity_Nm is not None:
+            s, c = harmonic(angle[..., None], per)
+            t += np.sum(amp[..., 0] * s + amp[..., 1] * c, axis=-1)
+        for scale, (f, df) in ((a.term_coulomb_Nm, coulomb(qd, a.term_coulomb_width_rad_s)),
+                               (a.term_stribeck_Nm, stribeck(qd, a.term_stribeck_speed_rad_s)),
+                               (a.term_viscous_Nms_per_rad, (qd, np.ones_like(qd))),
+                               (a.term_quadratic_Nms2_per_rad2, quadratic(qd))):
+            tv += scale * f
+            slope += scale * df
+        if gravity_Nm is not None:
             t += a.term_gravity_scale * gravity_Nm
         # a dissipative slope is integrated like implicit friction (drive/friction.py); a negative one explicitly
         return t + tv / (1.0 + np.maximum(slope, 0.0) * dt / m_ii)
@@ -171,3 +176,63 @@ class TermHook:
 LINK_TORQUE_FIELDS = ("term_joint_harmonic_Nm", "term_motor_harmonic_Nm", "term_coulomb_Nm", "term_stribeck_Nm",
                       "term_viscous_Nms_per_rad", "term_quadratic_Nms2_per_rad2", "term_gravity_scale")
 SENSOR_FIELDS = ("current_temp_drift_A_per_K", "current_time_shift_s", "position_time_shift_s")
+
+
+# ------------------------------------------------------------------------------------ compiled paths
+@njit(cache=True)
+def _load_torque(q, qd, th_m, m_ii, dt, grav, amp_j, per_j, amp_m, per_m, coul, coul_w, strib, strib_v, visc, quad,
+                 grav_scale, sign_w, out):
+    """The terms' load torque, run by run and joint by joint, skipping absent terms (same equations as
+    :meth:`TermHook.load_torque_reference`)."""
+    n, nj = q.shape
+    for r in range(n):
+        for j in range(nj):
+            t = grav_scale[r, j] * grav[r, j]
+            for h in range(amp_j.shape[2]):
+                if amp_j[r, j, h, 0] != 0.0 or amp_j[r, j, h, 1] != 0.0:
+                    x = per_j[r, j, h] * q[r, j]
+                    t += amp_j[r, j, h, 0] * math.sin(x) + amp_j[r, j, h, 1] * math.cos(x)
+                if amp_m[r, j, h, 0] != 0.0 or amp_m[r, j, h, 1] != 0.0:
+                    x = per_m[r, j, h] * th_m[r, j]
+                    t += amp_m[r, j, h, 0] * math.sin(x) + amp_m[r, j, h, 1] * math.cos(x)
+            w = qd[r, j]
+            tv = 0.0
+            slope = 0.0
+            if coul[r, j] != 0.0:
+                s = math.tanh(w / coul_w[r, j])
+                tv += coul[r, j] * s
+                slope += coul[r, j] * (1.0 - s * s) / coul_w[r, j]
+            if strib[r, j] != 0.0:
+                s = math.tanh(w / sign_w)
+                vs = strib_v[r, j]
+                e = math.exp(-((w / vs) ** 2))
+                tv += strib[r, j] * s * e
+                slope += strib[r, j] * ((1.0 - s * s) / sign_w * e - s * e * 2.0 * w / (vs * vs))
+            if visc[r, j] != 0.0:
+                tv += visc[r, j] * w
+                slope += visc[r, j]
+            if quad[r, j] != 0.0:
+                tv += quad[r, j] * w * abs(w)
+                slope += quad[r, j] * 2.0 * abs(w)
+            out[r, j] = t + tv / (1.0 + max(slope, 0.0) * dt / m_ii[r, j])
+
+
+@njit(cache=True)
+def gravity_moments(mass, xipos, xanchor, xaxis, subtree, up, out):
+    """Static gravity torque per run and joint: for every body moving with joint j, the moment of its
+    weight (``mass * up``, ``up`` the holding force per kg) about the joint's axis."""
+    n = mass.shape[0]
+    nj, nb = subtree.shape
+    for r in range(n):
+        for j in range(nj):
+            tx, ty, tz = 0.0, 0.0, 0.0
+            for b in range(nb):
+                if subtree[j, b] and mass[r, b] != 0.0:
+                    ax = xipos[r, b, 0] - xanchor[r, j, 0]
+                    ay = xipos[r, b, 1] - xanchor[r, j, 1]
+                    az = xipos[r, b, 2] - xanchor[r, j, 2]
+                    m = mass[r, b]
+                    tx += m * (ay * up[2] - az * up[1])
+                    ty += m * (az * up[0] - ax * up[2])
+                    tz += m * (ax * up[1] - ay * up[0])
+            out[r, j] = tx * xaxis[r, j, 0] + ty * xaxis[r, j, 1] + tz * xaxis[r, j, 2]
