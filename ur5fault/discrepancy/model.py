@@ -38,6 +38,9 @@ logger = logging.getLogger(__name__)
 #: residuals above this multiple of the noise floor (sqrt 2 sigma: model and log noise) get joint-local terms
 FLOOR_FACTOR = 2.0
 FIT_FRACTION_RANGE = (0.2, 0.9)
+#: the library is screened and the dictionary selected on at most this much of the fitting part [s]
+#: (assumption: 20 s of a robot program hold its motions several times; refinement and judgement use all)
+SCREEN_S = 20.0
 
 
 @dataclasses.dataclass
@@ -87,6 +90,26 @@ class SearchStep:
         return cls(stage, v.label, v.theta, v.delta_bic, v.z, v.stability.ratios, v.accepted, v.reason)
 
 
+#: bare MuJoCo steps timed to measure the machine's speed (about 0.1 s)
+SPEED_PROBE_STEPS = 20000
+
+
+def bare_mj_step_us(dt_s: float) -> float:
+    """Wall time of one bare ``mujoco.mj_step`` of the packaged UR5 now [us] (no drive, no Python loop
+    around it beyond this one)."""
+    import mujoco
+
+    from ..engine import DEFAULT_MODEL_PATH
+
+    m = mujoco.MjModel.from_xml_path(str(DEFAULT_MODEL_PATH))
+    m.opt.timestep = dt_s
+    d = mujoco.MjData(m)
+    t = time.perf_counter()
+    for _ in range(SPEED_PROBE_STEPS):
+        mujoco.mj_step(m, d)
+    return (time.perf_counter() - t) / SPEED_PROBE_STEPS * 1e6
+
+
 class _Stages:
     """Progress of the workflow on one tqdm bar (``ur5fault.progress``): one unit per stage."""
 
@@ -128,12 +151,12 @@ class DiscrepancyModel:
         refiner: ``"secant"`` or ``"minimize"`` (see :func:`ur5fault.discrepancy.search.refine`).
         progress: show a progress bar (tqdm; silent when not interactive).
         screen_s: length of the log's first part the library is screened and the dictionary selected on
-            [s] (default: the whole fitting part); refinement and judgement use the whole fitting part.
+            [s] (None: the whole fitting part); refinement and judgement use the whole fitting part.
     """
 
     def __init__(self, fit_fraction: float = 0.6, max_effects: int = 3, max_terms: int = 4,
                  kinds: Sequence[str] | None = None, jobs: int = 1, refiner: str = "secant",
-                 progress: bool = False, screen_s: float | None = None) -> None:
+                 progress: bool = False, screen_s: float | None = SCREEN_S) -> None:
         lo, hi = FIT_FRACTION_RANGE
         if not lo <= fit_fraction <= hi:
             raise ParameterError(f"fit_fraction = {fit_fraction} is out of range [{lo}, {hi}]")
@@ -247,6 +270,10 @@ class DiscrepancyModel:
         self.wall_s_ = time.perf_counter() - t0
         self.n_simulated_runs_ = rp.n_simulated
         self.simulated_s_ = rp.simulated_s
+        # the machine's speed right now, for wall times that mean something on a shared machine
+        self.bare_mj_step_us_ = bare_mj_step_us(rp.params.physics_dt_s)
+        steps = rp.simulated_s / rp.params.physics_dt_s
+        self.wall_over_mj_steps_ = self.wall_s_ / (steps * self.bare_mj_step_us_ * 1e-6) if steps else float("nan")
         return self
 
     # --------------------------------------------------------------------------------- pieces

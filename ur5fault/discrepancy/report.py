@@ -234,6 +234,10 @@ def summary(model: DiscrepancyModel) -> dict[str, Any]:
         "wall_s_by_stage": model.timings_s_,
         "simulated_runs": model.n_simulated_runs_,
         "simulated_s": model.simulated_s_,
+        # wall time over (simulated run-steps x one bare mj_step timed at the end of the fit): compares
+        # wall times taken on machines of different speed or load
+        "bare_mj_step_us": model.bare_mj_step_us_,
+        "wall_over_mj_steps": model.wall_over_mj_steps_,
     }
 
 
@@ -307,5 +311,6 @@ def _markdown(model: DiscrepancyModel, summ: dict[str, Any], figs: list[Path]) -
         lines.append(f"- nothing above {UNEXPLAINED_FACTOR:g} times the noise floor")
     lines += ["", "## Residual plots", ""] + [f"![{p.stem}]({p.name})" for p in figs]
     lines += ["", f"Fitted on the first {100 * model.fit_fraction:.0f} % of the log; {summ['simulated_runs']} "
-              f"simulated runs ({summ['simulated_s']:.0f} s simulated) in {summ['wall_s']:.0f} s."]
+              f"simulated runs ({summ['simulated_s']:.0f} s simulated) in {summ['wall_s']:.0f} s "
+              f"({summ['wall_over_mj_steps']:.2f} bare mj_step times per simulated run-step)."]
     return "\n".join(lines) + "\n"

@@ -150,8 +150,8 @@ def forward(bg: BlockGram, e_fit: NDArray, X: NDArray, cands: Sequence[Candidate
             break
         k, v, gain = taken
         alt = []
-        for gain2, k2 in gains:
-            if k2 != k and gain2 >= ALTERNATIVE_SHARE * gain:
+        for gain2, k2 in gains:  # as good in this log, and as credible on its own
+            if k2 != k and gain2 >= ALTERNATIVE_SHARE * gain and judge(bg, e_fit, X, cols, chosen, k2, fixed).accepted:
                 alt.append((k2, rss_of(G, g, ee, base + cols[k2])[1][len(base):]))
         chosen.append(k)
         verdicts.append(v)
