@@ -102,6 +102,31 @@ def test_link_torque_terms_equal_a_passive_force_written_here(effect, law):
     _close(term, ref, base, j, rel=0.05)
 
 
+def test_holding_term_equals_a_passive_force_with_memory_written_here():
+    """A torque held at rest in the direction of the last motion, as a passive-force callback that keeps
+    its own memory of the direction."""
+    j, level, w_r = 2, 8.0, 0.02
+    base = _run(sim=Simulator(stepper="loop"))
+    state = {"sign": 0.0}
+
+    def passive(m, d):
+        w = d.qvel[j]
+        if abs(w) > w_r:
+            state["sign"] = float(np.sign(w))
+        d.qfrc_passive[j] -= level * state["sign"] * np.exp(-((w / w_r) ** 2))
+
+    ref_sim = Simulator(stepper="loop")
+    mujoco.set_mjcb_passive(passive)
+    try:
+        ref = _run(sim=ref_sim)
+    finally:
+        mujoco.set_mjcb_passive(None)
+    term = _run([make_effect("torque_holding", "elbow", torque_Nm=level, speed_rad_s=w_r)],
+                sim=Simulator(stepper="loop"))
+    # the hook damps the term's steep edges semi-implicitly where the callback applies them explicitly
+    _close(term, ref, base, j, rel=0.1)
+
+
 def test_sensor_terms_shift_and_drift_the_logged_readings_only(base):
     shifted = _run([make_effect("current_time_shift", "elbow", shift_ms=2 * LOG_S * 1e3),
                     make_effect("position_time_shift", "wrist_1", shift_ms=-LOG_S * 1e3),
@@ -132,13 +157,16 @@ def test_compiled_load_torque_equals_the_numpy_reference():
             make_effect("torque_coulomb", 1, torque_Nm=0.5), make_effect("torque_stribeck", 4, torque_Nm=0.7),
             make_effect("torque_viscous", 5, coeff_Nms_per_rad=2.0),
             make_effect("torque_quadratic", 6, coeff_Nms2_per_rad2=-3.0),
-            make_effect("torque_gravity_scale", 2, scale=0.1)]
-    hook = TermHook.build(build_run_arrays(load_params(), [effs, effs[:3], ()], 1.0))
+            make_effect("torque_gravity_scale", 2, scale=0.1), make_effect("torque_holding", 3, torque_Nm=2.0)]
+    a = build_run_arrays(load_params(), [effs, effs[:3], ()], 1.0)
+    fast, slow = TermHook.build(a), TermHook.build(a)
     rng = np.random.default_rng(0)
-    q, qd, th_m = rng.uniform(-3, 3, (3, 3, 6))
-    m_ii, grav = rng.uniform(0.01, 2, (3, 6)), rng.uniform(-30, 30, (3, 6))
-    np.testing.assert_allclose(hook.load_torque(q, qd, th_m, m_ii, 5e-5, grav),
-                               hook.load_torque_reference(q, qd, th_m, m_ii, 5e-5, grav), rtol=1e-12, atol=1e-12)
+    for _ in range(5):  # several steps: the holding term remembers the last motion
+        q, th_m = rng.uniform(-3, 3, (2, 3, 6))
+        qd = rng.choice([-1.0, 0.0, 1.0], (3, 6)) * rng.uniform(0.0, 0.05, (3, 6))
+        m_ii, grav = rng.uniform(0.01, 2, (3, 6)), rng.uniform(-30, 30, (3, 6))
+        np.testing.assert_allclose(fast.load_torque(q, qd, th_m, m_ii, 5e-5, grav),
+                                   slow.load_torque_reference(q, qd, th_m, m_ii, 5e-5, grav), rtol=1e-12, atol=1e-12)
 
 
 def test_gravity_torque_equals_mujocos_bias_at_rest():

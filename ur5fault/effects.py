@@ -216,6 +216,11 @@ _TERM_EFFECTS = [
            "(gravity-model error; data-driven)",
            (EffectParam("scale", "-", -1.0, 1.0, 0.0, "share of the joint's gravity torque added"),),
            True, _add("term_gravity_scale", "scale")),
+    Effect("torque_holding", "torque held at rest in the direction of the last motion (friction that stays "
+           "loaded when the joint stops; data-driven)",
+           (EffectParam("torque_Nm", "N*m", -30.0, 30.0, 0.0, "level at rest"),
+            EffectParam("speed_rad_s", "rad/s", 1e-3, 1.0, 0.02, "speed below which the joint is at rest")),
+           True, _both(_add("term_holding_Nm", "torque_Nm"), _set("term_holding_speed_rad_s", "speed_rad_s"))),
     Effect("inertia", "added rotational inertia on the joint (armature; missing inertia; data-driven)",
            (EffectParam("inertia_kgm2", "kg*m^2", -1.0, 10.0, 0.0, "added to the joint's inertia"),),
            True, _add("armature_kgm2", "inertia_kgm2")),

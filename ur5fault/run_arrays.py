@@ -71,6 +71,8 @@ class RunArrays:
     term_viscous_Nms_per_rad: NDArray
     term_quadratic_Nms2_per_rad2: NDArray
     term_gravity_scale: NDArray
+    term_holding_Nm: NDArray
+    term_holding_speed_rad_s: NDArray
     armature_kgm2: NDArray
     link_mass_kg: NDArray
     link_com_shift_m: NDArray  # (n_runs, 6, 3) in the link's body frame
@@ -156,7 +158,9 @@ def _term_fields(n: int, params: RobotParams) -> dict[str, NDArray]:
         "term_coulomb_Nm": zeros.copy(), "term_coulomb_width_rad_s": np.full((n, N_JOINTS), 0.01),
         "term_stribeck_Nm": zeros.copy(), "term_stribeck_speed_rad_s": np.full((n, N_JOINTS), 0.05),
         "term_viscous_Nms_per_rad": zeros.copy(), "term_quadratic_Nms2_per_rad2": zeros.copy(),
-        "term_gravity_scale": zeros.copy(), "armature_kgm2": zeros.copy(), "link_mass_kg": zeros.copy(),
+        "term_gravity_scale": zeros.copy(), "term_holding_Nm": zeros.copy(),
+        "term_holding_speed_rad_s": np.full((n, N_JOINTS), 0.02),
+        "armature_kgm2": zeros.copy(), "link_mass_kg": zeros.copy(),
         "link_com_shift_m": np.zeros((n, N_JOINTS, 3)), "current_temp_drift_A_per_K": zeros.copy(),
         "current_temp_reference_C": np.full((n, N_JOINTS), float(params.friction.reference_temp_C)),
         "current_time_shift_s": zeros.copy(), "position_time_shift_s": zeros.copy(),

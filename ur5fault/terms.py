@@ -8,7 +8,8 @@ one place of the drive chain:
 
 * **link torques** (``torque_*``): a load torque on the joint, added where friction acts (the link
   receives ``T_gear - T_f - T_term``), a function of the joint angle, the motor angle, the joint speed
-  or the model's own static gravity torque on the joint.  The motor must supply it, so at low
+  (``torque_holding``: at rest, in the direction of the last motion - friction that stays loaded when
+  a joint stops), or the model's own static gravity torque on the joint.  The motor must supply it, so at low
   frequencies the current rises by ``T_term / (K_t N)``.  Velocity functions are applied
   semi-implicitly with their local slope, like the friction of eq. (2), so a steep one stays stable
   on a light link.
@@ -64,6 +65,25 @@ def stribeck(w_rad_s: ArrayLike, speed_rad_s: ArrayLike) -> tuple[NDArray, NDArr
     return s * e, slope
 
 
+def rest_weight(w_rad_s: ArrayLike, speed_rad_s: ArrayLike) -> tuple[NDArray, NDArray]:
+    """How much a joint is at rest, ``exp(-(w / w_r)^2)`` (1 at rest, 0 in motion), and its slope."""
+    w = np.asarray(w_rad_s)
+    e = np.exp(-((w / speed_rad_s) ** 2))
+    return e, -2.0 * w / np.asarray(speed_rad_s) ** 2 * e
+
+
+def last_motion_sign(w_rad_s: NDArray, speed_rad_s: float, start: float = 0.0) -> NDArray:
+    """Direction of the last motion faster than ``speed_rad_s`` at each sample of ``w`` ``(n,)`` (``start``
+    before the first one): the memory of the holding term."""
+    out = np.empty(w_rad_s.shape[0])
+    s = start
+    for i, w in enumerate(w_rad_s):
+        if abs(w) > speed_rad_s:
+            s = 1.0 if w > 0 else -1.0
+        out[i] = s
+    return out
+
+
 def quadratic(w_rad_s: ArrayLike) -> tuple[NDArray, NDArray]:
     """Speed-squared drag ``w |w|`` and its slope ``2 |w|``."""
     w = np.asarray(w_rad_s)
@@ -92,6 +112,7 @@ class TermHook:
     a: object  # RunArrays (not imported: the engine imports this module)
     link_torque: bool
     gravity: bool
+    last_sign: NDArray | None = None  # holding terms: direction of each joint's last motion (n_runs, 6)
 
     @classmethod
     def build(cls, a) -> TermHook | None:
@@ -130,11 +151,14 @@ class TermHook:
         (compiled: :func:`_load_torque`; ``load_torque_reference`` is the same in numpy)."""
         a = self.a
         out = np.empty_like(q)
+        if self.last_sign is None:
+            self.last_sign = np.zeros_like(q)
         _load_torque(q, qd, th_m, m_ii, dt, gravity_Nm if gravity_Nm is not None else np.zeros_like(q),
                      a.term_joint_harmonic_Nm, a.term_joint_harmonic_per_rev, a.term_motor_harmonic_Nm,
                      a.term_motor_harmonic_per_rev, a.term_coulomb_Nm, a.term_coulomb_width_rad_s, a.term_stribeck_Nm,
                      a.term_stribeck_speed_rad_s, a.term_viscous_Nms_per_rad, a.term_quadratic_Nms2_per_rad2,
-                     a.term_gravity_scale, STRIBECK_SIGN_WIDTH_RAD_S, out)
+                     a.term_gravity_scale, STRIBECK_SIGN_WIDTH_RAD_S, a.term_holding_Nm, a.term_holding_speed_rad_s,
+                     self.last_sign, out)
         return out
 
     def load_torque_reference(self, q: NDArray, qd: NDArray, th_m: NDArray, m_ii: NDArray, dt: float,
@@ -156,7 +180,15 @@ class TermHook:
             slope += scale * df
         if gravity_Nm is not None:
             t += a.term_gravity_scale * gravity_Nm
-        # a dissipative slope is integrated like implicit friction (drive/friction.py); a negative one explicitly
+        if self.last_sign is None:
+            self.last_sign = np.zeros_like(q)
+        moving = np.abs(qd) > a.term_holding_speed_rad_s
+        self.last_sign = np.where(moving, np.sign(qd), self.last_sign)
+        f, df = rest_weight(qd, a.term_holding_speed_rad_s)
+        tv += a.term_holding_Nm * self.last_sign * f
+        slope += np.abs(a.term_holding_Nm * self.last_sign * df)
+        # a dissipative slope is integrated like implicit friction (drive/friction.py); the holding term's
+        # steep edges with their magnitude (stable on a light link; its level at rest is unchanged)
         return t + tv / (1.0 + np.maximum(slope, 0.0) * dt / m_ii)
 
     # -- sensor terms, on the logged readings after the run
@@ -174,14 +206,15 @@ class TermHook:
 
 #: run-array fields of the link-torque terms and of the sensor terms (the hook's switches)
 LINK_TORQUE_FIELDS = ("term_joint_harmonic_Nm", "term_motor_harmonic_Nm", "term_coulomb_Nm", "term_stribeck_Nm",
-                      "term_viscous_Nms_per_rad", "term_quadratic_Nms2_per_rad2", "term_gravity_scale")
+                      "term_viscous_Nms_per_rad", "term_quadratic_Nms2_per_rad2", "term_gravity_scale",
+                      "term_holding_Nm")
 SENSOR_FIELDS = ("current_temp_drift_A_per_K", "current_time_shift_s", "position_time_shift_s")
 
 
 # ------------------------------------------------------------------------------------ compiled paths
 @njit(cache=True)
 def _load_torque(q, qd, th_m, m_ii, dt, grav, amp_j, per_j, amp_m, per_m, coul, coul_w, strib, strib_v, visc, quad,
-                 grav_scale, sign_w, out):
+                 grav_scale, sign_w, hold, hold_w, last_sign, out):
     """The terms' load torque, run by run and joint by joint, skipping absent terms (same equations as
     :meth:`TermHook.load_torque_reference`)."""
     n, nj = q.shape
@@ -214,6 +247,12 @@ def _load_torque(q, qd, th_m, m_ii, dt, grav, amp_j, per_j, amp_m, per_m, coul, 
             if quad[r, j] != 0.0:
                 tv += quad[r, j] * w * abs(w)
                 slope += quad[r, j] * 2.0 * abs(w)
+            if abs(w) > hold_w[r, j]:
+                last_sign[r, j] = 1.0 if w > 0.0 else -1.0
+            if hold[r, j] != 0.0:
+                e = math.exp(-((w / hold_w[r, j]) ** 2))
+                tv += hold[r, j] * last_sign[r, j] * e
+                slope += abs(hold[r, j] * last_sign[r, j] * 2.0 * w / (hold_w[r, j] * hold_w[r, j]) * e)
             out[r, j] = t + tv / (1.0 + max(slope, 0.0) * dt / m_ii[r, j])
 
 

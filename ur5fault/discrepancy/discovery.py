@@ -4,7 +4,9 @@ the workflow's own forward selection with an information criterion, see ``search
 
 Columns are the terms' quasi-static effect on the readings, weighted by the sensor noise:
 
-* link torques ``T(t)`` (``torque_*`` effects) appear in the motor current as ``T / (K_t N)``: the
+* link torques ``T(t)`` (``torque_*`` effects: harmonics of the joint and motor angles, Coulomb-,
+  Stribeck-like, viscous, speed-squared, a torque held at rest in the direction of the last motion,
+  inertia) appear in the motor current as ``T / (K_t N)``: the
   speed loop's integrator makes the motor supply them at frequencies below its bandwidth (15-60 Hz,
   far above a joint's motion); the simulation of the selected terms then corrects what is faster;
 * the model's own gravity torque on a joint, and its partial derivatives in each link's mass (at the
@@ -25,7 +27,7 @@ from numpy.typing import NDArray
 from ..axes import N_JOINTS
 from ..engine import Simulator
 from ..multibody import payload_inertia
-from ..terms import coulomb, harmonic, quadratic, stribeck
+from ..terms import coulomb, harmonic, last_motion_sign, quadratic, rest_weight, stribeck
 from .candidates import TermCandidate
 from .replay import Replay, Replayed
 
@@ -38,6 +40,9 @@ MOTOR_PERIODS = tuple(range(1, 7))
 COULOMB_WIDTH_RAD_S = 0.01
 #: Stribeck speeds searched [rad/s] (assumption: the span of published Stribeck speeds of harmonic drives)
 STRIBECK_SPEEDS_RAD_S = (0.02, 0.05, 0.1, 0.2)
+#: speed below which a joint counts as at rest for the holding term [rad/s] (registry default of
+#: ``torque_holding``; assumption: well below the slowest commanded motion, above the replay's vibration)
+HOLDING_SPEED_RAD_S = 0.02
 #: a temperature column is formed when the joint's logged temperature moves at least this much [K]
 MIN_TEMPERATURE_SPAN_K = 0.5
 #: a column whose unit coefficient changes the weighted residual's sum of squares by less than this is
@@ -133,6 +138,8 @@ def dictionary(rp: Replay, sim: Replayed, n: int, joints: list[int]) -> tuple[li
         for vs in STRIBECK_SPEEDS_RAD_S:
             torque(j, "stribeck", "torque_stribeck", ("torque_Nm",), stribeck(qd[:, j], vs)[0], "N*m",
                    (("speed_rad_s", vs),))
+        hold = last_motion_sign(qd[:, j], HOLDING_SPEED_RAD_S) * rest_weight(qd[:, j], HOLDING_SPEED_RAD_S)[0]
+        torque(j, "holding", "torque_holding", ("torque_Nm",), hold, "N*m", (("speed_rad_s", HOLDING_SPEED_RAD_S),))
         torque(j, "viscous", "torque_viscous", ("coeff_Nms_per_rad",), qd[:, j], "N*m*s/rad")
         torque(j, "quadratic", "torque_quadratic", ("coeff_Nms2_per_rad2",), quadratic(qd[:, j])[0], "N*m*s^2/rad^2")
         torque(j, "inertia", "inertia", ("inertia_kgm2",), qdd[:, j], "kg*m^2")

@@ -170,6 +170,9 @@ def _term_text(c: TermCandidate, amp: float, lo: float, hi: float) -> str:
     if fam == "stribeck":
         return (f"{c.where}: Stribeck-like load torque of {amp:.3g} N*m ({amps}) at low speed, fading above "
                 f"{k['speed_rad_s']:g} rad/s ({rng})")
+    if fam == "holding":
+        return (f"{c.where}: holding torque of {amp:.3g} N*m ({amps}) at rest, in the direction of the last motion "
+                f"(friction that stays loaded when the joint stops; {rng})")
     if fam == "viscous":
         return f"{c.where}: viscous load of {amp:.3g} N*m*s/rad beyond the model's friction ({rng})"
     if fam == "quadratic":
