@@ -153,7 +153,7 @@ def test_compiled_load_torque_equals_the_numpy_reference():
     from ur5fault.terms import TermHook
 
     effs = [make_effect("torque_joint_harmonic", 2, sin_Nm=1.0, cos_Nm=-0.3, periods_per_rev=3),
-            make_effect("torque_motor_harmonic", 3, sin_Nm=0.2, periods_per_rev=2),
+            make_effect("torque_joint_harmonic", 3, sin_Nm=0.2, periods_per_rev=2),
             make_effect("torque_coulomb", 1, torque_Nm=0.5), make_effect("torque_stribeck", 4, torque_Nm=0.7),
             make_effect("torque_viscous", 5, coeff_Nms_per_rad=2.0),
             make_effect("torque_quadratic", 6, coeff_Nms2_per_rad2=-3.0),
@@ -162,11 +162,11 @@ def test_compiled_load_torque_equals_the_numpy_reference():
     fast, slow = TermHook.build(a), TermHook.build(a)
     rng = np.random.default_rng(0)
     for _ in range(5):  # several steps: the holding term remembers the last motion
-        q, th_m = rng.uniform(-3, 3, (2, 3, 6))
+        q = rng.uniform(-3, 3, (3, 6))
         qd = rng.choice([-1.0, 0.0, 1.0], (3, 6)) * rng.uniform(0.0, 0.05, (3, 6))
         m_ii, grav = rng.uniform(0.01, 2, (3, 6)), rng.uniform(-30, 30, (3, 6))
-        np.testing.assert_allclose(fast.load_torque(q, qd, th_m, m_ii, 5e-5, grav),
-                                   slow.load_torque_reference(q, qd, th_m, m_ii, 5e-5, grav), rtol=1e-12, atol=1e-12)
+        np.testing.assert_allclose(fast.load_torque(q, qd, m_ii, 5e-5, grav),
+                                   slow.load_torque_reference(q, qd, m_ii, 5e-5, grav), rtol=1e-12, atol=1e-12)
 
 
 def test_gravity_torque_equals_mujocos_bias_at_rest():

@@ -196,8 +196,6 @@ def _harmonic_params(angle: str) -> tuple[EffectParam, ...]:
 _TERM_EFFECTS = [
     Effect("torque_joint_harmonic", "link torque periodic in the joint angle (eccentric or worn gear; data-driven)",
            _harmonic_params("joint angle"), True, _harmonic("term_joint_harmonic")),
-    Effect("torque_motor_harmonic", "link torque periodic in the motor angle (motor or wave-generator ripple; "
-           "data-driven)", _harmonic_params("motor angle"), True, _harmonic("term_motor_harmonic")),
     Effect("torque_coulomb", "Coulomb-like load torque tanh(w / width) (data-driven)",
            (EffectParam("torque_Nm", "N*m", -30.0, 30.0, 0.0, "level at speed"),
             EffectParam("width_rad_s", "rad/s", 1e-3, 1.0, 0.01, "speed of the smooth sign")),

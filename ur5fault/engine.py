@@ -171,8 +171,7 @@ def _integrate(sim: Simulator, traj: Trajectory, runs: list[RunSpec], a: RunArra
     q = np.tile(q_set_s[0], (n, 1))
     bias = mb.start(q)
     if terms is not None and terms.link_torque:  # >>> term hook: the terms' static load is held from the start
-        ratio = np.asarray(a.gear_ratio)
-        bias = bias + terms.load_torque(q, np.zeros_like(q), ratio * q, np.ones_like(q), dt,
+        bias = bias + terms.load_torque(q, np.zeros_like(q), np.ones_like(q), dt,
                                         mb.gravity_torque() if terms.gravity else None)
     qd = np.zeros((n, N_JOINTS))
     P = pack_params(sim, a)
@@ -228,7 +227,7 @@ def _integrate(sim: Simulator, traj: Trajectory, runs: list[RunSpec], a: RunArra
 
         tau = drive.physics(q, qd, m_ii)
         if terms is not None and terms.link_torque:  # >>> term hook: load torques of data-driven terms
-            tau = tau - terms.load_torque(q, qd, drive.th_m, m_ii, dt, mb.gravity_torque() if terms.gravity else None)
+            tau = tau - terms.load_torque(q, qd, m_ii, dt, mb.gravity_torque() if terms.gravity else None)
         if step in change_steps:
             mb.set_payload(a.payload_kg * gripped_step[step])
         mb.qfrc_applied[:] = tau

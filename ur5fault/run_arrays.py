@@ -62,8 +62,6 @@ class RunArrays:
     # (n_runs, 6, MAX_HARMONICS) with [..., 0] the sine and [..., 1] the cosine amplitude
     term_joint_harmonic_Nm: NDArray
     term_joint_harmonic_per_rev: NDArray
-    term_motor_harmonic_Nm: NDArray
-    term_motor_harmonic_per_rev: NDArray
     term_coulomb_Nm: NDArray
     term_coulomb_width_rad_s: NDArray
     term_stribeck_Nm: NDArray
@@ -153,8 +151,6 @@ def _term_fields(n: int, params: RobotParams) -> dict[str, NDArray]:
     return {
         "term_joint_harmonic_Nm": np.zeros((n, N_JOINTS, h, 2)),
         "term_joint_harmonic_per_rev": np.ones((n, N_JOINTS, h)),
-        "term_motor_harmonic_Nm": np.zeros((n, N_JOINTS, h, 2)),
-        "term_motor_harmonic_per_rev": np.ones((n, N_JOINTS, h)),
         "term_coulomb_Nm": zeros.copy(), "term_coulomb_width_rad_s": np.full((n, N_JOINTS), 0.01),
         "term_stribeck_Nm": zeros.copy(), "term_stribeck_speed_rad_s": np.full((n, N_JOINTS), 0.05),
         "term_viscous_Nms_per_rad": zeros.copy(), "term_quadratic_Nms2_per_rad2": zeros.copy(),

@@ -7,7 +7,7 @@ other effect and ``simulate``, ``campaign run`` and ``discrepancy --model`` repl
 one place of the drive chain:
 
 * **link torques** (``torque_*``): a load torque on the joint, added where friction acts (the link
-  receives ``T_gear - T_f - T_term``), a function of the joint angle, the motor angle, the joint speed
+  receives ``T_gear - T_f - T_term``), a function of the joint angle, the joint speed
   (``torque_holding``: at rest, in the direction of the last motion - friction that stays loaded when
   a joint stops), or the model's own static gravity torque on the joint.  The motor must supply it, so at low
   frequencies the current rises by ``T_term / (K_t N)``.  Velocity functions are applied
@@ -145,7 +145,7 @@ class TermHook:
             mb.gravity_torque()  # binds the kinematic fields before the run starts
 
     # -- link torques, every physics step
-    def load_torque(self, q: NDArray, qd: NDArray, th_m: NDArray, m_ii: NDArray, dt: float,
+    def load_torque(self, q: NDArray, qd: NDArray, m_ii: NDArray, dt: float,
                     gravity_Nm: NDArray | None) -> NDArray:
         """Load torque of the terms on every joint ``(n_runs, 6)`` [N*m], velocity parts semi-implicit
         (compiled: :func:`_load_torque`; ``load_torque_reference`` is the same in numpy)."""
@@ -153,25 +153,22 @@ class TermHook:
         out = np.empty_like(q)
         if self.last_sign is None:
             self.last_sign = np.zeros_like(q)
-        _load_torque(q, qd, th_m, m_ii, dt, gravity_Nm if gravity_Nm is not None else np.zeros_like(q),
-                     a.term_joint_harmonic_Nm, a.term_joint_harmonic_per_rev, a.term_motor_harmonic_Nm,
-                     a.term_motor_harmonic_per_rev, a.term_coulomb_Nm, a.term_coulomb_width_rad_s, a.term_stribeck_Nm,
-                     a.term_stribeck_speed_rad_s, a.term_viscous_Nms_per_rad, a.term_quadratic_Nms2_per_rad2,
-                     a.term_gravity_scale, STRIBECK_SIGN_WIDTH_RAD_S, a.term_holding_Nm, a.term_holding_speed_rad_s,
-                     self.last_sign, out)
+        _load_torque(q, qd, m_ii, dt, gravity_Nm if gravity_Nm is not None else np.zeros_like(q),
+                     a.term_joint_harmonic_Nm, a.term_joint_harmonic_per_rev, a.term_coulomb_Nm,
+                     a.term_coulomb_width_rad_s, a.term_stribeck_Nm, a.term_stribeck_speed_rad_s,
+                     a.term_viscous_Nms_per_rad, a.term_quadratic_Nms2_per_rad2, a.term_gravity_scale,
+                     STRIBECK_SIGN_WIDTH_RAD_S, a.term_holding_Nm, a.term_holding_speed_rad_s, self.last_sign, out)
         return out
 
-    def load_torque_reference(self, q: NDArray, qd: NDArray, th_m: NDArray, m_ii: NDArray, dt: float,
+    def load_torque_reference(self, q: NDArray, qd: NDArray, m_ii: NDArray, dt: float,
                               gravity_Nm: NDArray | None) -> NDArray:
         """:meth:`load_torque` with the numpy dictionary functions (the reference of the compiled path)."""
         a = self.a
         t = np.zeros_like(q)  # position-dependent part
         tv = np.zeros_like(q)  # velocity-dependent part
         slope = np.zeros_like(q)
-        for amp, per, angle in ((a.term_joint_harmonic_Nm, a.term_joint_harmonic_per_rev, q),
-                                (a.term_motor_harmonic_Nm, a.term_motor_harmonic_per_rev, th_m)):
-            s, c = harmonic(angle[..., None], per)
-            t += np.sum(amp[..., 0] * s + amp[..., 1] * c, axis=-1)
+        s, c = harmonic(q[..., None], a.term_joint_harmonic_per_rev)
+        t += np.sum(a.term_joint_harmonic_Nm[..., 0] * s + a.term_joint_harmonic_Nm[..., 1] * c, axis=-1)
         for scale, (f, df) in ((a.term_coulomb_Nm, coulomb(qd, a.term_coulomb_width_rad_s)),
                                (a.term_stribeck_Nm, stribeck(qd, a.term_stribeck_speed_rad_s)),
                                (a.term_viscous_Nms_per_rad, (qd, np.ones_like(qd))),
@@ -205,7 +202,7 @@ class TermHook:
 
 
 #: run-array fields of the link-torque terms and of the sensor terms (the hook's switches)
-LINK_TORQUE_FIELDS = ("term_joint_harmonic_Nm", "term_motor_harmonic_Nm", "term_coulomb_Nm", "term_stribeck_Nm",
+LINK_TORQUE_FIELDS = ("term_joint_harmonic_Nm", "term_coulomb_Nm", "term_stribeck_Nm",
                       "term_viscous_Nms_per_rad", "term_quadratic_Nms2_per_rad2", "term_gravity_scale",
                       "term_holding_Nm")
 SENSOR_FIELDS = ("current_temp_drift_A_per_K", "current_time_shift_s", "position_time_shift_s")
@@ -213,7 +210,7 @@ SENSOR_FIELDS = ("current_temp_drift_A_per_K", "current_time_shift_s", "position
 
 # ------------------------------------------------------------------------------------ compiled paths
 @njit(cache=True)
-def _load_torque(q, qd, th_m, m_ii, dt, grav, amp_j, per_j, amp_m, per_m, coul, coul_w, strib, strib_v, visc, quad,
+def _load_torque(q, qd, m_ii, dt, grav, amp_j, per_j, coul, coul_w, strib, strib_v, visc, quad,
                  grav_scale, sign_w, hold, hold_w, last_sign, out):
     """The terms' load torque, run by run and joint by joint, skipping absent terms (same equations as
     :meth:`TermHook.load_torque_reference`)."""
@@ -225,9 +222,6 @@ def _load_torque(q, qd, th_m, m_ii, dt, grav, amp_j, per_j, amp_m, per_m, coul, 
                 if amp_j[r, j, h, 0] != 0.0 or amp_j[r, j, h, 1] != 0.0:
                     x = per_j[r, j, h] * q[r, j]
                     t += amp_j[r, j, h, 0] * math.sin(x) + amp_j[r, j, h, 1] * math.cos(x)
-                if amp_m[r, j, h, 0] != 0.0 or amp_m[r, j, h, 1] != 0.0:
-                    x = per_m[r, j, h] * th_m[r, j]
-                    t += amp_m[r, j, h, 0] * math.sin(x) + amp_m[r, j, h, 1] * math.cos(x)
             w = qd[r, j]
             tv = 0.0
             slope = 0.0

@@ -4,7 +4,7 @@ the workflow's own forward selection with an information criterion, see ``search
 
 Columns are the terms' quasi-static effect on the readings, weighted by the sensor noise:
 
-* link torques ``T(t)`` (``torque_*`` effects: harmonics of the joint and motor angles, Coulomb-,
+* link torques ``T(t)`` (``torque_*`` effects: harmonics of the joint angle, Coulomb-,
   Stribeck-like, viscous, speed-squared, a torque held at rest in the direction of the last motion,
   inertia) appear in the motor current as ``T / (K_t N)``: the
   speed loop's integrator makes the motor supply them at frequencies below its bandwidth (15-60 Hz,
@@ -34,8 +34,9 @@ from .replay import Replay, Replayed
 #: periods per joint revolution searched for ripples periodic in the joint angle (assumption: a gear's
 #: eccentricity or wear shows at low orders; 12 covers the strain-wave gear's two-lobe harmonics)
 JOINT_PERIODS = tuple(range(1, 13))
-#: periods per motor revolution searched (motor cogging and wave-generator orders)
-MOTOR_PERIODS = tuple(range(1, 7))
+#: Ripples periodic in the *motor* angle are left to the library's ``cogging`` effect, which acts on the
+#: rotor: at the joints' speeds they are tens of hertz, faster than the speed loop, and a link-side term of
+#: the same shape would misplace them in the drive chain (tried: 26 % low and half the gap left).
 #: width of the Coulomb-like term's smooth sign [rad/s] (registry default of ``torque_coulomb``)
 COULOMB_WIDTH_RAD_S = 0.01
 #: Stribeck speeds searched [rad/s] (assumption: the span of published Stribeck speeds of harmonic drives)
@@ -105,7 +106,7 @@ def dictionary(rp: Replay, sim: Replayed, n: int, joints: list[int]) -> tuple[li
     S = len(rp.signals)
     sig = rp.sigma  # (S, 6)
     ktn = np.asarray(rp.params.motor.torque_constant_Nm_per_A) * rp.gear_ratio  # joint torque per motor ampere
-    q, qm = sim.q_rad[:n], sim.q_motor_rad[:n]
+    q = sim.q_rad[:n]
     qd = _smooth(np.gradient(q, period, axis=0))
     qdd = _smooth(np.gradient(qd, period, axis=0))
     didt = _smooth(np.gradient(sim.current_true_A[:n], period, axis=0))
@@ -130,9 +131,6 @@ def dictionary(rp: Replay, sim: Replayed, n: int, joints: list[int]) -> tuple[li
         for k in JOINT_PERIODS:
             torque(j, "joint_harmonic", "torque_joint_harmonic", ("sin_Nm", "cos_Nm"),
                    np.stack(harmonic(q[:, j], k)), "N*m", (("periods_per_rev", float(k)),))
-        for k in MOTOR_PERIODS:
-            torque(j, "motor_harmonic", "torque_motor_harmonic", ("sin_Nm", "cos_Nm"),
-                   np.stack(harmonic(qm[:, j], k)), "N*m", (("periods_per_rev", float(k)),))
         torque(j, "coulomb", "torque_coulomb", ("torque_Nm",), coulomb(qd[:, j], COULOMB_WIDTH_RAD_S)[0], "N*m",
                (("width_rad_s", COULOMB_WIDTH_RAD_S),))
         for vs in STRIBECK_SPEEDS_RAD_S:

@@ -41,6 +41,8 @@ FIT_FRACTION_RANGE = (0.2, 0.9)
 #: the library is screened and the dictionary selected on at most this much of the fitting part [s]
 #: (assumption: 20 s of a robot program hold its motions several times; refinement and judgement use all)
 SCREEN_S = 20.0
+#: indistinguishable alternatives per finding simulated (for their own estimates) at most
+MAX_ALTERNATIVES = 3
 
 
 @dataclasses.dataclass
@@ -196,7 +198,8 @@ class DiscrepancyModel:
         self.search_ += [SearchStep.of("library", v) for v in sel.trace]
         lib = [cands[k] for k in sel.chosen]
         lib_cols = [c for k in sel.chosen for c in cols[k]]
-        alternatives = {cands[k]: [(cands[a], X_lib[cols[a]]) for a, _ in alt]
+        # a finding's indistinguishable alternatives with their linear estimates (simulated later)
+        alternatives = {cands[k]: [(cands[a], th) for a, th in alt][:MAX_ALTERNATIVES]
                         for k, alt in zip(sel.chosen, sel.alternatives)}
         timings["library screening"] = time.perf_counter() - t
 
@@ -218,7 +221,7 @@ class DiscrepancyModel:
                 terms = [dcands[k] for k in sel2.chosen]
                 fixed += [c for k in sel2.chosen for c in dcols[k]]
                 for k, alt in zip(sel2.chosen, sel2.alternatives):
-                    alternatives[dcands[k]] = [(dcands[a], X_all[dcols[a]]) for a, _ in alt]
+                    alternatives[dcands[k]] = [(dcands[a], th) for a, th in alt][:MAX_ALTERNATIVES]
         timings["discovery"] = time.perf_counter() - t
 
         # ---- 3. every finding refined by re-simulating the whole log (one batch of probes), then judged;
@@ -243,7 +246,8 @@ class DiscrepancyModel:
         if found:
             G, g, ee = BlockGram.build(X_all[fixed], e0).total()
             theta0 = rss_of(G, g, ee, list(range(len(fixed))))[1]
-            ref = self._refine(rp, found, theta0, n_fit, prog)
+            self._alts = [(i, a, th) for i, c in enumerate(found) for a, th in alternatives.get(c, [])]
+            ref = self._refine(rp, found, theta0, n_fit, prog, self._alts)
             self.refinement_ = ref.steps
         else:
             ref = None
@@ -281,16 +285,24 @@ class DiscrepancyModel:
     def _split(found: list[Candidate], theta: NDArray) -> list[NDArray]:
         return np.split(theta, np.cumsum([c.n_coef for c in found])[:-1])
 
-    def _refine(self, rp: Replay, found: list[Candidate], theta0: NDArray, n_fit: int, progress) -> Refined:
+    def _refine(self, rp: Replay, found: list[Candidate], theta0: NDArray, n_fit: int, progress,
+                alts: Sequence[tuple[int, Candidate, NDArray]] = ()) -> Refined:
         """Re-simulate the whole log: the first batch holds the starting model, the linearised estimate and
         each finding removed (a sine-cosine pair also turned by a quarter period), whose secants give the
-        simulated Jacobian; Gauss-Newton steps follow on the fitting part."""
+        simulated Jacobian, and each indistinguishable alternative in place of its finding (at its linear
+        estimate); Gauss-Newton steps follow on the fitting part."""
         n_all = rp.n_samples
         meas = rp.measured(n_all)
 
-        def evaluate(thetas: list[NDArray]) -> list[tuple[Replayed, NDArray]]:
-            sets = [tuple(c.spec(th) for c, th in zip(found, self._split(found, theta)) if np.any(th))
-                    for theta in thetas]
+        def specs(theta: NDArray) -> tuple[EffectSpec, ...]:
+            return tuple(c.spec(th) for c, th in zip(found, self._split(found, theta)) if np.any(th))
+
+        def evaluate(thetas: list[NDArray], extra=()) -> list[tuple[Replayed, NDArray]]:
+            sets = [specs(theta) for theta in thetas]
+            for i, a, a_theta in extra:  # the alternative in place of finding i, the others at theta0
+                th = self._split(found, theta0)
+                th[i] = np.zeros_like(th[i])
+                sets.append(specs(np.concatenate(th)) + (a.spec(a_theta),))
             sims = rp.run(sets, n_all, progress)
             return [(s, weighted(meas, s.y, rp.sigma)) for s in sims]
 
@@ -304,7 +316,7 @@ class DiscrepancyModel:
             off += c.n_coef
         lo = np.concatenate([c.bounds()[0] for c in found])
         hi = np.concatenate([c.bounds()[1] for c in found])
-        return refine(evaluate, theta0, probes, (lo, hi), n_fit, self.refiner)
+        return refine(evaluate, theta0, probes, (lo, hi), n_fit, self.refiner, list(alts), evaluate)
 
     def _judge(self, found: list[Candidate], ref: Refined, alternatives, n_fit: int, n_scr: int) -> list[Finding]:
         """Every finding against all the others on the fitting part, linearised at the refined coefficients:
@@ -368,8 +380,7 @@ class DiscrepancyModel:
             f.verdict = dataclasses.replace(judge(bg, e_pseudo, J_fit, cols, [o for o in kept if o != k], k),
                                             label=found[k].label)
             f.se = np.asarray(f.verdict.se)
-            f.alternatives = self._alternatives(found, kept, k, alternatives.get(found[k], []), J_fit, e_pseudo,
-                                                cols, n_scr)
+            f.alternatives = self._alternatives(found, kept, k, ref, J_fit, e_pseudo, cols, n_fit)
         return list(final.values()) + dropped
 
     def _channels(self, c: Candidate) -> NDArray:
@@ -382,16 +393,23 @@ class DiscrepancyModel:
             ch[:] = True
         return ch.ravel()
 
-    @staticmethod
-    def _alternatives(found, kept, k, alts, J_fit, e_pseudo, cols, n_scr) -> list[tuple[Candidate, NDArray]]:
-        """Each alternative's own coefficients, in place of finding ``k`` beside the other kept findings (on the
-        screening part, where its column is known)."""
+    def _alternatives(self, found, kept, k, ref: Refined, J_fit, e_pseudo, cols, n_fit) -> list[tuple[Candidate,
+                                                                                                    NDArray]]:
+        """Each simulated alternative's own coefficients in place of finding ``k``, beside the other kept
+        findings: its secant from the run with finding ``k`` removed (both with the others at their first
+        estimates), refitted on the fitting part."""
         out = []
         others = [c for o in kept if o != k for c in cols[o]]
-        for cand, col in alts:
-            X = np.concatenate([J_fit[others, :n_scr], col[:, :n_scr]])
-            Gb, gb, eb = BlockGram.build(X, e_pseudo[:n_scr]).total()
-            out.append((cand, rss_of(Gb, gb, eb, list(range(X.shape[0])))[1][len(others):]))
+        ablation = sum(c.n_coef for c in found[:k])  # the first probe of finding k removes it
+        e_without = ref.probe_e[ablation]
+        for (i, cand, th0), e_alt in zip(self._alts, ref.extra_e):
+            if i != k or e_alt is None or e_without is None:
+                continue
+            col = ((e_without - e_alt)[:n_fit] / np.linalg.norm(th0)).reshape((1,) + e_without[:n_fit].shape)
+            u = th0 / np.linalg.norm(th0)  # a harmonic alternative keeps its phase; its size is fitted
+            X = np.concatenate([J_fit[others], col])
+            G, g, ee = BlockGram.build(X, e_pseudo).total()
+            out.append((cand, rss_of(G, g, ee, list(range(X.shape[0])))[1][-1] * u))
         return out
 
     def _results(self, rp: Replay, nominal: Replayed, after: Replayed, n_fit: int, n_all: int) -> None:

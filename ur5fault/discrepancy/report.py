@@ -160,11 +160,9 @@ def _term_text(c: TermCandidate, amp: float, lo: float, hi: float) -> str:
     amps = f"{c.signal_per_coef * amp:.3g} A"
     rng = f"95 % {lo:.3g}..{hi:.3g}"
     fam = c.family
-    if fam in ("joint_harmonic", "motor_harmonic"):
-        angle = "joint angle" if fam == "joint_harmonic" else "motor angle"
-        per = "revolution" if fam == "joint_harmonic" else "motor revolution"
-        return (f"{c.where}: current ripple of {amps} periodic in the {angle}, {k['periods_per_rev']:.0f} per {per} "
-                f"(link torque {amp:.3g} N*m, {rng})")
+    if fam == "joint_harmonic":
+        return (f"{c.where}: current ripple of {amps} periodic in the joint angle, {k['periods_per_rev']:.0f} per "
+                f"revolution (link torque {amp:.3g} N*m, {rng})")
     if fam == "coulomb":
         return f"{c.where}: Coulomb-like load torque of {amp:.3g} N*m ({amps}) beyond the model's friction ({rng})"
     if fam == "stribeck":

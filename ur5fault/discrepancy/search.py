@@ -209,6 +209,8 @@ class Refined:
     sim0: object
     e0: NDArray
     steps: list[RefineStep]
+    probe_e: list[NDArray | None] = dataclasses.field(default_factory=list)  # residual of theta0 + each probe
+    extra_e: list[NDArray | None] = dataclasses.field(default_factory=list)  # residual of each extra model
 
 
 class _Evaluations:
@@ -220,15 +222,21 @@ class _Evaluations:
         self.best: tuple[NDArray, NDArray, object, float] | None = None
         self.last: tuple[NDArray, NDArray] | None = None
         self.steps: list[RefineStep] = []
+        self.extra_e: list[NDArray | None] = []
 
     def fit_part(self, e: NDArray) -> NDArray:
         return e[: self.rows].ravel()
 
-    def __call__(self, thetas: list[NDArray], update: bool = True) -> list[tuple[NDArray | None, float, object]]:
-        """Simulate ``thetas`` in one batch; ``update``: the Jacobian takes the secant of each new point from
-        the one before."""
+    def __call__(self, thetas: list[NDArray], update: bool = True, extra: Sequence[object] = (),
+                 evaluate_extra=None) -> list[tuple[NDArray | None, float, object]]:
+        """Simulate ``thetas`` (and ``extra`` models, whose residuals go to ``extra_e``) in one batch;
+        ``update``: the Jacobian takes the secant of each new point from the one before."""
         out = []
-        for th, (sim, e) in zip(thetas, self.evaluate(thetas)):
+        results = self.evaluate(thetas) if not extra else evaluate_extra(thetas, extra)
+        if extra:
+            results, more = results[: len(thetas)], results[len(thetas):]
+            self.extra_e = [e if sim.ok else None for sim, e in more]
+        for th, (sim, e) in zip(thetas, results):
             ok = sim.ok and np.all(np.isfinite(e))
             f = self.fit_part(e) if ok else None
             rss = float(f @ f) if f is not None else math.inf
@@ -266,7 +274,7 @@ class _Evaluations:
 
 
 def refine(evaluate, theta0: NDArray, probes: Sequence[NDArray], bounds: tuple[NDArray, NDArray], fit_rows: int,
-           method: str = "secant") -> Refined:
+           method: str = "secant", extra: Sequence[object] = (), evaluate_extra=None) -> Refined:
     """Refine coefficients by re-simulating the whole log, fitting its first ``fit_rows`` samples.
 
     The first lockstep batch holds the starting model (all coefficients zero), ``theta0`` and ``theta0`` +
@@ -281,6 +289,8 @@ def refine(evaluate, theta0: NDArray, probes: Sequence[NDArray], bounds: tuple[N
         method: ``"secant"`` (Gauss-Newton steps on the secant Jacobian, one simulation per round,
             at most :data:`REFINE_ROUNDS`) or ``"minimize"`` (``mujoco.minimize.least_squares`` from the
             first batch's best point, finite differences in scaled coordinates).
+        extra, evaluate_extra: other models simulated in the first batch (``evaluate_extra(extra)`` returns
+            their residuals), e.g. a finding's indistinguishable alternatives.
     """
     lo, hi = bounds
     k = theta0.size
@@ -288,7 +298,8 @@ def refine(evaluate, theta0: NDArray, probes: Sequence[NDArray], bounds: tuple[N
     ev = _Evaluations(evaluate, k, scale, fit_rows)
     theta = np.clip(theta0, lo, hi)
     pts = [np.zeros(k), theta] + [np.clip(theta + p, lo, hi) for p in probes]
-    first = ev(pts, update=False)
+    first = ev(pts, update=False, extra=extra, evaluate_extra=evaluate_extra)
+    extra_e = ev.extra_e
     e0, sim0 = first[0][0], first[0][2]
     if e0 is None:
         raise RuntimeError("the starting model failed to replay the log")
@@ -321,7 +332,7 @@ def refine(evaluate, theta0: NDArray, probes: Sequence[NDArray], bounds: tuple[N
         raise ValueError(f"method = {method!r}; choose secant or minimize")
     th, e, sim, _ = ev.best
     n, C = e0.shape
-    return Refined(th, ev.J.T.reshape(-1, n, C), sim, e, sim0, e0, ev.steps)
+    return Refined(th, ev.J.T.reshape(-1, n, C), sim, e, sim0, e0, ev.steps, [r[0] for r in first[2:]], extra_e)
 
 
 #: finite-difference step of the ``minimize`` refinement, relative to each coefficient's first estimate
