@@ -397,7 +397,8 @@ class DiscrepancyModel:
                                                                                                     NDArray]]:
         """Each simulated alternative's own coefficients in place of finding ``k``, beside the other kept
         findings: its secant from the run with finding ``k`` removed (both with the others at their first
-        estimates), refitted on the fitting part."""
+        estimates), fitted on the fitting part to what that run leaves (the others' columns take up
+        their small differences)."""
         out = []
         others = [c for o in kept if o != k for c in cols[o]]
         ablation = sum(c.n_coef for c in found[:k])  # the first probe of finding k removes it
@@ -408,7 +409,7 @@ class DiscrepancyModel:
             col = ((e_without - e_alt)[:n_fit] / np.linalg.norm(th0)).reshape((1,) + e_without[:n_fit].shape)
             u = th0 / np.linalg.norm(th0)  # a harmonic alternative keeps its phase; its size is fitted
             X = np.concatenate([J_fit[others], col])
-            G, g, ee = BlockGram.build(X, e_pseudo).total()
+            G, g, ee = BlockGram.build(X, e_without[:n_fit]).total()
             out.append((cand, rss_of(G, g, ee, list(range(X.shape[0])))[1][-1] * u))
         return out
 
