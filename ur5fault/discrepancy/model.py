@@ -423,6 +423,11 @@ class DiscrepancyModel:
         self.rms_after_ = rms_table(rp.signals, meas, after.y, held)
         self.rms_fit_before_ = rms_table(rp.signals, meas, nominal.y, slice(0, n_fit))
         self.rms_fit_after_ = rms_table(rp.signals, meas, after.y, slice(0, n_fit))
+        # the robot controller's own current model where the log has it (target - actual current)
+        tc = rp.log.target_current_A
+        self.rms_controller_model_ = None if tc is None else {
+            part: {JOINT_NAMES[j]: float(np.sqrt(np.mean((tc[1 : n_all + 1][sl, j] - meas[sl, 0, j]) ** 2)))
+                   for j in range(N_JOINTS)} for part, sl in (("held_out", held), ("fit", slice(0, n_fit)))}
         self.unexplained_ = unexplained(rp, self.residual_after_, after.torque_gear_Nm, n_fit)
         self.localisation_ = localise(rp, self.residual_before_, nominal.torque_gear_Nm)
 
