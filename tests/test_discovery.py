@@ -155,3 +155,22 @@ def test_cli_round_trip_through_the_model_overlay(tmp_path):
     assert "nothing explains the residual better than noise" in second, second
     cli("simulate", "--model", "fit1/model.yaml", "--trajectory", "joint_sweep", "--duration-s", "0.5",
         "--out", "run.parquet")
+
+
+@pytest.mark.slow
+def test_a_finding_that_does_not_generalise_is_dropped_and_reported(tmp_path):
+    """A current offset on wrist_1 present during the fitting part only (a fault that came and went):
+    named on the fitting part, but on the held-out part it moves the model away from the measurement, so it
+    is dropped, reported, and left out of the overlay."""
+    res = simulate(seed=1357)
+    n_fit = int((res.t_s.size - 1) * 0.6)
+    res["i_FB_A"][0, : n_fit + 1, 3] += 0.2
+    model = DiscrepancyModel(jobs=JOBS).fit(read_log(write_rtde(res, tmp_path / "m.csv"), "rtde",
+                                                     payload_kg=PAYLOAD_KG))
+    dropped = [f for f in model.dropped_ if f.candidate.effect == "current_sensor_offset" and f.candidate.joint == 3]
+    assert dropped and "does not generalise" in dropped[0].reason, [sentence(f) for f in model.findings_]
+    assert dropped[0].held_out.ratio < 0
+    assert not model.effects_ and not model.terms_, [sentence(f) for f in model.findings_]
+    summ = write_report(model, tmp_path / "out") and (tmp_path / "out" / "report.md").read_text()
+    assert "## Dropped" in summ and "does not generalise" in summ
+    assert Overlay.load(tmp_path / "out" / "model.yaml").effects == ()

@@ -32,8 +32,9 @@ from .statistics import (
 #: other candidates that achieve at least this share of the chosen one's improvement are reported with
 #: it as indistinguishable in this log (e.g. a current-sensor gain g and a torque-constant change 1/g)
 ALTERNATIVE_SHARE = 0.98
-#: candidates judged per step at most, in order of improvement (the rest cannot beat them on BIC either)
-MAX_TRIES_PER_STEP = 12
+#: candidates judged per step at most, in order of improvement; each judgement is small linear algebra,
+#: so in practice every candidate that could still lower BIC enough is tried
+MAX_TRIES_PER_STEP = 1000
 #: refinement rounds by re-simulation at most (each one lockstep batch) ...
 REFINE_ROUNDS = 3
 #: ... stopping early when the next Gauss-Newton step promises less than this share of the weighted RSS
@@ -118,7 +119,7 @@ def forward(bg: BlockGram, e_fit: NDArray, X: NDArray, cands: Sequence[Candidate
             max_n: int, fixed: Sequence[int] = (), labels: Callable[[int], str] | None = None) -> Selection:
     """Forward selection: at each step the candidates are tried in order of the improvement they add to the
     joint fit; the first one :func:`judge` accepts is taken.  Stops when no candidate can lower BIC enough
-    or none of the :data:`MAX_TRIES_PER_STEP` best is accepted."""
+    or none that could is accepted."""
     G, g, ee = bg.total()
     chosen: list[int] = []
     verdicts: list[Verdict] = []
