@@ -202,6 +202,7 @@ class DiscrepancyModel:
         alternatives = {cands[k]: [(cands[a], th) for a, th in alt][:MAX_ALTERNATIVES]
                         for k, alt in zip(sel.chosen, sel.alternatives)}
         timings["library screening"] = time.perf_counter() - t
+        logger.info("library screened in %.0f s: %s", timings["library screening"], [c.label for c in lib] or "nothing")
 
         # ---- 2. discovery: the dictionary's terms on what the library leaves (library columns free to readjust)
         t = time.perf_counter()
@@ -223,6 +224,7 @@ class DiscrepancyModel:
                 for k, alt in zip(sel2.chosen, sel2.alternatives):
                     alternatives[dcands[k]] = [(dcands[a], th) for a, th in alt][:MAX_ALTERNATIVES]
         timings["discovery"] = time.perf_counter() - t
+        logger.info("dictionary selected in %.0f s: %s", timings["discovery"], [c.label for c in terms] or "nothing")
 
         # ---- 3. every finding refined by re-simulating the whole log (one batch of probes), then judged;
         # first the findings selected afresh among themselves on the linearised problem (free), so that
@@ -254,6 +256,7 @@ class DiscrepancyModel:
         else:
             nominal = rp.run([()], n_all, prog)[0]
         timings["refinement"] = time.perf_counter() - t
+        logger.info("probe batch over the whole log in %.0f s (%d findings)", timings["refinement"], len(found))
 
         # ---- 4. judged on the fitting and the held-out part; the kept ones polished by Gauss-Newton (the
         # first simulation of which is the final model when the estimate has converged)
@@ -269,6 +272,8 @@ class DiscrepancyModel:
         self._results(rp, nominal, after, n_fit, n_all)
         self._results(rp, nominal, after, n_fit, n_all)
         timings["judging"] = time.perf_counter() - t
+        logger.info("judged and polished in %.0f s: kept %s", timings["judging"],
+                    [f.candidate.label for f in findings if f.kept] or "nothing")
         stages.close()
         self.findings_ = findings
         self.timings_s_ = timings

@@ -345,8 +345,10 @@ def polish(evaluate, theta: NDArray, J: NDArray, bounds: tuple[NDArray, NDArray]
             size = ev.J.shape[0] // (J.shape[1]) * fit_rows  # channels x fitting rows
             return np.stack([ev.fit_part(e) if e is not None else np.full(size, 1e6) for e, _, _ in outs], axis=1)
 
+        # every residual is a simulation: a regulariser that grows tenfold per rejected step (not 10^0.1,
+        # which may spend a hundred simulations near an optimum the noise makes flat)
         minimize.least_squares(theta / scale, residual, bounds=(lo / scale, hi / scale), eps=FD_STEP,
-                               max_iter=REFINE_ROUNDS - 1, verbose=0)
+                               max_iter=REFINE_ROUNDS - 1, mu_factor=MU_FACTOR, verbose=0)
     else:
         raise ValueError(f"method = {method!r}; choose secant or minimize")
     if ev.best is None:
@@ -359,3 +361,5 @@ def polish(evaluate, theta: NDArray, J: NDArray, bounds: tuple[NDArray, NDArray]
 #: finite-difference step of the ``minimize`` refinement, relative to each coefficient's first estimate
 #: (large enough that the quantised, noisy readings change by more than their resolution)
 FD_STEP = 0.05
+#: growth of the ``minimize`` refinement's Levenberg-Marquardt regulariser per rejected step
+MU_FACTOR = 10.0
