@@ -39,6 +39,9 @@ class Col:
     label: str
     n_coef: int = 1
 
+    def bounds(self):
+        return np.full(self.n_coef, -np.inf), np.full(self.n_coef, np.inf)
+
 
 def test_effective_n_follows_the_autocorrelation():
     rng = np.random.default_rng(1)

@@ -220,7 +220,7 @@ _TERM_EFFECTS = [
             EffectParam("speed_rad_s", "rad/s", 1e-3, 1.0, 0.02, "speed below which the joint is at rest")),
            True, _both(_add("term_holding_Nm", "torque_Nm"), _set("term_holding_speed_rad_s", "speed_rad_s"))),
     Effect("inertia", "added rotational inertia on the joint (armature; missing inertia; data-driven)",
-           (EffectParam("inertia_kgm2", "kg*m^2", -1.0, 10.0, 0.0, "added to the joint's inertia"),),
+           (EffectParam("inertia_kgm2", "kg*m^2", 0.0, 10.0, 0.0, "added to the joint's inertia"),),
            True, _add("armature_kgm2", "inertia_kgm2")),
     Effect("link_mass", "mass and centre-of-mass error of the link the joint moves (data-driven)",
            (EffectParam("mass_kg", "kg", -10.0, 30.0, 0.0, "added at the link's centre of mass"),

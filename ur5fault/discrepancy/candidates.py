@@ -125,6 +125,7 @@ class TermCandidate(Candidate):
     signal: str = "current_A"
     signal_per_coef: float = 1.0
     local_: bool = True
+    lower: float | None = None  # a tighter lower bound of the (single) coefficient than the effect's range
 
     source = "dictionary"
 
@@ -147,4 +148,7 @@ class TermCandidate(Candidate):
 
     def bounds(self) -> tuple[NDArray, NDArray]:
         ps = [REGISTRY[self.effect].param(k) for k in self.keys]
-        return (np.array([p.lo / self.to_param for p in ps]), np.array([p.hi / self.to_param for p in ps]))
+        lo = np.array([p.lo / self.to_param for p in ps])
+        if self.lower is not None:
+            lo = np.maximum(lo, self.lower)
+        return lo, np.array([p.hi / self.to_param for p in ps])

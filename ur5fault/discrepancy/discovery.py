@@ -49,6 +49,8 @@ MIN_TEMPERATURE_SPAN_K = 0.5
 #: a column whose unit coefficient changes the weighted residual's sum of squares by less than this is
 #: no candidate (its term cannot act on these readings)
 MIN_COLUMN_NORM2 = 1e-6
+#: a link-mass term may take at most this share of the link's modelled mass away (a lighter link, not none)
+MAX_MASS_LOSS = 0.9
 #: samples of the centred moving average that smooths numerical derivatives of the replayed states
 DERIVATIVE_SMOOTHING = 5
 
@@ -59,10 +61,10 @@ def _smooth(x: NDArray, k: int = DERIVATIVE_SMOOTHING) -> NDArray:
     return (c[k:] - c[:-k]) / k
 
 
-def _gravity(rp: Replay, q: NDArray) -> tuple[NDArray, NDArray, NDArray]:
+def _gravity(rp: Replay, q: NDArray) -> tuple[NDArray, NDArray, NDArray, NDArray]:
     """Gravity torques at the replayed angles: the model's own ``(n, 6)``; per unit mass at each link's
     centre of mass ``(6, n, 6)``; per metre of each link's centre-of-mass shift along its x, y, z axes
-    ``(6, 3, n, 6)`` [N*m]."""
+    ``(6, 3, n, 6)`` [N*m]; and the links' masses [kg]."""
     sim = Simulator(rp.params)
     m = sim.model
     tcp = np.asarray(rp.params.tcp_offset_m)
@@ -90,7 +92,7 @@ def _gravity(rp: Replay, q: NDArray) -> tuple[NDArray, NDArray, NDArray]:
             R = d.xmat[b].reshape(3, 3)
             for k in range(3):  # moving the centre of mass by R e_k moves the weight's moment arm
                 per_shift[li, k, i] = m.body_mass[b] * (jacr[:, :N_JOINTS].T @ np.cross(R[:, k], up))
-    return own, per_mass, per_shift
+    return own, per_mass, per_shift, np.array([m.body_mass[b] for b in links])
 
 
 def dictionary(rp: Replay, sim: Replayed, n: int, joints: list[int]) -> tuple[list[TermCandidate], NDArray]:
@@ -151,7 +153,7 @@ def dictionary(rp: Replay, sim: Replayed, n: int, joints: list[int]) -> tuple[li
             add(TermCandidate("current_temperature_drift", j, family="temperature_drift", keys=("coeff_A_per_K",),
                               fixed=(("reference_C", t_ref),), unit="A/K", signal_per_coef=1.0),
                 [(0, j, temp[1 : n + 1, j] - t_ref)])
-    own, per_mass, per_shift = _gravity(rp, q)
+    own, per_mass, per_shift, masses = _gravity(rp, q)
     for j in joints:
         torque(j, "gravity_scale", "torque_gravity_scale", ("scale",), own[:, j], "-")
     for li in range(N_JOINTS):  # a link's mass and centre of mass act on every joint that carries it
@@ -159,7 +161,8 @@ def dictionary(rp: Replay, sim: Replayed, n: int, joints: list[int]) -> tuple[li
             return [(0, i, values[:, i] / ktn[i]) for i in range(N_JOINTS)]
 
         add(TermCandidate("link_mass", li, family="link_mass", keys=("mass_kg",), unit="kg", local_=False,
-                          signal_per_coef=float("nan")), on_all(per_mass[li]))
+                          signal_per_coef=float("nan"), lower=-MAX_MASS_LOSS * float(masses[li])),
+            on_all(per_mass[li]))
         for k, key in enumerate(("com_dx_m", "com_dy_m", "com_dz_m")):
             add(TermCandidate("link_mass", li, family="link_com", keys=(key,), unit="m", local_=False,
                               signal_per_coef=float("nan")), on_all(per_shift[li, k]))

@@ -238,7 +238,7 @@ class DiscrepancyModel:
             keep, _, _ = backward(bg3, e0, X_all[fixed], found, fcols, again.chosen)
             for k in range(len(found)):
                 if k not in keep:
-                    v = dataclasses.replace(judge(bg3, e0, X_all[fixed], fcols, keep, k), label=found[k].label)
+                    v = judge(bg3, e0, X_all[fixed], found, fcols, keep, k)
                     self.search_.append(SearchStep.of("linear joint check", dataclasses.replace(
                         v, accepted=False, reason=v.reason or "explains nothing the other findings do not")))
             keep = sorted(keep)
@@ -349,8 +349,7 @@ class DiscrepancyModel:
         bg = BlockGram.build(J_fit, e_pseudo)
         failed = []
         for k, f in enumerate(kept):
-            v = dataclasses.replace(judge(bg, e_pseudo, J_fit, kcols, [o for o in range(len(kept)) if o != k], k),
-                                    label=f.candidate.label)
+            v = judge(bg, e_pseudo, J_fit, cands, kcols, [o for o in range(len(kept)) if o != k], k)
             f.verdict, f.se = v, np.asarray(v.se)
             if not v.accepted:
                 failed.append(f)
@@ -379,7 +378,7 @@ class DiscrepancyModel:
         dropped: list[Finding] = []
         for k in range(len(found)):  # the dropped ones, judged against the kept
             if k not in kept:
-                v = dataclasses.replace(judge(bg, e_pseudo, J_fit, cols, kept, k), label=found[k].label)
+                v = judge(bg, e_pseudo, J_fit, found, cols, kept, k)
                 reason = v.reason or "explains nothing the other findings do not"
                 dropped.append(Finding(found[k], np.asarray(v.theta), np.asarray(v.se), v, kept=False,
                                        reason=f"explains nothing the others do not ({reason})"))
@@ -408,8 +407,7 @@ class DiscrepancyModel:
             f.kept = False
             f.reason = (f"does not generalise: on the held-out part it removes {100 * f.held_out.ratio:.0f} % of the "
                         "change it makes")
-            f.verdict = dataclasses.replace(judge(bg, e_pseudo, J_fit, cols, [o for o in kept if o != k], k),
-                                            label=found[k].label)
+            f.verdict = judge(bg, e_pseudo, J_fit, found, cols, [o for o in kept if o != k], k)
             f.se = np.asarray(f.verdict.se)
             dropped.append(f)
             kept.remove(k)
@@ -419,8 +417,7 @@ class DiscrepancyModel:
             self.search_.append(SearchStep.of("held-out check" if f.held_out else "joint check", dataclasses.replace(
                 f.verdict, accepted=False, reason=f.reason)))
         for k, f in final.items():  # final verdicts and alternatives, against the kept findings
-            f.verdict = dataclasses.replace(judge(bg, e_pseudo, J_fit, cols, [o for o in kept if o != k], k),
-                                            label=found[k].label)
+            f.verdict = judge(bg, e_pseudo, J_fit, found, cols, [o for o in kept if o != k], k)
             f.se = np.asarray(f.verdict.se)
             f.alternatives = self._alternatives(found, kept, k, ref, J_fit, e_pseudo, cols, n_fit)
         return list(final.values()) + dropped

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 
 import numpy as np
 from numpy.typing import NDArray
@@ -55,15 +55,15 @@ class Verdict:
     reason: str  # why it was rejected ("" when accepted)
 
 
-def judge(bg: BlockGram, e_fit: NDArray, X: NDArray, cols: list[list[int]], others: list[int], cand: int,
-          fixed: Sequence[int] = ()) -> Verdict:
+def judge(bg: BlockGram, e_fit: NDArray, X: NDArray, cands: Sequence[Candidate], cols: list[list[int]],
+          others: list[int], cand: int, fixed: Sequence[int] = ()) -> Verdict:
     """Judge candidate ``cand`` in the joint fit with ``others`` (candidate indices) and ``fixed`` columns.
 
     Args:
         bg: block statistics of ``e ~ X theta``.
         e_fit: the weighted residual ``(n, n_channels)`` the statistics were built from.
         X: all columns ``(p, n, n_channels)``.
-        cols: column indices of each candidate.
+        cands: the candidates (for their valid ranges and labels); ``cols``: column indices of each.
     """
     G, g, ee = bg.total()
     base = list(fixed) + [c for o in others for c in cols[o]]
@@ -78,6 +78,9 @@ def judge(bg: BlockGram, e_fit: NDArray, X: NDArray, cols: list[list[int]], othe
     z = amplitude_z(th[own], se[own])
     stab = stability(bg, idx, own, th, rss1 / n_eff)
     reasons = []
+    lo, hi = cands[cand].bounds()
+    if np.any(th[own] < lo) or np.any(th[own] > hi):
+        reasons.append("estimate outside the effect's valid range")
     r2 = collinearity(G, base, cols[cand])
     if r2 > MAX_COLLINEARITY:
         reasons.append(f"collinear with the findings already in (r^2 {r2:.3f})")
@@ -87,8 +90,8 @@ def judge(bg: BlockGram, e_fit: NDArray, X: NDArray, cols: list[list[int]], othe
         reasons.append(f"z {z:.1f} < {MIN_Z:g}")
     if not stab.stable:
         reasons.append("unstable across time blocks (" + ", ".join(f"{r:.2f}" for r in stab.ratios) + ")")
-    return Verdict("", tuple(float(t) for t in th[own]), tuple(float(s) for s in se[own]), float(dbic), float(z),
-                   stab, not reasons, "; ".join(reasons))
+    return Verdict(cands[cand].label, tuple(float(t) for t in th[own]), tuple(float(s) for s in se[own]),
+                   float(dbic), float(z), stab, not reasons, "; ".join(reasons))
 
 
 @dataclasses.dataclass
@@ -116,7 +119,7 @@ def columns_of(cands: Sequence[Candidate], start: int = 0) -> list[list[int]]:
 
 
 def forward(bg: BlockGram, e_fit: NDArray, X: NDArray, cands: Sequence[Candidate], cols: list[list[int]],
-            max_n: int, fixed: Sequence[int] = (), labels: Callable[[int], str] | None = None) -> Selection:
+            max_n: int, fixed: Sequence[int] = ()) -> Selection:
     """Forward selection: at each step the candidates are tried in order of the improvement they add to the
     joint fit; the first one :func:`judge` accepts is taken.  Stops when no candidate can lower BIC enough
     or none that could is accepted."""
@@ -125,7 +128,6 @@ def forward(bg: BlockGram, e_fit: NDArray, X: NDArray, cands: Sequence[Candidate
     verdicts: list[Verdict] = []
     alts: list[list[tuple[int, NDArray]]] = []
     trace: list[Verdict] = []
-    label = labels or (lambda k: cands[k].label)
     while len(chosen) < max_n:
         base = list(fixed) + [c for k in chosen for c in cols[k]]
         rss0, th0 = rss_of(G, g, ee, base)
@@ -142,7 +144,7 @@ def forward(bg: BlockGram, e_fit: NDArray, X: NDArray, cands: Sequence[Candidate
             # early rejection: even ignoring its extra parameters the gain cannot lower BIC enough
             if gain <= 0 or n_eff * math.log(max(rss0 - gain, 1e-300) / rss0) > -MIN_DELTA_BIC:
                 break
-            v = dataclasses.replace(judge(bg, e_fit, X, cols, chosen, k, fixed), label=label(k))
+            v = judge(bg, e_fit, X, cands, cols, chosen, k, fixed)
             trace.append(v)
             if v.accepted:
                 taken = (k, v, gain)
@@ -152,7 +154,8 @@ def forward(bg: BlockGram, e_fit: NDArray, X: NDArray, cands: Sequence[Candidate
         k, v, gain = taken
         alt = []
         for gain2, k2 in gains:  # as good in this log, and as credible on its own
-            if k2 != k and gain2 >= ALTERNATIVE_SHARE * gain and judge(bg, e_fit, X, cols, chosen, k2, fixed).accepted:
+            if (k2 != k and gain2 >= ALTERNATIVE_SHARE * gain
+                    and judge(bg, e_fit, X, cands, cols, chosen, k2, fixed).accepted):
                 alt.append((k2, rss_of(G, g, ee, base + cols[k2])[1][len(base):]))
         chosen.append(k)
         verdicts.append(v)
@@ -170,8 +173,7 @@ def backward(bg: BlockGram, e_fit: NDArray, X: NDArray, cands: Sequence[Candidat
     kept = list(chosen)
     dropped: list[Verdict] = []
     while kept:
-        vs = [dataclasses.replace(judge(bg, e_fit, X, cols, [o for o in kept if o != k], k, fixed),
-                                  label=cands[k].label) for k in kept]
+        vs = [judge(bg, e_fit, X, cands, cols, [o for o in kept if o != k], k, fixed) for k in kept]
         failing = [(v.delta_bic, i) for i, v in enumerate(vs) if not v.accepted]
         if not failing:
             return kept, vs, dropped
