@@ -8,7 +8,8 @@ import dataclasses
 import numpy as np
 import pytest
 
-from ur5fault.discrepancy.search import columns_of, forward, polish, probe_batch
+from ur5fault.discrepancy.refinement import polish, probe_batch
+from ur5fault.discrepancy.search import columns_of, forward
 from ur5fault.discrepancy.statistics import (
     BlockGram,
     collinearity,

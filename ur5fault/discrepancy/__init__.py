@@ -4,11 +4,13 @@ data not used for fitting.
 
 Modules: ``replay`` (the log through the model), ``library`` (screening the effect registry),
 ``discovery`` (the dictionary of terms), ``candidates``, ``statistics`` (the tests a finding must pass),
-``search`` (selection and refinement), ``model`` (the estimator), ``report`` (sentences and files),
-``cli`` (``ur5fault discrepancy``).  See docs/discrepancy.md.
+``search`` (selection), ``refinement`` (re-simulation), ``judging`` (findings after re-simulation),
+``model`` (the estimator), ``report`` (sentences and files), ``cli`` (``ur5fault discrepancy``).
+See docs/discrepancy.md.
 """
 
-from .model import DiscrepancyModel, Finding
+from .judging import Finding
+from .model import DiscrepancyModel
 from .replay import WORKFLOW_SEED, Replay
 from .report import sentence, summary, write_report
 

@@ -3,12 +3,12 @@
 1. *Find*: replay the log's target trajectory through the model; weighted residuals per signal and joint.
 2. *Name (library)*: screen every effect of the registry in one lockstep batch (``library.py``), select
    by forward selection on the linearised problem, every step judged on significance, autocorrelation
-   and stability in time blocks (``search.py``, ``statistics.py``); refine the selected by re-simulation.
+   and stability in time blocks (``search.py``, ``statistics.py``).
 3. *Discover*: fit what the library leaves by the same selection over a dictionary of physical terms of
-   the replayed states (``discovery.py``); refine library findings and terms together by re-simulation.
-4. *Judge*: every finding against all the others (it must explain something nothing else does), then
-   on the held-out part of the log by simulation: a finding that does not generalise is dropped and
-   reported.
+   the replayed states (``discovery.py``).
+4. *Refine and judge*: one batch of probes over the whole log gives the simulated Jacobian
+   (``refinement.py``); every finding is judged against all the others and on the held-out part
+   (``judging.py``): one that does not generalise is dropped and reported; the kept ones are polished.
 5. *Show*: before/after RMS per signal and joint on the held-out part; what stays unexplained.
 """
 
@@ -28,10 +28,12 @@ from ..errors import ParameterError
 from ..logs import MeasuredLog
 from . import discovery, library
 from .candidates import Candidate
+from .judging import Finding, SearchStep, final_verdicts, judge_findings
+from .refinement import FindingSet, Refined, polish, probe_batch
 from .replay import Replay, Replayed
 from .report import localise, rms_table, unexplained
-from .search import Refined, Verdict, backward, columns_of, forward, judge, polish, probe_batch
-from .statistics import Z_95, BlockGram, Generalisation, generalisation, rss_of, weighted
+from .search import backward, columns_of, forward, judge
+from .statistics import BlockGram, rss_of, weighted
 
 logger = logging.getLogger(__name__)
 
@@ -43,53 +45,6 @@ FIT_FRACTION_RANGE = (0.2, 0.9)
 SCREEN_S = 20.0
 #: indistinguishable alternatives per finding simulated (for their own estimates) at most
 MAX_ALTERNATIVES = 3
-
-
-@dataclasses.dataclass
-class Finding:
-    """A library effect or a discovered term the workflow adds to the model.
-
-    Attributes:
-        candidate: what it is (effect, joint, parameter or dictionary family).
-        theta: its coefficients; ``se`` their block-jackknife standard errors.
-        verdict: its final judgement against all the other findings.
-        alternatives: candidates this log cannot tell from it, with their own coefficients.
-        held_out: what it does on the held-out part (None until judged there).
-        kept: False when it was dropped; ``reason`` says why.
-    """
-
-    candidate: Candidate
-    theta: NDArray
-    se: NDArray
-    verdict: Verdict
-    alternatives: list[tuple[Candidate, NDArray]] = dataclasses.field(default_factory=list)
-    held_out: Generalisation | None = None
-    kept: bool = True
-    reason: str = ""
-
-    def spec(self) -> EffectSpec:
-        return self.candidate.spec(self.theta)
-
-    def interval(self) -> tuple[NDArray, NDArray]:
-        return self.theta - Z_95 * self.se, self.theta + Z_95 * self.se
-
-
-@dataclasses.dataclass(frozen=True)
-class SearchStep:
-    """One judgement of the search trace: stage, candidate, estimate, the tests and the decision."""
-
-    stage: str
-    candidate: str
-    estimate: tuple[float, ...]
-    delta_bic: float
-    z: float
-    block_ratios: tuple[float, ...]
-    accepted: bool
-    reason: str
-
-    @classmethod
-    def of(cls, stage: str, v: Verdict) -> SearchStep:
-        return cls(stage, v.label, v.theta, v.delta_bic, v.z, v.stability.ratios, v.accepted, v.reason)
 
 
 #: bare MuJoCo steps timed to measure the machine's speed (about 0.1 s)
@@ -150,7 +105,7 @@ class DiscrepancyModel:
         max_terms: most dictionary terms added (0: no discovery).
         kinds: restrict the library's effect kinds (default: the whole registry).
         jobs: worker processes for lockstep batches.
-        refiner: ``"secant"`` or ``"minimize"`` (see :func:`ur5fault.discrepancy.search.refine`).
+        refiner: ``"secant"`` or ``"minimize"`` (see :func:`ur5fault.discrepancy.refinement.polish`).
         progress: show a progress bar (tqdm; silent when not interactive).
         screen_s: length of the log's first part the library is screened and the dictionary selected on
             [s] (None: the whole fitting part); refinement and judgement use the whole fitting part.
@@ -246,11 +201,13 @@ class DiscrepancyModel:
             found = [found[k] for k in keep]
         prog = stages.start("refining the findings")
         self.refinement_ = []
+        fs = FindingSet(found)
+        alts = [(i, a, th) for i, c in enumerate(found) for a, th in alternatives.get(c, [])]
         if found:
             G, g, ee = BlockGram.build(X_all[fixed], e0).total()
             theta0 = rss_of(G, g, ee, list(range(len(fixed))))[1]
-            self._alts = [(i, a, th) for i, c in enumerate(found) for a, th in alternatives.get(c, [])]
-            first = self._probe(rp, found, theta0, n_fit, prog, self._alts)
+            evaluate = fs.evaluator(rp, prog)
+            first = probe_batch(evaluate, theta0, fs.probes(theta0), fs.bounds(), n_fit, alts, evaluate)
             self.refinement_ += first.steps
             nominal = first.sim0
         else:
@@ -265,11 +222,11 @@ class DiscrepancyModel:
         findings: list[Finding] = []
         after = nominal
         if found:
-            findings = self._judge(found, first, n_fit)
+            findings, trace = judge_findings(found, first, n_fit, len(rp.signals), alts)
+            self.search_ += trace
             kept = [f for f in findings if f.kept]
             if kept:
-                after = self._polish(rp, kept, first, found, n_fit, prog)
-        self._results(rp, nominal, after, n_fit, n_all)
+                after = self._polish(rp, kept, first, fs, prog)
         self._results(rp, nominal, after, n_fit, n_all)
         timings["judging"] = time.perf_counter() - t
         logger.info("judged and polished in %.0f s: kept %s", timings["judging"],
@@ -287,170 +244,26 @@ class DiscrepancyModel:
         return self
 
     # --------------------------------------------------------------------------------- pieces
-    @staticmethod
-    def _split(found: list[Candidate], theta: NDArray) -> list[NDArray]:
-        return np.split(theta, np.cumsum([c.n_coef for c in found])[:-1])
-
-    def _evaluator(self, rp: Replay, found: list[Candidate], progress):
-        """``evaluate(thetas, extra=())``: replays of the whole log with ``found`` at each ``theta`` (and
-        each extra ``(i, alternative, its coefficients)``: the alternative in place of finding ``i``, the
-        others at ``thetas[1]``), with their weighted residuals."""
-        n_all = rp.n_samples
-        meas = rp.measured(n_all)
-
-        def specs(theta: NDArray) -> tuple[EffectSpec, ...]:
-            return tuple(c.spec(th) for c, th in zip(found, self._split(found, theta)) if np.any(th))
-
-        def evaluate(thetas: list[NDArray], extra=()) -> list[tuple[Replayed, NDArray]]:
-            sets = [specs(theta) for theta in thetas]
-            for i, a, a_theta in extra:
-                th = self._split(found, thetas[1])
-                th[i] = np.zeros_like(th[i])
-                sets.append(specs(np.concatenate(th)) + (a.spec(a_theta),))
-            sims = rp.run(sets, n_all, progress)
-            return [(s, weighted(meas, s.y, rp.sigma)) for s in sims]
-
-        return evaluate
-
-    def _bounds(self, found: list[Candidate]) -> tuple[NDArray, NDArray]:
-        return (np.concatenate([c.bounds()[0] for c in found]), np.concatenate([c.bounds()[1] for c in found]))
-
-    def _probe(self, rp: Replay, found: list[Candidate], theta0: NDArray, n_fit: int, progress,
-               alts: Sequence[tuple[int, Candidate, NDArray]] = ()) -> Refined:
-        """One batch over the whole log: the starting model, the linearised estimate, each finding removed
-        (a sine-cosine pair also turned by a quarter period), whose secants give the simulated Jacobian,
-        and each indistinguishable alternative in place of its finding (at its linear estimate)."""
-        probes, off = [], 0
-        for c in found:
-            th_c = theta0[off : off + c.n_coef]
-            for d in [-th_c] + ([np.array([-th_c[1], th_c[0]])] if c.n_coef == 2 else []):
-                p = np.zeros_like(theta0)
-                p[off : off + c.n_coef] = d
-                probes.append(p)
-            off += c.n_coef
-        evaluate = self._evaluator(rp, found, progress)
-        return probe_batch(evaluate, theta0, probes, self._bounds(found), n_fit, list(alts), evaluate)
-
-    def _polish(self, rp: Replay, kept: list[Finding], first: Refined, found: list[Candidate], n_fit: int,
-                progress) -> Replayed:
-        """Gauss-Newton on the kept findings from their judged coefficients; their final coefficients and
-        verdicts (a finding that fails now is dropped, and the final model simulated once more)."""
-        cands = [f.candidate for f in kept]
-        cols = columns_of(found)
-        idx = [c for f in kept for c in cols[found.index(f.candidate)]]
-        pol = polish(self._evaluator(rp, cands, progress), np.concatenate([f.theta for f in kept]), first.J[idx],
-                     self._bounds(cands), n_fit, self.refiner)
+    def _polish(self, rp: Replay, kept: list[Finding], first: Refined, fs: FindingSet, progress) -> Replayed:
+        """Gauss-Newton on the kept findings from their judged coefficients, then their final verdicts (one
+        that fails now is dropped and the final model simulated once more)."""
+        cols = columns_of(fs.found)
+        kfs = FindingSet([f.candidate for f in kept])
+        idx = [c for f in kept for c in cols[fs.found.index(f.candidate)]]
+        pol = polish(kfs.evaluator(rp, progress), np.concatenate([f.theta for f in kept]), first.J[idx],
+                     kfs.bounds(), self.n_fit_, self.refiner)
         self.refinement_ += pol.steps
-        for f, th in zip(kept, self._split(cands, pol.theta)):
+        for f, th in zip(kept, kfs.split(pol.theta)):
             f.theta = th
-        kcols = columns_of(cands)
-        J_fit = pol.J[:, :n_fit]
-        e_pseudo = pol.e[:n_fit] + np.tensordot(pol.theta, J_fit, axes=1)
-        bg = BlockGram.build(J_fit, e_pseudo)
-        failed = []
-        for k, f in enumerate(kept):
-            v = judge(bg, e_pseudo, J_fit, cands, kcols, [o for o in range(len(kept)) if o != k], k)
-            f.verdict, f.se = v, np.asarray(v.se)
-            if not v.accepted:
-                failed.append(f)
+        failed = final_verdicts(kept, pol, self.n_fit_)
         for f in failed:
             f.kept = False
             f.reason = f"explains nothing the others do not once refined ({f.verdict.reason})"
             self.search_.append(SearchStep.of("final check", dataclasses.replace(f.verdict, reason=f.reason)))
         if failed:
-            rest = [f for f in kept if f.kept]
-            return rp.run([tuple(f.spec() for f in rest)], rp.n_samples, progress)[0] if rest else first.sim0
+            rest = tuple(f.spec() for f in kept if f.kept)
+            return rp.run([rest], rp.n_samples, progress)[0] if rest else first.sim0
         return pol.sim
-
-    def _judge(self, found: list[Candidate], ref: Refined, n_fit: int) -> list[Finding]:
-        """Every finding against all the others on the fitting part, linearised at the refined coefficients:
-        selected afresh from the findings alone (so two that only cancel each other, e.g. a viscous scale
-        and a negative viscous term beside a speed-squared drag, do not both stay), each checked against
-        all the rest, then on the held-out part (a finding that does not generalise is dropped)."""
-        cols = columns_of(found)
-        J_fit, e_fit = ref.J[:, :n_fit], ref.e[:n_fit]
-        e_pseudo = e_fit + np.tensordot(ref.theta, J_fit, axes=1)
-        bg = BlockGram.build(J_fit, e_pseudo)
-        G, g, ee = bg.total()
-        again = forward(bg, e_pseudo, J_fit, found, cols, len(found))
-        kept, verdicts, _ = backward(bg, e_pseudo, J_fit, found, cols, again.chosen)
-        out: list[Finding] = []
-        dropped: list[Finding] = []
-        for k in range(len(found)):  # the dropped ones, judged against the kept
-            if k not in kept:
-                v = judge(bg, e_pseudo, J_fit, found, cols, kept, k)
-                reason = v.reason or "explains nothing the other findings do not"
-                dropped.append(Finding(found[k], np.asarray(v.theta), np.asarray(v.se), v, kept=False,
-                                       reason=f"explains nothing the others do not ({reason})"))
-        # held-out part: the residual with the kept findings, and without each, from the simulated Jacobian
-        e_held = ref.e[n_fit:] + np.tensordot(ref.theta, ref.J[:, n_fit:], axes=1)  # starting model, linearised
-        while kept:
-            idx = [c for k in kept for c in cols[k]]
-            theta = rss_of(G, g, ee, idx)[1]  # the kept findings refitted without the dropped ones
-            with_all = e_held - np.tensordot(theta, ref.J[idx, n_fit:], axes=1)
-            out, i, worst = [], 0, None
-            for k in kept:
-                c = found[k]
-                th = theta[i : i + c.n_coef]
-                own = [idx.index(col) for col in cols[k]]
-                i += c.n_coef
-                ch = self._channels(c)
-                gen = generalisation(with_all[:, ch], (with_all + np.tensordot(th, ref.J[[idx[o] for o in own], n_fit:],
-                                                                                axes=1))[:, ch])
-                f = Finding(c, th, np.zeros(c.n_coef), None, held_out=gen)
-                out.append(f)
-                if not gen.passes and (worst is None or gen.ratio < worst[1].held_out.ratio):
-                    worst = (k, f)
-            if worst is None:
-                break
-            k, f = worst
-            f.kept = False
-            f.reason = (f"does not generalise: on the held-out part it removes {100 * f.held_out.ratio:.0f} % of the "
-                        "change it makes")
-            f.verdict = judge(bg, e_pseudo, J_fit, found, cols, [o for o in kept if o != k], k)
-            f.se = np.asarray(f.verdict.se)
-            dropped.append(f)
-            kept.remove(k)
-            out = []
-        final = {k: f for k, f in zip(kept, out)}
-        for f in dropped:
-            self.search_.append(SearchStep.of("held-out check" if f.held_out else "joint check", dataclasses.replace(
-                f.verdict, accepted=False, reason=f.reason)))
-        for k, f in final.items():  # final verdicts and alternatives, against the kept findings
-            f.verdict = judge(bg, e_pseudo, J_fit, found, cols, [o for o in kept if o != k], k)
-            f.se = np.asarray(f.verdict.se)
-            f.alternatives = self._alternatives(found, kept, k, ref, J_fit, e_pseudo, cols, n_fit)
-        return list(final.values()) + dropped
-
-    def _channels(self, c: Candidate) -> NDArray:
-        """Flat channel mask of what a finding acts on: its joint's signals, or everything."""
-        S = len(self.replay_.signals)
-        ch = np.zeros((S, N_JOINTS), dtype=bool)
-        if c.local:
-            ch[:, c.joint] = True
-        else:
-            ch[:] = True
-        return ch.ravel()
-
-    def _alternatives(self, found, kept, k, ref: Refined, J_fit, e_pseudo, cols, n_fit) -> list[tuple[Candidate,
-                                                                                                    NDArray]]:
-        """Each simulated alternative's own coefficients in place of finding ``k``, beside the other kept
-        findings: its secant from the run with finding ``k`` removed (both with the others at their first
-        estimates), fitted on the fitting part to what that run leaves (the others' columns take up
-        their small differences)."""
-        out = []
-        others = [c for o in kept if o != k for c in cols[o]]
-        ablation = sum(c.n_coef for c in found[:k])  # the first probe of finding k removes it
-        e_without = ref.probe_e[ablation]
-        for (i, cand, th0), e_alt in zip(self._alts, ref.extra_e):
-            if i != k or e_alt is None or e_without is None:
-                continue
-            col = ((e_without - e_alt)[:n_fit] / np.linalg.norm(th0)).reshape((1,) + e_without[:n_fit].shape)
-            u = th0 / np.linalg.norm(th0)  # a harmonic alternative keeps its phase; its size is fitted
-            X = np.concatenate([J_fit[others], col])
-            G, g, ee = BlockGram.build(X, e_without[:n_fit]).total()
-            out.append((cand, rss_of(G, g, ee, list(range(X.shape[0])))[1][-1] * u))
-        return out
 
     def _results(self, rp: Replay, nominal: Replayed, after: Replayed, n_fit: int, n_all: int) -> None:
         meas = rp.measured(n_all)

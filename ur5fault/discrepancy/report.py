@@ -19,7 +19,8 @@ from .replay import Replay
 from .statistics import Z_95
 
 if TYPE_CHECKING:  # pragma: no cover
-    from .model import DiscrepancyModel, Finding
+    from .judging import Finding
+    from .model import DiscrepancyModel
 
 #: the links the joints move (MJCF body names), for findings about a link's mass
 LINK_NAMES = ("shoulder_link", "upper_arm_link", "forearm_link", "wrist_1_link", "wrist_2_link", "wrist_3_link")
