@@ -44,7 +44,17 @@ DEFAULT_MODEL_PATH = Path(str(resources.files("ur5fault") / "models" / "ur5.xml"
 #: Tracking error that trips a protective stop [rad] (assumption: UR stops on large
 #: position deviation; 0.1 rad is far above any healthy or modelled-fault value).
 PROTECTIVE_STOP_RAD = 0.1
+#: |joint angle| beyond which a run counts as diverged [rad] (assumption: the UR5's joint range is +-360 deg
+#: = +-6.3 rad (../shared/ur5-facts.md), so 50 rad is only reached by a numerically exploding run).
+RUNAWAY_LIMIT_RAD = 50.0
+#: unit-noise draws per servo sample and joint, in the order the drive's servo step reads them
+#: (``drive/state.py`` ``NumpyDrive.servo`` and ``drive/kernel.py`` ``servo``: ``nz[:, 0..4]``).
+NOISE_CHANNELS = ("resolver", "encoder_angle", "encoder_speed", "current_q", "current_d")
+#: servo samples of noise drawn at once per run (memory (n_runs, 2000, 5, 6) doubles, ~0.5 MB per run; a
+#: chunk only amortises the generator call and does not change the stream: draws are in sample order)
 NOISE_CHUNK_SAMPLES = 2000
+#: fraction of the run between two calls of ``run(progress=...)``
+PROGRESS_STEP = 0.02
 
 
 class Status(str, enum.Enum):
@@ -173,7 +183,7 @@ def _integrate(sim: Simulator, traj: Trajectory, runs: list[RunSpec], a: RunArra
     delay_k = np.rint(a.setpoint_delay_s / ts).astype(int)
     delayed = bool(np.any(delay_k))
     rngs = [np.random.default_rng(r.seed) for r in runs]
-    noise = np.empty((n, NOISE_CHUNK_SAMPLES, 5, N_JOINTS))
+    noise = np.empty((n, NOISE_CHUNK_SAMPLES, len(NOISE_CHANNELS), N_JOINTS))
 
     n_log = n_steps // log_every
     log = {name: np.full((n, n_log, N_JOINTS), np.nan) for name in SimResult.JOINT_SIGNALS}
@@ -189,7 +199,7 @@ def _integrate(sim: Simulator, traj: Trajectory, runs: list[RunSpec], a: RunArra
             ci = si % NOISE_CHUNK_SAMPLES
             if ci == 0:
                 for r in range(n):
-                    noise[r] = rngs[r].standard_normal((NOISE_CHUNK_SAMPLES, 5, N_JOINTS))
+                    noise[r] = rngs[r].standard_normal((NOISE_CHUNK_SAMPLES, len(NOISE_CHANNELS), N_JOINTS))
             if delayed:
                 k = np.maximum(si - delay_k, 0)
                 q_set_now, qd_set_now = q_set_s[k], qd_set_s[k]
@@ -198,7 +208,7 @@ def _integrate(sim: Simulator, traj: Trajectory, runs: list[RunSpec], a: RunArra
                 qd_set_now = np.broadcast_to(qd_set_s[si], (n, N_JOINTS))
             drive.servo(q_set_now, qd_set_now, noise[:, ci])
             # run health: a diverged or tripped run is frozen and its remaining log left NaN
-            bad = ~np.all(np.isfinite(q), axis=1) | np.any(np.abs(q) > 50.0, axis=1)
+            bad = ~np.all(np.isfinite(q), axis=1) | np.any(np.abs(q) > RUNAWAY_LIMIT_RAD, axis=1)
             trip = np.any(np.abs(q_set_now - drive.q_fb) > PROTECTIVE_STOP_RAD, axis=1)
             if bad.any() or trip.any():
                 for r in np.flatnonzero(active & (bad | trip)):
@@ -214,7 +224,7 @@ def _integrate(sim: Simulator, traj: Trajectory, runs: list[RunSpec], a: RunArra
             m_ii = mb.mass_diagonal()
             if progress is not None and step >= next_progress * n_steps:
                 progress(step / n_steps)
-                next_progress += 0.02
+                next_progress += PROGRESS_STEP
 
         tau = drive.physics(q, qd, m_ii)
         if step in change_steps:
