@@ -1,13 +1,16 @@
-"""Command line: ``ur5fault simulate | effects | campaign | plot | discrepancy``.
+"""Command line: ``ur5fault simulate | effects | campaign | plot | show | discrepancy``.
 
 Bad input prints one line ``ur5fault: error: ...`` naming the problem and the valid
-choices, and exits with status 2; never a traceback.
+choices, and exits with status 2; never a traceback.  ``-v`` (before or after the
+subcommand) shows the library's ``logging`` messages at INFO, ``-vv`` at DEBUG;
+``--quiet`` switches the progress bar off.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import logging
 import sys
 from collections.abc import Sequence
 from pathlib import Path
@@ -86,12 +89,40 @@ def cmd_effects(args: argparse.Namespace) -> int:
 
 
 class _Parser(argparse.ArgumentParser):
+    def __init__(self, *args, **kwargs) -> None:
+        super().__init__(*args, **kwargs)
+        # on every (sub)parser, so `ur5fault -v simulate` and `ur5fault simulate -v` both work; SUPPRESS keeps a
+        # subcommand's parser from resetting a count given before the subcommand
+        self.add_argument("-v", "--verbose", action="count", default=argparse.SUPPRESS,
+                          help="log what the library does (-v: INFO, -vv: DEBUG)")
+
     def error(self, message: str):  # one line, exit 2
         self.exit(EXIT_USAGE, f"ur5fault: error: {message}\n")
 
 
+def _version() -> str:
+    from importlib.metadata import version
+
+    from . import __version__
+
+    deps = ", ".join(f"{name} {version(name)}" for name in ("mujoco", "numpy"))
+    return f"ur5fault {__version__} ({deps}, python {sys.version.split()[0]})"
+
+
+def configure_logging(verbosity: int) -> None:
+    """Send the ``ur5fault`` loggers' records to stderr: WARNING by default, INFO at ``-v``, DEBUG at ``-vv``."""
+    logger = logging.getLogger("ur5fault")
+    logger.setLevel(logging.WARNING if verbosity <= 0 else logging.INFO if verbosity == 1 else logging.DEBUG)
+    if not any(getattr(h, "_ur5fault_cli", False) for h in logger.handlers):
+        handler = logging.StreamHandler(sys.stderr)
+        handler.setFormatter(logging.Formatter("ur5fault: %(levelname)s: %(name)s: %(message)s"))
+        handler._ur5fault_cli = True  # type: ignore[attr-defined]
+        logger.addHandler(handler)
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = _Parser(prog="ur5fault", description="UR5 fault-injection simulator")
+    p.add_argument("--version", action="version", version=_version())
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
     s = sub.add_parser("simulate", help="run one configuration and write its time series to Parquet")
     s.add_argument("--config", help="run configuration YAML (see docs/usage.md)")
@@ -128,6 +159,7 @@ def _add_optional_commands(sub) -> None:
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    configure_logging(getattr(args, "verbose", 0))
     try:
         return int(args.func(args) or 0)
     except Ur5FaultError as exc:

@@ -20,6 +20,8 @@ from __future__ import annotations
 
 import dataclasses
 import enum
+import logging
+import time
 from collections.abc import Callable, Sequence
 from importlib import resources
 from pathlib import Path
@@ -37,6 +39,8 @@ from .params import RobotParams, load_params
 from .result import SimResult
 from .run_arrays import RunArrays, build_run_arrays
 from .trajectory import Trajectory
+
+_log = logging.getLogger(__name__)
 
 #: the packaged MJCF (package data, so it is found from an installed wheel too)
 DEFAULT_MODEL_PATH = Path(str(resources.files("ur5fault") / "models" / "ur5.xml"))
@@ -152,7 +156,17 @@ class Simulator:
         if n_steps < 1:
             raise ParameterError(f"duration_s = {duration} s is shorter than one physics step")
         a = build_run_arrays(p, [r.effects for r in runs], trajectory.default_payload_kg)
-        return _integrate(self, trajectory, list(runs), a, n_steps, log_every, progress)
+        _log.info("simulating %d run(s) x %d physics steps of %g s on %s (drive %s, stepper %s)", len(runs), n_steps,
+                  dt, trajectory.name, self.drive, self.stepper)
+        t0 = time.perf_counter()
+        res = _integrate(self, trajectory, list(runs), a, n_steps, log_every, progress)
+        _log.info("simulated %d run(s) in %.2f s wall; status: %s", len(runs), time.perf_counter() - t0,
+                  ", ".join(f"{r}={s}" for r, s in zip(res.run_ids, res.status)) if len(runs) <= 8
+                  else {s: res.status.count(s) for s in set(res.status)})
+        for r, s, why in zip(res.run_ids, res.status, res.reason):
+            if s != Status.OK.value:
+                _log.debug("run %s: %s (%s)", r, s, why)
+        return res
 
 
 def _integrate(sim: Simulator, traj: Trajectory, runs: list[RunSpec], a: RunArrays, n_steps: int,

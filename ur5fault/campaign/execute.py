@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import logging
 import os
 import sys
 import time
@@ -23,6 +24,8 @@ from ..params import load_params
 from ..progress import campaign_progress
 from .spec import Campaign, CampaignRun
 from .store import Lock, consolidate, done_ids, file_sha256, runs_dir
+
+_log = logging.getLogger(__name__)
 
 
 def _effects_of(camp: Campaign, rc: CampaignRun) -> tuple[EffectSpec, ...]:
@@ -135,6 +138,8 @@ def run_campaign(camp: Campaign, out: Path | None = None, *, jobs: int | None = 
         todo = [rc for rc in camp.runs if rc.run_id not in already]
         batches = plan_batches(camp, todo, jobs)
         total, done = len(camp.runs), len(camp.runs) - len(todo)
+        _log.info("campaign %s: %d of %d runs already in %s; %d to do in %d batch(es) on %d %s worker(s)", camp.name,
+                  done, total, out, len(todo), len(batches), jobs, backend)
         report = campaign_progress(progress, total)
         report(done, 0.0)
         t0 = time.perf_counter()
