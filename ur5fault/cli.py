@@ -88,6 +88,38 @@ def cmd_effects(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_show(args: argparse.Namespace) -> int:
+    from .errors import ConfigFileError
+    from .plotting import run_figure
+    from .plotting._figure import DPI
+
+    target = Path(args.target)
+    if target.suffix == ".parquet" or target.is_file():
+        import pandas as pd
+
+        if not target.is_file():
+            raise ConfigFileError(f"{target}: no such file")
+        try:
+            series = pd.read_parquet(target)
+        except (OSError, ValueError) as exc:
+            raise ConfigFileError(f"{target}: cannot read as Parquet ({exc})") from None
+        fig = run_figure(series)
+        png = Path(args.out) if args.out else target.with_suffix(".png")
+    else:
+        from .campaign.result import CampaignResult
+
+        result = CampaignResult.load(Path(args.campaign))
+        row = result.run(args.target)
+        twin = row.get("twin_run_id", row["run_id"])
+        series = result.time_series([row["run_id"], twin])
+        fig = run_figure(series[row["run_id"]], twin=series[twin] if twin != row["run_id"] else None)
+        png = Path(args.out) if args.out else result.out / "plots" / f"show_{row['run_id']}.png"
+    png.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(png, dpi=DPI)
+    print(f"wrote {png}")
+    return 0
+
+
 class _Parser(argparse.ArgumentParser):
     def __init__(self, *args, **kwargs) -> None:
         super().__init__(*args, **kwargs)
@@ -142,6 +174,12 @@ def build_parser() -> argparse.ArgumentParser:
     s.set_defaults(func=cmd_simulate)
     e = sub.add_parser("effects", help="list the effect registry")
     e.set_defaults(func=cmd_effects)
+    sh = sub.add_parser("show", help="draw one run: setpoint vs resolver, encoder mismatch, currents, TCP deviation")
+    sh.add_argument("target", help="a time-series Parquet file (from `simulate`, or a campaign's timeseries/), or the "
+                                   "run_id of a run in the campaign folder --campaign (re-simulated if not saved)")
+    sh.add_argument("--campaign", default=".", help="campaign output folder of a RUN_ID (default: this folder)")
+    sh.add_argument("--out", help="PNG file (default: FILE.png beside the file, or CAMPAIGN/plots/show_RUN_ID.png)")
+    sh.set_defaults(func=cmd_show)
     _add_optional_commands(sub)
     return p
 

@@ -25,9 +25,11 @@ def register(sub) -> None:
     s = csub.add_parser("status", help="what a campaign folder holds")
     s.add_argument("dir")
     s.set_defaults(func=cmd_status)
-    p = sub.add_parser("plot", help="draw the paper's figures and a feature heat map as PNG")
+    p = sub.add_parser("plot", help="draw the paper's backlash figures and a severity figure per swept effect (PNG)")
     p.add_argument("dir", help="campaign output folder")
-    p.add_argument("--feature", default="tcp_dev_max_mm", help="feature of the heat map (a features.parquet column)")
+    p.add_argument("--feature", default="tcp_dev_max_mm",
+                   help="feature of the severity figures and heat maps: a features.parquet column, or a per-joint "
+                        "feature without _j{j} (e.g. current_spike_max_A: read on the faulty joint)")
     p.add_argument("--out", help="folder for the PNG files (default: DIR/plots)")
     p.set_defaults(func=cmd_plot)
 
@@ -46,12 +48,12 @@ def cmd_run(args: argparse.Namespace) -> int:
 
     features = pd.read_parquet(Path(camp.out) / "features.parquet")
     thr = args.threshold_mm if args.threshold_mm is not None else camp.threshold_mm
-    table = tcp_table(features)
+    table = tcp_table(features, camp.swept_keys)
     if not table.empty:
         print("\nmax TCP deviation from the healthy twin [mm], fault joint x backlash [deg]:")
         print(table.to_string(float_format=lambda v: f"{v:.3f}"))
         print(f"\nlargest backlash keeping the TCP within {thr:g} mm [deg]:")
-        print(acceptable_backlash(features, thr).to_string(float_format=lambda v: f"{v:g}"))
+        print(acceptable_backlash(features, thr, camp.swept_keys).to_string(float_format=lambda v: f"{v:g}"))
     bad = features[features["status"] != "ok"]
     if len(bad):
         print(f"\n{len(bad)} run(s) not ok:\n" + bad[["run_id", "status", "reason"]].to_string(index=False))
@@ -68,8 +70,13 @@ def cmd_status(args: argparse.Namespace) -> int:
 
 
 def cmd_plot(args: argparse.Namespace) -> int:
-    from ..plotting import plot_campaign
+    from ..plotting import campaign_figures, save
+    from .result import CampaignResult
 
-    for path in plot_campaign(Path(args.dir), args.feature, Path(args.out) if args.out else None):
+    result = CampaignResult.load(Path(args.dir))
+    figures, messages = campaign_figures(result, args.feature)
+    for path in save(figures, Path(args.out) if args.out else result.out / "plots"):
         print(f"wrote {path}")
+    for message in messages:
+        print(message)
     return 0
