@@ -228,16 +228,6 @@ def test_manifest(small_reference):
     assert m["n_runs"] == 7 and m["duration_s"] == 5.5 and m["physics_dt_s"] == 5e-5
 
 
-def test_plot_writes_figures(tmp_path, small_reference):
-    from ur5fault.plotting import plot_campaign
-
-    _, _, out = small_reference
-    paths = plot_campaign(out, plot_dir=tmp_path / "plots")
-    names = {p.name for p in paths}
-    assert {"fig3_tcp_deviation_alpha0.1.png", "fig4_shoulder_current.png", "heatmap_tcp_dev_max_mm.png"} <= names
-    assert all(p.stat().st_size > 10_000 for p in paths)
-
-
 # ----------------------------------------------------------------------------- the paper
 @pytest.fixture(scope="module")
 def paper(tmp_path_factory):
