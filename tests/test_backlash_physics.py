@@ -6,6 +6,7 @@ Shoulder backlash 0.05, 0.1, 0.2 deg against the healthy twin (same noise seed) 
 
 import numpy as np
 import pytest
+
 from conftest import torque_reversal_times
 
 J = 1  # shoulder_lift_joint

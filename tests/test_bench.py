@@ -3,9 +3,10 @@
 import json
 import subprocess
 import sys
-from pathlib import Path
 
-BENCH = Path(__file__).resolve().parents[1] / "bench" / "bench_speed.py"
+from conftest import REPO
+
+BENCH = REPO / "bench" / "bench_speed.py"
 
 
 def test_bench_quick_prints_figures():

@@ -8,7 +8,6 @@ import signal
 import subprocess
 import sys
 import time
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -25,7 +24,8 @@ from ur5fault.campaign import (
 from ur5fault.errors import ParameterError, UnknownNameError
 from ur5fault.features import FEATURE_UNITS
 
-REPO = Path(__file__).resolve().parents[1]
+from conftest import REPO
+
 EXEC_COLUMNS = ["wall_s_batch", "batch_size"]  # execution metadata, not results
 
 SMALL = """name: small

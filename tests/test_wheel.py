@@ -19,9 +19,10 @@ from pathlib import Path
 
 import pandas as pd
 import pytest
-from conftest import REPO
 
 from ur5fault import __version__
+
+from conftest import REPO
 
 pytestmark = pytest.mark.slow
 
