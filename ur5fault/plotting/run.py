@@ -64,7 +64,7 @@ def run_figure(series: pd.DataFrame, twin: pd.DataFrame | None = None, *, gear_r
         a_err.plot(t, 1e3 * (q_set[:, j] - q_fb[:, j]), color=c, lw=0.7)
         a_cur.plot(t, series[f"i_FB_A_j{j + 1}"], color=c, lw=0.6)
     a_ang.set_ylabel("setpoint (wide) and\nresolver q_FB [deg]")
-    a_ang.legend(fontsize=7, ncol=3)
+    a_ang.legend(fontsize=7, ncol=6, loc="lower center", bbox_to_anchor=(0.5, 1.0), frameon=False)
     a_err.set_ylabel("q_set - q_FB [mrad]")
     a_cur.set_ylabel("motor current i_FB [A]")
     if all(c in series.columns for c in _joint_cols("q_M_FB_rad")):
