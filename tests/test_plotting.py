@@ -149,14 +149,19 @@ def test_every_swept_effect_gets_a_severity_figure(two):
                          "heatmap_backlash_tcp_dev_max_mm", "severity_coulomb_friction_tcp_dev_max_mm",
                          "heatmap_coulomb_friction_tcp_dev_max_mm"}
     ax = figs["severity_coulomb_friction_tcp_dev_max_mm"].axes[0]
-    assert ax.get_xlabel() == "scale [-]"
     df = two.features[two.features["fault"] == "coulomb_friction"]
+    # the documented size: the fault_size column when the table has one, else the swept parameter's column
+    size = "fault_size" if "fault_size" in df.columns else "coulomb_friction_scale"
+    assert ax.get_xlabel() == ("scale [-]" if size != "fault_size" else "coulomb_friction size [fraction]")
+    joints = set()
     for line in ax.get_lines():
         if line.get_label().startswith("J"):
             j = int(line.get_label()[1])
-            sub = df[df["fault_joint"] == j].sort_values("coulomb_friction_scale")
-            np.testing.assert_array_equal(line.get_xdata(), sub["coulomb_friction_scale"])
+            joints.add(j)
+            sub = df[df["fault_joint"] == j].sort_values(size)
+            np.testing.assert_array_equal(line.get_xdata(), sub[size])
             np.testing.assert_array_equal(line.get_ydata(), sub["tcp_dev_max_mm"])
+    assert joints == {2, 3}
     assert 0.3 in _hlines(ax)
 
 
@@ -211,6 +216,20 @@ def test_fault_size_column_is_preferred(tmp_path):
     ax = figs["severity_delay_tcp_dev_max_mm"].axes[0]
     assert messages == [] and ax.get_xlabel() == "delay size [ms]"
     np.testing.assert_array_equal(_lines(ax)[0].get_xdata(), [2.0, 5.0, 10.0])
+
+
+def test_signed_parameter_kept_when_sizes_would_fold(tmp_path):
+    """A friction scale of 0.5 and 1.5 both have fault_size 0.5: the severity axis keeps the scale."""
+    feats = pd.DataFrame({
+        "run_id": list("abh"), "fault": ["viscous_friction"] * 2 + ["healthy"], "status": ["ok"] * 3,
+        "fault_joint": [2, 2, 0], "fault_size": [0.5, 0.5, 0.0], "fault_size_unit": ["fraction"] * 2 + [""],
+        "viscous_friction_scale": [0.5, 1.5, np.nan], "tcp_dev_max_mm": [0.2, 0.3, 0.0],
+    })
+    manifest = {"name": "x", "threshold_mm": 0.5, "swept_keys": ["viscous_friction.joint", "viscous_friction.scale"]}
+    figs, _ = campaign_figures(CampaignResult(tmp_path, feats, manifest))
+    ax = figs["severity_viscous_friction_tcp_dev_max_mm"].axes[0]
+    assert ax.get_xlabel() == "scale [-]"
+    np.testing.assert_array_equal(ax.get_lines()[0].get_xdata(), [0.5, 1.5])
 
 
 def test_plot_and_show_commands(tmp_path, two, capsys):

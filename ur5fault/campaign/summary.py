@@ -3,7 +3,9 @@ joint x fault size for any effect, the paper's TCP-deviation table and the accep
 
 The fault size of a run is read from the ``fault_size`` / ``fault_size_unit`` columns when the table has
 them, otherwise from the column of the swept parameter (``<effect>_<param>``; ``backlash_deg_swept`` for
-backlash).  Healthy runs are the rows whose ``fault`` is ``healthy``.
+backlash).  The swept parameter is kept even with a ``fault_size`` column when its values lie on both sides
+of the effect's "absent" value (a friction scale of 0.5 and 1.5 both have size 0.5).  Healthy runs are the
+rows whose ``fault`` is ``healthy``.
 """
 
 from __future__ import annotations
@@ -85,18 +87,23 @@ def effect_sweep(features: pd.DataFrame, effect: str, params: Sequence[str] | No
     if ok.empty:
         why = f"{n_bad} run(s), none ok" if n_bad else "no run carries it alone (only combined with others?)"
         return f"effect {effect!r}: {why}"
+    if params is None:
+        params = [p.name for p in reg.params if _size_column(features, effect, p.name)]
+    col = _size_column(features, effect, params[0]) if len(params) == 1 else None
     if "fault_size" in features.columns:
+        absent = reg.param(params[0]).absent if col is not None else None
+        if absent is not None and (ok[col] < absent).any() and (ok[col] > absent).any():
+            # |value - absent| would fold both directions onto one axis: keep the signed parameter
+            return EffectSweep(effect, params[0], reg.param(params[0]).unit, reg.per_joint, ok.assign(size=ok[col]),
+                               n_bad)
         units = sorted(set(ok.get("fault_size_unit", pd.Series(["-"])).astype(str)))
         return EffectSweep(effect, "fault_size", "/".join(units), reg.per_joint, ok.assign(size=ok["fault_size"]),
                            n_bad)
-    if params is None:
-        params = [p.name for p in reg.params if _size_column(features, effect, p.name)]
     if not params:
         return f"effect {effect!r}: no swept size parameter (only its joint?) and no fault_size column"
     if len(params) > 1:
         return (f"effect {effect!r}: {len(params)} parameters swept together ({', '.join(params)}); a severity "
                 "axis needs one (or a fault_size column)")
-    col = _size_column(features, effect, params[0])
     if col is None:
         return f"effect {effect!r}: the feature table has no column for its parameter {params[0]!r}"
     return EffectSweep(effect, params[0], reg.param(params[0]).unit, reg.per_joint, ok.assign(size=ok[col]), n_bad)
