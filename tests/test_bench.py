@@ -4,11 +4,14 @@ import json
 import subprocess
 import sys
 
+import pytest
+
 from conftest import REPO
 
 BENCH = REPO / "bench" / "bench_speed.py"
 
 
+@pytest.mark.slow  # a benchmark harness, not a correctness check: `make test-fast` skips it
 def test_bench_quick_prints_figures():
     r = subprocess.run([sys.executable, str(BENCH), "--quick"], capture_output=True, text=True, timeout=900)
     assert r.returncode == 0, r.stderr

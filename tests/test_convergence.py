@@ -10,6 +10,9 @@ import pytest
 from ur5fault import RunSpec, Simulator, make_effect, pick_and_place
 from ur5fault.params import load_params
 
+# two full pick-and-place runs at two physics steps: long; `make test-fast` skips it
+pytestmark = pytest.mark.slow
+
 
 def features(dt):
     p = load_params(overrides={"physics_dt_s": dt})

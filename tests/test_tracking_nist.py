@@ -14,6 +14,9 @@ from ur5fault import RunSpec, Simulator
 from ur5fault.logs import read_nist
 from ur5fault.params import load_params
 
+# replays the whole real log: long; `make test-fast` skips it
+pytestmark = pytest.mark.slow
+
 
 @pytest.fixture(scope="module")
 def replay(nist_path):
