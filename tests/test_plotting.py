@@ -118,14 +118,17 @@ def test_run_figure_draws_into_given_axes_and_checks_input(run_pair):
 
 
 # ----------------------------------------------------------------------------- campaigns
-def test_resimulated_time_series_equal_saved_ones(tmp_path, two):
-    for name in ("features.parquet", "manifest.json"):  # the same campaign without its time series
-        shutil.copy(two.out / name, tmp_path / name)
+def test_resimulated_time_series_equal_saved_ones(tmp_path, two, caplog):
+    shutil.copy(two.out / "features.parquet", tmp_path)  # the same campaign without its time series,
+    manifest = json.loads((two.out / "manifest.json").read_text())  # as if run by another version
+    (tmp_path / "manifest.json").write_text(json.dumps({**manifest, "ur5fault_version": "0.0.1"}))
     bare = CampaignResult.load(tmp_path)
     worn = two.features[(two.features["fault"] == "backlash") & (two.features["fault_joint"] == 2)]["run_id"]
     ids = list(worn)  # their twin is simulated with them, not returned
-    resim = bare.time_series(ids)
+    with caplog.at_level("INFO", logger="ur5fault"):
+        resim = bare.time_series(ids)
     assert list(resim) == ids and not (tmp_path / "timeseries").exists()
+    assert "was run with ur5fault 0.0.1" in caplog.text and f"re-simulating {len(ids)} run(s)" in caplog.text
     for r in ids:
         pd.testing.assert_frame_equal(resim[r], pd.read_parquet(two.out / "timeseries" / f"{r}.parquet"))
 
@@ -205,13 +208,16 @@ def test_effects_without_a_figure_get_a_message(tmp_path):
     ]
 
 
-def test_fault_size_column_is_preferred(tmp_path):
+@pytest.mark.parametrize("swept_keys", [["delay.delay_ms"], []], ids=["swept", "sampled"])
+def test_fault_size_column_is_preferred(tmp_path, swept_keys):
+    """The size is read from fault_size (not the leftover delay_delay_ms column); a sampled campaign, whose
+    manifest lists no swept effect, gets its figures from the fault labels."""
     feats = pd.DataFrame({
         "run_id": list("abcd"), "fault": ["delay"] * 3 + ["healthy"], "status": ["ok"] * 4, "fault_joint": [0] * 4,
         "fault_size": [2.0, 5.0, 10.0, 0.0], "fault_size_unit": ["ms"] * 3 + [""], "delay_delay_ms": [9.0] * 4,
         "tcp_dev_max_mm": [0.1, 0.4, 0.9, 0.0],
     })
-    manifest = {"name": "x", "threshold_mm": 0.5, "swept_keys": ["delay.delay_ms"]}
+    manifest = {"name": "x", "threshold_mm": 0.5, "swept_keys": swept_keys}
     figs, messages = campaign_figures(CampaignResult(tmp_path, feats, manifest))
     ax = figs["severity_delay_tcp_dev_max_mm"].axes[0]
     assert messages == [] and ax.get_xlabel() == "delay size [ms]"

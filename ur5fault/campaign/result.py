@@ -16,6 +16,7 @@ from typing import Any
 import pandas as pd
 import yaml
 
+from ..effects import REGISTRY
 from ..errors import ConfigFileError, UnknownNameError
 from .summary import EffectSweep, acceptable_backlash, effect_sweep, severity_table, swept_effects, tcp_table
 
@@ -61,9 +62,14 @@ class CampaignResult:
         return tuple(self.manifest.get("swept_keys", ()))
 
     def sweeps(self) -> tuple[dict[str, EffectSweep], dict[str, str]]:
-        """Every swept effect: its runs and sizes, or (second dict) why they cannot be shown."""
+        """Every swept effect (a ``swept_keys`` entry, or a single-effect ``fault`` label, e.g. of a sampled
+        campaign): its runs and sizes, or (second dict) why they cannot be shown."""
+        effects: dict[str, list[str] | None] = dict(swept_effects(self.swept_keys))
+        for fault in sorted(set(self.features["fault"].astype(str))):
+            if fault in REGISTRY and fault not in effects:
+                effects[fault] = None  # its size from fault_size, or any registered parameter with a column
         shown, skipped = {}, {}
-        for effect, params in swept_effects(self.swept_keys).items():
+        for effect, params in effects.items():
             sweep = effect_sweep(self.features, effect, params)
             if isinstance(sweep, str):
                 skipped[effect] = sweep
@@ -108,11 +114,19 @@ class CampaignResult:
         return {r: self._series[r] for r in ids}
 
     def _resimulate(self, run_ids: list[str]) -> dict[str, pd.DataFrame]:
+        from .. import __version__
+        from ..engine import DEFAULT_MODEL_PATH
         from .execute import plan_batches, run_batch
         from .spec import build_campaign
+        from .store import file_sha256
 
         text = self.manifest["campaign_text"]
         camp = build_campaign(yaml.safe_load(text), "manifest", text)
+        then = (self.manifest.get("ur5fault_version"), self.manifest.get("model_sha256"))
+        now = (__version__, file_sha256(DEFAULT_MODEL_PATH))
+        if then != now:
+            _log.warning("%s was run with ur5fault %s and model %s; re-simulating with %s and model %s may not give "
+                         "the same runs", self.out, then[0], str(then[1])[:12], now[0], now[1][:12])
         by_id = {rc.run_id: rc for rc in camp.runs}
         _log.info("re-simulating %d run(s) whose time series were not saved: %s", len(run_ids), ", ".join(run_ids))
         got: dict[str, pd.DataFrame] = {}
