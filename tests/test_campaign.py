@@ -48,12 +48,12 @@ def write(tmp_path, text, name="c.yaml"):
 # ----------------------------------------------------------------------------- validation
 BAD = [
     ("nmae: x\n", "c.yaml: unknown key 'nmae'; valid: base, batch_size,"),
-    ("base: {seed: -1}\n", "c.yaml: base.seed: seed = -1 must be a non-negative integer"),
-    ("base: {temperature_C: 500}\n", "temperature.temperature_C = 500 is out of range [-10, 90] degC"),
+    ("base: {seed: -1}\n", "c.yaml: base.seed = -1 must be a non-negative integer in [0, 9223372036854775807]"),
+    ("base: {temperature_C: 500}\n", "c.yaml: base.temperature_C = 500 is out of range [-10, 90] degC"),
     ("sweep: {backlash.joint: [7], backlash.backlash_deg: [0.1]}\n", "unknown joint 7; valid: 1..6"),
     ("sweep: {backlash.joint: [2], backlash.backlash_deg: [-0.1]}\n",
      "sweep.backlash.backlash_deg: backlash.backlash_deg = -0.1 is out of range [0, 5] deg"),
-    ("sweep: {backlash.joint: [2], backlash.backlash_deg: ['big']}\n", "out of range [0, 5] deg"),
+    ("sweep: {backlash.joint: [2], backlash.backlash_deg: ['big']}\n", "'big' must be a number in [0, 5] deg"),
     ("sweep: {rust.level: [1]}\n", "unknown sweep key 'rust.level'; valid:"),
     ("sweep: {backlash.backlash_deg: [0.1]}\n", "needs 'backlash.joint'"),
     ("sweep: {seed: 3}\n", "sweep.seed: expected a non-empty list"),
