@@ -28,12 +28,11 @@ def _series(out: Path, features: pd.DataFrame, run_ids: list[str]) -> dict[str, 
 
 
 def _resimulate(out: Path, features: pd.DataFrame, run_ids: list[str]) -> dict[str, pd.DataFrame]:
-    import yaml
-
+    from . import yamlsafe
     from .campaign import build_campaign, run_batch
 
     manifest = json.loads((out / "manifest.json").read_text())
-    camp = build_campaign(yaml.safe_load(manifest["campaign_text"]), "manifest", manifest["campaign_text"])
+    camp = build_campaign(yamlsafe.loads(manifest["campaign_text"], "manifest"), "manifest", manifest["campaign_text"])
     by_id = {rc.run_id: rc for rc in camp.runs}
     batch = [by_id[r] for r in run_ids if r in by_id]
     import tempfile

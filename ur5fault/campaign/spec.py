@@ -240,7 +240,8 @@ def build_campaign(data: Mapping[str, Any], where: str, text: str = "", path: Pa
         cond = {**cond0, **{k: v for k, v in values.items() if k in CONDITION_KEYS}}
         faults = tuple(sorted((k, v) for k, v in values.items() if k not in CONDITION_KEYS))
         rc = CampaignRun(tuple(sorted(cond.items(), key=lambda kv: kv[0])), faults)
-        rc.fault_effects()  # validate the combination (e.g. joint present)
+        if not rc.fault_effects():  # (also validates the combination) a fault at its "absent" value: the
+            rc = rc.twin()          # healthy run itself, stored without faults whichever sweep point made it
         for r in (rc, rc.twin()):
             runs.setdefault(r.run_id, r)
     thr = check_number(data.get("threshold_mm", 0.5), f"{where}: threshold_mm", 0.0, MAX_THRESHOLD_MM, "mm",
