@@ -12,7 +12,6 @@ process dies (even by SIGKILL) exits within a second.
 
 from __future__ import annotations
 
-import hashlib
 import json
 import os
 import sys
@@ -29,9 +28,10 @@ from ..errors import ParameterError
 from ..io import check_writable, write_json_atomic, write_parquet_atomic
 from ..params import load_params
 from ..progress import campaign_progress
-from .identity import Identities, file_sha256
+from .identity import Identities
 from .identity import run_effects as _effects_of
 from .limits import check_limits, effective_jobs, estimate
+from .manifest import build_manifest
 from .spec import CONDITION_KEYS, Campaign, CampaignRun
 from .store import CampaignChangedError, Lock, consolidate, run_path, write_run_file
 from .verify import scan
@@ -179,6 +179,16 @@ def run_campaign(camp: Campaign, out: Path | None = None, *, jobs: int | None = 
     check_limits(camp, estimate(camp, jobs))
     check_writable(out, folder=True)
     save_ts = camp.save_timeseries if save_timeseries is None else save_timeseries
+    client = _dask_client(str(scheduler)) if backend == "dask" else None  # before anything is written
+    try:
+        return _run_locked(camp, out, jobs, backend, client, progress, save_ts, replace_changed, say)
+    finally:
+        if client is not None:
+            client.close()
+
+
+def _run_locked(camp: Campaign, out: Path, jobs: int, backend: str, client, progress, save_ts: bool,
+                replace_changed: bool, say: Callable[[str], None]) -> dict[str, Any]:
     with Lock(out):
         _remove_stale_temporaries(out)
         ids = Identities(camp)
@@ -197,19 +207,18 @@ def run_campaign(camp: Campaign, out: Path | None = None, *, jobs: int | None = 
         redo = set(found.missing) | {rid for rid, _ in found.bad} | {rid for rid, _ in found.changed}
         todo = [rc for rc in camp.runs if rc.run_id in redo]
         t0 = time.perf_counter()
-        write_json_atomic(out / "manifest.json", _manifest(camp, ids, None, "running", backend, jobs, save_ts, t0))
+        write_json_atomic(out / "manifest.json", build_manifest(camp, ids, None, "running", backend, jobs, save_ts, t0))
         ts_dir = out / "timeseries" if save_ts else None
         batches = plan_batches(camp, todo, jobs)
         total, done = len(camp.runs), len(camp.runs) - len(todo)
         report = campaign_progress(progress, total)
         report(done, 0.0)
         try:
-            _execute(camp, batches, out, ts_dir, jobs, backend, scheduler, ids, {rc.run_id for rc in todo}, done,
-                     report, t0)
+            _execute(camp, batches, out, ts_dir, jobs, client, ids, {rc.run_id for rc in todo}, done, report, t0)
         finally:
             report.close()
         features = consolidate(out, {rc.run_id: ids.record(rc) for rc in camp.runs})
-        manifest = _manifest(camp, ids, features, "complete", backend, jobs, save_ts, t0)
+        manifest = build_manifest(camp, ids, features, "complete", backend, jobs, save_ts, t0)
         manifest["runs_resimulated"] = {"missing": len(found.missing), "bad": len(found.bad),
                                         "changed": len(found.changed)}
         write_json_atomic(out / "manifest.json", manifest)
@@ -222,54 +231,6 @@ def _remove_stale_temporaries(out: Path) -> None:
         if folder.is_dir():
             for p in folder.glob(".*.tmp"):
                 p.unlink(missing_ok=True)
-
-
-def _manifest(camp: Campaign, ids: Identities, features, state: str, backend: str, jobs: int, save_ts: bool,
-              t0: float) -> dict[str, Any]:
-    import mujoco
-
-    from .. import __version__
-    from ..engine import DEFAULT_MODEL_PATH
-    from ..features import FEATURE_UNITS
-    from ..provenance import dependency_versions, git_revision
-    from .identity import digest
-
-    p = load_params(overrides=dict(camp.base_params))
-    durations = [ids.duration_s(rc) for rc in camp.runs]
-    identities = {rc.run_id: ids.identity(rc) for rc in sorted(camp.runs, key=lambda r: r.run_id)}
-    m: dict[str, Any] = {
-        "name": camp.name,
-        "state": state,
-        "campaign_file": str(camp.path) if camp.path else None,
-        "campaign_sha256": camp.sha256,
-        "campaign_text": camp.text,
-        "campaign_data": camp.data,
-        "campaign_identity": digest(identities),
-        "model_file": str(DEFAULT_MODEL_PATH),
-        "model_sha256": file_sha256(DEFAULT_MODEL_PATH),
-        "params_sha256": hashlib.sha256(json.dumps(p.to_dict(), sort_keys=True).encode()).hexdigest(),
-        "ur5fault_version": __version__,
-        "git_revision": git_revision(),
-        "mujoco_version": mujoco.__version__,
-        "numpy_version": np.__version__,
-        "python": sys.version.split()[0],
-        "dependencies": dependency_versions(),
-        "n_runs": len(camp.runs) if features is None else int(len(features)),
-        "physics_dt_s": p.physics_dt_s,
-        "duration_s": max(durations),
-        "n_steps_total": int(sum(round(d / p.physics_dt_s) for d in durations)),
-        "log_period_s": camp.log_period_s,
-        "threshold_mm": camp.threshold_mm,
-        "swept_keys": list(camp.swept_keys),
-        "save_timeseries": save_ts,
-        "wall_s_this_invocation": time.perf_counter() - t0,
-        "backend": backend,
-        "jobs": jobs,
-        "feature_units": dict(FEATURE_UNITS),
-    }
-    if features is not None:
-        m["status_counts"] = {str(k): int(v) for k, v in features["status"].value_counts().items()}
-    return m
 
 
 def _stop_loky_workers() -> None:
@@ -297,16 +258,15 @@ def _dask_client(scheduler: str, timeout_s: float = DASK_CONNECT_TIMEOUT_S):
         return Client(scheduler, timeout=timeout_s)
     except (OSError, TimeoutError, ValueError, TypeError) as exc:
         why = " ".join(str(exc).split())[:160] or type(exc).__name__
-        raise ParameterError(f"--scheduler {scheduler}: no Dask scheduler answered within {timeout_s:g} s ({why}); "
-                             "check the address or start one with `dask scheduler`") from None
+        raise ParameterError(f"--scheduler {scheduler}: cannot connect to a Dask scheduler (timeout {timeout_s:g} s: "
+                             f"{why}); check the address or start one with `dask scheduler`") from None
     finally:
         for lg, level in zip(loggers, levels):
             lg.setLevel(level)
 
 
 def _execute(camp: Campaign, batches: list[list[CampaignRun]], out: Path, ts_dir: Path | None, jobs: int,
-             backend: str, scheduler: str | None, ids: Identities, todo: set[str], done: int, report,
-             t0: float) -> None:
+             client, ids: Identities, todo: set[str], done: int, report, t0: float) -> None:
     """Run the batches in parallel; write each run's row to the store as soon as its batch returns."""
     import joblib
 
@@ -316,14 +276,13 @@ def _execute(camp: Campaign, batches: list[list[CampaignRun]], out: Path, ts_dir
         ts_dir.mkdir(exist_ok=True)
     by_id = {rc.run_id: rc for b in batches for rc in b}
     idents = {rid: ids.identity(rc) for rid, rc in by_id.items()}
-    if backend == "dask":
-        client = _dask_client(str(scheduler))
+    if client is not None:
         ctx = joblib.parallel_backend("dask", wait_for_workers_timeout=60)
     else:
-        client, ctx = None, joblib.parallel_backend("loky")
+        ctx = joblib.parallel_backend("loky")
     try:
         with ctx:
-            par = joblib.Parallel(n_jobs=jobs if backend == "loky" else -1, return_as="generator_unordered")
+            par = joblib.Parallel(n_jobs=jobs if client is None else -1, return_as="generator_unordered")
             gen = par(joblib.delayed(run_batch)(camp, b, str(ts_dir) if ts_dir else None,
                                                 {rc.run_id: idents[rc.run_id] for rc in b}, os.getpid())
                       for b in batches)
@@ -335,9 +294,6 @@ def _execute(camp: Campaign, batches: list[list[CampaignRun]], out: Path, ts_dir
                         done += 1
                 report(done, time.perf_counter() - t0)
     except BaseException:
-        if backend == "loky":
+        if client is None:
             _stop_loky_workers()
         raise
-    finally:
-        if client is not None:
-            client.close()
