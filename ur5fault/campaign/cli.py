@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import sys
 from pathlib import Path
 
 
@@ -50,7 +49,6 @@ def cmd_run(args: argparse.Namespace) -> int:
     why = confirmation_needed(camp, estimate(camp, jobs))
     if why and not args.yes:
         raise ParameterError(why)
-    print(f"campaign {camp.name}: {len(camp.runs)} runs (twins included) -> {camp.out}", file=sys.stderr)
     manifest = run_campaign(camp, camp.out, jobs=args.jobs, backend=args.backend, scheduler=args.scheduler,
                             progress=not args.quiet, save_timeseries=args.save_timeseries or None,
                             replace_changed=args.replace_changed)

@@ -174,22 +174,20 @@ def run_campaign(camp: Campaign, out: Path | None = None, *, jobs: int | None = 
     if backend == "dask" and not scheduler:
         raise ParameterError("--backend dask needs --scheduler ADDRESS (e.g. tcp://127.0.0.1:8786)")
     jobs, capped = effective_jobs(jobs) if backend == "loky" else (jobs or 1, None)
-    if capped:
-        say(capped)
     check_limits(camp, estimate(camp, jobs))
     check_writable(out, folder=True)
     save_ts = camp.save_timeseries if save_timeseries is None else save_timeseries
     client = _dask_client(str(scheduler)) if backend == "dask" else None  # before anything is written
     try:
-        return _run_locked(camp, out, jobs, backend, client, progress, save_ts, replace_changed, say)
+        return _run_locked(camp, out, jobs, backend, client, progress, save_ts, replace_changed, say, capped)
     finally:
         if client is not None:
             client.close()
 
 
 def _run_locked(camp: Campaign, out: Path, jobs: int, backend: str, client, progress, save_ts: bool,
-                replace_changed: bool, say: Callable[[str], None]) -> dict[str, Any]:
-    with Lock(out):
+                replace_changed: bool, say: Callable[[str], None], capped: str | None) -> dict[str, Any]:
+    with Lock(out):  # notes only from here: an error before is the one line a user sees
         _remove_stale_temporaries(out)
         ids = Identities(camp)
         found = scan(out, camp, ids, save_ts)
@@ -206,6 +204,9 @@ def _run_locked(camp: Campaign, out: Path, jobs: int, backend: str, client, prog
             say(f"re-simulating {len(found.changed)} run(s) made under other settings (--replace-changed)")
         redo = set(found.missing) | {rid for rid, _ in found.bad} | {rid for rid, _ in found.changed}
         todo = [rc for rc in camp.runs if rc.run_id in redo]
+        if capped:
+            say(capped)
+        say(f"campaign {camp.name}: {len(camp.runs)} runs (twins included), {len(todo)} to simulate -> {out}")
         t0 = time.perf_counter()
         write_json_atomic(out / "manifest.json", build_manifest(camp, ids, None, "running", backend, jobs, save_ts, t0))
         ts_dir = out / "timeseries" if save_ts else None
