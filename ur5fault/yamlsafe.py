@@ -32,6 +32,10 @@ from .errors import ConfigFileError
 MAX_BYTES = 1 << 20
 #: largest number of nodes after alias expansion; the default campaign has about 60
 MAX_NODES = 100_000
+#: deepest nesting of flow collections ``[...]``/``{...}`` (PyYAML's scanner takes time quadratic
+#: in it: 3000 levels cost 1.4 s) and of indented blocks (PyYAML composes them recursively);
+#: ur5fault's files nest 3 deep
+MAX_DEPTH = 64
 
 _FLOAT = re.compile(r"""^(?:[-+]?(?:[0-9][0-9_]*\.[0-9_]*|\.[0-9][0-9_]*)(?:[eE][-+]?[0-9]+)?
                      |[-+]?[0-9][0-9_]*[eE][-+]?[0-9]+
@@ -112,10 +116,55 @@ def _check_expansion(root: Node | None) -> None:
     count(root)
 
 
+def _flow_depth(text: str) -> int:
+    """Deepest nesting of ``[``/``{`` outside quotes and comments (an upper bound for YAML's)."""
+    depth = deepest = 0
+    quote = ""
+    comment = False
+    prev = "\n"
+    for ch in text:
+        if comment:
+            comment = ch != "\n"
+        elif quote:
+            if ch == quote:
+                quote = ""
+        elif ch in "'\"":
+            quote = ch
+        elif ch == "#" and prev in " \t\n":
+            comment = True
+        elif ch in "[{":
+            depth += 1
+            deepest = max(deepest, depth)
+        elif ch in "]}":
+            depth -= 1
+        prev = ch
+    return deepest
+
+
+def _block_depth(text: str) -> int:
+    """Deepest nesting of indentation levels (lines that are blank or comments ignored)."""
+    stack: list[int] = []
+    deepest = 0
+    for line in text.splitlines():
+        body = line.lstrip(" ")
+        if not body or body.startswith("#"):
+            continue
+        indent = len(line) - len(body)
+        while stack and stack[-1] >= indent:
+            stack.pop()
+        stack.append(indent)
+        deepest = max(deepest, len(stack))
+    return deepest
+
+
 def loads(text: str, where: str = "YAML", *, allow_empty: bool = False) -> Any:
     """Parse one YAML document strictly (see the module docstring); ``where`` prefixes errors."""
     if len(text) > MAX_BYTES:
         raise ConfigFileError(f"{where}: {len(text)} characters, above the limit of {MAX_BYTES} for a YAML file")
+    if _flow_depth(text) > MAX_DEPTH:
+        raise ConfigFileError(f"{where}: YAML nested too deeply (more than {MAX_DEPTH} levels of [ or {{)")
+    if _block_depth(text) > MAX_DEPTH:
+        raise ConfigFileError(f"{where}: YAML nested too deeply (more than {MAX_DEPTH} levels of indentation)")
     try:
         data = yaml.load(text, Loader=StrictLoader)  # noqa: S506 - StrictLoader derives from SafeLoader
     except ConfigFileError as exc:

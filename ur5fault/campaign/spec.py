@@ -255,8 +255,8 @@ def build_campaign(data: Mapping[str, Any], where: str, text: str = "", path: Pa
     save_ts = check_bool(data.get("save_timeseries", False), f"{where}: save_timeseries")
     name = check_text(data["name"], f"{where}: name") if data.get("name") is not None else (
         path.stem if path else "campaign")
-    if out is None and data.get("out") is not None:
-        out = check_text(data["out"], f"{where}: out", max_len=4096)
+    file_out = check_text(data["out"], f"{where}: out", max_len=4096) if data.get("out") is not None else None
+    out = out if out is not None else file_out
     out_dir = Path(out) if out is not None else Path("results") / name
     resolved = {**dict(data), "base": {**dict(base), "params": params}}
     return Campaign(name, path, text or yaml.safe_dump(dict(data)), out_dir, base_effects, params,
