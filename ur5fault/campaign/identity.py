@@ -128,12 +128,14 @@ def first_difference(recorded: Any, expected: Any, path: str = "") -> str | None
             if d:
                 return d
         return None
-    if isinstance(recorded, list) and isinstance(expected, list) and len(recorded) == len(expected):
+    if isinstance(recorded, list) and isinstance(expected, list):
         base = 1 if path.startswith("params.") else 0  # per-joint parameters count joints from 1
         for i, (a, b) in enumerate(zip(recorded, expected)):
             d = first_difference(a, b, f"{path.rstrip('.')}[{i + base}].")
             if d:
                 return d
+        if len(recorded) != len(expected):
+            return f"{path.rstrip('.')}: {len(recorded)} entries in the file, {len(expected)} now"
         return None
     if json.dumps(recorded, sort_keys=True) != json.dumps(expected, sort_keys=True):
         return f"{path.rstrip('.')}: {short(recorded)} in the file, {short(expected)} now"
