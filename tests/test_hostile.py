@@ -397,3 +397,15 @@ def test_files_are_group_readable(tmp_path):
     finally:
         os.umask(old)
     assert p.stat().st_mode & 0o777 == 0o644 and j.stat().st_mode & 0o777 == 0o644
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--payload-kg", "nan"], "payload_kg = nan must be a finite number in [0, 5] kg"),
+    (["--payload-kg", "-1"], "payload_kg = -1.0 is out of range [0, 5] kg"),
+    (["--tcp-offset-m", "0", "0", "inf"], "tcp_offset_m[3] = inf must be a finite number in [-2, 2] m"),
+], ids=["payload-nan", "payload-negative", "tcp-offset-inf"])
+def test_discrepancy_log_arguments(args, message, tmp_path, capsys):
+    log = _write(tmp_path, "log.csv", rtde_frame())
+    rc, err, peak = _run(["discrepancy", str(log), "--format", "rtde", *args, "--out", str(tmp_path / "out")],
+                         tmp_path, capsys)
+    _assert_one_line(rc, err, peak, message)

@@ -71,7 +71,8 @@ def estimate(camp: Campaign, jobs: int) -> Estimate:
     steps = sum(round(durations[repr(rc.cond["trajectory"])] / dt) for rc in camp.runs)
     max_logged = int(max(durations.values()) / camp.log_period_s)
     n = len(camp.runs)
-    runs_at_once = min(camp.batch_size, n)
+    per_worker = -(-n // max(1, jobs))
+    runs_at_once = min(n, 2 * max(1, min(camp.batch_size - 1, per_worker)))  # plan_batches: a chunk + its twins
     processes = max(1, min(jobs, n))
     memory = sim_bytes(runs_at_once, max_logged, processes) + sim_bytes(0, 0)  # + the parent process
     return Estimate(n, float(steps), core_hours(steps), processes, runs_at_once, max_logged, memory)

@@ -21,6 +21,8 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from ..checks import check_number
+from ..effects import REGISTRY
 from ..errors import LogFormatError, UnknownNameError
 from . import plausible
 from .measured import MeasuredLog
@@ -106,6 +108,11 @@ def read_rtde(path: str | Path, payload_kg: float = 0.0,
     """
     path = Path(path)
     src = path.name
+    mass = REGISTRY["payload"].param("mass_kg")
+    payload_kg = check_number(payload_kg, "payload_kg", mass.lo, mass.hi, mass.unit)
+    if len(tcp_offset_m) != 3:
+        raise LogFormatError(f"tcp_offset_m = {tcp_offset_m!r} must be 3 numbers [m]")
+    tcp_offset_m = tuple(check_number(v, f"tcp_offset_m[{k + 1}]", -2.0, 2.0, "m") for k, v in enumerate(tcp_offset_m))
     layout = sniff(path, src)
     cols = layout.columns
     qt = [f"target_q_{j}" for j in range(6)]
