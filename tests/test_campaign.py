@@ -460,7 +460,8 @@ def test_timeseries_asked_for_later_are_made(tmp_path, tiny_done):
 
 
 def test_workers_exit_when_the_campaign_process_is_killed(tmp_path):
-    """SIGKILL of the campaign process alone (not its group): its loky workers notice within seconds."""
+    """SIGKILL of the campaign process alone (not its group): its loky workers exit (within a second
+    of their batch running; the issue saw them linger for minutes)."""
     f = write(tmp_path, SMALL.format(dur=3.0))
     proc = subprocess.Popen([sys.executable, "-m", "ur5fault.cli", "campaign", "run", str(f), "--out",
                              str(tmp_path / "out"), "--jobs", "2", "--quiet"], stdout=subprocess.DEVNULL,
@@ -475,7 +476,7 @@ def test_workers_exit_when_the_campaign_process_is_killed(tmp_path):
         time.sleep(3.0)  # both are simulating a batch
         os.kill(proc.pid, signal.SIGKILL)
         proc.wait()
-        deadline = time.time() + 5.0
+        deadline = time.time() + 30.0  # a worker still importing under load notices when its batch starts
         while time.time() < deadline and any(_cmdline(p) for p in workers):
             time.sleep(0.2)
         assert not any(_cmdline(p) for p in workers), "orphaned workers still running"

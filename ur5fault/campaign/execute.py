@@ -71,7 +71,7 @@ def run_batch(camp: Campaign, batch: Sequence[CampaignRun], ts_dir: str | None,
     Args:
         ts_dir: folder for the runs' time series (None: not written).
         identities: run_id -> run identity, recorded in the time-series files.
-        parent_pid: the campaign process; a worker process whose parent it is exits when it dies.
+        parent_pid: the campaign process, for loky workers: a worker exits when it dies.
     """
     from ..engine import RunSpec, Simulator
     from ..features import FEATURE_UNITS, run_features
@@ -129,9 +129,13 @@ def _column(key: str) -> str:
 
 
 def _exit_with_parent(parent_pid: int | None) -> None:
-    """In a worker process started by ``parent_pid``: exit as soon as that process is gone."""
-    if parent_pid is None or os.getpid() == parent_pid or os.getppid() != parent_pid:
-        return  # in-process (jobs=1), or a Dask worker (its parent is a nanny, not us)
+    """In a loky worker process started by ``parent_pid``: exit as soon as that process is gone
+    (``parent_pid`` is None on Dask, whose workers belong to their nanny, and equal to our own
+    pid when the batch runs in the campaign process itself)."""
+    if parent_pid is None or os.getpid() == parent_pid:
+        return
+    if os.getppid() != parent_pid:  # the campaign process died before this batch started
+        os._exit(1)
     if any(t.name == "ur5fault-parent-watch" for t in threading.enumerate()):
         return
 
@@ -285,7 +289,8 @@ def _execute(camp: Campaign, batches: list[list[CampaignRun]], out: Path, ts_dir
         with ctx:
             par = joblib.Parallel(n_jobs=jobs if client is None else -1, return_as="generator_unordered")
             gen = par(joblib.delayed(run_batch)(camp, b, str(ts_dir) if ts_dir else None,
-                                                {rc.run_id: idents[rc.run_id] for rc in b}, os.getpid())
+                                                {rc.run_id: idents[rc.run_id] for rc in b},
+                                                os.getpid() if client is None else None)
                       for b in batches)
             for rows in gen:
                 for row in rows:
