@@ -196,7 +196,7 @@ class Lock:
                 return self
             except FileExistsError:
                 owner = lock_owner(self.path)
-                if owner and owner[0] == socket.gethostname() and not _alive(owner[1]):
+                if owner and owner[0] == socket.gethostname() and not pid_alive(owner[1]):
                     self.path.unlink(missing_ok=True)  # stale: its process is gone
                     continue
                 raise CampaignLockedError(
@@ -220,7 +220,7 @@ def lock_owner(path: Path) -> tuple[str, int] | None:
         return None
 
 
-def _alive(pid: int) -> bool:
+def pid_alive(pid: int) -> bool:
     try:
         os.kill(pid, 0)
     except ProcessLookupError:

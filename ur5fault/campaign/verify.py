@@ -13,10 +13,10 @@ from .identity import Identities, digest
 from .spec import Campaign, build_campaign
 from .store import (
     FileCheck,
-    _alive,
     check_run_file,
     check_timeseries_file,
     lock_owner,
+    pid_alive,
     read_manifest,
     run_path,
     runs_dir,
@@ -91,7 +91,7 @@ def status(out: Path) -> dict[str, Any]:
     owner = lock_owner(out / ".lock")
     info: dict[str, Any] = {
         "folder": str(out), "campaign": manifest.get("name"), "state": manifest.get("state"),
-        "lock": None if owner is None else {"host": owner[0], "pid": owner[1], "alive": _alive(owner[1])},
+        "lock": None if owner is None else {"host": owner[0], "pid": owner[1], "alive": pid_alive(owner[1])},
         "n_runs_expected": None,
     }
     camp = None
