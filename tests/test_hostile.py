@@ -409,3 +409,19 @@ def test_discrepancy_log_arguments(args, message, tmp_path, capsys):
     rc, err, peak = _run(["discrepancy", str(log), "--format", "rtde", *args, "--out", str(tmp_path / "out")],
                          tmp_path, capsys)
     _assert_one_line(rc, err, peak, message)
+
+
+def test_dask_scheduler_that_does_not_answer(support_files, capsys, monkeypatch):
+    """A closed port: one line after the connect timeout (shortened here from 10 s), nothing written."""
+    pytest.importorskip("dask.distributed")
+    import time
+
+    from ur5fault.campaign import execute
+
+    monkeypatch.setattr(execute, "DASK_CONNECT_TIMEOUT_S", 1.0)
+    f = _write(support_files, "c.yaml", GOOD)
+    t0 = time.perf_counter()
+    rc, err, peak = _run(["campaign", "run", str(f), "--out", str(support_files / "o"), "--backend", "dask",
+                          "--scheduler", "tcp://127.0.0.1:9"], support_files, capsys)
+    _assert_one_line(rc, err, peak, "--scheduler tcp://127.0.0.1:9: cannot connect to a Dask scheduler (timeout 1 s")
+    assert time.perf_counter() - t0 < 8.0

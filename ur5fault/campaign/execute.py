@@ -249,11 +249,14 @@ def _stop_loky_workers() -> None:
         executor.shutdown(wait=False, kill_workers=True)
 
 
-def _dask_client(scheduler: str, timeout_s: float = DASK_CONNECT_TIMEOUT_S):
-    """Connect to a Dask scheduler, or fail within ``timeout_s`` with one line (and no logged tracebacks)."""
+def _dask_client(scheduler: str, timeout_s: float | None = None):
+    """Connect to a Dask scheduler, or fail within ``timeout_s`` (default :data:`DASK_CONNECT_TIMEOUT_S`)
+    with one line (and no logged tracebacks)."""
     import logging
 
     from dask.distributed import Client
+
+    timeout_s = DASK_CONNECT_TIMEOUT_S if timeout_s is None else timeout_s
 
     loggers = [logging.getLogger(name) for name in ("distributed", "distributed.client", "distributed.comm.core")]
     levels = [lg.level for lg in loggers]
