@@ -11,6 +11,7 @@ from __future__ import annotations
 import argparse
 import json
 import logging
+import signal
 import sys
 from collections.abc import Sequence
 from pathlib import Path
@@ -24,6 +25,7 @@ EXIT_USAGE = 2
 def cmd_simulate(args: argparse.Namespace) -> int:
     from .config import Overlay, build_run_config
     from .engine import RunSpec, Simulator
+    from .io import check_writable
     from .params import read_yaml
 
     data = read_yaml(Path(args.config)) if args.config else {}
@@ -46,12 +48,12 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     data["effects"] = effects
     overlay = Overlay.load(args.model) if args.model else None
     cfg = build_run_config(data, where, overlay)
+    out = check_writable(Path(args.out))  # before simulating, not after
     sim = Simulator(cfg.params)
     with progress.bar(1.0, "simulate", "run", enabled=not args.quiet,
                       bar_format="{desc}: {percentage:3.0f}%|{bar}| {elapsed}<{remaining}") as pbar:
         res = sim.run(cfg.trajectory, [RunSpec("run", cfg.seed, cfg.effects)], log_period_s=cfg.log_period_s,
                       duration_s=cfg.duration_s, progress=progress.fraction_callback(pbar))
-    out = Path(args.out)
     res.to_parquet(out)
     summ = res.summary(0)
     print(f"wrote {out} ({res.t_s.size} samples x {len(res.to_pandas(0).columns)} columns)")
@@ -194,18 +196,36 @@ def _add_optional_commands(sub) -> None:
     discrepancy_cli.register(sub)
 
 
+class Terminated(KeyboardInterrupt):
+    """SIGTERM arrived: unwind like Ctrl-C (locks released, workers stopped, temporary files removed)."""
+
+
+def _on_sigterm(signum, frame) -> None:
+    raise Terminated()
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     configure_logging(getattr(args, "verbose", 0))
     try:
+        previous = signal.signal(signal.SIGTERM, _on_sigterm)
+    except ValueError:  # not the main thread: leave signals alone
+        previous = None
+    try:
         return int(args.func(args) or 0)
     except Ur5FaultError as exc:
-        sys.stderr.write(f"ur5fault: error: {exc}\n")
+        sys.stderr.write(f"ur5fault: error: {' '.join(str(exc).split())}\n")
         return EXIT_USAGE
+    except Terminated:
+        sys.stderr.write("ur5fault: terminated\n")
+        return 128 + signal.SIGTERM
     except KeyboardInterrupt:
         sys.stderr.write("ur5fault: interrupted\n")
         return 130
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGTERM, previous)
 
 
 if __name__ == "__main__":

@@ -13,9 +13,8 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
-import yaml
-
-from .errors import ConfigFileError, ParameterError
+from . import yamlsafe
+from .errors import ParameterError
 from .validated import Validated, param
 
 DEFAULT_PARAMS_PATH = Path(str(resources.files("ur5fault") / "data" / "ur5_drive.yaml"))
@@ -161,22 +160,9 @@ def load_params(path: str | Path | None = None, overrides: dict[str, Any] | None
 
 
 def read_yaml(path: Path) -> dict[str, Any]:
-    """Parse a YAML mapping, turning I/O and syntax errors into :class:`ConfigFileError`."""
-    try:
-        text = Path(path).read_text()
-    except OSError as exc:
-        raise ConfigFileError(f"{path}: cannot read ({exc.strerror})") from None
-    try:
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        loc = f" line {mark.line + 1}" if mark is not None else ""
-        raise ConfigFileError(f"{path}:{loc} is not valid YAML ({getattr(exc, 'problem', exc)})") from None
-    if data is None:
-        return {}
-    if not isinstance(data, dict):
-        raise ConfigFileError(f"{path}: expected a mapping at the top level, got {type(data).__name__}")
-    return data
+    """Parse a YAML mapping strictly (:func:`ur5fault.yamlsafe.read_yaml`: duplicate keys, alias bombs,
+    oversized and empty files refused; YAML 1.2 numbers), errors as :class:`ConfigFileError`."""
+    return yamlsafe.read_yaml(path)
 
 
 def deep_merge(base: dict[str, Any], over: dict[str, Any]) -> dict[str, Any]:

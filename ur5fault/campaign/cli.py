@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import sys
 from pathlib import Path
 
 
@@ -21,8 +20,12 @@ def register(sub) -> None:
     r.add_argument("--save-timeseries", action="store_true", help="also write each run's time series")
     r.add_argument("--threshold-mm", type=float, help="TCP acceptability threshold of the summary [mm]")
     r.add_argument("--quiet", action="store_true")
+    r.add_argument("--yes", action="store_true",
+                   help="start a large campaign (over 1000 runs or 2e9 physics steps) without asking")
+    r.add_argument("--replace-changed", action="store_true", dest="replace_changed",
+                   help="re-simulate stored runs of OUT made under other settings (default: stop and name them)")
     r.set_defaults(func=cmd_run)
-    s = csub.add_parser("status", help="what a campaign folder holds")
+    s = csub.add_parser("status", help="what a campaign folder holds, every run file verified (exit 1 on problems)")
     s.add_argument("dir")
     s.set_defaults(func=cmd_status)
     p = sub.add_parser("plot", help="draw the paper's backlash figures and a severity figure per swept effect (PNG)")
@@ -35,15 +38,22 @@ def register(sub) -> None:
 
 
 def cmd_run(args: argparse.Namespace) -> int:
+    from ..checks import check_number
     from ..errors import ParameterError
     from . import acceptable_backlash, load_campaign, run_campaign, tcp_table
+    from .limits import confirmation_needed, effective_jobs, estimate
+    from .spec import MAX_THRESHOLD_MM
 
     camp = load_campaign(args.file, args.out, args.model)
-    if args.jobs is not None and args.jobs < 1:
-        raise ParameterError(f"--jobs {args.jobs}: must be at least 1")
-    print(f"campaign {camp.name}: {len(camp.runs)} runs (twins included) -> {camp.out}", file=sys.stderr)
+    if args.threshold_mm is not None:
+        check_number(args.threshold_mm, "--threshold-mm", 0.0, MAX_THRESHOLD_MM, "mm", lo_open=True)
+    jobs, _ = effective_jobs(args.jobs) if args.backend == "loky" else (args.jobs or 1, None)
+    why = confirmation_needed(camp, estimate(camp, jobs))
+    if why and not args.yes:
+        raise ParameterError(why)
     manifest = run_campaign(camp, camp.out, jobs=args.jobs, backend=args.backend, scheduler=args.scheduler,
-                            progress=not args.quiet, save_timeseries=args.save_timeseries or None)
+                            progress=not args.quiet, save_timeseries=args.save_timeseries or None,
+                            replace_changed=args.replace_changed)
     import pandas as pd
 
     features = pd.read_parquet(Path(camp.out) / "features.parquet")
@@ -65,8 +75,11 @@ def cmd_run(args: argparse.Namespace) -> int:
 def cmd_status(args: argparse.Namespace) -> int:
     from . import status
 
-    print(json.dumps(status(Path(args.dir)), indent=2, default=str))
-    return 0
+    info = status(Path(args.dir))
+    print(json.dumps(info, indent=2, default=str))
+    runs = info.get("runs", {})
+    stale = info.get("state") == "complete" and (info.get("features") or {}).get("state") != "ok"
+    return 1 if runs.get("bad") or runs.get("changed") or stale else 0
 
 
 def cmd_plot(args: argparse.Namespace) -> int:

@@ -14,8 +14,8 @@ from pathlib import Path
 from typing import Any
 
 import pandas as pd
-import yaml
 
+from .. import yamlsafe
 from ..effects import REGISTRY
 from ..errors import ConfigFileError, UnknownNameError
 from .summary import EffectSweep, acceptable_backlash, effect_sweep, severity_table, swept_effects, tcp_table
@@ -118,10 +118,11 @@ class CampaignResult:
         from ..engine import DEFAULT_MODEL_PATH
         from .execute import plan_batches, run_batch
         from .spec import build_campaign
-        from .store import file_sha256
+        from .identity import file_sha256
 
-        text = self.manifest["campaign_text"]
-        camp = build_campaign(yaml.safe_load(text), "manifest", text)
+        text = str(self.manifest.get("campaign_text", ""))
+        data = self.manifest.get("campaign_data")  # the validated mapping (older manifests: the text)
+        camp = build_campaign(data if isinstance(data, dict) else yamlsafe.loads(text, "manifest"), "manifest", text)
         then = (self.manifest.get("ur5fault_version"), self.manifest.get("model_sha256"))
         now = (__version__, file_sha256(DEFAULT_MODEL_PATH))
         if then != now:
