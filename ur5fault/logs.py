@@ -45,6 +45,9 @@ class MeasuredLog:
     q_motor_rad: NDArray | None = None
     payload_kg: float = 0.0
     tcp_offset_m: tuple[float, float, float] = (0.0, 0.0, 0.15)
+    #: UR's own inverse-dynamics joint torque of the target motion [N*m] (NIST ROBOT_TARGET_JOINT_TORQUES,
+    #: RTDE target_moment), used as a cross-check by ``ur5fault identify``
+    target_torque_Nm: NDArray | None = None
 
     @property
     def period_s(self) -> float:
@@ -116,11 +119,12 @@ def read_nist(path: str | Path) -> MeasuredLog:
     _plausible_ur5(src, qa)
     opt = lambda cols: df[cols].to_numpy(float) if all(c in df.columns for c in cols) else None  # noqa: E731
     ct = opt(cur_t)
+    tq = opt([f"ROBOT_TARGET_JOINT_TORQUES (J{j})" for j in range(1, 7)])
     return MeasuredLog(
         source=src, t_s=t - t[0], q_target_rad=qt, q_actual_rad=qa,
         current_A=arrays["actual currents"] * UR_CURRENT_SIGN,
         target_current_A=None if ct is None else ct * UR_CURRENT_SIGN, temperature_C=opt(temp), tcp_m=opt(tcp),
-        payload_kg=NIST_PAYLOAD_KG, tcp_offset_m=NIST_TOOL_OFFSET_M,
+        payload_kg=NIST_PAYLOAD_KG, tcp_offset_m=NIST_TOOL_OFFSET_M, target_torque_Nm=tq,
     )
 
 
@@ -129,7 +133,8 @@ def read_rtde(path: str | Path, payload_kg: float = 0.0,
     """Read a UR RTDE CSV as the ``rtde`` recorder writes it (radians, amperes, metres).
 
     Required columns: ``timestamp``, ``target_q_0..5``, ``actual_q_0..5``, ``actual_current_0..5``;
-    optional: ``target_current_0..5``, ``joint_temperatures_0..5``, ``actual_TCP_pose_0..5``.
+    optional: ``target_current_0..5``, ``joint_temperatures_0..5``, ``actual_TCP_pose_0..5``,
+    ``target_moment_0..5``.
     The payload and tool offset are not in the recording and are given by the caller.
     """
     path = Path(path)
@@ -156,6 +161,7 @@ def read_rtde(path: str | Path, payload_kg: float = 0.0,
         target_current_A=None if ct is None else ct * UR_CURRENT_SIGN,
         temperature_C=opt([f"joint_temperatures_{j}" for j in range(6)]), tcp_m=tcp,
         payload_kg=payload_kg, tcp_offset_m=tuple(tcp_offset_m),
+        target_torque_Nm=opt([f"target_moment_{j}" for j in range(6)]),
     )
 
 

@@ -1,0 +1,106 @@
+"""Coulomb and viscous friction from the moving samples, jointly with the torque constant.
+
+Per joint, on samples where the joint slides (target *and* measured speed above
+:data:`MIN_SPEED_RAD_S`, same sign), the measured current is regressed as
+
+    i = tau_model / K + F_c * sign(w) + F_v * w * theta(T) + c
+
+with ``tau_model`` MuJoCo's inverse dynamics of the log's motion (gravity and inertia of the
+links and the payload, plus the reflected rotor inertia; :mod:`.signals`), ``w`` the target
+speed, ``theta(T) = exp(-coeff * (T - T_ref))`` the model's viscous temperature law (so F_v is
+the value at the reference temperature, as ``ur5_drive.yaml`` stores it) and ``c`` a constant
+current offset: a nuisance term that absorbs a constant torque the model lacks (a payload or
+link centre-of-mass error on the wrists, a current-sensor offset) instead of letting it
+bias F_c.  ``K`` is shared by the joints of one motor size (:mod:`.motor`).  Standstill
+samples are left out: at rest the current is whatever static friction happens to hold
+(issue 10: with them J1 gives 0.38 A / 2.0 A*s/rad, without them 0.50 / 1.49).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..params import RobotParams
+from . import motor
+from .signals import LogSignals
+
+#: a sample is "moving" above this speed [rad/s]: ~2.5x the noise of the speed differentiated from
+#: the resolver (sigma 2.3e-5 rad * sqrt(2) / 8 ms = 4e-3 rad/s on the NIST log)
+MIN_SPEED_RAD_S = 0.01
+#: Coulomb and viscous friction separate only if the joint's speeds span a range: the moving
+#: samples must reach this speed [rad/s] ...
+MIN_TOP_SPEED_RAD_S = 0.2
+#: ... and be this many
+MIN_MOVING_SAMPLES = 500
+
+#: names of the fitted vector: per joint K [N*m/A at the joint], F_c [A], F_v [A*s/rad], c [A]
+FIELDS = ("k_joint_Nm_per_A", "coulomb_A", "viscous_A_s_per_rad", "offset_A")
+
+
+def moving_mask(sig: LogSignals) -> NDArray:
+    """``(n, 6)``: the joint slides (target and measured speed above the threshold, same sign)."""
+    wt, wa = sig.qd_target_rad_s, sig.qd_actual_rad_s
+    return (np.abs(wt) > MIN_SPEED_RAD_S) & (np.abs(wa) > MIN_SPEED_RAD_S) & (np.sign(wt) == np.sign(wa))
+
+
+def identifiable(sig: LogSignals, moving: NDArray) -> NDArray:
+    """``(6,)``: the joint moves often and fast enough to separate Coulomb from viscous friction."""
+    top = np.array([np.abs(sig.qd_target_rad_s[moving[:, j], j]).max(initial=0.0) for j in range(moving.shape[1])])
+    return (moving.sum(axis=0) >= MIN_MOVING_SAMPLES) & (top >= MIN_TOP_SPEED_RAD_S)
+
+
+def design_columns(sig: LogSignals, params: RobotParams) -> list[NDArray]:
+    """Per joint the ``(n, 3)`` friction columns ``sign(w)``, ``w * theta(T)``, ``1``."""
+    f = params.friction
+    theta = np.exp(-np.asarray(f.viscous_temp_coeff_per_K) * (sig.temperature_C - f.reference_temp_C))
+    w = sig.qd_target_rad_s
+    return [np.column_stack([np.sign(w[:, j]), w[:, j] * theta[:, j], np.ones(sig.n)]) for j in range(w.shape[1])]
+
+
+class FrictionFit:
+    """The joint fit of torque constants and friction, as a function of the samples used.
+
+    Args:
+        sig: the log's derived signals.
+        params: the model (reference temperature, viscous temperature law, fallback K).
+    """
+
+    def __init__(self, sig: LogSignals, params: RobotParams) -> None:
+        self.sig = sig
+        self.moving = moving_mask(sig)
+        self.ok = identifiable(sig, self.moving)
+        self.cols = design_columns(sig, params)
+        self.ratio = np.asarray(params.gear.ratio, float)
+        self.k_prior = np.asarray(params.motor.torque_constant_Nm_per_A) * self.ratio
+        lever = motor.torque_lever(sig.model_torque_Nm, self.moving)
+        sizes = np.asarray(motor.MOTOR_SIZE)
+        #: per motor size, the joints whose current carries the torque constant
+        carries = self.ok & (lever >= motor.MIN_TORQUE_SPREAD_NM)
+        self.k_groups = {int(s): [int(j) for j in np.flatnonzero((sizes == s) & carries)] for s in np.unique(sizes)}
+        self.lever_Nm = lever
+
+    def k_identified(self) -> NDArray:
+        """``(6,)``: the joint's torque constant comes from the log (its size group has a lever joint)."""
+        return np.array([bool(self.k_groups[s]) for s in motor.MOTOR_SIZE])
+
+    def __call__(self, idx: NDArray, torque: NDArray | None = None) -> NDArray:
+        """Fit on the samples ``idx`` (repeats allowed); returns ``(4, 6)`` in the order of :data:`FIELDS`.
+
+        ``torque`` replaces the model torque (e.g. UR's own target torque, as a cross-check).
+        """
+        sig = self.sig
+        tau = sig.model_torque_Nm if torque is None else torque
+        rows = [idx[self.moving[idx, j]] for j in range(self.moving.shape[1])]
+        k = self.k_prior.copy()
+        for s, joints in self.k_groups.items():
+            if joints:
+                beta = motor.pooled_inverse_gain(sig.current_A, tau, self.cols, rows, joints)
+                k[np.asarray(motor.MOTOR_SIZE) == s] = 1.0 / beta
+        out = np.full((len(FIELDS), k.size), np.nan)
+        out[0] = k
+        for j in np.flatnonzero(self.ok):
+            r = rows[j]
+            y = sig.current_A[r, j] - tau[r, j] / k[j]
+            out[1:, j] = np.linalg.lstsq(self.cols[j][r], y, rcond=None)[0]
+        return out
