@@ -1,4 +1,4 @@
-"""Command line: ``ur5fault simulate | effects | campaign | plot | discrepancy``.
+"""Command line: ``ur5fault simulate | effects | campaign | plot | discrepancy | identify``.
 
 Bad input prints one line ``ur5fault: error: ...`` naming the problem and the valid
 choices, and exits with status 2; never a traceback.
@@ -120,9 +120,11 @@ def _add_optional_commands(sub) -> None:
     not a silently missing command)."""
     from . import discrepancy_cli
     from .campaign import cli as campaign_cli
+    from .identify import cli as identify_cli
 
     campaign_cli.register(sub)
     discrepancy_cli.register(sub)
+    identify_cli.register(sub)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
