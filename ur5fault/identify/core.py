@@ -55,8 +55,11 @@ def identify(log: MeasuredLog, params: RobotParams | None = None, *, model_path:
     full = fit(np.arange(sig.n))
     lo, hi = interval(bootstrap(fit, blocks, n_boot, seed))
     est += _torque_constant(fit, full, lo, hi, p)
+    est += _k_check(friction.FrictionFit(sig, p, k_offset_term=True), None, blocks, n_boot, seed,
+                    "check.torque_constant_with_offset_Nm_per_A", "with a constant current offset fitted too")
     if sig.target_torque_Nm is not None:
-        est += _torque_constant_ur(fit, blocks, n_boot, seed, p)
+        est += _k_check(fit, sig.target_torque_Nm, blocks, n_boot, seed, "check.torque_constant_vs_UR_torque_Nm_per_A",
+                        "with UR's target torque column in place of MuJoCo's inverse dynamics")
     fric = _friction(fit, full, lo, hi, p)
     est += fric
     coulomb_A = np.array([e.value for e in fric if e.key == "friction.coulomb_A"])
@@ -107,7 +110,7 @@ def _torque_constant(fit: friction.FrictionFit, full: NDArray, lo: NDArray, hi: 
             src = ", ".join(f"J{g + 1}" for g in group)
             out.append(Estimate(key, j, full[0, j] / ratio[j], lo[0, j] / ratio[j], hi[0, j] / ratio[j],
                                 f"slope of current on MuJoCo inverse-dynamics torque, moving samples of {src} "
-                                f"(shared by the size-{size} joints), fitted with friction and offset"))
+                                f"(shared by the size-{size} joints), fitted with their friction"))
         else:
             spread = ", ".join(f"{fit.lever_Nm[g]:.2f}" for g in np.flatnonzero(np.asarray(motor.MOTOR_SIZE) == size))
             out.append(fallback(key, j, p.motor.torque_constant_Nm_per_A[j], "kept the model's value",
@@ -116,12 +119,12 @@ def _torque_constant(fit: friction.FrictionFit, full: NDArray, lo: NDArray, hi: 
     return out
 
 
-def _torque_constant_ur(fit: friction.FrictionFit, blocks, n_boot: int, seed: int, p: RobotParams) -> list[Estimate]:
-    """The same fit with UR's own target torque in place of MuJoCo's (a cross-check, not written)."""
-    tq = fit.sig.target_torque_Nm
+def _k_check(fit: friction.FrictionFit, torque: NDArray | None, blocks, n_boot: int, seed: int, key: str,
+             how: str) -> list[Estimate]:
+    """A variant of the torque-constant fit, reported as a check (not written to the overlay)."""
 
     def stat(idx: NDArray) -> NDArray:
-        return fit(idx, torque=tq)[0]
+        return fit(idx, torque=torque)[0]
 
     full = stat(np.arange(fit.sig.n))
     lo, hi = interval(bootstrap(stat, blocks, n_boot, seed))
@@ -129,10 +132,9 @@ def _torque_constant_ur(fit: friction.FrictionFit, blocks, n_boot: int, seed: in
     for size, group in fit.k_groups.items():
         if group:
             j = group[0]
-            out.append(Estimate("check.torque_constant_vs_UR_torque_Nm_per_A", j, full[j] / fit.ratio[j],
-                                lo[j] / fit.ratio[j], hi[j] / fit.ratio[j],
-                                f"as motor.torque_constant_Nm_per_A (size {size}) with UR's target torque column "
-                                "in place of MuJoCo's inverse dynamics"))
+            r = fit.ratio[j]
+            out.append(Estimate(key, j, full[j] / r, lo[j] / r, hi[j] / r,
+                                f"as motor.torque_constant_Nm_per_A (size {size}) {how}"))
     return out
 
 
@@ -145,7 +147,8 @@ def _friction(fit: friction.FrictionFit, full: NDArray, lo: NDArray, hi: NDArray
     names = (("friction.coulomb_A", 1, "Coulomb term", p.friction.coulomb_Nm),
              ("friction.viscous_A_s_per_rad", 2, f"viscous term at {t_ref:g} degC (via the model's viscous "
                                                  "temperature law)", p.friction.viscous_Nms_per_rad),
-             ("check.current_offset_A", 3, "constant current offset (nuisance term: a torque the model lacks)", None))
+             ("check.current_offset_A", 3, "constant current (nuisance term: a torque or offset the model "
+                                               "lacks)", None))
     for key, row, what, prior_Nm in names:
         for j in range(N_JOINTS):
             if fit.ok[j]:

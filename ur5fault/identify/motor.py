@@ -4,8 +4,8 @@ Joints of one motor size share one torque constant ([facts]: J1-J3 size 3, J4-J6
 Only joints whose model torque varies enough over the moving samples carry it (gravity on
 the shoulder and elbow, 20-55 N*m); on the base the torque is inertia only (~0.3 N*m RMS)
 and the slope is indistinguishable from friction.  The constant is fitted jointly with each
-contributing joint's friction and current offset (a pooled least squares with a shared
-slope), on moving samples only (at rest the current is whatever static friction holds).
+contributing joint's friction (a pooled least squares with a shared slope), on moving samples
+only (at rest the current is whatever static friction holds).
 """
 
 from __future__ import annotations
