@@ -96,6 +96,22 @@ def test_friction_fit_recovers_torque_constant_coulomb_viscous_and_offset():
     assert friction.FrictionFit(sig2, p)(np.arange(n))[0, 1] != pytest.approx(k_joint, rel=0.01)
 
 
+def test_ur_model_read_back_from_its_predicted_current():
+    from ur5fault.identify import urmodel
+
+    n = 3000
+    t = np.arange(n) * DT
+    w = 0.4 * np.sin(2 * np.pi * t / 5.0)[:, None] * np.ones(6)
+    tq = 20 * np.cos(2 * np.pi * t / 13.0)[:, None] * np.ones(6)
+    k_ur = np.array([11.6, 11.6, 11.4, 8.5, 8.5, 8.5])
+    it = tq / k_ur + 0.4 * np.sign(w) + 1.7 * w
+    sig = _signals(n, qd_target_rad_s=w, qd_actual_rad_s=w, target_torque_Nm=tq, target_current_A=it)
+    est = urmodel.ur_model(friction.FrictionFit(sig, load_params()))
+    kt = [e.value for e in est if e.key == "check.UR_model_torque_constant_Nm_per_A"]
+    np.testing.assert_allclose(kt, k_ur[:6] / 101, rtol=1e-9)
+    assert all(e.value == pytest.approx(0.4) for e in est if e.key == "check.UR_model_coulomb_A")
+
+
 def test_tracking_lag_and_feedforward():
     rng = np.random.default_rng(6)
     n = 5000

@@ -18,7 +18,7 @@ from numpy.typing import NDArray
 from ..axes import N_JOINTS
 from ..logs import MeasuredLog
 from ..params import RobotParams, load_params
-from . import friction, loop, motor, sensors, stickslip
+from . import friction, loop, motor, sensors, stickslip, urmodel
 from .report import Identification, overlay_params
 from .signals import derive
 from .stats import BLOCK_S, N_BOOT, Estimate, block_indices, bootstrap, fallback, interval
@@ -62,6 +62,7 @@ def identify(log: MeasuredLog, params: RobotParams | None = None, *, model_path:
                         "with UR's target torque column in place of MuJoCo's inverse dynamics")
     fric = _friction(fit, full, lo, hi, p)
     est += fric
+    est += urmodel.ur_model(fit)
     coulomb_A = np.array([e.value for e in fric if e.key == "friction.coulomb_A"])
 
     say("sensor noise at rest and resolver resolution")

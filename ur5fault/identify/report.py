@@ -78,6 +78,8 @@ class Identification:
         for e in self.estimates:
             j = "all" if e.joint is None else f"J{e.joint + 1}"
             iv = f"[{e.lo:.4g}, {e.hi:.4g}]" if e.identifiable else "not identifiable"
+            if e.identifiable and np.isnan(e.lo):
+                iv = "-"
             tail = e.method + (f"; {e.note}" if e.note else "")
             lines.append(f"{e.key:46s} {j:3s} {e.value:11.4g}  {iv:22s} {tail}")
         return "\n".join(lines)

@@ -37,6 +37,7 @@ class LogSignals:
     temperature_C: NDArray
     model_torque_Nm: NDArray
     target_torque_Nm: NDArray | None
+    target_current_A: NDArray | None = None
 
     @property
     def n(self) -> int:
@@ -60,4 +61,4 @@ def derive(log: MeasuredLog, params: RobotParams, model_path: str | Path) -> Log
     temp = (log.temperature_C if log.temperature_C is not None
             else np.tile(np.asarray(params.joint_temperature_C, float), (log.t_s.size, 1)))
     return LogSignals(dt, log.q_target_rad, qd_t, qdd_t, log.q_actual_rad, qd_a, log.current_A, temp, tau,
-                      log.target_torque_Nm)
+                      log.target_torque_Nm, log.target_current_A)
