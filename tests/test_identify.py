@@ -298,6 +298,44 @@ def test_identify_cli_errors(tmp_path, capsys):
     assert "--bootstrap = 3 must be at least 20" in capsys.readouterr().err
 
 
+def test_rtde_log_gives_the_same_estimates_as_its_nist_original(nist_path, tmp_path):
+    """The RTDE path (radians, payload and tool from the command line) on the NIST data rewritten as RTDE."""
+    import pandas as pd
+
+    from ur5fault.logs import read_nist
+
+    log = read_nist(nist_path).window(0.0, 40.0)
+    cols = {"timestamp": log.t_s}
+    for j in range(6):
+        cols[f"target_q_{j}"] = log.q_target_rad[:, j]
+        cols[f"actual_q_{j}"] = log.q_actual_rad[:, j]
+        cols[f"actual_current_{j}"] = log.current_A[:, j]
+        cols[f"joint_temperatures_{j}"] = log.temperature_C[:, j]
+        cols[f"target_moment_{j}"] = log.target_torque_Nm[:, j]
+    pd.DataFrame(cols).to_csv(tmp_path / "rtde.csv", index=False)
+    args = ["--no-sweep", "--bootstrap", "20", "--quiet"]
+    assert main(["identify", str(tmp_path / "rtde.csv"), "--format", "rtde", "--payload-kg", str(log.payload_kg),
+                 "--tcp-offset-m", *map(str, log.tcp_offset_m), "--out", str(tmp_path / "rtde.yaml"), *args]) == 0
+    from ur5fault.identify import identify
+
+    ref = identify(log, sweep=False, n_boot=20)
+    got = Overlay.load(tmp_path / "rtde.yaml").params
+    want = ref.overlay(load_params())["params"]
+    assert got["friction"] == want["friction"] and got["motor"] == want["motor"]
+    assert got["sensors"] == want["sensors"]
+
+
+def test_presliding_written_per_joint_with_the_models_value_where_not_identified():
+    from types import SimpleNamespace
+
+    from ur5fault.identify import report
+
+    ident = report.Identification("x", 1.0, tuple(
+        stats.Estimate("friction.presliding_stiffness_Nm_per_rad", j, 9e4 + j, 8e4, 1e5, "m") for j in range(3)))
+    params = SimpleNamespace(friction=SimpleNamespace(**{report.PRESLIDING_FIELD: (1e4,) * 6}))
+    np.testing.assert_array_equal(report._presliding(ident, params), [9e4, 9e4 + 1, 9e4 + 2, 1e4, 1e4, 1e4])
+
+
 def test_estimate_contains_and_json():
     e = stats.Estimate("k", 0, 1.0, 0.9, 1.1, "m")
     assert e.contains(1.14, rel_tol=0.05) and not e.contains(1.16, rel_tol=0.05)

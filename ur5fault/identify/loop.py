@@ -1,9 +1,9 @@
 """Position loop: the tracking lag, the velocity feed-forward it implies, and the loop bandwidth.
 
 *Lag.*  Per joint the tracking error ``e = q_target - q_actual`` is regressed on the target
-speed (with a constant): the slope is the lag tau [s].  Identifiable only where the speed
-explains a real share of the error (R^2 >= :data:`MIN_LAG_R2`); on the NIST log J5 (max 0.15
-rad/s, R^2 = 0.005) and J6 (still) are not.
+speed (with a constant): the slope is the lag tau [s].  Identifiable only where the joint moves
+(:data:`MIN_TOP_SPEED_RAD_S`) and the speed explains a real share of the error
+(R^2 >= :data:`MIN_LAG_R2`); on the NIST log J5 (max 0.15 rad/s, R^2 = 0.005) and J6 (still) are not.
 
 *Feed-forward.*  A P position loop of gain ``K_p = 2 pi f_p`` with a feed-forward share ``ff``
 of the setpoint speed lags by ``(1 - ff) / K_p``, so ``ff = 1 - tau * 2 pi f_p``.
@@ -31,8 +31,8 @@ from .stats import BLOCK_S, Estimate, block_indices, bootstrap, interval
 
 #: the lag counts as identified when the target speed explains this share of the tracking error
 MIN_LAG_R2 = 0.05
-#: joints moving slower than this everywhere do not enter the bandwidth score [rad/s]
-MIN_SCORE_SPEED_RAD_S = 0.05
+#: a joint whose target never moves faster than this [rad/s] has no lag and no place in the bandwidth score
+MIN_TOP_SPEED_RAD_S = 0.05
 BANDWIDTHS_HZ = (1.0, 1.5, 2.0, 3.0)
 SWEEP_WINDOW_S = 32.0
 #: noise seed of the sweep's replays
@@ -54,12 +54,13 @@ def tracking_lag(sig: LogSignals, n_boot: int, seed: int) -> tuple[list[Estimate
     out, ok = [], np.zeros(e.shape[1], bool)
     for j in range(e.shape[1]):
         lag, r2 = _lag_fit(e[:, j], w[:, j])
-        ok[j] = r2 >= MIN_LAG_R2
+        top = float(np.abs(w[:, j]).max())
+        ok[j] = r2 >= MIN_LAG_R2 and top >= MIN_TOP_SPEED_RAD_S
         if not ok[j]:
+            why = (f"the target speed explains {100 * r2:.1f} % of the tracking error (< {100 * MIN_LAG_R2:.0f} %)"
+                   if top >= MIN_TOP_SPEED_RAD_S else f"the joint does not move (top speed {top:.2g} rad/s)")
             out.append(Estimate("controller.tracking_lag_s", j, lag, float("nan"), float("nan"),
-                                "slope of tracking error on target speed", False,
-                                f"the target speed explains {100 * r2:.1f} % of the tracking error "
-                                f"(< {100 * MIN_LAG_R2:.0f} %)"))
+                                "slope of tracking error on target speed", False, why))
             continue
         boot = bootstrap(lambda idx, j=j: np.array(_lag_fit(e[idx, j], w[idx, j])[0]), blocks, n_boot, seed)
         lo, hi = interval(boot)
@@ -110,7 +111,7 @@ def bandwidth_sweep(log: MeasuredLog, base_overrides: dict, lag_s: NDArray, lag_
     n = min(n, log.t_s.size - 1)
     meas = log.q_target_rad[1 : n + 1] - log.q_actual_rad[1 : n + 1]
     speed = np.abs(np.gradient(log.q_target_rad[: n + 1], log.period_s, axis=0)).max(axis=0)
-    joints = tuple(int(j) for j in np.flatnonzero(speed >= MIN_SCORE_SPEED_RAD_S))
+    joints = tuple(int(j) for j in np.flatnonzero(speed >= MIN_TOP_SPEED_RAD_S))
     sq_sim = []
     for f in bandwidths_Hz:
         if progress is not None:

@@ -27,6 +27,8 @@ PRESLIDING_FIELD = "presliding_stiffness_Nm_per_rad"
 NOT_IDENTIFIABLE = (
     "friction.model (smooth sign vs stick-slip law): a model choice, made by comparing replays "
     "(issue 10 part A), not a value this regression can give",
+    "bristle damping (LuGre sigma_1): acts within the milliseconds of presliding, unseen at this log's 8 ms "
+    "sampling",
     "friction share motor side / link side of the gear: not identifiable from a healthy log - in steady "
     "sliding the motor current carries the whole friction wherever it acts, and before breakaway the link "
     "moves only by the friction contact's own deflection on either side (stickslip.py); only the gear's "
@@ -144,7 +146,7 @@ def overlay_params(ident: Identification, params: RobotParams) -> dict[str, Any]
 
 
 def _presliding(ident: Identification, params: RobotParams) -> NDArray:
-    """Identified joints keep their value; the others take the mean of the identified ones."""
+    """Identified joints take their estimate; the others keep the model's value (its stated assumption)."""
     vals = {e.joint: e.value for e in ident.estimates if e.key == "friction.presliding_stiffness_Nm_per_rad"}
-    mean = float(np.mean(list(vals.values())))
-    return np.array([vals.get(j, mean) for j in range(N_JOINTS)])
+    prior = getattr(params.friction, PRESLIDING_FIELD)
+    return np.array([vals.get(j, prior[j]) for j in range(N_JOINTS)])
