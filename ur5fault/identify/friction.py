@@ -93,10 +93,6 @@ class FrictionFit:
         self.k_groups = {int(s): [int(j) for j in np.flatnonzero((sizes == s) & carries)] for s in np.unique(sizes)}
         self.lever_Nm = lever
 
-    def k_identified(self) -> NDArray:
-        """``(6,)``: the joint's torque constant comes from the log (its size group has a lever joint)."""
-        return np.array([bool(self.k_groups[s]) for s in motor.MOTOR_SIZE])
-
     def __call__(self, idx: NDArray, torque: NDArray | None = None) -> NDArray:
         """Fit on the samples ``idx`` (repeats allowed); returns ``(4, 6)`` in the order of :data:`FIELDS`.
 
