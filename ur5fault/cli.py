@@ -1,4 +1,4 @@
-"""Command line: ``ur5fault simulate | effects | campaign | plot | show | discrepancy``.
+"""Command line: ``ur5fault simulate | effects | campaign | plot | show | discrepancy | identify``.
 
 Bad input prints one line ``ur5fault: error: ...`` naming the problem and the valid
 choices, and exits with status 2; never a traceback.  ``-v`` (before or after the
@@ -191,9 +191,11 @@ def _add_optional_commands(sub) -> None:
     not a silently missing command)."""
     from . import discrepancy_cli
     from .campaign import cli as campaign_cli
+    from .identify import cli as identify_cli
 
     campaign_cli.register(sub)
     discrepancy_cli.register(sub)
+    identify_cli.register(sub)
 
 
 class Terminated(KeyboardInterrupt):

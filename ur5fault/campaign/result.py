@@ -117,8 +117,8 @@ class CampaignResult:
         from .. import __version__
         from ..engine import DEFAULT_MODEL_PATH
         from .execute import plan_batches, run_batch
-        from .spec import build_campaign
         from .identity import file_sha256
+        from .spec import build_campaign
 
         text = str(self.manifest.get("campaign_text", ""))
         data = self.manifest.get("campaign_data")  # the validated mapping (older manifests: the text)

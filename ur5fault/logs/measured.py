@@ -29,6 +29,9 @@ class MeasuredLog:
     q_motor_rad: NDArray | None = None
     payload_kg: float = 0.0
     tcp_offset_m: tuple[float, float, float] = (0.0, 0.0, 0.15)
+    #: UR's own inverse-dynamics joint torque of the target motion [N*m] (NIST ROBOT_TARGET_JOINT_TORQUES,
+    #: RTDE target_moment), used as a cross-check by ``ur5fault identify``
+    target_torque_Nm: NDArray | None = None
 
     @property
     def period_s(self) -> float:

@@ -79,7 +79,9 @@ def read_nist(path: str | Path) -> MeasuredLog:
     tcp = _have(cols, [f"ROBOT_CARTESIAN_COORD_TOOL ({a})" for a in "xyz"])
     vel_t = _have(cols, [f"ROBOT_TARGET_JOINT_VELOCITIES (J{j})" for j in range(1, 7)])
     vel_a = _have(cols, [f"ROBOT_ACTUAL_JOINT_VELOCITIES (J{j})" for j in range(1, 7)])
-    d = read_columns(path, src, layout, ["ROBOT_TIME", *pos_t, *pos_a, *cur_a, *cur_t, *temp, *tcp, *vel_t, *vel_a])
+    torq = _have(cols, [f"ROBOT_TARGET_JOINT_TORQUES (J{j})" for j in range(1, 7)])
+    d = read_columns(path, src, layout,
+                     ["ROBOT_TIME", *pos_t, *pos_a, *cur_a, *cur_t, *temp, *tcp, *vel_t, *vel_a, *torq])
     t = d["ROBOT_TIME"]
     arrays = {"target positions": _stack(d, pos_t), "actual positions": _stack(d, pos_a),
               "actual currents": _stack(d, cur_a)}
@@ -93,6 +95,7 @@ def read_nist(path: str | Path) -> MeasuredLog:
         current_A=arrays["actual currents"] * UR_CURRENT_SIGN,
         target_current_A=None if ct is None else ct * UR_CURRENT_SIGN, temperature_C=_stack(d, temp),
         tcp_m=_stack(d, tcp), payload_kg=NIST_PAYLOAD_KG, tcp_offset_m=NIST_TOOL_OFFSET_M,
+        target_torque_Nm=_stack(d, torq),
     )
 
 
@@ -102,7 +105,8 @@ def read_rtde(path: str | Path, payload_kg: float = 0.0,
     tab-, semicolon- or space-separated, plain or gzip, with or without a UTF-8 byte-order mark.
 
     Required columns: ``timestamp``, ``target_q_0..5``, ``actual_q_0..5``, ``actual_current_0..5``;
-    optional: ``target_current_0..5``, ``joint_temperatures_0..5``, ``actual_TCP_pose_0..5``, and
+    optional: ``target_current_0..5``, ``joint_temperatures_0..5``, ``actual_TCP_pose_0..5``,
+    ``target_moment_0..5`` (UR's target torque), and
     ``target_qd_0..5`` / ``actual_qd_0..5`` (rad/s, used to check the position units).
     The payload and tool offset are not in the recording and are given by the caller.
     """
@@ -125,7 +129,8 @@ def read_rtde(path: str | Path, payload_kg: float = 0.0,
     tcp = _have(cols, [f"actual_TCP_pose_{j}" for j in range(3)])
     vt = _have(cols, [f"target_qd_{j}" for j in range(6)])
     va = _have(cols, [f"actual_qd_{j}" for j in range(6)])
-    d = read_columns(path, src, layout, ["timestamp", *qt, *qa, *ia, *ct, *temp, *tcp, *vt, *va])
+    tm = _have(cols, [f"target_moment_{j}" for j in range(6)])
+    d = read_columns(path, src, layout, ["timestamp", *qt, *qa, *ia, *ct, *temp, *tcp, *vt, *va, *tm])
     t = d["timestamp"]
     arrays = {"target_q": _stack(d, qt), "actual_q": _stack(d, qa), "actual_current": _stack(d, ia)}
     _checked(src, t, arrays, arrays["actual_q"], _stack(d, va))
@@ -137,7 +142,7 @@ def read_rtde(path: str | Path, payload_kg: float = 0.0,
         current_A=arrays["actual_current"] * UR_CURRENT_SIGN,
         target_current_A=None if cur_t is None else cur_t * UR_CURRENT_SIGN,
         temperature_C=_stack(d, temp), tcp_m=_stack(d, tcp),
-        payload_kg=payload_kg, tcp_offset_m=tuple(tcp_offset_m),
+        payload_kg=payload_kg, tcp_offset_m=tuple(tcp_offset_m), target_torque_Nm=_stack(d, tm),
     )
 
 
