@@ -1,8 +1,10 @@
 """The compiled drive kernel (fast path) against the numpy reference modules.
 
 They cannot agree bit for bit: libm's tanh and numpy's vectorised tanh differ in the last bit.
-So: one step from identical random states agrees to rounding, and a run without noise and
-quantisation (where rounding differences are not amplified) stays within 1e-9 rad.
+So: one step from identical random states agrees to rounding, and over whole runs (noise and
+quantisation on) the two differ by no more than the model itself moves when one parameter is
+changed by a relative 1e-12 (a self-perturbation baseline: a well-conditioned model amplifies
+last-bit differences no more than that; an ill-conditioned one would make both large).
 """
 
 import numpy as np
@@ -63,16 +65,20 @@ def test_one_step_agrees_to_rounding(packed, seed):
         np.testing.assert_allclose(xb[i], xa[i], rtol=1e-12, atol=1e-12, err_msg=name)
 
 
-def test_noise_free_run_stays_together():
-    quiet = {"sensors": {"resolver_noise_rad": 0, "encoder_noise_rad": 0, "encoder_speed_noise_rad_s": 0,
-                         "current_noise_A": 0, "resolver_counts_per_rev": 2**32, "encoder_counts_per_rev": 2**32,
-                         "encoder_speed_lsb_rad_s": 0, "current_lsb_A": 0}}
-    p = load_params(overrides=quiet)
-    runs = [RunSpec("h", 0), RunSpec("b", 0, (make_effect("backlash", 2, backlash_deg=0.1),))]
-    a = Simulator(p, drive="numpy").run(pick_and_place(), runs, duration_s=1.0)
-    b = Simulator(p, drive="numba").run(pick_and_place(), runs, duration_s=1.0)
-    assert np.max(np.abs(a["q_rad"] - b["q_rad"])) < 1e-9
-    assert np.max(np.abs(a["i_q_A"] - b["i_q_A"])) < 1e-6
+@pytest.mark.parametrize("duration_s", [1.0, pytest.param(None, marks=pytest.mark.slow)], ids=["1s", "whole_run"])
+def test_runs_agree_within_the_self_perturbation_baseline(duration_s):
+    p = load_params()
+    nudged = load_params(overrides={"friction": {"coulomb_Nm": [c * (1 + 1e-12) for c in p.friction.coulomb_Nm]}})
+    runs = [RunSpec("h", 3), RunSpec("b", 3, (make_effect("backlash", 2, backlash_deg=0.1),))]
+    ref = Simulator(p, drive="numpy").run(pick_and_place(), runs, duration_s=duration_s)
+    fast = Simulator(p, drive="numba").run(pick_and_place(), runs, duration_s=duration_s)
+    base = Simulator(nudged, drive="numba").run(pick_and_place(), runs, duration_s=duration_s)
+    assert ref.status == fast.status == base.status == ("ok", "ok")
+    for s in ("q_rad", "q_FB_rad", "i_q_A", "i_FB_A", "T_gear_Nm", "T_f_Nm"):
+        kernel = np.max(np.abs(fast[s] - ref[s]), axis=(0, 1))  # per joint
+        baseline = np.max(np.abs(base[s] - fast[s]))
+        print(f"{s}: kernel vs numpy per joint {np.array2string(kernel, precision=2)}, baseline {baseline:.2e}")
+        assert np.all(kernel <= 10 * baseline), s
 
 
 def test_row_tables_consistent():
