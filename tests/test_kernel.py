@@ -29,6 +29,7 @@ def packed():
     P[PI["sigma0"]] = rng.uniform(1e3, 1e5, P[PI["sigma0"]].shape)
     P[PI["sigma1"]] = rng.uniform(0.0, 50.0, P[PI["sigma1"]].shape)
     P[PI["share"]] = rng.uniform(0.0, 1.0, P[PI["share"]].shape)
+    P[PI["share"]][:, :2] = 0.0  # all on the link: the kernel skips the motor side
     return sim, P
 
 

@@ -185,10 +185,14 @@ def physics(X, P, q, qd, tau, dt, stribeck, has_cogging):
                 t_m = t_m + P[COG_AMP, r, j] * np.sin(P[COG_PER, r, j] * th_m)
             X[TH_PREV, r, j], X[Q_PREV, r, j] = th_m, q[r, j]
             u = w_m / N
-            _, f_m, s_m = _friction(P, r, j, X[Z_M, r, j], u, dt, stribeck)
+            if share > 0.0:
+                _, f_m, s_m = _friction(P, r, j, X[Z_M, r, j], u, dt, stribeck)
+            else:  # no motor-side friction: skip its evaluation (the bristle state stays as it is)
+                f_m, s_m = 0.0, 0.0
             w_new = w_m + dt * ((t_m - t_id / N) - share * f_m / N) / (P[JR, r, j] + dt * (share * s_m / (N * N)))
             X[T_F_M, r, j] = share * (f_m + s_m * (w_new / N - u))
-            X[Z_M, r, j] = _bristle(P, r, j, X[Z_M, r, j], w_new / N, dt, stribeck)
+            if share > 0.0:
+                X[Z_M, r, j] = _bristle(P, r, j, X[Z_M, r, j], w_new / N, dt, stribeck)
             X[W_M, r, j] = w_new
             X[TH_M, r, j] = th_m + dt * w_new  # symplectic: the new speed
             X[I_D, r, j], X[I_Q, r, j] = i_d_new, i_q_new

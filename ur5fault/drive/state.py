@@ -159,7 +159,7 @@ class NumpyDrive(_Views):
         X[XI["th_prev"]], X[XI["q_prev"]] = self.th_m, q
         w_new = fr.implicit_speed(self.w_m, t_m - self.t_id / N, share * f_m / N, share * s_m / (N * N), p("jr"), dt)
         X[XI["t_f_m"]] = share * (f_m + s_m * (w_new / N - u))
-        X[XI["z_m"]] = self._bristle(self.z_m, w_new / N)
+        X[XI["z_m"]] = np.where(share > 0.0, self._bristle(self.z_m, w_new / N), self.z_m)
         X[XI["w_m"]] = w_new
         X[XI["th_m"]] = self.th_m + dt * w_new
         return self.t_id - self.f_l + self.s_l * qd
