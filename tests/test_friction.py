@@ -109,3 +109,24 @@ def test_implicit_step_never_reverses_the_motion_by_itself():
         w_new = float(implicit_speed(w, 0.0, torque, slope, 1e-4, 5e-5))
         assert 0.0 <= w_new <= w and (w_new < w or w == 0.0)
         w = w_new
+
+
+def test_friction_share_decides_what_the_gear_carries():
+    """At constant speed the base joint (no gravity torque) needs only its friction: all of it on the link,
+    the gear carries it; all of it on the rotor (before the clearance), the gear carries nothing."""
+    from ur5fault import RunSpec, Simulator, make_effect, pick_and_place
+    from ur5fault.params import load_params
+
+    runs = [RunSpec(f"s{s}", 0, (make_effect("friction_share", 1, motor_side_share=s),)) for s in (0.0, 1.0)]
+    res = Simulator().run(pick_and_place(), runs, duration_s=5.6)
+    cruise = (res.t_s > 4.0) & (res.t_s < 5.5)  # the base at its constant 0.3 rad/s of the first move
+    qd = np.gradient(res.q_set_rad[:, 0], res.t_s)
+    assert np.all(np.abs(qd[cruise] - qd[cruise].mean()) < 1e-3) and abs(qd[cruise].mean()) > 0.2
+    t_f = res["T_f_Nm"][:, cruise, 0].mean(axis=1)
+    t_gear = res["T_gear_Nm"][:, cruise, 0].mean(axis=1)
+    f, v = load_params().friction, abs(qd[cruise].mean())  # at the 28 degC reference temperature
+    tc, ts, fv = f.coulomb_Nm[0], f.static_Nm[0], f.viscous_Nms_per_rad[0]
+    steady = np.sign(qd[cruise].mean()) * ((ts - tc) * (1 - np.tanh(10 * v)) + tc + fv * v)  # eq. (2), read odd
+    np.testing.assert_allclose(t_f, steady, rtol=0.01)  # both sides apply eq. (2) at speed
+    assert t_gear[0] == pytest.approx(steady, rel=0.05)
+    assert abs(t_gear[1]) < 0.05 * abs(steady)
