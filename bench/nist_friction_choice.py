@@ -51,7 +51,12 @@ def replay(log, friction: dict | None, cases: list[dict]) -> list[dict]:
     def rms(x, m):
         return np.sqrt(np.nanmean(np.where(m, x, np.nan) ** 2, axis=0)).round(4).tolist()
 
-    out = [{"case": c, "status": res.status[i], **{k: rms(res["i_FB_A"][i] - meas, m) for k, m in sel.items()}}
+    near = masks["near velocity reversals"]
+    e_meas = log.q_target_rad[1 : n + 1] - log.q_actual_rad[1 : n + 1]
+    out = [{"case": c, "status": res.status[i], **{k: rms(res["i_FB_A"][i] - meas, m) for k, m in sel.items()},
+            "tracking_near_reversals_sim_over_measured":
+                (np.array(rms(log.q_target_rad[1 : n + 1] - res["q_FB_rad"][i], near)) /
+                 np.array(rms(e_meas, near))).round(3).tolist()}
            for i, c in enumerate(cases)]
     out.append({"case": "UR's model", **{k: rms(log.target_current_A[1 : n + 1] - meas, m) for k, m in sel.items()}})
     return out
@@ -82,6 +87,9 @@ def main(argv=None) -> int:
     results["share"] = replay(log, None, [{"share": s} for s in (0.0, 0.25, 0.5, 0.75, 1.0)])
     table("Motor-side share", results["share"], "held_out")
     table("Motor-side share", results["share"], "near_reversals")
+    print("\ntracking error near velocity reversals, simulated / measured, J1..J6:")
+    for r in results["share"][:-1]:
+        print(json.dumps(r["case"]), r["tracking_near_reversals_sim_over_measured"])
     if not a.quick:
         results["presliding"] = replay(log, None, [{"s0": s} for s in (0.1, 0.3, 0.5, 1.0, 2.0, 10.0)])
         table("Presliding stiffness (x default)", results["presliding"], "held_out")
