@@ -256,10 +256,11 @@ def test_paper_shoulder_and_elbow_above_wrists(paper):
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(strict=True, reason="model disagrees with the paper on the base joint: its clearance is crossed "
-                   "at standstill on this trajectory (no gravity torque, inertia below friction); docs/validation.md")
 def test_paper_base_joint_above_wrists(paper):
+    # with friction that sticks, the base link holds through the dwells and the clearance is crossed when the
+    # next move starts (with the former smooth sign it crept across it at standstill: 0.17 mm); docs/validation.md
     assert _at(paper, 1, 0.1) > max(_at(paper, j, 0.1) for j in (4, 5, 6))
+    assert _at(paper, 1, 0.1) > 0.5
 
 
 @pytest.mark.slow

@@ -11,9 +11,11 @@ Step order (semi-implicit Euler for the whole chain):
 1. at servo instants: sample the sensors (noise, sample-and-hold, quantisation) and run
    position -> speed -> current loops; the inverter limits and holds the voltage;
 2. winding currents (exact R-L decay);
-3. gear torque, eq. (1), from rotor and link states; friction, eq. (2);
-4. rotor speed and angle; link torque ``T = T_id - T_f`` into ``qfrc_applied``; ``mj_step``;
-5. analog sensor filters; logging.
+3. gear torque, eq. (1), from rotor and link states; friction, eq. (2) (smooth or LuGre), its
+   motor-side share solved implicitly with the rotor;
+4. rotor speed and angle; link torque ``T = T_id - T_f`` into ``qfrc_applied`` with the friction's
+   slope as joint damping, which MuJoCo's Euler step applies implicitly; ``mj_step``;
+5. link bristle states at the reached speed; analog sensor filters; logging.
 """
 
 from __future__ import annotations
@@ -191,7 +193,6 @@ def _integrate(sim: Simulator, traj: Trajectory, runs: list[RunSpec], a: RunArra
     qd = np.zeros((n, N_JOINTS))
     P = pack_params(sim, a)
     drive = DRIVES[sim.drive](P, initial_state(P, q, bias), dt, ts, p.friction.stribeck_rate_s_per_rad)
-    m_ii = mb.mass_diagonal()
 
     # setpoint latency per run, in whole servo samples (effect "delay")
     delay_k = np.rint(a.setpoint_delay_s / ts).astype(int)
@@ -235,19 +236,19 @@ def _integrate(sim: Simulator, traj: Trajectory, runs: list[RunSpec], a: RunArra
                         status[r] = Status.PROTECTIVE_STOP
                         reason[r] = (f"tracking error of joint {j + 1} above {PROTECTIVE_STOP_RAD} rad "
                                      f"at t={step * dt:.4f} s")
-            m_ii = mb.mass_diagonal()
             if progress is not None and step >= next_progress * n_steps:
                 progress(step / n_steps)
                 next_progress += PROGRESS_STEP
 
-        tau = drive.physics(q, qd, m_ii)
+        tau = drive.physics(q, qd)
         if step in change_steps:
             mb.set_payload(a.payload_kg * gripped_step[step])
         mb.qfrc_applied[:] = tau
+        mb.dof_damping[:] = drive.s_l  # the friction's slope: MuJoCo applies the link friction implicitly
         mb.step(active)
         q = mb.qpos.copy()
         qd = mb.qvel.copy()
-        drive.sensors(q)
+        drive.sensors(q, qd)
 
         if (step + 1) % log_every == 0:
             li = (step + 1) // log_every - 1

@@ -32,7 +32,8 @@ class GearParams(Validated):
 
 @dataclasses.dataclass(frozen=True)
 class FrictionParams(Validated):
-    """Joint friction at the output shaft, the paper's eq. (2) read as odd in speed."""
+    """Joint friction, the paper's eq. (2) read as odd in speed, as a smooth-sign or LuGre law,
+    split between the motor side and the link side of the gear clearance."""
 
     coulomb_Nm: tuple[float, ...] = param(0, 500, unit="N*m", doc="T_f,c")
     static_Nm: tuple[float, ...] = param(0, 500, unit="N*m", doc="T_f,s (breakaway)")
@@ -44,6 +45,18 @@ class FrictionParams(Validated):
     stribeck_rate_s_per_rad: float = param(0, 1e3, per_joint=False, unit="s/rad", doc="the 10 in tanh(10|w|)")
     sign_smoothing_rad_s: tuple[float, ...] = param(
         0, 1, lo_open=True, unit="rad/s", doc="width of the smooth sign tanh(w / width)"
+    )
+    # defaults reproduce the earlier smooth-sign, all-on-the-link model for files without these keys
+    model: tuple[str, ...] = param(unit="", choices=("lugre", "smooth"), default="smooth",
+                                   doc="friction law per joint: LuGre (sticks) or eq. (2) with a smooth sign")
+    presliding_stiffness_Nm_per_rad: tuple[float, ...] = param(
+        0, 1e9, lo_open=True, unit="N*m/rad", default=1e4, doc="LuGre sigma0 (bristle stiffness, joint side)"
+    )
+    bristle_damping_Nms_per_rad: tuple[float, ...] = param(
+        0, 1e5, unit="N*m*s/rad", default=0.0, doc="LuGre sigma1 (bristle damping, joint side)"
+    )
+    motor_side_share: tuple[float, ...] = param(
+        0, 1, unit="-", default=0.0, doc="share of the friction acting on the rotor, before the gear clearance"
     )
 
 
