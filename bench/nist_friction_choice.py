@@ -18,48 +18,12 @@ from pathlib import Path
 
 import numpy as np
 
-from ur5fault import RunSpec, Simulator, make_effect
-from ur5fault.discrepancy import conditions
+from ur5fault.identify.friction_choice import replay
 from ur5fault.logs import read_nist
-from ur5fault.params import deep_merge, load_params
+from ur5fault.params import load_params
 
 NIST_LOG = Path(__file__).resolve().parents[2] / "shared" / "data" / "nist-ur5" / \
     "ur5testresult_halfspeed_payload1.6lb_1.csv.gz"
-HELD_OUT_FROM = 0.6
-
-
-def replay(log, friction: dict | None, cases: list[dict]) -> list[dict]:
-    """Replay once per case (``{"s0": scale, "share": value}`` on every joint); RMS figures per case."""
-    over = {"tcp_offset_m": list(log.tcp_offset_m), "joint_temperature_C": log.temperature_C.mean(axis=0).tolist()}
-    p = load_params(overrides=deep_merge(over, {"friction": friction} if friction else {}))
-    runs = []
-    for i, c in enumerate(cases):
-        eff = []
-        for j in range(1, 7):
-            if "s0" in c:
-                eff.append(make_effect("presliding_stiffness", j, scale=c["s0"]))
-            if "share" in c:
-                eff.append(make_effect("friction_share", j, motor_side_share=c["share"]))
-        runs.append(RunSpec(f"c{i}", 1, tuple(eff)))
-    res = Simulator(p).run(log.to_trajectory(), runs, log_period_s=log.period_s)
-    n = res.t_s.size
-    meas = log.current_A[1 : n + 1]
-    masks = conditions(log, n, meas)
-    held = np.broadcast_to((res.t_s >= HELD_OUT_FROM * (log.t_s[-1] - log.t_s[0]))[:, None], (n, 6))
-    sel = {"held_out": held, "at_rest": masks["at rest"], "near_reversals": masks["near velocity reversals"]}
-
-    def rms(x, m):
-        return np.sqrt(np.nanmean(np.where(m, x, np.nan) ** 2, axis=0)).round(4).tolist()
-
-    near = masks["near velocity reversals"]
-    e_meas = log.q_target_rad[1 : n + 1] - log.q_actual_rad[1 : n + 1]
-    out = [{"case": c, "status": res.status[i], **{k: rms(res["i_FB_A"][i] - meas, m) for k, m in sel.items()},
-            "tracking_near_reversals_sim_over_measured":
-                (np.array(rms(log.q_target_rad[1 : n + 1] - res["q_FB_rad"][i], near)) /
-                 np.array(rms(e_meas, near))).round(3).tolist()}
-           for i, c in enumerate(cases)]
-    out.append({"case": "UR's model", **{k: rms(log.target_current_A[1 : n + 1] - meas, m) for k, m in sel.items()}})
-    return out
 
 
 def table(title: str, rows: list[dict], key: str) -> None:
