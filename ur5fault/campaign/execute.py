@@ -21,6 +21,7 @@ from ..errors import ParameterError
 from ..io import write_json_atomic, write_parquet_atomic
 from ..params import load_params
 from ..progress import campaign_progress
+from .labels import assign_splits, refresh_splits, row_labels
 from .spec import Campaign, CampaignRun
 from .store import Lock, consolidate, done_ids, file_sha256, runs_dir
 
@@ -30,12 +31,25 @@ def _effects_of(camp: Campaign, rc: CampaignRun) -> tuple[EffectSpec, ...]:
     return camp.base_effects + rc.fault_effects() + (
         make_effect("payload", mass_kg=c["payload_kg"]),
         make_effect("temperature", temperature_C=c["temperature_C"]),
-    )
+    ) + _condition_effects(c)
+
+
+def _condition_effects(cond: dict[str, Any]) -> tuple[EffectSpec, ...]:
+    """Whole-robot effects held as run conditions (``<effect>.<param>`` keys, e.g. a sampled campaign's
+    ``payload_com.dz_m`` or ``delay.delay_ms``): shared with the healthy twin, not faults."""
+    by_effect: dict[str, dict[str, Any]] = {}
+    for key, v in cond.items():
+        name, dot, par = key.partition(".")
+        if dot:
+            by_effect.setdefault(name, {})[par] = v
+    return tuple(make_effect(name, **vals) for name, vals in sorted(by_effect.items()))
 
 
 def plan_batches(camp: Campaign, todo: Sequence[CampaignRun], n_workers: int = 1) -> list[list[CampaignRun]]:
     """Group runs by trajectory, cut into lockstep batches (at most ``batch_size`` runs, and at
-    least ``n_workers`` batches when there are enough runs), and add each batch's missing twins."""
+    least ``n_workers`` batches when there are enough runs), and add each batch's missing twins
+    (those the campaign lists: every twin of a swept campaign, the chosen ones of a sampled one)."""
+    listed = {rc.run_id for rc in camp.runs}  # a twin is simulated when the campaign lists it
     by_traj: dict[str, list[CampaignRun]] = {}
     for rc in todo:
         by_traj.setdefault(json.dumps(rc.cond["trajectory"], sort_keys=True), []).append(rc)
@@ -48,7 +62,7 @@ def plan_batches(camp: Campaign, todo: Sequence[CampaignRun], n_workers: int = 1
             ids = {r.run_id for r in chunk}
             for r in list(chunk):
                 t = r.twin()
-                if t.run_id not in ids:
+                if t.run_id not in ids and t.run_id in listed:
                     chunk.append(t)
                     ids.add(t.run_id)
             batches.append(chunk)
@@ -69,41 +83,33 @@ def run_batch(camp: Campaign, batch: Sequence[CampaignRun], ts_dir: str | None) 
     wall = time.perf_counter() - t0
     index = {rc.run_id: i for i, rc in enumerate(batch)}
     ratio = np.asarray(sim.params.gear.ratio)
+    splits = assign_splits(camp.split, (rc.cond for rc in camp.runs))
     rows = []
     for i, rc in enumerate(batch):
-        twin_i = index[rc.twin().run_id]
-        ok = res.status[i] == "ok" and res.status[twin_i] == "ok"
+        twin_i = index.get(rc.twin().run_id)  # None: the campaign simulates no twin for this run
+        twin_ok = twin_i is None or res.status[twin_i] == "ok"
+        ok = res.status[i] == "ok" and twin_ok
         feats = run_features(res.t_s, res.q_set_rad, res["q_FB_rad"][i], res["q_M_FB_rad"][i], res["i_FB_A"][i],
-                             ratio, res.tcp_m[i], res.tcp_des_m[i], res.tcp_m[twin_i] if ok else None)
+                             ratio, res.tcp_m[i], res.tcp_des_m[i],
+                             res.tcp_m[twin_i] if ok and twin_i is not None else None)
         if ts_dir is not None:
             res.to_parquet(Path(ts_dir) / f"{rc.run_id}.parquet", i)
         eff = rc.fault_effects()
-        backlash = next((e for e in eff if e.name == "backlash"), None)
-        fault_joint = (eff[0].joint + 1) if eff and eff[0].joint is not None else 0
         row: dict[str, Any] = {
             "run_id": rc.run_id,
-            "fault_joint": fault_joint,
-            "fault": "+".join(e.name for e in eff) or "healthy",
-            "backlash_deg": backlash.value("backlash_deg") if backlash else 0.0,
-            **{k: (json.dumps(v) if isinstance(v, dict) else v) for k, v in rc.cond.items()},
-            **{_column(k): v for k, v in rc.faults},
-            "twin_run_id": rc.twin().run_id,
+            **row_labels(rc.cond, eff, camp.split, splits),
+            "twin_run_id": rc.twin().run_id if twin_i is not None else "",
             "status": res.status[i] if res.status[i] != "ok" or ok else "ok",
             "reason": res.reason[i] or ("" if ok else f"twin: {res.reason[twin_i]}"),
             "effects": "; ".join(e.describe() for e in eff),
             "wall_s_batch": wall,
             "batch_size": len(batch),
+            "tcp_dev_max_mm": np.nan,  # without a twin; run_features fills both when there is one
+            "tcp_dev_rms_mm": np.nan,
             **feats,
         }
         rows.append(row)
     return rows
-
-
-def _column(key: str) -> str:
-    name, _, par = key.partition(".")
-    if key == "backlash.backlash_deg":
-        return "backlash_deg_swept"
-    return f"{name}_{par}" if par != "joint" else f"{name}_joint"
 
 
 def run_campaign(camp: Campaign, out: Path | None = None, *, jobs: int | None = None, backend: str = "loky",
@@ -143,6 +149,9 @@ def run_campaign(camp: Campaign, out: Path | None = None, *, jobs: int | None = 
         finally:
             report.close()
         features = consolidate(out, camp)
+        features, changed = refresh_splits(features, camp.split, camp.runs)
+        if changed:  # the campaign's split rule differs from the one the stored rows were labelled with
+            write_parquet_atomic(features, out / "features.parquet")
         p = load_params(overrides=dict(camp.base_params))
         import mujoco
 

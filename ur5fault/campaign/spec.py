@@ -39,9 +39,10 @@ from ..config import Overlay, check_keys, parse_effects, parse_trajectory
 from ..effects import REGISTRY, EffectSpec, make_effect
 from ..errors import ParameterError, UnknownNameError
 from ..params import deep_merge, load_params, read_yaml
+from .labels import SplitRule, parse_split
 
 CAMPAIGN_KEYS = ("name", "out", "trajectory", "base", "sweep", "zip", "threshold_mm", "batch_size",
-                 "log_period_s", "save_timeseries", "duration_s")
+                 "log_period_s", "save_timeseries", "duration_s", "split")
 BASE_KEYS = ("seed", "payload_kg", "temperature_C", "effects", "params")
 CONDITION_KEYS = ("seed", "payload_kg", "temperature_C", "trajectory")
 
@@ -103,6 +104,7 @@ class Campaign:
     log_period_s: float
     save_timeseries: bool
     duration_s: float | None
+    split: SplitRule = SplitRule()  # train/test split of the feature rows (campaign/labels.py)
 
     @property
     def sha256(self) -> str:
@@ -239,7 +241,8 @@ def build_campaign(data: Mapping[str, Any], where: str, text: str = "", path: Pa
     out_dir = Path(out) if out is not None else Path(data.get("out") or Path("results") / name)
     return Campaign(name, path, text or yaml.safe_dump(dict(data)), out_dir, base_effects, params,
                     tuple(runs.values()), tuple(swept), float(thr), int(bs), float(lp),
-                    bool(data.get("save_timeseries", False)), None if dur is None else float(dur))
+                    bool(data.get("save_timeseries", False)), None if dur is None else float(dur),
+                    parse_split(data.get("split"), where))
 
 
 def _check_fault_keys(swept: Sequence[str], where: str) -> None:
