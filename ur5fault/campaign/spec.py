@@ -11,6 +11,7 @@ Campaign YAML (see campaigns/default.yaml)::
       backlash.backlash_deg: [0, 0.02, 0.05, 0.1, 0.2, 0.5]
     zip:                            # groups whose lists vary together (one axis per group)
       - {payload_kg: [1.0, 2.0], temperature_C: [25.0, 40.0]}
+    split: {by: trajectory_seed, test_fraction: 0.25, seed: 0}   # train/test column (campaign/labels.py)
     threshold_mm: 0.5               # TCP acceptability threshold of the summary
     batch_size: 32                  # runs stepped in lockstep per batch
     log_period_s: 0.001
@@ -20,6 +21,9 @@ Sweep keys: ``seed``, ``payload_kg``, ``temperature_C``, ``trajectory`` (conditi
 ``<effect>.<parameter>`` / ``<effect>.joint`` for any entry of the effect registry (faults).
 Each run is compared with its *healthy twin*: the run with the same conditions and no swept
 fault, which the campaign adds and simulates in the same batch.
+
+Instead of ``sweep``/``zip``, a ``sample:`` section draws N runs by Latin hypercube or Sobol
+sampling over fault kinds, joints, sizes and nuisance conditions (format in :mod:`.sampling`).
 """
 
 from __future__ import annotations
@@ -40,9 +44,10 @@ from ..effects import REGISTRY, EffectSpec, make_effect
 from ..errors import ParameterError, UnknownNameError
 from ..params import deep_merge, load_params, read_yaml
 from .labels import SplitRule, parse_split
+from .sampling import sample_runs
 
 CAMPAIGN_KEYS = ("name", "out", "trajectory", "base", "sweep", "zip", "threshold_mm", "batch_size",
-                 "log_period_s", "save_timeseries", "duration_s", "split")
+                 "log_period_s", "save_timeseries", "duration_s", "split", "sample")
 BASE_KEYS = ("seed", "payload_kg", "temperature_C", "effects", "params")
 CONDITION_KEYS = ("seed", "payload_kg", "temperature_C", "trajectory")
 
@@ -215,7 +220,10 @@ def build_campaign(data: Mapping[str, Any], where: str, text: str = "", path: Pa
         raise ParameterError(f"{where}: key swept twice: {', '.join(dup)}")
     _check_fault_keys(swept, where)
     runs: dict[str, CampaignRun] = {}
-    for combo in itertools.product(*axes) if axes else [()]:
+    sampled = data.get("sample") is not None  # a sampled campaign (campaign/sampling.py) instead of a grid
+    if sampled and (axes or swept):
+        raise ParameterError(f"{where}: sample cannot be combined with sweep or zip; use one of them")
+    for combo in (itertools.product(*axes) if axes else [()]) if not sampled else []:
         values: dict[str, Any] = {}
         for part in combo:
             values.update(part)
@@ -225,6 +233,13 @@ def build_campaign(data: Mapping[str, Any], where: str, text: str = "", path: Pa
         rc.fault_effects()  # validate the combination (e.g. joint present)
         for r in (rc, rc.twin()):
             runs.setdefault(r.run_id, r)
+    if sampled:
+        drawn, swept = sample_runs(data["sample"], cond0, where)
+        for cond, faults, wants_twin in drawn:
+            rc = CampaignRun(tuple(sorted(cond.items())), tuple(sorted(faults.items())))
+            rc.fault_effects()  # validate the combination
+            for r in (rc, rc.twin()) if wants_twin else (rc,):
+                runs.setdefault(r.run_id, r)
     thr = data.get("threshold_mm", 0.5)
     if isinstance(thr, bool) or not isinstance(thr, (int, float)) or thr <= 0:
         raise ParameterError(f"{where}: threshold_mm = {thr!r} must be a positive number of mm")
