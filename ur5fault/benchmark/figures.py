@@ -42,9 +42,13 @@ def auc_vs_size(detection: dict[str, Any]) -> Figure:
         info = detection["per_kind"][kind]
         b = [x for x in info["by_size"] if np.isfinite(x["auc"])]
         mid = [np.sqrt(x["size_lo"] * x["size_hi"]) for x in b]
-        ax.errorbar(mid, [x["auc"] for x in b], yerr=[x["auc_se"] for x in b], marker="o", ms=4, capsize=2)
         ax.axhline(0.5, color="0.6", lw=0.8, ls=":")
-        ax.set_xscale("log")
+        if b:
+            ax.errorbar(mid, [x["auc"] for x in b], yerr=[x["auc_se"] for x in b], marker="o", ms=4, capsize=2)
+            ax.set_xscale("log")
+        else:
+            ax.text(0.5, 0.5, "too few test runs per size bin", ha="center", va="center", transform=ax.transAxes,
+                    fontsize=8)
         ax.set_ylim(0.3, 1.02)
         ax.set_title(kind, fontsize=9)
         ax.set_xlabel(f"fault size [{info['unit']}]", fontsize=8)
@@ -75,7 +79,10 @@ def backlash_detectability(alpha: np.ndarray, joint: np.ndarray, hit: np.ndarray
             ax.axvline(a90, color="C3", lw=1, label=f"alpha_90 = {a90:.3g} deg")
         ax.axvline(paper, color="0.3", ls="--", lw=0.8, label=f"paper {paper:g} deg")
         ax.axhline(0.9, color="0.6", ls=":", lw=0.8)
-        ax.set_xscale("log")
+        if alpha.size:
+            ax.set_xscale("log")
+        if not on.any():
+            ax.text(0.5, 0.5, "no test runs", ha="center", va="center", transform=ax.transAxes, fontsize=8)
         ax.set_title(f"J{j} {JOINT_NAMES[j - 1]}", fontsize=9)
         ax.legend(fontsize=7, loc="center left")
     for ax in axes[1]:

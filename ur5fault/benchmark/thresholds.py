@@ -4,7 +4,8 @@ within 0.5 mm on its pick-and-place).
 
 Per joint, the test runs with backlash on that joint give (alpha, flagged at 5 % false alarms).
 The detection probability is modelled as logistic in log alpha (maximum likelihood);
-``alpha_90`` is where it reaches 90 %, with a bootstrap interval over those runs.  The empirical
+``alpha_90`` is where it reaches 90 %, with a bootstrap interval over those runs; it is not
+extrapolated: outside the tested alphas only the bound is given (``alpha_90_bound``).  The empirical
 figure beside it is the smallest tested alpha above which at least 90 % of the runs are flagged.
 
 The TCP deviation at ``alpha_90`` comes from the backlash runs that have a simulated healthy twin
@@ -73,10 +74,12 @@ def backlash_thresholds(test: pd.DataFrame, detected: np.ndarray, everything: pd
         if on.sum() >= MIN_RUNS:
             ab = fit_logistic(np.log(alpha), hit)
             a90 = alpha_at(DETECTION_PROBABILITY, ab)
-            if ab is None and hit.all():
-                res["note"] = "every test run flagged: alpha_90 is below the smallest tested alpha"
-            elif ab is None:
-                res["note"] = "no test run flagged: alpha_90 is above the largest tested alpha"
+            if (ab is None and hit.all()) or a90 < alpha.min():
+                res["note"], res["alpha_90_bound"] = "below the smallest tested alpha", f"< {alpha.min():.3g}"
+            elif ab is None or a90 > alpha.max() or not math.isfinite(a90):
+                res["note"], res["alpha_90_bound"] = "not reached in the tested range", f"> {alpha.max():.3g}"
+            if "alpha_90_bound" in res:
+                a90 = math.nan  # not extrapolated beyond the simulated alphas
             boots = []
             for _ in range(N_BOOTSTRAP):
                 k = rng.integers(0, len(alpha), len(alpha))
