@@ -77,8 +77,9 @@ def markdown(m: dict[str, Any]) -> str:
         interval = "-" if ci[0] is None or ci[1] is None else f"{_f(ci[0], '.3g')}-{_f(ci[1], '.3g')}"
         dev = "-" if tcp.get("median") is None else (
             f"{_f(tcp.get('median'), '.3g')} ({_f(tcp.get('p10'), '.2g')}-{_f(tcp.get('p90'), '.2g')})")
+        emp, at_thr = _f(v["alpha_90_empirical_deg"], ".3g"), _f(v.get("alpha_at_threshold_deg"), ".3g")
         lines.append(f"| J{j} {JOINT_NAMES[int(j) - 1]} | {v['n_test']} ({v['detected']}) | {a90} | {interval} | "
-                     f"{_f(v['alpha_90_empirical_deg'], '.3g')} | {dev} | {_f(v.get('alpha_at_threshold_deg'), '.3g')} |")
+                     f"{emp} | {dev} | {at_thr} |")
     lines += ["", "## What the detector uses (permutation importance, test ROC AUC drop)", "",
               "| input | AUC drop (s.d.) |", "| --- | --- |"]
     lines += [f"| {x['feature']} | {_f(x['auc_drop_mean'], '.4f')} ({_f(x['auc_drop_std'], '.4f')}) |"
