@@ -32,14 +32,27 @@ MIN_RUNS = 6  # fewer runs on a joint: no fit
 EXTRAPOLATION = 1.5  # the TCP power law is evaluated at most this factor beyond the simulated alphas
 
 
-def fit_logistic(log_alpha: np.ndarray, hit: np.ndarray) -> tuple[float, float] | None:
-    """Maximum-likelihood ``(a, b)`` of P(hit) = 1 / (1 + exp(-(a + b log alpha))); None if degenerate."""
+def fit_logistic(log_alpha: np.ndarray, hit: np.ndarray, ridge: float = 1e-4) -> tuple[float, float] | None:
+    """Maximum-likelihood ``(a, b)`` of P(hit) = 1 / (1 + exp(-(a + b log alpha))); None if every run or no
+    run is a hit.  Newton-Raphson on the standardised input; a tiny ridge on the slope keeps perfectly
+    separated runs finite (their fit is then a steep step between the two classes)."""
     if hit.all() or not hit.any():
         return None
-    from sklearn.linear_model import LogisticRegression
-
-    m = LogisticRegression(C=1e4, max_iter=1000).fit(log_alpha[:, None], hit.astype(int))
-    return float(m.intercept_[0]), float(m.coef_[0, 0])
+    x = np.asarray(log_alpha, float)
+    mu, sd = x.mean(), x.std() or 1.0
+    z, y = (x - mu) / sd, hit.astype(float)
+    w = np.zeros(2)
+    design = np.stack([np.ones_like(z), z], axis=1)
+    for _ in range(100):
+        with np.errstate(over="ignore"):
+            p = 1.0 / (1.0 + np.exp(-(design @ w)))
+        grad = design.T @ (y - p) - np.array([0.0, ridge * w[1]])
+        hess = design.T @ (design * (p * (1 - p))[:, None]) + np.diag([1e-12, ridge])
+        step = np.linalg.solve(hess, grad)
+        w += step
+        if np.max(np.abs(step)) < 1e-10:
+            break
+    return float(w[0] - w[1] * mu / sd), float(w[1] / sd)
 
 
 def alpha_at(p: float, ab: tuple[float, float] | None) -> float:
