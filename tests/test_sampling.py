@@ -10,7 +10,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from ur5fault.campaign import build_campaign, run_campaign
+from ur5fault.campaign import build_campaign, run_campaign, status
 from ur5fault.campaign.labels import fault_labels
 from ur5fault.campaign.sampling import parse_dist, unit_design
 from ur5fault.errors import ParameterError, UnknownNameError
@@ -204,3 +204,5 @@ def test_small_sampled_campaign_runs_labels_and_resumes(tmp_path):
     stamp = {p.name: p.stat().st_mtime_ns for p in (tmp_path / "runs").iterdir()}
     run_campaign(build_campaign(copy.deepcopy(TINY), "tiny.yaml", out=tmp_path), tmp_path, jobs=1, progress=False)
     assert stamp == {p.name: p.stat().st_mtime_ns for p in (tmp_path / "runs").iterdir()}  # resumed: nothing to do
+    info = status(tmp_path)  # rebuilt from the manifest's campaign text: the same draws
+    assert info["n_runs_expected"] == len(camp.runs) == info["runs_done"]
