@@ -74,7 +74,9 @@ def markdown(m: dict[str, Any]) -> str:
         tcp = v.get("tcp_at_alpha_90_mm", {})
         ci = v["alpha_90_ci90_deg"]
         a90 = v.get("alpha_90_bound") or _f(v["alpha_90_deg"], ".3g")
-        interval = "-" if ci[0] is None or ci[1] is None else f"{_f(ci[0], '.3g')}-{_f(ci[1], '.3g')}"
+        lo = v.get("alpha_90_ci90_open_below") or _f(ci[0], ".3g")
+        hi = v.get("alpha_90_ci90_open_above") or _f(ci[1], ".3g")
+        interval = "-" if lo == hi == "-" else f"{lo} to {hi}"
         dev = "-" if tcp.get("median") is None else (
             f"{_f(tcp.get('median'), '.3g')} ({_f(tcp.get('p10'), '.2g')}-{_f(tcp.get('p90'), '.2g')})")
         emp, at_thr = _f(v["alpha_90_empirical_deg"], ".3g"), _f(v.get("alpha_at_threshold_deg"), ".3g")

@@ -100,6 +100,10 @@ def backlash_thresholds(test: pd.DataFrame, detected: np.ndarray, everything: pd
             boots = np.array(boots)
             if np.isfinite(boots).mean() > 0.5:
                 lo, hi = (float(v) for v in np.nanquantile(boots, [0.05, 0.95]))
+                if hi > alpha.max():  # not extrapolated either: the interval is open above
+                    hi, res["alpha_90_ci90_open_above"] = math.nan, f"> {alpha.max():.3g}"
+                if lo < alpha.min():
+                    lo, res["alpha_90_ci90_open_below"] = math.nan, f"< {alpha.min():.3g}"
         res.update({"alpha_90_deg": a90, "alpha_90_ci90_deg": [lo, hi],
                     "alpha_90_empirical_deg": empirical_alpha(alpha, hit) if on.any() else math.nan})
         res.update(_tcp_relation(everything, j, a90, threshold_mm))
