@@ -8,6 +8,7 @@ from typing import Any
 
 import numpy as np
 from matplotlib.figure import Figure
+from matplotlib.ticker import NullFormatter
 
 from ..axes import JOINT_NAMES
 from .metrics import FALSE_ALARM_RATE
@@ -46,6 +47,7 @@ def auc_vs_size(detection: dict[str, Any]) -> Figure:
         if b:
             ax.errorbar(mid, [x["auc"] for x in b], yerr=[x["auc_se"] for x in b], marker="o", ms=4, capsize=2)
             ax.set_xscale("log")
+            ax.xaxis.set_minor_formatter(NullFormatter())  # minor labels of a short log axis overlap
         else:
             ax.text(0.5, 0.5, "too few test runs per size bin", ha="center", va="center", transform=ax.transAxes,
                     fontsize=8)
