@@ -66,9 +66,13 @@ def markdown(m: dict[str, Any]) -> str:
         f"deviation at alpha_90 (median, 10-90 % over motions). The paper: alpha = "
         f"{bl['paper']['alpha_deg']:g} deg keeps the TCP within {bl['paper']['tcp_mm']:g} mm.",
         "",
+        "Crossed: share of all runs with alpha >= 0.1 deg on that joint whose motor-vs-joint encoder mismatch "
+        "spans at least alpha/2, i.e. whose clearance was crossed at all (gravity can keep one flank loaded "
+        "through a whole motion); flagged: share of such test runs the detector flags.",
+        "",
         "| joint | test runs (flagged) | alpha_90 [deg] | 90 % interval | empirical | TCP dev at alpha_90 [mm] "
-        f"| alpha for {bl['threshold_mm']:g} mm [deg] |",
-        "| --- | --- | --- | --- | --- | --- | --- |",
+        f"| alpha for {bl['threshold_mm']:g} mm [deg] | crossed (alpha >= 0.1 deg) | flagged when crossed |",
+        "| --- | --- | --- | --- | --- | --- | --- | --- | --- |",
     ]
     for j, v in bl["per_joint"].items():
         tcp = v.get("tcp_at_alpha_90_mm", {})
@@ -76,12 +80,15 @@ def markdown(m: dict[str, Any]) -> str:
         a90 = v.get("alpha_90_bound") or _f(v["alpha_90_deg"], ".3g")
         lo = v.get("alpha_90_ci90_open_below") or _f(ci[0], ".3g")
         hi = v.get("alpha_90_ci90_open_above") or _f(ci[1], ".3g")
-        interval = "-" if lo == hi == "-" else f"{lo} to {hi}"
+        interval = "-" if lo == hi == "-" else (lo if lo == hi else f"{lo} to {hi}")
         dev = "-" if tcp.get("median") is None else (
             f"{_f(tcp.get('median'), '.3g')} ({_f(tcp.get('p10'), '.2g')}-{_f(tcp.get('p90'), '.2g')})")
-        emp, at_thr = _f(v["alpha_90_empirical_deg"], ".3g"), _f(v.get("alpha_at_threshold_deg"), ".3g")
+        emp = _f(v["alpha_90_empirical_deg"], ".3g")
+        at_thr = v.get("alpha_at_threshold_bound") or _f(v.get("alpha_at_threshold_deg"), ".3g")
+        crossed = f"{_f(v.get('share_crossed'), '.0%')} of {v.get('n_runs_alpha_ge_min', 0)}"
+        flagged = f"{_f(v.get('detection_rate_crossed_test'), '.0%')} of {v.get('n_test_crossed', 0)}"
         lines.append(f"| J{j} {JOINT_NAMES[int(j) - 1]} | {v['n_test']} ({v['detected']}) | {a90} | {interval} | "
-                     f"{emp} | {dev} | {at_thr} |")
+                     f"{emp} | {dev} | {at_thr} | {crossed} | {flagged} |")
     lines += ["", "## What the detector uses (permutation importance, test ROC AUC drop)", "",
               "| input | AUC drop (s.d.) |", "| --- | --- |"]
     lines += [f"| {x['feature']} | {_f(x['auc_drop_mean'], '.4f')} ({_f(x['auc_drop_std'], '.4f')}) |"

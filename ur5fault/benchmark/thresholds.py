@@ -29,6 +29,7 @@ PAPER_ALPHA_DEG = 0.1  # seed paper: acceptable backlash for the pick-and-place 
 PAPER_TCP_MM = 0.5  # ... at this TCP deviation
 N_BOOTSTRAP = 200
 MIN_RUNS = 6  # fewer runs on a joint: no fit
+CROSSING_MIN_ALPHA_DEG = 0.1  # alpha/2 = 0.87 mrad, 1.5x the healthy mismatch span (~0.6 mrad, docs)
 EXTRAPOLATION = 1.5  # the TCP power law is evaluated at most this factor beyond the simulated alphas
 
 
@@ -59,7 +60,8 @@ def alpha_at(p: float, ab: tuple[float, float] | None) -> float:
     """Alpha where the fitted probability reaches ``p`` (NaN if it never rises with alpha)."""
     if ab is None or ab[1] <= 0:
         return math.nan
-    return math.exp((math.log(p / (1 - p)) - ab[0]) / ab[1])
+    x = (math.log(p / (1 - p)) - ab[0]) / ab[1]
+    return math.exp(min(x, 700.0)) if x < 700.0 else math.inf  # a nearly flat fit: never reached
 
 
 def empirical_alpha(alpha: np.ndarray, hit: np.ndarray, p: float = DETECTION_PROBABILITY) -> float:
@@ -100,16 +102,45 @@ def backlash_thresholds(test: pd.DataFrame, detected: np.ndarray, everything: pd
             boots = np.array(boots)
             if np.isfinite(boots).mean() > 0.5:
                 lo, hi = (float(v) for v in np.nanquantile(boots, [0.05, 0.95]))
-                if hi > alpha.max():  # not extrapolated either: the interval is open above
+                if lo > alpha.max():  # not extrapolated either: all of it above the tested alphas
+                    lo, res["alpha_90_ci90_open_below"] = math.nan, f"> {alpha.max():.3g}"
+                if hi > alpha.max():  # open above
                     hi, res["alpha_90_ci90_open_above"] = math.nan, f"> {alpha.max():.3g}"
                 if lo < alpha.min():
                     lo, res["alpha_90_ci90_open_below"] = math.nan, f"< {alpha.min():.3g}"
         res.update({"alpha_90_deg": a90, "alpha_90_ci90_deg": [lo, hi],
                     "alpha_90_empirical_deg": empirical_alpha(alpha, hit) if on.any() else math.nan})
         res.update(_tcp_relation(everything, j, a90, threshold_mm))
+        res.update(_crossing(test, everything, detected, j))
         out[str(j)] = res
     return {"detection_probability": DETECTION_PROBABILITY, "threshold_mm": threshold_mm,
             "paper": {"alpha_deg": PAPER_ALPHA_DEG, "tcp_mm": PAPER_TCP_MM}, "per_joint": out}
+
+
+def _crossing(test: pd.DataFrame, df: pd.DataFrame, detected: np.ndarray, joint: int) -> dict[str, Any]:
+    """How often a large clearance is crossed at all, and how often the detector flags those runs.
+
+    Crossing the gap moves the motor against the link by alpha (eq. (1)), so a run whose encoder mismatch
+    spans less than half of alpha never crossed it (gravity kept one flank loaded).  Judged for
+    alpha >= :data:`CROSSING_MIN_ALPHA_DEG`, where alpha/2 is well above the healthy mismatch span."""
+    col = f"enc_mismatch_p2p_rad_j{joint}"
+    if col not in df:
+        return {}
+
+    def crossed(rows: pd.DataFrame) -> np.ndarray:
+        return (rows[col] >= 0.5 * np.radians(rows["fault_size"])).to_numpy()
+
+    big = (df["fault"] == "backlash") & (df["fault_joint"] == joint) & (df["fault_size"] >= CROSSING_MIN_ALPHA_DEG)
+    tb = ((test["fault"] == "backlash") & (test["fault_joint"] == joint)
+          & (test["fault_size"] >= CROSSING_MIN_ALPHA_DEG)).to_numpy()
+    cross_test = np.zeros(len(test), bool)
+    cross_test[tb] = crossed(test[tb])
+    return {
+        "n_runs_alpha_ge_min": int(big.sum()),
+        "share_crossed": float(crossed(df[big]).mean()) if big.any() else math.nan,
+        "detection_rate_crossed_test": float(detected[cross_test].mean()) if cross_test.any() else math.nan,
+        "n_test_crossed": int(cross_test.sum()),
+    }
 
 
 def _tcp_relation(df: pd.DataFrame, joint: int, a90: float, threshold_mm: float) -> dict[str, Any]:
@@ -129,8 +160,10 @@ def _tcp_relation(df: pd.DataFrame, joint: int, a90: float, threshold_mm: float)
     def dev_at(a: float, r: float) -> float:
         return math.exp(icpt + slope * math.log(a) + r) if lo <= a <= hi else math.nan
 
-    a_thr = math.exp((math.log(threshold_mm) - icpt - r50) / slope) if slope > 0 else math.nan
+    a_thr = math.exp(min((math.log(threshold_mm) - icpt - r50) / slope, 700.0)) if slope > 0 else math.nan
+    bound = {"alpha_at_threshold_bound": f"> {hi:.3g}"} if not a_thr <= hi else {}
     return {
+        **bound,
         "n_tcp_runs": int(len(alpha)),
         "tcp_power_law": {"mm_at_1deg": math.exp(icpt), "exponent": slope},
         "tcp_at_alpha_90_mm": {"p10": dev_at(a90, r10), "median": dev_at(a90, r50), "p90": dev_at(a90, r90)},
