@@ -66,12 +66,12 @@ def markdown(m: dict[str, Any]) -> str:
         f"deviation at alpha_90 (median, 10-90 % over motions). The paper: alpha = "
         f"{bl['paper']['alpha_deg']:g} deg keeps the TCP within {bl['paper']['tcp_mm']:g} mm.",
         "",
-        "Crossed: share of all runs with alpha >= 0.1 deg on that joint whose motor-vs-joint encoder mismatch "
+        "Crossed: share of all runs with alpha >= 0.2 deg on that joint whose motor-vs-joint encoder mismatch "
         "spans at least alpha/2, i.e. whose clearance was crossed at all (gravity can keep one flank loaded "
         "through a whole motion); flagged: share of such test runs the detector flags.",
         "",
         "| joint | test runs (flagged) | alpha_90 [deg] | 90 % interval | empirical | TCP dev at alpha_90 [mm] "
-        f"| alpha for {bl['threshold_mm']:g} mm [deg] | crossed (alpha >= 0.1 deg) | flagged when crossed |",
+        f"| alpha for {bl['threshold_mm']:g} mm [deg] | crossed (alpha >= 0.2 deg) | flagged when crossed |",
         "| --- | --- | --- | --- | --- | --- | --- | --- | --- |",
     ]
     for j, v in bl["per_joint"].items():
