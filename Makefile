@@ -5,14 +5,14 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: venv test campaign bench lint clean
+.PHONY: venv test campaign bench lint clean diagnostics
 
 venv: $(STAMP)
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -e '.[dev,cluster]'
+	$(BIN)/python -m pip install --quiet -e '.[dev,cluster,ml]'
 	touch $(STAMP)
 
 test: $(STAMP)
@@ -28,6 +28,16 @@ campaign: $(STAMP)
 
 bench: $(STAMP)
 	$(BIN)/python bench/bench_speed.py --campaign
+
+# issue 11: the diagnostics dataset (campaigns/diagnostics.yaml, 2,000 sampled runs + backlash twins) and its
+# benchmark, end to end, timed. Resumes an interrupted run; for a timing from scratch: rm -rf results/diagnostics
+diagnostics: $(STAMP)
+	@start=$$(date +%s); \
+	$(BIN)/ur5fault campaign run campaigns/diagnostics.yaml --out results/diagnostics --quiet && \
+	$(BIN)/ur5fault benchmark results/diagnostics && \
+	end=$$(date +%s) && \
+	echo "make diagnostics: $$((end - start)) s end to end (campaign + benchmark)" && \
+	$(BIN)/python bench/diagnostics_timing.py results/diagnostics --wall-s $$((end - start))
 
 lint: $(STAMP)
 	$(BIN)/ruff check ur5fault tests bench

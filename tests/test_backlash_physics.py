@@ -81,8 +81,10 @@ def test_base_clearance_is_crossed_when_the_next_move_starts():
     reversing = [s for s in starts if np.sign(qd_set[np.searchsorted(t, s) + 50]) < 0]
     assert lag[k] > 0.5 * alpha  # 0.76 alpha (with the smooth sign, which creeps: 0.14 alpha, mid-dwell)
     assert any(0.0 <= t[k] - s < 0.5 for s in reversing), f"largest lag at t={t[k]:.2f} s, moves start {starts}"
-    # through the dwell before it, the teeth stayed on the flank last pushed (theta_rel near alpha)
+    # through the dwell before it, the teeth stayed on the flank last pushed: theta_rel has not crossed half
+    # of the clearance (measured: it stays above 0.90 alpha with the friction identified by `ur5fault identify`;
+    # the smooth sign let it creep across to 0)
     th_rel = res["q_M_rad"][1, :, 0] / 101.0 - res["q_rad"][1, :, 0]
     s = max(x for x in reversing if x <= t[k])
     dwell = (t > s - 1.0) & (t < s)
-    assert np.all(th_rel[dwell] > 0.9 * alpha)
+    assert np.all(th_rel[dwell] > 0.5 * alpha), th_rel[dwell].min() / alpha

@@ -190,12 +190,14 @@ def _add_optional_commands(sub) -> None:
     """The campaign and discrepancy command groups (imported directly: a broken module is an error,
     not a silently missing command)."""
     from . import discrepancy_cli
+    from .benchmark import cli as benchmark_cli
     from .campaign import cli as campaign_cli
     from .identify import cli as identify_cli
 
     campaign_cli.register(sub)
     discrepancy_cli.register(sub)
     identify_cli.register(sub)
+    benchmark_cli.register(sub)
 
 
 class Terminated(KeyboardInterrupt):

@@ -101,6 +101,8 @@ def _trajectory_option(key: str, value: Any, where: str) -> Any:
             raise ParameterError(f"{where} = {short(value)} must be a list of 6 joint angles [rad]")
         return tuple(check_number(v, f"{where}[{j + 1}]", -2 * math.pi, 2 * math.pi, "rad")
                      for j, v in enumerate(value))
+    if key == "seed":  # a trajectory family's seed (random_pick_and_place)
+        return check_seed(value, where)
     lo, hi, unit = TRAJECTORY_OPTIONS.get(key, (-math.inf, math.inf, ""))
     return check_number(value, where, lo, hi, unit)
 

@@ -59,7 +59,9 @@ def cmd_run(args: argparse.Namespace) -> int:
     features = pd.read_parquet(Path(camp.out) / "features.parquet")
     thr = args.threshold_mm if args.threshold_mm is not None else camp.threshold_mm
     table = tcp_table(features, camp.swept_keys)
-    if not table.empty:
+    if table.shape[1] > 20:  # a sampled campaign's continuous backlash sizes: no readable grid
+        print(f"\n{len(features)} runs with {table.shape[1]} distinct backlash sizes: see `ur5fault benchmark`")
+    elif not table.empty:
         print("\nmax TCP deviation from the healthy twin [mm], fault joint x backlash [deg]:")
         print(table.to_string(float_format=lambda v: f"{v:.3f}"))
         print(f"\nlargest backlash keeping the TCP within {thr:g} mm [deg]:")

@@ -31,9 +31,10 @@ from ..params import load_params
 from ..progress import campaign_progress
 from .identity import Identities
 from .identity import run_effects as _effects_of
+from .labels import assign_splits, refresh_splits, row_labels
 from .limits import check_limits, effective_jobs, estimate
 from .manifest import build_manifest
-from .spec import CONDITION_KEYS, Campaign, CampaignRun
+from .spec import Campaign, CampaignRun
 from .store import CampaignChangedError, Lock, consolidate, run_path, write_run_file
 from .verify import scan
 
@@ -46,7 +47,9 @@ PARENT_POLL_S = 1.0
 
 def plan_batches(camp: Campaign, todo: Sequence[CampaignRun], n_workers: int = 1) -> list[list[CampaignRun]]:
     """Group runs by trajectory, cut into lockstep batches (at most ``batch_size`` runs, and at
-    least ``n_workers`` batches when there are enough runs), and add each batch's missing twins."""
+    least ``n_workers`` batches when there are enough runs), and add each batch's missing twins
+    (those the campaign lists: every twin of a swept campaign, the chosen ones of a sampled one)."""
+    listed = {rc.run_id for rc in camp.runs}  # a twin is simulated when the campaign lists it
     by_traj: dict[str, list[CampaignRun]] = {}
     for rc in todo:
         by_traj.setdefault(json.dumps(rc.cond["trajectory"], sort_keys=True), []).append(rc)
@@ -59,7 +62,7 @@ def plan_batches(camp: Campaign, todo: Sequence[CampaignRun], n_workers: int = 1
             ids = {r.run_id for r in chunk}
             for r in list(chunk):
                 t = r.twin()
-                if t.run_id not in ids:
+                if t.run_id not in ids and t.run_id in listed:
                     chunk.append(t)
                     ids.add(t.run_id)
             batches.append(chunk)
@@ -89,45 +92,37 @@ def run_batch(camp: Campaign, batch: Sequence[CampaignRun], ts_dir: str | None,
     wall = time.perf_counter() - t0
     index = {rc.run_id: i for i, rc in enumerate(batch)}
     ratio = np.asarray(sim.params.gear.ratio)
+    splits = assign_splits(camp.split, (rc.cond for rc in camp.runs))
     rows = []
     for i, rc in enumerate(batch):
-        twin_i = index[rc.twin().run_id]
-        ok = res.status[i] == "ok" and res.status[twin_i] == "ok"
+        twin_i = index.get(rc.twin().run_id)  # None: the campaign simulates no twin for this run
+        twin_ok = twin_i is None or res.status[twin_i] == "ok"
+        ok = res.status[i] == "ok" and twin_ok
         feats = run_features(res.t_s, res.q_set_rad, res["q_FB_rad"][i], res["q_M_FB_rad"][i], res["i_FB_A"][i],
-                             ratio, res.tcp_m[i], res.tcp_des_m[i], res.tcp_m[twin_i] if ok else None)
+                             ratio, res.tcp_m[i], res.tcp_des_m[i],
+                             res.tcp_m[twin_i] if ok and twin_i is not None else None)
         if ts_dir is not None:
             meta = {**res.run_metadata(i), "run_identity": (identities or {}).get(rc.run_id)}
             write_parquet_atomic(res.to_pandas(i), Path(ts_dir) / f"{rc.run_id}.parquet",
                                  {"ur5fault": json.dumps(meta)})
         eff = rc.fault_effects()
-        backlash = next((e for e in eff if e.name == "backlash"), None)
-        fault_joint = (eff[0].joint + 1) if eff and eff[0].joint is not None else 0
         row: dict[str, Any] = {
             "run_id": rc.run_id,
-            "fault_joint": fault_joint,
-            "fault": "+".join(e.name for e in eff) or "healthy",
-            "backlash_deg": backlash.value("backlash_deg") if backlash else 0.0,
-            **{k: (json.dumps(v) if isinstance(v, dict) else v) for k, v in rc.cond.items()},
-            **{_column(k): dict(rc.faults).get(k, float("nan")) for k in camp.swept_keys if k not in CONDITION_KEYS},
-            "twin_run_id": rc.twin().run_id,
+            **row_labels(rc.cond, eff, camp.split, splits),
+            "twin_run_id": rc.twin().run_id if twin_i is not None else "",
             "status": res.status[i] if res.status[i] != "ok" or ok else "ok",
             "reason": res.reason[i] or ("" if ok else f"twin: {res.reason[twin_i]}"),
             "effects": "; ".join(e.describe() for e in eff),
             "wall_s_batch": wall,
             "batch_size": len(batch),
+            "tcp_dev_max_mm": np.nan,  # without a twin; run_features fills both when there is one
+            "tcp_dev_rms_mm": np.nan,
             **feats,
         }
         for key in FEATURE_UNITS:  # every file has the full schema (tcp_dev_* is NaN without a sound twin)
             row.setdefault(key, float("nan"))
         rows.append(row)
     return rows
-
-
-def _column(key: str) -> str:
-    name, _, par = key.partition(".")
-    if key == "backlash.backlash_deg":
-        return "backlash_deg_swept"
-    return f"{name}_{par}" if par != "joint" else f"{name}_joint"
 
 
 def _exit_with_parent(parent_pid: int | None) -> None:
@@ -226,7 +221,9 @@ def _run_locked(camp: Campaign, out: Path, jobs: int, backend: str, client, prog
             _execute(camp, batches, out, ts_dir, jobs, client, ids, {rc.run_id for rc in todo}, done, report, t0)
         finally:
             report.close()
-        features = consolidate(out, {rc.run_id: ids.record(rc) for rc in camp.runs})
+        records = {rc.run_id: ids.record(rc) for rc in camp.runs}
+        # the split is a label, not a result: stored rows follow the campaign's current split rule
+        features = consolidate(out, records, lambda df: refresh_splits(df, camp.split, camp.runs)[0])
         manifest = build_manifest(camp, ids, features, "complete", backend, jobs, save_ts, t0)
         manifest["runs_resimulated"] = {"missing": len(found.missing), "bad": len(found.bad),
                                         "changed": len(found.changed)}

@@ -42,7 +42,18 @@ def run_effects(camp: Campaign, rc: CampaignRun) -> tuple[EffectSpec, ...]:
     return camp.base_effects + rc.fault_effects() + (
         make_effect("payload", mass_kg=c["payload_kg"]),
         make_effect("temperature", temperature_C=c["temperature_C"]),
-    )
+    ) + condition_effects(c)
+
+
+def condition_effects(cond: Mapping[str, Any]) -> tuple[EffectSpec, ...]:
+    """Whole-robot effects held as run conditions (``<effect>.<param>`` keys, e.g. a sampled campaign's
+    ``payload_com.dz_m`` or ``delay.delay_ms``): shared with the healthy twin, not faults."""
+    by_effect: dict[str, dict[str, Any]] = {}
+    for key, v in cond.items():
+        name, dot, par = key.partition(".")
+        if dot:
+            by_effect.setdefault(name, {})[par] = v
+    return tuple(make_effect(name, **vals) for name, vals in sorted(by_effect.items()))
 
 
 def file_sha256(path: Path) -> str:

@@ -11,6 +11,7 @@ Campaign YAML (see campaigns/default.yaml)::
       backlash.backlash_deg: [0, 0.02, 0.05, 0.1, 0.2, 0.5]
     zip:                            # groups whose lists vary together (one axis per group)
       - {payload_kg: [1.0, 2.0], temperature_C: [25.0, 40.0]}
+    split: {by: trajectory_seed, test_fraction: 0.25, seed: 0}   # train/test column (campaign/labels.py)
     threshold_mm: 0.5               # TCP acceptability threshold of the summary
     batch_size: 32                  # runs stepped in lockstep per batch
     log_period_s: 0.001
@@ -20,6 +21,9 @@ Sweep keys: ``seed``, ``payload_kg``, ``temperature_C``, ``trajectory`` (conditi
 ``<effect>.<parameter>`` / ``<effect>.joint`` for any entry of the effect registry (faults).
 Each run is compared with its *healthy twin*: the run with the same conditions and no swept
 fault, which the campaign adds and simulates in the same batch.
+
+Instead of ``sweep``/``zip``, a ``sample:`` section draws N runs by Latin hypercube or Sobol
+sampling over fault kinds, joints, sizes and nuisance conditions (format in :mod:`.sampling`).
 """
 
 from __future__ import annotations
@@ -49,9 +53,11 @@ from ..config import (
 from ..effects import REGISTRY, EffectSpec, make_effect
 from ..errors import ParameterError, UnknownNameError
 from ..params import deep_merge, load_params, read_yaml
+from .labels import SplitRule, parse_split
+from .sampling import sample_runs
 
 CAMPAIGN_KEYS = ("name", "out", "trajectory", "base", "sweep", "zip", "threshold_mm", "batch_size",
-                 "log_period_s", "save_timeseries", "duration_s")
+                 "log_period_s", "save_timeseries", "duration_s", "split", "sample")
 BASE_KEYS = ("seed", "payload_kg", "temperature_C", "effects", "params")
 CONDITION_KEYS = ("seed", "payload_kg", "temperature_C", "trajectory")
 #: largest grid expanded at all (checked from the list lengths before expanding; assumption: a
@@ -119,6 +125,7 @@ class Campaign:
     save_timeseries: bool
     duration_s: float | None
     data: Mapping[str, Any] = dataclasses.field(default_factory=dict)  # the validated mapping (JSON-able)
+    split: SplitRule = SplitRule()  # train/test split of the feature rows (campaign/labels.py)
 
     @property
     def sha256(self) -> str:
@@ -233,7 +240,10 @@ def build_campaign(data: Mapping[str, Any], where: str, text: str = "", path: Pa
     _check_fault_keys(swept, where)
     check_grid_size([len(a) for a in axes], where)
     runs: dict[str, CampaignRun] = {}
-    for combo in itertools.product(*axes) if axes else [()]:
+    sampled = data.get("sample") is not None  # a sampled campaign (campaign/sampling.py) instead of a grid
+    if sampled and (axes or swept):
+        raise ParameterError(f"{where}: sample cannot be combined with sweep or zip; use one of them")
+    for combo in (itertools.product(*axes) if axes else [()]) if not sampled else []:
         values: dict[str, Any] = {}
         for part in combo:
             values.update(part)
@@ -244,6 +254,13 @@ def build_campaign(data: Mapping[str, Any], where: str, text: str = "", path: Pa
             rc = rc.twin()          # healthy run itself, stored without faults whichever sweep point made it
         for r in (rc, rc.twin()):
             runs.setdefault(r.run_id, r)
+    if sampled:
+        drawn, swept = sample_runs(data["sample"], cond0, where)
+        for cond, faults, wants_twin in drawn:
+            rc = CampaignRun(tuple(sorted(cond.items())), tuple(sorted(faults.items())))
+            rc.fault_effects()  # validate the combination
+            for r in (rc, rc.twin()) if wants_twin else (rc,):
+                runs.setdefault(r.run_id, r)
     thr = check_number(data.get("threshold_mm", 0.5), f"{where}: threshold_mm", 0.0, MAX_THRESHOLD_MM, "mm",
                        lo_open=True)
     bs = check_int(data.get("batch_size", 32), f"{where}: batch_size", 1, 1024)
@@ -260,7 +277,8 @@ def build_campaign(data: Mapping[str, Any], where: str, text: str = "", path: Pa
     out_dir = Path(out) if out is not None else Path("results") / name
     resolved = {**dict(data), "base": {**dict(base), "params": params}}
     return Campaign(name, path, text or yaml.safe_dump(dict(data)), out_dir, base_effects, params,
-                    tuple(runs.values()), tuple(swept), thr, bs, lp, save_ts, dur, resolved)
+                    tuple(runs.values()), tuple(swept), thr, bs, lp, save_ts, dur, resolved,
+                    parse_split(data.get("split"), where))
 
 
 def trajectory_specs(runs: Iterable[CampaignRun]) -> list[Any]:

@@ -17,7 +17,7 @@ import dataclasses
 import json
 import os
 import socket
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -153,9 +153,12 @@ def write_run_file(out: Path, row: Mapping[str, Any], record: Mapping[str, Any])
                                 {"ur5fault": json.dumps(meta, sort_keys=True)})
 
 
-def consolidate(out: Path, records: Mapping[str, Mapping[str, Any]]) -> pd.DataFrame:
+def consolidate(out: Path, records: Mapping[str, Mapping[str, Any]],
+                relabel: Callable[[pd.DataFrame], pd.DataFrame] | None = None) -> pd.DataFrame:
     """Gather exactly the runs of ``records`` (run_id -> record) into ``OUT/features.parquet``,
-    ordered by run_id, each file verified first; stray or duplicate files never leak in."""
+    ordered by run_id, each file verified first; stray or duplicate files never leak in.
+    ``relabel`` may rewrite label columns (not results) before the table is written, e.g. the
+    train/test split when the campaign's split rule changed since the runs were stored."""
     import pyarrow.parquet as pq
 
     frames = []
@@ -169,6 +172,8 @@ def consolidate(out: Path, records: Mapping[str, Mapping[str, Any]]) -> pd.DataF
     if not frames:
         raise ConfigFileError(f"{out}: the campaign has no runs")
     df = pd.concat(frames, ignore_index=True)
+    if relabel is not None:
+        df = relabel(df)
     identities = {rid: records[rid]["identity"] for rid in sorted(records)}
     meta = {"units": column_units(df.columns), "campaign_identity": digest(identities),
             "run_identities": identities}
