@@ -189,9 +189,9 @@ def build_parser() -> argparse.ArgumentParser:
 def _add_optional_commands(sub) -> None:
     """The campaign and discrepancy command groups (imported directly: a broken module is an error,
     not a silently missing command)."""
-    from . import discrepancy_cli
     from .benchmark import cli as benchmark_cli
     from .campaign import cli as campaign_cli
+    from .discrepancy import cli as discrepancy_cli
     from .identify import cli as identify_cli
 
     campaign_cli.register(sub)

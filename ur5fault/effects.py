@@ -16,6 +16,8 @@ import math
 from collections.abc import Callable, Mapping
 from typing import Any
 
+import numpy as np
+
 from .axes import JOINT_NAMES, joint_index
 from .errors import ParameterError, UnknownNameError
 
@@ -160,6 +162,86 @@ def _payload_com(a, row, j, v):
 
 DEG = math.pi / 180.0
 
+
+def _harmonic(field: str):
+    """Store a harmonic term in the joint's slot of the same period (added) or the first free one."""
+
+    def apply(a, row, j, v):
+        amp, per = getattr(a, f"{field}_Nm"), getattr(a, f"{field}_per_rev")
+        k = v["periods_per_rev"]
+        if v["sin_Nm"] == 0.0 and v["cos_Nm"] == 0.0:
+            return
+        slots = [i for i in range(per.shape[-1]) if per[row, j, i] == k or not np.any(amp[row, j, i])]
+        if not slots:
+            raise ParameterError(f"{field.removeprefix('term_')}: at most {per.shape[-1]} periods per joint "
+                                 f"in one run ({JOINT_NAMES[j]})")
+        i = slots[0]
+        per[row, j, i] = k
+        amp[row, j, i] += (v["sin_Nm"], v["cos_Nm"])
+
+    return apply
+
+
+def _link_mass(a, row, j, v):
+    a.link_mass_kg[row, j] += v["mass_kg"]
+    a.link_com_shift_m[row, j] += (v["com_dx_m"], v["com_dy_m"], v["com_dz_m"])
+
+
+def _harmonic_params(angle: str) -> tuple[EffectParam, ...]:
+    return (EffectParam("sin_Nm", "N*m", -50.0, 50.0, 0.0, f"link torque amplitude of sin(k {angle})"),
+            EffectParam("cos_Nm", "N*m", -50.0, 50.0, 0.0, f"link torque amplitude of cos(k {angle})"),
+            EffectParam("periods_per_rev", "1/rev", 1.0, 200.0, 1.0, f"k: periods per revolution of the {angle}"))
+
+
+_TERM_EFFECTS = [
+    Effect("torque_joint_harmonic", "link torque periodic in the joint angle (eccentric or worn gear; data-driven)",
+           _harmonic_params("joint angle"), True, _harmonic("term_joint_harmonic")),
+    Effect("torque_coulomb", "Coulomb-like load torque tanh(w / width) (data-driven)",
+           (EffectParam("torque_Nm", "N*m", -30.0, 30.0, 0.0, "level at speed"),
+            EffectParam("width_rad_s", "rad/s", 1e-3, 1.0, 0.01, "speed of the smooth sign")),
+           True, _both(_add("term_coulomb_Nm", "torque_Nm"), _set("term_coulomb_width_rad_s", "width_rad_s"))),
+    Effect("torque_stribeck", "Stribeck-like load torque at low speed, fading above v_s (data-driven)",
+           (EffectParam("torque_Nm", "N*m", -30.0, 30.0, 0.0, "level at low speed"),
+            EffectParam("speed_rad_s", "rad/s", 1e-3, 2.0, 0.05, "Stribeck speed v_s")),
+           True, _both(_add("term_stribeck_Nm", "torque_Nm"), _set("term_stribeck_speed_rad_s", "speed_rad_s"))),
+    Effect("torque_viscous", "viscous load torque c w (data-driven)",
+           (EffectParam("coeff_Nms_per_rad", "N*m*s/rad", -100.0, 100.0, 0.0, "c"),),
+           True, _add("term_viscous_Nms_per_rad", "coeff_Nms_per_rad")),
+    Effect("torque_quadratic", "speed-squared load torque c w|w| (seal or fluid drag; data-driven)",
+           (EffectParam("coeff_Nms2_per_rad2", "N*m*s^2/rad^2", -500.0, 500.0, 0.0, "c"),),
+           True, _add("term_quadratic_Nms2_per_rad2", "coeff_Nms2_per_rad2")),
+    Effect("torque_gravity_scale", "load torque proportional to the model's own gravity torque on the joint "
+           "(gravity-model error; data-driven)",
+           (EffectParam("scale", "-", -1.0, 1.0, 0.0, "share of the joint's gravity torque added"),),
+           True, _add("term_gravity_scale", "scale")),
+    Effect("torque_holding", "torque held at rest in the direction of the last motion (friction that stays "
+           "loaded when the joint stops; data-driven)",
+           (EffectParam("torque_Nm", "N*m", -30.0, 30.0, 0.0, "level at rest"),
+            EffectParam("speed_rad_s", "rad/s", 1e-3, 1.0, 0.02, "speed below which the joint is at rest")),
+           True, _both(_add("term_holding_Nm", "torque_Nm"), _set("term_holding_speed_rad_s", "speed_rad_s"))),
+    Effect("inertia", "added rotational inertia on the joint (armature; missing inertia; data-driven)",
+           (EffectParam("inertia_kgm2", "kg*m^2", -1.0, 10.0, 0.0, "added to the joint's inertia"),),
+           True, _add("armature_kgm2", "inertia_kgm2")),
+    Effect("link_mass", "mass and centre-of-mass error of the link the joint moves (data-driven)",
+           (EffectParam("mass_kg", "kg", -10.0, 30.0, 0.0, "added at the link's centre of mass"),
+            *(EffectParam(f"com_{k}_m", "m", -0.5, 0.5, 0.0, f"centre-of-mass shift along the link's {k[1]} axis")
+              for k in ("dx", "dy", "dz"))),
+           True, _link_mass),
+    Effect("current_temperature_drift", "current-reading drift with joint temperature (sensor or thermal drift; "
+           "data-driven)",
+           (EffectParam("coeff_A_per_K", "A/K", -1.0, 1.0, 0.0, "c in c (T - T_ref)"),
+            EffectParam("reference_C", "degC", -10.0, 90.0, 28.0, "T_ref")),
+           True, _both(_add("current_temp_drift_A_per_K", "coeff_A_per_K"),
+                       _set("current_temp_reference_C", "reference_C"))),
+    Effect("current_time_shift", "logged current reading shifted in time (timestamp skew; data-driven)",
+           (EffectParam("shift_ms", "ms", -50.0, 50.0, 0.0, "reading(t) = current(t - shift)"),),
+           True, _add("current_time_shift_s", "shift_ms", 1e-3)),
+    Effect("position_time_shift", "logged joint-position reading shifted in time (timestamp skew or lag; "
+           "data-driven)",
+           (EffectParam("shift_ms", "ms", -50.0, 50.0, 0.0, "reading(t) = position(t - shift)"),),
+           True, _add("position_time_shift_s", "shift_ms", 1e-3)),
+]
+
 REGISTRY: dict[str, Effect] = {
     e.name: e
     for e in [
@@ -285,5 +367,8 @@ REGISTRY: dict[str, Effect] = {
             True,
             _set("friction_motor_side_share", "motor_side_share"),
         ),
+        # ---- data-driven terms (ur5fault/terms.py): what the discrepancy workflow discovers outside the
+        # entries above; the engine's term hook evaluates them (link torques, model terms, sensor terms)
+        *_TERM_EFFECTS,
     ]
 }

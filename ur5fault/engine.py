@@ -40,6 +40,7 @@ from .multibody import BatchMultibody, LoopMultibody
 from .params import RobotParams, load_params
 from .result import SimResult
 from .run_arrays import RunArrays, build_run_arrays
+from .terms import TermHook
 from .trajectory import Trajectory
 
 _log = logging.getLogger(__name__)
@@ -187,9 +188,17 @@ def _integrate(sim: Simulator, traj: Trajectory, runs: list[RunSpec], a: RunArra
 
     # multibody, consistent start at rest, drive chain
     mb = sim._multibody(a)
+    # >>> data-driven terms hook (ur5fault/terms.py): None unless some run carries a term effect
+    terms = TermHook.build(a)
+    if terms is not None:
+        terms.prepare_model(mb)
+    # <<<
     mb.set_payload(a.payload_kg * gripped_step[0])
     q = np.tile(q_set_s[0], (n, 1))
     bias = mb.start(q)
+    if terms is not None and terms.link_torque:  # >>> term hook: the terms' static load is held from the start
+        bias = bias + terms.load_torque(q, np.zeros_like(q), np.ones_like(q), dt,
+                                        mb.gravity_torque() if terms.gravity else None)
     qd = np.zeros((n, N_JOINTS))
     P = pack_params(sim, a)
     drive = DRIVES[sim.drive](P, initial_state(P, q, bias), dt, ts, p.friction.stribeck_rate_s_per_rad)
@@ -241,10 +250,14 @@ def _integrate(sim: Simulator, traj: Trajectory, runs: list[RunSpec], a: RunArra
                 next_progress += PROGRESS_STEP
 
         tau = drive.physics(q, qd)
+        if terms is not None and terms.link_torque:  # >>> term hook: load torques of data-driven terms
+            tau = tau - terms.load_torque(q, qd, mb.mass_diagonal(), dt,
+                                         mb.gravity_torque() if terms.gravity else None)
         if step in change_steps:
             mb.set_payload(a.payload_kg * gripped_step[step])
         mb.qfrc_applied[:] = tau
-        mb.dof_damping[:] = drive.s_l  # the friction's slope: MuJoCo applies the link friction implicitly
+        # the friction's slope on top of the model's own joint damping: MuJoCo's Euler step applies both implicitly
+        mb.dof_damping[:] = mb.model_damping + drive.s_l
         mb.step(active)
         q = mb.qpos.copy()
         qd = mb.qvel.copy()
@@ -260,6 +273,8 @@ def _integrate(sim: Simulator, traj: Trajectory, runs: list[RunSpec], a: RunArra
 
     if progress is not None:
         progress(1.0)
+    if terms is not None:  # >>> term hook: sensor terms on the logged readings
+        terms.apply_sensor_terms(log, (np.arange(n_log) + 1) * log_every * dt)
     for r in np.flatnonzero(mb.warnings() > 0):
         if status[r] is Status.OK:
             status[r], reason[r] = Status.DIVERGED, "MuJoCo reported a simulation warning (instability)"

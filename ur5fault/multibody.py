@@ -34,6 +34,28 @@ class _Ids:
         self.tcp = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_SITE, "tcp")
         self.payload = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "payload")
         self.m_diag = np.asarray(model.M_rowadr) + np.asarray(model.M_rownnz) - 1
+        self.links = [int(model.jnt_bodyid[j]) for j in range(N_JOINTS)]  # the body each joint moves
+        # subtree[j, b]: body b moves with joint j (b is the joint's body or one of its descendants)
+        self.subtree = np.zeros((N_JOINTS, model.nbody), dtype=bool)
+        for j, top in enumerate(self.links):
+            for b in range(model.nbody):
+                a = b
+                while a > 0 and a != top:
+                    a = int(model.body_parentid[a])
+                self.subtree[j, b] = a == top
+        self.up = -np.asarray(model.opt.gravity) / max(np.linalg.norm(model.opt.gravity), 1e-300)
+
+
+def gravity_torque(ids: _Ids, g_m_s2: float, mass: NDArray, xipos: NDArray, xanchor: NDArray,
+                   xaxis: NDArray) -> NDArray:
+    """Static gravity torque each joint's motor supplies ``(n, 6)`` [N*m]: the weight of every body that
+    moves with the joint, ``m_b g`` upwards at its centre of mass, taken about the joint's axis."""
+    from .terms import gravity_moments
+
+    out = np.empty((mass.shape[0], N_JOINTS))
+    gravity_moments(np.ascontiguousarray(mass), np.ascontiguousarray(xipos), np.ascontiguousarray(xanchor),
+                    np.ascontiguousarray(xaxis), ids.subtree, g_m_s2 * ids.up, out)
+    return out
 
 
 class LoopMultibody:
@@ -52,7 +74,9 @@ class LoopMultibody:
         self.qpos = np.zeros((n, N_JOINTS))
         self.qvel = np.zeros((n, N_JOINTS))
         self.qfrc_applied = np.zeros((n, N_JOINTS))
-        self.dof_damping = np.zeros((n, N_JOINTS))
+        self.dof_damping = np.tile(np.asarray(model.dof_damping, float), (n, 1))
+        #: the joint damping the MJCF itself declares (the engine adds the friction slope to it)
+        self.model_damping = np.asarray(model.dof_damping, float).copy()
 
     def set_payload(self, mass_kg: NDArray) -> None:
         inertia = payload_inertia(mass_kg)
@@ -90,6 +114,25 @@ class LoopMultibody:
     def run_models(self) -> list[mujoco.MjModel]:
         return self.models
 
+    # -- used by the data-driven terms (ur5fault/terms.py)
+    def model_field(self, name: str) -> list[NDArray]:
+        """Per run, a writable view of a model field (call :meth:`model_changed` after writing)."""
+        return [getattr(m, name) for m in self.models]
+
+    def link_bodies(self) -> list[int]:
+        return self.ids.links
+
+    def model_changed(self) -> None:
+        for m, d in zip(self.models, self.datas):
+            mujoco.mj_setConst(m, d)
+
+    def gravity_torque(self) -> NDArray:
+        """Static gravity torque of every run and joint ``(n, 6)`` [N*m] (see :func:`gravity_torque`)."""
+        g = float(np.linalg.norm(self.models[0].opt.gravity))
+        return gravity_torque(self.ids, g, np.stack([m.body_mass for m in self.models]),
+                              np.stack([d.xipos for d in self.datas]), np.stack([d.xanchor for d in self.datas]),
+                              np.stack([d.xaxis for d in self.datas]))
+
 
 class BatchMultibody:
     """Fast path: ``mujoco.batch.Batch`` steps all runs in C on ``nthread`` threads."""
@@ -111,6 +154,8 @@ class BatchMultibody:
         self.qvel = b.bind("qvel")
         self.qfrc_applied = b.bind("qfrc_applied")
         self.dof_damping = b.expand("dof_damping")
+        #: the joint damping the MJCF itself declares (the engine adds the friction slope to it)
+        self.model_damping = np.asarray(model.dof_damping, float).copy()
         self._M = b.bind("M")
         self._bias = b.bind("qfrc_bias")  # bound before any call: a derived field bound later reads zero until then
         self._all = np.arange(n)
@@ -139,3 +184,22 @@ class BatchMultibody:
 
     def run_models(self) -> list[mujoco.MjModel]:
         return [self.batch.get_model(r) for r in range(len(self._all))]
+
+    # -- used by the data-driven terms (ur5fault/terms.py)
+    def model_field(self, name: str) -> NDArray:
+        """A writable ``(n, ...)`` array of per-run model values (call :meth:`model_changed` after writing)."""
+        return self.batch.expand(name)
+
+    def link_bodies(self) -> list[int]:
+        return self.ids.links
+
+    def model_changed(self) -> None:
+        self.batch.set_const()
+
+    def gravity_torque(self) -> NDArray:
+        """Static gravity torque of every run and joint ``(n, 6)`` [N*m] (see :func:`gravity_torque`).
+        The kinematic fields are bound at the first call; call it before :meth:`start`."""
+        if not hasattr(self, "_xipos"):
+            self._xipos, self._xanchor, self._xaxis = (self.batch.bind(f) for f in ("xipos", "xanchor", "xaxis"))
+        g = float(np.linalg.norm(self.template.opt.gravity))
+        return gravity_torque(self.ids, g, self._mass, self._xipos, self._xanchor, self._xaxis)

@@ -17,6 +17,7 @@ from .axes import N_JOINTS
 from .drive.motor import back_emf_constant
 from .effects import REGISTRY, EffectSpec
 from .params import RobotParams
+from .terms import MAX_HARMONICS
 
 
 @dataclasses.dataclass
@@ -61,6 +62,26 @@ class RunArrays:
     payload_kg: NDArray
     payload_com_m: NDArray
     setpoint_delay_s: NDArray
+    # data-driven terms (ur5fault/terms.py; the engine's term hook reads them): harmonics in slots
+    # (n_runs, 6, MAX_HARMONICS) with [..., 0] the sine and [..., 1] the cosine amplitude
+    term_joint_harmonic_Nm: NDArray
+    term_joint_harmonic_per_rev: NDArray
+    term_coulomb_Nm: NDArray
+    term_coulomb_width_rad_s: NDArray
+    term_stribeck_Nm: NDArray
+    term_stribeck_speed_rad_s: NDArray
+    term_viscous_Nms_per_rad: NDArray
+    term_quadratic_Nms2_per_rad2: NDArray
+    term_gravity_scale: NDArray
+    term_holding_Nm: NDArray
+    term_holding_speed_rad_s: NDArray
+    armature_kgm2: NDArray
+    link_mass_kg: NDArray
+    link_com_shift_m: NDArray  # (n_runs, 6, 3) in the link's body frame
+    current_temp_drift_A_per_K: NDArray
+    current_temp_reference_C: NDArray
+    current_time_shift_s: NDArray
+    position_time_shift_s: NDArray
 
     @property
     def n_runs(self) -> int:
@@ -123,8 +144,28 @@ def build_run_arrays(params: RobotParams, effects: Sequence[Sequence[EffectSpec]
         payload_kg=np.full(n, float(payload_kg)),
         payload_com_m=np.zeros((n, 3)),
         setpoint_delay_s=np.zeros(n),
+        **_term_fields(n, params),
     )
     for row, run_effects in enumerate(effects):
         for spec in run_effects:
             REGISTRY[spec.name].apply(arrays, row, spec.joint, dict(spec.values))
     return arrays
+
+
+def _term_fields(n: int, params: RobotParams) -> dict[str, NDArray]:
+    """The data-driven terms' fields at their absent values (the registry's defaults)."""
+    h = MAX_HARMONICS
+    zeros = np.zeros((n, N_JOINTS))
+    return {
+        "term_joint_harmonic_Nm": np.zeros((n, N_JOINTS, h, 2)),
+        "term_joint_harmonic_per_rev": np.ones((n, N_JOINTS, h)),
+        "term_coulomb_Nm": zeros.copy(), "term_coulomb_width_rad_s": np.full((n, N_JOINTS), 0.01),
+        "term_stribeck_Nm": zeros.copy(), "term_stribeck_speed_rad_s": np.full((n, N_JOINTS), 0.05),
+        "term_viscous_Nms_per_rad": zeros.copy(), "term_quadratic_Nms2_per_rad2": zeros.copy(),
+        "term_gravity_scale": zeros.copy(), "term_holding_Nm": zeros.copy(),
+        "term_holding_speed_rad_s": np.full((n, N_JOINTS), 0.02),
+        "armature_kgm2": zeros.copy(), "link_mass_kg": zeros.copy(),
+        "link_com_shift_m": np.zeros((n, N_JOINTS, 3)), "current_temp_drift_A_per_K": zeros.copy(),
+        "current_temp_reference_C": np.full((n, N_JOINTS), float(params.friction.reference_temp_C)),
+        "current_time_shift_s": zeros.copy(), "position_time_shift_s": zeros.copy(),
+    }

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import argparse
-import sys
+import os
 from pathlib import Path
 
 
@@ -11,20 +11,24 @@ def register(sub) -> None:
     d = sub.add_parser("discrepancy", help="find, name and fix where the model and a measured log disagree")
     d.add_argument("log", help="measured log file")
     d.add_argument("--format", required=True, choices=("rtde", "nist", "sim"), dest="fmt")
-    d.add_argument("--model", help="model overlay YAML to start from")
+    d.add_argument("--model", help="model overlay YAML to start from (e.g. an earlier model.yaml)")
     d.add_argument("--out", required=True, help="output folder (report.md, model.yaml, summary.json)")
     d.add_argument("--payload-kg", type=float, help="payload held during the log (rtde: required if any)")
     d.add_argument("--tcp-offset-m", type=float, nargs=3, help="tool offset in the flange frame [m] (rtde)")
     d.add_argument("--fit-fraction", type=float, default=0.6, help="share of the log used for fitting (0.2..0.9)")
-    d.add_argument("--max-effects", type=int, default=3)
-    d.add_argument("--jobs", type=int, help="worker processes for the candidate batches (default: all cores)")
+    d.add_argument("--max-effects", type=int, default=3, help="most effects of the library named (default 3)")
+    d.add_argument("--max-terms", type=int, default=4,
+                   help="most terms discovered outside the library (default 4; 0: library only)")
+    d.add_argument("--jobs", type=int, help="worker processes for the simulation batches (default: all cores)")
+    d.add_argument("--quiet", action="store_true", help="no progress bar")
     d.set_defaults(func=cmd_discrepancy)
 
 
 def cmd_discrepancy(args: argparse.Namespace) -> int:
-    from .config import Overlay
-    from .discrepancy import DiscrepancyModel, write_report
-    from .logs import read_log
+    from ..config import Overlay
+    from ..logs import read_log
+    from .model import DiscrepancyModel
+    from .report import summary, write_report
 
     kwargs = {}
     if args.fmt == "rtde":
@@ -34,16 +38,17 @@ def cmd_discrepancy(args: argparse.Namespace) -> int:
             kwargs["tcp_offset_m"] = tuple(args.tcp_offset_m)
     log = read_log(args.log, args.fmt, **kwargs)
     overlay = Overlay.load(args.model) if args.model else None
-    print(f"{log.source}: {log.t_s[-1]:.1f} s at {1 / log.period_s:.0f} Hz; fitting...", file=sys.stderr)
-    import os
-
     jobs = args.jobs or os.cpu_count() or 1
-    model = DiscrepancyModel(fit_fraction=args.fit_fraction, max_effects=args.max_effects, jobs=jobs).fit(
+    model = DiscrepancyModel(fit_fraction=args.fit_fraction, max_effects=args.max_effects,
+                             max_terms=args.max_terms, jobs=jobs, progress=not args.quiet).fit(
         log, dict(overlay.params) if overlay else None, overlay.effects if overlay else ())
     paths = write_report(model, Path(args.out))
-    summ = model.summary()
-    for line in summ["named"] or ["no effect of the library explains the residual better than noise"]:
+    summ = summary(model)
+    print(f"{log.source}: {log.t_s[-1]:.1f} s at {1 / log.period_s:.0f} Hz")
+    for line in summ["named"] or ["nothing explains the residual better than noise"]:
         print(line)
+    for line in summ["dropped"]:
+        print(f"dropped: {line}")
     for u in summ["unexplained"]:
         print(f"unexplained: {u['signal']} on {u['joint']} (held-out RMS {u['rms_held_out']:.3g}, "
               f"largest {u['largest_where']})")

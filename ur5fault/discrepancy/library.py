@@ -1,0 +1,116 @@
+"""Screening the effect library: linearised sensitivities of every candidate from one lockstep batch.
+
+Every (effect, parameter) of the registry is simulated once at a probe value (a typical fault size).
+A per-joint effect is probed on every joint at once in a single run: a joint's drive hardly moves the
+other joints' readings (their coupling through the arm changes a position by micro-radians), so the
+run's change on joint ``j``'s channels is the sensitivity of candidate ``(effect, j)``, and the batch
+holds one run per effect parameter instead of one per joint.  The secant from the baseline to the probe
+is the candidate's column of the linearised problem.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..axes import N_JOINTS
+from ..effects import REGISTRY, EffectSpec, make_effect
+from ..params import load_params
+from .candidates import LibraryCandidate
+from .replay import Replay, Replayed
+
+#: probe value per (effect, parameter): a typical fault size, for the secant of the screening batch
+PROBES: dict[tuple[str, str], float | None] = {
+    ("backlash", "backlash_deg"): 0.1,
+    ("coulomb_friction", "scale"): 1.5,
+    ("viscous_friction", "scale"): 1.5,
+    ("viscous_temperature", "coeff_per_K"): 0.04,
+    ("gear_stiffness", "scale"): 0.5,
+    ("torque_constant", "scale"): 0.9,
+    ("resolver_offset", "offset_deg"): 0.01,
+    ("current_sensor_gain", "gain"): 1.1,
+    ("current_sensor_offset", "offset_A"): 0.1,
+    ("cogging", "amplitude_Nm"): 0.02,
+    ("delay", "delay_ms"): 4.0,
+    ("payload", "mass_kg"): None,  # the log's payload + PAYLOAD_PROBE_KG
+    ("payload_com", "dx_m"): 0.05, ("payload_com", "dy_m"): 0.05, ("payload_com", "dz_m"): 0.05,
+}
+PAYLOAD_PROBE_KG = 0.5
+#: effects that are operating conditions read from the log, not discrepancies
+CONDITIONS = {"temperature"}
+
+
+def candidates(payload_kg: float, joints: Sequence[int] = range(N_JOINTS),
+               kinds: Sequence[str] | None = None) -> list[LibraryCandidate]:
+    """Every candidate of the library (optionally only some effect kinds), per-joint ones on ``joints``."""
+    out = []
+    for (name, par), probe in PROBES.items():
+        if name in CONDITIONS or (kinds is not None and name not in kinds):
+            continue
+        eff = REGISTRY[name]
+        if name == "payload":
+            x0, probe = payload_kg, payload_kg + PAYLOAD_PROBE_KG
+        elif name == "viscous_temperature":
+            x0 = float(load_params().friction.viscous_temp_coeff_per_K[0])
+        else:
+            x0 = float(eff.param(par).absent)
+        for j in (joints if eff.per_joint else [None]):
+            out.append(LibraryCandidate(name, j, par, x0, float(probe)))
+    return out
+
+
+def _probe_runs(cands: list[LibraryCandidate]) -> list[tuple[list[LibraryCandidate], tuple[EffectSpec, ...]]]:
+    """Group the candidates into probe runs: per-joint ones of one (effect, parameter) share a run."""
+    groups: dict[tuple[str, str], list[LibraryCandidate]] = {}
+    for c in cands:
+        groups.setdefault((c.effect, c.param), []).append(c)
+    runs = []
+    for group in groups.values():
+        if group[0].joint is None:
+            runs += [([c], (c.spec(np.array([c.coef(c.probe)])),)) for c in group]
+        else:
+            runs.append((group, tuple(c.spec(np.array([c.coef(c.probe)])) for c in group)))
+    return runs
+
+
+def screen(rp: Replay, n: int, cands: list[LibraryCandidate], current: Sequence[EffectSpec] = (),
+           progress=None) -> tuple[Replayed, NDArray, list[LibraryCandidate]]:
+    """Simulate the baseline and every probe run over samples ``1..n`` in one batch.
+
+    Returns:
+        The baseline replay, the weighted columns ``(p, n, n_channels)`` (the change of the *simulated*
+        readings per unit coefficient, divided by the noise sigma) and the candidates they belong to
+        (those whose probe run failed, even when probed alone, are left out).
+    """
+    runs = _probe_runs(cands)
+    sims = rp.run([tuple(current)] + [tuple(current) + specs for _, specs in runs], n, progress)
+    base, probes = sims[0], sims[1:]
+    retry = [c for (group, _), sim in zip(runs, probes) if not sim.ok and len(group) > 1 for c in group]
+    if retry:  # a probe that failed on one joint spoils its shared run: probe those joints one by one
+        alone = rp.run([tuple(current) + (c.spec(np.array([c.coef(c.probe)])),) for c in retry], n)
+        runs += [([c], ()) for c in retry]
+        probes += alone
+    sigma = rp.sigma
+    cols, kept = [], []
+    for (group, _), sim in zip(runs, probes):
+        if not sim.ok:
+            continue
+        delta = (sim.y - base.y) / sigma
+        for c in group:
+            if c in kept:
+                continue
+            col = delta / c.coef(c.probe)
+            if c.joint is not None:  # a per-joint probe's column: its own joint's channels only
+                col = np.where(np.arange(N_JOINTS) == c.joint, col, 0.0)
+            if not np.any(col):
+                continue
+            cols.append(col.reshape(n, -1))
+            kept.append(c)
+    return base, np.array(cols), kept
+
+
+def effect_specs(found: Sequence[tuple[LibraryCandidate, float]]) -> tuple[EffectSpec, ...]:
+    """Effects of found library candidates at their values."""
+    return tuple(make_effect(c.effect, None if c.joint is None else c.joint + 1, **{c.param: v}) for c, v in found)

@@ -1,0 +1,145 @@
+"""Replay a measured log through the model: the log's target trajectory, payload, tool offset and joint
+temperatures, simulated under a set of effects, sampled where the log was.
+
+Residual signals (the log's readings that the model predicts), stacked on a signal axis so that every
+array of the workflow is ``(n_samples, n_signals, 6)``:
+
+* ``current_A``: motor current reading;
+* ``position_rad``: joint position reading (resolver);
+* ``mismatch_rad``: motor-encoder angle / gear ratio - joint reading, when the log has motor encoders.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Sequence
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..effects import EffectSpec
+from ..engine import RunSpec, Simulator
+from ..errors import ParameterError
+from ..logs import MeasuredLog
+from ..params import RobotParams, deep_merge, load_params
+from ..terms import sensor_temperature_term
+
+#: the workflow's own sensor-noise stream, unrelated to any log
+WORKFLOW_SEED = 20261121
+#: joint temperatures outside this range are clipped before they reach the model [degC] (the params' range)
+TEMPERATURE_RANGE_C = (-20.0, 120.0)
+
+
+@dataclasses.dataclass(frozen=True)
+class Replayed:
+    """One replay at log samples ``1..n``: readings ``y`` ``(n, n_signals, 6)`` in the replay's signal
+    order, and the simulated states the dictionary of terms is built from, ``(n, 6)`` each."""
+
+    status: str
+    y: NDArray
+    q_rad: NDArray  # true joint angle
+    q_motor_rad: NDArray  # true motor angle
+    current_true_A: NDArray  # motor current before the sensor
+    torque_gear_Nm: NDArray
+
+    @property
+    def ok(self) -> bool:
+        return self.status == "ok"
+
+
+class Replay:
+    """Simulates a log's target trajectory under a model (parameter overrides + effects).
+
+    Args:
+        log: the measured log.
+        params_overrides: robot-parameter overrides of the model overlay.
+        base_effects: effects of the model overlay, carried by every replay.
+        seed: sensor-noise seed of the replays.
+        jobs: worker processes for batches of replays.
+    """
+
+    def __init__(self, log: MeasuredLog, params_overrides: dict | None = None,
+                 base_effects: Sequence[EffectSpec] = (), seed: int = WORKFLOW_SEED, jobs: int = 1) -> None:
+        self.log = log
+        self.jobs = max(1, int(jobs))
+        over: dict = {"tcp_offset_m": list(log.tcp_offset_m)}
+        if log.temperature_C is not None:
+            over["joint_temperature_C"] = np.clip(log.temperature_C.mean(axis=0), *TEMPERATURE_RANGE_C).tolist()
+        self.params: RobotParams = load_params(overrides=deep_merge(over, dict(params_overrides or {})))
+        self.traj = log.to_trajectory()
+        self.base = tuple(base_effects)
+        self.seed = seed
+        steps = log.period_s / self.params.physics_dt_s
+        if abs(steps - round(steps)) > 1e-6:
+            raise ParameterError(f"{log.source}: sample period {log.period_s:g} s is not a multiple of the physics "
+                                 f"step {self.params.physics_dt_s:g} s")
+        self.signals: tuple[str, ...] = ("current_A", "position_rad") + (
+            ("mismatch_rad",) if log.q_motor_rad is not None else ())
+        s = self.params.sensors
+        noise = {"current_A": s.current_noise_A, "position_rad": s.resolver_noise_rad,
+                 "mismatch_rad": s.resolver_noise_rad}
+        #: sensor-noise sigma per signal and joint ``(n_signals, 6)``: the residual weights
+        self.sigma: NDArray = np.array([noise[name] for name in self.signals], dtype=float)
+        self.gear_ratio = np.asarray(self.params.gear.ratio, dtype=float)
+        self.n_simulated = 0  # replays run so far
+        self.simulated_s = 0.0  # simulated seconds so far, summed over replays
+
+    @property
+    def n_samples(self) -> int:
+        """Samples that can be replayed (every sample after the first)."""
+        return self.log.t_s.size - 1
+
+    def measured(self, n: int) -> NDArray:
+        """The log's readings at samples ``1..n``, ``(n, n_signals, 6)``."""
+        L = self.log
+        out = [L.current_A[1 : n + 1], L.q_actual_rad[1 : n + 1]]
+        if L.q_motor_rad is not None:
+            out.append(L.q_motor_rad[1 : n + 1] / self.gear_ratio - L.q_actual_rad[1 : n + 1])
+        return np.stack(out, axis=1)
+
+    def run(self, effect_sets: Sequence[Sequence[EffectSpec]], n: int, progress=None) -> list[Replayed]:
+        """Replay samples ``1..n`` once per effect set (one lockstep batch, split over ``jobs`` processes)."""
+        runs = [RunSpec(f"c{i}", self.seed, self.base + tuple(e)) for i, e in enumerate(effect_sets)]
+        self.n_simulated += len(runs)
+        self.simulated_s += len(runs) * n * self.log.period_s
+        if self.jobs > 1 and len(runs) >= 2:
+            # a batch equals its single runs bit for bit, so splitting over processes changes nothing
+            import joblib
+
+            size = -(-len(runs) // self.jobs)
+            parts = joblib.Parallel(n_jobs=self.jobs)(
+                joblib.delayed(_simulate)(self.params, self.traj, runs[i : i + size], self.log.period_s, n)
+                for i in range(0, len(runs), size))
+            res = [r for part in parts for r in part]
+        else:
+            res = _simulate(self.params, self.traj, runs, self.log.period_s, n, progress)
+        k = len(self.signals)  # _simulate returns current, position, mismatch: keep those the log has
+        return [self._with_log_temperature(dataclasses.replace(r, y=r.y[:, :k]), effs)
+                for r, effs in zip(res, effect_sets)]
+
+    def _with_log_temperature(self, r: Replayed, effects: Sequence[EffectSpec]) -> Replayed:
+        """A temperature term was evaluated at the run's constant temperature (the log's mean);
+        replace that by the log's temperature series."""
+        drift = [e for e in effects if e.name == "current_temperature_drift"]
+        if not drift or self.log.temperature_C is None:
+            return r
+        n = r.y.shape[0]
+        t_log = self.log.temperature_C[1 : n + 1]
+        t_run = np.asarray(self.params.joint_temperature_C)
+        y = r.y.copy()
+        for e in drift:
+            c = e.value("coeff_A_per_K")
+            y[:, 0, e.joint] += sensor_temperature_term(c, t_log[:, e.joint], t_run[e.joint])
+        return dataclasses.replace(r, y=y)
+
+
+def _simulate(params: RobotParams, traj, runs: list[RunSpec], period_s: float, n: int, progress=None
+              ) -> list[Replayed]:
+    res = Simulator(params).run(traj, runs, log_period_s=period_s, duration_s=n * period_s, progress=progress)
+    ratio = np.asarray(params.gear.ratio, dtype=float)
+    out = []
+    for i in range(res.n_runs):
+        y = [res["i_FB_A"][i], res["q_FB_rad"][i], res["q_M_FB_rad"][i] / ratio - res["q_FB_rad"][i]]
+        out.append(Replayed(res.status[i], np.stack(y, axis=1), res["q_rad"][i], res["q_M_rad"][i], res["i_q_A"][i],
+                            res["T_gear_Nm"][i]))
+    return out

@@ -1,0 +1,317 @@
+"""What the workflow tells its user: RMS tables, where residuals are largest, one sentence per finding,
+``summary.json``, ``model.yaml`` (the overlay) and ``report.md`` with residual figures."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..axes import JOINT_NAMES, N_JOINTS
+from ..effects import REGISTRY
+from ..io import write_text_atomic
+from .candidates import LibraryCandidate, TermCandidate
+from .replay import Replay
+from .statistics import Z_95
+
+if TYPE_CHECKING:  # pragma: no cover
+    from .model import DiscrepancyModel, Finding
+
+#: the links the joints move (MJCF body names), for findings about a link's mass
+LINK_NAMES = ("shoulder_link", "upper_arm_link", "forearm_link", "wrist_1_link", "wrist_2_link", "wrist_3_link")
+#: a held-out residual above this multiple of the noise floor is reported as unexplained
+UNEXPLAINED_FACTOR = 3.0
+#: a condition's window around a velocity reversal [s]; a joint counts as moving above this speed [rad/s]
+REVERSAL_WINDOW_S = 0.25
+MOVING_RAD_S = 1e-3
+#: "at speed", "accelerating", "under high load": above this share of the joint's largest value
+PEAK_SHARE = 0.5
+#: temperature span above which the warmer half of the log is a condition [K]
+WARM_SPAN_K = 0.5
+
+
+def rms_table(signals: tuple[str, ...], meas: NDArray, sim: NDArray, sl: slice) -> dict[str, dict[str, float]]:
+    """RMS of measured - simulated per signal and joint over samples ``sl``."""
+    return {s: {JOINT_NAMES[j]: float(np.sqrt(np.nanmean((meas[sl, i, j] - sim[sl, i, j]) ** 2)))
+                for j in range(N_JOINTS)} for i, s in enumerate(signals)}
+
+
+def conditions(rp: Replay, n: int, torque: NDArray) -> dict[str, NDArray]:
+    """Boolean masks ``(n, 6)`` of operating conditions at samples 1..n."""
+    log = rp.log
+    q = log.q_target_rad[: n + 2]
+    qd_all = np.gradient(q, log.period_s, axis=0)
+    qd = qd_all[1 : n + 1]
+    qdd = np.gradient(qd_all, log.period_s, axis=0)[1 : n + 1]
+    win = max(1, round(REVERSAL_WINDOW_S / log.period_s))
+    near = np.zeros_like(qd, dtype=bool)
+    moving = np.abs(qd) > MOVING_RAD_S
+    sign = np.sign(np.where(moving, qd, 0.0))
+    for j in range(N_JOINTS):
+        last = 0.0
+        for k in np.flatnonzero(sign[:, j]):
+            if last != 0 and sign[k, j] != last:
+                near[max(0, k - win) : k + win, j] = True
+            last = sign[k, j]
+
+    def peak(x: NDArray) -> NDArray:
+        return np.abs(x) > PEAK_SHARE * np.maximum(np.abs(x).max(axis=0), 1e-12)
+
+    out = {"at speed": peak(qd), "near velocity reversals": near, "accelerating": peak(qdd),
+           "at rest": ~moving, "under high load": peak(torque[:n])}
+    if log.temperature_C is not None and np.ptp(log.temperature_C) > WARM_SPAN_K:
+        temp = log.temperature_C[1 : n + 1]
+        out["warmer half"] = temp > np.median(temp, axis=0)
+    return out
+
+
+def rms_by_condition(r: NDArray, masks: dict[str, NDArray], j: int) -> tuple[dict[str, float], str]:
+    """RMS of one joint's residual ``r`` under each condition that occurs, and the largest one."""
+    by = {k: float(np.sqrt(np.nanmean(r[m[:, j]] ** 2))) for k, m in masks.items() if m[:, j].any()}
+    return by, max(by, key=by.__getitem__)
+
+
+def localise(rp: Replay, residual: NDArray, torque: NDArray, top: int = 3) -> list[dict[str, Any]]:
+    """The largest residuals (signal, joint) with their RMS under each operating condition."""
+    n = residual.shape[0]
+    masks = conditions(rp, n, torque)
+    rms = np.sqrt(np.nanmean(residual**2, axis=0))  # (S, 6)
+    ranked = sorted(((rms[i, j] / rp.sigma[i, j], i, j) for i in range(len(rp.signals)) for j in range(N_JOINTS)),
+                    reverse=True)[:top]
+    out = []
+    for ratio, i, j in ranked:
+        by, worst = rms_by_condition(residual[:, i, j], masks, j)
+        out.append({"signal": rp.signals[i], "joint": JOINT_NAMES[j], "rms": float(rms[i, j]),
+                    "rms_over_noise": float(ratio), "rms_by_condition": by, "largest_where": worst})
+    return out
+
+
+def unexplained(rp: Replay, residual: NDArray, torque: NDArray, n_fit: int) -> list[dict[str, Any]]:
+    """Signal/joint pairs whose held-out residual stays above UNEXPLAINED_FACTOR x the noise floor."""
+    out = []
+    masks = conditions(rp, residual.shape[0], torque)
+    for i, s in enumerate(rp.signals):
+        for j in range(N_JOINTS):
+            floor = math.sqrt(2.0) * rp.sigma[i, j]
+            rms = float(np.sqrt(np.nanmean(residual[n_fit:, i, j] ** 2)))
+            if rms > UNEXPLAINED_FACTOR * floor:
+                where, worst = rms_by_condition(residual[:, i, j], masks, j)
+                out.append({"signal": s, "joint": JOINT_NAMES[j], "rms_held_out": rms, "noise_floor": floor,
+                            "rms_by_condition": where, "largest_where": worst})
+    return out
+
+
+# ------------------------------------------------------------------------------------------ sentences
+def _amplitude(f: Finding) -> tuple[float, float, float]:
+    """Size of a finding's coefficients (the amplitude of a sine-cosine pair) and its 95 % interval."""
+    th, se = np.asarray(f.theta), np.asarray(f.se)
+    amp = float(np.linalg.norm(th)) if th.size > 1 else float(th[0])
+    if th.size > 1:
+        u = th / max(abs(amp), 1e-300)
+        s = float(np.sqrt(np.sum((u * se) ** 2)))
+    else:
+        s = float(se[0])
+    return amp, amp - Z_95 * s, amp + Z_95 * s
+
+
+def size(f: Finding) -> float:
+    """A finding's size in its effect's own unit (amplitude for a harmonic; the parameter value for a
+    library effect)."""
+    c = f.candidate
+    if isinstance(c, LibraryCandidate):
+        return c.value(f.theta)
+    return _amplitude(f)[0] * c.to_param
+
+
+def sentence(f: Finding) -> str:
+    """One line a robotics engineer reads: what, where, how big (95 % interval), and how sure."""
+    c = f.candidate
+    amp, lo, hi = _amplitude(f)
+    if isinstance(c, LibraryCandidate):
+        unit = REGISTRY[c.effect].param(c.param).unit
+        a, b = sorted((c.value(lo), c.value(hi)))
+        text = (f"{c.where}: {REGISTRY[c.effect].doc} - {c.param} {c.value(f.theta):.4g} {unit} "
+                f"({a:.4g}..{b:.4g})")
+    else:
+        text = _term_text(c, amp, lo, hi)
+    tests = f"z {f.verdict.z:.0f}, delta BIC {f.verdict.delta_bic:.0f}"
+    if f.held_out is not None:
+        tests += (f", held out: removes {100 * f.held_out.ratio:.0f} % of its change" if f.held_out.testable
+                  else ", not testable on the held-out part")
+    alt = ""
+    if f.alternatives:
+        alt = "; indistinguishable in this log from " + ", ".join(
+            f"{a.label} {_coef_text(a, th)}" for a, th in f.alternatives)
+    return f"{text} [{tests}]{alt}"
+
+
+def _coef_text(c, th) -> str:
+    if isinstance(c, LibraryCandidate):
+        return f"{c.value(th):.4g}"
+    return ", ".join(f"{k} {v * c.to_param:.4g}" for k, v in zip(c.keys, np.ravel(th)))
+
+
+def _term_text(c: TermCandidate, amp: float, lo: float, hi: float) -> str:
+    k = dict(c.fixed)
+    amps = f"{c.signal_per_coef * amp:.3g} A"
+    rng = f"95 % {lo:.3g}..{hi:.3g}"
+    fam = c.family
+    if fam == "joint_harmonic":
+        return (f"{c.where}: current ripple of {amps} periodic in the joint angle, {k['periods_per_rev']:.0f} per "
+                f"revolution (link torque {amp:.3g} N*m, {rng})")
+    if fam == "coulomb":
+        return f"{c.where}: Coulomb-like load torque of {amp:.3g} N*m ({amps}) beyond the model's friction ({rng})"
+    if fam == "stribeck":
+        return (f"{c.where}: Stribeck-like load torque of {amp:.3g} N*m ({amps}) at low speed, fading above "
+                f"{k['speed_rad_s']:g} rad/s ({rng})")
+    if fam == "holding":
+        return (f"{c.where}: holding torque of {amp:.3g} N*m ({amps}) at rest, in the direction of the last motion "
+                f"(friction that stays loaded when the joint stops; {rng})")
+    if fam == "viscous":
+        return f"{c.where}: viscous load of {amp:.3g} N*m*s/rad beyond the model's friction ({rng})"
+    if fam == "quadratic":
+        return f"{c.where}: speed-squared drag of {amp:.3g} N*m*s^2/rad^2 (torque c w|w|; {rng})"
+    if fam == "inertia":
+        what = "missing" if amp > 0 else "excess"
+        return f"{c.where}: {what} inertia of {abs(amp):.3g} kg*m^2 on the joint ({rng})"
+    if fam == "gravity_scale":
+        return f"{c.where}: gravity torque {100 * amp:+.1f} % of the model's ({100 * lo:.1f}..{100 * hi:.1f} %)"
+    if fam == "link_mass":
+        return f"{LINK_NAMES[c.joint]}: {amp:+.3g} kg at the link's centre of mass ({rng} kg)"
+    if fam == "link_com":
+        axis = c.keys[0][5]
+        return (f"{LINK_NAMES[c.joint]}: centre of mass {1e3 * amp:+.1f} mm along the link's {axis} axis "
+                f"(95 % {1e3 * lo:.1f}..{1e3 * hi:.1f} mm)")
+    if fam == "temperature_drift":
+        return f"{c.where}: current drift of {1e3 * amp:.3g} mA/K with joint temperature (95 % {1e3 * lo:.3g}.." \
+               f"{1e3 * hi:.3g} mA/K)"
+    what = "current" if fam == "current_time_shift" else "position"
+    return (f"{c.where}: {what} reading {abs(1e3 * amp):.3g} ms {'late' if amp > 0 else 'early'} "
+            f"(95 % {1e3 * lo:.3g}..{1e3 * hi:.3g} ms)")
+
+
+def finding_json(f: Finding) -> dict[str, Any]:
+    c = f.candidate
+    spec = f.spec()
+    lo, hi = f.interval()
+    out = {"source": c.source, "name": c.effect, "joint": JOINT_NAMES[c.joint] if c.joint is not None else None,
+           "parameters": dict(spec.values), "sentence": sentence(f), "size": size(f), "kept": f.kept,
+           "reason": f.reason, "z": f.verdict.z, "delta_bic": f.verdict.delta_bic,
+           "block_ratios": list(f.verdict.stability.ratios),
+           "held_out": None if f.held_out is None else {"testable": f.held_out.testable, "ratio": f.held_out.ratio,
+                                                       "energy": f.held_out.energy},
+           "indistinguishable_from": [{"candidate": a.label, "coefficients": list(map(float, np.ravel(th)))}
+                                      for a, th in f.alternatives]}
+    if isinstance(c, LibraryCandidate):
+        a, b = sorted((c.value(lo), c.value(hi)))
+        out["interval"] = {c.param: [a, b]}
+    else:
+        out["family"] = c.family
+        out["interval"] = {k: [float(x) * c.to_param, float(y) * c.to_param] for k, x, y in zip(c.keys, lo, hi)}
+    return out
+
+
+def summary(model: DiscrepancyModel) -> dict[str, Any]:
+    rp = model.replay_
+    return {
+        "log": rp.log.source,
+        "named": [sentence(f) for f in model.findings_ if f.kept],
+        "findings": [finding_json(f) for f in model.findings_],
+        "dropped": [f"{sentence(f)}: {f.reason}" for f in model.dropped_],
+        "rms_before": model.rms_before_,
+        "rms_after": model.rms_after_,
+        "rms_fit_before": model.rms_fit_before_,
+        "rms_fit_after": model.rms_fit_after_,
+        "unexplained": model.unexplained_,
+        "localisation_before": model.localisation_,
+        "search": [vars(s) for s in model.search_],
+        "fit_fraction": model.fit_fraction,
+        "held_out_s": [model.n_fit_ * rp.log.period_s, model.n_all_ * rp.log.period_s],
+        "wall_s": model.wall_s_,
+        "wall_s_by_stage": model.timings_s_,
+        "simulated_runs": model.n_simulated_runs_,
+        "simulated_s": model.simulated_s_,
+        # wall time over (simulated run-steps x one bare mj_step timed at the end of the fit): compares
+        # wall times taken on machines of different speed or load
+        "bare_mj_step_us": model.bare_mj_step_us_,
+        "wall_over_mj_steps": model.wall_over_mj_steps_,
+    }
+
+
+def figures(model: DiscrepancyModel):
+    """One residual figure per signal (before/after, held-out part marked), as matplotlib Figures."""
+    from matplotlib.figure import Figure
+
+    rp = model.replay_
+    t = rp.log.t_s[1 : model.n_all_ + 1]
+    out = {}
+    for i, s in enumerate(rp.signals):
+        fig = Figure(figsize=(11, 11))
+        axes = fig.subplots(N_JOINTS, 1, sharex=True)
+        for j, ax in enumerate(axes):
+            ax.plot(t, model.residual_before_[:, i, j], lw=0.5, label="before")
+            ax.plot(t, model.residual_after_[:, i, j], lw=0.5, label="after")
+            ax.axvline(t[model.n_fit_ - 1], color="k", ls="--", lw=0.8)
+            ax.set_ylabel(f"J{j + 1} [{s.split('_')[-1]}]")
+        axes[0].legend(loc="upper right", fontsize=8)
+        axes[0].set_title(f"{s} residual (measured - simulated); dashed: start of the held-out part")
+        axes[-1].set_xlabel("time [s]")
+        fig.tight_layout()
+        out[s] = fig
+    return out
+
+
+def write_report(model: DiscrepancyModel, out: Path) -> list[Path]:
+    """``report.md`` with residual plots, ``model.yaml`` (overlay) and ``summary.json``."""
+    import yaml
+
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    summ = summary(model)
+    write_text_atomic(out / "summary.json", json.dumps(summ, indent=2, default=float))
+    write_text_atomic(out / "model.yaml", yaml.safe_dump(model.overlay(), sort_keys=False))
+    paths = []
+    for s, fig in figures(model).items():
+        p = out / f"residual_{s}.png"
+        fig.savefig(p, dpi=80)
+        paths.append(p)
+    write_text_atomic(out / "report.md", _markdown(model, summ, paths))
+    return [out / "report.md", out / "model.yaml", out / "summary.json", *paths]
+
+
+def _markdown(model: DiscrepancyModel, summ: dict[str, Any], figs: list[Path]) -> str:
+    lines = [f"# Discrepancy report: {summ['log']}", "", "## Where the starting model disagrees", "",
+             "| signal | joint | RMS | RMS / noise | largest where |", "| --- | --- | --- | --- | --- |"]
+    for loc in summ["localisation_before"]:
+        lines.append(f"| {loc['signal']} | {loc['joint']} | {loc['rms']:.4g} | {loc['rms_over_noise']:.1f} | "
+                     f"{loc['largest_where']} ({loc['rms_by_condition'][loc['largest_where']]:.4g}) |")
+    lib = [sentence(f) for f in model.effects_]
+    terms = [sentence(f) for f in model.terms_]
+    lines += ["", "## Effects of the library found", ""]
+    lines += [f"- {s}" for s in lib] or ["- none"]
+    lines += ["", "## Terms discovered outside the library (added to model.yaml as data-driven effects)", ""]
+    lines += [f"- {s}" for s in terms] or ["- none"]
+    if summ["dropped"]:
+        lines += ["", "## Dropped", ""] + [f"- {s}" for s in summ["dropped"]]
+    lines += ["", "## Held-out gap (RMS, measured - simulated)", "",
+              "| signal | joint | before | after | share explained |", "| --- | --- | --- | --- | --- |"]
+    for s, per in summ["rms_before"].items():
+        for jn, b in per.items():
+            a = summ["rms_after"][s][jn]
+            lines.append(f"| {s} | {jn} | {b:.4g} | {a:.4g} | {100 * (1 - (a / b) ** 2) if b else 0:.0f} % |")
+    lines += ["", "## Unexplained", ""]
+    if summ["unexplained"]:
+        for u in summ["unexplained"]:
+            lines.append(f"- {u['signal']} on {u['joint']}: held-out RMS {u['rms_held_out']:.4g} against a noise "
+                         f"floor of {u['noise_floor']:.3g}, largest {u['largest_where']}")
+    else:
+        lines.append(f"- nothing above {UNEXPLAINED_FACTOR:g} times the noise floor")
+    lines += ["", "## Residual plots", ""] + [f"![{p.stem}]({p.name})" for p in figs]
+    lines += ["", f"Fitted on the first {100 * model.fit_fraction:.0f} % of the log; {summ['simulated_runs']} "
+              f"simulated runs ({summ['simulated_s']:.0f} s simulated) in {summ['wall_s']:.0f} s "
+              f"({summ['wall_over_mj_steps']:.2f} bare mj_step times per simulated run-step)."]
+    return "\n".join(lines) + "\n"
