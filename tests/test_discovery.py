@@ -128,3 +128,30 @@ def test_library_finding_survives_a_different_friction_law_on_the_same_joint(tmp
     hit = _library_estimate(model, "coulomb_friction", 0)
     assert hit, [sentence(f) for f in model.findings_]
     assert abs(hit[1] - 1.5) <= 0.25 * 0.5, hit
+
+
+@pytest.mark.slow
+def test_cli_round_trip_through_the_model_overlay(tmp_path):
+    """``discrepancy`` writes a model.yaml with the discovered term; ``discrepancy --model`` replays it and
+    finds nothing more; ``simulate --model`` runs it."""
+    import subprocess
+    import sys
+
+    log = write_rtde(simulate(seed=2468), tmp_path / "m.csv", drift=(2, 0.025))
+
+    def cli(*args):
+        r = subprocess.run([sys.executable, "-m", "ur5fault.cli", *args], capture_output=True, text=True,
+                           cwd=tmp_path)
+        assert r.returncode == 0, r.stderr
+        return r.stdout
+
+    first = cli("discrepancy", str(log), "--format", "rtde", "--payload-kg", str(PAYLOAD_KG), "--out", "fit1",
+                "--jobs", str(JOBS), "--quiet")
+    assert "elbow_joint: current drift of" in first, first
+    ov = Overlay.load(tmp_path / "fit1" / "model.yaml")
+    assert [e.name for e in ov.effects] == ["current_temperature_drift"]
+    second = cli("discrepancy", str(log), "--format", "rtde", "--payload-kg", str(PAYLOAD_KG), "--model",
+                 "fit1/model.yaml", "--out", "fit2", "--jobs", str(JOBS), "--quiet")
+    assert "nothing explains the residual better than noise" in second, second
+    cli("simulate", "--model", "fit1/model.yaml", "--trajectory", "joint_sweep", "--duration-s", "0.5",
+        "--out", "run.parquet")

@@ -8,7 +8,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from ur5fault.discrepancy.search import columns_of, forward, refine
+from ur5fault.discrepancy.search import columns_of, forward, polish, probe_batch
 from ur5fault.discrepancy.statistics import (
     BlockGram,
     collinearity,
@@ -124,8 +124,8 @@ def test_generalisation_ratio():
 
 @pytest.mark.parametrize("method", ["secant", "minimize"])
 def test_refine_converges_on_a_mildly_nonlinear_model(method):
-    """A stand-in simulator y(theta) = A theta + 0.3 (A theta)^2: both refiners reach the truth from the
-    secant estimate of a probe at half the true size."""
+    """A stand-in simulator y(theta) = A theta + 0.3 (A theta)^2: from the linear estimate of probes at half
+    the true size, one probe batch and either refiner reach the truth."""
     rng = np.random.default_rng(8)
     A = rng.standard_normal((2, N, C)) * 0.05
     truth = np.array([1.0, -0.6])
@@ -149,6 +149,8 @@ def test_refine_converges_on_a_mildly_nonlinear_model(method):
     G, g, ee = bg.total()
     th0 = rss_of(G, g, ee, [0, 1])[1]
     probes = [-th0[i] * np.eye(2)[i] for i in range(2)]  # each coefficient removed
-    out = refine(evaluate, th0, probes, (np.full(2, -5.0), np.full(2, 5.0)), N // 2, method)
+    bounds = (np.full(2, -5.0), np.full(2, 5.0))
+    first = probe_batch(evaluate, th0, probes, bounds, N // 2)
+    assert np.allclose(first.e0, e0) and len(first.steps) == 4
+    out = polish(evaluate, first.theta, first.J, bounds, N // 2, method)
     assert np.allclose(out.theta, truth, atol=0.02), (out.theta, len(out.steps))
-    assert np.allclose(out.e0, e0)

@@ -30,7 +30,7 @@ from . import discovery, library
 from .candidates import Candidate
 from .replay import Replay, Replayed
 from .report import localise, rms_table, unexplained
-from .search import Refined, Verdict, backward, columns_of, forward, judge, refine
+from .search import Refined, Verdict, backward, columns_of, forward, judge, polish, probe_batch
 from .statistics import Z_95, BlockGram, Generalisation, generalisation, rss_of, weighted
 
 logger = logging.getLogger(__name__)
@@ -243,29 +243,30 @@ class DiscrepancyModel:
             fixed = [fixed[c] for k in keep for c in fcols[k]]
             found = [found[k] for k in keep]
         prog = stages.start("refining the findings")
+        self.refinement_ = []
         if found:
             G, g, ee = BlockGram.build(X_all[fixed], e0).total()
             theta0 = rss_of(G, g, ee, list(range(len(fixed))))[1]
             self._alts = [(i, a, th) for i, c in enumerate(found) for a, th in alternatives.get(c, [])]
-            ref = self._refine(rp, found, theta0, n_fit, prog, self._alts)
-            self.refinement_ = ref.steps
+            first = self._probe(rp, found, theta0, n_fit, prog, self._alts)
+            self.refinement_ += first.steps
+            nominal = first.sim0
         else:
-            ref = None
-            self.refinement_ = []
             nominal = rp.run([()], n_all, prog)[0]
         timings["refinement"] = time.perf_counter() - t
+
+        # ---- 4. judged on the fitting and the held-out part; the kept ones polished by Gauss-Newton (the
+        # first simulation of which is the final model when the estimate has converged)
         t = time.perf_counter()
-        stages.start("judging")
-        if ref is not None:
-            findings = self._judge(found, ref, alternatives, n_fit, n_scr)
-            nominal = ref.sim0
+        prog = stages.start("judging")
+        findings: list[Finding] = []
+        after = nominal
+        if found:
+            findings = self._judge(found, first, n_fit)
             kept = [f for f in findings if f.kept]
-            if len(kept) == len(found):
-                after = ref.sim
-            else:
-                after = rp.run([tuple(f.spec() for f in kept)], n_all)[0]
-        else:
-            findings, after = [], nominal
+            if kept:
+                after = self._polish(rp, kept, first, found, n_fit, prog)
+        self._results(rp, nominal, after, n_fit, n_all)
         self._results(rp, nominal, after, n_fit, n_all)
         timings["judging"] = time.perf_counter() - t
         stages.close()
@@ -285,12 +286,10 @@ class DiscrepancyModel:
     def _split(found: list[Candidate], theta: NDArray) -> list[NDArray]:
         return np.split(theta, np.cumsum([c.n_coef for c in found])[:-1])
 
-    def _refine(self, rp: Replay, found: list[Candidate], theta0: NDArray, n_fit: int, progress,
-                alts: Sequence[tuple[int, Candidate, NDArray]] = ()) -> Refined:
-        """Re-simulate the whole log: the first batch holds the starting model, the linearised estimate and
-        each finding removed (a sine-cosine pair also turned by a quarter period), whose secants give the
-        simulated Jacobian, and each indistinguishable alternative in place of its finding (at its linear
-        estimate); Gauss-Newton steps follow on the fitting part."""
+    def _evaluator(self, rp: Replay, found: list[Candidate], progress):
+        """``evaluate(thetas, extra=())``: replays of the whole log with ``found`` at each ``theta`` (and
+        each extra ``(i, alternative, its coefficients)``: the alternative in place of finding ``i``, the
+        others at ``thetas[1]``), with their weighted residuals."""
         n_all = rp.n_samples
         meas = rp.measured(n_all)
 
@@ -299,13 +298,23 @@ class DiscrepancyModel:
 
         def evaluate(thetas: list[NDArray], extra=()) -> list[tuple[Replayed, NDArray]]:
             sets = [specs(theta) for theta in thetas]
-            for i, a, a_theta in extra:  # the alternative in place of finding i, the others at theta0
-                th = self._split(found, theta0)
+            for i, a, a_theta in extra:
+                th = self._split(found, thetas[1])
                 th[i] = np.zeros_like(th[i])
                 sets.append(specs(np.concatenate(th)) + (a.spec(a_theta),))
             sims = rp.run(sets, n_all, progress)
             return [(s, weighted(meas, s.y, rp.sigma)) for s in sims]
 
+        return evaluate
+
+    def _bounds(self, found: list[Candidate]) -> tuple[NDArray, NDArray]:
+        return (np.concatenate([c.bounds()[0] for c in found]), np.concatenate([c.bounds()[1] for c in found]))
+
+    def _probe(self, rp: Replay, found: list[Candidate], theta0: NDArray, n_fit: int, progress,
+               alts: Sequence[tuple[int, Candidate, NDArray]] = ()) -> Refined:
+        """One batch over the whole log: the starting model, the linearised estimate, each finding removed
+        (a sine-cosine pair also turned by a quarter period), whose secants give the simulated Jacobian,
+        and each indistinguishable alternative in place of its finding (at its linear estimate)."""
         probes, off = [], 0
         for c in found:
             th_c = theta0[off : off + c.n_coef]
@@ -314,11 +323,42 @@ class DiscrepancyModel:
                 p[off : off + c.n_coef] = d
                 probes.append(p)
             off += c.n_coef
-        lo = np.concatenate([c.bounds()[0] for c in found])
-        hi = np.concatenate([c.bounds()[1] for c in found])
-        return refine(evaluate, theta0, probes, (lo, hi), n_fit, self.refiner, list(alts), evaluate)
+        evaluate = self._evaluator(rp, found, progress)
+        return probe_batch(evaluate, theta0, probes, self._bounds(found), n_fit, list(alts), evaluate)
 
-    def _judge(self, found: list[Candidate], ref: Refined, alternatives, n_fit: int, n_scr: int) -> list[Finding]:
+    def _polish(self, rp: Replay, kept: list[Finding], first: Refined, found: list[Candidate], n_fit: int,
+                progress) -> Replayed:
+        """Gauss-Newton on the kept findings from their judged coefficients; their final coefficients and
+        verdicts (a finding that fails now is dropped, and the final model simulated once more)."""
+        cands = [f.candidate for f in kept]
+        cols = columns_of(found)
+        idx = [c for f in kept for c in cols[found.index(f.candidate)]]
+        pol = polish(self._evaluator(rp, cands, progress), np.concatenate([f.theta for f in kept]), first.J[idx],
+                     self._bounds(cands), n_fit, self.refiner)
+        self.refinement_ += pol.steps
+        for f, th in zip(kept, self._split(cands, pol.theta)):
+            f.theta = th
+        kcols = columns_of(cands)
+        J_fit = pol.J[:, :n_fit]
+        e_pseudo = pol.e[:n_fit] + np.tensordot(pol.theta, J_fit, axes=1)
+        bg = BlockGram.build(J_fit, e_pseudo)
+        failed = []
+        for k, f in enumerate(kept):
+            v = dataclasses.replace(judge(bg, e_pseudo, J_fit, kcols, [o for o in range(len(kept)) if o != k], k),
+                                    label=f.candidate.label)
+            f.verdict, f.se = v, np.asarray(v.se)
+            if not v.accepted:
+                failed.append(f)
+        for f in failed:
+            f.kept = False
+            f.reason = f"explains nothing the others do not once refined ({f.verdict.reason})"
+            self.search_.append(SearchStep.of("final check", dataclasses.replace(f.verdict, reason=f.reason)))
+        if failed:
+            rest = [f for f in kept if f.kept]
+            return rp.run([tuple(f.spec() for f in rest)], rp.n_samples, progress)[0] if rest else first.sim0
+        return pol.sim
+
+    def _judge(self, found: list[Candidate], ref: Refined, n_fit: int) -> list[Finding]:
         """Every finding against all the others on the fitting part, linearised at the refined coefficients:
         selected afresh from the findings alone (so two that only cancel each other, e.g. a viscous scale
         and a negative viscous term beside a speed-squared drag, do not both stay), each checked against
@@ -370,9 +410,6 @@ class DiscrepancyModel:
             kept.remove(k)
             out = []
         final = {k: f for k, f in zip(kept, out)}
-        if not dropped:  # nothing dropped: the simulated optimum itself, not its linear refit
-            for f, th in zip(final.values(), self._split(found, ref.theta)):
-                f.theta = th
         for f in dropped:
             self.search_.append(SearchStep.of("held-out check" if f.held_out else "joint check", dataclasses.replace(
                 f.verdict, accepted=False, reason=f.reason)))
@@ -423,6 +460,11 @@ class DiscrepancyModel:
         self.rms_after_ = rms_table(rp.signals, meas, after.y, held)
         self.rms_fit_before_ = rms_table(rp.signals, meas, nominal.y, slice(0, n_fit))
         self.rms_fit_after_ = rms_table(rp.signals, meas, after.y, slice(0, n_fit))
+        # the robot controller's own current model where the log has it (target - actual current)
+        tc = rp.log.target_current_A
+        self.rms_controller_model_ = None if tc is None else {
+            part: {JOINT_NAMES[j]: float(np.sqrt(np.mean((tc[1 : n_all + 1][sl, j] - meas[sl, 0, j]) ** 2)))
+                   for j in range(N_JOINTS)} for part, sl in (("held_out", held), ("fit", slice(0, n_fit)))}
         self.unexplained_ = unexplained(rp, self.residual_after_, after.torque_gear_Nm, n_fit)
         self.localisation_ = localise(rp, self.residual_before_, nominal.torque_gear_Nm)
 

@@ -120,7 +120,7 @@ class Replay:
     def _with_log_temperature(self, r: Replayed, effects: Sequence[EffectSpec]) -> Replayed:
         """A temperature term was evaluated at the run's constant temperature (the log's mean);
         replace that by the log's temperature series."""
-        drift = [e for e in effects if e.name == "current_temperature_drift"]
+        drift = [e for e in (*self.base, *effects) if e.name == "current_temperature_drift"]
         if not drift or self.log.temperature_C is None:
             return r
         n = r.y.shape[0]

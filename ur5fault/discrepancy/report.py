@@ -226,6 +226,7 @@ def summary(model: DiscrepancyModel) -> dict[str, Any]:
         "rms_after": model.rms_after_,
         "rms_fit_before": model.rms_fit_before_,
         "rms_fit_after": model.rms_fit_after_,
+        "rms_controller_model_current_A": model.rms_controller_model_,
         "unexplained": model.unexplained_,
         "localisation_before": model.localisation_,
         "search": [vars(s) for s in model.search_],
@@ -303,6 +304,10 @@ def _markdown(model: DiscrepancyModel, summ: dict[str, Any], figs: list[Path]) -
         for jn, b in per.items():
             a = summ["rms_after"][s][jn]
             lines.append(f"| {s} | {jn} | {b:.4g} | {a:.4g} | {100 * (1 - (a / b) ** 2) if b else 0:.0f} % |")
+    if summ["rms_controller_model_current_A"]:
+        ctl = summ["rms_controller_model_current_A"]["held_out"]
+        lines += ["", "The robot controller's own current model (target - actual current in the log), held out: "
+                  + ", ".join(f"{jn} {v:.3g} A" for jn, v in ctl.items()) + "."]
     lines += ["", "## Unexplained", ""]
     if summ["unexplained"]:
         for u in summ["unexplained"]:

@@ -273,66 +273,86 @@ class _Evaluations:
         return step, float((Jf @ step) @ f)
 
 
-def refine(evaluate, theta0: NDArray, probes: Sequence[NDArray], bounds: tuple[NDArray, NDArray], fit_rows: int,
-           method: str = "secant", extra: Sequence[object] = (), evaluate_extra=None) -> Refined:
-    """Refine coefficients by re-simulating the whole log, fitting its first ``fit_rows`` samples.
-
-    The first lockstep batch holds the starting model (all coefficients zero), ``theta0`` and ``theta0`` +
-    each of ``probes``; when the probes span every coefficient (each finding removed, a sine-cosine pair
-    also turned by a quarter period), their secants give the whole Jacobian at once.
+def probe_batch(evaluate, theta0: NDArray, probes: Sequence[NDArray], bounds: tuple[NDArray, NDArray],
+                fit_rows: int, extra: Sequence[object] = (), evaluate_extra=None) -> Refined:
+    """Re-simulate the whole log once for the starting model (all coefficients zero), ``theta0`` and
+    ``theta0`` + each of ``probes``, in one lockstep batch.  When the probes span every coefficient (each
+    finding removed, a sine-cosine pair also turned by a quarter period), their secants anchored at
+    ``theta0`` give the whole simulated Jacobian.
 
     Args:
         evaluate: ``evaluate(list of theta) -> list of (replay, weighted residual (n, n_channels))``.
         theta0: the linearised estimate.
-        probes: perturbations of ``theta0`` simulated in the first batch.
+        probes: perturbations of ``theta0``.
         bounds: coefficient bounds (the effects' valid ranges).
-        method: ``"secant"`` (Gauss-Newton steps on the secant Jacobian, one simulation per round,
-            at most :data:`REFINE_ROUNDS`) or ``"minimize"`` (``mujoco.minimize.least_squares`` from the
-            first batch's best point, finite differences in scaled coordinates).
-        extra, evaluate_extra: other models simulated in the first batch (``evaluate_extra(extra)`` returns
-            their residuals), e.g. a finding's indistinguishable alternatives.
+        fit_rows: samples of the fitting part (the rest is held out).
+        extra, evaluate_extra: other models simulated in the same batch (``evaluate_extra(thetas, extra)``
+            returns the replays of both), e.g. a finding's indistinguishable alternatives.
     """
     lo, hi = bounds
     k = theta0.size
-    scale = np.maximum(np.abs(theta0), 1e-9)
-    ev = _Evaluations(evaluate, k, scale, fit_rows)
+    ev = _Evaluations(evaluate, k, np.maximum(np.abs(theta0), 1e-9), fit_rows)
     theta = np.clip(theta0, lo, hi)
     pts = [np.zeros(k), theta] + [np.clip(theta + p, lo, hi) for p in probes]
     first = ev(pts, update=False, extra=extra, evaluate_extra=evaluate_extra)
-    extra_e = ev.extra_e
     e0, sim0 = first[0][0], first[0][2]
     if e0 is None:
         raise RuntimeError("the starting model failed to replay the log")
-    # the Jacobian from the secants of the first batch, anchored at theta (at zero if theta failed)
-    anchor = 1 if first[1][0] is not None else 0
+    anchor = 1 if first[1][0] is not None else 0  # at zero if theta0 itself failed
     ev._secants(pts[anchor], first[anchor][0],
                 [(pts[i], first[i][0]) for i in range(len(pts)) if i != anchor and first[i][0] is not None])
+    n, C = e0.shape
+    return Refined(pts[anchor], ev.J.T.reshape(-1, n, C), first[anchor][2], first[anchor][0], sim0, e0, ev.steps,
+                   [r[0] for r in first[2:]], ev.extra_e)
+
+
+def polish(evaluate, theta: NDArray, J: NDArray, bounds: tuple[NDArray, NDArray], fit_rows: int,
+           method: str = "secant") -> Refined:
+    """Gauss-Newton rounds on the fitting part from ``theta`` (its Jacobian ``J`` ``(k, n, n_channels)``
+    from :func:`probe_batch`); the first simulation is ``theta`` itself, so a converged estimate costs one.
+
+    Args:
+        method: ``"secant"`` (steps on the secant-updated Jacobian, one simulation each, until the next
+            promises less than :data:`REFINE_RTOL` of the weighted RSS; at most :data:`REFINE_ROUNDS`
+            simulations) or ``"minimize"`` (``mujoco.minimize.least_squares``: Levenberg-Marquardt with
+            bounds, finite differences of :data:`FD_STEP` in coordinates scaled by ``theta``).
+    """
+    lo, hi = bounds
+    k = theta.size
+    scale = np.maximum(np.abs(theta), 1e-9)
+    ev = _Evaluations(evaluate, k, scale, fit_rows)
+    ev.J = J.reshape(k, -1).T.copy()
+    theta = np.clip(theta, lo, hi)
     if method == "secant":
-        theta = ev.best[0]
-        for _ in range(REFINE_ROUNDS):
+        (e, _, _), = ev([theta], update=False)
+        if e is None:
+            raise RuntimeError("the refined model failed to replay the log")
+        ev.last = (theta.copy(), e)
+        for _ in range(REFINE_ROUNDS - 1):
             step, gain = ev.step(ev.best[1])
             if gain < REFINE_RTOL * ev.best[3]:
                 break
-            theta = np.clip(ev.best[0] + step, lo, hi)
-            (e, rss, _), = ev([theta])
+            trial = np.clip(ev.best[0] + step, lo, hi)
+            (e, rss, _), = ev([trial])
             if e is None or rss > ev.best[3]:  # worse than the best point: try half the step once
-                theta = np.clip(ev.best[0] + 0.5 * step, lo, hi)
-                ev([theta])
+                ev([np.clip(ev.best[0] + 0.5 * step, lo, hi)])
     elif method == "minimize":
         from mujoco import minimize
 
         def residual(z: NDArray) -> NDArray:
             outs = ev([col * scale for col in z.T])
-            return np.stack([ev.fit_part(e) if e is not None else np.full(ev.fit_part(e0).size, 1e6)
-                             for e, _, _ in outs], axis=1)
+            size = ev.J.shape[0] // (J.shape[1]) * fit_rows  # channels x fitting rows
+            return np.stack([ev.fit_part(e) if e is not None else np.full(size, 1e6) for e, _, _ in outs], axis=1)
 
-        minimize.least_squares(ev.best[0] / scale, residual, bounds=(lo / scale, hi / scale), eps=FD_STEP,
-                               max_iter=REFINE_ROUNDS, verbose=0)
+        minimize.least_squares(theta / scale, residual, bounds=(lo / scale, hi / scale), eps=FD_STEP,
+                               max_iter=REFINE_ROUNDS - 1, verbose=0)
     else:
         raise ValueError(f"method = {method!r}; choose secant or minimize")
+    if ev.best is None:
+        raise RuntimeError("the refined model failed to replay the log")
     th, e, sim, _ = ev.best
-    n, C = e0.shape
-    return Refined(th, ev.J.T.reshape(-1, n, C), sim, e, sim0, e0, ev.steps, [r[0] for r in first[2:]], extra_e)
+    n = e.shape[0]
+    return Refined(th, ev.J.T.reshape(k, n, -1), sim, e, None, None, ev.steps)
 
 
 #: finite-difference step of the ``minimize`` refinement, relative to each coefficient's first estimate
