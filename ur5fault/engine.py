@@ -108,7 +108,7 @@ class Simulator:
         payload = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_BODY, "payload")
         self.model.body_sameframe[payload] = 0
         m = self.model
-        self._tcp_site = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SITE, "tcp")
+        self.tcp_site = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SITE, "tcp")
         p = self.params
         self.gains = ctl.design_gains(
             p.controller,
@@ -280,7 +280,8 @@ def _integrate(sim: Simulator, traj: Trajectory, runs: list[RunSpec], a: RunArra
             status[r], reason[r] = Status.DIVERGED, "MuJoCo reported a simulation warning (instability)"
     t_log = (np.arange(n_log) + 1) * log_every * dt
     q_set_log, _ = traj.interpolate(t_log)
-    return SimResult.build(sim, traj, runs, a, t_log, q_set_log, log, [s.value for s in status], reason,
+    return SimResult.build(sim.params, sim.model_path, sim.tcp_site, traj, runs, a, t_log, q_set_log, log,
+                           [s.value for s in status], reason,
                            mb.run_models())
 
 
