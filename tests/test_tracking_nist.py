@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from ur5fault import RunSpec, Simulator
-from ur5fault.discrepancy import conditions
+from ur5fault.discrepancy.report import conditions
 from ur5fault.logs import read_nist
 from ur5fault.params import load_params
 

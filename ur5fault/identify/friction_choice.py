@@ -25,7 +25,7 @@ REST_SPEED_RAD_S = 1e-3  # target speed below which a joint is at rest
 
 
 def _masks(log: MeasuredLog, n: int) -> dict[str, np.ndarray]:
-    from ..discrepancy import conditions  # the discrepancy workflow's own definition of the conditions
+    from ..discrepancy.report import conditions  # the discrepancy workflow's own definition of the conditions
 
     masks = conditions(log, n, log.current_A[1 : n + 1])
     t = log.t_s[1 : n + 1] - log.t_s[0]
