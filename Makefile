@@ -18,6 +18,11 @@ $(STAMP): pyproject.toml
 test: $(STAMP)
 	$(BIN)/python -m pytest -q
 
+# daily work: everything except the tests marked slow (long physics, campaigns, wheel, discrepancy); < 3 min
+.PHONY: test-fast
+test-fast: $(STAMP)
+	$(BIN)/python -m pytest -q -m "not slow"
+
 campaign: $(STAMP)
 	$(BIN)/ur5fault campaign run campaigns/default.yaml --out results/default
 

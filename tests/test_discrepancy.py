@@ -77,6 +77,7 @@ def noise_seed(kind: str) -> int:
     return seed
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("kind", sorted(KINDS))
 def test_hidden_effect_is_named_estimated_and_removed(tmp_path, kind):
     eff, j, par, truth, signal = draw(kind)
@@ -96,6 +97,7 @@ def test_hidden_effect_is_named_estimated_and_removed(tmp_path, kind):
     assert after <= 0.3 * before, f"held-out {signal} gap on {jn}: {before:.4g} -> {after:.4g}"
 
 
+@pytest.mark.slow
 def test_no_effect_names_nothing(tmp_path):
     log = read_sim(generate(tmp_path, [], seed=99))
     model = DiscrepancyModel().fit(log)
@@ -103,6 +105,7 @@ def test_no_effect_names_nothing(tmp_path):
     assert model.unexplained_ == []
 
 
+@pytest.mark.slow
 def test_two_effects_on_different_joints_both_named(tmp_path):
     effs = [make_effect("coulomb_friction", 1, scale=1.7), make_effect("current_sensor_offset", 4, offset_A=0.25)]
     log = read_sim(generate(tmp_path, effs, seed=1234))
@@ -111,6 +114,7 @@ def test_two_effects_on_different_joints_both_named(tmp_path):
     assert ("coulomb_friction", 0) in named and ("current_sensor_offset", 3) in named, model.log_
 
 
+@pytest.mark.slow
 def test_effect_outside_the_library_is_reported_unexplained(tmp_path):
     """A 3x heavier forearm (link mass is not an effect of the library): the workflow must not
     confidently name something else; the residual stays reported, with where it is."""
@@ -129,6 +133,7 @@ def test_effect_outside_the_library_is_reported_unexplained(tmp_path):
         assert max(f.share_explained.values()) > 0.5, f.sentence()
 
 
+@pytest.mark.slow
 def test_outputs_and_overlay_roundtrip(tmp_path):
     eff = make_effect("coulomb_friction", 3, scale=1.6)
     log = read_sim(generate(tmp_path, [eff], seed=42))

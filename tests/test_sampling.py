@@ -205,4 +205,4 @@ def test_small_sampled_campaign_runs_labels_and_resumes(tmp_path):
     run_campaign(build_campaign(copy.deepcopy(TINY), "tiny.yaml", out=tmp_path), tmp_path, jobs=1, progress=False)
     assert stamp == {p.name: p.stat().st_mtime_ns for p in (tmp_path / "runs").iterdir()}  # resumed: nothing to do
     info = status(tmp_path)  # rebuilt from the manifest's campaign text: the same draws
-    assert info["n_runs_expected"] == len(camp.runs) == info["runs_done"]
+    assert info["n_runs_expected"] == len(camp.runs) == info["runs"]["ok"]

@@ -521,11 +521,8 @@ def _clip(x: float, p) -> float:
 
 def write_report(model: DiscrepancyModel, out: Path) -> list[Path]:
     """``report.md`` with residual plots, ``model.yaml`` (overlay) and ``summary.json``."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
     import yaml
+    from matplotlib.figure import Figure  # no pyplot: no backend picked, nothing to close
 
     out.mkdir(parents=True, exist_ok=True)
     summ = model.summary()
@@ -535,7 +532,8 @@ def write_report(model: DiscrepancyModel, out: Path) -> list[Path]:
     t = log.t_s[1 : model.n_all_ + 1]
     figs = []
     for s in model.residual_before_:
-        fig, axes = plt.subplots(N_JOINTS, 1, figsize=(11, 11), sharex=True)
+        fig = Figure(figsize=(11, 11))
+        axes = fig.subplots(N_JOINTS, 1, sharex=True)
         for j, ax in enumerate(axes):
             ax.plot(t, model.residual_before_[s][:, j], lw=0.5, label="before")
             ax.plot(t, model.residual_after_[s][:, j], lw=0.5, label="after")
@@ -547,7 +545,6 @@ def write_report(model: DiscrepancyModel, out: Path) -> list[Path]:
         fig.tight_layout()
         p = out / f"residual_{s}.png"
         fig.savefig(p, dpi=80)
-        plt.close(fig)
         figs.append(p)
     lines = [f"# Discrepancy report: {log.source}", "", "## Where the starting model disagrees", "",
              "| signal | joint | RMS | RMS / noise | largest where |", "| --- | --- | --- | --- | --- |"]

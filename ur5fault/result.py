@@ -76,6 +76,32 @@ class SimResult:
     def n_runs(self) -> int:
         return len(self.run_ids)
 
+    # ------------------------------------------------------------------ notebooks
+    #: runs listed by ``repr`` before it abbreviates
+    REPR_RUNS = 4
+
+    def __repr__(self) -> str:
+        """One line per batch: shape, trajectory, and each run's id, status and effects (no arrays)."""
+        runs = [f"{r} {s}" + (f" [{'; '.join(e)}]" if e else " [healthy]")
+                for r, s, e in zip(self.run_ids[: self.REPR_RUNS], self.status, self.effects)]
+        if self.n_runs > self.REPR_RUNS:
+            runs.append(f"... {self.n_runs - self.REPR_RUNS} more")
+        period = self.meta.get("log_period_s", float("nan"))
+        return (f"<SimResult {self.n_runs} run(s) x {self.t_s.size} samples every {period:g} s on "
+                f"{self.meta.get('trajectory', '?')}, signals (n_runs, n_log, 6): {', '.join(self.signals)}; "
+                f"runs: {', '.join(runs)}>")
+
+    def _repr_html_(self) -> str:
+        """A table of the runs for notebooks."""
+        import html
+
+        head = (f"<p><b>SimResult</b>: {self.n_runs} run(s) x {self.t_s.size} samples on "
+                f"{html.escape(str(self.meta.get('trajectory', '?')))}; signals {html.escape(', '.join(self.signals))}"
+                "</p>")
+        table = pd.DataFrame({"run_id": self.run_ids, "seed": self.seeds, "status": self.status,
+                              "effects": ["; ".join(e) or "healthy" for e in self.effects], "reason": self.reason})
+        return head + table.to_html(index=False)
+
     def __getitem__(self, name: str) -> NDArray:
         """A joint signal by name, ``(n_runs, n_log, 6)``."""
         return self.signals[name]
