@@ -33,7 +33,7 @@ bench: $(STAMP)
 # benchmark, end to end, timed. Resumes an interrupted run; for a timing from scratch: rm -rf results/diagnostics
 diagnostics: $(STAMP)
 	@start=$$(date +%s); \
-	$(BIN)/ur5fault campaign run campaigns/diagnostics.yaml --out results/diagnostics --quiet && \
+	$(BIN)/ur5fault campaign run campaigns/diagnostics.yaml --out results/diagnostics --quiet --yes && \
 	$(BIN)/ur5fault benchmark results/diagnostics && \
 	end=$$(date +%s) && \
 	echo "make diagnostics: $$((end - start)) s end to end (campaign + benchmark)" && \
