@@ -357,11 +357,14 @@ def test_sigterm_frees_the_lock_and_stops_workers(tmp_path):
     out = tmp_path / "out"
     proc = subprocess.Popen([sys.executable, "-m", "ur5fault.cli", "campaign", "run", str(f), "--out", str(out),
                              "--jobs", "2", "--quiet"], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    def loky_workers() -> list[int]:  # not any child: a short-lived one (git, for the manifest) comes first
+        return [c for c in _children(proc.pid) if b"loky" in _cmdline(c)]
+
     deadline = time.time() + 60
-    while time.time() < deadline and not _children(proc.pid):
+    while time.time() < deadline and not loky_workers():
         time.sleep(0.2)
     time.sleep(1.0)
-    workers = _children(proc.pid)
+    workers = loky_workers()
     assert workers, "no worker processes seen"
     proc.send_signal(signal.SIGTERM)
     err = proc.communicate(timeout=60)[1]
@@ -371,6 +374,14 @@ def test_sigterm_frees_the_lock_and_stops_workers(tmp_path):
     while time.time() < deadline and any(_alive(p) for p in workers):
         time.sleep(0.1)
     assert not [p for p in workers if _alive(p)], "worker processes survived SIGTERM"
+
+
+def _cmdline(pid: int) -> bytes:
+    try:
+        with open(f"/proc/{pid}/cmdline", "rb") as fh:
+            return fh.read()
+    except OSError:
+        return b""
 
 
 def _children(pid: int) -> list[int]:
