@@ -5,24 +5,39 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: venv test campaign bench lint clean
+.PHONY: venv test campaign bench lint clean diagnostics
 
 venv: $(STAMP)
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -e '.[dev,cluster]'
+	$(BIN)/python -m pip install --quiet -e '.[dev,cluster,ml]'
 	touch $(STAMP)
 
 test: $(STAMP)
 	$(BIN)/python -m pytest -q
+
+# daily work: everything except the tests marked slow (long physics, campaigns, wheel, discrepancy); < 3 min
+.PHONY: test-fast
+test-fast: $(STAMP)
+	$(BIN)/python -m pytest -q -m "not slow"
 
 campaign: $(STAMP)
 	$(BIN)/ur5fault campaign run campaigns/default.yaml --out results/default
 
 bench: $(STAMP)
 	$(BIN)/python bench/bench_speed.py --campaign
+
+# issue 11: the diagnostics dataset (campaigns/diagnostics.yaml, 2,000 sampled runs + backlash twins) and its
+# benchmark, end to end, timed. Resumes an interrupted run; for a timing from scratch: rm -rf results/diagnostics
+diagnostics: $(STAMP)
+	@start=$$(date +%s); \
+	$(BIN)/ur5fault campaign run campaigns/diagnostics.yaml --out results/diagnostics --quiet --yes && \
+	$(BIN)/ur5fault benchmark results/diagnostics && \
+	end=$$(date +%s) && \
+	echo "make diagnostics: $$((end - start)) s end to end (campaign + benchmark)" && \
+	$(BIN)/python bench/diagnostics_timing.py results/diagnostics --wall-s $$((end - start))
 
 lint: $(STAMP)
 	$(BIN)/ruff check ur5fault tests bench

@@ -1,5 +1,8 @@
-"""Shared fixtures: the real NIST log (skipped with a message when absent) and cached
-simulations reused by several physics tests."""
+"""Shared test constants (paths, the UR5's joint names) and fixtures: the real NIST log (skipped with
+a message when absent) and cached simulations reused by several physics tests.
+
+Test modules import the constants with ``from conftest import ...`` (``tests/`` is on the path through
+``pythonpath`` in pyproject.toml, which also makes ``reference_ur5`` importable)."""
 
 from __future__ import annotations
 
@@ -8,8 +11,22 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+#: the repository checkout; ../shared beside it holds the real log
 REPO = Path(__file__).resolve().parents[1]
 NIST_LOG = REPO.parent / "shared" / "data" / "nist-ur5" / "ur5testresult_halfspeed_payload1.6lb_1.csv.gz"
+#: the MJCF of the checkout, read directly by the tests of the model file
+MODEL_XML = REPO / "ur5fault" / "models" / "ur5.xml"
+CAMPAIGNS = REPO / "campaigns"
+#: the UR5's joints in DH order as the MJCF names them; typed here, not taken from the package, so the model
+#: tests check the MJCF against the reference on their own (test_kinematics checks the package agrees)
+JOINT_NAMES = (
+    "shoulder_pan_joint",
+    "shoulder_lift_joint",
+    "elbow_joint",
+    "wrist_1_joint",
+    "wrist_2_joint",
+    "wrist_3_joint",
+)
 
 
 @pytest.fixture(scope="session")

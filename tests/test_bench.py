@@ -3,11 +3,15 @@
 import json
 import subprocess
 import sys
-from pathlib import Path
 
-BENCH = Path(__file__).resolve().parents[1] / "bench" / "bench_speed.py"
+import pytest
+
+from conftest import REPO
+
+BENCH = REPO / "bench" / "bench_speed.py"
 
 
+@pytest.mark.slow  # a benchmark harness, not a correctness check: `make test-fast` skips it
 def test_bench_quick_prints_figures():
     r = subprocess.run([sys.executable, str(BENCH), "--quick"], capture_output=True, text=True, timeout=900)
     assert r.returncode == 0, r.stderr

@@ -24,8 +24,10 @@ from ur5fault.campaign import (
 )
 from ur5fault.errors import ParameterError, UnknownNameError
 from ur5fault.features import FEATURE_UNITS
+from ur5fault.params import load_params
 
-REPO = Path(__file__).resolve().parents[1]
+from conftest import REPO
+
 EXEC_COLUMNS = ["wall_s_batch", "batch_size"]  # execution metadata, not results
 
 SMALL = """name: small
@@ -48,12 +50,12 @@ def write(tmp_path, text, name="c.yaml"):
 # ----------------------------------------------------------------------------- validation
 BAD = [
     ("nmae: x\n", "c.yaml: unknown key 'nmae'; valid: base, batch_size,"),
-    ("base: {seed: -1}\n", "c.yaml: base.seed: seed = -1 must be a non-negative integer"),
-    ("base: {temperature_C: 500}\n", "temperature.temperature_C = 500 is out of range [-10, 90] degC"),
+    ("base: {seed: -1}\n", "c.yaml: base.seed = -1 must be a non-negative integer in [0, 9223372036854775807]"),
+    ("base: {temperature_C: 500}\n", "c.yaml: base.temperature_C = 500 is out of range [-10, 90] degC"),
     ("sweep: {backlash.joint: [7], backlash.backlash_deg: [0.1]}\n", "unknown joint 7; valid: 1..6"),
     ("sweep: {backlash.joint: [2], backlash.backlash_deg: [-0.1]}\n",
      "sweep.backlash.backlash_deg: backlash.backlash_deg = -0.1 is out of range [0, 5] deg"),
-    ("sweep: {backlash.joint: [2], backlash.backlash_deg: ['big']}\n", "out of range [0, 5] deg"),
+    ("sweep: {backlash.joint: [2], backlash.backlash_deg: ['big']}\n", "'big' must be a number in [0, 5] deg"),
     ("sweep: {rust.level: [1]}\n", "unknown sweep key 'rust.level'; valid:"),
     ("sweep: {backlash.backlash_deg: [0.1]}\n", "needs 'backlash.joint'"),
     ("sweep: {seed: 3}\n", "sweep.seed: expected a non-empty list"),
@@ -158,6 +160,7 @@ def test_feature_table_schema_and_units(small_reference):
         assert f"`{generic}`" in docs, f"column {col} undocumented in docs/outputs.md"
 
 
+@pytest.mark.slow
 def test_resume_after_sigkill_gives_identical_table(tmp_path, small_reference):
     f, ref, _ = small_reference
     out = tmp_path / "out"
@@ -195,6 +198,7 @@ def test_rerun_of_finished_campaign_does_nothing(small_reference):
     assert stamp == {p.name: p.stat().st_mtime_ns for p in (out / "runs").iterdir()}
 
 
+@pytest.mark.slow
 def test_dask_backend_equals_local(tmp_path, small_reference):
     distributed = pytest.importorskip("dask.distributed")
     f, ref, _ = small_reference
@@ -228,16 +232,6 @@ def test_manifest(small_reference):
     assert m["n_runs"] == 7 and m["duration_s"] == 5.5 and m["physics_dt_s"] == 5e-5
 
 
-def test_plot_writes_figures(tmp_path, small_reference):
-    from ur5fault.plotting import plot_campaign
-
-    _, _, out = small_reference
-    paths = plot_campaign(out, plot_dir=tmp_path / "plots")
-    names = {p.name for p in paths}
-    assert {"fig3_tcp_deviation_alpha0.1.png", "fig4_shoulder_current.png", "heatmap_tcp_dev_max_mm.png"} <= names
-    assert all(p.stat().st_size > 10_000 for p in paths)
-
-
 # ----------------------------------------------------------------------------- the paper
 @pytest.fixture(scope="module")
 def paper(tmp_path_factory):
@@ -254,6 +248,7 @@ def _at(df, joint, alpha, col="tcp_dev_max_mm"):
     return float(df.loc[sel, col].iloc[0])
 
 
+@pytest.mark.slow
 def test_paper_shoulder_and_elbow_above_wrists(paper):
     wrists = max(_at(paper, j, 0.1) for j in (4, 5, 6))
     for j in (2, 3):
@@ -261,14 +256,246 @@ def test_paper_shoulder_and_elbow_above_wrists(paper):
         assert _at(paper, j, 0.1) > 0.5  # the paper's threshold is exceeded
 
 
-@pytest.mark.xfail(strict=True, reason="model disagrees with the paper on the base joint: its clearance is crossed "
-                   "at standstill on this trajectory (no gravity torque, inertia below friction); docs/validation.md")
+@pytest.mark.slow
 def test_paper_base_joint_above_wrists(paper):
+    # with friction that sticks, the base link holds through the dwells and the clearance is crossed when the
+    # next move starts (with the former smooth sign it crept across it at standstill: 0.17 mm); docs/validation.md
     assert _at(paper, 1, 0.1) > max(_at(paper, j, 0.1) for j in (4, 5, 6))
+    assert _at(paper, 1, 0.1) > 0.5
 
 
+@pytest.mark.slow
 def test_paper_shoulder_current_spikes_grow_with_alpha(paper):
     spikes = [_at(paper, 2, a, "current_spike_max_A_j2") for a in (0.05, 0.1, 0.2)]
     assert spikes[0] < spikes[1] < spikes[2]
     healthy = float(paper.loc[paper["fault_joint"] == 0, "current_spike_max_A_j2"].iloc[0])
     assert spikes[0] > healthy
+
+
+# ----------------------------------------------------------------------------- identity and verification
+TINY = """name: tiny
+trajectory: pick_and_place
+duration_s: {dur}
+log_period_s: {lp}
+base: {{seed: 0, payload_kg: 2.0{base}}}
+sweep:
+  backlash.joint: [2]
+  backlash.backlash_deg: [{levels}]
+batch_size: 4
+"""
+
+
+def tiny(tmp_path, name="t.yaml", dur=0.3, lp=0.001, base="", levels="0.1, 0.2"):
+    return write(tmp_path, TINY.format(dur=dur, lp=lp, base=base, levels=levels), name)
+
+
+def run_quiet(camp, out, **kw):
+    return run_campaign(camp, out, jobs=1, progress=False, note=None, **kw)
+
+
+@pytest.fixture(scope="module")
+def tiny_done(tmp_path_factory):
+    d = tmp_path_factory.mktemp("tiny")
+    run_quiet(load_campaign(tiny(d)), d / "out")
+    return d
+
+
+def _copy_done(tiny_done, tmp_path):
+    import shutil
+
+    shutil.copytree(tiny_done / "out", tmp_path / "out")
+    return tmp_path / "out"
+
+
+EDITS = [
+    ({"dur": 0.2}, None, "duration_s: 0.3 in the file, 0.2 now"),
+    ({"lp": 0.002}, None, "log_period_s: 0.001 in the file, 0.002 now"),
+    ({"base": ", params: {gear: {damping_Nms_per_rad: [15.0, 24.0, 12.0, 1.0, 1.0, 0.3]}}"}, None,
+     "params.gear.damping_Nms_per_rad[2]: 20.0 in the file, 24.0 now"),
+    ({"base": ", effects: [{effect: current_sensor_offset, joint: 2, offset_A: 1.5}]"}, None,
+     "effects[0][0]: 'backlash' in the file, 'current_sensor_offset' now"),
+    ({}, "params: {friction: {coulomb_Nm: [6.0, 6.8, 3.8, 0.98, 0.98, 0.98]}}\n",
+     f"params.friction.coulomb_Nm[1]: {load_params().friction.coulomb_Nm[0]!r} in the file, 6.0 now"),
+]
+
+
+@pytest.mark.parametrize("edit, overlay, difference", EDITS, ids=["duration", "log_period", "base_params",
+                                                                  "base_effects", "model_overlay"])
+def test_edited_campaign_never_reuses_old_results(tmp_path, tiny_done, edit, overlay, difference):
+    """Rerun into the old folder: stop naming the first difference; with replace_changed the result
+    equals a fresh run of the edited campaign in an empty folder (bit for bit)."""
+    from ur5fault.campaign import CampaignChangedError
+
+    out = _copy_done(tiny_done, tmp_path)
+    ov = write(tmp_path, overlay, "ov.yaml") if overlay else None
+    camp = load_campaign(tiny(tmp_path, **edit), overlay=ov)
+    with pytest.raises(CampaignChangedError) as e:
+        run_quiet(camp, out)
+    msg = str(e.value)
+    assert difference in msg and "--replace-changed" in msg and "\n" not in msg, msg
+    run_quiet(camp, out, replace_changed=True)
+    run_quiet(camp, tmp_path / "fresh")
+    got, fresh = (pd.read_parquet(p / "features.parquet") for p in (out, tmp_path / "fresh"))
+    pd.testing.assert_frame_equal(_results(got), _results(fresh))
+
+
+def test_changed_condition_makes_new_runs(tmp_path, tiny_done):
+    """A condition is part of the run_id: new runs are simulated, the old files are left as strays."""
+    from ur5fault.campaign import status
+
+    out = _copy_done(tiny_done, tmp_path)
+    camp = load_campaign(tiny(tmp_path, base=", temperature_C: 30.0"))
+    run_quiet(camp, out)
+    run_quiet(camp, tmp_path / "fresh")
+    got, fresh = (pd.read_parquet(p / "features.parquet") for p in (out, tmp_path / "fresh"))
+    pd.testing.assert_frame_equal(_results(got), _results(fresh))
+    assert status(out)["runs"] == {"ok": 3, "missing": 0, "bad": 0, "changed": 0, "stray": 3}
+
+
+def test_identity_covers_the_package_version(tmp_path, tiny_done, monkeypatch):
+    import ur5fault
+    from ur5fault.campaign import CampaignChangedError
+
+    out = _copy_done(tiny_done, tmp_path)
+    monkeypatch.setattr(ur5fault, "__version__", "99.0")
+    with pytest.raises(CampaignChangedError, match="ur5fault_version: '0.1.0' in the file, '99.0' now"):
+        run_quiet(load_campaign(tiny(tmp_path)), out)
+
+
+def test_identity_inputs_cover_everything_that_decides_a_result():
+    from ur5fault.campaign.identity import Identities
+
+    camp = build_campaign({"duration_s": 0.3, "sweep": {"backlash.joint": [2], "backlash.backlash_deg": [0.1]}}, "t")
+    rc = next(r for r in camp.runs if not r.is_healthy())
+    inputs = Identities(camp).inputs(rc)
+    assert set(inputs) == {"identity_format", "ur5fault_version", "mujoco_version", "model_sha256", "drive", "stepper",
+                           "trajectory", "duration_s", "log_period_s", "seed", "effects", "params"}
+    assert inputs["params"]["physics_dt_s"] == 5e-5 and inputs["params"]["gear"]["ratio"] == [101.0] * 6
+    assert [e[0] for e in inputs["effects"]] == ["backlash", "payload", "temperature"]
+    assert len(inputs["trajectory"]["setpoints_sha256"]) == 64
+
+
+def test_added_level_simulates_only_the_new_run(tmp_path, tiny_done):
+    out = _copy_done(tiny_done, tmp_path)
+    stamp = {p.name: p.stat().st_mtime_ns for p in (out / "runs").iterdir()}
+    run_quiet(load_campaign(tiny(tmp_path, levels="0.1, 0.2, 0.3")), out)
+    now = {p.name: p.stat().st_mtime_ns for p in (out / "runs").iterdir()}
+    assert {k: now[k] for k in stamp} == stamp and len(now) == len(stamp) + 1
+    assert len(pd.read_parquet(out / "features.parquet")) == 4
+
+
+def test_bad_and_stray_run_files(tmp_path, tiny_done):
+    """Truncated, empty and mislabelled per-run files are reported by status and re-simulated;
+    stray copies never reach features.parquet."""
+    import shutil
+
+    from ur5fault.campaign import status
+
+    out = _copy_done(tiny_done, tmp_path)
+    ref = pd.read_parquet(out / "features.parquet")
+    files = sorted((out / "runs").glob("r*.parquet"))
+    shutil.copy(files[0], out / "runs" / f"{files[0].stem} (copy).parquet")
+    files[0].write_bytes(files[0].read_bytes()[:200])  # truncated
+    files[1].write_bytes(b"")  # empty
+    shutil.copy(files[0].with_name(f"{files[0].stem} (copy).parquet"), files[2])  # another run's content
+    info = status(out)
+    assert info["runs"] == {"ok": 0, "missing": 0, "bad": 3, "changed": 0, "stray": 1}
+    text = " | ".join(info["problems"])
+    assert "unreadable as Parquet" in text and f"holds run {files[0].stem!r}" in text
+    assert info["ignored"] == [f"runs/{files[0].stem} (copy).parquet: not a run of this campaign (stray)"]
+    notes = []
+    run_campaign(load_campaign(tiny(tmp_path)), out, jobs=1, progress=False, note=notes.append)
+    assert sum("simulating it again" in n for n in notes) == 3
+    got = pd.read_parquet(out / "features.parquet")
+    assert got["run_id"].is_unique and len(got) == 3
+    pd.testing.assert_frame_equal(_results(got), _results(ref))
+    assert status(out)["runs"]["ok"] == 3
+
+
+def test_status_command_exit_code(tmp_path, tiny_done):
+    out = _copy_done(tiny_done, tmp_path)
+    cmd = [sys.executable, "-m", "ur5fault.cli", "campaign", "status", str(out)]
+    assert subprocess.run(cmd, capture_output=True, timeout=120).returncode == 0
+    next((out / "runs").glob("r*.parquet")).write_bytes(b"PAR1")
+    r = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
+    assert r.returncode == 1 and '"bad": 1' in r.stdout
+
+
+def test_schema_metadata_and_manifest(tiny_done):
+    import json
+
+    import pyarrow.parquet as pq
+
+    out = tiny_done / "out"
+    run_file = next((out / "runs").glob("r*.parquet"))
+    meta = json.loads(pq.read_schema(run_file).metadata[b"ur5fault"])
+    assert meta["run_id"] == run_file.stem and len(meta["identity"]) == 64
+    assert meta["inputs"]["duration_s"] == 0.3 and meta["units"]["tcp_dev_max_mm"] == "mm"
+    assert meta["units"]["temperature_C"] == "degC"
+    feats = json.loads(pq.read_schema(out / "features.parquet").metadata[b"ur5fault"])
+    assert feats["units"]["backlash_deg_swept"] == "deg"  # a fault column (present in the faulty runs' files)
+    assert set(feats["run_identities"]) == set(pd.read_parquet(out / "features.parquet")["run_id"])
+    assert feats["units"]["current_hf_energy_A2s_j2"] == "A^2*s"
+    m = json.loads((out / "manifest.json").read_text())
+    assert m["state"] == "complete" and m["campaign_identity"] == feats["campaign_identity"]
+    for dep in ("numpy", "mujoco", "pandas", "pyarrow", "joblib", "pyyaml", "numba", "tqdm", "python"):
+        assert m["dependencies"].get(dep), dep
+    assert m["git_revision"] is None or len(m["git_revision"]["commit"]) == 40
+
+
+def test_timeseries_asked_for_later_are_made(tmp_path, tiny_done):
+    import json
+
+    import pyarrow.parquet as pq
+
+    out = _copy_done(tiny_done, tmp_path)
+    run_quiet(load_campaign(tiny(tmp_path)), out, save_timeseries=True)
+    files = sorted((out / "timeseries").glob("r*.parquet"))
+    assert len(files) == 3
+    ident = json.loads(pq.read_schema(out / "features.parquet").metadata[b"ur5fault"])["run_identities"]
+    for f in files:
+        assert json.loads(pq.read_schema(f).metadata[b"ur5fault"])["run_identity"] == ident[f.stem]
+        assert pq.ParquetFile(f).metadata.num_rows == 300
+
+
+def test_workers_exit_when_the_campaign_process_is_killed(tmp_path):
+    """SIGKILL of the campaign process alone (not its group): its loky workers exit (within a second
+    of their batch running; the issue saw them linger for minutes)."""
+    f = write(tmp_path, SMALL.format(dur=3.0))
+    proc = subprocess.Popen([sys.executable, "-m", "ur5fault.cli", "campaign", "run", str(f), "--out",
+                             str(tmp_path / "out"), "--jobs", "2", "--quiet"], stdout=subprocess.DEVNULL,
+                            stderr=subprocess.DEVNULL, start_new_session=True)
+    try:
+        deadline = time.time() + 120
+        workers: list[int] = []
+        while time.time() < deadline and len(workers) < 2:
+            time.sleep(0.3)
+            workers = [p for p in _children(proc.pid) if b"LokyProcess" in _cmdline(p)]
+        assert len(workers) == 2, "loky workers not seen"
+        time.sleep(3.0)  # both are simulating a batch
+        os.kill(proc.pid, signal.SIGKILL)
+        proc.wait()
+        deadline = time.time() + 30.0  # a worker still importing under load notices when its batch starts
+        while time.time() < deadline and any(_cmdline(p) for p in workers):
+            time.sleep(0.2)
+        assert not any(_cmdline(p) for p in workers), "orphaned workers still running"
+    finally:
+        try:
+            os.killpg(proc.pid, signal.SIGKILL)
+        except ProcessLookupError:
+            pass
+
+
+def _children(pid: int) -> list[int]:
+    try:
+        return [int(x) for x in Path(f"/proc/{pid}/task/{pid}/children").read_text().split()]
+    except OSError:
+        return []
+
+
+def _cmdline(pid: int) -> bytes:
+    try:
+        stat = Path(f"/proc/{pid}/stat").read_text().split()
+        return b"" if stat[2] == "Z" else Path(f"/proc/{pid}/cmdline").read_bytes()
+    except (OSError, IndexError):
+        return b""

@@ -84,3 +84,21 @@ def test_discrepancy_bad_input(tmp_path):
     bad.write_text("timestamp,target_q_0\n0,0\n")
     r = run("discrepancy", str(bad), "--format", "rtde", "--out", str(tmp_path / "o"))
     assert r.returncode == 2 and "missing required column 'target_q_1'" in r.stderr
+
+
+def test_version_matches_installed_metadata():
+    from importlib.metadata import version
+
+    r = run("--version")
+    assert r.returncode == 0
+    assert r.stdout.startswith(f"ur5fault {version('ur5fault')} (mujoco {version('mujoco')}")
+
+
+@pytest.mark.parametrize("where", ["before", "after"])
+def test_verbose_logs_through_logging(tmp_path, where):
+    args = ["simulate", "--duration-s", "0.02", "--out", str(tmp_path / "r.parquet"), "--quiet"]
+    r = run(*(["-v", *args] if where == "before" else [*args, "-v"]))
+    assert r.returncode == 0, r.stderr
+    assert "ur5fault: INFO: ur5fault.engine: simulating 1 run(s) x 400 physics steps" in r.stderr
+    quiet = run(*args)
+    assert quiet.returncode == 0 and "INFO" not in quiet.stderr

@@ -2,25 +2,13 @@
 
 from __future__ import annotations
 
-import sys
-from pathlib import Path
-
 import mujoco
 import numpy as np
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-import reference_ur5 as ref  # noqa: E402
+import reference_ur5 as ref
+from conftest import JOINT_NAMES, MODEL_XML
 
-MODEL_XML = Path(__file__).resolve().parents[1] / "ur5fault" / "models" / "ur5.xml"
-JOINT_NAMES = (
-    "shoulder_pan_joint",
-    "shoulder_lift_joint",
-    "elbow_joint",
-    "wrist_1_joint",
-    "wrist_2_joint",
-    "wrist_3_joint",
-)
 N_SAMPLES = 100
 TOL_TAU_NM = 1e-6
 # Payload for the loaded check: CoM at (0, 0, 0.15) m in the tool body, which sits at the flange.

@@ -109,13 +109,9 @@ def test_start_is_at_rest_in_equilibrium():
 def test_payload_and_its_centre_of_mass_match_independent_dynamics():
     """Gravity torques with a 2 kg payload whose CoM is moved 0.1 m along the tool axis equal the
     independent Newton-Euler reference (tests/reference_ur5.py)."""
-    import sys
-    from pathlib import Path
-
-    sys.path.insert(0, str(Path(__file__).parent))
-    from reference_ur5 import rnea
-
     from ur5fault.run_arrays import build_run_arrays
+
+    from reference_ur5 import rnea
 
     sim = Simulator(stepper="loop")
     a = build_run_arrays(sim.params, [(make_effect("payload_com", dz_m=0.1),)], 2.0)

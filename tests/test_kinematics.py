@@ -2,25 +2,13 @@
 
 from __future__ import annotations
 
-import sys
-from pathlib import Path
-
 import mujoco
 import numpy as np
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-import reference_ur5 as ref  # noqa: E402
+import reference_ur5 as ref
+from conftest import JOINT_NAMES, MODEL_XML
 
-MODEL_XML = Path(__file__).resolve().parents[1] / "ur5fault" / "models" / "ur5.xml"
-JOINT_NAMES = (
-    "shoulder_pan_joint",
-    "shoulder_lift_joint",
-    "elbow_joint",
-    "wrist_1_joint",
-    "wrist_2_joint",
-    "wrist_3_joint",
-)
 N_CONFIGS = 200
 TOL_POS_M = 1e-9
 TOL_ROT = 1e-9
@@ -37,7 +25,10 @@ def qpos_index(model: mujoco.MjModel) -> np.ndarray:
 
 
 def test_joint_layout(model: mujoco.MjModel) -> None:
+    from ur5fault import JOINT_NAMES as PACKAGE_JOINT_NAMES
+
     assert model.nq == 6 and model.nv == 6
+    assert PACKAGE_JOINT_NAMES == JOINT_NAMES  # the package's joint order is the MJCF's DH order
     for name in JOINT_NAMES:
         assert model.jnt_type[model.joint(name).id] == mujoco.mjtJoint.mjJNT_HINGE, name
 

@@ -7,27 +7,13 @@ RMS, with a tool offset fitted by linear least squares (TCP = p_flange + R_flang
 
 from __future__ import annotations
 
-import sys
-from pathlib import Path
-
 import mujoco
 import numpy as np
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-import reference_ur5 as ref  # noqa: E402
+import reference_ur5 as ref
+from conftest import JOINT_NAMES, MODEL_XML
 
-REPO_ROOT = Path(__file__).resolve().parents[1]
-MODEL_XML = REPO_ROOT / "ur5fault" / "models" / "ur5.xml"
-NIST_CSV = REPO_ROOT.parent / "shared" / "data" / "nist-ur5" / "ur5testresult_halfspeed_payload1.6lb_1.csv.gz"
-JOINT_NAMES = (
-    "shoulder_pan_joint",
-    "shoulder_lift_joint",
-    "elbow_joint",
-    "wrist_1_joint",
-    "wrist_2_joint",
-    "wrist_3_joint",
-)
 Q_COLUMNS = [f"ROBOT_ACTUAL_JOINT_POSITIONS (J{i})" for i in range(1, 7)]  # degrees
 TCP_COLUMNS = [f"ROBOT_CARTESIAN_COORD_TOOL ({c})" for c in "xyz"]  # metres, base frame
 NOMINAL_TOOL_OFFSET_M = np.array([-0.001, -0.001, 0.1856])  # in the flange frame
@@ -36,13 +22,11 @@ TOL_RMS_M = 0.5e-3
 
 
 @pytest.fixture(scope="module")
-def log() -> tuple[np.ndarray, np.ndarray]:
+def log(nist_path) -> tuple[np.ndarray, np.ndarray]:
     """(q [rad], tcp [m]) from the NIST log, shapes (n_rows, 6) and (n_rows, 3)."""
-    if not NIST_CSV.is_file():
-        pytest.skip(f"NIST UR5 log not found at {NIST_CSV}; the real-data FK check needs it")
     import pandas as pd
 
-    frame = pd.read_csv(NIST_CSV)
+    frame = pd.read_csv(nist_path)
     q_rad = np.deg2rad(frame[Q_COLUMNS].to_numpy(dtype=float))
     tcp_m = frame[TCP_COLUMNS].to_numpy(dtype=float)
     assert q_rad.shape[0] > 1000 and np.all(np.isfinite(q_rad)) and np.all(np.isfinite(tcp_m))

@@ -1,13 +1,17 @@
-"""Command line: ``ur5fault simulate | effects | campaign | plot | discrepancy``.
+"""Command line: ``ur5fault simulate | effects | campaign | plot | show | discrepancy | identify``.
 
 Bad input prints one line ``ur5fault: error: ...`` naming the problem and the valid
-choices, and exits with status 2; never a traceback.
+choices, and exits with status 2; never a traceback.  ``-v`` (before or after the
+subcommand) shows the library's ``logging`` messages at INFO, ``-vv`` at DEBUG;
+``--quiet`` switches the progress bar off.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import logging
+import signal
 import sys
 from collections.abc import Sequence
 from pathlib import Path
@@ -21,6 +25,7 @@ EXIT_USAGE = 2
 def cmd_simulate(args: argparse.Namespace) -> int:
     from .config import Overlay, build_run_config
     from .engine import RunSpec, Simulator
+    from .io import check_writable
     from .params import read_yaml
 
     data = read_yaml(Path(args.config)) if args.config else {}
@@ -43,12 +48,12 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     data["effects"] = effects
     overlay = Overlay.load(args.model) if args.model else None
     cfg = build_run_config(data, where, overlay)
+    out = check_writable(Path(args.out))  # before simulating, not after
     sim = Simulator(cfg.params)
     with progress.bar(1.0, "simulate", "run", enabled=not args.quiet,
                       bar_format="{desc}: {percentage:3.0f}%|{bar}| {elapsed}<{remaining}") as pbar:
         res = sim.run(cfg.trajectory, [RunSpec("run", cfg.seed, cfg.effects)], log_period_s=cfg.log_period_s,
                       duration_s=cfg.duration_s, progress=progress.fraction_callback(pbar))
-    out = Path(args.out)
     res.to_parquet(out)
     summ = res.summary(0)
     print(f"wrote {out} ({res.t_s.size} samples x {len(res.to_pandas(0).columns)} columns)")
@@ -85,13 +90,73 @@ def cmd_effects(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_show(args: argparse.Namespace) -> int:
+    from .errors import ConfigFileError
+    from .plotting import run_figure
+    from .plotting._figure import DPI
+
+    target = Path(args.target)
+    if target.suffix == ".parquet" or target.is_file():
+        import pandas as pd
+
+        if not target.is_file():
+            raise ConfigFileError(f"{target}: no such file")
+        try:
+            series = pd.read_parquet(target)
+        except (OSError, ValueError) as exc:
+            raise ConfigFileError(f"{target}: cannot read as Parquet ({exc})") from None
+        fig = run_figure(series)
+        png = Path(args.out) if args.out else target.with_suffix(".png")
+    else:
+        from .campaign.result import CampaignResult
+
+        result = CampaignResult.load(Path(args.campaign))
+        row = result.run(args.target)
+        twin = row.get("twin_run_id", row["run_id"])
+        series = result.time_series([row["run_id"], twin])
+        fig = run_figure(series[row["run_id"]], twin=series[twin] if twin != row["run_id"] else None)
+        png = Path(args.out) if args.out else result.out / "plots" / f"show_{row['run_id']}.png"
+    png.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(png, dpi=DPI)
+    print(f"wrote {png}")
+    return 0
+
+
 class _Parser(argparse.ArgumentParser):
+    def __init__(self, *args, **kwargs) -> None:
+        super().__init__(*args, **kwargs)
+        # on every (sub)parser, so `ur5fault -v simulate` and `ur5fault simulate -v` both work; SUPPRESS keeps a
+        # subcommand's parser from resetting a count given before the subcommand
+        self.add_argument("-v", "--verbose", action="count", default=argparse.SUPPRESS,
+                          help="log what the library does (-v: INFO, -vv: DEBUG)")
+
     def error(self, message: str):  # one line, exit 2
         self.exit(EXIT_USAGE, f"ur5fault: error: {message}\n")
 
 
+def _version() -> str:
+    from importlib.metadata import version
+
+    from . import __version__
+
+    deps = ", ".join(f"{name} {version(name)}" for name in ("mujoco", "numpy"))
+    return f"ur5fault {__version__} ({deps}, python {sys.version.split()[0]})"
+
+
+def configure_logging(verbosity: int) -> None:
+    """Send the ``ur5fault`` loggers' records to stderr: WARNING by default, INFO at ``-v``, DEBUG at ``-vv``."""
+    logger = logging.getLogger("ur5fault")
+    logger.setLevel(logging.WARNING if verbosity <= 0 else logging.INFO if verbosity == 1 else logging.DEBUG)
+    if not any(getattr(h, "_ur5fault_cli", False) for h in logger.handlers):
+        handler = logging.StreamHandler(sys.stderr)
+        handler.setFormatter(logging.Formatter("ur5fault: %(levelname)s: %(name)s: %(message)s"))
+        handler._ur5fault_cli = True  # type: ignore[attr-defined]
+        logger.addHandler(handler)
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = _Parser(prog="ur5fault", description="UR5 fault-injection simulator")
+    p.add_argument("--version", action="version", version=_version())
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
     s = sub.add_parser("simulate", help="run one configuration and write its time series to Parquet")
     s.add_argument("--config", help="run configuration YAML (see docs/usage.md)")
@@ -111,6 +176,12 @@ def build_parser() -> argparse.ArgumentParser:
     s.set_defaults(func=cmd_simulate)
     e = sub.add_parser("effects", help="list the effect registry")
     e.set_defaults(func=cmd_effects)
+    sh = sub.add_parser("show", help="draw one run: setpoint vs resolver, encoder mismatch, currents, TCP deviation")
+    sh.add_argument("target", help="a time-series Parquet file (from `simulate`, or a campaign's timeseries/), or the "
+                                   "run_id of a run in the campaign folder --campaign (re-simulated if not saved)")
+    sh.add_argument("--campaign", default=".", help="campaign output folder of a RUN_ID (default: this folder)")
+    sh.add_argument("--out", help="PNG file (default: FILE.png beside the file, or CAMPAIGN/plots/show_RUN_ID.png)")
+    sh.set_defaults(func=cmd_show)
     _add_optional_commands(sub)
     return p
 
@@ -118,24 +189,47 @@ def build_parser() -> argparse.ArgumentParser:
 def _add_optional_commands(sub) -> None:
     """The campaign and discrepancy command groups (imported directly: a broken module is an error,
     not a silently missing command)."""
+    from .benchmark import cli as benchmark_cli
     from .campaign import cli as campaign_cli
     from .discrepancy import cli as discrepancy_cli
+    from .identify import cli as identify_cli
 
     campaign_cli.register(sub)
     discrepancy_cli.register(sub)
+    identify_cli.register(sub)
+    benchmark_cli.register(sub)
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM arrived: unwind like Ctrl-C (locks released, workers stopped, temporary files removed)."""
+
+
+def _on_sigterm(signum, frame) -> None:
+    raise Terminated()
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    configure_logging(getattr(args, "verbose", 0))
+    try:
+        previous = signal.signal(signal.SIGTERM, _on_sigterm)
+    except ValueError:  # not the main thread: leave signals alone
+        previous = None
     try:
         return int(args.func(args) or 0)
     except Ur5FaultError as exc:
-        sys.stderr.write(f"ur5fault: error: {exc}\n")
+        sys.stderr.write(f"ur5fault: error: {' '.join(str(exc).split())}\n")
         return EXIT_USAGE
+    except Terminated:
+        sys.stderr.write("ur5fault: terminated\n")
+        return 128 + signal.SIGTERM
     except KeyboardInterrupt:
         sys.stderr.write("ur5fault: interrupted\n")
         return 130
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGTERM, previous)
 
 
 if __name__ == "__main__":

@@ -19,15 +19,30 @@ A *model overlay* (written by the discrepancy workflow, accepted by ``--model``)
 from __future__ import annotations
 
 import dataclasses
+import inspect
+import math
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from .effects import EffectSpec, make_effect
+from .budget import MAX_DURATION_S, check_memory, sim_bytes
+from .checks import check_int, check_number, short
+from .effects import REGISTRY, EffectSpec, make_effect
 from .errors import ParameterError, UnknownNameError
 from .params import RobotParams, deep_merge, load_params, read_yaml
 from .trajectory import TRAJECTORIES, Trajectory, get_trajectory
 
+#: largest noise seed (a Parquet int64 column holds it)
+MAX_SEED = 2**63 - 1
+#: numeric trajectory options and their valid ranges: the payload effect's range; speed up to
+#: UR's maximum joint speed (pi rad/s, ur5-facts.md) over the controller default 1.047 rad/s;
+#: dwell times up to the run-length limit; setpoint periods from the 0.1 ms servo period to 10 Hz
+TRAJECTORY_OPTIONS = {
+    "payload_kg": (REGISTRY["payload"].param("mass_kg").lo, REGISTRY["payload"].param("mass_kg").hi, "kg"),
+    "speed_scale": (0.05, 3.0, "-"),
+    "seconds": (0.01, MAX_DURATION_S, "s"),
+    "setpoint_period_s": (1e-4, 0.1, "s"),
+}
 RUN_KEYS = ("trajectory", "seed", "payload_kg", "temperature_C", "duration_s", "log_period_s", "effects", "params")
 OVERLAY_KEYS = ("params", "effects")
 
@@ -49,19 +64,75 @@ def parse_effects(items: Any, where: str) -> tuple[EffectSpec, ...]:
 
 
 def parse_trajectory(spec: Any, where: str) -> Trajectory:
-    """``"name"`` or ``{name: ..., <keyword>: value}`` -> a :class:`Trajectory`."""
+    """``"name"`` or ``{name: ..., <option>: value}`` -> a :class:`Trajectory`.
+
+    Options are checked before the trajectory is built: known names only (listed on error),
+    finite numbers in :data:`TRAJECTORY_OPTIONS` ranges, ``q_rad`` six joint angles.
+    """
     if isinstance(spec, str):
+        if spec not in TRAJECTORIES:
+            raise UnknownNameError("trajectory", spec, TRAJECTORIES, where)
         return get_trajectory(spec)
     if isinstance(spec, Mapping) and "name" in spec:
-        kwargs = {k: v for k, v in spec.items() if k != "name"}
-        if spec["name"] not in TRAJECTORIES:
-            raise UnknownNameError("trajectory", spec["name"], TRAJECTORIES, where)
+        name = spec["name"]
+        if not isinstance(name, str) or name not in TRAJECTORIES:
+            raise UnknownNameError("trajectory", name if isinstance(name, str) else short(name), TRAJECTORIES, where)
+        valid = [k for k in inspect.signature(TRAJECTORIES[name]).parameters]
+        kwargs = {}
+        for key, value in spec.items():
+            if key == "name":
+                continue
+            if key not in valid:
+                raise UnknownNameError(f"option of trajectory {name!r}", key, valid, where)
+            kwargs[key] = _trajectory_option(key, value, f"{where}.{key}")
         try:
-            return get_trajectory(str(spec["name"]), **kwargs)
-        except TypeError as exc:
-            raise ParameterError(f"{where}: {exc}") from None
+            return get_trajectory(name, **kwargs)
+        except (TypeError, ValueError) as exc:
+            if isinstance(exc, ParameterError):
+                raise ParameterError(f"{where}: {exc}") from None
+            raise ParameterError(f"{where}: {' '.join(str(exc).split())}") from None
     raise ParameterError(
         f"{where}: expected a trajectory name or a mapping with 'name'; valid: {', '.join(TRAJECTORIES)}")
+
+
+def _trajectory_option(key: str, value: Any, where: str) -> Any:
+    if key == "q_rad":
+        if not isinstance(value, Sequence) or isinstance(value, str) or len(value) != 6:
+            raise ParameterError(f"{where} = {short(value)} must be a list of 6 joint angles [rad]")
+        return tuple(check_number(v, f"{where}[{j + 1}]", -2 * math.pi, 2 * math.pi, "rad")
+                     for j, v in enumerate(value))
+    if key == "seed":  # a trajectory family's seed (random_pick_and_place)
+        return check_seed(value, where)
+    lo, hi, unit = TRAJECTORY_OPTIONS.get(key, (-math.inf, math.inf, ""))
+    return check_number(value, where, lo, hi, unit)
+
+
+def check_seed(value: Any, where: str) -> int:
+    """A noise seed: an integer in [0, 2**63 - 1] (``1e9`` is the integer it means)."""
+    return check_int(value, where, 0, MAX_SEED, "a non-negative integer")
+
+
+def check_duration(value: Any, where: str) -> float:
+    """Simulated time of one run [s]: a finite number in (0, MAX_DURATION_S]."""
+    return check_number(value, where, 0.0, MAX_DURATION_S, "s", lo_open=True)
+
+
+def check_log_period(value: Any, where: str, physics_dt_s: float, duration_s: float) -> float:
+    """Log period [s]: a whole multiple of the physics step, at most the run's duration."""
+    lp = check_number(value, where, physics_dt_s, max(duration_s, physics_dt_s), "s")
+    k = round(lp / physics_dt_s)
+    if abs(k * physics_dt_s - lp) > 1e-12:
+        raise ParameterError(f"{where} = {short(value)} must be a whole multiple of physics_dt_s = {physics_dt_s:g} s")
+    return lp
+
+
+def check_mapping(value: Any, where: str) -> Mapping[str, Any]:
+    """An optional mapping (``None`` is empty)."""
+    if value is None:
+        return {}
+    if not isinstance(value, Mapping):
+        raise ParameterError(f"{where} = {short(value)} must be a mapping of keys to values")
+    return value
 
 
 def check_keys(data: Mapping[str, Any], valid: Sequence[str], where: str) -> None:
@@ -82,9 +153,7 @@ class Overlay:
         path = Path(path)
         data = read_yaml(path)
         check_keys(data, OVERLAY_KEYS, path.name)
-        params = data.get("params") or {}
-        if not isinstance(params, Mapping):
-            raise ParameterError(f"{path.name}: params must be a mapping")
+        params = check_mapping(data.get("params"), f"{path.name}: params")
         load_params(overrides=dict(params))  # validate now, with key paths
         return cls(dict(params), parse_effects(data.get("effects"), f"{path.name}: effects"))
 
@@ -105,7 +174,7 @@ def build_run_config(data: Mapping[str, Any], where: str = "config", overlay: Ov
     """Validate a run-configuration mapping (see the module docstring)."""
     check_keys(data, RUN_KEYS, where)
     traj = parse_trajectory(data.get("trajectory", "pick_and_place"), f"{where}: trajectory")
-    overrides = dict(data.get("params") or {})
+    overrides = dict(check_mapping(data.get("params"), f"{where}: params"))
     if overlay is not None:
         overrides = deep_merge(dict(overlay.params), overrides)
     params = load_params(overrides=overrides)
@@ -116,13 +185,10 @@ def build_run_config(data: Mapping[str, Any], where: str = "config", overlay: Ov
         effects += (make_effect("payload", where=f"{where}: payload_kg", mass_kg=data["payload_kg"]),)
     if data.get("temperature_C") is not None:
         effects += (make_effect("temperature", where=f"{where}: temperature_C", temperature_C=data["temperature_C"]),)
-    seed = data.get("seed", 0)
-    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
-        raise ParameterError(f"{where}: seed = {seed!r} must be a non-negative integer")
+    seed = check_seed(data.get("seed", 0), f"{where}: seed")
     dur = data.get("duration_s")
-    if dur is not None and (not isinstance(dur, (int, float)) or dur <= 0):
-        raise ParameterError(f"{where}: duration_s = {dur!r} must be a positive number of seconds")
-    lp = data.get("log_period_s", 1e-3)
-    if not isinstance(lp, (int, float)) or lp <= 0:
-        raise ParameterError(f"{where}: log_period_s = {lp!r} must be a positive number of seconds")
-    return RunConfig(traj, params, effects, seed, None if dur is None else float(dur), float(lp))
+    duration = traj.duration_s if dur is None else check_duration(dur, f"{where}: duration_s")
+    lp = check_log_period(data.get("log_period_s", 1e-3), f"{where}: log_period_s", params.physics_dt_s, duration)
+    check_memory(sim_bytes(1, int(duration / lp)), f"{where}: a run of {duration:g} s logged every {lp:g} s",
+                 "raise log_period_s or shorten duration_s")
+    return RunConfig(traj, params, effects, seed, None if dur is None else duration, lp)

@@ -346,6 +346,27 @@ REGISTRY: dict[str, Effect] = {
             True,
             _both(_set("cogging_Nm", "amplitude_Nm"), _set("cogging_periods_per_rev", "periods_per_rev")),
         ),
+        Effect(
+            "breakaway_friction",
+            "breakaway (static) friction scaled, Coulomb friction unchanged (stick-slip, lubricant loss at rest)",
+            (EffectParam("scale", "-", 0.0, 10.0, 1.0, "factor on T_f,s"),),
+            True,
+            _mul("friction_static_Nm", "scale"),
+        ),
+        Effect(
+            "presliding_stiffness",
+            "LuGre presliding (bristle) stiffness scaled: how far a stuck joint yields before it slides",
+            (EffectParam("scale", "-", 0.01, 100.0, 1.0, "factor on sigma0"),),
+            True,
+            _mul("friction_presliding_stiffness_Nm_per_rad", "scale"),
+        ),
+        Effect(
+            "friction_share",
+            "share of the joint friction acting on the motor side of the gear clearance (the rest on the link)",
+            (EffectParam("motor_side_share", "-", 0.0, 1.0, None, "0: all on the link, 1: all on the rotor"),),
+            True,
+            _set("friction_motor_side_share", "motor_side_share"),
+        ),
         # ---- data-driven terms (ur5fault/terms.py): what the discrepancy workflow discovers outside the
         # entries above; the engine's term hook evaluates them (link torques, model terms, sensor terms)
         *_TERM_EFFECTS,

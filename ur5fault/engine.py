@@ -11,15 +11,19 @@ Step order (semi-implicit Euler for the whole chain):
 1. at servo instants: sample the sensors (noise, sample-and-hold, quantisation) and run
    position -> speed -> current loops; the inverter limits and holds the voltage;
 2. winding currents (exact R-L decay);
-3. gear torque, eq. (1), from rotor and link states; friction, eq. (2);
-4. rotor speed and angle; link torque ``T = T_id - T_f`` into ``qfrc_applied``; ``mj_step``;
-5. analog sensor filters; logging.
+3. gear torque, eq. (1), from rotor and link states; friction, eq. (2) (smooth or LuGre), its
+   motor-side share solved implicitly with the rotor;
+4. rotor speed and angle; link torque ``T = T_id - T_f`` into ``qfrc_applied`` with the friction's
+   slope as joint damping, which MuJoCo's Euler step applies implicitly; ``mj_step``;
+5. link bristle states at the reached speed; analog sensor filters; logging.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import enum
+import logging
+import time
 from collections.abc import Callable, Sequence
 from importlib import resources
 from pathlib import Path
@@ -39,13 +43,25 @@ from .run_arrays import RunArrays, build_run_arrays
 from .terms import TermHook
 from .trajectory import Trajectory
 
+_log = logging.getLogger(__name__)
+
 #: the packaged MJCF (package data, so it is found from an installed wheel too)
 DEFAULT_MODEL_PATH = Path(str(resources.files("ur5fault") / "models" / "ur5.xml"))
 
 #: Tracking error that trips a protective stop [rad] (assumption: UR stops on large
 #: position deviation; 0.1 rad is far above any healthy or modelled-fault value).
 PROTECTIVE_STOP_RAD = 0.1
+#: |joint angle| beyond which a run counts as diverged [rad] (assumption: the UR5's joint range is +-360 deg
+#: = +-6.3 rad (../shared/ur5-facts.md), so 50 rad is only reached by a numerically exploding run).
+RUNAWAY_LIMIT_RAD = 50.0
+#: unit-noise draws per servo sample and joint, in the order the drive's servo step reads them
+#: (``drive/state.py`` ``NumpyDrive.servo`` and ``drive/kernel.py`` ``servo``: ``nz[:, 0..4]``).
+NOISE_CHANNELS = ("resolver", "encoder_angle", "encoder_speed", "current_q", "current_d")
+#: servo samples of noise drawn at once per run (memory (n_runs, 2000, 5, 6) doubles, ~0.5 MB per run; a
+#: chunk only amortises the generator call and does not change the stream: draws are in sample order)
 NOISE_CHUNK_SAMPLES = 2000
+#: fraction of the run between two calls of ``run(progress=...)``
+PROGRESS_STEP = 0.02
 
 
 class Status(str, enum.Enum):
@@ -92,7 +108,7 @@ class Simulator:
         payload = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_BODY, "payload")
         self.model.body_sameframe[payload] = 0
         m = self.model
-        self._tcp_site = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SITE, "tcp")
+        self.tcp_site = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SITE, "tcp")
         p = self.params
         self.gains = ctl.design_gains(
             p.controller,
@@ -143,7 +159,17 @@ class Simulator:
         if n_steps < 1:
             raise ParameterError(f"duration_s = {duration} s is shorter than one physics step")
         a = build_run_arrays(p, [r.effects for r in runs], trajectory.default_payload_kg)
-        return _integrate(self, trajectory, list(runs), a, n_steps, log_every, progress)
+        _log.info("simulating %d run(s) x %d physics steps of %g s on %s (drive %s, stepper %s)", len(runs), n_steps,
+                  dt, trajectory.name, self.drive, self.stepper)
+        t0 = time.perf_counter()
+        res = _integrate(self, trajectory, list(runs), a, n_steps, log_every, progress)
+        _log.info("simulated %d run(s) in %.2f s wall; status: %s", len(runs), time.perf_counter() - t0,
+                  ", ".join(f"{r}={s}" for r, s in zip(res.run_ids, res.status)) if len(runs) <= 8
+                  else {s: res.status.count(s) for s in set(res.status)})
+        for r, s, why in zip(res.run_ids, res.status, res.reason):
+            if s != Status.OK.value:
+                _log.debug("run %s: %s (%s)", r, s, why)
+        return res
 
 
 def _integrate(sim: Simulator, traj: Trajectory, runs: list[RunSpec], a: RunArrays, n_steps: int,
@@ -176,13 +202,12 @@ def _integrate(sim: Simulator, traj: Trajectory, runs: list[RunSpec], a: RunArra
     qd = np.zeros((n, N_JOINTS))
     P = pack_params(sim, a)
     drive = DRIVES[sim.drive](P, initial_state(P, q, bias), dt, ts, p.friction.stribeck_rate_s_per_rad)
-    m_ii = mb.mass_diagonal()
 
     # setpoint latency per run, in whole servo samples (effect "delay")
     delay_k = np.rint(a.setpoint_delay_s / ts).astype(int)
     delayed = bool(np.any(delay_k))
     rngs = [np.random.default_rng(r.seed) for r in runs]
-    noise = np.empty((n, NOISE_CHUNK_SAMPLES, 5, N_JOINTS))
+    noise = np.empty((n, NOISE_CHUNK_SAMPLES, len(NOISE_CHANNELS), N_JOINTS))
 
     n_log = n_steps // log_every
     log = {name: np.full((n, n_log, N_JOINTS), np.nan) for name in SimResult.JOINT_SIGNALS}
@@ -198,7 +223,7 @@ def _integrate(sim: Simulator, traj: Trajectory, runs: list[RunSpec], a: RunArra
             ci = si % NOISE_CHUNK_SAMPLES
             if ci == 0:
                 for r in range(n):
-                    noise[r] = rngs[r].standard_normal((NOISE_CHUNK_SAMPLES, 5, N_JOINTS))
+                    noise[r] = rngs[r].standard_normal((NOISE_CHUNK_SAMPLES, len(NOISE_CHANNELS), N_JOINTS))
             if delayed:
                 k = np.maximum(si - delay_k, 0)
                 q_set_now, qd_set_now = q_set_s[k], qd_set_s[k]
@@ -207,7 +232,7 @@ def _integrate(sim: Simulator, traj: Trajectory, runs: list[RunSpec], a: RunArra
                 qd_set_now = np.broadcast_to(qd_set_s[si], (n, N_JOINTS))
             drive.servo(q_set_now, qd_set_now, noise[:, ci])
             # run health: a diverged or tripped run is frozen and its remaining log left NaN
-            bad = ~np.all(np.isfinite(q), axis=1) | np.any(np.abs(q) > 50.0, axis=1)
+            bad = ~np.all(np.isfinite(q), axis=1) | np.any(np.abs(q) > RUNAWAY_LIMIT_RAD, axis=1)
             trip = np.any(np.abs(q_set_now - drive.q_fb) > PROTECTIVE_STOP_RAD, axis=1)
             if bad.any() or trip.any():
                 for r in np.flatnonzero(active & (bad | trip)):
@@ -220,21 +245,23 @@ def _integrate(sim: Simulator, traj: Trajectory, runs: list[RunSpec], a: RunArra
                         status[r] = Status.PROTECTIVE_STOP
                         reason[r] = (f"tracking error of joint {j + 1} above {PROTECTIVE_STOP_RAD} rad "
                                      f"at t={step * dt:.4f} s")
-            m_ii = mb.mass_diagonal()
             if progress is not None and step >= next_progress * n_steps:
                 progress(step / n_steps)
-                next_progress += 0.02
+                next_progress += PROGRESS_STEP
 
-        tau = drive.physics(q, qd, m_ii)
+        tau = drive.physics(q, qd)
         if terms is not None and terms.link_torque:  # >>> term hook: load torques of data-driven terms
-            tau = tau - terms.load_torque(q, qd, m_ii, dt, mb.gravity_torque() if terms.gravity else None)
+            tau = tau - terms.load_torque(q, qd, mb.mass_diagonal(), dt,
+                                         mb.gravity_torque() if terms.gravity else None)
         if step in change_steps:
             mb.set_payload(a.payload_kg * gripped_step[step])
         mb.qfrc_applied[:] = tau
+        # the friction's slope on top of the model's own joint damping: MuJoCo's Euler step applies both implicitly
+        mb.dof_damping[:] = mb.model_damping + drive.s_l
         mb.step(active)
         q = mb.qpos.copy()
         qd = mb.qvel.copy()
-        drive.sensors(q)
+        drive.sensors(q, qd)
 
         if (step + 1) % log_every == 0:
             li = (step + 1) // log_every - 1
@@ -253,7 +280,8 @@ def _integrate(sim: Simulator, traj: Trajectory, runs: list[RunSpec], a: RunArra
             status[r], reason[r] = Status.DIVERGED, "MuJoCo reported a simulation warning (instability)"
     t_log = (np.arange(n_log) + 1) * log_every * dt
     q_set_log, _ = traj.interpolate(t_log)
-    return SimResult.build(sim, traj, runs, a, t_log, q_set_log, log, [s.value for s in status], reason,
+    return SimResult.build(sim.params, sim.model_path, sim.tcp_site, traj, runs, a, t_log, q_set_log, log,
+                           [s.value for s in status], reason,
                            mb.run_models())
 
 

@@ -27,10 +27,19 @@ from numpy.typing import NDArray
 
 from .axes import N_JOINTS
 
+#: window of the moving average the current residual is taken against [s] (assumption: 20 samples at the 1 kHz
+#: log rate average the sensor noise, and 20 ms is short against the 0.1-1 s torque phases of a motion)
 SMOOTH_S = 0.02
+#: half-width of the window around a torque reversal where a spike or a mismatch jump is looked for [s]
+#: (assumption: a backlash crossing and its current spike last well under 0.25 s at UR5 speeds)
 SPIKE_WINDOW_S = 0.25
-SPIKE_THRESHOLD_A = 0.1  # about 8 sigma of the current-sensor noise
+#: residual that counts as a spike [A]: about 8 sigma of the current-sensor noise (0.012 A, data/ur5_drive.yaml)
+SPIKE_THRESHOLD_A = 0.1
+#: dead band of the smoothed current's sign change that marks a torque reversal [A] (assumption: above the
+#: residual noise of the 20 ms average, so noise at standstill does not count as reversals)
 REVERSAL_HYSTERESIS_A = 0.15
+#: sample spacing assumed for a one-sample series [s] (the default log period)
+DEFAULT_LOG_PERIOD_S = 1e-3
 
 
 def moving_average(x: NDArray, n: int) -> NDArray:
@@ -58,7 +67,7 @@ def sign_changes(x: NDArray, hysteresis: float) -> NDArray:
 def run_features(t_s: NDArray, q_set: NDArray, q_fb: NDArray, q_m_fb: NDArray, i_fb: NDArray, ratio: NDArray,
                  tcp: NDArray, tcp_des: NDArray, tcp_twin: NDArray | None) -> dict[str, float]:
     """Features of one run from its ``(n_log, 6)`` joint signals and ``(n_log, 3)`` TCP paths [m]."""
-    dt = float(t_s[1] - t_s[0]) if t_s.size > 1 else 1e-3
+    dt = float(t_s[1] - t_s[0]) if t_s.size > 1 else DEFAULT_LOG_PERIOD_S
     f: dict[str, float] = {}
     if tcp_twin is not None:
         dev = np.linalg.norm(tcp - tcp_twin, axis=-1) * 1e3

@@ -13,21 +13,58 @@ from typing import Any
 
 import pandas as pd
 
+from .errors import Ur5FaultError
+
 FILE_MODE = 0o644
+
+
+class OutputError(Ur5FaultError, OSError):
+    """An output file or folder cannot be written (also an :class:`OSError`)."""
+
+
+def check_writable(path: str | Path, *, folder: bool = False) -> Path:
+    """Fail before any work when ``path`` (a file, or a ``folder``) cannot be written.
+
+    Nothing is created: the nearest existing ancestor must be a folder in which a probe file can
+    be made (and removed again), and an existing ``path`` must be of the right kind.
+    """
+    path = Path(path)
+    if path.exists() and folder and not path.is_dir():
+        raise OutputError(f"{path}: exists and is not a folder; choose another output folder")
+    if path.exists() and not folder and path.is_dir():
+        raise OutputError(f"{path}: is a folder; give a file name for the output")
+    probe = path if folder else path.parent
+    probe = probe.absolute()
+    while not probe.exists() and probe != probe.parent:
+        probe = probe.parent
+    if not probe.is_dir():
+        raise OutputError(f"{path}: cannot be created, {probe} is a file and not a folder")
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=".ur5fault-probe-", dir=probe)
+        os.close(fd)
+        os.unlink(tmp)
+    except OSError as exc:
+        raise OutputError(f"{path}: cannot write in {probe} ({exc.strerror or exc})") from None
+    return path
 
 
 def _atomic(path: str | Path, write: Callable[[str], None]) -> Path:
     """Call ``write(tmp_path)`` and rename the temporary file over ``path``."""
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    os.close(fd)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+        os.close(fd)
+    except OSError as exc:
+        raise OutputError(f"{path}: cannot write ({exc.strerror or exc})") from None
     try:
         write(tmp)
         os.chmod(tmp, FILE_MODE)
         os.replace(tmp, path)
-    except BaseException:
+    except BaseException as exc:
         Path(tmp).unlink(missing_ok=True)
+        if isinstance(exc, OSError) and not isinstance(exc, Ur5FaultError):
+            raise OutputError(f"{path}: cannot write ({exc.strerror or exc})") from None
         raise
     return path
 

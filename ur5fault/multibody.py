@@ -7,7 +7,8 @@ Two interchangeable steppers with the same interface:
 * :class:`BatchMultibody` - the fast path: MuJoCo's ``mujoco.batch.Batch``, which steps all
   runs in C on a thread pool; documented (and tested here) bit-identical to the loop.
 
-Arrays are live views shaped ``(n_runs, 6)``: ``qpos``, ``qvel``, ``qfrc_applied``.
+Arrays are live views shaped ``(n_runs, 6)``: ``qpos``, ``qvel``, ``qfrc_applied`` and ``dof_damping``
+(per-run joint damping, which MuJoCo's Euler integrator applies implicitly: the drive's friction slope).
 """
 
 from __future__ import annotations
@@ -73,6 +74,9 @@ class LoopMultibody:
         self.qpos = np.zeros((n, N_JOINTS))
         self.qvel = np.zeros((n, N_JOINTS))
         self.qfrc_applied = np.zeros((n, N_JOINTS))
+        self.dof_damping = np.tile(np.asarray(model.dof_damping, float), (n, 1))
+        #: the joint damping the MJCF itself declares (the engine adds the friction slope to it)
+        self.model_damping = np.asarray(model.dof_damping, float).copy()
 
     def set_payload(self, mass_kg: NDArray) -> None:
         inertia = payload_inertia(mass_kg)
@@ -99,6 +103,7 @@ class LoopMultibody:
         for r in np.flatnonzero(active):
             d = self.datas[r]
             d.qfrc_applied[:] = self.qfrc_applied[r]
+            self.models[r].dof_damping[:] = self.dof_damping[r]
             mujoco.mj_step(self.models[r], d)
             self.qpos[r] = d.qpos
             self.qvel[r] = d.qvel
@@ -148,6 +153,9 @@ class BatchMultibody:
         self.qpos = b.bind("qpos")
         self.qvel = b.bind("qvel")
         self.qfrc_applied = b.bind("qfrc_applied")
+        self.dof_damping = b.expand("dof_damping")
+        #: the joint damping the MJCF itself declares (the engine adds the friction slope to it)
+        self.model_damping = np.asarray(model.dof_damping, float).copy()
         self._M = b.bind("M")
         self._bias = b.bind("qfrc_bias")  # bound before any call: a derived field bound later reads zero until then
         self._all = np.arange(n)

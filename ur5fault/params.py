@@ -13,9 +13,8 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
-import yaml
-
-from .errors import ConfigFileError, ParameterError
+from . import yamlsafe
+from .errors import ParameterError
 from .validated import Validated, param
 
 DEFAULT_PARAMS_PATH = Path(str(resources.files("ur5fault") / "data" / "ur5_drive.yaml"))
@@ -33,7 +32,8 @@ class GearParams(Validated):
 
 @dataclasses.dataclass(frozen=True)
 class FrictionParams(Validated):
-    """Joint friction at the output shaft, the paper's eq. (2) read as odd in speed."""
+    """Joint friction, the paper's eq. (2) read as odd in speed, as a smooth-sign or LuGre law,
+    split between the motor side and the link side of the gear clearance."""
 
     coulomb_Nm: tuple[float, ...] = param(0, 500, unit="N*m", doc="T_f,c")
     static_Nm: tuple[float, ...] = param(0, 500, unit="N*m", doc="T_f,s (breakaway)")
@@ -45,6 +45,18 @@ class FrictionParams(Validated):
     stribeck_rate_s_per_rad: float = param(0, 1e3, per_joint=False, unit="s/rad", doc="the 10 in tanh(10|w|)")
     sign_smoothing_rad_s: tuple[float, ...] = param(
         0, 1, lo_open=True, unit="rad/s", doc="width of the smooth sign tanh(w / width)"
+    )
+    # defaults reproduce the earlier smooth-sign, all-on-the-link model for files without these keys
+    model: tuple[str, ...] = param(unit="", choices=("lugre", "smooth"), default="smooth",
+                                   doc="friction law per joint: LuGre (sticks) or eq. (2) with a smooth sign")
+    presliding_stiffness_Nm_per_rad: tuple[float, ...] = param(
+        0, 1e9, lo_open=True, unit="N*m/rad", default=1e4, doc="LuGre sigma0 (bristle stiffness, joint side)"
+    )
+    bristle_damping_Nms_per_rad: tuple[float, ...] = param(
+        0, 1e5, unit="N*m*s/rad", default=0.0, doc="LuGre sigma1 (bristle damping, joint side)"
+    )
+    motor_side_share: tuple[float, ...] = param(
+        0, 1, unit="-", default=0.0, doc="share of the friction acting on the rotor, before the gear clearance"
     )
 
 
@@ -161,22 +173,9 @@ def load_params(path: str | Path | None = None, overrides: dict[str, Any] | None
 
 
 def read_yaml(path: Path) -> dict[str, Any]:
-    """Parse a YAML mapping, turning I/O and syntax errors into :class:`ConfigFileError`."""
-    try:
-        text = Path(path).read_text()
-    except OSError as exc:
-        raise ConfigFileError(f"{path}: cannot read ({exc.strerror})") from None
-    try:
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        loc = f" line {mark.line + 1}" if mark is not None else ""
-        raise ConfigFileError(f"{path}:{loc} is not valid YAML ({getattr(exc, 'problem', exc)})") from None
-    if data is None:
-        return {}
-    if not isinstance(data, dict):
-        raise ConfigFileError(f"{path}: expected a mapping at the top level, got {type(data).__name__}")
-    return data
+    """Parse a YAML mapping strictly (:func:`ur5fault.yamlsafe.read_yaml`: duplicate keys, alias bombs,
+    oversized and empty files refused; YAML 1.2 numbers), errors as :class:`ConfigFileError`."""
+    return yamlsafe.read_yaml(path)
 
 
 def deep_merge(base: dict[str, Any], over: dict[str, Any]) -> dict[str, Any]:

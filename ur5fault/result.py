@@ -23,7 +23,8 @@ from .drive.motor import phase_currents
 from .io import write_parquet_atomic
 
 if TYPE_CHECKING:  # pragma: no cover
-    from .engine import RunSpec, Simulator
+    from .engine import RunSpec
+    from .params import RobotParams
     from .run_arrays import RunArrays
     from .trajectory import Trajectory
 
@@ -76,18 +77,45 @@ class SimResult:
     def n_runs(self) -> int:
         return len(self.run_ids)
 
+    # ------------------------------------------------------------------ notebooks
+    #: runs listed by ``repr`` before it abbreviates
+    REPR_RUNS = 4
+
+    def __repr__(self) -> str:
+        """One line per batch: shape, trajectory, and each run's id, status and effects (no arrays)."""
+        runs = [f"{r} {s}" + (f" [{'; '.join(e)}]" if e else " [healthy]")
+                for r, s, e in zip(self.run_ids[: self.REPR_RUNS], self.status, self.effects)]
+        if self.n_runs > self.REPR_RUNS:
+            runs.append(f"... {self.n_runs - self.REPR_RUNS} more")
+        period = self.meta.get("log_period_s", float("nan"))
+        return (f"<SimResult {self.n_runs} run(s) x {self.t_s.size} samples every {period:g} s on "
+                f"{self.meta.get('trajectory', '?')}, signals (n_runs, n_log, 6): {', '.join(self.signals)}; "
+                f"runs: {', '.join(runs)}>")
+
+    def _repr_html_(self) -> str:
+        """A table of the runs for notebooks."""
+        import html
+
+        head = (f"<p><b>SimResult</b>: {self.n_runs} run(s) x {self.t_s.size} samples on "
+                f"{html.escape(str(self.meta.get('trajectory', '?')))}; signals {html.escape(', '.join(self.signals))}"
+                "</p>")
+        table = pd.DataFrame({"run_id": self.run_ids, "seed": self.seeds, "status": self.status,
+                              "effects": ["; ".join(e) or "healthy" for e in self.effects], "reason": self.reason})
+        return head + table.to_html(index=False)
+
     def __getitem__(self, name: str) -> NDArray:
         """A joint signal by name, ``(n_runs, n_log, 6)``."""
         return self.signals[name]
 
     @classmethod
-    def build(cls, sim: Simulator, traj: Trajectory, runs: list[RunSpec], a: RunArrays, t_log: NDArray,
+    def build(cls, params: RobotParams, model_path: Path, tcp_site: int, traj: Trajectory, runs: list[RunSpec],
+              a: RunArrays, t_log: NDArray,
               q_set_log: NDArray, log: dict[str, NDArray], status: list[str], reason: list[str],
               models: list[mujoco.MjModel]) -> SimResult:
         n = len(runs)
         tcp = np.full((n, t_log.size, 3), np.nan)
         tcp_des = np.empty((n, t_log.size, 3))
-        site = sim._tcp_site
+        site = tcp_site
         for r, m in enumerate(models):
             d = mujoco.MjData(m)
             for i in range(t_log.size):
@@ -101,7 +129,7 @@ class SimResult:
         elec = log["q_M_rad"] * a.motor_pole_pairs[:, None, :]
         phases = phase_currents(log["i_d_A"], log["i_q_A"], elec)
         phases = np.where(a.motor_is_pmsm[:, None, :, None], phases, np.nan)
-        p = sim.params
+        p = params
         meta = {
             "physics_dt_s": p.physics_dt_s,
             "servo_period_s": p.controller.servo_period_s,
@@ -114,7 +142,7 @@ class SimResult:
             "payload_kg": a.payload_kg.tolist(),
             "joint_temperature_C": a.temperature_C.tolist(),
             "mujoco_version": mujoco.__version__,
-            "model_path": str(sim.model_path),
+            "model_path": str(model_path),
         }
         return cls(
             t_s=t_log, q_set_rad=q_set_log, signals=log, tcp_m=tcp, tcp_des_m=tcp_des, phase_currents_A=phases,

@@ -33,6 +33,10 @@ class RunArrays:
     friction_viscous_Nms_per_rad: NDArray
     friction_temp_coeff_per_K: NDArray
     friction_sign_smoothing_rad_s: NDArray
+    friction_is_lugre: NDArray
+    friction_presliding_stiffness_Nm_per_rad: NDArray
+    friction_bristle_damping_Nms_per_rad: NDArray
+    friction_motor_side_share: NDArray
     temperature_C: NDArray
     motor_is_pmsm: NDArray
     motor_kt_Nm_per_A: NDArray
@@ -111,6 +115,10 @@ def build_run_arrays(params: RobotParams, effects: Sequence[Sequence[EffectSpec]
         friction_viscous_Nms_per_rad=joint(f.viscous_Nms_per_rad),
         friction_temp_coeff_per_K=joint(f.viscous_temp_coeff_per_K),
         friction_sign_smoothing_rad_s=joint(f.sign_smoothing_rad_s),
+        friction_is_lugre=np.tile(np.array([k == "lugre" for k in f.model]), (n, 1)),
+        friction_presliding_stiffness_Nm_per_rad=joint(f.presliding_stiffness_Nm_per_rad),
+        friction_bristle_damping_Nms_per_rad=joint(f.bristle_damping_Nms_per_rad),
+        friction_motor_side_share=joint(f.motor_side_share),
         temperature_C=joint(params.joint_temperature_C),
         motor_is_pmsm=np.tile(is_pmsm, (n, 1)),
         motor_kt_Nm_per_A=joint(kt),

@@ -63,11 +63,6 @@ def _check_scalar(where: str, value: Any, meta: Mapping[str, Any]) -> Any:
         if not isinstance(value, str) or value not in meta["choices"]:
             raise ParameterError(f"{where} = {value!r} is not valid; choose one of: {', '.join(meta['choices'])}")
         return value
-    if isinstance(value, str):  # PyYAML reads 6.7e4 (no dot before e, no sign) as a string
-        try:
-            value = float(value)
-        except ValueError:
-            pass
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise ParameterError(f"{where} = {value!r} must be a number in {_range_text(meta)}")
     v = float(value)

@@ -3,11 +3,14 @@ over processes (:mod:`.execute`), stored atomically and resumably (:mod:`.store`
 (:mod:`.summary`).  The campaign file's format is documented in :mod:`.spec`."""
 
 from .execute import plan_batches, run_batch, run_campaign
+from .result import CampaignResult
 from .spec import Campaign, CampaignRun, build_campaign, load_campaign
-from .store import CampaignLockedError, Lock, consolidate, status
+from .store import CampaignChangedError, CampaignLockedError, Lock, consolidate
 from .summary import acceptable_backlash, tcp_table
+from .verify import status
 
 __all__ = [
-    "Campaign", "CampaignRun", "CampaignLockedError", "Lock", "acceptable_backlash", "build_campaign", "consolidate",
-    "load_campaign", "plan_batches", "run_batch", "run_campaign", "status", "tcp_table",
+    "Campaign", "CampaignRun", "CampaignChangedError", "CampaignLockedError", "CampaignResult", "Lock",
+    "acceptable_backlash", "build_campaign", "consolidate", "load_campaign", "plan_batches", "run_batch",
+    "run_campaign", "status", "tcp_table",
 ]

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import sys
 from pathlib import Path
 
 
@@ -21,37 +20,52 @@ def register(sub) -> None:
     r.add_argument("--save-timeseries", action="store_true", help="also write each run's time series")
     r.add_argument("--threshold-mm", type=float, help="TCP acceptability threshold of the summary [mm]")
     r.add_argument("--quiet", action="store_true")
+    r.add_argument("--yes", action="store_true",
+                   help="start a large campaign (over 1000 runs or 2e9 physics steps) without asking")
+    r.add_argument("--replace-changed", action="store_true", dest="replace_changed",
+                   help="re-simulate stored runs of OUT made under other settings (default: stop and name them)")
     r.set_defaults(func=cmd_run)
-    s = csub.add_parser("status", help="what a campaign folder holds")
+    s = csub.add_parser("status", help="what a campaign folder holds, every run file verified (exit 1 on problems)")
     s.add_argument("dir")
     s.set_defaults(func=cmd_status)
-    p = sub.add_parser("plot", help="draw the paper's figures and a feature heat map as PNG")
+    p = sub.add_parser("plot", help="draw the paper's backlash figures and a severity figure per swept effect (PNG)")
     p.add_argument("dir", help="campaign output folder")
-    p.add_argument("--feature", default="tcp_dev_max_mm", help="feature of the heat map (a features.parquet column)")
+    p.add_argument("--feature", default="tcp_dev_max_mm",
+                   help="feature of the severity figures and heat maps: a features.parquet column, or a per-joint "
+                        "feature without _j{j} (e.g. current_spike_max_A: read on the faulty joint)")
     p.add_argument("--out", help="folder for the PNG files (default: DIR/plots)")
     p.set_defaults(func=cmd_plot)
 
 
 def cmd_run(args: argparse.Namespace) -> int:
+    from ..checks import check_number
     from ..errors import ParameterError
     from . import acceptable_backlash, load_campaign, run_campaign, tcp_table
+    from .limits import confirmation_needed, effective_jobs, estimate
+    from .spec import MAX_THRESHOLD_MM
 
     camp = load_campaign(args.file, args.out, args.model)
-    if args.jobs is not None and args.jobs < 1:
-        raise ParameterError(f"--jobs {args.jobs}: must be at least 1")
-    print(f"campaign {camp.name}: {len(camp.runs)} runs (twins included) -> {camp.out}", file=sys.stderr)
+    if args.threshold_mm is not None:
+        check_number(args.threshold_mm, "--threshold-mm", 0.0, MAX_THRESHOLD_MM, "mm", lo_open=True)
+    jobs, _ = effective_jobs(args.jobs) if args.backend == "loky" else (args.jobs or 1, None)
+    why = confirmation_needed(camp, estimate(camp, jobs))
+    if why and not args.yes:
+        raise ParameterError(why)
     manifest = run_campaign(camp, camp.out, jobs=args.jobs, backend=args.backend, scheduler=args.scheduler,
-                            progress=not args.quiet, save_timeseries=args.save_timeseries or None)
+                            progress=not args.quiet, save_timeseries=args.save_timeseries or None,
+                            replace_changed=args.replace_changed)
     import pandas as pd
 
     features = pd.read_parquet(Path(camp.out) / "features.parquet")
     thr = args.threshold_mm if args.threshold_mm is not None else camp.threshold_mm
-    table = tcp_table(features)
-    if not table.empty:
+    table = tcp_table(features, camp.swept_keys)
+    if table.shape[1] > 20:  # a sampled campaign's continuous backlash sizes: no readable grid
+        print(f"\n{len(features)} runs with {table.shape[1]} distinct backlash sizes: see `ur5fault benchmark`")
+    elif not table.empty:
         print("\nmax TCP deviation from the healthy twin [mm], fault joint x backlash [deg]:")
         print(table.to_string(float_format=lambda v: f"{v:.3f}"))
         print(f"\nlargest backlash keeping the TCP within {thr:g} mm [deg]:")
-        print(acceptable_backlash(features, thr).to_string(float_format=lambda v: f"{v:g}"))
+        print(acceptable_backlash(features, thr, camp.swept_keys).to_string(float_format=lambda v: f"{v:g}"))
     bad = features[features["status"] != "ok"]
     if len(bad):
         print(f"\n{len(bad)} run(s) not ok:\n" + bad[["run_id", "status", "reason"]].to_string(index=False))
@@ -63,13 +77,21 @@ def cmd_run(args: argparse.Namespace) -> int:
 def cmd_status(args: argparse.Namespace) -> int:
     from . import status
 
-    print(json.dumps(status(Path(args.dir)), indent=2, default=str))
-    return 0
+    info = status(Path(args.dir))
+    print(json.dumps(info, indent=2, default=str))
+    runs = info.get("runs", {})
+    stale = info.get("state") == "complete" and (info.get("features") or {}).get("state") != "ok"
+    return 1 if runs.get("bad") or runs.get("changed") or stale else 0
 
 
 def cmd_plot(args: argparse.Namespace) -> int:
-    from ..plotting import plot_campaign
+    from ..plotting import campaign_figures, save
+    from .result import CampaignResult
 
-    for path in plot_campaign(Path(args.dir), args.feature, Path(args.out) if args.out else None):
+    result = CampaignResult.load(Path(args.dir))
+    figures, messages = campaign_figures(result, args.feature)
+    for path in save(figures, Path(args.out) if args.out else result.out / "plots"):
         print(f"wrote {path}")
+    for message in messages:
+        print(message)
     return 0

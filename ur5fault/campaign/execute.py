@@ -1,41 +1,55 @@
 """Campaign execution: runs grouped into lockstep batches, spread over processes (joblib loky,
-or Dask for clusters), each finished run written atomically to the store as it arrives."""
+or Dask for clusters), each finished run written atomically to the store as it arrives.
+
+Before anything is simulated the campaign's cost is checked (:mod:`.limits`) and the output folder
+must be writable.  On a rerun into an existing folder every stored run is verified
+(:mod:`.verify`): sound results made under the same settings are kept, bad files are reported
+and re-simulated, and results made under other settings stop the campaign with the first
+difference named (``replace_changed=True`` re-simulates them instead).  On an interruption
+(Ctrl-C, SIGTERM) the loky workers are stopped and the lock released; a worker whose parent
+process dies (even by SIGKILL) exits within a second.
+"""
 
 from __future__ import annotations
 
-import hashlib
 import json
+import logging
 import os
 import sys
+import threading
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
-import pandas as pd
 
 from ..config import parse_trajectory
-from ..effects import EffectSpec, make_effect
 from ..errors import ParameterError
-from ..io import write_json_atomic, write_parquet_atomic
+from ..io import check_writable, write_json_atomic, write_parquet_atomic
 from ..params import load_params
 from ..progress import campaign_progress
+from .identity import Identities
+from .identity import run_effects as _effects_of
+from .labels import assign_splits, refresh_splits, row_labels
+from .limits import check_limits, effective_jobs, estimate
+from .manifest import build_manifest
 from .spec import Campaign, CampaignRun
-from .store import Lock, consolidate, done_ids, file_sha256, runs_dir
+from .store import CampaignChangedError, Lock, consolidate, run_path, write_run_file
+from .verify import scan
 
-
-def _effects_of(camp: Campaign, rc: CampaignRun) -> tuple[EffectSpec, ...]:
-    c = rc.cond
-    return camp.base_effects + rc.fault_effects() + (
-        make_effect("payload", mass_kg=c["payload_kg"]),
-        make_effect("temperature", temperature_C=c["temperature_C"]),
-    )
+_log = logging.getLogger(__name__)
+#: seconds to wait for a Dask scheduler to answer (distributed's own default is 30 s)
+DASK_CONNECT_TIMEOUT_S = 10.0
+#: how often a loky worker checks that the campaign process is still alive [s]
+PARENT_POLL_S = 1.0
 
 
 def plan_batches(camp: Campaign, todo: Sequence[CampaignRun], n_workers: int = 1) -> list[list[CampaignRun]]:
     """Group runs by trajectory, cut into lockstep batches (at most ``batch_size`` runs, and at
-    least ``n_workers`` batches when there are enough runs), and add each batch's missing twins."""
+    least ``n_workers`` batches when there are enough runs), and add each batch's missing twins
+    (those the campaign lists: every twin of a swept campaign, the chosen ones of a sampled one)."""
+    listed = {rc.run_id for rc in camp.runs}  # a twin is simulated when the campaign lists it
     by_traj: dict[str, list[CampaignRun]] = {}
     for rc in todo:
         by_traj.setdefault(json.dumps(rc.cond["trajectory"], sort_keys=True), []).append(rc)
@@ -48,17 +62,26 @@ def plan_batches(camp: Campaign, todo: Sequence[CampaignRun], n_workers: int = 1
             ids = {r.run_id for r in chunk}
             for r in list(chunk):
                 t = r.twin()
-                if t.run_id not in ids:
+                if t.run_id not in ids and t.run_id in listed:
                     chunk.append(t)
                     ids.add(t.run_id)
             batches.append(chunk)
     return batches
 
 
-def run_batch(camp: Campaign, batch: Sequence[CampaignRun], ts_dir: str | None) -> list[dict[str, Any]]:
-    """Simulate one lockstep batch; return one feature row per run (twins included)."""
+def run_batch(camp: Campaign, batch: Sequence[CampaignRun], ts_dir: str | None,
+              identities: Mapping[str, str] | None = None, parent_pid: int | None = None) -> list[dict[str, Any]]:
+    """Simulate one lockstep batch; return one feature row per run (twins included).
+
+    Args:
+        ts_dir: folder for the runs' time series (None: not written).
+        identities: run_id -> run identity, recorded in the time-series files.
+        parent_pid: the campaign process, for loky workers: a worker exits when it dies.
+    """
     from ..engine import RunSpec, Simulator
-    from ..features import run_features
+    from ..features import FEATURE_UNITS, run_features
+
+    _exit_with_parent(parent_pid)
 
     traj_spec = batch[0].cond["trajectory"]
     traj = parse_trajectory(traj_spec, "trajectory")
@@ -69,148 +92,218 @@ def run_batch(camp: Campaign, batch: Sequence[CampaignRun], ts_dir: str | None) 
     wall = time.perf_counter() - t0
     index = {rc.run_id: i for i, rc in enumerate(batch)}
     ratio = np.asarray(sim.params.gear.ratio)
+    splits = assign_splits(camp.split, (rc.cond for rc in camp.runs))
     rows = []
     for i, rc in enumerate(batch):
-        twin_i = index[rc.twin().run_id]
-        ok = res.status[i] == "ok" and res.status[twin_i] == "ok"
+        twin_i = index.get(rc.twin().run_id)  # None: the campaign simulates no twin for this run
+        twin_ok = twin_i is None or res.status[twin_i] == "ok"
+        ok = res.status[i] == "ok" and twin_ok
         feats = run_features(res.t_s, res.q_set_rad, res["q_FB_rad"][i], res["q_M_FB_rad"][i], res["i_FB_A"][i],
-                             ratio, res.tcp_m[i], res.tcp_des_m[i], res.tcp_m[twin_i] if ok else None)
+                             ratio, res.tcp_m[i], res.tcp_des_m[i],
+                             res.tcp_m[twin_i] if ok and twin_i is not None else None)
         if ts_dir is not None:
-            res.to_parquet(Path(ts_dir) / f"{rc.run_id}.parquet", i)
+            meta = {**res.run_metadata(i), "run_identity": (identities or {}).get(rc.run_id)}
+            write_parquet_atomic(res.to_pandas(i), Path(ts_dir) / f"{rc.run_id}.parquet",
+                                 {"ur5fault": json.dumps(meta)})
         eff = rc.fault_effects()
-        backlash = next((e for e in eff if e.name == "backlash"), None)
-        fault_joint = (eff[0].joint + 1) if eff and eff[0].joint is not None else 0
         row: dict[str, Any] = {
             "run_id": rc.run_id,
-            "fault_joint": fault_joint,
-            "fault": "+".join(e.name for e in eff) or "healthy",
-            "backlash_deg": backlash.value("backlash_deg") if backlash else 0.0,
-            **{k: (json.dumps(v) if isinstance(v, dict) else v) for k, v in rc.cond.items()},
-            **{_column(k): v for k, v in rc.faults},
-            "twin_run_id": rc.twin().run_id,
+            **row_labels(rc.cond, eff, camp.split, splits),
+            "twin_run_id": rc.twin().run_id if twin_i is not None else "",
             "status": res.status[i] if res.status[i] != "ok" or ok else "ok",
             "reason": res.reason[i] or ("" if ok else f"twin: {res.reason[twin_i]}"),
             "effects": "; ".join(e.describe() for e in eff),
             "wall_s_batch": wall,
             "batch_size": len(batch),
+            "tcp_dev_max_mm": np.nan,  # without a twin; run_features fills both when there is one
+            "tcp_dev_rms_mm": np.nan,
             **feats,
         }
+        for key in FEATURE_UNITS:  # every file has the full schema (tcp_dev_* is NaN without a sound twin)
+            row.setdefault(key, float("nan"))
         rows.append(row)
     return rows
 
 
-def _column(key: str) -> str:
-    name, _, par = key.partition(".")
-    if key == "backlash.backlash_deg":
-        return "backlash_deg_swept"
-    return f"{name}_{par}" if par != "joint" else f"{name}_joint"
+def _exit_with_parent(parent_pid: int | None) -> None:
+    """In a loky worker process started by ``parent_pid``: exit as soon as that process is gone
+    (``parent_pid`` is None on Dask, whose workers belong to their nanny, and equal to our own
+    pid when the batch runs in the campaign process itself)."""
+    if parent_pid is None or os.getpid() == parent_pid:
+        return
+    if os.getppid() != parent_pid:  # the campaign process died before this batch started
+        os._exit(1)
+    if any(t.name == "ur5fault-parent-watch" for t in threading.enumerate()):
+        return
+
+    def watch() -> None:
+        while True:
+            time.sleep(PARENT_POLL_S)
+            if os.getppid() != parent_pid:
+                os._exit(1)
+
+    threading.Thread(target=watch, name="ur5fault-parent-watch", daemon=True).start()
+
+
+def _note_stderr(message: str) -> None:
+    sys.stderr.write(f"ur5fault: note: {message}\n")
 
 
 def run_campaign(camp: Campaign, out: Path | None = None, *, jobs: int | None = None, backend: str = "loky",
                  scheduler: str | None = None, progress: bool | Callable[[int, int, float], None] = True,
-                 save_timeseries: bool | None = None) -> dict[str, Any]:
-    """Run every run of ``camp`` not yet done in ``out``; return the manifest.
+                 save_timeseries: bool | None = None, replace_changed: bool = False,
+                 note: Callable[[str], None] | None = _note_stderr) -> dict[str, Any]:
+    """Run every run of ``camp`` not yet soundly done in ``out``; return the manifest.
 
     Args:
-        jobs: worker processes (default: all cores).
+        jobs: worker processes (default, and at most: the cores available; a cap is noted).
         backend: ``"loky"`` (local processes) or ``"dask"`` (``scheduler`` address required).
         progress: print a progress line to stderr, or a callback ``(done, total, eta_s)``.
-    """
-    from .. import __version__
-    from ..engine import DEFAULT_MODEL_PATH
+        replace_changed: re-simulate stored runs made under other settings instead of stopping.
+        note: receives one-line notes (jobs capped, bad files re-simulated); None: silent.
 
+    Raises:
+        CampaignChangedError: stored runs were made under other settings (first difference named).
+        CampaignLockedError: another process writes ``out``.
+        ParameterError: the campaign exceeds a limit (memory, steps), or a bad backend/scheduler.
+        OutputError: ``out`` cannot be written.
+    """
     out = Path(out) if out is not None else camp.out
-    jobs = jobs or os.cpu_count() or 1
+    say = note or (lambda message: None)
     if backend not in ("loky", "dask"):
         raise ParameterError(f"backend = {backend!r} is not valid; choose one of: loky, dask")
     if backend == "dask" and not scheduler:
         raise ParameterError("--backend dask needs --scheduler ADDRESS (e.g. tcp://127.0.0.1:8786)")
+    jobs, capped = effective_jobs(jobs) if backend == "loky" else (jobs or 1, None)
+    check_limits(camp, estimate(camp, jobs))
+    check_writable(out, folder=True)
     save_ts = camp.save_timeseries if save_timeseries is None else save_timeseries
-    with Lock(out):
-        runs_dir(out).mkdir(parents=True, exist_ok=True)
+    client = _dask_client(str(scheduler)) if backend == "dask" else None  # before anything is written
+    try:
+        return _run_locked(camp, out, jobs, backend, client, progress, save_ts, replace_changed, say, capped)
+    finally:
+        if client is not None:
+            client.close()
+
+
+def _run_locked(camp: Campaign, out: Path, jobs: int, backend: str, client, progress, save_ts: bool,
+                replace_changed: bool, say: Callable[[str], None], capped: str | None) -> dict[str, Any]:
+    with Lock(out):  # notes only from here: an error before is the one line a user sees
+        _remove_stale_temporaries(out)
+        ids = Identities(camp)
+        found = scan(out, camp, ids, save_ts)
+        if found.changed and not replace_changed:
+            rid, why = found.changed[0]
+            raise CampaignChangedError(
+                f"{run_path(out, rid)}: made under other settings ({why}); {len(found.changed)} stored run(s) differ "
+                "from this campaign: use another --out, or --replace-changed to re-simulate them")
+        for rid, why in found.bad[:5]:
+            say(f"{run_path(out, rid)}: {why}; simulating it again")
+        if len(found.bad) > 5:
+            say(f"... and {len(found.bad) - 5} more bad run files; simulating them again")
+        if found.changed:
+            say(f"re-simulating {len(found.changed)} run(s) made under other settings (--replace-changed)")
+        redo = set(found.missing) | {rid for rid, _ in found.bad} | {rid for rid, _ in found.changed}
+        todo = [rc for rc in camp.runs if rc.run_id in redo]
+        if capped:
+            say(capped)
+        say(f"campaign {camp.name}: {len(camp.runs)} runs (twins included), {len(todo)} to simulate -> {out}")
+        t0 = time.perf_counter()
+        write_json_atomic(out / "manifest.json", build_manifest(camp, ids, None, "running", backend, jobs, save_ts, t0))
         ts_dir = out / "timeseries" if save_ts else None
-        if ts_dir is not None:
-            ts_dir.mkdir(exist_ok=True)
-        already = done_ids(out)
-        todo = [rc for rc in camp.runs if rc.run_id not in already]
         batches = plan_batches(camp, todo, jobs)
         total, done = len(camp.runs), len(camp.runs) - len(todo)
+        _log.info("campaign %s: %d of %d runs already in %s; %d to do in %d batch(es) on %d %s worker(s)", camp.name,
+                  done, total, out, len(todo), len(batches), jobs, backend)
         report = campaign_progress(progress, total)
         report(done, 0.0)
-        t0 = time.perf_counter()
         try:
-            _execute(camp, batches, out, ts_dir, jobs, backend, scheduler, already, done, report, t0)
+            _execute(camp, batches, out, ts_dir, jobs, client, ids, {rc.run_id for rc in todo}, done, report, t0)
         finally:
             report.close()
-        features = consolidate(out, camp)
-        p = load_params(overrides=dict(camp.base_params))
-        import mujoco
-
-        duration = camp.duration_s if camp.duration_s else _duration(camp)
-        manifest = {
-            "name": camp.name,
-            "campaign_file": str(camp.path) if camp.path else None,
-            "campaign_sha256": camp.sha256,
-            "campaign_text": camp.text,
-            "model_file": str(DEFAULT_MODEL_PATH),
-            "model_sha256": file_sha256(DEFAULT_MODEL_PATH),
-            "params_sha256": hashlib.sha256(json.dumps(p.to_dict(), sort_keys=True).encode()).hexdigest(),
-            "ur5fault_version": __version__,
-            "mujoco_version": mujoco.__version__,
-            "numpy_version": np.__version__,
-            "python": sys.version.split()[0],
-            "n_runs": int(len(features)),
-            "physics_dt_s": p.physics_dt_s,
-            "duration_s": duration,
-            "n_steps_total": int(len(features) * round(duration / p.physics_dt_s)),
-            "threshold_mm": camp.threshold_mm,
-            "swept_keys": list(camp.swept_keys),
-            "wall_s_this_invocation": time.perf_counter() - t0,
-            "backend": backend,
-            "jobs": jobs,
-            "status_counts": features["status"].value_counts().to_dict(),
-            "feature_units": _units(),
-        }
+        records = {rc.run_id: ids.record(rc) for rc in camp.runs}
+        # the split is a label, not a result: stored rows follow the campaign's current split rule
+        features = consolidate(out, records, lambda df: refresh_splits(df, camp.split, camp.runs)[0])
+        manifest = build_manifest(camp, ids, features, "complete", backend, jobs, save_ts, t0)
+        manifest["runs_resimulated"] = {"missing": len(found.missing), "bad": len(found.bad),
+                                        "changed": len(found.changed)}
         write_json_atomic(out / "manifest.json", manifest)
         return manifest
 
 
-def _duration(camp: Campaign) -> float:
-    traj = parse_trajectory(camp.runs[0].cond["trajectory"], "trajectory")
-    return traj.duration_s
+def _remove_stale_temporaries(out: Path) -> None:
+    """Temporary files of a writer killed mid-write (we hold the lock, so no one else writes here)."""
+    for folder in (out, out / "runs", out / "timeseries"):
+        if folder.is_dir():
+            for p in folder.glob(".*.tmp"):
+                p.unlink(missing_ok=True)
 
 
-def _units() -> dict[str, str]:
-    from ..features import FEATURE_UNITS
+def _stop_loky_workers() -> None:
+    """Kill the worker processes of joblib's reusable loky executor (after an interruption)."""
+    try:
+        from joblib.externals.loky import reusable_executor
+    except ImportError:  # pragma: no cover - joblib without its vendored loky
+        return
+    executor = getattr(reusable_executor, "_executor", None)
+    if executor is not None:
+        executor.shutdown(wait=False, kill_workers=True)
 
-    return dict(FEATURE_UNITS)
+
+def _dask_client(scheduler: str, timeout_s: float | None = None):
+    """Connect to a Dask scheduler, or fail within ``timeout_s`` (default :data:`DASK_CONNECT_TIMEOUT_S`)
+    with one line (and no logged tracebacks)."""
+    import logging
+
+    from dask.distributed import Client
+
+    timeout_s = DASK_CONNECT_TIMEOUT_S if timeout_s is None else timeout_s
+
+    loggers = [logging.getLogger(name) for name in ("distributed", "distributed.client", "distributed.comm.core")]
+    levels = [lg.level for lg in loggers]
+    for lg in loggers:
+        lg.setLevel(logging.CRITICAL)
+    try:
+        return Client(scheduler, timeout=timeout_s)
+    except (OSError, TimeoutError, ValueError, TypeError) as exc:
+        why = " ".join(str(exc).split())[:160] or type(exc).__name__
+        raise ParameterError(f"--scheduler {scheduler}: cannot connect to a Dask scheduler (timeout {timeout_s:g} s: "
+                             f"{why}); check the address or start one with `dask scheduler`") from None
+    finally:
+        for lg, level in zip(loggers, levels):
+            lg.setLevel(level)
 
 
 def _execute(camp: Campaign, batches: list[list[CampaignRun]], out: Path, ts_dir: Path | None, jobs: int,
-             backend: str, scheduler: str | None, already: set[str], done: int, report, t0: float) -> None:
+             client, ids: Identities, todo: set[str], done: int, report, t0: float) -> None:
     """Run the batches in parallel; write each run's row to the store as soon as its batch returns."""
     import joblib
 
     if not batches:
         return
-    if backend == "dask":
-        from dask.distributed import Client
-
-        client = Client(scheduler)
+    if ts_dir is not None:
+        ts_dir.mkdir(exist_ok=True)
+    by_id = {rc.run_id: rc for b in batches for rc in b}
+    idents = {rid: ids.identity(rc) for rid, rc in by_id.items()}
+    if client is not None:
         ctx = joblib.parallel_backend("dask", wait_for_workers_timeout=60)
     else:
-        client, ctx = None, joblib.parallel_backend("loky")
+        ctx = joblib.parallel_backend("loky")
     try:
         with ctx:
-            par = joblib.Parallel(n_jobs=jobs if backend == "loky" else -1, return_as="generator_unordered")
-            gen = par(joblib.delayed(run_batch)(camp, b, str(ts_dir) if ts_dir else None) for b in batches)
+            par = joblib.Parallel(n_jobs=jobs if client is None else -1, return_as="generator_unordered")
+            gen = par(joblib.delayed(run_batch)(camp, b, str(ts_dir) if ts_dir else None,
+                                                {rc.run_id: idents[rc.run_id] for rc in b},
+                                                os.getpid() if client is None else None)
+                      for b in batches)
             for rows in gen:
                 for row in rows:
-                    if row["run_id"] not in already:
-                        write_parquet_atomic(pd.DataFrame([row]), runs_dir(out) / f"{row['run_id']}.parquet")
-                        already.add(row["run_id"])
+                    if row["run_id"] in todo:
+                        write_run_file(out, row, ids.record(by_id[row["run_id"]]))
+                        todo.discard(row["run_id"])
                         done += 1
                 report(done, time.perf_counter() - t0)
-    finally:
-        if client is not None:
-            client.close()
+    except BaseException:
+        if client is None:
+            _stop_loky_workers()
+        raise

@@ -11,6 +11,7 @@ Campaign YAML (see campaigns/default.yaml)::
       backlash.backlash_deg: [0, 0.02, 0.05, 0.1, 0.2, 0.5]
     zip:                            # groups whose lists vary together (one axis per group)
       - {payload_kg: [1.0, 2.0], temperature_C: [25.0, 40.0]}
+    split: {by: trajectory_seed, test_fraction: 0.25, seed: 0}   # train/test column (campaign/labels.py)
     threshold_mm: 0.5               # TCP acceptability threshold of the summary
     batch_size: 32                  # runs stepped in lockstep per batch
     log_period_s: 0.001
@@ -20,6 +21,9 @@ Sweep keys: ``seed``, ``payload_kg``, ``temperature_C``, ``trajectory`` (conditi
 ``<effect>.<parameter>`` / ``<effect>.joint`` for any entry of the effect registry (faults).
 Each run is compared with its *healthy twin*: the run with the same conditions and no swept
 fault, which the campaign adds and simulates in the same batch.
+
+Instead of ``sweep``/``zip``, a ``sample:`` section draws N runs by Latin hypercube or Sobol
+sampling over fault kinds, joints, sizes and nuisance conditions (format in :mod:`.sampling`).
 """
 
 from __future__ import annotations
@@ -28,22 +32,39 @@ import dataclasses
 import hashlib
 import itertools
 import json
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
 import yaml
 
 from ..axes import joint_index
-from ..config import Overlay, check_keys, parse_effects, parse_trajectory
+from ..checks import check_bool, check_int, check_number, check_text, short
+from ..config import (
+    Overlay,
+    check_duration,
+    check_keys,
+    check_log_period,
+    check_mapping,
+    check_seed,
+    parse_effects,
+    parse_trajectory,
+)
 from ..effects import REGISTRY, EffectSpec, make_effect
 from ..errors import ParameterError, UnknownNameError
 from ..params import deep_merge, load_params, read_yaml
+from .labels import SplitRule, parse_split
+from .sampling import sample_runs
 
 CAMPAIGN_KEYS = ("name", "out", "trajectory", "base", "sweep", "zip", "threshold_mm", "batch_size",
-                 "log_period_s", "save_timeseries", "duration_s")
+                 "log_period_s", "save_timeseries", "duration_s", "split", "sample")
 BASE_KEYS = ("seed", "payload_kg", "temperature_C", "effects", "params")
 CONDITION_KEYS = ("seed", "payload_kg", "temperature_C", "trajectory")
+#: largest grid expanded at all (checked from the list lengths before expanding; assumption: a
+#: million runs is ~ 3e11 physics steps, far beyond one machine, and its run list alone ~ 1 GB)
+MAX_RUNS = 1_000_000
+#: largest TCP acceptability threshold [mm]: the UR5's reach is 850 mm
+MAX_THRESHOLD_MM = 1000.0
 
 
 @dataclasses.dataclass(frozen=True)
@@ -103,6 +124,8 @@ class Campaign:
     log_period_s: float
     save_timeseries: bool
     duration_s: float | None
+    data: Mapping[str, Any] = dataclasses.field(default_factory=dict)  # the validated mapping (JSON-able)
+    split: SplitRule = SplitRule()  # train/test split of the feature rows (campaign/labels.py)
 
     @property
     def sha256(self) -> str:
@@ -111,38 +134,34 @@ class Campaign:
 
 def _as_list(value: Any, where: str) -> list:
     if not isinstance(value, list) or not value:
-        raise ParameterError(f"{where}: expected a non-empty list of values")
+        raise ParameterError(f"{where}: expected a non-empty list of values, got {short(value)}")
     return value
 
 
-def _check_value(key: str, value: Any, where: str) -> Any:
-    """Validate one swept value now, before any simulation starts."""
+def _check_value(key: Any, value: Any, where: str) -> Any:
+    """Validate one swept (or base) value now, before any simulation starts."""
     if key == "seed":
-        if isinstance(value, bool) or not isinstance(value, int) or value < 0:
-            raise ParameterError(f"{where}: seed = {value!r} must be a non-negative integer")
-        return value
+        return check_seed(value, where)
     if key == "payload_kg":
-        make_effect("payload", where=where, mass_kg=value)
-        return float(value)
+        p = REGISTRY["payload"].param("mass_kg")
+        return check_number(value, where, p.lo, p.hi, p.unit)
     if key == "temperature_C":
-        make_effect("temperature", where=where, temperature_C=value)
-        return float(value)
+        p = REGISTRY["temperature"].param("temperature_C")
+        return check_number(value, where, p.lo, p.hi, p.unit)
     if key == "trajectory":
         parse_trajectory(value, where)
         return value if isinstance(value, str) else dict(value)
-    name, dot, par = key.partition(".")
+    name, dot, par = key.partition(".") if isinstance(key, str) else ("", "", "")
     if not dot or name not in REGISTRY:
         valid = list(CONDITION_KEYS) + [f"{e}.<param>" for e in REGISTRY]
-        raise UnknownNameError("sweep key", key, valid, where)
+        raise UnknownNameError("sweep key", key if isinstance(key, str) else short(key), valid, where)
     eff = REGISTRY[name]
     if par == "joint":
         if not eff.per_joint:
             raise ParameterError(f"{where}: effect {name!r} acts on the whole robot and takes no joint")
         return joint_index(value, where) + 1
     p = eff.param(par)
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not p.lo <= float(value) <= p.hi:
-        raise ParameterError(f"{where}: {key} = {value!r} is out of range [{p.lo:g}, {p.hi:g}] {p.unit}")
-    return float(value)
+    return check_number(value, f"{where}: {key}", p.lo, p.hi, p.unit)
 
 
 def load_campaign(path: str | Path, out: str | Path | None = None, overlay: str | Path | None = None) -> Campaign:
@@ -159,9 +178,13 @@ def load_campaign(path: str | Path, out: str | Path | None = None, overlay: str 
         ov_path = Path(overlay)
         Overlay.load(ov_path)  # validated with its own file name in messages
         ov = read_yaml(ov_path)
-        base = dict(data.get("base") or {})
-        base["params"] = deep_merge(dict(ov.get("params") or {}), dict(base.get("params") or {}))
-        base["effects"] = list(ov.get("effects") or []) + list(base.get("effects") or [])
+        base = dict(check_mapping(data.get("base"), f"{path.name}: base"))
+        own = dict(check_mapping(base.get("params"), f"{path.name}: base.params"))
+        base["params"] = deep_merge(dict(ov.get("params") or {}), own)
+        own_effects = base.get("effects") or []
+        if not isinstance(own_effects, list):
+            raise ParameterError(f"{path.name}: base.effects: expected a list of effects")
+        base["effects"] = list(ov.get("effects") or []) + own_effects
         data = {**data, "base": base}
         text = yaml.safe_dump(dict(data), sort_keys=False)
     return build_campaign(data, path.name, text, path, out)
@@ -169,13 +192,18 @@ def load_campaign(path: str | Path, out: str | Path | None = None, overlay: str 
 
 def build_campaign(data: Mapping[str, Any], where: str, text: str = "", path: Path | None = None,
                    out: str | Path | None = None) -> Campaign:
+    """Validate a campaign mapping and expand it into runs (twins included); nothing is simulated.
+
+    Every value that reaches the engine is checked here: types (no bool or string as a number),
+    finiteness, ranges, the log period against the physics step, and the grid size before expanding.
+    """
+    if not isinstance(data, Mapping):
+        raise ParameterError(f"{where}: expected a mapping of campaign keys, got {short(data)}")
     check_keys(data, CAMPAIGN_KEYS, where)
-    base = data.get("base") or {}
-    if not isinstance(base, Mapping):
-        raise ParameterError(f"{where}: base must be a mapping")
+    base = check_mapping(data.get("base"), f"{where}: base")
     check_keys(base, BASE_KEYS, f"{where}: base")
-    params = dict(base.get("params") or {})
-    load_params(overrides=params)  # validate robot overrides now
+    params = dict(check_mapping(base.get("params"), f"{where}: base.params"))
+    robot = load_params(overrides=params)  # validate robot overrides now
     base_effects = parse_effects(base.get("effects"), f"{where}: base.effects")
     cond0 = {
         "seed": _check_value("seed", base.get("seed", 0), f"{where}: base.seed"),
@@ -186,9 +214,7 @@ def build_campaign(data: Mapping[str, Any], where: str, text: str = "", path: Pa
     }
     axes: list[list[dict[str, Any]]] = []
     swept: list[str] = []
-    sweep = data.get("sweep") or {}
-    if not isinstance(sweep, Mapping):
-        raise ParameterError(f"{where}: sweep must be a mapping of key -> list of values")
+    sweep = check_mapping(data.get("sweep"), f"{where}: sweep")
     for key, values in sweep.items():
         loc = f"{where}: sweep.{key}"
         vals = [_check_value(key, v, loc) for v in _as_list(values, loc)]
@@ -212,34 +238,66 @@ def build_campaign(data: Mapping[str, Any], where: str, text: str = "", path: Pa
         dup = sorted({k for k in swept if swept.count(k) > 1})
         raise ParameterError(f"{where}: key swept twice: {', '.join(dup)}")
     _check_fault_keys(swept, where)
+    check_grid_size([len(a) for a in axes], where)
     runs: dict[str, CampaignRun] = {}
-    for combo in itertools.product(*axes) if axes else [()]:
+    sampled = data.get("sample") is not None  # a sampled campaign (campaign/sampling.py) instead of a grid
+    if sampled and (axes or swept):
+        raise ParameterError(f"{where}: sample cannot be combined with sweep or zip; use one of them")
+    for combo in (itertools.product(*axes) if axes else [()]) if not sampled else []:
         values: dict[str, Any] = {}
         for part in combo:
             values.update(part)
         cond = {**cond0, **{k: v for k, v in values.items() if k in CONDITION_KEYS}}
         faults = tuple(sorted((k, v) for k, v in values.items() if k not in CONDITION_KEYS))
         rc = CampaignRun(tuple(sorted(cond.items(), key=lambda kv: kv[0])), faults)
-        rc.fault_effects()  # validate the combination (e.g. joint present)
+        if not rc.fault_effects():  # (also validates the combination) a fault at its "absent" value: the
+            rc = rc.twin()          # healthy run itself, stored without faults whichever sweep point made it
         for r in (rc, rc.twin()):
             runs.setdefault(r.run_id, r)
-    thr = data.get("threshold_mm", 0.5)
-    if isinstance(thr, bool) or not isinstance(thr, (int, float)) or thr <= 0:
-        raise ParameterError(f"{where}: threshold_mm = {thr!r} must be a positive number of mm")
-    bs = data.get("batch_size", 32)
-    if isinstance(bs, bool) or not isinstance(bs, int) or not 1 <= bs <= 1024:
-        raise ParameterError(f"{where}: batch_size = {bs!r} must be an integer in [1, 1024]")
-    lp = data.get("log_period_s", 1e-3)
-    if isinstance(lp, bool) or not isinstance(lp, (int, float)) or lp <= 0:
-        raise ParameterError(f"{where}: log_period_s = {lp!r} must be a positive number of seconds")
+    if sampled:
+        drawn, swept = sample_runs(data["sample"], cond0, where)
+        for cond, faults, wants_twin in drawn:
+            rc = CampaignRun(tuple(sorted(cond.items())), tuple(sorted(faults.items())))
+            rc.fault_effects()  # validate the combination
+            for r in (rc, rc.twin()) if wants_twin else (rc,):
+                runs.setdefault(r.run_id, r)
+    thr = check_number(data.get("threshold_mm", 0.5), f"{where}: threshold_mm", 0.0, MAX_THRESHOLD_MM, "mm",
+                       lo_open=True)
+    bs = check_int(data.get("batch_size", 32), f"{where}: batch_size", 1, 1024)
     dur = data.get("duration_s")
-    if dur is not None and (isinstance(dur, bool) or not isinstance(dur, (int, float)) or dur <= 0):
-        raise ParameterError(f"{where}: duration_s = {dur!r} must be a positive number of seconds")
-    name = str(data.get("name") or (path.stem if path else "campaign"))
-    out_dir = Path(out) if out is not None else Path(data.get("out") or Path("results") / name)
+    dur = None if dur is None else check_duration(dur, f"{where}: duration_s")
+    shortest = dur if dur is not None else min(
+        parse_trajectory(t, f"{where}: trajectory").duration_s for t in trajectory_specs(runs.values()))
+    lp = check_log_period(data.get("log_period_s", 1e-3), f"{where}: log_period_s", robot.physics_dt_s, shortest)
+    save_ts = check_bool(data.get("save_timeseries", False), f"{where}: save_timeseries")
+    name = check_text(data["name"], f"{where}: name") if data.get("name") is not None else (
+        path.stem if path else "campaign")
+    file_out = check_text(data["out"], f"{where}: out", max_len=4096) if data.get("out") is not None else None
+    out = out if out is not None else file_out
+    out_dir = Path(out) if out is not None else Path("results") / name
+    resolved = {**dict(data), "base": {**dict(base), "params": params}}
     return Campaign(name, path, text or yaml.safe_dump(dict(data)), out_dir, base_effects, params,
-                    tuple(runs.values()), tuple(swept), float(thr), int(bs), float(lp),
-                    bool(data.get("save_timeseries", False)), None if dur is None else float(dur))
+                    tuple(runs.values()), tuple(swept), thr, bs, lp, save_ts, dur, resolved,
+                    parse_split(data.get("split"), where))
+
+
+def trajectory_specs(runs: Iterable[CampaignRun]) -> list[Any]:
+    """The distinct trajectory specifications of ``runs``, in first-seen order."""
+    seen: dict[str, Any] = {}
+    for r in runs:
+        seen.setdefault(json.dumps(r.cond["trajectory"], sort_keys=True), r.cond["trajectory"])
+    return list(seen.values())
+
+
+def check_grid_size(axis_lengths: Sequence[int], where: str) -> int:
+    """Number of grid points of the axes; refuse above :data:`MAX_RUNS` before expanding."""
+    n = 1
+    for length in axis_lengths:
+        n *= length
+    if n > MAX_RUNS:
+        raise ParameterError(f"{where}: the sweep expands to {n:.3g} runs, above the limit of {MAX_RUNS:g}; "
+                             "sweep fewer values")
+    return n
 
 
 def _check_fault_keys(swept: Sequence[str], where: str) -> None:

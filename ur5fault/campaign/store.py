@@ -1,68 +1,231 @@
-"""The campaign store on disk: ``OUT/runs/<run_id>.parquet`` (one file per finished run, written
-atomically), the ``OUT/.lock`` of the writing process, the consolidated ``OUT/features.parquet``,
-and what a folder holds (:func:`status`)."""
+"""The campaign store on disk, and what a folder holds.
+
+- ``OUT/runs/<run_id>.parquet``: one file per finished run (one row), written atomically; its
+  Parquet schema metadata (key ``ur5fault``) records the run's identity and the inputs behind it
+  (:mod:`.identity`) and the column units.
+- ``OUT/timeseries/<run_id>.parquet``: optional time series, with the identity in its metadata.
+- ``OUT/features.parquet``: exactly the campaign's runs, gathered from verified per-run files.
+- ``OUT/.lock``: host and pid of the process writing the folder.
+
+Every per-run file is verified before it is used (:func:`check_run_file`): readable as Parquet,
+the feature schema, one row, the run_id of its name, and the identity the campaign expects.
+"""
 
 from __future__ import annotations
 
-import hashlib
+import dataclasses
 import json
 import os
 import socket
+from collections.abc import Callable, Iterable, Mapping
 from pathlib import Path
 from typing import Any
 
 import pandas as pd
-import yaml
 
+from ..effects import REGISTRY
 from ..errors import ConfigFileError, Ur5FaultError
-from ..io import write_parquet_atomic
-from .spec import Campaign, build_campaign
+from ..features import FEATURE_UNITS
+from ..io import OutputError, write_parquet_atomic
+from .identity import digest, first_difference
+
+META_KEY = b"ur5fault"
+#: columns every per-run file has (the feature table's schema; others may be added)
+REQUIRED_COLUMNS = ("run_id", "status", "twin_run_id", *FEATURE_UNITS)
+#: units of the run-description columns (features: :data:`ur5fault.features.FEATURE_UNITS`)
+COLUMN_UNITS = {
+    "run_id": "-", "fault_joint": "-", "fault": "-", "backlash_deg": "deg", "seed": "-", "payload_kg": "kg",
+    "temperature_C": "degC", "trajectory": "-", "backlash_deg_swept": "deg", "twin_run_id": "-", "status": "-",
+    "reason": "-", "effects": "-", "wall_s_batch": "s", "batch_size": "-",
+}
 
 
 class CampaignLockedError(Ur5FaultError, RuntimeError):
     """Another campaign process is writing the same output folder."""
 
 
+class CampaignChangedError(Ur5FaultError, ValueError):
+    """Stored results were made under other settings than the campaign being run."""
+
+
+@dataclasses.dataclass(frozen=True)
+class FileCheck:
+    """Verdict on one stored file: ``ok``, ``missing``, ``bad`` (unusable) or ``changed``
+    (a sound file made under other settings); ``detail`` says why."""
+
+    state: str
+    detail: str = ""
+
+
 def runs_dir(out: Path) -> Path:
-    return out / "runs"
+    return Path(out) / "runs"
 
 
-def done_ids(out: Path) -> set[str]:
-    d = runs_dir(out)
-    return {p.stem for p in d.glob("r*.parquet")} if d.exists() else set()
+def run_path(out: Path, run_id: str) -> Path:
+    return runs_dir(out) / f"{run_id}.parquet"
+
+
+def timeseries_path(out: Path, run_id: str) -> Path:
+    return Path(out) / "timeseries" / f"{run_id}.parquet"
+
+
+def column_units(columns: Iterable[str]) -> dict[str, str]:
+    """Unit of each known column (swept ``<effect>_<param>`` columns from the effect registry)."""
+    units = {**COLUMN_UNITS, **FEATURE_UNITS}
+    out = {}
+    for col in columns:
+        if col in units:
+            out[col] = units[col]
+            continue
+        for name, eff in REGISTRY.items():
+            if col == f"{name}_joint":
+                out[col] = "-"
+            for p in eff.params:
+                if col == f"{name}_{p.name}":
+                    out[col] = p.unit
+    return out
+
+
+def _read_meta(schema) -> dict[str, Any] | None:
+    raw = (schema.metadata or {}).get(META_KEY)
+    try:
+        meta = json.loads(raw) if raw else None
+    except ValueError:
+        return None
+    return meta if isinstance(meta, dict) else None
+
+
+def check_run_file(path: Path, expected: Mapping[str, Any] | None = None) -> FileCheck:
+    """Verify a per-run file; ``expected``: the record (run_id, identity, inputs) it must carry."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    path = Path(path)
+    if not path.is_file():
+        return FileCheck("missing")
+    try:
+        pf = pq.ParquetFile(path)
+        schema, n_rows = pf.schema_arrow, pf.metadata.num_rows
+        missing = [c for c in REQUIRED_COLUMNS if c not in schema.names]
+        if missing:
+            return FileCheck("bad", f"column {missing[0]!r} missing" + (f" (and {len(missing) - 1} more)"
+                                                                          if len(missing) > 1 else ""))
+        if n_rows != 1:
+            return FileCheck("bad", f"{n_rows} rows, expected 1")
+        rid = pf.read(columns=["run_id"]).column(0)[0].as_py()
+    except (OSError, ValueError, pa.ArrowException) as exc:
+        return FileCheck("bad", f"unreadable as Parquet ({' '.join(str(exc).split())[:120]})")
+    if rid != path.stem:
+        return FileCheck("bad", f"holds run {rid!r}, not {path.stem!r}")
+    meta = _read_meta(schema)
+    if not meta or not isinstance(meta.get("identity"), str):
+        return FileCheck("changed", "no recorded run identity (written before identities were recorded)")
+    if expected is not None and meta["identity"] != expected["identity"]:
+        diff = first_difference(meta.get("inputs"), expected["inputs"]) or "the run identity differs"
+        return FileCheck("changed", diff)
+    return FileCheck("ok")
+
+
+def check_timeseries_file(path: Path, identity: str, n_rows: int) -> FileCheck:
+    """Verify a time-series file: readable, ``n_rows`` samples, the run identity in its metadata."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    if not Path(path).is_file():
+        return FileCheck("missing")
+    try:
+        pf = pq.ParquetFile(path)
+        schema, rows = pf.schema_arrow, pf.metadata.num_rows
+    except (OSError, ValueError, pa.ArrowException) as exc:
+        return FileCheck("bad", f"unreadable as Parquet ({' '.join(str(exc).split())[:120]})")
+    if rows != n_rows or "t_s" not in schema.names:
+        return FileCheck("bad", f"{rows} samples, expected {n_rows}")
+    meta = _read_meta(schema) or {}
+    if meta.get("run_identity") != identity:
+        return FileCheck("changed", "time series of a run made under other settings")
+    return FileCheck("ok")
+
+
+def write_run_file(out: Path, row: Mapping[str, Any], record: Mapping[str, Any]) -> Path:
+    """Write one run's row atomically, its identity record and column units in the schema metadata."""
+    meta = {**record, "units": column_units(row)}
+    return write_parquet_atomic(pd.DataFrame([dict(row)]), run_path(out, str(row["run_id"])),
+                                {"ur5fault": json.dumps(meta, sort_keys=True)})
+
+
+def consolidate(out: Path, records: Mapping[str, Mapping[str, Any]],
+                relabel: Callable[[pd.DataFrame], pd.DataFrame] | None = None) -> pd.DataFrame:
+    """Gather exactly the runs of ``records`` (run_id -> record) into ``OUT/features.parquet``,
+    ordered by run_id, each file verified first; stray or duplicate files never leak in.
+    ``relabel`` may rewrite label columns (not results) before the table is written, e.g. the
+    train/test split when the campaign's split rule changed since the runs were stored."""
+    import pyarrow.parquet as pq
+
+    frames = []
+    for rid in sorted(records):
+        path = run_path(out, rid)
+        check = check_run_file(path, records[rid])
+        if check.state != "ok":
+            raise CampaignChangedError(f"{path}: {check.state}{': ' + check.detail if check.detail else ''}; "
+                                       "run the campaign again to re-simulate it")
+        frames.append(pq.read_table(path).to_pandas())
+    if not frames:
+        raise ConfigFileError(f"{out}: the campaign has no runs")
+    df = pd.concat(frames, ignore_index=True)
+    if relabel is not None:
+        df = relabel(df)
+    identities = {rid: records[rid]["identity"] for rid in sorted(records)}
+    meta = {"units": column_units(df.columns), "campaign_identity": digest(identities),
+            "run_identities": identities}
+    write_parquet_atomic(df, Path(out) / "features.parquet", {"ur5fault": json.dumps(meta, sort_keys=True)})
+    return df
 
 
 class Lock:
     """``OUT/.lock`` holding the owner's host and pid; a stale lock (dead pid) is taken over."""
 
     def __init__(self, out: Path) -> None:
-        self.path = out / ".lock"
+        self.path = Path(out) / ".lock"
 
     def __enter__(self) -> Lock:
-        self.path.parent.mkdir(parents=True, exist_ok=True)
         me = f"{socket.gethostname()} {os.getpid()}"
+        try:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise OutputError(f"{self.path.parent}: cannot create the output folder ({exc.strerror})") from None
         for _ in range(2):
             try:
-                fd = os.open(self.path, os.O_CREAT | os.O_EXCL | os.O_WRONLY)
+                fd = os.open(self.path, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
                 os.write(fd, me.encode())
                 os.close(fd)
                 return self
             except FileExistsError:
-                owner = self.path.read_text().split() if self.path.exists() else []
-                if len(owner) == 2 and owner[0] == socket.gethostname() and not _alive(int(owner[1])):
+                owner = lock_owner(self.path)
+                if owner and owner[0] == socket.gethostname() and not pid_alive(owner[1]):
                     self.path.unlink(missing_ok=True)  # stale: its process is gone
                     continue
                 raise CampaignLockedError(
                     f"{self.path.parent}: another campaign is writing this folder (host {owner[0] if owner else '?'}, "
-                    f"pid {owner[1] if len(owner) > 1 else '?'}); wait for it or choose another --out"
+                    f"pid {owner[1] if owner else '?'}); wait for it or choose another --out"
                 ) from None
+            except OSError as exc:
+                raise OutputError(f"{self.path}: cannot create the lock ({exc.strerror})") from None
         raise CampaignLockedError(f"{self.path}: could not take the lock")
 
     def __exit__(self, *exc) -> None:
         self.path.unlink(missing_ok=True)
 
 
-def _alive(pid: int) -> bool:
+def lock_owner(path: Path) -> tuple[str, int] | None:
+    """(host, pid) written in a lock file, or None when absent or unreadable."""
+    try:
+        host, pid = Path(path).read_text().split()
+        return host, int(pid)
+    except (OSError, ValueError):
+        return None
+
+
+def pid_alive(pid: int) -> bool:
     try:
         os.kill(pid, 0)
     except ProcessLookupError:
@@ -72,40 +235,10 @@ def _alive(pid: int) -> bool:
     return True
 
 
-def file_sha256(path: Path) -> str:
-    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
-
-
-def consolidate(out: Path, camp: Campaign | None = None) -> pd.DataFrame:
-    """Gather the per-run files into ``OUT/features.parquet`` (atomic), ordered by run_id."""
-    files = sorted(runs_dir(out).glob("r*.parquet"))
-    if not files:
-        raise ConfigFileError(f"{out}: no finished runs")
-    df = pd.concat([pd.read_parquet(f) for f in files], ignore_index=True)
-    if camp is not None:
-        wanted = {rc.run_id for rc in camp.runs}
-        df = df[df["run_id"].isin(wanted)]
-    df = df.sort_values("run_id", kind="stable").reset_index(drop=True)
-    write_parquet_atomic(df, out / "features.parquet")
-    return df
-
-
-def status(out: Path) -> dict[str, Any]:
-    """What is in a campaign folder: runs done, statuses, whether a process holds the lock."""
-    out = Path(out)
-    if not out.exists():
-        raise ConfigFileError(f"{out}: no such campaign folder")
-    manifest = json.loads((out / "manifest.json").read_text()) if (out / "manifest.json").exists() else {}
-    done = done_ids(out)
-    lock = (out / ".lock").read_text() if (out / ".lock").exists() else None
-    info: dict[str, Any] = {"folder": str(out), "runs_done": len(done), "n_runs_expected": None, "lock": lock}
-    if manifest.get("campaign_text"):
-        try:
-            camp = build_campaign(yaml.safe_load(manifest["campaign_text"]), "manifest", manifest["campaign_text"])
-            info["n_runs_expected"] = len(camp.runs)
-        except Ur5FaultError:
-            pass
-    if (out / "features.parquet").exists():
-        df = pd.read_parquet(out / "features.parquet")
-        info["status_counts"] = df["status"].value_counts().to_dict()
-    return info
+def read_manifest(out: Path) -> dict[str, Any]:
+    """``OUT/manifest.json`` as a mapping ({} when absent or unreadable)."""
+    try:
+        m = json.loads((Path(out) / "manifest.json").read_text())
+    except (OSError, ValueError):
+        return {}
+    return m if isinstance(m, dict) else {}

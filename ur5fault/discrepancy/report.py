@@ -14,6 +14,7 @@ from numpy.typing import NDArray
 from ..axes import JOINT_NAMES, N_JOINTS
 from ..effects import REGISTRY
 from ..io import write_text_atomic
+from ..logs import MeasuredLog
 from .candidates import LibraryCandidate, TermCandidate
 from .replay import Replay
 from .statistics import Z_95
@@ -41,9 +42,8 @@ def rms_table(signals: tuple[str, ...], meas: NDArray, sim: NDArray, sl: slice) 
                 for j in range(N_JOINTS)} for i, s in enumerate(signals)}
 
 
-def conditions(rp: Replay, n: int, torque: NDArray) -> dict[str, NDArray]:
-    """Boolean masks ``(n, 6)`` of operating conditions at samples 1..n."""
-    log = rp.log
+def conditions(log: MeasuredLog, n: int, torque: NDArray) -> dict[str, NDArray]:
+    """Boolean masks ``(n, 6)`` of operating conditions of ``log`` at samples 1..n."""
     q = log.q_target_rad[: n + 2]
     qd_all = np.gradient(q, log.period_s, axis=0)
     qd = qd_all[1 : n + 1]
@@ -79,7 +79,7 @@ def rms_by_condition(r: NDArray, masks: dict[str, NDArray], j: int) -> tuple[dic
 def localise(rp: Replay, residual: NDArray, torque: NDArray, top: int = 3) -> list[dict[str, Any]]:
     """The largest residuals (signal, joint) with their RMS under each operating condition."""
     n = residual.shape[0]
-    masks = conditions(rp, n, torque)
+    masks = conditions(rp.log, n, torque)
     rms = np.sqrt(np.nanmean(residual**2, axis=0))  # (S, 6)
     ranked = sorted(((rms[i, j] / rp.sigma[i, j], i, j) for i in range(len(rp.signals)) for j in range(N_JOINTS)),
                     reverse=True)[:top]
@@ -94,7 +94,7 @@ def localise(rp: Replay, residual: NDArray, torque: NDArray, top: int = 3) -> li
 def unexplained(rp: Replay, residual: NDArray, torque: NDArray, n_fit: int) -> list[dict[str, Any]]:
     """Signal/joint pairs whose held-out residual stays above UNEXPLAINED_FACTOR x the noise floor."""
     out = []
-    masks = conditions(rp, residual.shape[0], torque)
+    masks = conditions(rp.log, residual.shape[0], torque)
     for i, s in enumerate(rp.signals):
         for j in range(N_JOINTS):
             floor = math.sqrt(2.0) * rp.sigma[i, j]

@@ -1,4 +1,4 @@
-"""The drive step compiled with numba: the equations of ``gearbox.py``, ``friction.py``,
+"""The drive step compiled with numba: the equations of ``gearbox.py``, ``friction.py``, ``lugre.py``,
 ``motor.py``, ``power.py``, ``controller.py`` and ``sensors.py`` in the same order, as loops
 over runs and joints.  Row indices come from ``state.PI`` / ``state.XI`` (frozen here as
 constants).  Keep in step with the numpy modules: ``tests/test_kernel.py`` compares them.
@@ -25,6 +25,7 @@ ENCV_NOISE, ENCV_LSB, CUR_NOISE, CUR_LSB, CUR_GAIN, CUR_OFF = (
 POS_KP, SPD_KP, SPD_KI, CUR_KP, CUR_KI, FF = (PI[n] for n in ("pos_kp", "spd_kp", "spd_ki", "cur_kp", "cur_ki", "ff"))
 RATIO_NOM, KE_NOM, CROSS_NOM = PI["ratio_nom"], PI["ke_nom"], PI["cross_nom"]
 RES_C0, ENC_C0, CUR_A, CUR_C0, CUR_C1 = PI["res_c0"], PI["enc_c0"], PI["cur_a"], PI["cur_c0"], PI["cur_c1"]
+LUGRE, SIGMA0, SIGMA1, SHARE = PI["lugre"], PI["sigma0"], PI["sigma1"], PI["share"]
 # state rows
 TH_M, W_M, I_Q, I_D, V_Q, V_D = (XI[n] for n in ("th_m", "w_m", "i_q", "i_d", "v_q", "v_d"))
 INTEG_V, INTEG_Q, INTEG_D = XI["integ_v"], XI["integ_q"], XI["integ_d"]
@@ -32,6 +33,8 @@ Y_RES, DY_RES, Y_ENC, DY_ENC, Y_IQ, Y_ID = (XI[n] for n in ("y_res", "dy_res", "
 Q_FB, TH_FB, W_FB, IQ_FB, ID_FB, I_REF = (XI[n] for n in ("q_fb", "th_fb", "w_fb", "iq_fb", "id_fb", "i_ref"))
 T_ID, T_F, Q_PREV, TH_PREV, IQ_PREV, ID_PREV = (XI[n] for n in ("t_id", "t_f", "q_prev", "th_prev", "iq_prev",
                                                                "id_prev"))
+Z_L, Z_M, F_L, S_L, QD_PREV, T_F_M = (XI[n] for n in ("z_l", "z_m", "f_l", "s_l", "qd_prev", "t_f_m"))
+LEVEL_FLOOR_NM, SMALL_X = 1e-12, 1e-4  # as lugre.py
 
 
 @njit(cache=True, inline="always")
@@ -45,6 +48,62 @@ def _read(x, noise_std, z, lsb):
 @njit(cache=True, inline="always")
 def _clip(x, lim):
     return min(max(x, -lim), lim)
+
+
+@njit(cache=True, inline="always")
+def _level(w, tc, ts, rate):
+    """friction.stribeck_level: (g, dg/d|w|)."""
+    th = np.tanh(rate * abs(w))
+    excess = ts - tc
+    return excess * (1.0 - th) + tc, -excess * rate * (1.0 - th * th)
+
+
+@njit(cache=True, inline="always")
+def _decay(s0, w, g, dt):
+    """lugre._decay: (x, e, r)."""
+    x = s0 * abs(w) * dt / max(g, LEVEL_FLOOR_NM)
+    e = math.exp(-x)
+    if x < SMALL_X:
+        return x, e, 1.0 - x / 2.0 + x * x / 6.0
+    return x, e, -math.expm1(-x) / x
+
+
+@njit(cache=True, inline="always")
+def _sign(w):
+    return 1.0 if w > 0.0 else (-1.0 if w < 0.0 else 0.0)
+
+
+@njit(cache=True, inline="always")
+def _friction(P, r, j, z, w, dt, rate):
+    """friction.friction_step at speed w: (z+, T_f, S) of the joint's law."""
+    tc, ts, fv = P[T_COULOMB, r, j], P[T_STATIC, r, j], P[FV, r, j]
+    g, dg = _level(w, tc, ts, rate)
+    if P[LUGRE, r, j] == 0.0:
+        eps = P[EPS, r, j]
+        y = w / eps
+        t_over_y = 1.0 if abs(y) < 1e-8 else np.tanh(y) / y
+        return 0.0, g * t_over_y * y + fv * w, g * t_over_y / eps + fv
+    s0, s1 = P[SIGMA0, r, j], P[SIGMA1, r, j]
+    g = max(g, LEVEL_FLOOR_NM)
+    x, e, rr = _decay(s0, w, g, dt)
+    phi = dt * rr
+    z1 = e * z + phi * w
+    k = s0 + s1 / dt
+    torque = k * z1 - (s1 / dt) * z + fv * w
+    dx = s0 * dt * _sign(w) * (g - abs(w) * dg) / (g * g)
+    psi = -0.5 + x / 3.0 - x * x / 8.0 if x < SMALL_X else (e * (1.0 + x) - 1.0) / (x * x)
+    dz1 = -z * e * dx + phi + w * dt * psi * dx
+    return z1, torque, max(k * dz1 + fv, 0.0)
+
+
+@njit(cache=True, inline="always")
+def _bristle(P, r, j, z, w, dt, rate):
+    """friction.bristle_update."""
+    if P[LUGRE, r, j] == 0.0:
+        return 0.0
+    g = _level(w, P[T_COULOMB, r, j], P[T_STATIC, r, j], rate)[0]
+    _, e, rr = _decay(P[SIGMA0, r, j], w, g, dt)
+    return e * z + dt * rr * w
 
 
 @njit(cache=True)
@@ -87,8 +146,9 @@ def servo(X, P, q_set, qd_set, nz, ts):
 
 
 @njit(cache=True)
-def physics(X, P, q, qd, m_ii, tau, dt, stribeck, has_cogging):
-    """Windings, gear eq. (1), friction eq. (2), rotor; writes the link torque ``tau``."""
+def physics(X, P, q, qd, tau, dt, stribeck, has_cogging):
+    """Windings, gear eq. (1), friction eq. (2), rotor; writes the link torque ``tau`` (its friction part
+    to be applied implicitly with the joint damping ``X[S_L]``)."""
     n, nj = X.shape[1], X.shape[2]
     for r in range(n):
         for j in range(nj):
@@ -114,35 +174,42 @@ def physics(X, P, q, qd, m_ii, tau, dt, stribeck, has_cogging):
                 t_id = min(t_low, 0.0)
             else:
                 t_id = 0.0
-            # friction.friction_torque + implicit_friction
+            # link-side friction at the current speed (applied implicitly by MuJoCo)
+            share = P[SHARE, r, j]
             w = qd[r, j]
-            eps = P[EPS, r, j]
-            tc = P[T_COULOMB, r, j]
-            s = np.tanh(w / eps)
-            level = (P[T_STATIC, r, j] - tc) * (1.0 - np.tanh(stribeck * abs(w))) + tc
-            fv = P[FV, r, j]
-            t_f = s * level + fv * w
-            slope = level * (1.0 - s * s) / eps + fv
-            t_f = t_f / (1.0 + slope * dt / m_ii[r, j])
-            # rotor
+            _, f_l, s_l = _friction(P, r, j, X[Z_L, r, j], w, dt, stribeck)
+            f_l, s_l = (1.0 - share) * f_l, (1.0 - share) * s_l
+            # rotor, motor-side friction solved implicitly (friction.implicit_speed)
             t_m = P[KT, r, j] * i_q_new
             if has_cogging:
                 t_m = t_m + P[COG_AMP, r, j] * np.sin(P[COG_PER, r, j] * th_m)
             X[TH_PREV, r, j], X[Q_PREV, r, j] = th_m, q[r, j]
-            w_new = w_m + dt * (t_m - t_id / N) / P[JR, r, j]
+            u = w_m / N
+            if share > 0.0:
+                _, f_m, s_m = _friction(P, r, j, X[Z_M, r, j], u, dt, stribeck)
+            else:  # no motor-side friction: skip its evaluation (the bristle state stays as it is)
+                f_m, s_m = 0.0, 0.0
+            w_new = w_m + dt * ((t_m - t_id / N) - share * f_m / N) / (P[JR, r, j] + dt * (share * s_m / (N * N)))
+            X[T_F_M, r, j] = share * (f_m + s_m * (w_new / N - u))
+            if share > 0.0:
+                X[Z_M, r, j] = _bristle(P, r, j, X[Z_M, r, j], w_new / N, dt, stribeck)
             X[W_M, r, j] = w_new
             X[TH_M, r, j] = th_m + dt * w_new  # symplectic: the new speed
             X[I_D, r, j], X[I_Q, r, j] = i_d_new, i_q_new
-            X[T_ID, r, j], X[T_F, r, j] = t_id, t_f
-            tau[r, j] = t_id - t_f
+            X[T_ID, r, j] = t_id
+            X[F_L, r, j], X[S_L, r, j], X[QD_PREV, r, j] = f_l, s_l, w
+            tau[r, j] = t_id - f_l + s_l * w
 
 
 @njit(cache=True)
-def sensors(X, P, q):
-    """Analog sensor filters after the MuJoCo step (first-order-hold discretisations)."""
+def sensors(X, P, q, qd, dt, stribeck):
+    """After the MuJoCo step: applied friction and link bristles at the reached speed, then the analog
+    sensor filters (first-order-hold discretisations)."""
     n, nj = X.shape[1], X.shape[2]
     for r in range(n):
         for j in range(nj):
+            X[T_F, r, j] = X[F_L, r, j] + X[S_L, r, j] * (qd[r, j] - X[QD_PREV, r, j]) + X[T_F_M, r, j]
+            X[Z_L, r, j] = _bristle(P, r, j, X[Z_L, r, j], qd[r, j], dt, stribeck)
             y, dy, u0 = X[Y_RES, r, j], X[DY_RES, r, j], X[Q_PREV, r, j]
             u1 = q[r, j]
             c = RES_C0

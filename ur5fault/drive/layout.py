@@ -18,12 +18,17 @@ PARAM_NAMES = (
     "res_c0", "res_c1", "res_c2", "res_c3", "res_c4", "res_c5", "res_c6", "res_c7",
     "enc_c0", "enc_c1", "enc_c2", "enc_c3", "enc_c4", "enc_c5", "enc_c6", "enc_c7",
     "cur_a", "cur_c0", "cur_c1",
+    # friction law (1 = LuGre, 0 = smooth sign), LuGre sigma0 and sigma1, motor-side share
+    "lugre", "sigma0", "sigma1", "share",
 )
 #: drive state (rows of the packed array X)
 STATE_NAMES = (
     "th_m", "w_m", "i_q", "i_d", "v_q", "v_d", "integ_v", "integ_q", "integ_d",
     "y_res", "dy_res", "y_enc", "dy_enc", "y_iq", "y_id",
     "q_fb", "th_fb", "w_fb", "iq_fb", "id_fb", "i_ref", "t_id", "t_f", "q_prev", "th_prev", "iq_prev", "id_prev",
+    # friction: bristle states (link, motor side), the link share's torque and implicit slope at the step's start
+    # speed, that speed, and the motor share's applied torque (joint-side units)
+    "z_l", "z_m", "f_l", "s_l", "qd_prev", "t_f_m",
 )
 PI = {name: i for i, name in enumerate(PARAM_NAMES)}
 XI = {name: i for i, name in enumerate(STATE_NAMES)}

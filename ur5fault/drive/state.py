@@ -8,8 +8,10 @@ implementations of one drive step:
 
 Both expose the same attributes (``th_m``, ``q_fb``, ``i_q``, ... all ``(n_runs, 6)``) and
 three methods the engine calls: :meth:`servo` at servo instants, :meth:`physics` before
-and :meth:`sensors` after each MuJoCo step.  They agree to rounding (numpy's vectorised
-``tanh`` and libm's differ in the last bit), which ``tests/test_kernel.py`` checks.
+and :meth:`sensors` after each MuJoCo step (the link's friction is applied by MuJoCo with the
+joint damping ``s_l``, its bristles updated after the step at the speed the link reached).
+They agree to rounding (numpy's vectorised ``tanh`` and libm's differ in the last bit), which
+``tests/test_kernel.py`` checks.
 """
 
 from __future__ import annotations
@@ -58,6 +60,8 @@ def pack_params(sim, a) -> NDArray:
         "cross_nom": np.where(pmsm0, np.asarray(p.motor.pole_pairs) * np.asarray(p.motor.inductance_H), 0.0),
         **{f"res_c{i}": c_res[i] for i in range(8)}, **{f"enc_c{i}": c_enc[i] for i in range(8)},
         "cur_a": c_cur[0], "cur_c0": c_cur[1], "cur_c1": c_cur[2],
+        "lugre": a.friction_is_lugre, "sigma0": a.friction_presliding_stiffness_Nm_per_rad,
+        "sigma1": a.friction_bristle_damping_Nms_per_rad, "share": a.friction_motor_side_share,
     }
     for name, v in values.items():
         out[PI[name]] = np.broadcast_to(np.asarray(v, dtype=float), (n, 6))
@@ -124,25 +128,47 @@ class NumpyDrive(_Views):
             self.ts, p("ke_nom"), p("cross_nom"), p("v_lim"))
         X[XI["v_d"]], X[XI["v_q"]] = power.limit_voltage(vd, vq, p("v_lim"))
 
-    def physics(self, q: NDArray, qd: NDArray, m_ii: NDArray) -> NDArray:
+    def _friction(self, z: NDArray, w: NDArray) -> tuple[NDArray, NDArray, NDArray]:
+        p = self._p
+        return fr.friction_step(p("lugre") != 0.0, z, w, p("t_coulomb"), p("t_static"), p("fv"), self.stribeck,
+                                p("eps"), p("sigma0"), p("sigma1"), self.dt)
+
+    def _bristle(self, z: NDArray, w: NDArray) -> NDArray:
+        p = self._p
+        return fr.bristle_update(p("lugre") != 0.0, z, w, p("t_coulomb"), p("t_static"), self.stribeck, p("sigma0"),
+                                 self.dt)
+
+    def physics(self, q: NDArray, qd: NDArray) -> NDArray:
+        """Windings, gear, friction and rotor over one step; returns the link torque whose friction part the
+        multibody must apply implicitly with the joint damping :attr:`s_l` (see ``friction.py``)."""
         p, X, dt = self._p, self.X, self.dt
         X[XI["iq_prev"]], X[XI["id_prev"]] = self.i_q, self.i_d
         X[XI["i_d"]], X[XI["i_q"]] = motor.electrical_step(self.i_d, self.i_q, self.v_d, self.v_q, self.w_m,
                                                            p("decay"), p("gain_iv"), p("cross"), p("ke"))
-        N = p("ratio")
+        N, share = p("ratio"), p("share")
         X[XI["t_id"]] = gearbox.gear_torque(self.th_m / N - q, self.w_m / N - qd, p("k"), p("c"), p("alpha"))
-        t_f, slope = fr.friction_torque(qd, p("t_coulomb"), p("t_static"), p("fv"), self.stribeck, p("eps"))
-        X[XI["t_f"]] = fr.implicit_friction(t_f, slope, m_ii, dt)
+        # link side: torque at the current speed and its slope; MuJoCo applies T_f + S (w+ - w) implicitly
+        _, f_l, s_l = self._friction(self.z_l, qd)
+        X[XI["f_l"]], X[XI["s_l"]], X[XI["qd_prev"]] = (1.0 - share) * f_l, (1.0 - share) * s_l, qd
+        # rotor, with the motor side's friction (joint-side law at the rotor speed / N) solved implicitly
         t_m = p("kt") * self.i_q
         if self.has_cogging:
             t_m = t_m + p("cog_amp") * np.sin(p("cog_per") * self.th_m)
+        u = self.w_m / N
+        _, f_m, s_m = self._friction(self.z_m, u)
         X[XI["th_prev"]], X[XI["q_prev"]] = self.th_m, q
-        X[XI["w_m"]] = self.w_m + dt * (t_m - self.t_id / N) / p("jr")
-        X[XI["th_m"]] = self.th_m + dt * self.w_m
-        return self.t_id - self.t_f
+        w_new = fr.implicit_speed(self.w_m, t_m - self.t_id / N, share * f_m / N, share * s_m / (N * N), p("jr"), dt)
+        X[XI["t_f_m"]] = share * (f_m + s_m * (w_new / N - u))
+        X[XI["z_m"]] = np.where(share > 0.0, self._bristle(self.z_m, w_new / N), self.z_m)
+        X[XI["w_m"]] = w_new
+        X[XI["th_m"]] = self.th_m + dt * w_new
+        return self.t_id - self.f_l + self.s_l * qd
 
-    def sensors(self, q: NDArray) -> None:
+    def sensors(self, q: NDArray, qd: NDArray) -> None:
+        """After the multibody step (link at ``q``, ``qd``): link bristles, applied friction, sensor filters."""
         p, X = self._p, self.X
+        X[XI["t_f"]] = self.f_l + self.s_l * (qd - self.qd_prev) + self.t_f_m
+        X[XI["z_l"]] = self._bristle(self.z_l, qd)
         c_res = np.stack([p(f"res_c{i}") for i in range(8)])
         c_enc = np.stack([p(f"enc_c{i}") for i in range(8)])
         c_cur = np.stack([p("cur_a"), p("cur_c0"), p("cur_c1")])
@@ -167,12 +193,12 @@ class NumbaDrive(_Views):
     def servo(self, q_set: NDArray, qd_set: NDArray, nz: NDArray) -> None:
         self.k.servo(self.X, self.P, q_set, qd_set, nz, self.ts)
 
-    def physics(self, q: NDArray, qd: NDArray, m_ii: NDArray) -> NDArray:
-        self.k.physics(self.X, self.P, q, qd, m_ii, self.tau, self.dt, self.stribeck, self.has_cogging)
+    def physics(self, q: NDArray, qd: NDArray) -> NDArray:
+        self.k.physics(self.X, self.P, q, qd, self.tau, self.dt, self.stribeck, self.has_cogging)
         return self.tau
 
-    def sensors(self, q: NDArray) -> None:
-        self.k.sensors(self.X, self.P, q)
+    def sensors(self, q: NDArray, qd: NDArray) -> None:
+        self.k.sensors(self.X, self.P, q, qd, self.dt, self.stribeck)
 
 
 DRIVES = {"numpy": NumpyDrive, "numba": NumbaDrive}

@@ -1,0 +1,70 @@
+"""Wall time of a diagnostics campaign set against bare ``mj_step`` (not a timed test: printed only).
+
+    python bench/diagnostics_timing.py results/diagnostics --wall-s 1234 [--jobs 2]
+
+Counts the simulated run-steps of every run in ``OUT/features.parquet`` (each run's trajectory
+duration / physics step; trajectories differ in length), times bare ``mj_step`` of the UR5 model in
+this process, and prints one JSON line: the wall time, the run-steps, the bare-step cost and the
+ratio wall x cores / (run-steps x bare step) - the overhead of everything (drive chain, logging,
+features, Parquet, process start-up, the benchmark) over stepping the multibody alone.  Figures taken
+on a shared machine must be re-measured on a quiet one: the ratio is what carries over.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import time
+from pathlib import Path
+
+import mujoco
+import pandas as pd
+
+from ur5fault.config import parse_trajectory
+from ur5fault.engine import DEFAULT_MODEL_PATH
+from ur5fault.params import load_params
+
+BARE_STEPS = 40_000
+
+
+def bare_mj_step_s(n_steps: int = BARE_STEPS) -> float:
+    m = mujoco.MjModel.from_xml_path(str(DEFAULT_MODEL_PATH))
+    m.opt.timestep = load_params().physics_dt_s
+    d = mujoco.MjData(m)
+    mujoco.mj_forward(m, d)
+    t = time.perf_counter()
+    for _ in range(n_steps):
+        mujoco.mj_step(m, d)
+    return (time.perf_counter() - t) / n_steps
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("out", type=Path)
+    ap.add_argument("--wall-s", type=float, required=True, help="measured wall time of campaign + benchmark")
+    ap.add_argument("--jobs", type=int, default=os.cpu_count() or 1)
+    args = ap.parse_args()
+    df = pd.read_parquet(args.out / "features.parquet", columns=["trajectory"])
+    dt = load_params().physics_dt_s
+    durations = {t: parse_trajectory(json.loads(t) if t.startswith("{") else t, "trajectory").duration_s
+                 for t in df["trajectory"].unique()}
+    run_steps = sum(round(durations[t] / dt) for t in df["trajectory"])
+    bare = bare_mj_step_s()
+    bench = args.out / "benchmark" / "metrics.json"
+    out = {
+        "n_runs": len(df),
+        "simulated_s": run_steps * dt,
+        "run_steps": run_steps,
+        "wall_s": args.wall_s,
+        "jobs": args.jobs,
+        "bare_mj_step_us": bare * 1e6,
+        "bare_stepping_wall_s_on_jobs_cores": run_steps * bare / args.jobs,
+        "ratio_to_bare_mj_step": args.wall_s * args.jobs / (run_steps * bare),
+        "benchmark_wall_s": json.loads(bench.read_text())["timing"]["benchmark_wall_s"] if bench.exists() else None,
+    }
+    print(json.dumps(out))
+
+
+if __name__ == "__main__":
+    main()

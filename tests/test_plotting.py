@@ -1,0 +1,277 @@
+"""Figures and campaign results: plot functions return Figures without pyplot or a backend, draw the
+signals they claim (checked against the simulator's arrays and the feature table), use the campaign's
+threshold, cover any swept effect or say why not; re-simulated time series equal saved ones; reprs are short."""
+
+from __future__ import annotations
+
+import json
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+from matplotlib.figure import Figure
+
+from ur5fault import RunSpec, Simulator, make_effect, pick_and_place
+from ur5fault.campaign import CampaignResult, load_campaign, run_campaign
+from ur5fault.campaign.summary import effect_sweep, severity_table, tcp_table
+from ur5fault.errors import ConfigFileError, ParameterError, UnknownNameError
+from ur5fault.plotting import campaign_figures, fig3_tcp_deviation, plot_campaign, run_figure, severity_figure
+
+PACKAGE = Path(__file__).resolve().parents[1] / "ur5fault"
+
+# backlash and Coulomb friction each alone on joints 2 and 3 (zipped levels; 0 / 1 mean "absent"), 5.5 s of the
+# pick-and-place (the shoulder's first torque reversal is at ~5 s); a threshold that is not the default 0.5 mm
+TWO_EFFECTS = """name: two
+trajectory: pick_and_place
+duration_s: 5.5
+base: {seed: 0, payload_kg: 2.0}
+sweep:
+  backlash.joint: [2, 3]
+  coulomb_friction.joint: [2, 3]
+zip:
+  - {backlash.backlash_deg: [0.1, 0.2, 0.0, 0.0], coulomb_friction.scale: [1.0, 1.0, 2.0, 3.0]}
+threshold_mm: 0.3
+save_timeseries: SAVE
+"""
+
+
+def _campaign(folder: Path, save: bool) -> Path:
+    f = folder / "two.yaml"
+    f.write_text(TWO_EFFECTS.replace("SAVE", "true" if save else "false"))
+    run_campaign(load_campaign(f), folder / "out", jobs=1, progress=False)
+    return folder / "out"
+
+
+@pytest.fixture(scope="module")
+def two(tmp_path_factory) -> CampaignResult:
+    """The campaign, its time series saved."""
+    return CampaignResult.load(_campaign(tmp_path_factory.mktemp("two"), save=True))
+
+
+@pytest.fixture(scope="module")
+def run_pair():
+    """A healthy run and a shoulder-backlash run, 5.5 s, straight from the simulator."""
+    runs = [RunSpec("healthy", 0), RunSpec("worn", 0, (make_effect("backlash", "shoulder", backlash_deg=0.2),))]
+    return Simulator().run(pick_and_place(), runs, duration_s=5.5)
+
+
+def _lines(ax):
+    return [line for line in ax.get_lines() if len(line.get_xdata()) > 2]
+
+
+def _hlines(ax):
+    return [line.get_ydata()[0] for line in ax.get_lines() if len(set(np.ravel(line.get_ydata()))) == 1
+            and len(line.get_xdata()) == 2]
+
+
+# ----------------------------------------------------------------------------- no backend, no pyplot
+def test_library_never_picks_a_backend():
+    offenders = [str(p.relative_to(PACKAGE)) for p in PACKAGE.rglob("*.py")
+                 if "matplotlib.use(" in p.read_text() or "import matplotlib.pyplot" in p.read_text()]
+    assert offenders == []
+
+
+def test_figures_made_without_importing_pyplot(tmp_path):
+    code = (
+        "import sys, pandas as pd\n"
+        "from ur5fault import Simulator, RunSpec, pick_and_place\n"
+        "from ur5fault.plotting import run_figure\n"
+        "res = Simulator().run(pick_and_place(), [RunSpec('r')], duration_s=0.05)\n"
+        "fig = run_figure(res.to_pandas(0))\n"
+        f"fig.savefig({str(tmp_path / 'r.png')!r})\n"
+        "print(type(fig).__name__, 'matplotlib.pyplot' in sys.modules)\n"
+    )
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.split() == ["Figure", "False"]
+    assert (tmp_path / "r.png").stat().st_size > 10_000
+
+
+# ----------------------------------------------------------------------------- one run
+def test_run_figure_draws_the_simulated_signals(run_pair):
+    res = run_pair
+    fig = run_figure(res.to_pandas("worn"), twin=res.to_pandas("healthy"))
+    assert isinstance(fig, Figure)
+    ang, err, mis, cur, tcp = fig.axes[:5]
+    q_fb, q_set = res["q_FB_rad"][1], res.q_set_rad
+    np.testing.assert_allclose(_lines(ang)[3].get_ydata(), np.degrees(q_fb[:, 1]))  # J2 resolver (2nd of pair)
+    np.testing.assert_allclose(_lines(err)[1].get_ydata(), 1e3 * (q_set[:, 1] - q_fb[:, 1]))
+    np.testing.assert_allclose(_lines(mis)[1].get_ydata(), 1e3 * (res["q_M_FB_rad"][1][:, 1] / 101.0 - q_fb[:, 1]))
+    np.testing.assert_allclose(_lines(cur)[1].get_ydata(), res["i_FB_A"][1][:, 1])
+    dev_mm = 1e3 * np.linalg.norm(res.tcp_m[1] - res.tcp_m[0], axis=-1)
+    np.testing.assert_allclose(_lines(tcp)[1].get_ydata(), dev_mm, atol=1e-12)
+    assert dev_mm.max() > 1.0  # the backlash really shows (0.2 deg on the shoulder)
+
+
+def test_run_figure_draws_into_given_axes_and_checks_input(run_pair):
+    outer = Figure()
+    axes = outer.subplots(5, 1)
+    assert run_figure(run_pair.to_pandas(0), axes=axes) is outer
+    with pytest.raises(ParameterError, match="axes: 2 given, run_figure draws 5 panels"):
+        run_figure(run_pair.to_pandas(0), axes=axes[:2])
+    with pytest.raises(ParameterError, match="time series lacks column 'q_set_rad_j1'"):
+        run_figure(pd.DataFrame({"t_s": [0.0, 1.0]}))
+
+
+# ----------------------------------------------------------------------------- campaigns
+def test_resimulated_time_series_equal_saved_ones(tmp_path, two, caplog):
+    shutil.copy(two.out / "features.parquet", tmp_path)  # the same campaign without its time series,
+    manifest = json.loads((two.out / "manifest.json").read_text())  # as if run by another version
+    (tmp_path / "manifest.json").write_text(json.dumps({**manifest, "ur5fault_version": "0.0.1"}))
+    bare = CampaignResult.load(tmp_path)
+    worn = two.features[(two.features["fault"] == "backlash") & (two.features["fault_joint"] == 2)]["run_id"]
+    ids = list(worn)  # their twin is simulated with them, not returned
+    with caplog.at_level("INFO", logger="ur5fault"):
+        resim = bare.time_series(ids)
+    assert list(resim) == ids and not (tmp_path / "timeseries").exists()
+    assert "was run with ur5fault 0.0.1" in caplog.text and f"re-simulating {len(ids)} run(s)" in caplog.text
+    for r in ids:
+        pd.testing.assert_frame_equal(resim[r], pd.read_parquet(two.out / "timeseries" / f"{r}.parquet"))
+
+
+def test_fig3_uses_campaign_threshold_and_matches_features(two):
+    fig = fig3_tcp_deviation(two)
+    ax = fig.axes[0]
+    assert _hlines(ax) == [pytest.approx(0.3)]  # manifest threshold_mm, not the default 0.5
+    rows = two.features[(two.features["fault"] == "backlash") & np.isclose(two.features["backlash_deg"], 0.1)]
+    by_joint = {int(r.fault_joint): r.tcp_dev_max_mm for r in rows.itertuples()}
+    curves = _lines(ax)
+    assert [c.get_label() for c in curves] == ["J2 shoulder_lift_joint", "J3 elbow_joint"]
+    for curve, j in zip(curves, (2, 3)):  # features were computed from the arrays; the figure from the files
+        assert np.nanmax(curve.get_ydata()) == pytest.approx(by_joint[j], rel=1e-9, abs=1e-12)
+
+
+def test_every_swept_effect_gets_a_severity_figure(two):
+    figs, messages = campaign_figures(two)
+    assert messages == []
+    assert set(figs) == {"fig3_tcp_deviation_alpha0.1", "fig4_shoulder_current", "severity_backlash_tcp_dev_max_mm",
+                         "heatmap_backlash_tcp_dev_max_mm", "severity_coulomb_friction_tcp_dev_max_mm",
+                         "heatmap_coulomb_friction_tcp_dev_max_mm"}
+    ax = figs["severity_coulomb_friction_tcp_dev_max_mm"].axes[0]
+    df = two.features[two.features["fault"] == "coulomb_friction"]
+    # the documented size: the fault_size column when the table has one, else the swept parameter's column
+    size = "fault_size" if "fault_size" in df.columns else "coulomb_friction_scale"
+    assert ax.get_xlabel() == ("scale [-]" if size != "fault_size" else "coulomb_friction size [fraction]")
+    joints = set()
+    for line in ax.get_lines():
+        if line.get_label().startswith("J"):
+            j = int(line.get_label()[1])
+            joints.add(j)
+            sub = df[df["fault_joint"] == j].sort_values(size)
+            np.testing.assert_array_equal(line.get_xdata(), sub[size])
+            np.testing.assert_array_equal(line.get_ydata(), sub["tcp_dev_max_mm"])
+    assert joints == {2, 3}
+    assert 0.3 in _hlines(ax)
+
+
+def test_per_joint_feature_read_on_the_faulty_joint(two):
+    sweep = effect_sweep(two.features, "coulomb_friction", ["scale"])
+    table = severity_table(sweep, "current_spike_max_A")
+    df = two.features[two.features["fault"] == "coulomb_friction"]
+    for j in (2, 3):
+        sub = df[df["fault_joint"] == j].set_index("coulomb_friction_scale")[f"current_spike_max_A_j{j}"]
+        np.testing.assert_array_equal(table.loc[f"{j} {('shoulder_lift_joint', 'elbow_joint')[j - 2]}"], sub)
+    fig = severity_figure(sweep, "current_spike_max_A")
+    assert fig.axes[0].get_ylabel() == "current_spike_max_A of the faulty joint"
+    with pytest.raises(UnknownNameError, match="unknown feature 'nope'; valid: .*current_spike_max_A"):
+        severity_table(sweep, "nope")
+
+
+def test_tcp_table_is_the_backlash_pivot(two):
+    df = two.features
+    bl = df[(df["fault"] == "backlash") & (df["status"] == "ok")]
+    expected = bl.pivot_table(index="fault_joint", columns="backlash_deg", values="tcp_dev_max_mm", aggfunc="max")
+    got = tcp_table(df)
+    np.testing.assert_array_equal(got[[0.1, 0.2]].to_numpy(), expected.to_numpy())
+    assert list(got.index) == ["2 shoulder_lift_joint", "3 elbow_joint"] and (got[0.0] == 0.0).all()
+
+
+def test_effects_without_a_figure_get_a_message(tmp_path):
+    feats = pd.DataFrame({
+        "run_id": ["a", "b", "c", "h"], "fault": ["payload_com", "payload_com", "torque_constant", "healthy"],
+        "status": ["ok", "ok", "protective_stop", "ok"], "fault_joint": [0, 0, 2, 0],
+        "payload_com_dx_m": [0.1, 0.0, np.nan, np.nan], "payload_com_dz_m": [0.0, 0.1, np.nan, np.nan],
+        "torque_constant_scale": [np.nan, np.nan, 0.2, np.nan], "tcp_dev_max_mm": [1.0, 2.0, np.nan, 0.0],
+    })
+    manifest = {"name": "x", "threshold_mm": 0.5, "swept_keys": ["payload_com.dx_m", "payload_com.dz_m",
+                                                                 "torque_constant.joint", "torque_constant.scale"]}
+    figs, messages = campaign_figures(CampaignResult(tmp_path, feats, manifest))
+    assert figs == {}
+    assert messages == [
+        "no figure for effect 'payload_com': 2 parameters swept together (dx_m, dz_m); a severity axis needs one "
+        "(or a fault_size column)",
+        "no figure for effect 'torque_constant': 1 run(s), none ok",
+    ]
+
+
+@pytest.mark.parametrize("swept_keys", [["delay.delay_ms"], []], ids=["swept", "sampled"])
+def test_fault_size_column_is_preferred(tmp_path, swept_keys):
+    """The size is read from fault_size (not the leftover delay_delay_ms column); a sampled campaign, whose
+    manifest lists no swept effect, gets its figures from the fault labels."""
+    feats = pd.DataFrame({
+        "run_id": list("abcd"), "fault": ["delay"] * 3 + ["healthy"], "status": ["ok"] * 4, "fault_joint": [0] * 4,
+        "fault_size": [2.0, 5.0, 10.0, 0.0], "fault_size_unit": ["ms"] * 3 + [""], "delay_delay_ms": [9.0] * 4,
+        "tcp_dev_max_mm": [0.1, 0.4, 0.9, 0.0],
+    })
+    manifest = {"name": "x", "threshold_mm": 0.5, "swept_keys": swept_keys}
+    figs, messages = campaign_figures(CampaignResult(tmp_path, feats, manifest))
+    ax = figs["severity_delay_tcp_dev_max_mm"].axes[0]
+    assert messages == [] and ax.get_xlabel() == "delay size [ms]"
+    np.testing.assert_array_equal(_lines(ax)[0].get_xdata(), [2.0, 5.0, 10.0])
+
+
+def test_signed_parameter_kept_when_sizes_would_fold(tmp_path):
+    """A friction scale of 0.5 and 1.5 both have fault_size 0.5: the severity axis keeps the scale."""
+    feats = pd.DataFrame({
+        "run_id": list("abh"), "fault": ["viscous_friction"] * 2 + ["healthy"], "status": ["ok"] * 3,
+        "fault_joint": [2, 2, 0], "fault_size": [0.5, 0.5, 0.0], "fault_size_unit": ["fraction"] * 2 + [""],
+        "viscous_friction_scale": [0.5, 1.5, np.nan], "tcp_dev_max_mm": [0.2, 0.3, 0.0],
+    })
+    manifest = {"name": "x", "threshold_mm": 0.5, "swept_keys": ["viscous_friction.joint", "viscous_friction.scale"]}
+    figs, _ = campaign_figures(CampaignResult(tmp_path, feats, manifest))
+    ax = figs["severity_viscous_friction_tcp_dev_max_mm"].axes[0]
+    assert ax.get_xlabel() == "scale [-]"
+    np.testing.assert_array_equal(ax.get_lines()[0].get_xdata(), [0.5, 1.5])
+
+
+def test_plot_and_show_commands(tmp_path, two, capsys):
+    from ur5fault.cli import main
+
+    assert main(["plot", str(two.out), "--out", str(tmp_path / "p")]) == 0
+    assert len(list((tmp_path / "p").glob("*.png"))) == 6 and capsys.readouterr().out.count("wrote ") == 6
+    run_id = two.features.loc[two.features["fault"] == "backlash", "run_id"].iloc[0]
+    assert main(["show", run_id, "--campaign", str(two.out), "--out", str(tmp_path / "s.png")]) == 0
+    assert (tmp_path / "s.png").stat().st_size > 20_000
+    assert main(["show", str(two.out / "timeseries" / f"{run_id}.parquet"), "--out", str(tmp_path / "f.png")]) == 0
+    assert (tmp_path / "f.png").stat().st_size > 20_000
+    capsys.readouterr()
+    for args, message in ((["show", "rnope", "--campaign", str(two.out)], "unknown run_id 'rnope'; valid: r"),
+                          (["show", str(tmp_path / "none.parquet")], "none.parquet: no such file"),
+                          (["show", "r1", "--campaign", str(tmp_path)], "no features.parquet"),
+                          (["plot", str(two.out), "--feature", "nope"], "unknown feature 'nope'")):
+        assert main(args) == 2
+        err = capsys.readouterr().err
+        assert message in err and err.startswith("ur5fault: error: ") and len(err.strip().splitlines()) == 1, err
+
+
+def test_plot_campaign_writes_png_files(tmp_path, two):
+    paths = plot_campaign(two.out, plot_dir=tmp_path)
+    assert len(paths) == 6 and all(p.stat().st_size > 10_000 for p in paths)
+    with pytest.raises(ConfigFileError, match="no features.parquet"):
+        plot_campaign(tmp_path)
+
+
+# ----------------------------------------------------------------------------- reprs
+def test_reprs_are_short_and_tabular(run_pair, two):
+    text = repr(run_pair)
+    assert len(text) < 500 and "2 run(s) x 5500 samples" in text and "worn ok [backlash on shoulder_lift_joint" in text
+    assert "array" not in text and "<table" in run_pair._repr_html_()
+    text = repr(two)
+    assert len(text) < 400 and "9 runs (9 ok)" in text and "threshold 0.3 mm; time series saved" in text
+    html = two._repr_html_()
+    assert html.count("<table") == 3  # backlash, coulomb friction, acceptable backlash
+    assert json.loads((two.out / "manifest.json").read_text())["threshold_mm"] == 0.3

@@ -1,0 +1,208 @@
+"""Sampled campaigns (ur5fault/campaign/sampling.py): coverage of the design, reproducibility,
+validation before any simulation, twins only where asked, and a small sampled campaign end to end."""
+
+from __future__ import annotations
+
+import copy
+import math
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from ur5fault.campaign import build_campaign, run_campaign, status
+from ur5fault.campaign.labels import fault_labels
+from ur5fault.campaign.sampling import parse_dist, unit_design
+from ur5fault.errors import ParameterError, UnknownNameError
+
+SPEC = {
+    "name": "s",
+    "sample": {
+        "n": 240, "method": "lhs", "seed": 3, "twins": ["backlash"], "joints": [1, 2, 3, 4, 5, 6],
+        "faults": {
+            "healthy": {"weight": 2},
+            "backlash": {"weight": 3, "size": {"log": [0.005, 0.5]}},
+            "torque_constant": {"size": {"log": [0.02, 0.5]}, "direction": "down"},
+            "current_sensor_offset": {"size": {"log": [0.005, 0.5]}, "direction": "both"},
+        },
+        "conditions": {
+            "seed": {"integers": [0, 999]},
+            "payload_kg": [0.0, 3.0],
+            "temperature_C": [15.0, 45.0],
+            "payload_com.dz_m": [0.0, 0.08],
+            "delay.delay_ms": {"uniform": [0.0, 2.0], "step": 0.1},
+            "trajectory": {"name": "random_pick_and_place", "seed": {"integers": [0, 11]}},
+        },
+    },
+}
+
+
+def table(camp):
+    rows = []
+    for rc in camp.runs:
+        c = rc.cond
+        rows.append({"run_id": rc.run_id, **fault_labels(rc.fault_effects()), "traj": c["trajectory"]["seed"],
+                     "faults": dict(rc.faults), **{k: v for k, v in c.items() if k != "trajectory"}})
+    return pd.DataFrame(rows)
+
+
+@pytest.fixture(scope="module")
+def camp():
+    return build_campaign(SPEC, "s.yaml")
+
+
+def drawn(camp):
+    """The drawn runs (twins of backlash runs removed: healthy runs whose id is some run's twin)."""
+    df = table(camp)
+    twin_ids = {rc.twin().run_id for rc in camp.runs if rc.faults and rc.fault_effects()[0].name == "backlash"}
+    return df[~df["run_id"].isin(twin_ids)], df
+
+
+def test_unit_design_is_stratified_in_every_dimension():
+    for method, n in (("lhs", 97), ("sobol", 64)):
+        u = unit_design(method, n, 5, seed=1)
+        assert u.shape == (n, 5) and (u >= 0).all() and (u < 1).all()
+        for j in range(5):  # one point per interval of width 1/n in each 1-D projection
+            assert sorted(np.floor(u[:, j] * n).astype(int)) == list(range(n)), (method, j)
+    np.testing.assert_array_equal(unit_design("lhs", 50, 3, 7), unit_design("lhs", 50, 3, 7))
+    assert not np.array_equal(unit_design("lhs", 50, 3, 7), unit_design("lhs", 50, 3, 8))
+
+
+def test_same_file_same_runs_other_seed_other_runs(camp):
+    again = build_campaign(copy.deepcopy(SPEC), "s.yaml")
+    assert [r.run_id for r in again.runs] == [r.run_id for r in camp.runs]
+    other = copy.deepcopy(SPEC)
+    other["sample"]["seed"] = 4
+    assert not {r.run_id for r in build_campaign(other, "s.yaml").runs} & {r.run_id for r in camp.runs}
+    sobol = copy.deepcopy(SPEC)
+    sobol["sample"]["method"] = "sobol"
+    assert [r.run_id for r in build_campaign(sobol, "s.yaml").runs] == [
+        r.run_id for r in build_campaign(copy.deepcopy(sobol), "s.yaml").runs]
+
+
+def test_kinds_joints_and_trajectories_get_their_shares(camp):
+    runs, _ = drawn(camp)
+    assert len(runs) == 240
+    counts = runs["fault"].value_counts()
+    for kind, share in (("healthy", 2 / 7), ("backlash", 3 / 7), ("torque_constant", 1 / 7),
+                        ("current_sensor_offset", 1 / 7)):
+        assert abs(counts[kind] - 240 * share) <= 1, kind
+    assert abs(runs["traj"].value_counts() - 20).max() <= 1 and runs["traj"].nunique() == 12
+    joints = runs.loc[runs["fault_joint"] > 0, "fault_joint"].value_counts()
+    assert set(joints.index) == set(range(1, 7)) and joints.min() >= 10  # kind and joint drawn independently
+
+
+def test_sizes_and_conditions_cover_their_ranges(camp):
+    runs, _ = drawn(camp)
+    for kind, lo, hi in (("backlash", 0.005, 0.5), ("torque_constant", 0.02, 0.5),
+                         ("current_sensor_offset", 0.005, 0.5)):
+        s = np.log(runs.loc[runs["fault"] == kind, "fault_size"].to_numpy())
+        assert s.min() >= math.log(lo) - 1e-6 and s.max() <= math.log(hi) + 1e-6
+        x = np.sort((s - math.log(lo)) / math.log(hi / lo))  # log-uniform: uniform in log size
+        assert np.abs(x - (np.arange(len(x)) + 0.5) / len(x)).max() < 0.25, kind
+    tc = runs[runs["fault"] == "torque_constant"]["faults"].map(lambda f: f["torque_constant.scale"])
+    assert (tc < 1).all()  # direction: down
+    off = runs[runs["fault"] == "current_sensor_offset"]["faults"].map(lambda f: f["current_sensor_offset.offset_A"])
+    assert (off > 0).sum() >= 8 and (off < 0).sum() >= 8  # direction: both
+    n = len(runs)
+    for key, lo, hi in (("payload_kg", 0, 3), ("temperature_C", 15, 45), ("payload_com.dz_m", 0, 0.08)):
+        v = runs[key].to_numpy()
+        assert v.min() >= lo and v.max() <= hi
+        # Latin hypercube over all drawn runs: one value per stratum (the 6-digit rounding aside)
+        assert len(set(np.floor((v - lo) / (hi - lo) * n).astype(int))) >= n - 2, key
+    d = runs["delay.delay_ms"].to_numpy()
+    np.testing.assert_allclose(d * 10, np.round(d * 10), atol=1e-9)  # step 0.1 ms
+    assert set(runs["seed"]) <= set(range(1000))
+
+
+def test_twins_only_for_the_listed_kinds(camp):
+    runs, everything = drawn(camp)
+    ids = set(everything["run_id"])
+    for rc in camp.runs:
+        eff = rc.fault_effects()
+        if eff:
+            assert (rc.twin().run_id in ids) == (eff[0].name == "backlash")
+    n_backlash = (runs["fault"] == "backlash").sum()
+    assert len(everything) == len(runs) + n_backlash
+    none = copy.deepcopy(SPEC)
+    none["sample"]["twins"] = "none"
+    assert len(build_campaign(none, "s.yaml").runs) == 240
+
+
+def sample_with(**changes):
+    spec = copy.deepcopy(SPEC)
+    for path, value in changes.items():
+        node = spec["sample"]
+        keys = path.split("__")
+        for k in keys[:-1]:
+            node = node[k]
+        node[keys[-1]] = value
+    return spec
+
+
+BAD = [
+    (sample_with(n=0), ParameterError, "s.yaml: sample.n = 0 must be an integer in [1, 1000000]"),
+    (sample_with(method="grid"), UnknownNameError, "unknown sampling method 'grid'; valid: lhs, sobol"),
+    (sample_with(faults__rust={"size": [0.1, 1]}), UnknownNameError, "unknown fault kind 'rust'"),
+    (sample_with(faults__backlash={"size": {"log": [0.01, 9.0]}}), ParameterError,
+     "sample.faults.backlash.size: size 9 gives backlash.backlash_deg = 9, out of range [0, 5] deg"),
+    (sample_with(faults__torque_constant={"size": {"log": [0.02, 0.5]}}), UnknownNameError,
+     "unknown direction None; valid: both, down, up"),
+    (sample_with(faults__backlash={"size": {"log": [0, 0.5]}}), ParameterError, "log = [0, 0.5] needs 0 < lo <= hi"),
+    (sample_with(faults__backlash={"size": {"normal": [0, 0.5]}}), UnknownNameError, "unknown distribution 'normal'"),
+    (sample_with(faults__payload={"size": [0.1, 1]}), ParameterError, "it cannot be a sampled fault kind"),
+    (sample_with(conditions__payload_kg=[0.0, 9.0]), ParameterError, "payload.mass_kg = 9.0 is out of range [0, 5] kg"),
+    (sample_with(conditions__rust=[0, 1]), UnknownNameError, "unknown condition 'rust'"),
+    (sample_with(**{"conditions__backlash.backlash_deg": [0, 1]}), ParameterError, "is per joint"),
+    (sample_with(conditions__trajectory={"name": "random_pick_and_place", "seed": [0, 9]}), ParameterError,
+     "trajectory options are drawn from integers or choices only"),
+    (sample_with(conditions__trajectory={"name": "zigzag"}), UnknownNameError, "unknown trajectory 'zigzag'"),
+    (sample_with(twins=["gear_stiffness"]), UnknownNameError, "unknown twin kind 'gear_stiffness'"),
+    (sample_with(joints=[7]), UnknownNameError, "unknown joint 7"),
+    ({**SPEC, "sweep": {"seed": [0, 1]}}, ParameterError, "sample cannot be combined with sweep or zip"),
+]
+
+
+@pytest.mark.parametrize("spec, exc, message", BAD)
+def test_validation_before_any_simulation(spec, exc, message):
+    with pytest.raises(exc) as info:
+        build_campaign(spec, "s.yaml")
+    assert str(info.value).startswith("s.yaml") and message in str(info.value), str(info.value)
+    assert "\n" not in str(info.value)
+
+
+def test_distributions_map_the_unit_interval():
+    assert parse_dist([1.0, 3.0], "x").value(0.5) == 2.0
+    assert parse_dist({"log": [0.01, 1.0]}, "x").value(0.5) == pytest.approx(0.1)
+    d = parse_dist({"integers": [0, 3]}, "x")
+    assert [d.value(u) for u in (0.0, 0.24, 0.25, 0.99)] == [0, 0, 1, 3]
+    assert parse_dist({"choices": ["a", "b"]}, "x").value(0.7) == "b"
+    assert parse_dist(5, "x").value(0.3) == 5 and not parse_dist(5, "x").drawn
+
+
+# ----------------------------------------------------------------------------- end to end
+TINY = {
+    "name": "tiny", "duration_s": 0.05, "batch_size": 16,
+    "sample": {"n": 8, "seed": 1, "twins": ["backlash"],
+               "faults": {"healthy": {}, "backlash": {"weight": 2, "size": {"log": [0.05, 0.5]}}},
+               "conditions": {"payload_kg": [0.5, 3.0], "delay.delay_ms": {"choices": [0.0, 0.5]},
+                              "payload_com.dz_m": [0.0, 0.05],
+                              "trajectory": {"name": "random_pick_and_place", "seed": {"integers": [0, 1]}}}},
+    "split": {"test_fraction": 0.5},
+}
+
+
+def test_small_sampled_campaign_runs_labels_and_resumes(tmp_path):
+    camp = build_campaign(TINY, "tiny.yaml", out=tmp_path)
+    run_campaign(camp, tmp_path, jobs=1, progress=False)
+    df = pd.read_parquet(tmp_path / "features.parquet")
+    assert len(df) == len(camp.runs) and set(df["status"]) == {"ok"}
+    assert {"delay_ms", "payload_com_dz_m", "split", "split_group", "fault_size"} <= set(df.columns)
+    bl = df[df["fault"] == "backlash"]
+    assert len(bl) and np.isfinite(bl["tcp_dev_max_mm"]).all() and (bl["twin_run_id"] != "").all()
+    assert df.groupby("split_group")["split"].nunique().eq(1).all() and set(df["split"]) == {"train", "test"}
+    stamp = {p.name: p.stat().st_mtime_ns for p in (tmp_path / "runs").iterdir()}
+    run_campaign(build_campaign(copy.deepcopy(TINY), "tiny.yaml", out=tmp_path), tmp_path, jobs=1, progress=False)
+    assert stamp == {p.name: p.stat().st_mtime_ns for p in (tmp_path / "runs").iterdir()}  # resumed: nothing to do
+    info = status(tmp_path)  # rebuilt from the manifest's campaign text: the same draws
+    assert info["n_runs_expected"] == len(camp.runs) == info["runs"]["ok"]

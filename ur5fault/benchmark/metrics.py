@@ -1,0 +1,169 @@
+"""What the baseline achieves on the test split: detection ROC AUC per fault kind and size,
+localisation and fault-kind accuracy with confusion matrices, and which inputs carry the detection
+(permutation importance).
+
+The operating point "5 % false alarms" is the detector-score threshold that at most 5 % of the
+healthy test runs exceed (the test ROC curve read at a false-positive rate of 0.05).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from .data import Dataset
+from .models import Models, joint_fault_rows
+
+FALSE_ALARM_RATE = 0.05
+N_SIZE_BINS = 4  # log-spaced fault-size bins per kind
+IMPORTANCE_REPEATS = 5
+MIN_BIN_RUNS = 3  # a size bin with fewer faulty test runs gets no AUC
+
+
+def auc_standard_error(auc: float, n_pos: int, n_neg: int) -> float:
+    """Standard error of a ROC AUC (Hanley and McNeil, Radiology 143, 1982, eq. 2)."""
+    if n_pos < 1 or n_neg < 1 or not math.isfinite(auc):
+        return math.nan
+    q1, q2 = auc / (2 - auc), 2 * auc**2 / (1 + auc)
+    var = (auc * (1 - auc) + (n_pos - 1) * (q1 - auc**2) + (n_neg - 1) * (q2 - auc**2)) / (n_pos * n_neg)
+    return math.sqrt(max(var, 0.0))
+
+
+def roc_auc(y: np.ndarray, score: np.ndarray) -> float:
+    from sklearn.metrics import roc_auc_score
+
+    return float(roc_auc_score(y, score)) if len(np.unique(y)) == 2 else math.nan
+
+
+def detector_scores(ds: Dataset, models: Models) -> np.ndarray:
+    """Probability of 'faulty' for every test run."""
+    return models.detector.predict_proba(ds.x("test"))[:, 1]
+
+
+def alarm_threshold(score: np.ndarray, healthy: np.ndarray, far: float = FALSE_ALARM_RATE) -> float:
+    """Score threshold exceeded by at most ``far`` of the healthy runs."""
+    return float(np.quantile(score[healthy], 1.0 - far, method="higher"))
+
+
+def size_edges(sizes: np.ndarray, n_bins: int = N_SIZE_BINS) -> np.ndarray:
+    """Log-spaced bin edges over the positive sizes of one kind."""
+    s = sizes[np.isfinite(sizes) & (sizes > 0)]
+    if s.size == 0:
+        return np.array([])
+    return np.geomspace(s.min(), s.max() * (1 + 1e-9), n_bins + 1)
+
+
+def detection(ds: Dataset, models: Models) -> dict[str, Any]:
+    """Detection AUC overall, per fault kind and per fault-size bin; detection rate at 5 % false alarms."""
+    te = ds.test
+    score = detector_scores(ds, models)
+    healthy = (te["fault"] == "healthy").to_numpy()
+    thr = alarm_threshold(score, healthy)
+    detected = score > thr
+    all_sizes = np.concatenate([ds.train["fault_size"].to_numpy(float), te["fault_size"].to_numpy(float)])
+    all_kinds = np.concatenate([ds.train["fault"].to_numpy(str), te["fault"].to_numpy(str)])
+    per_kind = {}
+    for kind in sorted(set(te["fault"]) - {"healthy"}):
+        pos = (te["fault"] == kind).to_numpy()
+        sizes = te["fault_size"].to_numpy(float)
+        unit = str(te.loc[pos, "fault_size_unit"].iloc[0]) if "fault_size_unit" in te else ""
+        bins = []
+        edges = size_edges(all_sizes[all_kinds == kind])
+        for lo, hi in zip(edges[:-1], edges[1:]):
+            inb = pos & (sizes >= lo) & (sizes < hi)
+            n = int(inb.sum())
+            auc = _auc_vs_healthy(score, healthy, inb) if n >= MIN_BIN_RUNS else math.nan
+            bins.append({"size_lo": float(lo), "size_hi": float(hi), "n_test": n, "auc": auc,
+                         "auc_se": auc_standard_error(auc, n, int(healthy.sum())),
+                         "detection_rate": float(detected[inb].mean()) if n else math.nan})
+        auc = _auc_vs_healthy(score, healthy, pos)
+        per_kind[kind] = {"unit": unit, "n_test": int(pos.sum()), "auc": auc,
+                          "auc_se": auc_standard_error(auc, int(pos.sum()), int(healthy.sum())),
+                          "detection_rate": float(detected[pos].mean()), "by_size": bins}
+    return {
+        "auc_all": roc_auc((~healthy).astype(int), score),
+        "n_test_healthy": int(healthy.sum()),
+        "n_test_faulty": int((~healthy).sum()),
+        "false_alarm_rate": FALSE_ALARM_RATE,
+        "threshold_score": thr,
+        "false_alarm_rate_measured": float(detected[healthy].mean()),
+        "detection_rate_all": float(detected[~healthy].mean()),
+        "per_kind": per_kind,
+    }
+
+
+def _auc_vs_healthy(score: np.ndarray, healthy: np.ndarray, pos: np.ndarray) -> float:
+    keep = healthy | pos
+    return roc_auc(pos[keep].astype(int), score[keep])
+
+
+def confusion(y_true: np.ndarray, y_pred: np.ndarray, labels: list) -> list[list[int]]:
+    """Counts, rows = true label, columns = predicted label, in the order of ``labels``."""
+    index = {lab: i for i, lab in enumerate(labels)}
+    m = np.zeros((len(labels), len(labels)), dtype=int)
+    for t, p in zip(y_true, y_pred):
+        m[index[t], index[p]] += 1
+    return m.tolist()
+
+
+def localisation(ds: Dataset, models: Models, detected: np.ndarray) -> dict[str, Any]:
+    """Which joint, among the test runs with a single joint fault (all, and those the detector flags)."""
+    jm = joint_fault_rows(ds.test)
+    if models.localiser is None or not jm.any():
+        return {"n_test": int(jm.sum()), "accuracy": math.nan}
+    y = ds.test.loc[jm, "fault_joint"].to_numpy(int)
+    pred = models.localiser.predict(ds.x("test")[jm]).astype(int)
+    det = detected[jm]
+    per_kind = {}
+    kinds = ds.test.loc[jm, "fault"].to_numpy(str)
+    for kind in sorted(set(kinds)):
+        k = kinds == kind
+        per_kind[kind] = {"n_test": int(k.sum()), "accuracy": float((pred[k] == y[k]).mean()),
+                          "accuracy_detected": float((pred[k & det] == y[k & det]).mean()) if (k & det).any()
+                          else math.nan}
+    return {
+        "n_test": int(jm.sum()),
+        "accuracy": float((pred == y).mean()),
+        "n_test_detected": int(det.sum()),
+        "accuracy_detected": float((pred[det] == y[det]).mean()) if det.any() else math.nan,
+        "chance": 1.0 / 6.0,
+        "labels": list(range(1, 7)),
+        "confusion": confusion(y, pred, list(range(1, 7))),
+        "per_kind": per_kind,
+    }
+
+
+def fault_kind(ds: Dataset, models: Models, detected: np.ndarray) -> dict[str, Any]:
+    """Healthy or which kind, over every test run; accuracy, balanced accuracy, confusion matrix."""
+    from sklearn.metrics import balanced_accuracy_score
+
+    y = ds.test["fault"].to_numpy(str)
+    if models.kind is None:
+        return {"n_test": len(y), "accuracy": math.nan}
+    pred = models.kind.predict(ds.x("test")).astype(str)
+    labels = ["healthy"] + sorted((set(y) | set(pred)) - {"healthy"})
+    faulty_det = detected & (y != "healthy")
+    return {
+        "n_test": len(y),
+        "accuracy": float((pred == y).mean()),
+        "balanced_accuracy": float(balanced_accuracy_score(y, pred)),
+        "accuracy_detected_faulty": float((pred[faulty_det] == y[faulty_det]).mean()) if faulty_det.any()
+        else math.nan,
+        "chance_balanced": 1.0 / len(set(y)),
+        "labels": labels,
+        "confusion": confusion(y, pred, labels),
+    }
+
+
+def importance(ds: Dataset, models: Models, seed: int = 0, top: int = 20) -> list[dict[str, Any]]:
+    """Permutation importance of each input for the detector: drop of the test ROC AUC when shuffled."""
+    from sklearn.inspection import permutation_importance
+
+    y = (ds.test["fault"] != "healthy").to_numpy(int)
+    r = permutation_importance(models.detector, ds.x("test"), y, scoring="roc_auc", n_repeats=IMPORTANCE_REPEATS,
+                               random_state=seed)
+    order = np.argsort(-r.importances_mean)[:top]
+    return [{"feature": ds.inputs[i], "auc_drop_mean": float(r.importances_mean[i]),
+             "auc_drop_std": float(r.importances_std[i])} for i in order]

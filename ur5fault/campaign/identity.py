@@ -1,0 +1,153 @@
+"""Run identity: everything that decides a run's result, taken from *resolved* values and hashed.
+
+The identity of a campaign run covers the ur5fault and MuJoCo versions, the SHA-256 of the MJCF
+model file, the drive implementation and stepper, the trajectory (its options and a hash of the
+setpoints it produces), the simulated duration, the log period, the noise seed, the full list of
+effects the run carries (base effects, swept faults, payload, temperature; in the order applied)
+and the full resolved robot parameter set (packaged defaults + campaign ``base.params`` + ``--model``
+overlay, which includes the physics step).  A run's features also depend on its healthy twin,
+whose inputs are the run's minus its swept faults, so the run's identity covers the twin's too.
+
+``run_id`` (the file name, a hash of the run's conditions and faults) names a run within a
+campaign; the identity says whether a stored result was made under the same settings.  Both are
+recorded in each per-run file (Parquet schema metadata, key ``ur5fault``) with the inputs, so a
+mismatch can be explained by naming the first input that differs.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+from ..checks import short
+from ..config import parse_trajectory
+from ..effects import EffectSpec, make_effect
+from ..params import load_params
+from .spec import Campaign, CampaignRun
+
+IDENTITY_FORMAT = 1
+#: how inputs are compared, in this order, to name the first difference
+INPUT_ORDER = ("identity_format", "ur5fault_version", "mujoco_version", "model_sha256", "drive", "stepper",
+               "trajectory", "duration_s", "log_period_s", "seed", "effects", "params")
+#: the simulator configuration campaigns run with (engine defaults, recorded because they decide results)
+DRIVE, STEPPER = "numba", "batch"
+
+
+def run_effects(camp: Campaign, rc: CampaignRun) -> tuple[EffectSpec, ...]:
+    """Every effect a campaign run carries, in the order they are applied."""
+    c = rc.cond
+    return camp.base_effects + rc.fault_effects() + (
+        make_effect("payload", mass_kg=c["payload_kg"]),
+        make_effect("temperature", temperature_C=c["temperature_C"]),
+    ) + condition_effects(c)
+
+
+def condition_effects(cond: Mapping[str, Any]) -> tuple[EffectSpec, ...]:
+    """Whole-robot effects held as run conditions (``<effect>.<param>`` keys, e.g. a sampled campaign's
+    ``payload_com.dz_m`` or ``delay.delay_ms``): shared with the healthy twin, not faults."""
+    by_effect: dict[str, dict[str, Any]] = {}
+    for key, v in cond.items():
+        name, dot, par = key.partition(".")
+        if dot:
+            by_effect.setdefault(name, {})[par] = v
+    return tuple(make_effect(name, **vals) for name, vals in sorted(by_effect.items()))
+
+
+def file_sha256(path: Path) -> str:
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+
+
+def digest(inputs: Mapping[str, Any]) -> str:
+    """SHA-256 of the canonical JSON of ``inputs``."""
+    return hashlib.sha256(json.dumps(inputs, sort_keys=True, separators=(",", ":")).encode()).hexdigest()
+
+
+class Identities:
+    """Identity inputs and hashes of the runs of one campaign (trajectories resolved once)."""
+
+    def __init__(self, camp: Campaign) -> None:
+        import mujoco
+
+        from .. import __version__
+        from ..engine import DEFAULT_MODEL_PATH
+
+        self.camp = camp
+        model = Path(DEFAULT_MODEL_PATH)
+        self.common = {
+            "identity_format": IDENTITY_FORMAT,
+            "ur5fault_version": __version__,
+            "mujoco_version": mujoco.__version__,
+            "model_sha256": file_sha256(model),
+            "drive": DRIVE,
+            "stepper": STEPPER,
+            "log_period_s": camp.log_period_s,
+            "params": load_params(overrides=dict(camp.base_params)).to_dict(),
+        }
+        self._common_digest = digest(self.common)
+        self._traj: dict[str, tuple[dict[str, Any], float]] = {}
+
+    def _trajectory(self, spec: Any) -> tuple[dict[str, Any], float]:
+        key = json.dumps(spec, sort_keys=True)
+        if key not in self._traj:
+            traj = parse_trajectory(spec, "trajectory")
+            h = hashlib.sha256(traj.q_set_rad.tobytes())
+            h.update(json.dumps([traj.setpoint_period_s, traj.payload_events, traj.payload_gripped_at_start,
+                                 traj.default_payload_kg]).encode())
+            self._traj[key] = ({"spec": spec, "setpoints_sha256": h.hexdigest()}, traj.duration_s)
+        return self._traj[key]
+
+    def _own(self, rc: CampaignRun) -> dict[str, Any]:
+        traj, traj_duration = self._trajectory(rc.cond["trajectory"])
+        return {
+            "trajectory": traj,
+            "duration_s": self.camp.duration_s if self.camp.duration_s is not None else traj_duration,
+            "seed": rc.cond["seed"],
+            "effects": [[e.name, e.joint, dict(e.values)] for e in run_effects(self.camp, rc)],
+        }
+
+    def inputs(self, rc: CampaignRun) -> dict[str, Any]:
+        """Everything that decides ``rc``'s result (JSON-able)."""
+        return {**self.common, **self._own(rc)}
+
+    def identity(self, rc: CampaignRun) -> str:
+        """SHA-256 of the inputs (the shared part hashed once per campaign)."""
+        return digest({"common": self._common_digest, **self._own(rc)})
+
+    def duration_s(self, rc: CampaignRun) -> float:
+        return float(self._own(rc)["duration_s"])
+
+    def record(self, rc: CampaignRun) -> dict[str, Any]:
+        """What a per-run file records about its run: run_id, identity and the inputs."""
+        own = self._own(rc)
+        return {"run_id": rc.run_id, "identity": digest({"common": self._common_digest, **own}),
+                "inputs": {**self.common, **own}}
+
+
+def first_difference(recorded: Any, expected: Any, path: str = "") -> str | None:
+    """``"duration_s: 1.5 in the file, 0.7 now"`` for the first input that differs, else None."""
+    if isinstance(recorded, Mapping) and isinstance(expected, Mapping):
+        keys = [k for k in INPUT_ORDER if k in recorded or k in expected] if not path else []
+        keys += sorted((set(recorded) | set(expected)) - set(keys), key=str)
+        for k in keys:
+            if k not in recorded or k not in expected:
+                side = "the file" if k not in recorded else "this campaign"
+                return f"{path}{k}: absent from {side}"
+            d = first_difference(recorded[k], expected[k], f"{path}{k}.")
+            if d:
+                return d
+        return None
+    if isinstance(recorded, list) and isinstance(expected, list):
+        base = 1 if path.startswith("params.") else 0  # per-joint parameters count joints from 1
+        for i, (a, b) in enumerate(zip(recorded, expected)):
+            d = first_difference(a, b, f"{path.rstrip('.')}[{i + base}].")
+            if d:
+                return d
+        if len(recorded) != len(expected):
+            return f"{path.rstrip('.')}: {len(recorded)} entries in the file, {len(expected)} now"
+        return None
+    if json.dumps(recorded, sort_keys=True) != json.dumps(expected, sort_keys=True):
+        return f"{path.rstrip('.')}: {short(recorded)} in the file, {short(expected)} now"
+    return None

@@ -1,0 +1,66 @@
+"""The campaign manifest: provenance of a campaign folder (see docs/outputs.md)."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import sys
+import time
+from typing import Any
+
+import numpy as np
+
+from ..params import load_params
+from .identity import Identities, file_sha256
+from .spec import Campaign
+
+
+def build_manifest(camp: Campaign, ids: Identities, features, state: str, backend: str, jobs: int, save_ts: bool,
+              t0: float) -> dict[str, Any]:
+    """``OUT/manifest.json``: what was run (the campaign's text and validated mapping, its identity),
+    with what (model hash, parameter hash, ur5fault version, git revision, every dependency's
+    version), and how (backend, jobs, wall time); ``state`` is ``running`` until the end."""
+    import mujoco
+
+    from .. import __version__
+    from ..engine import DEFAULT_MODEL_PATH
+    from ..features import FEATURE_UNITS
+    from ..provenance import dependency_versions, git_revision
+    from .identity import digest
+
+    p = load_params(overrides=dict(camp.base_params))
+    durations = [ids.duration_s(rc) for rc in camp.runs]
+    identities = {rc.run_id: ids.identity(rc) for rc in sorted(camp.runs, key=lambda r: r.run_id)}
+    m: dict[str, Any] = {
+        "name": camp.name,
+        "state": state,
+        "campaign_file": str(camp.path) if camp.path else None,
+        "campaign_sha256": camp.sha256,
+        "campaign_text": camp.text,
+        "campaign_data": camp.data,
+        "campaign_identity": digest(identities),
+        "model_file": str(DEFAULT_MODEL_PATH),
+        "model_sha256": file_sha256(DEFAULT_MODEL_PATH),
+        "params_sha256": hashlib.sha256(json.dumps(p.to_dict(), sort_keys=True).encode()).hexdigest(),
+        "ur5fault_version": __version__,
+        "git_revision": git_revision(),
+        "mujoco_version": mujoco.__version__,
+        "numpy_version": np.__version__,
+        "python": sys.version.split()[0],
+        "dependencies": dependency_versions(),
+        "n_runs": len(camp.runs) if features is None else int(len(features)),
+        "physics_dt_s": p.physics_dt_s,
+        "duration_s": max(durations),
+        "n_steps_total": int(sum(round(d / p.physics_dt_s) for d in durations)),
+        "log_period_s": camp.log_period_s,
+        "threshold_mm": camp.threshold_mm,
+        "swept_keys": list(camp.swept_keys),
+        "save_timeseries": save_ts,
+        "wall_s_this_invocation": time.perf_counter() - t0,
+        "backend": backend,
+        "jobs": jobs,
+        "feature_units": dict(FEATURE_UNITS),
+    }
+    if features is not None:
+        m["status_counts"] = {str(k): int(v) for k, v in features["status"].value_counts().items()}
+    return m

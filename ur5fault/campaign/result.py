@@ -1,0 +1,165 @@
+"""A finished campaign folder as one object: its feature table, its manifest (threshold, swept keys) and
+its runs' time series, read from ``OUT/timeseries`` or re-simulated when the campaign did not save them
+(the simulator is deterministic, so they are the same runs).  Concise ``repr`` and an HTML table for
+notebooks."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import logging
+import tempfile
+from collections.abc import Iterable, Mapping
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+
+from .. import yamlsafe
+from ..effects import REGISTRY
+from ..errors import ConfigFileError, UnknownNameError
+from .summary import EffectSweep, acceptable_backlash, effect_sweep, severity_table, swept_effects, tcp_table
+
+_log = logging.getLogger(__name__)
+
+
+@dataclasses.dataclass(frozen=True, repr=False, eq=False)
+class CampaignResult:
+    """A campaign output folder.  Build it with :meth:`load`.
+
+    Attributes:
+        out: the folder.
+        features: ``features.parquet``, one row per run.
+        manifest: ``manifest.json`` (provenance, ``threshold_mm``, ``swept_keys``, the campaign text).
+    """
+
+    out: Path
+    features: pd.DataFrame
+    manifest: Mapping[str, Any]
+    _series: dict[str, pd.DataFrame] = dataclasses.field(default_factory=dict)  # time series read or re-simulated
+
+    @classmethod
+    def load(cls, out: str | Path) -> CampaignResult:
+        """Read ``OUT/features.parquet`` and ``OUT/manifest.json``."""
+        out = Path(out)
+        for name in ("features.parquet", "manifest.json"):
+            if not (out / name).exists():
+                raise ConfigFileError(f"{out}: no {name} (run the campaign to its end first)")
+        return cls(out, pd.read_parquet(out / "features.parquet"), json.loads((out / "manifest.json").read_text()))
+
+    # ------------------------------------------------------------------ what the campaign was
+    @property
+    def name(self) -> str:
+        return str(self.manifest.get("name", self.out.name))
+
+    @property
+    def threshold_mm(self) -> float:
+        """The campaign's TCP acceptability threshold [mm]."""
+        return float(self.manifest["threshold_mm"])
+
+    @property
+    def swept_keys(self) -> tuple[str, ...]:
+        return tuple(self.manifest.get("swept_keys", ()))
+
+    def sweeps(self) -> tuple[dict[str, EffectSweep], dict[str, str]]:
+        """Every swept effect (a ``swept_keys`` entry, or a single-effect ``fault`` label, e.g. of a sampled
+        campaign): its runs and sizes, or (second dict) why they cannot be shown."""
+        effects: dict[str, list[str] | None] = dict(swept_effects(self.swept_keys))
+        for fault in sorted(set(self.features["fault"].astype(str))):
+            if fault in REGISTRY and fault not in effects:
+                effects[fault] = None  # its size from fault_size, or any registered parameter with a column
+        shown, skipped = {}, {}
+        for effect, params in effects.items():
+            sweep = effect_sweep(self.features, effect, params)
+            if isinstance(sweep, str):
+                skipped[effect] = sweep
+            else:
+                shown[effect] = sweep
+        return shown, skipped
+
+    # ------------------------------------------------------------------ summaries
+    def tcp_table(self) -> pd.DataFrame:
+        """Max TCP deviation [mm], fault joint x backlash [deg] (the paper's table)."""
+        return tcp_table(self.features, self.swept_keys)
+
+    def acceptable_backlash(self, threshold_mm: float | None = None) -> pd.Series:
+        """Largest backlash [deg] per joint keeping the TCP within ``threshold_mm`` (default: the campaign's)."""
+        thr = self.threshold_mm if threshold_mm is None else threshold_mm
+        return acceptable_backlash(self.features, thr, self.swept_keys)
+
+    def severity_tables(self, feature: str = "tcp_dev_max_mm") -> dict[str, pd.DataFrame]:
+        """``feature`` by fault joint x fault size, one table per swept effect."""
+        return {effect: severity_table(sweep, feature) for effect, sweep in self.sweeps()[0].items()}
+
+    # ------------------------------------------------------------------ time series
+    def run(self, run_id: str) -> pd.Series:
+        """The feature row of one run."""
+        hit = self.features[self.features["run_id"] == run_id]
+        if hit.empty:
+            raise UnknownNameError("run_id", run_id, self.features["run_id"], str(self.out))
+        return hit.iloc[0]
+
+    def time_series(self, run_ids: Iterable[str]) -> dict[str, pd.DataFrame]:
+        """Wide time-series tables of ``run_ids`` (see docs/outputs.md): saved ones read, the others re-simulated."""
+        ids = list(dict.fromkeys(run_ids))
+        for r in ids:
+            self.run(r)  # an unknown id is an error naming the valid ones
+        ts = self.out / "timeseries"
+        for r in ids:
+            if r not in self._series and (ts / f"{r}.parquet").exists():
+                self._series[r] = pd.read_parquet(ts / f"{r}.parquet")
+        missing = [r for r in ids if r not in self._series]
+        if missing:
+            self._series.update(self._resimulate(missing))
+        return {r: self._series[r] for r in ids}
+
+    def _resimulate(self, run_ids: list[str]) -> dict[str, pd.DataFrame]:
+        from .. import __version__
+        from ..engine import DEFAULT_MODEL_PATH
+        from .execute import plan_batches, run_batch
+        from .identity import file_sha256
+        from .spec import build_campaign
+
+        text = str(self.manifest.get("campaign_text", ""))
+        data = self.manifest.get("campaign_data")  # the validated mapping (older manifests: the text)
+        camp = build_campaign(data if isinstance(data, dict) else yamlsafe.loads(text, "manifest"), "manifest", text)
+        then = (self.manifest.get("ur5fault_version"), self.manifest.get("model_sha256"))
+        now = (__version__, file_sha256(DEFAULT_MODEL_PATH))
+        if then != now:
+            _log.warning("%s was run with ur5fault %s and model %s; re-simulating with %s and model %s may not give "
+                         "the same runs", self.out, then[0], str(then[1])[:12], now[0], now[1][:12])
+        by_id = {rc.run_id: rc for rc in camp.runs}
+        _log.info("re-simulating %d run(s) whose time series were not saved: %s", len(run_ids), ", ".join(run_ids))
+        got: dict[str, pd.DataFrame] = {}
+        with tempfile.TemporaryDirectory() as tmp:
+            for batch in plan_batches(camp, [by_id[r] for r in run_ids]):  # twins added: features need them
+                run_batch(camp, batch, tmp)
+                got.update({rc.run_id: pd.read_parquet(Path(tmp) / f"{rc.run_id}.parquet") for rc in batch})
+        return got
+
+    # ------------------------------------------------------------------ notebooks
+    def _headline(self) -> str:
+        counts = self.features["status"].value_counts().to_dict()
+        status = ", ".join(f"{n} {s}" for s, n in sorted(counts.items()))
+        saved = "saved" if (self.out / "timeseries").is_dir() else "not saved (re-simulated on demand)"
+        return (f"campaign {self.name!r} in {self.out}: {len(self.features)} runs ({status}); swept "
+                f"{', '.join(self.swept_keys) or 'nothing'}; threshold {self.threshold_mm:g} mm; time series {saved}")
+
+    def __repr__(self) -> str:
+        return f"<CampaignResult {self._headline()}>"
+
+    def _repr_html_(self) -> str:
+        import html
+
+        parts = [f"<p><b>CampaignResult</b> {html.escape(self._headline())}</p>"]
+        fmt = lambda v: f"{v:.3g}"  # noqa: E731
+        for effect, table in self.severity_tables().items():
+            parts.append(f"<p>max TCP deviation from the healthy twin [mm], {html.escape(effect)}:</p>")
+            parts.append(table.to_html(float_format=fmt, na_rep="-"))
+        acc = self.acceptable_backlash()
+        if not acc.empty:
+            parts.append(f"<p>largest backlash keeping the TCP within {self.threshold_mm:g} mm [deg]:</p>")
+            parts.append(acc.to_frame().to_html(float_format=lambda v: f"{v:g}", na_rep="none"))
+        _, skipped = self.sweeps()
+        parts += [f"<p>{html.escape(why)}</p>" for why in skipped.values()]
+        return "\n".join(parts)

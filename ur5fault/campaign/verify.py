@@ -1,0 +1,152 @@
+"""What a campaign folder holds, verified file by file: used on resume (which runs to simulate,
+which stored results to refuse) and by ``ur5fault campaign status``."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from pathlib import Path
+from typing import Any
+
+from ..errors import ConfigFileError, Ur5FaultError
+from .identity import Identities, digest
+from .spec import Campaign, build_campaign
+from .store import (
+    FileCheck,
+    check_run_file,
+    check_timeseries_file,
+    lock_owner,
+    pid_alive,
+    read_manifest,
+    run_path,
+    runs_dir,
+    timeseries_path,
+)
+
+MAX_LISTED = 20
+
+
+@dataclasses.dataclass
+class Scan:
+    """Per-run verdicts of a folder against a campaign (run_ids; details for bad and changed)."""
+
+    ok: list[str] = dataclasses.field(default_factory=list)
+    missing: list[str] = dataclasses.field(default_factory=list)
+    bad: list[tuple[str, str]] = dataclasses.field(default_factory=list)
+    changed: list[tuple[str, str]] = dataclasses.field(default_factory=list)
+    stray: list[str] = dataclasses.field(default_factory=list)
+
+    def counts(self) -> dict[str, int]:
+        return {k: len(getattr(self, k)) for k in ("ok", "missing", "bad", "changed", "stray")}
+
+
+def scan(out: Path, camp: Campaign, ids: Identities, save_timeseries: bool = False) -> Scan:
+    """Verify every run of ``camp`` stored in ``out`` (and its time series when they are wanted)."""
+    out = Path(out)
+    s = Scan()
+    wanted = set()
+    for rc in camp.runs:
+        rid = rc.run_id
+        wanted.add(rid)
+        record = ids.record(rc)
+        check = check_run_file(run_path(out, rid), record)
+        if check.state == "ok" and save_timeseries:
+            inputs = record["inputs"]
+            n_log = int(round(inputs["duration_s"] / inputs["params"]["physics_dt_s"])) // int(
+                round(inputs["log_period_s"] / inputs["params"]["physics_dt_s"]))
+            ts = check_timeseries_file(timeseries_path(out, rid), record["identity"], n_log)
+            if ts.state != "ok":
+                check = FileCheck(ts.state if ts.state != "missing" else "missing",
+                                  f"time series {ts.state}{': ' + ts.detail if ts.detail else ''}")
+        _add(s, rid, check)
+    d = runs_dir(out)
+    if d.is_dir():
+        s.stray = sorted(p.name for p in d.glob("*.parquet") if p.stem not in wanted)
+    return s
+
+
+def _add(s: Scan, rid: str, check: FileCheck) -> None:
+    if check.state == "ok":
+        s.ok.append(rid)
+    elif check.state == "missing":
+        s.missing.append(rid)
+    elif check.state == "bad":
+        s.bad.append((rid, check.detail))
+    else:
+        s.changed.append((rid, check.detail))
+
+
+def _listed(items: list[str]) -> list[str]:
+    return items[:MAX_LISTED] + ([f"... and {len(items) - MAX_LISTED} more"] if len(items) > MAX_LISTED else [])
+
+
+def status(out: Path) -> dict[str, Any]:
+    """What a campaign folder holds: the campaign, its state, every per-run file verified against
+    the campaign recorded in the manifest (and the installed ur5fault), strays, the lock, and
+    whether ``features.parquet`` holds exactly the campaign's runs."""
+    out = Path(out)
+    if not out.is_dir():
+        raise ConfigFileError(f"{out}: no such campaign folder")
+    manifest = read_manifest(out)
+    owner = lock_owner(out / ".lock")
+    info: dict[str, Any] = {
+        "folder": str(out), "campaign": manifest.get("name"), "state": manifest.get("state"),
+        "lock": None if owner is None else {"host": owner[0], "pid": owner[1], "alive": pid_alive(owner[1])},
+        "n_runs_expected": None,
+    }
+    camp = None
+    data = manifest.get("campaign_data")
+    if isinstance(data, dict):
+        try:
+            camp = build_campaign(data, "manifest.json", str(manifest.get("campaign_text", "")), None, out)
+        except Ur5FaultError as exc:
+            info["campaign_error"] = str(exc)
+    else:
+        info["campaign_error"] = "manifest.json absent or without the campaign: files checked for soundness only"
+    problems: list[str] = []
+    if camp is not None:
+        ids = Identities(camp)
+        s = scan(out, camp, ids, bool(manifest.get("save_timeseries", False)))
+        info["n_runs_expected"] = len(camp.runs)
+        info["runs"] = s.counts()
+        problems += [f"runs/{rid}.parquet: bad: {why}" for rid, why in s.bad]
+        problems += [f"runs/{rid}.parquet: made under other settings: {why}" for rid, why in s.changed]
+        info["ignored"] = _listed([f"runs/{name}: not a run of this campaign (stray)" for name in s.stray])
+        info["features"] = _check_features(out, {rc.run_id: ids.identity(rc) for rc in camp.runs})
+    else:
+        counts = {"ok": 0, "bad": 0, "changed": 0}
+        for p in sorted(runs_dir(out).glob("*.parquet")) if runs_dir(out).is_dir() else []:
+            c = check_run_file(p)
+            counts[c.state] = counts.get(c.state, 0) + 1
+            if c.state != "ok":
+                problems.append(f"runs/{p.name}: {c.state}: {c.detail}")
+        info["runs"] = counts
+    info["problems"] = _listed(problems)
+    return info
+
+
+def _check_features(out: Path, identities: dict[str, str]) -> dict[str, Any]:
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    path = out / "features.parquet"
+    if not path.exists():
+        return {"state": "missing"}
+    try:
+        table = pq.read_table(path)
+    except (OSError, ValueError, pa.ArrowException) as exc:
+        return {"state": "bad", "detail": f"unreadable as Parquet ({' '.join(str(exc).split())[:120]})"}
+    if "run_id" not in table.column_names:
+        return {"state": "bad", "detail": "no run_id column"}
+    df = table.select([c for c in ("run_id", "status") if c in table.column_names]).to_pandas()
+    raw = (table.schema.metadata or {}).get(b"ur5fault")
+    try:
+        recorded = json.loads(raw).get("campaign_identity") if raw else None
+    except (ValueError, AttributeError):
+        recorded = None
+    exact = (len(df) == len(identities) and set(df["run_id"]) == set(identities))
+    out_info: dict[str, Any] = {"state": "ok" if exact and recorded == digest(identities) else "stale",
+                                "rows": int(len(df))}
+    if "status" in df:
+        out_info["status_counts"] = {str(k): int(v) for k, v in df["status"].value_counts().items()}
+    return out_info

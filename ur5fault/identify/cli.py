@@ -1,0 +1,57 @@
+"""``ur5fault identify LOG --format nist|rtde [--payload-kg M] [--tcp-offset-m X Y Z] --out params.yaml``."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+
+def register(sub) -> None:
+    d = sub.add_parser("identify", help="re-derive the measured drive parameters from a log (parameter overlay)")
+    d.add_argument("log", help="measured log file")
+    d.add_argument("--format", required=True, choices=("nist", "rtde"), dest="fmt")
+    d.add_argument("--out", required=True, help="parameter overlay YAML to write (accepted by --model)")
+    d.add_argument("--json", help="also write every estimate with its interval as JSON")
+    d.add_argument("--payload-kg", type=float, help="payload held during the log (rtde)")
+    d.add_argument("--tcp-offset-m", type=float, nargs=3, help="tool offset in the flange frame [m] (rtde)")
+    d.add_argument("--no-sweep", action="store_true",
+                   help="skip the position-loop bandwidth sweep (it replays the log once per candidate)")
+    d.add_argument("--sweep-window-s", type=float, default=32.0,
+                   help="the part of the log the sweep replays, from its start (default 32)")
+    d.add_argument("--bootstrap", type=int, default=200, help="resamples per interval (default 200)")
+    d.add_argument("--quiet", action="store_true", help="no progress messages")
+    d.set_defaults(func=cmd_identify)
+
+
+def cmd_identify(args: argparse.Namespace) -> int:
+    from ..errors import ParameterError
+    from ..io import write_json_atomic, write_text_atomic
+    from ..logs import read_log
+    from ..params import load_params
+    from . import identify
+
+    if args.bootstrap < 20:
+        raise ParameterError(f"--bootstrap = {args.bootstrap} must be at least 20")
+    if args.sweep_window_s <= 0:
+        raise ParameterError(f"--sweep-window-s = {args.sweep_window_s} must be a positive number of seconds")
+    kwargs = {}
+    if args.fmt == "rtde":
+        if args.payload_kg is not None:
+            kwargs["payload_kg"] = args.payload_kg
+        if args.tcp_offset_m is not None:
+            kwargs["tcp_offset_m"] = tuple(args.tcp_offset_m)
+    log = read_log(args.log, args.fmt, **kwargs)
+    say = None if args.quiet else (lambda msg: print(f"identify: {msg}...", file=sys.stderr, flush=True))
+    params = load_params()
+    result = identify(log, params, sweep=not args.no_sweep, sweep_window_s=args.sweep_window_s,
+                      n_boot=args.bootstrap, progress=say)
+    print(result.table())
+    out = Path(args.out)
+    write_text_atomic(out, result.to_yaml(params))
+    written = [str(out)]
+    if args.json:
+        write_json_atomic(Path(args.json), result.to_json())
+        written.append(args.json)
+    print(f"wrote {', '.join(written)}")
+    return 0

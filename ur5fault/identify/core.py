@@ -1,0 +1,209 @@
+"""``identify(log)``: every measured parameter of the drive model, re-derived from a log.
+
+Order matters: the torque constant and friction come first (the breakaway needs both and
+the position noise), the bandwidth sweep last (it replays the log with everything else
+already identified).  Where the log cannot carry a value (a joint that barely moves, a
+torque constant without a gravity lever) the estimate falls back to a stated assumption
+and says so (``identifiable=False``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..axes import N_JOINTS
+from ..logs import MeasuredLog
+from ..params import RobotParams, load_params
+from . import friction, loop, motor, sensors, stickslip, urmodel
+from .report import Identification, overlay_params
+from .signals import derive
+from .stats import BLOCK_S, N_BOOT, Estimate, block_indices, bootstrap, fallback, interval
+
+
+def identify(log: MeasuredLog, params: RobotParams | None = None, *, model_path: str | Path | None = None,
+             sweep: bool = True, bandwidths_Hz=loop.BANDWIDTHS_HZ, sweep_window_s: float = loop.SWEEP_WINDOW_S,
+             n_boot: int = N_BOOT, seed: int = 0, progress: Callable[[str], None] | None = None) -> Identification:
+    """Identify the ``[nist]`` parameters of ``ur5_drive.yaml`` from ``log``.
+
+    Args:
+        log: a measured log (:func:`ur5fault.logs.read_log`) with its payload and tool offset.
+        params: the model whose assumptions are kept (rotor inertia, gear ratio, viscous temperature
+            law, the fallbacks); default the packaged ``ur5_drive.yaml``.
+        model_path: MJCF for the inverse dynamics (default: the simulator's).
+        sweep: run the position-loop bandwidth sweep (replays the log once per candidate; slow).
+        bandwidths_Hz: candidate position-loop bandwidths.
+        sweep_window_s: the part of the log the sweep replays (from its start).
+        n_boot: resamples of every interval.
+        seed: seed of the resampling (results are reproducible).
+        progress: called with a one-line message before each slow step.
+    """
+    from ..engine import DEFAULT_MODEL_PATH
+
+    p = params if params is not None else load_params()
+    say = progress or (lambda _msg: None)
+    say("inverse dynamics of the log's motion")
+    sig = derive(log, p, model_path or DEFAULT_MODEL_PATH)
+    est: list[Estimate] = []
+
+    say("torque constant and friction (moving samples)")
+    fit = friction.FrictionFit(sig, p)
+    blocks = block_indices(sig.n, int(round(BLOCK_S / sig.period_s)))
+    full = fit(np.arange(sig.n))
+    lo, hi = interval(bootstrap(fit, blocks, n_boot, seed))
+    est += _torque_constant(fit, full, lo, hi, p)
+    est += _k_check(friction.FrictionFit(sig, p, k_offset_term=True), None, blocks, n_boot, seed,
+                    "check.torque_constant_with_offset_Nm_per_A", "with a constant current offset fitted too")
+    if sig.target_torque_Nm is not None:
+        est += _k_check(fit, sig.target_torque_Nm, blocks, n_boot, seed, "check.torque_constant_vs_UR_torque_Nm_per_A",
+                        "with UR's target torque column in place of MuJoCo's inverse dynamics")
+    fric = _friction(fit, full, lo, hi, p)
+    est += fric
+    est += urmodel.ur_model(fit)
+    coulomb_A = np.array([e.value for e in fric if e.key == "friction.coulomb_A"])
+
+    say("sensor noise at rest and resolver resolution")
+    noise = sensors.noise_at_rest(sig, n_boot, seed)
+    est += noise
+    est.append(sensors.resolver_resolution(sig, n_boot, seed))
+
+    say("breakaway and presliding stiffness (starts from rest)")
+    q_noise = np.array([e.value for e in noise if e.key == "sensors.resolver_noise_rad"])
+    est += _breakaway(sig, fit, full, coulomb_A, q_noise, n_boot, seed)
+
+    say("tracking lag")
+    lags, lag_ok = loop.tracking_lag(sig, n_boot, seed)
+    est += lags
+    lag = np.array([e.value for e in lags])
+    ff_prior = np.asarray(p.controller.velocity_feedforward, float)
+
+    result = Identification(log.source, float(log.t_s[-1] - log.t_s[0]), tuple(est), None)
+    bw_prior = float(np.mean(p.controller.position_bw_Hz))
+    if sweep:
+        base = {"tcp_offset_m": list(log.tcp_offset_m), **overlay_params(result, p)}
+        if log.temperature_C is not None:
+            base["joint_temperature_C"] = np.clip(log.temperature_C.mean(axis=0), -20, 120).tolist()
+        sw = loop.bandwidth_sweep(log, base, lag, lag_ok, ff_prior, bandwidths_Hz, sweep_window_s, n_boot, seed,
+                                  progress=say)
+        est.append(loop.sweep_estimate(sw))
+        bw = sw.best_Hz
+    else:
+        sw = None
+        est.append(fallback("controller.position_bw_Hz", None, bw_prior, "not swept (sweep=False)",
+                            "kept the model's value"))
+        bw = bw_prior
+    est += _feedforward(lags, lag_ok, bw, ff_prior)
+    return Identification(log.source, result.duration_s, tuple(est), sw)
+
+
+def _torque_constant(fit: friction.FrictionFit, full: NDArray, lo: NDArray, hi: NDArray,
+                     p: RobotParams) -> list[Estimate]:
+    out = []
+    ratio = fit.ratio
+    for j in range(N_JOINTS):
+        size = motor.MOTOR_SIZE[j]
+        group = fit.k_groups[size]
+        key = "motor.torque_constant_Nm_per_A"
+        if group:
+            src = ", ".join(f"J{g + 1}" for g in group)
+            out.append(Estimate(key, j, full[0, j] / ratio[j], lo[0, j] / ratio[j], hi[0, j] / ratio[j],
+                                f"slope of current on MuJoCo inverse-dynamics torque, moving samples of {src} "
+                                f"(shared by the size-{size} joints), fitted with their friction"))
+        else:
+            spread = ", ".join(f"{fit.lever_Nm[g]:.2f}" for g in np.flatnonzero(np.asarray(motor.MOTOR_SIZE) == size))
+            out.append(fallback(key, j, p.motor.torque_constant_Nm_per_A[j], "kept the model's value",
+                                f"no size-{size} joint has a torque lever (model torque spread {spread} N*m < "
+                                f"{motor.MIN_TORQUE_SPREAD_NM:g})"))
+    return out
+
+
+def _k_check(fit: friction.FrictionFit, torque: NDArray | None, blocks, n_boot: int, seed: int, key: str,
+             how: str) -> list[Estimate]:
+    """A variant of the torque-constant fit, reported as a check (not written to the overlay)."""
+
+    def stat(idx: NDArray) -> NDArray:
+        return fit(idx, torque=torque)[0]
+
+    full = stat(np.arange(fit.sig.n))
+    lo, hi = interval(bootstrap(stat, blocks, n_boot, seed))
+    out = []
+    for size, group in fit.k_groups.items():
+        if group:
+            j = group[0]
+            r = fit.ratio[j]
+            out.append(Estimate(key, j, full[j] / r, lo[j] / r, hi[j] / r,
+                                f"as motor.torque_constant_Nm_per_A (size {size}) {how}"))
+    return out
+
+
+def _friction(fit: friction.FrictionFit, full: NDArray, lo: NDArray, hi: NDArray, p: RobotParams) -> list[Estimate]:
+    """Coulomb, viscous (and the offset, as a check) per joint; joints that barely move take the mean of
+    the identified joints of their size ([A]), or the model's value when there is none."""
+    out = []
+    sizes = np.asarray(motor.MOTOR_SIZE)
+    t_ref = p.friction.reference_temp_C
+    names = (("friction.coulomb_A", 1, "Coulomb term", p.friction.coulomb_Nm),
+             ("friction.viscous_A_s_per_rad", 2, f"viscous term at {t_ref:g} degC (via the model's viscous "
+                                                 "temperature law)", p.friction.viscous_Nms_per_rad),
+             ("check.current_offset_A", 3, "constant current (nuisance term: a torque or offset the model "
+                                               "lacks)", None))
+    for key, row, what, prior_Nm in names:
+        for j in range(N_JOINTS):
+            if fit.ok[j]:
+                n = int(fit.moving[:, j].sum())
+                out.append(Estimate(key, j, full[row, j], lo[row, j], hi[row, j],
+                                    f"{what}, regression on {n} moving samples with the model torque removed"))
+            elif prior_Nm is not None:
+                donors = np.flatnonzero((sizes == sizes[j]) & fit.ok)
+                if donors.size:
+                    src = ", ".join(f"J{d + 1}" for d in donors)
+                    out.append(fallback(key, j, float(np.mean(full[row, donors])), f"[A] equal to {src} (same joint "
+                                        "size)", _why_not(fit, j)))
+                else:
+                    out.append(fallback(key, j, prior_Nm[j] / fit.k_prior[j], "kept the model's value",
+                                        _why_not(fit, j)))
+    return out
+
+
+def _why_not(fit: friction.FrictionFit, j: int) -> str:
+    w = np.abs(fit.sig.qd_target_rad_s[:, j])
+    return (f"J{j + 1} barely moves in the log ({int(fit.moving[:, j].sum())} moving samples, top speed "
+            f"{w.max():.2f} rad/s; needs {friction.MIN_MOVING_SAMPLES} and {friction.MIN_TOP_SPEED_RAD_S:g} rad/s)")
+
+
+def _breakaway(sig, fit: friction.FrictionFit, full: NDArray, coulomb_A: NDArray, q_noise: NDArray, n_boot: int,
+               seed: int) -> list[Estimate]:
+    """Breakaway current and presliding stiffness per joint.  Where the starts do not show a breakaway
+    (its interval reaches zero), the breakaway is the joint's Coulomb level times the breakaway-to-Coulomb
+    ratio measured on the joints where they do, and the stiffness is not reported."""
+    found = stickslip.identify_stickslip(sig, full[0], full[3], q_noise, np.flatnonzero(fit.ok), n_boot, seed)
+    brk = {e.joint: e for e in found if e.key == "friction.breakaway_A"}
+    good = {j for j, e in brk.items() if e.lo > 0}
+    out = [e for e in found if e.joint in good]
+    ratio = float(np.median([brk[j].value / coulomb_A[j] for j in good])) if good else 1.0
+    src = ", ".join(f"J{j + 1}" for j in sorted(good)) or "no joint (ratio 1 assumed)"
+    for j in range(N_JOINTS):
+        if j in good:
+            continue
+        why = (f"the starts of J{j + 1} show no breakaway above zero (interval {brk[j].lo:.3f}..{brk[j].hi:.3f} A)"
+               if j in brk else _why_not(fit, j))
+        out.append(fallback("friction.breakaway_A", j, ratio * coulomb_A[j],
+                            f"[A] Coulomb level times the breakaway/Coulomb ratio {ratio:.2f} measured on {src}", why))
+    return out
+
+
+def _feedforward(lags: list[Estimate], lag_ok: NDArray, bw_Hz: float, ff_prior: NDArray) -> list[Estimate]:
+    """``ff = 1 - lag * 2 pi f_p`` where the lag is identified; the model's value elsewhere."""
+    out = []
+    gain = 2.0 * np.pi * bw_Hz
+    for e in lags:
+        j = e.joint
+        if lag_ok[j]:
+            out.append(Estimate("controller.velocity_feedforward", j, 1.0 - e.value * gain, 1.0 - e.hi * gain,
+                                1.0 - e.lo * gain, f"1 - lag * 2 pi * {bw_Hz:g} Hz (interval of the lag only)"))
+        else:
+            out.append(fallback("controller.velocity_feedforward", j, ff_prior[j], "kept the model's value", e.note))
+    return out

@@ -1,0 +1,152 @@
+"""The result of an identification: estimates, the parameter overlay they imply, and its text forms.
+
+The overlay (``params:`` mapping, :class:`ur5fault.config.Overlay`) holds what
+``simulate --model``, ``campaign run --model`` and ``discrepancy --model`` accept.  Friction is
+identified in current units (what the log measures) and written in the model's torque units
+with the identified torque constant, so ``current = torque / K`` in a simulation gives back
+the identified current.  Interval, method and caveat of every value go into the file's header.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from typing import Any
+
+import numpy as np
+import yaml
+from numpy.typing import NDArray
+
+from ..axes import N_JOINTS
+from ..params import FrictionParams, RobotParams
+from .stats import Estimate
+
+#: stick-slip parameters of issue 10 part A: written as soon as the friction parameters have the field
+PRESLIDING_FIELD = "presliding_stiffness_Nm_per_rad"
+#: what this log cannot give for the stick-slip law and the friction share, and why
+NOT_IDENTIFIABLE = (
+    "friction.model (smooth sign vs stick-slip law): a model choice, made by comparing replays "
+    "(issue 10 part A), not a value this regression can give",
+    "bristle damping (LuGre sigma_1): acts within the milliseconds of presliding, unseen at this log's 8 ms "
+    "sampling",
+    "friction share motor side / link side of the gear: not identifiable from a healthy log - in steady "
+    "sliding the motor current carries the whole friction wherever it acts, and before breakaway the link "
+    "moves only by the friction contact's own deflection on either side (stickslip.py); only the gear's "
+    "elastic mode (>100 Hz, above this log's 62.5 Hz Nyquist) or a backlash would tell",
+)
+SIGNIFICANT = 4
+
+
+def _round(x: float) -> float:
+    return float(f"{x:.{SIGNIFICANT}g}")
+
+
+@dataclasses.dataclass(frozen=True)
+class Identification:
+    """Everything ``identify`` found.
+
+    Attributes:
+        source: the log's file name.
+        duration_s: the log's length.
+        estimates: one :class:`Estimate` per quantity and joint.
+        sweep: the bandwidth sweep (``None`` when skipped).
+    """
+
+    source: str
+    duration_s: float
+    estimates: tuple[Estimate, ...]
+    sweep: Any = None
+
+    def get(self, key: str, joint: int | None = None) -> Estimate:
+        for e in self.estimates:
+            if e.key == key and e.joint == joint:
+                return e
+        raise KeyError(f"no estimate {key!r} for joint {joint}")
+
+    def has(self, key: str) -> bool:
+        return any(e.key == key for e in self.estimates)
+
+    def values(self, key: str) -> NDArray:
+        """Per-joint values ``(6,)`` of ``key``."""
+        return np.array([self.get(key, j).value for j in range(N_JOINTS)])
+
+    def overlay(self, params: RobotParams) -> dict[str, Any]:
+        """The model overlay ``{"params": ...}``."""
+        return {"params": overlay_params(self, params)}
+
+    def table(self) -> str:
+        """One line per estimate: key, joint, value, interval, method / caveat."""
+        lines = []
+        for e in self.estimates:
+            j = "all" if e.joint is None else f"J{e.joint + 1}"
+            iv = f"[{e.lo:.4g}, {e.hi:.4g}]" if e.identifiable else "not identifiable"
+            if e.identifiable and np.isnan(e.lo):
+                iv = "-"
+            tail = e.method + (f"; {e.note}" if e.note else "")
+            lines.append(f"{e.key:46s} {j:3s} {e.value:11.4g}  {iv:22s} {tail}")
+        return "\n".join(lines)
+
+    def to_yaml(self, params: RobotParams) -> str:
+        """The overlay as YAML, with every estimate, interval and caveat in the header."""
+        head = [f"# ur5fault identify: parameters re-derived from {self.source} ({self.duration_s:.1f} s).",
+                "# Intervals: 95 % bootstrap (time blocks, rest segments or starts).  Friction is identified in A",
+                "# and written in N*m with the identified torque constant.  Estimates:"]
+        head += ["#   " + line for line in self.table().splitlines()]
+        head += ["#", "# Stick-slip and friction share (issue 10 part A):"]
+        written = PRESLIDING_FIELD in {f.name for f in dataclasses.fields(FrictionParams)}
+        head.append("#   presliding stiffness: " + (f"written as friction.{PRESLIDING_FIELD}" if written else
+                                                 "reported above, not written (the model has no such parameter yet)"))
+        head += [f"#   {t}" for t in NOT_IDENTIFIABLE]
+        body = yaml.safe_dump(self.overlay(params), sort_keys=False, default_flow_style=None, width=120)
+        return "\n".join(head) + "\n" + body
+
+    def to_json(self) -> dict[str, Any]:
+        out: dict[str, Any] = {"log": self.source, "duration_s": self.duration_s,
+                               "estimates": [e.to_json() for e in self.estimates]}
+        if self.sweep is not None:
+            s = self.sweep
+            out["sweep"] = {"bandwidths_Hz": s.bandwidths_Hz, "scores": s.scores, "best_Hz": s.best_Hz,
+                            "window_s": s.window_s, "joints": [j + 1 for j in s.joints],
+                            "rms_sim_rad": s.rms_sim_rad.tolist(), "rms_meas_rad": s.rms_meas_rad.tolist()}
+        return json.loads(json.dumps(out, default=float))
+
+
+def overlay_params(ident: Identification, params: RobotParams) -> dict[str, Any]:
+    """The identified values as a nested ``params`` mapping (keys present in ``ident`` only)."""
+    ratio = np.asarray(params.gear.ratio, float)
+    kt = ident.values("motor.torque_constant_Nm_per_A")
+    k_joint = kt * ratio
+    vec = lambda x: [_round(v) for v in x]  # noqa: E731
+    out: dict[str, Any] = {"motor": {"torque_constant_Nm_per_A": vec(kt)}}
+    fr: dict[str, Any] = {"coulomb_Nm": vec(ident.values("friction.coulomb_A") * k_joint)}
+    if ident.has("friction.breakaway_A"):
+        fr["static_Nm"] = vec(ident.values("friction.breakaway_A") * k_joint)
+    fr["viscous_Nms_per_rad"] = vec(ident.values("friction.viscous_A_s_per_rad") * k_joint)
+    if ident.has("friction.presliding_stiffness_Nm_per_rad") and PRESLIDING_FIELD in {
+            f.name for f in dataclasses.fields(FrictionParams)}:
+        fr[PRESLIDING_FIELD] = vec(_presliding(ident, params))
+    out["friction"] = fr
+    sensors: dict[str, Any] = {}
+    if ident.has("sensors.resolver_noise_rad"):
+        sensors["resolver_noise_rad"] = vec(ident.values("sensors.resolver_noise_rad"))
+    if ident.has("sensors.resolver_counts_per_rev"):
+        counts = ident.get("sensors.resolver_counts_per_rev").value
+        sensors["resolver_counts_per_rev"] = int(2 ** round(np.log2(counts)))  # encoders count in powers of two
+    if ident.has("sensors.current_noise_A"):
+        sensors["current_noise_A"] = vec(ident.values("sensors.current_noise_A"))
+    out["sensors"] = sensors
+    ctrl: dict[str, Any] = {}
+    if ident.has("controller.position_bw_Hz"):
+        ctrl["position_bw_Hz"] = _round(ident.get("controller.position_bw_Hz").value)
+    if ident.has("controller.velocity_feedforward"):
+        ctrl["velocity_feedforward"] = vec(ident.values("controller.velocity_feedforward"))
+    if ctrl:
+        out["controller"] = ctrl
+    return out
+
+
+def _presliding(ident: Identification, params: RobotParams) -> NDArray:
+    """Identified joints take their estimate; the others keep the model's value (its stated assumption)."""
+    vals = {e.joint: e.value for e in ident.estimates if e.key == "friction.presliding_stiffness_Nm_per_rad"}
+    prior = getattr(params.friction, PRESLIDING_FIELD)
+    return np.array([vals.get(j, prior[j]) for j in range(N_JOINTS)])

@@ -1,0 +1,105 @@
+"""Sensor noise at rest and the resolver's resolution.
+
+*At rest* means every joint's target has been constant for :data:`SETTLE_S` already (the
+joints have settled; what remains in the readings is sensor noise and the servo's own
+dither).  Each rest segment's readings are detrended by a straight line (a holding current
+still creeping as an integrator winds up is not noise), and the noise sigma is the pooled
+RMS of the detrended readings; its interval comes from resampling whole rest segments.
+
+The resolver resolution is the quantum of the measured joint positions: the small non-zero
+sample-to-sample steps are integer multiples of it, so it is the least-squares slope of the
+steps on their multiples (smallest step as a first guess).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .signals import LogSignals
+from .stats import Estimate, bootstrap, interval
+
+#: settling time after the last joint stopped before samples count as "at rest" [s]
+SETTLE_S = 0.5
+#: a rest segment needs at least this many samples after settling
+MIN_REST_SAMPLES = 20
+#: steps up to this many quanta are used to fit the quantum (larger ones may be motion)
+MAX_QUANTA = 5
+
+
+def rest_segments(sig: LogSignals) -> list[NDArray]:
+    """Index arrays of the settled rest segments (all six targets constant)."""
+    rest = np.all(sig.at_rest(), axis=1)
+    edges = np.flatnonzero(np.diff(rest.astype(int))) + 1
+    settle = int(round(SETTLE_S / sig.period_s))
+    out = []
+    for seg in np.split(np.arange(sig.n), edges):
+        if rest[seg[0]] and seg.size - settle >= MIN_REST_SAMPLES:
+            out.append(seg[settle:])
+    return out
+
+
+def _detrended_ss(x: NDArray, segments: list[NDArray]) -> tuple[NDArray, NDArray]:
+    """Per segment: sum of squared residuals about a straight line ``(n_seg, 6)`` and sample counts."""
+    ss = np.empty((len(segments), x.shape[1]))
+    for s, seg in enumerate(segments):
+        t = np.arange(seg.size, dtype=float)
+        a = np.column_stack([t - t.mean(), np.ones_like(t)])
+        y = x[seg]
+        coef = np.linalg.lstsq(a, y, rcond=None)[0]
+        ss[s] = np.sum((y - a @ coef) ** 2, axis=0)
+    counts = np.array([seg.size - 2 for seg in segments], float)  # two fitted parameters per segment
+    return ss, counts
+
+
+def noise_at_rest(sig: LogSignals, n_boot: int, seed: int) -> list[Estimate]:
+    """Current and position noise sigma per joint at rest."""
+    segs = rest_segments(sig)
+    if not segs:
+        raise ValueError("no rest segment")
+    out = []
+    for key, x, method in (
+        ("sensors.current_noise_A", sig.current_A, "current"),
+        ("sensors.resolver_noise_rad", sig.q_actual_rad, "joint position"),
+    ):
+        ss, counts = _detrended_ss(x, segs)
+
+        def stat(idx: NDArray, ss=ss, counts=counts) -> NDArray:
+            return np.sqrt(ss[idx].sum(axis=0) / counts[idx].sum())
+
+        value = stat(np.arange(len(segs)))
+        lo, hi = interval(bootstrap(stat, [np.array([s]) for s in range(len(segs))], n_boot, seed))
+        for j in range(x.shape[1]):
+            out.append(Estimate(key, j, float(value[j]), float(lo[j]), float(hi[j]),
+                                f"{method} sigma at rest, {len(segs)} settled rest segments, detrended"))
+    return out
+
+
+def position_quantum(q_rad: NDArray) -> tuple[float, NDArray]:
+    """The quantum [rad] of measured positions and the small steps it was fitted on."""
+    steps = np.abs(np.diff(q_rad, axis=0)).ravel()
+    steps = steps[steps > 0]
+    if steps.size == 0:
+        raise ValueError("positions never change")
+    quantum = float(steps.min())
+    for _ in range(2):  # refine: the smallest step may sit at the low edge of its cluster
+        small = steps[steps < (MAX_QUANTA + 0.5) * quantum]
+        quanta = np.maximum(np.round(small / quantum), 1.0)
+        quantum = float(small.sum() / quanta.sum())
+    return quantum, small
+
+
+def resolver_resolution(sig: LogSignals, n_boot: int, seed: int) -> Estimate:
+    """Counts per revolution of the joint-side encoder (2 pi / quantum), with a bootstrap over steps."""
+    quantum, small = position_quantum(sig.q_actual_rad)
+
+    def stat(idx: NDArray) -> NDArray:
+        s = small[idx]
+        return np.array(2.0 * np.pi * np.maximum(np.round(s / quantum), 1.0).sum() / s.sum())
+
+    groups = [np.array([k]) for k in range(small.size)]
+    lo, hi = interval(bootstrap(stat, groups, n_boot, seed))
+    counts = 2.0 * np.pi / quantum
+    return Estimate("sensors.resolver_counts_per_rev", None, counts, float(lo), float(hi),
+                    f"2 pi / quantum of the measured positions ({small.size} steps of 1..{MAX_QUANTA} quanta; "
+                    f"nearest power of two 2^{round(np.log2(counts))})")

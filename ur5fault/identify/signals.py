@@ -1,0 +1,64 @@
+"""Signals derived once from a measured log for every identification step.
+
+Speeds and accelerations of the *target* come from central differences of the target
+positions (the setpoints are smooth: on the NIST log this matches UR's own target-velocity
+column to 3e-5 rad/s); the actual speed from central differences of the measured positions.
+The model torque is MuJoCo's inverse dynamics of the target motion plus the rotor inertia
+reflected through the gear (J_rotor * N^2 * qdd): the motor current drives both.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..logs import MeasuredLog
+from ..params import RobotParams
+from .dynamics import inverse_dynamics_Nm, payload_model
+
+#: a target speed below this is "at rest" [rad/s] (the setpoints are exactly constant at rest)
+REST_SPEED_RAD_S = 1e-6
+
+
+@dataclasses.dataclass(frozen=True)
+class LogSignals:
+    """Arrays ``(n_samples, 6)`` in SI units, joint-positive current, plus the sample period."""
+
+    period_s: float
+    q_target_rad: NDArray
+    qd_target_rad_s: NDArray
+    qdd_target_rad_s2: NDArray
+    q_actual_rad: NDArray
+    qd_actual_rad_s: NDArray
+    current_A: NDArray
+    temperature_C: NDArray
+    model_torque_Nm: NDArray
+    target_torque_Nm: NDArray | None
+    target_current_A: NDArray | None = None
+
+    @property
+    def n(self) -> int:
+        return self.q_target_rad.shape[0]
+
+    def at_rest(self) -> NDArray:
+        """``(n, 6)``: the joint's target is not moving."""
+        return np.abs(self.qd_target_rad_s) < REST_SPEED_RAD_S
+
+
+def derive(log: MeasuredLog, params: RobotParams, model_path: str | Path) -> LogSignals:
+    """Speeds, accelerations and the model torque of ``log`` (see the module docstring)."""
+    dt = log.period_s
+    qd_t = np.gradient(log.q_target_rad, dt, axis=0)
+    qdd_t = np.gradient(qd_t, dt, axis=0)
+    qd_a = np.gradient(log.q_actual_rad, dt, axis=0)
+    model = payload_model(model_path, log.payload_kg, log.tcp_offset_m)
+    tau = inverse_dynamics_Nm(model, log.q_target_rad, qd_t, qdd_t)
+    n_gear = np.asarray(params.gear.ratio)
+    tau = tau + np.asarray(params.motor.rotor_inertia_kgm2) * n_gear**2 * qdd_t
+    temp = (log.temperature_C if log.temperature_C is not None
+            else np.tile(np.asarray(params.joint_temperature_C, float), (log.t_s.size, 1)))
+    return LogSignals(dt, log.q_target_rad, qd_t, qdd_t, log.q_actual_rad, qd_a, log.current_A, temp, tau,
+                      log.target_torque_Nm, log.target_current_A)

@@ -1,0 +1,133 @@
+"""Plausibility checks of a log before anything is fitted to it; each failure is one line naming
+what is wrong and where.
+
+Limits and their reasons:
+
+- sample rate between :data:`MIN_RATE_HZ` and :data:`MAX_RATE_HZ`: UR controllers log at 125 Hz
+  (CB3) or 500 Hz (e-Series); below 10 Hz the drive dynamics are invisible, above 10 kHz the
+  time column is almost surely in the wrong unit (a time in milliseconds read as seconds gives
+  0.125 Hz, in microseconds read as milliseconds 125 kHz);
+- no gap longer than :data:`MAX_GAP_PERIODS` sample periods: the log's target positions are
+  replayed as a setpoint stream sampled at its median period, so every missing stretch shifts the
+  rest of the replay in time;
+- at least :data:`MIN_DURATION_S` seconds and :data:`MIN_SAMPLES` samples (the discrepancy
+  workflow fits on a share of the log and judges on the rest; a 3-row log once produced a
+  "finding" and NaN), and at most the run length a simulation may have
+  (:data:`ur5fault.budget.MAX_DURATION_S`);
+- exactly six joints;
+- units: where a log carries joint velocities, the time derivative of the positions (as declared,
+  converted to radians) must agree with them; a factor of 180/pi = 57.3 either way is named as a
+  degrees/radians mix-up, any other factor outside [0.5, 2] as a disagreement.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Mapping
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..axes import N_JOINTS
+from ..budget import MAX_DURATION_S
+from ..errors import LogFormatError
+
+MIN_RATE_HZ = 10.0
+MAX_RATE_HZ = 10_000.0
+MAX_GAP_PERIODS = 5.0
+MIN_DURATION_S = 5.0
+MIN_SAMPLES = 250
+#: joints count as moving above this speed [rad/s] (3 deg/s, far above standstill noise) and
+#: need this many moving samples for the units check
+MOVING_RAD_S = 0.05
+MIN_MOVING = 20
+DEG_PER_RAD = 180.0 / math.pi
+
+
+def check_joint_count(src: str, indices: Iterable[int], first: int) -> None:
+    """``indices``: the joint numbers found in the column names (counted from ``first``)."""
+    found = sorted(set(indices))
+    if found != list(range(first, first + N_JOINTS)):
+        shown = ", ".join(str(i) for i in found[:10]) + (", ..." if len(found) > 10 else "")
+        raise LogFormatError(f"{src}: {len(found)} joints in the columns ({shown}); a UR5 has exactly "
+                             f"{N_JOINTS}, numbered {first}..{first + N_JOINTS - 1}")
+
+
+def check_finite(src: str, arrays: Mapping[str, NDArray]) -> None:
+    for name, arr in arrays.items():
+        bad = ~np.isfinite(arr)
+        if bad.any():
+            row = int(np.argwhere(bad)[0][0])
+            raise LogFormatError(f"{src}: NaN or inf in {name} at data row {row + 1}")
+
+
+def check_increasing(src: str, t: NDArray) -> None:
+    dt = np.diff(t)
+    if np.any(dt <= 0):
+        row = int(np.argmax(dt <= 0)) + 1
+        raise LogFormatError(f"{src}: time is not increasing at data row {row + 1} (t={t[row]})")
+
+
+def check_sampling(src: str, t: NDArray) -> None:
+    """A plausible sample rate, no long gap, a usable length (``t`` increasing)."""
+    dt = np.diff(t)
+    if t.size < 2:
+        raise LogFormatError(f"{src}: {t.size} sample; at least {MIN_SAMPLES} are needed")
+    period = float(np.median(dt))
+    rate = 1.0 / period
+    if not MIN_RATE_HZ <= rate <= MAX_RATE_HZ:
+        raise LogFormatError(f"{src}: sample rate {rate:.3g} Hz (median step {period:.3g}) is outside "
+                             f"{MIN_RATE_HZ:g} Hz..{MAX_RATE_HZ / 1e3:g} kHz; is the time column in seconds?")
+    k = int(np.argmax(dt))
+    if dt[k] > MAX_GAP_PERIODS * period:
+        raise LogFormatError(f"{src}: a gap of {dt[k]:.3g} s after t = {t[k] - t[0]:.3f} s (data row {k + 1}); "
+                             f"at most {MAX_GAP_PERIODS:g} sample periods ({MAX_GAP_PERIODS * period:.3g} s) allowed")
+    duration = float(t[-1] - t[0])
+    if duration > MAX_DURATION_S:
+        raise LogFormatError(f"{src}: {duration:.0f} s long, above the {MAX_DURATION_S:g} s one simulation may "
+                             "cover; cut the log into pieces")
+    if duration < MIN_DURATION_S or t.size < MIN_SAMPLES:
+        raise LogFormatError(f"{src}: {duration:.3g} s and {t.size} samples; fitting needs at least "
+                             f"{MIN_DURATION_S:g} s and {MIN_SAMPLES} samples")
+
+
+def check_range(src: str, q_rad: NDArray, t: NDArray | None = None, v_rad_s: NDArray | None = None,
+                declared: str = "radians") -> None:
+    """Joint positions within +-360 deg (with 0.1 rad of slack); beyond, logged velocities (when
+    given) tell whether the positions are degrees read as radians."""
+    if np.any(np.abs(q_rad) > 2.0 * np.pi + 0.1):
+        r = velocity_ratio(t, q_rad, v_rad_s) if t is not None and v_rad_s is not None and t.size > 2 else None
+        if r is not None and DEG_PER_RAD / 1.5 <= r <= DEG_PER_RAD * 1.5:
+            raise LogFormatError(f"{src}: positions beyond +-360 deg that change {r:.3g} times faster than the "
+                                 f"logged velocities (rad/s): they look like degrees, but this layout declares "
+                                 f"{declared}")
+        j = int(np.argmax(np.max(np.abs(q_rad), axis=0)))
+        raise LogFormatError(f"{src}: joint {j + 1} beyond +-360 deg; wrong robot or unit (degrees vs radians)")
+
+
+def velocity_ratio(t: NDArray, q_rad: NDArray, v_rad_s: NDArray) -> float | None:
+    """Median over moving joints of the least-squares factor between dq/dt and the logged velocity."""
+    dq = np.gradient(q_rad, t, axis=0)
+    ratios = []
+    for j in range(q_rad.shape[1]):
+        m = np.abs(v_rad_s[:, j]) > MOVING_RAD_S
+        if m.sum() >= MIN_MOVING:
+            ratios.append(float(np.sum(dq[m, j] * v_rad_s[m, j]) / np.sum(v_rad_s[m, j] ** 2)))
+    return float(np.median(ratios)) if ratios else None
+
+
+def check_units(src: str, t: NDArray, q_rad: NDArray, v_rad_s: NDArray | None, what: str, declared: str) -> None:
+    """Positions (declared in ``declared`` units, converted to rad) against logged velocities [rad/s]."""
+    if v_rad_s is None:
+        return
+    r = velocity_ratio(t, q_rad, v_rad_s)
+    if r is None or 0.5 <= r <= 2.0:
+        return
+    if DEG_PER_RAD / 1.5 <= r <= DEG_PER_RAD * 1.5:
+        raise LogFormatError(f"{src}: {what} change {r:.3g} times faster than the logged velocities (rad/s): "
+                             f"they look like degrees, but this layout declares {declared}")
+    if 1 / (1.5 * DEG_PER_RAD) <= r <= 1.5 / DEG_PER_RAD:
+        raise LogFormatError(f"{src}: {what} change {1 / r:.3g} times slower than the logged velocities (rad/s): "
+                             f"they look like radians, but this layout declares {declared}")
+    raise LogFormatError(f"{src}: {what} and the logged velocities disagree by a factor {r:.3g} "
+                         "(time derivative / velocity); check the units of both")

@@ -1,0 +1,224 @@
+"""Measured logs: UR RTDE CSV, the NIST layout, and ur5fault's own time series.
+
+Every reader returns a :class:`MeasuredLog` in SI units and ur5fault's sign conventions
+(motor current positive when it drives the joint positive).  UR's controller configuration
+lists joint directions ``[1, 1, -1, 1, 1, 1]``, but in the NIST log the elbow current has the
+*same* sign as UR's own elbow torque (-1.35 A for -18.4 N*m at the start, 13.6 N*m/A like
+J1-J2, and it rises with elbow speed), so no sign is flipped there; ``UR_CURRENT_SIGN`` is
+where a log with the other convention would be corrected.
+
+Files are sniffed and streamed (:mod:`.source`) and checked for plausibility (:mod:`.plausible`)
+before a log is returned; every problem is one :class:`~ur5fault.errors.LogFormatError` line.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..checks import check_number
+from ..effects import REGISTRY
+from ..errors import LogFormatError, UnknownNameError
+from . import plausible
+from .measured import MeasuredLog
+from .source import check_log_memory, read_columns, sniff
+
+#: sign of the reported motor current w.r.t. joint torque (all +1 in the NIST log, see above)
+UR_CURRENT_SIGN = np.array([1.0, 1.0, 1.0, 1.0, 1.0, 1.0])
+NIST_TOOL_OFFSET_M = (-0.001, -0.001, 0.1856)  # fitted on the NIST log (tests/test_nist_fk.py)
+NIST_PAYLOAD_KG = 0.726  # 1.6 lb, from the NIST run name
+
+
+def _require(columns: Sequence[str], required: Sequence[str], source: str) -> None:
+    missing = [c for c in required if c not in columns]
+    if missing:
+        raise LogFormatError(f"{source}: missing required column {missing[0]!r}" +
+                             (f" (and {len(missing) - 1} more)" if len(missing) > 1 else ""))
+
+
+def _joint_numbers(columns: Sequence[str], pattern: str) -> list[int]:
+    rx = re.compile(pattern)
+    return [int(m.group(1)) for c in columns if (m := rx.fullmatch(c))]
+
+
+def _have(columns: Sequence[str], wanted: Sequence[str]) -> list[str]:
+    return list(wanted) if all(c in columns for c in wanted) else []
+
+
+def _stack(data: Mapping[str, NDArray], cols: Sequence[str]) -> NDArray | None:
+    return np.column_stack([data[c] for c in cols]) if cols else None
+
+
+def _checked(src: str, t: NDArray, arrays: Mapping[str, NDArray], q_rad: NDArray, v_rad_s: NDArray | None = None,
+             declared: str = "radians") -> None:
+    plausible.check_finite(src, {"time": t, **arrays})
+    plausible.check_increasing(src, t)
+    plausible.check_range(src, q_rad, t, v_rad_s, declared)
+    plausible.check_sampling(src, t)
+
+
+def read_nist(path: str | Path) -> MeasuredLog:
+    """Read the NIST UR5 layout (positions in degrees, velocities in rad/s; see
+    ../shared/data/nist-ur5/README.md)."""
+    path = Path(path)
+    src = path.name
+    layout = sniff(path, src)
+    cols = layout.columns
+    pos_t = [f"ROBOT_TARGET_JOINT_POSITIONS (J{j})" for j in range(1, 7)]
+    pos_a = [f"ROBOT_ACTUAL_JOINT_POSITIONS (J{j})" for j in range(1, 7)]
+    cur_a = [f"ROBOT_ACTUAL_JOINT_CURRENT (J{j})" for j in range(1, 7)]
+    _require(cols, ["ROBOT_TIME", *pos_t, *pos_a, *cur_a], src)
+    plausible.check_joint_count(src, _joint_numbers(cols, r"ROBOT_ACTUAL_JOINT_POSITIONS \(J(\d+)\)"), 1)
+    cur_t = _have(cols, [f"ROBOT_TARGET_JOITN_CURRENT (J{j})" for j in range(1, 7)])
+    temp = _have(cols, [f"ROBOT_JOINT_TEMP (J{j})" for j in range(1, 7)])
+    tcp = _have(cols, [f"ROBOT_CARTESIAN_COORD_TOOL ({a})" for a in "xyz"])
+    vel_t = _have(cols, [f"ROBOT_TARGET_JOINT_VELOCITIES (J{j})" for j in range(1, 7)])
+    vel_a = _have(cols, [f"ROBOT_ACTUAL_JOINT_VELOCITIES (J{j})" for j in range(1, 7)])
+    torq = _have(cols, [f"ROBOT_TARGET_JOINT_TORQUES (J{j})" for j in range(1, 7)])
+    d = read_columns(path, src, layout,
+                     ["ROBOT_TIME", *pos_t, *pos_a, *cur_a, *cur_t, *temp, *tcp, *vel_t, *vel_a, *torq])
+    t = d["ROBOT_TIME"]
+    arrays = {"target positions": _stack(d, pos_t), "actual positions": _stack(d, pos_a),
+              "actual currents": _stack(d, cur_a)}
+    qt, qa = np.radians(arrays["target positions"]), np.radians(arrays["actual positions"])
+    _checked(src, t, arrays, qa, _stack(d, vel_a), "degrees")
+    plausible.check_units(src, t, qt, _stack(d, vel_t), "target positions", "degrees")
+    plausible.check_units(src, t, qa, _stack(d, vel_a), "actual positions", "degrees")
+    ct = _stack(d, cur_t)
+    return MeasuredLog(
+        source=src, t_s=t - t[0], q_target_rad=qt, q_actual_rad=qa,
+        current_A=arrays["actual currents"] * UR_CURRENT_SIGN,
+        target_current_A=None if ct is None else ct * UR_CURRENT_SIGN, temperature_C=_stack(d, temp),
+        tcp_m=_stack(d, tcp), payload_kg=NIST_PAYLOAD_KG, tcp_offset_m=NIST_TOOL_OFFSET_M,
+        target_torque_Nm=_stack(d, torq),
+    )
+
+
+def read_rtde(path: str | Path, payload_kg: float = 0.0,
+              tcp_offset_m: tuple[float, float, float] = (0.0, 0.0, 0.15)) -> MeasuredLog:
+    """Read a UR RTDE CSV as the ``rtde`` recorder writes it (radians, amperes, metres), comma-,
+    tab-, semicolon- or space-separated, plain or gzip, with or without a UTF-8 byte-order mark.
+
+    Required columns: ``timestamp``, ``target_q_0..5``, ``actual_q_0..5``, ``actual_current_0..5``;
+    optional: ``target_current_0..5``, ``joint_temperatures_0..5``, ``actual_TCP_pose_0..5``,
+    ``target_moment_0..5`` (UR's target torque), and
+    ``target_qd_0..5`` / ``actual_qd_0..5`` (rad/s, used to check the position units).
+    The payload and tool offset are not in the recording and are given by the caller.
+    """
+    path = Path(path)
+    src = path.name
+    mass = REGISTRY["payload"].param("mass_kg")
+    payload_kg = check_number(payload_kg, "payload_kg", mass.lo, mass.hi, mass.unit)
+    if len(tcp_offset_m) != 3:
+        raise LogFormatError(f"tcp_offset_m = {tcp_offset_m!r} must be 3 numbers [m]")
+    tcp_offset_m = tuple(check_number(v, f"tcp_offset_m[{k + 1}]", -2.0, 2.0, "m") for k, v in enumerate(tcp_offset_m))
+    layout = sniff(path, src)
+    cols = layout.columns
+    qt = [f"target_q_{j}" for j in range(6)]
+    qa = [f"actual_q_{j}" for j in range(6)]
+    ia = [f"actual_current_{j}" for j in range(6)]
+    _require(cols, ["timestamp", *qt, *qa, *ia], src)
+    plausible.check_joint_count(src, _joint_numbers(cols, r"actual_q_(\d+)"), 0)
+    ct = _have(cols, [f"target_current_{j}" for j in range(6)])
+    temp = _have(cols, [f"joint_temperatures_{j}" for j in range(6)])
+    tcp = _have(cols, [f"actual_TCP_pose_{j}" for j in range(3)])
+    vt = _have(cols, [f"target_qd_{j}" for j in range(6)])
+    va = _have(cols, [f"actual_qd_{j}" for j in range(6)])
+    tm = _have(cols, [f"target_moment_{j}" for j in range(6)])
+    d = read_columns(path, src, layout, ["timestamp", *qt, *qa, *ia, *ct, *temp, *tcp, *vt, *va, *tm])
+    t = d["timestamp"]
+    arrays = {"target_q": _stack(d, qt), "actual_q": _stack(d, qa), "actual_current": _stack(d, ia)}
+    _checked(src, t, arrays, arrays["actual_q"], _stack(d, va))
+    plausible.check_units(src, t, arrays["target_q"], _stack(d, vt), "target_q", "radians")
+    plausible.check_units(src, t, arrays["actual_q"], _stack(d, va), "actual_q", "radians")
+    cur_t = _stack(d, ct)
+    return MeasuredLog(
+        source=src, t_s=t - t[0], q_target_rad=arrays["target_q"], q_actual_rad=arrays["actual_q"],
+        current_A=arrays["actual_current"] * UR_CURRENT_SIGN,
+        target_current_A=None if cur_t is None else cur_t * UR_CURRENT_SIGN,
+        temperature_C=_stack(d, temp), tcp_m=_stack(d, tcp),
+        payload_kg=payload_kg, tcp_offset_m=tuple(tcp_offset_m), target_torque_Nm=_stack(d, tm),
+    )
+
+
+def read_sim(path: str | Path) -> MeasuredLog:
+    """Read a time series written by ``ur5fault simulate`` (or a campaign's ``timeseries/``).
+
+    Uses ``q_set_rad_j*`` as target, ``q_FB_rad_j*`` as the measured position, ``i_FB_A_j*`` as the
+    current, and ``q_M_FB_rad_j*`` (motor encoders) when present.
+    """
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    path = Path(path)
+    src = path.name
+    try:
+        pf = pq.ParquetFile(path)
+        schema, n_rows = pf.schema_arrow, pf.metadata.num_rows
+    except (OSError, ValueError, pa.ArrowException) as exc:
+        raise LogFormatError(f"{src}: cannot read as Parquet ({' '.join(str(exc).split())[:160]})") from None
+    names = schema.names
+    cols = lambda name: [f"{name}_j{j}" for j in range(1, 7)]  # noqa: E731
+    _require(names, ["t_s", *cols("q_set_rad"), *cols("q_FB_rad"), *cols("i_FB_A")], src)
+    plausible.check_joint_count(src, _joint_numbers(names, r"q_FB_rad_j(\d+)"), 1)
+    tcp = _have(names, ["tcp_x_m", "tcp_y_m", "tcp_z_m"])
+    qm = _have(names, cols("q_M_FB_rad"))
+    wanted = ["t_s", *cols("q_set_rad"), *cols("q_FB_rad"), *cols("i_FB_A"), *tcp, *qm]
+    check_log_memory(src, n_rows, len(wanted))
+    try:
+        table = pf.read(columns=wanted)
+        d = {c: table.column(c).to_numpy().astype(float) for c in wanted}
+    except (OSError, ValueError, TypeError, pa.ArrowException) as exc:
+        raise LogFormatError(f"{src}: cannot read its columns ({' '.join(str(exc).split())[:160]})") from None
+    if n_rows == 0:
+        raise LogFormatError(f"{src}: no samples")
+    t = d["t_s"]
+    arrays = {"q_set_rad": _stack(d, cols("q_set_rad")), "q_FB_rad": _stack(d, cols("q_FB_rad")),
+              "i_FB_A": _stack(d, cols("i_FB_A"))}
+    _checked(src, t, arrays, arrays["q_FB_rad"])
+    meta = _sim_metadata(schema, src)
+    temp = meta.get("joint_temperature_C")
+    try:
+        temp_arr = None if temp is None else np.tile(np.asarray(temp, float).reshape(6), (t.size, 1))
+        payload = float(meta.get("payload_kg", 0.0) or 0.0)
+        offset = tuple(float(x) for x in meta.get("tcp_offset_m", (0.0, 0.0, 0.15)))
+        if len(offset) != 3 or not np.all(np.isfinite(offset)) or not np.isfinite(payload):
+            raise ValueError("tcp_offset_m or payload_kg")
+    except (TypeError, ValueError) as exc:
+        raise LogFormatError(f"{src}: malformed ur5fault metadata ({exc})") from None
+    return MeasuredLog(
+        source=src, t_s=t, q_target_rad=arrays["q_set_rad"], q_actual_rad=arrays["q_FB_rad"],
+        current_A=arrays["i_FB_A"], tcp_m=_stack(d, tcp), q_motor_rad=_stack(d, qm), temperature_C=temp_arr,
+        payload_kg=payload, tcp_offset_m=offset,  # type: ignore[arg-type]
+    )
+
+
+def _sim_metadata(schema, src: str) -> dict:
+    raw = (schema.metadata or {}).get(b"ur5fault", b"{}")
+    try:
+        meta = json.loads(raw)
+    except ValueError:
+        raise LogFormatError(f"{src}: malformed ur5fault metadata (not JSON)") from None
+    if not isinstance(meta, dict):
+        raise LogFormatError(f"{src}: malformed ur5fault metadata (not a mapping)")
+    return meta
+
+
+READERS = {"nist": read_nist, "rtde": read_rtde, "sim": read_sim}
+
+
+def read_log(path: str | Path, fmt: str, **kwargs) -> MeasuredLog:
+    """Read a log in one of the formats of :data:`READERS` (``nist``, ``rtde``, ``sim``)."""
+    if fmt not in READERS:
+        raise UnknownNameError("log format", fmt, READERS)
+    p = Path(path)
+    if not p.exists():
+        raise LogFormatError(f"{p}: no such file")
+    if not p.is_file():
+        raise LogFormatError(f"{p}: not a file")
+    return READERS[fmt](p, **kwargs)

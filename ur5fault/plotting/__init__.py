@@ -1,0 +1,71 @@
+"""Figures: the paper's backlash figures (:mod:`.paper`), severity figures for any swept effect
+(:mod:`.severity`) and one run's time series (:mod:`.run`).
+
+Every function returns a :class:`matplotlib.figure.Figure` and takes an optional ``ax`` (``axes`` for the
+multi-panel run figure) to draw into; none picks a matplotlib backend or uses pyplot, so a notebook's
+inline display is left alone.  :func:`campaign_figures` makes every figure a campaign supports and says
+why the others are missing; :func:`save` writes figures as PNG.
+"""
+
+from __future__ import annotations
+
+import logging
+from pathlib import Path
+
+from matplotlib.figure import Figure
+
+from ..campaign.result import CampaignResult
+from ..campaign.summary import HEALTHY, joint_feature
+from ..errors import Ur5FaultError
+from ._figure import save
+from .paper import fig3_tcp_deviation, fig4_shoulder_current
+from .run import run_figure
+from .severity import heatmap, severity_figure
+
+__all__ = ["campaign_figures", "fig3_tcp_deviation", "fig4_shoulder_current", "heatmap", "plot_campaign",
+           "run_figure", "save", "severity_figure"]
+
+_log = logging.getLogger(__name__)
+
+#: backlash size of the paper's Fig. 3 [deg]
+FIG3_BACKLASH_DEG = 0.1
+
+
+def campaign_figures(result: CampaignResult, feature: str = "tcp_dev_max_mm") -> tuple[dict[str, Figure], list[str]]:
+    """Every figure the campaign supports, by file stem, and one message per figure it cannot have.
+
+    Backlash gets the paper's Fig. 3 and Fig. 4; every swept effect gets ``feature`` against its fault size
+    and, when it sits on joints, a joint x size heat map of ``feature``.
+    """
+    joint_feature(result.features, feature)  # an unknown feature is an error before any work
+    figures: dict[str, Figure] = {}
+    messages: list[str] = []
+    sweeps, skipped = result.sweeps()
+    messages += [f"no figure for {why}" for why in skipped.values()]
+    if "backlash" in sweeps:
+        for name, draw in ((f"fig3_tcp_deviation_alpha{FIG3_BACKLASH_DEG:g}",
+                            lambda: fig3_tcp_deviation(result, FIG3_BACKLASH_DEG)),
+                           ("fig4_shoulder_current", lambda: fig4_shoulder_current(result))):
+            try:
+                figures[name] = draw()
+            except Ur5FaultError as exc:
+                messages.append(str(exc))
+    healthy = result.features[(result.features["fault"] == HEALTHY) & (result.features["status"] == "ok")]
+    for effect, sweep in sweeps.items():
+        figures[f"severity_{effect}_{feature}"] = severity_figure(sweep, feature, healthy=healthy,
+                                                                  threshold_mm=result.threshold_mm)
+        if sweep.per_joint:
+            figures[f"heatmap_{effect}_{feature}"] = heatmap(sweep, feature)
+    if not sweeps and not skipped:
+        messages.append(f"{result.out}: the campaign sweeps no effect ({', '.join(result.swept_keys) or 'nothing'})")
+    return figures, messages
+
+
+def plot_campaign(out: str | Path, feature: str = "tcp_dev_max_mm", plot_dir: str | Path | None = None) -> list[Path]:
+    """Write :func:`campaign_figures` of the campaign in ``out`` as PNG (default ``out/plots``); return the
+    paths.  Figures the campaign cannot have are logged as warnings."""
+    result = CampaignResult.load(out)
+    figures, messages = campaign_figures(result, feature)
+    for m in messages:
+        _log.warning(m)
+    return save(figures, Path(plot_dir) if plot_dir is not None else result.out / "plots")

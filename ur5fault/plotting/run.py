@@ -1,0 +1,93 @@
+"""One run's time series in one figure (``ur5fault show``): setpoint against resolver, tracking error,
+encoder mismatch, motor currents and TCP deviation, joints in the same colours in every panel."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+import pandas as pd
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
+
+from ..axes import JOINT_NAMES, N_JOINTS
+from ..errors import ParameterError
+from .paper import TCP_COLUMNS, tcp_deviation_mm
+
+#: panels of :func:`run_figure`, top to bottom
+PANELS = ("joint angle", "tracking error", "encoder mismatch", "motor current", "TCP deviation")
+#: gear ratio assumed when the table carries no ``gear_ratio`` metadata (UR5, all joints; ../shared/ur5-facts.md)
+DEFAULT_GEAR_RATIO = 101.0
+
+
+def _joint_cols(name: str) -> list[str]:
+    return [f"{name}_j{j}" for j in range(1, N_JOINTS + 1)]
+
+
+def run_figure(series: pd.DataFrame, twin: pd.DataFrame | None = None, *, gear_ratio: Sequence[float] | None = None,
+               title: str | None = None, axes: Sequence[Axes] | None = None) -> Figure:
+    """Draw one run.
+
+    Args:
+        series: the run's wide time-series table (``SimResult.to_pandas``, a ``simulate`` Parquet file or a
+            campaign's ``timeseries/<run_id>.parquet``; columns in docs/outputs.md).
+        twin: the healthy twin's table; the TCP panel then shows the deviation from it as well.
+        gear_ratio: per joint, for the encoder mismatch ``q_M_FB / N - q_FB`` (default: the table's
+            ``attrs["ur5fault"]["gear_ratio"]``, else 101).
+        title: figure title (default: run id, effects and status from the table's metadata).
+        axes: five axes to draw into, in the order of :data:`PANELS` (default: a new figure).
+
+    Returns:
+        The figure.
+    """
+    need = ["t_s", *_joint_cols("q_set_rad"), *_joint_cols("q_FB_rad"), *_joint_cols("i_FB_A")]
+    missing = [c for c in need if c not in series.columns]
+    if missing:
+        raise ParameterError(f"time series lacks column {missing[0]!r} (a ur5fault time series has {need[0]}, "
+                             "q_set_rad_j1.., q_FB_rad_j1.., i_FB_A_j1..; docs/outputs.md)")
+    meta = series.attrs.get("ur5fault", {})
+    ratio = np.asarray(gear_ratio if gear_ratio is not None else meta.get("gear_ratio", [DEFAULT_GEAR_RATIO] * 6))
+    if axes is None:
+        fig = Figure(figsize=(10, 12), layout="constrained")
+        axes = fig.subplots(len(PANELS), 1, sharex=True)
+    elif len(axes) != len(PANELS):
+        raise ParameterError(f"axes: {len(axes)} given, run_figure draws {len(PANELS)} panels ({', '.join(PANELS)})")
+    fig = axes[0].figure
+    t = series["t_s"].to_numpy()
+    q_set = series[_joint_cols("q_set_rad")].to_numpy()
+    q_fb = series[_joint_cols("q_FB_rad")].to_numpy()
+    a_ang, a_err, a_mis, a_cur, a_tcp = axes
+    for j in range(N_JOINTS):
+        c, lab = f"C{j}", f"J{j + 1} {JOINT_NAMES[j]}"
+        a_ang.plot(t, np.degrees(q_set[:, j]), color=c, lw=3, alpha=0.3)
+        a_ang.plot(t, np.degrees(q_fb[:, j]), color=c, lw=0.8, label=lab)
+        a_err.plot(t, 1e3 * (q_set[:, j] - q_fb[:, j]), color=c, lw=0.7)
+        a_cur.plot(t, series[f"i_FB_A_j{j + 1}"], color=c, lw=0.6)
+    a_ang.set_ylabel("setpoint (wide) and\nresolver q_FB [deg]")
+    a_ang.legend(fontsize=7, ncol=6, loc="lower center", bbox_to_anchor=(0.5, 1.0), frameon=False)
+    a_err.set_ylabel("q_set - q_FB [mrad]")
+    a_cur.set_ylabel("motor current i_FB [A]")
+    if all(c in series.columns for c in _joint_cols("q_M_FB_rad")):
+        mis = series[_joint_cols("q_M_FB_rad")].to_numpy() / ratio - q_fb
+        for j in range(N_JOINTS):
+            a_mis.plot(t, 1e3 * mis[:, j], color=f"C{j}", lw=0.7)
+        a_mis.set_ylabel("encoder mismatch\nq_M_FB/N - q_FB [mrad]")
+    else:
+        a_mis.text(0.5, 0.5, "no motor encoder (q_M_FB_rad) in this table", ha="center", transform=a_mis.transAxes)
+    if all(c in series.columns for c in TCP_COLUMNS + ["tcp_des_x_m"]):
+        des = series[["tcp_des_x_m", "tcp_des_y_m", "tcp_des_z_m"]].to_numpy()
+        a_tcp.plot(t, np.linalg.norm(series[TCP_COLUMNS].to_numpy() - des, axis=1) * 1e3, color="0.4", lw=0.7,
+                   label="from desired TCP")
+        if twin is not None:
+            a_tcp.plot(t, tcp_deviation_mm(series, twin), color="C3", lw=0.8, label="from healthy twin")
+        a_tcp.legend(fontsize=7)
+        a_tcp.set_ylabel("TCP deviation [mm]")
+    else:
+        a_tcp.text(0.5, 0.5, "no TCP columns in this table", ha="center", transform=a_tcp.transAxes)
+    a_tcp.set_xlabel("time [s]")
+    if title is None:
+        effects = meta.get("effects")
+        effects = "effects unknown" if effects is None else "; ".join(effects) or "healthy"
+        title = f"{meta.get('run_id', 'run')}: {effects} ({meta.get('status', 'status unknown')})"
+    fig.suptitle(title, fontsize=10)
+    return fig

@@ -1,0 +1,78 @@
+"""Severity figures for any swept effect: a feature against the fault size, one line per fault joint
+(:func:`severity_figure`), and the same numbers as a fault joint x size heat map (:func:`heatmap`)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
+
+from ..campaign.summary import EffectSweep, joint_feature, severity_table
+from ._figure import figure_and_axes
+
+
+def _is_generic(df: pd.DataFrame, feature: str) -> bool:
+    """A per-joint feature named without its ``_j{j}`` suffix."""
+    return feature not in df.columns and f"{feature}_j1" in df.columns
+
+
+def severity_figure(sweep: EffectSweep, feature: str = "tcp_dev_max_mm", *, healthy: pd.DataFrame | None = None,
+                    threshold_mm: float | None = None, ax: Axes | None = None) -> Figure:
+    """``feature`` against the fault size of one swept effect.
+
+    Args:
+        sweep: the effect's runs (:func:`ur5fault.campaign.summary.effect_sweep`).
+        feature: a feature column, or a per-joint feature without ``_j{j}`` (read on the faulty joint).
+        healthy: feature rows of the healthy runs, drawn as dotted reference lines.
+        threshold_mm: the campaign's TCP threshold, drawn for ``tcp_dev_*`` features.
+        ax: axes to draw into (default: a new figure).
+
+    Returns:
+        The figure.
+    """
+    fig, ax = figure_and_axes(ax, (8, 4.5))
+    table = severity_table(sweep, feature)
+    values = joint_feature(sweep.rows, feature)
+    generic = _is_generic(sweep.rows, feature)
+    for k, (label, line) in enumerate(table.iterrows()):
+        color = f"C{k % 10}"
+        line = line.dropna()
+        ax.plot(line.index, line.to_numpy(), "o-", color=color, ms=4, lw=1.2, label=f"J{label}" if sweep.per_joint
+                else "robot")
+        if sweep.per_joint:
+            j = int(str(label).split()[0])
+            pts = sweep.rows["fault_joint"] == j
+        else:
+            pts = np.ones(len(sweep.rows), bool)
+        if pts.sum() > len(line):  # several runs per size (seeds, payloads): show them all
+            ax.plot(sweep.rows.loc[pts, "size"], values[pts], ".", color=color, alpha=0.4, ms=3)
+        if healthy is not None and len(healthy) and generic and sweep.per_joint:
+            ax.axhline(healthy[f"{feature}_j{j}"].max(), color=color, ls=":", lw=0.8)
+    if healthy is not None and len(healthy) and not (generic and sweep.per_joint):
+        ax.axhline(joint_feature(healthy, feature).max(), color="k", ls=":", lw=0.8, label="healthy")
+    if threshold_mm is not None and feature.startswith("tcp_dev_"):
+        ax.axhline(threshold_mm, color="k", ls="--", lw=0.8, label=f"{threshold_mm:g} mm threshold")
+    on = " of the faulty joint" if generic and sweep.per_joint else (" (max over joints)" if generic else "")
+    title = f"{feature}{on} against {sweep.effect} size"
+    if sweep.n_not_ok:
+        title += f" ({sweep.n_not_ok} run(s) not ok, not shown)"
+    ax.set(xlabel=sweep.label, ylabel=feature + on, title=title)
+    ax.legend(fontsize=8)
+    return fig
+
+
+def heatmap(sweep: EffectSweep, feature: str = "tcp_dev_max_mm", ax: Axes | None = None) -> Figure:
+    """``feature`` (largest over repeated runs) by fault joint x fault size, values written in the cells."""
+    fig, ax = figure_and_axes(ax, (8, 4.5))
+    table = severity_table(sweep, feature)
+    im = ax.imshow(table.to_numpy(), aspect="auto", cmap="viridis")
+    ax.set_xticks(range(table.shape[1]), [f"{v:g}" for v in table.columns])
+    ax.set_yticks(range(table.shape[0]), [f"J{label}" for label in table.index] if sweep.per_joint else table.index)
+    ax.set_xlabel(sweep.label)
+    for (r, c), v in np.ndenumerate(table.to_numpy()):
+        ax.text(c, r, f"{v:.3g}", ha="center", va="center", color="w", fontsize=7)
+    fig.colorbar(im, ax=ax, label=feature)
+    ax.set_title(f"{feature} by fault joint and {sweep.effect} size")
+    return fig
+
