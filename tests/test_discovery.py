@@ -63,17 +63,8 @@ EXPECTED = {
 }
 
 
-#: found after merging the stick-slip friction and the re-identified friction values (issue 10): on the
-#: joint sweep a speed-squared drag on the elbow (c = 3.06) is absorbed by the library's viscous (x1.26) and
-#: Coulomb (x0.89) scales, which pass every test a finding must pass; the workflow must learn to prefer the
-#: dictionary's quadratic term there (issue 12)
-ABSORBED = pytest.mark.xfail(strict=True, reason="speed-squared drag absorbed by viscous + Coulomb library scales "
-                             "under the merged friction model (issue 12)")
-
-
 @pytest.mark.slow
-@pytest.mark.parametrize("form", [pytest.param(f, marks=ABSORBED) if f == "speed_squared_drag" else f
-                                  for f in FORMS])
+@pytest.mark.parametrize("form", FORMS)
 def test_effect_outside_the_library_is_discovered_added_and_shrinks_the_gap(tmp_path, form):
     h = draw(form)
     j = h["joint"]

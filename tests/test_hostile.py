@@ -416,12 +416,23 @@ def test_files_are_group_readable(tmp_path):
     (["--payload-kg", "nan"], "payload_kg = nan must be a finite number in [0, 5] kg"),
     (["--payload-kg", "-1"], "payload_kg = -1.0 is out of range [0, 5] kg"),
     (["--tcp-offset-m", "0", "0", "inf"], "tcp_offset_m[3] = inf must be a finite number in [-2, 2] m"),
-], ids=["payload-nan", "payload-negative", "tcp-offset-inf"])
+    (["--fit-fraction", "nan"], "fit_fraction = nan is out of range [0.2, 0.9]"),
+    (["--max-terms", "-1"], "max_terms = -1 must be a whole number >= 0"),
+    (["--jobs", "0"], "jobs = 0 must be a whole number >= 1"),
+], ids=["payload-nan", "payload-negative", "tcp-offset-inf", "fit-fraction-nan", "max-terms-negative", "jobs-zero"])
 def test_discrepancy_log_arguments(args, message, tmp_path, capsys):
     log = _write(tmp_path, "log.csv", rtde_frame())
     rc, err, peak = _run(["discrepancy", str(log), "--format", "rtde", *args, "--out", str(tmp_path / "out")],
                          tmp_path, capsys)
     _assert_one_line(rc, err, peak, message)
+
+
+def test_discrepancy_unwritable_out_fails_before_reading_the_log(tmp_path, capsys):
+    """An output folder that cannot be made is refused first (the log is not even read)."""
+    (tmp_path / "afile").write_text("x")
+    rc, err, peak = _run(["discrepancy", str(tmp_path / "missing.csv"), "--format", "rtde", "--out",
+                          str(tmp_path / "afile" / "out")], tmp_path, capsys)
+    _assert_one_line(rc, err, peak, "is a file and not a folder")
 
 
 def test_dask_scheduler_that_does_not_answer(support_files, capsys, monkeypatch):

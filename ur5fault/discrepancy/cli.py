@@ -26,10 +26,16 @@ def register(sub) -> None:
 
 def cmd_discrepancy(args: argparse.Namespace) -> int:
     from ..config import Overlay
+    from ..io import check_writable
     from ..logs import read_log
     from .model import DiscrepancyModel
     from .report import summary, write_report
 
+    jobs = (os.cpu_count() or 1) if args.jobs is None else args.jobs
+    # everything that can be checked before minutes of fitting is checked first
+    model = DiscrepancyModel(fit_fraction=args.fit_fraction, max_effects=args.max_effects,
+                             max_terms=args.max_terms, jobs=jobs, progress=not args.quiet)
+    check_writable(args.out, folder=True)
     kwargs = {}
     if args.fmt == "rtde":
         if args.payload_kg is not None:
@@ -38,10 +44,7 @@ def cmd_discrepancy(args: argparse.Namespace) -> int:
             kwargs["tcp_offset_m"] = tuple(args.tcp_offset_m)
     log = read_log(args.log, args.fmt, **kwargs)
     overlay = Overlay.load(args.model) if args.model else None
-    jobs = args.jobs or os.cpu_count() or 1
-    model = DiscrepancyModel(fit_fraction=args.fit_fraction, max_effects=args.max_effects,
-                             max_terms=args.max_terms, jobs=jobs, progress=not args.quiet).fit(
-        log, dict(overlay.params) if overlay else None, overlay.effects if overlay else ())
+    model.fit(log, dict(overlay.params) if overlay else None, overlay.effects if overlay else ())
     paths = write_report(model, Path(args.out))
     summ = summary(model)
     print(f"{log.source}: {log.t_s[-1]:.1f} s at {1 / log.period_s:.0f} Hz")

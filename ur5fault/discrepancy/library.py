@@ -27,6 +27,11 @@ PROBES: dict[tuple[str, str], float | None] = {
     ("coulomb_friction", "scale"): 1.5,
     ("viscous_friction", "scale"): 1.5,
     ("viscous_temperature", "coeff_per_K"): 0.04,
+    # stick-slip and where friction acts (issue 10): breakaway 50 % above its identified level, a bristle
+    # three times more compliant, all of the joint's friction moved to the motor side of the clearance
+    ("breakaway_friction", "scale"): 1.5,
+    ("presliding_stiffness", "scale"): 0.3,
+    ("friction_share", "motor_side_share"): None,  # probed at 1 - the nominal share (the other end)
     ("gear_stiffness", "scale"): 0.5,
     ("torque_constant", "scale"): 0.9,
     ("resolver_offset", "offset_deg"): 0.01,
@@ -54,9 +59,12 @@ def candidates(payload_kg: float, joints: Sequence[int] = range(N_JOINTS),
             x0, probe = payload_kg, payload_kg + PAYLOAD_PROBE_KG
         elif name == "viscous_temperature":
             x0 = float(load_params().friction.viscous_temp_coeff_per_K[0])
-        else:
+        elif name != "friction_share":
             x0 = float(eff.param(par).absent)
         for j in (joints if eff.per_joint else [None]):
+            if name == "friction_share":  # no "absent" value: linearised about the packaged share
+                x0 = float(load_params().friction.motor_side_share[j])
+                probe = 1.0 if x0 < 0.5 else 0.0
             out.append(LibraryCandidate(name, j, par, x0, float(probe)))
     return out
 

@@ -117,6 +117,9 @@ class DiscrepancyModel:
         lo, hi = FIT_FRACTION_RANGE
         if not lo <= fit_fraction <= hi:
             raise ParameterError(f"fit_fraction = {fit_fraction} is out of range [{lo}, {hi}]")
+        for name, v, least in (("max_effects", max_effects, 0), ("max_terms", max_terms, 0), ("jobs", jobs, 1)):
+            if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < least:
+                raise ParameterError(f"{name} = {v!r} must be a whole number >= {least}")
         if refiner not in ("secant", "minimize"):
             raise ParameterError(f"refiner = {refiner!r} is not valid; choose one of: secant, minimize")
         self.fit_fraction, self.max_effects, self.max_terms = fit_fraction, max_effects, max_terms
@@ -167,7 +170,12 @@ class DiscrepancyModel:
         if self.max_terms > 0:
             G, g, ee = bg.total()
             e_lib = e0 - np.tensordot(rss_of(G, g, ee, lib_cols)[1], X_lib[lib_cols], axes=1)
-            dcands, X_dict = discovery.dictionary(rp, base, n_scr, self._joints_above_floor(e_lib, len(rp.signals)))
+            # offered where the library leaves a residual above the floor, and on the joints of the library's
+            # findings: a library effect may stand in for a term outside the library (viscous and Coulomb
+            # scales for a speed-squared drag); the joint check below keeps what explains what the rest does not
+            joints = sorted(set(self._joints_above_floor(e_lib, len(rp.signals)))
+                            | {c.joint for c in lib if c.joint is not None})
+            dcands, X_dict = discovery.dictionary(rp, base, n_scr, joints)
             if dcands:
                 X_all = np.concatenate([X_all, X_dict])
                 dcols = columns_of(dcands, start=len(lib_cols))
