@@ -7,11 +7,22 @@ constants).  Keep in step with the numpy modules: ``tests/test_kernel.py`` compa
 from __future__ import annotations
 
 import math
+import zlib
 
 import numpy as np
 from numba import njit
 
-from .layout import PI, XI
+from .layout import PARAM_NAMES, PI, STATE_NAMES, XI
+
+#: CRC-32 of the row layout these kernels were written for.  numba's cache (``cache=True``) checks only this
+#: file's time stamp, not ``layout.py``'s, and the rows below are frozen into the compiled code: a layout
+#: changed with this file untouched would reuse cached kernels that index the wrong rows (seen once as a
+#: segfault after a merge).  A changed layout therefore stops here until this number is updated, which also
+#: changes this file and so invalidates the cache.
+LAYOUT_CRC32 = 1131675108
+if zlib.crc32(("|".join(PARAM_NAMES) + "#" + "|".join(STATE_NAMES)).encode()) != LAYOUT_CRC32:
+    raise ImportError("ur5fault/drive/layout.py changed: update LAYOUT_CRC32 in ur5fault/drive/kernel.py "
+                      "(and check the row constants below) so numba recompiles the cached kernels")
 
 # parameter rows
 RATIO, K, C, ALPHA, T_COULOMB, T_STATIC, FV, EPS = (PI[n] for n in ("ratio", "k", "c", "alpha", "t_coulomb", "t_static",
