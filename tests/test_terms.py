@@ -142,6 +142,7 @@ def test_holding_term_equals_a_passive_force_with_memory_written_here():
     _close(term, ref, base, HOLD_J, rel=0.1)
 
 
+@pytest.mark.slow  # simulates at 1/8 of the physics step: about 16 s
 def test_holding_term_under_lugre_equals_the_converged_passive_force():
     """The same under the default LuGre law, where the reference needs a smaller step than the hook.
 

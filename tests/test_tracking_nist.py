@@ -72,6 +72,9 @@ def test_held_out_current_against_urs_own_model(replay):
     sim = _current_rms(log, res, held)
     ur = np.sqrt(np.mean((log.target_current_A[1 : n + 1] - log.current_A[1 : n + 1])[held[:, 0]] ** 2, axis=0))
     print("held-out current RMS [A]: sim", np.round(sim, 3), " UR", np.round(ur, 3))
+    whole = np.ones((n, 6), bool)
+    print("whole-log current RMS [A]: sim", np.round(_current_rms(log, res, whole), 3), " UR",
+          np.round(np.sqrt(np.mean((log.target_current_A[1 : n + 1] - log.current_A[1 : n + 1]) ** 2, axis=0)), 3))
     assert np.all(sim[:3] < 0.8 * ur[:3])
     assert sim[4] < ur[4]
     assert np.all(sim < 1.3 * ur)
