@@ -57,7 +57,10 @@ def replay(log: MeasuredLog, friction: Mapping[str, Any] | None, cases: Sequence
     sel = _masks(log, n)
 
     def rms(x: np.ndarray, m: np.ndarray) -> list[float]:
-        return np.sqrt(np.nanmean(np.where(m, x, np.nan) ** 2, axis=0)).round(4).tolist()
+        """RMS per joint over the samples in ``m``; NaN for a joint with none (e.g. no reversal)."""
+        count = m.sum(axis=0)
+        sq = np.where(m, x, 0.0) ** 2
+        return np.where(count > 0, np.sqrt(sq.sum(axis=0) / np.maximum(count, 1)), np.nan).round(4).tolist()
 
     near = sel["near_reversals"]
     e_meas = log.q_target_rad[1 : n + 1] - log.q_actual_rad[1 : n + 1]
