@@ -158,3 +158,20 @@ def test_refine_converges_on_a_mildly_nonlinear_model(method):
     assert np.allclose(first.e0, e0) and len(first.steps) == 4
     out = polish(evaluate, first.theta, first.J, bounds, N // 2, method)
     assert np.allclose(out.theta, truth, atol=0.02), (out.theta, len(out.steps))
+
+
+def test_library_candidates_are_linearised_about_the_model_being_fitted():
+    """Parameters without an "absent" value (friction share, temperature coefficient) start from the
+    fitted model's own values (a user's overlay), not the packaged ones; the share is probed at the end
+    of its range farther from that value."""
+    from ur5fault.discrepancy.library import candidates
+    from ur5fault.params import load_params
+
+    p = load_params(overrides={"friction": {"motor_side_share": [1.0, 0.0, 0.0, 0.0, 0.0, 0.3],
+                                            "viscous_temp_coeff_per_K": [0.01, 0.02, 0.03, 0.02, 0.02, 0.02]}})
+    share = {c.joint: (c.x0, c.probe) for c in candidates(0.7, params=p) if c.effect == "friction_share"}
+    assert share[0] == (1.0, 0.0) and share[1] == (0.0, 1.0) and share[5] == (0.3, 1.0)
+    temp = {c.joint: c.x0 for c in candidates(0.7, params=p) if c.effect == "viscous_temperature"}
+    assert temp[0] == 0.01 and temp[2] == 0.03
+    payload = [c for c in candidates(0.7, params=p) if c.effect == "payload"]
+    assert [(c.x0, c.probe) for c in payload] == [(0.7, 1.2)]

@@ -17,7 +17,7 @@ from numpy.typing import NDArray
 
 from ..axes import N_JOINTS
 from ..effects import REGISTRY, EffectSpec, make_effect
-from ..params import load_params
+from ..params import RobotParams, load_params
 from .candidates import LibraryCandidate
 from .replay import Replay, Replayed
 
@@ -31,7 +31,7 @@ PROBES: dict[tuple[str, str], float | None] = {
     # three times more compliant, all of the joint's friction moved to the motor side of the clearance
     ("breakaway_friction", "scale"): 1.5,
     ("presliding_stiffness", "scale"): 0.3,
-    ("friction_share", "motor_side_share"): None,  # probed at 1 - the nominal share (the other end)
+    ("friction_share", "motor_side_share"): None,  # probed at the end of its range farther from the model's
     ("gear_stiffness", "scale"): 0.5,
     ("torque_constant", "scale"): 0.9,
     ("resolver_offset", "offset_deg"): 0.01,
@@ -48,24 +48,27 @@ CONDITIONS = {"temperature"}
 
 
 def candidates(payload_kg: float, joints: Sequence[int] = range(N_JOINTS),
-               kinds: Sequence[str] | None = None) -> list[LibraryCandidate]:
-    """Every candidate of the library (optionally only some effect kinds), per-joint ones on ``joints``."""
+               kinds: Sequence[str] | None = None, params: RobotParams | None = None) -> list[LibraryCandidate]:
+    """Every candidate of the library (optionally only some effect kinds), per-joint ones on ``joints``.
+
+    ``params``: the model being fitted (default: the packaged one); parameters without an "absent" value
+    are linearised about its values."""
+    params = params if params is not None else load_params()
     out = []
     for (name, par), probe in PROBES.items():
         if name in CONDITIONS or (kinds is not None and name not in kinds):
             continue
         eff = REGISTRY[name]
-        if name == "payload":
-            x0, probe = payload_kg, payload_kg + PAYLOAD_PROBE_KG
-        elif name == "viscous_temperature":
-            x0 = float(load_params().friction.viscous_temp_coeff_per_K[0])
-        elif name != "friction_share":
-            x0 = float(eff.param(par).absent)
         for j in (joints if eff.per_joint else [None]):
-            if name == "friction_share":  # no "absent" value: linearised about the packaged share
-                x0 = float(load_params().friction.motor_side_share[j])
-                probe = 1.0 if x0 < 0.5 else 0.0
-            out.append(LibraryCandidate(name, j, par, x0, float(probe)))
+            x0, at = eff.param(par).absent, probe
+            if name == "payload":
+                x0, at = payload_kg, payload_kg + PAYLOAD_PROBE_KG
+            elif name == "viscous_temperature":  # linearised about the model's coefficient
+                x0 = params.friction.viscous_temp_coeff_per_K[0 if j is None else j]
+            elif name == "friction_share":  # no "absent" value: about the model's share, probed at the far end
+                x0 = params.friction.motor_side_share[j]
+                at = 1.0 if x0 < 0.5 else 0.0
+            out.append(LibraryCandidate(name, j, par, float(x0), float(at)))
     return out
 
 

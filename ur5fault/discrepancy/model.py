@@ -147,7 +147,7 @@ class DiscrepancyModel:
 
         # ---- 1. the library, screened in one batch and selected on the linearised problem
         t = time.perf_counter()
-        cands = library.candidates(log.payload_kg, kinds=self.kinds)
+        cands = library.candidates(log.payload_kg, kinds=self.kinds, params=rp.params)
         base, X_lib, cands = library.screen(rp, n_scr, cands, progress=stages.start("screening the library"))
         e0 = weighted(rp.measured(n_scr), base.y, rp.sigma)
         bg = BlockGram.build(X_lib, e0)
