@@ -17,8 +17,8 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
 import test_discovery as D  # noqa: E402
-from hidden_logs import edited_model, simulate, write_sim  # noqa: E402
-from test_discrepancy import CONDITIONS, KINDS, draw, named, noise_seed  # noqa: E402
+from hidden_logs import edited_model, named, simulate, write_sim  # noqa: E402
+from test_discrepancy import CONDITIONS, KINDS, draw, noise_seed  # noqa: E402
 
 from ur5fault import make_effect  # noqa: E402
 from ur5fault.axes import JOINT_NAMES  # noqa: E402

@@ -83,3 +83,12 @@ def write_rtde(res, path: Path, drift: tuple[int, float] | None = None) -> Path:
         cols[f"joint_temperatures_{j}"] = temp
     pd.DataFrame(cols).to_csv(path, index=False)
     return path
+
+
+def named(model, kind: str, joint: int | None):
+    """(candidate, estimate) of ``kind`` on ``joint`` among the kept library findings or their alternatives."""
+    for f in model.effects_:
+        for c, th in [(f.candidate, f.theta), *f.alternatives]:
+            if c.source == "library" and c.effect == kind and c.joint == joint:
+                return c, c.value(th)
+    return None

@@ -10,7 +10,7 @@ import zlib
 
 import numpy as np
 import pytest
-from hidden_logs import PAYLOAD_KG, edited_model, simulate, write_rtde, write_sim
+from hidden_logs import PAYLOAD_KG, edited_model, named, simulate, write_rtde, write_sim
 
 from ur5fault import make_effect
 from ur5fault.axes import JOINT_NAMES
@@ -98,14 +98,6 @@ def test_heavier_link_outside_the_library_is_discovered(tmp_path):
         assert model.rms_after_["current_A"][jn] < 0.5 * model.rms_before_["current_A"][jn]
 
 
-def _library_estimate(model, kind, joint):
-    for f in model.effects_:
-        for c, th in [(f.candidate, f.theta), *f.alternatives]:
-            if c.source == "library" and c.effect == kind and c.joint == joint:
-                return c, c.value(th)
-    return None
-
-
 @pytest.mark.slow
 def test_library_finding_survives_a_heavier_link_on_the_same_joint(tmp_path):
     """The issue's real-log failure: a 12 % current-sensor gain on shoulder_lift where the model is
@@ -113,7 +105,7 @@ def test_library_finding_survives_a_heavier_link_on_the_same_joint(tmp_path):
     path = edited_model(tmp_path, 'mass="2.33"', 'mass="3.495"')
     res = simulate([make_effect("current_sensor_gain", "shoulder_lift", gain=1.12)], seed=4321, model_path=path)
     model = DiscrepancyModel(jobs=JOBS).fit(read_sim(write_sim(res, tmp_path / "m.parquet")))
-    hit = _library_estimate(model, "current_sensor_gain", 1)
+    hit = named(model, "current_sensor_gain", 1)
     assert hit, [sentence(f) for f in model.findings_]
     assert abs(hit[1] - 1.12) <= 0.25 * 0.12, hit
 
@@ -125,7 +117,7 @@ def test_library_finding_survives_a_different_friction_law_on_the_same_joint(tmp
     hump = lambda q, qd: 1.5 * np.tanh(qd / 0.01) * np.exp(-abs(qd) / 0.05)  # noqa: E731
     res = simulate([make_effect("coulomb_friction", "shoulder_pan", scale=1.5)], seed=8765, joint=0, torque=hump)
     model = DiscrepancyModel(jobs=JOBS).fit(read_sim(write_sim(res, tmp_path / "m.parquet")))
-    hit = _library_estimate(model, "coulomb_friction", 0)
+    hit = named(model, "coulomb_friction", 0)
     assert hit, [sentence(f) for f in model.findings_]
     assert abs(hit[1] - 1.5) <= 0.25 * 0.5, hit
 

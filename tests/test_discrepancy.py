@@ -13,7 +13,7 @@ import zlib
 
 import numpy as np
 import pytest
-from hidden_logs import simulate, write_sim
+from hidden_logs import named, simulate, write_sim
 
 from ur5fault import make_effect
 from ur5fault.axes import JOINT_NAMES
@@ -65,15 +65,6 @@ def noise_seed(kind: str) -> int:
 
 def fit(path, **kw):
     return DiscrepancyModel(jobs=JOBS, **kw).fit(read_sim(path))
-
-
-def named(model, kind, joint):
-    """(candidate, estimate) of ``kind`` on ``joint`` among the kept library findings or their alternatives."""
-    for f in model.effects_:
-        for c, th in [(f.candidate, f.theta), *f.alternatives]:
-            if c.source == "library" and c.effect == kind and c.joint == joint:
-                return c, c.value(th)
-    return None
 
 
 @pytest.mark.slow

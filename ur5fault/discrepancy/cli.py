@@ -6,15 +6,14 @@ import argparse
 import os
 from pathlib import Path
 
+from ..logs.options import add_log_options
+
 
 def register(sub) -> None:
     d = sub.add_parser("discrepancy", help="find, name and fix where the model and a measured log disagree")
-    d.add_argument("log", help="measured log file")
-    d.add_argument("--format", required=True, choices=("rtde", "nist", "sim"), dest="fmt")
+    add_log_options(d, ("rtde", "nist", "sim"))
     d.add_argument("--model", help="model overlay YAML to start from (e.g. an earlier model.yaml)")
     d.add_argument("--out", required=True, help="output folder (report.md, model.yaml, summary.json)")
-    d.add_argument("--payload-kg", type=float, help="payload held during the log (rtde: required if any)")
-    d.add_argument("--tcp-offset-m", type=float, nargs=3, help="tool offset in the flange frame [m] (rtde)")
     d.add_argument("--fit-fraction", type=float, default=0.6, help="share of the log used for fitting (0.2..0.9)")
     d.add_argument("--max-effects", type=int, default=3, help="most effects of the library named (default 3)")
     d.add_argument("--max-terms", type=int, default=4,
@@ -27,7 +26,7 @@ def register(sub) -> None:
 def cmd_discrepancy(args: argparse.Namespace) -> int:
     from ..config import Overlay
     from ..io import check_writable
-    from ..logs import read_log
+    from ..logs.options import read_log_option
     from .model import DiscrepancyModel
     from .report import summary, write_report
 
@@ -36,13 +35,7 @@ def cmd_discrepancy(args: argparse.Namespace) -> int:
     model = DiscrepancyModel(fit_fraction=args.fit_fraction, max_effects=args.max_effects,
                              max_terms=args.max_terms, jobs=jobs, progress=not args.quiet)
     check_writable(args.out, folder=True)
-    kwargs = {}
-    if args.fmt == "rtde":
-        if args.payload_kg is not None:
-            kwargs["payload_kg"] = args.payload_kg
-        if args.tcp_offset_m is not None:
-            kwargs["tcp_offset_m"] = tuple(args.tcp_offset_m)
-    log = read_log(args.log, args.fmt, **kwargs)
+    log = read_log_option(args)
     overlay = Overlay.load(args.model) if args.model else None
     model.fit(log, dict(overlay.params) if overlay else None, overlay.effects if overlay else ())
     paths = write_report(model, Path(args.out))

@@ -6,15 +6,14 @@ import argparse
 import sys
 from pathlib import Path
 
+from ..logs.options import add_log_options
+
 
 def register(sub) -> None:
     d = sub.add_parser("identify", help="re-derive the measured drive parameters from a log (parameter overlay)")
-    d.add_argument("log", help="measured log file")
-    d.add_argument("--format", required=True, choices=("nist", "rtde"), dest="fmt")
+    add_log_options(d, ("nist", "rtde"))
     d.add_argument("--out", required=True, help="parameter overlay YAML to write (accepted by --model)")
     d.add_argument("--json", help="also write every estimate with its interval as JSON")
-    d.add_argument("--payload-kg", type=float, help="payload held during the log (rtde)")
-    d.add_argument("--tcp-offset-m", type=float, nargs=3, help="tool offset in the flange frame [m] (rtde)")
     d.add_argument("--no-sweep", action="store_true",
                    help="skip the position-loop bandwidth sweep (it replays the log once per candidate)")
     d.add_argument("--sweep-window-s", type=float, default=32.0,
@@ -27,7 +26,7 @@ def register(sub) -> None:
 def cmd_identify(args: argparse.Namespace) -> int:
     from ..errors import ParameterError
     from ..io import write_json_atomic, write_text_atomic
-    from ..logs import read_log
+    from ..logs.options import read_log_option
     from ..params import load_params
     from . import identify
 
@@ -35,13 +34,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
         raise ParameterError(f"--bootstrap = {args.bootstrap} must be at least 20")
     if args.sweep_window_s <= 0:
         raise ParameterError(f"--sweep-window-s = {args.sweep_window_s} must be a positive number of seconds")
-    kwargs = {}
-    if args.fmt == "rtde":
-        if args.payload_kg is not None:
-            kwargs["payload_kg"] = args.payload_kg
-        if args.tcp_offset_m is not None:
-            kwargs["tcp_offset_m"] = tuple(args.tcp_offset_m)
-    log = read_log(args.log, args.fmt, **kwargs)
+    log = read_log_option(args)
     say = None if args.quiet else (lambda msg: print(f"identify: {msg}...", file=sys.stderr, flush=True))
     params = load_params()
     result = identify(log, params, sweep=not args.no_sweep, sweep_window_s=args.sweep_window_s,
