@@ -22,8 +22,8 @@ import mujoco
 import pandas as pd
 
 from ur5fault.config import parse_trajectory
-from ur5fault.engine import DEFAULT_MODEL_PATH
-from ur5fault.params import load_params
+from ur5fault.sim.engine import DEFAULT_MODEL_PATH
+from ur5fault.sim.params import load_params
 
 BARE_STEPS = 40_000
 

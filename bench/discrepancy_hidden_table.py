@@ -21,10 +21,10 @@ from hidden_logs import edited_model, named, simulate, write_sim  # noqa: E402
 from test_discrepancy import CONDITIONS, KINDS, draw, noise_seed  # noqa: E402
 
 from ur5fault import make_effect  # noqa: E402
-from ur5fault.axes import JOINT_NAMES  # noqa: E402
 from ur5fault.discrepancy import DiscrepancyModel  # noqa: E402
 from ur5fault.discrepancy.report import size  # noqa: E402
 from ur5fault.logs import read_sim  # noqa: E402
+from ur5fault.sim.axes import JOINT_NAMES  # noqa: E402
 
 JOBS = 2
 

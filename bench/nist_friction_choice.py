@@ -20,7 +20,7 @@ import numpy as np
 
 from ur5fault.identify.friction_choice import replay
 from ur5fault.logs import read_nist
-from ur5fault.params import load_params
+from ur5fault.sim.params import load_params
 
 NIST_LOG = Path(__file__).resolve().parents[2] / "shared" / "data" / "nist-ur5" / \
     "ur5testresult_halfspeed_payload1.6lb_1.csv.gz"

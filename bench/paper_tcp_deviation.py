@@ -16,7 +16,7 @@ import json
 import numpy as np
 
 from ur5fault import JOINT_NAMES, RunSpec, Simulator, make_effect, pick_and_place
-from ur5fault.params import load_params
+from ur5fault.sim.params import load_params
 
 PAPER_THRESHOLD_MM = 0.5
 

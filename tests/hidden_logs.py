@@ -19,9 +19,9 @@ import pyarrow.parquet as pq
 
 from ur5fault import RunSpec, Simulator
 from ur5fault.discrepancy import WORKFLOW_SEED
-from ur5fault.effects import EffectSpec
-from ur5fault.engine import DEFAULT_MODEL_PATH
-from ur5fault.trajectory import joint_sweep
+from ur5fault.sim.effects import EffectSpec
+from ur5fault.sim.engine import DEFAULT_MODEL_PATH
+from ur5fault.sim.trajectories import joint_sweep
 
 #: the payload the 'user' declares (and the log holds)
 PAYLOAD_KG = 1.0

@@ -99,6 +99,6 @@ def test_verbose_logs_through_logging(tmp_path, where):
     args = ["simulate", "--duration-s", "0.02", "--out", str(tmp_path / "r.parquet"), "--quiet"]
     r = run(*(["-v", *args] if where == "before" else [*args, "-v"]))
     assert r.returncode == 0, r.stderr
-    assert "ur5fault: INFO: ur5fault.engine: simulating 1 run(s) x 400 physics steps" in r.stderr
+    assert "ur5fault: INFO: ur5fault.sim.engine: simulating 1 run(s) x 400 physics steps" in r.stderr
     quiet = run(*args)
     assert quiet.returncode == 0 and "INFO" not in quiet.stderr

@@ -311,7 +311,7 @@ def test_jobs_above_cores_capped_with_a_note():
 def test_yaml_1_1_numbers_mean_what_they_say(tmp_path):
     """The strict loader reads 1e9 / 6.7e4 as floats (PyYAML: strings) and 010 as ten."""
     from ur5fault.campaign import load_campaign
-    from ur5fault.yamlsafe import loads
+    from ur5fault.util.yamlsafe import loads
 
     assert loads("a: [1e9, 6.7e4, -1E3, 1.5e-3, 010, 0x10, 1:30]") == {
         "a": [1e9, 67000.0, -1000.0, 0.0015, 10, 16, "1:30"]}
@@ -326,7 +326,7 @@ def test_packaged_parameters_load_as_before():
     conversion gave (6.7e4 etc. were strings converted later)."""
     import yaml
 
-    from ur5fault.params import DEFAULT_PARAMS_PATH, RobotParams, load_params
+    from ur5fault.sim.params import DEFAULT_PARAMS_PATH, RobotParams, load_params
 
     def floats(x):
         if isinstance(x, dict):
@@ -401,7 +401,7 @@ def _alive(pid: int) -> bool:
 
 
 def test_files_are_group_readable(tmp_path):
-    from ur5fault.io import write_json_atomic, write_parquet_atomic
+    from ur5fault.util.io import write_json_atomic, write_parquet_atomic
 
     old = os.umask(0o077)  # even under a strict umask, outputs are 0644 as the docs say
     try:

@@ -56,7 +56,7 @@ def test_wheel_carries_model_and_data(wheel):
     names = set(zipfile.ZipFile(wheel).namelist())
     for path in PACKAGE_DATA:
         assert path in names, path
-    assert "ur5fault/drive/kernel.py" in names and "ur5fault/campaign/spec.py" in names
+    assert "ur5fault/sim/drive/kernel.py" in names and "ur5fault/campaign/spec.py" in names
     assert not [n for n in names if n.startswith(("tests/", "bench/", "campaigns/"))]
 
 
@@ -72,7 +72,7 @@ def test_installed_wheel_simulates_from_another_folder(wheel, tmp_path):
     work = tmp_path / "elsewhere"
     work.mkdir()
 
-    where = _sh(py, "-c", "import ur5fault.engine as e; print(e.__file__); print(e.DEFAULT_MODEL_PATH)", cwd=work,
+    where = _sh(py, "-c", "import ur5fault.sim.engine as e; print(e.__file__); print(e.DEFAULT_MODEL_PATH)", cwd=work,
                 env=env).stdout.split()
     assert all(Path(p).is_relative_to(site) for p in where), where  # the installed copy, its packaged MJCF
 

@@ -5,12 +5,12 @@ MuJoCo holds the multibody; per-step vectorised Python runs every joint's drive 
 friction with temperature, sensors).  See README.md.
 """
 
-from .axes import JOINT_NAMES, N_JOINTS
-from .effects import REGISTRY, make_effect
-from .engine import RunSpec, Simulator, Status
-from .params import RobotParams, load_params
-from .result import SimResult
-from .trajectory import Trajectory, get_trajectory, pick_and_place
+from .sim.axes import JOINT_NAMES, N_JOINTS
+from .sim.effects import REGISTRY, make_effect
+from .sim.engine import RunSpec, Simulator, Status
+from .sim.params import RobotParams, load_params
+from .sim.result import SimResult
+from .sim.trajectories import Trajectory, get_trajectory, pick_and_place
 
 __all__ = [
     "JOINT_NAMES", "N_JOINTS", "REGISTRY", "make_effect", "RunSpec", "Simulator", "Status", "RobotParams",

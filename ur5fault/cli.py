@@ -16,17 +16,17 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
-from . import progress
 from .errors import Ur5FaultError
+from .util import progress
 
 EXIT_USAGE = 2
 
 
 def cmd_simulate(args: argparse.Namespace) -> int:
     from .config import Overlay, build_run_config
-    from .engine import RunSpec, Simulator
-    from .io import check_writable
-    from .params import read_yaml
+    from .sim.engine import RunSpec, Simulator
+    from .sim.params import read_yaml
+    from .util.io import check_writable
 
     data = read_yaml(Path(args.config)) if args.config else {}
     where = Path(args.config).name if args.config else "command line"
@@ -81,7 +81,7 @@ def _parse_effect_arg(spec: str) -> dict:
 
 
 def cmd_effects(args: argparse.Namespace) -> int:
-    from .effects import REGISTRY
+    from .sim.effects import REGISTRY
 
     for e in REGISTRY.values():
         ps = ", ".join(f"{p.name} [{p.lo:g}..{p.hi:g}]" + (f" absent={p.absent:g}" if p.absent is not None else "")
@@ -189,9 +189,9 @@ def build_parser() -> argparse.ArgumentParser:
 def _add_optional_commands(sub) -> None:
     """The campaign and discrepancy command groups (imported directly: a broken module is an error,
     not a silently missing command)."""
-    from .benchmark import cli as benchmark_cli
     from .campaign import cli as campaign_cli
     from .discrepancy import cli as discrepancy_cli
+    from .health.diagnostics import cli as benchmark_cli
     from .identify import cli as identify_cli
 
     campaign_cli.register(sub)

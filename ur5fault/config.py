@@ -25,12 +25,12 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from .budget import MAX_DURATION_S, check_memory, sim_bytes
-from .checks import check_int, check_number, short
-from .effects import REGISTRY, EffectSpec, make_effect
 from .errors import ParameterError, UnknownNameError
-from .params import RobotParams, deep_merge, load_params, read_yaml
-from .trajectory import TRAJECTORIES, Trajectory, get_trajectory
+from .sim.budget import MAX_DURATION_S, check_memory, sim_bytes
+from .sim.effects import REGISTRY, EffectSpec, make_effect
+from .sim.params import RobotParams, deep_merge, load_params, read_yaml
+from .sim.trajectories import TRAJECTORIES, Trajectory, get_trajectory
+from .util.checks import check_int, check_number, short
 
 #: largest noise seed (a Parquet int64 column holds it)
 MAX_SEED = 2**63 - 1

@@ -38,8 +38,8 @@ def register(sub) -> None:
 
 
 def cmd_run(args: argparse.Namespace) -> int:
-    from ..checks import check_number
     from ..errors import ParameterError
+    from ..util.checks import check_number
     from . import acceptable_backlash, load_campaign, run_campaign, tcp_table
     from .limits import confirmation_needed, effective_jobs, estimate
     from .spec import MAX_THRESHOLD_MM

@@ -26,9 +26,9 @@ import numpy as np
 
 from ..config import parse_trajectory
 from ..errors import ParameterError
-from ..io import check_writable, write_json_atomic, write_parquet_atomic
-from ..params import load_params
-from ..progress import campaign_progress
+from ..sim.params import load_params
+from ..util.io import check_writable, write_json_atomic, write_parquet_atomic
+from ..util.progress import campaign_progress
 from .identity import Identities
 from .identity import run_effects as _effects_of
 from .labels import assign_splits, refresh_splits, row_labels
@@ -78,8 +78,8 @@ def run_batch(camp: Campaign, batch: Sequence[CampaignRun], ts_dir: str | None,
         identities: run_id -> run identity, recorded in the time-series files.
         parent_pid: the campaign process, for loky workers: a worker exits when it dies.
     """
-    from ..engine import RunSpec, Simulator
-    from ..features import FEATURE_UNITS, run_features
+    from ..health.features import FEATURE_UNITS, run_features
+    from ..sim.engine import RunSpec, Simulator
 
     _exit_with_parent(parent_pid)
 

@@ -22,10 +22,10 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-from ..checks import short
 from ..config import parse_trajectory
-from ..effects import EffectSpec, make_effect
-from ..params import load_params
+from ..sim.effects import EffectSpec, make_effect
+from ..sim.params import load_params
+from ..util.checks import short
 from .spec import Campaign, CampaignRun
 
 IDENTITY_FORMAT = 1
@@ -72,7 +72,7 @@ class Identities:
         import mujoco
 
         from .. import __version__
-        from ..engine import DEFAULT_MODEL_PATH
+        from ..sim.engine import DEFAULT_MODEL_PATH
 
         self.camp = camp
         model = Path(DEFAULT_MODEL_PATH)

@@ -33,8 +33,8 @@ from typing import Any
 
 import numpy as np
 
-from ..effects import REGISTRY, EffectSpec
 from ..errors import ParameterError, UnknownNameError
+from ..sim.effects import REGISTRY, EffectSpec
 
 SPLIT_KEYS = ("by", "test_fraction", "seed")
 #: group keys of the split: the trajectory's seed option (runs on a fixed trajectory are grouped by its

@@ -3,7 +3,7 @@
 Hard limits refuse a campaign outright (memory beyond what the machine has, more than
 :data:`MAX_RUN_STEPS` physics steps); a large campaign (more than :data:`CONFIRM_RUNS` runs or
 :data:`CONFIRM_RUN_STEPS` steps) needs ``--yes`` on the command line.  Where the per-step and
-per-sample figures come from: :mod:`ur5fault.budget`.
+per-sample figures come from: :mod:`ur5fault.sim.budget`.
 """
 
 from __future__ import annotations
@@ -11,10 +11,10 @@ from __future__ import annotations
 import dataclasses
 import os
 
-from ..budget import check_memory, core_hours, fmt_bytes, sim_bytes
 from ..config import parse_trajectory
 from ..errors import ParameterError
-from ..params import load_params
+from ..sim.budget import check_memory, core_hours, fmt_bytes, sim_bytes
+from ..sim.params import load_params
 from .spec import Campaign, trajectory_specs
 
 #: assumption: above a thousand runs or 2e9 physics steps (~2.4 core-hours at 4.3 us per

@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-from ..params import load_params
+from ..sim.params import load_params
 from .identity import Identities, file_sha256
 from .spec import Campaign
 
@@ -23,9 +23,9 @@ def build_manifest(camp: Campaign, ids: Identities, features, state: str, backen
     import mujoco
 
     from .. import __version__
-    from ..engine import DEFAULT_MODEL_PATH
-    from ..features import FEATURE_UNITS
-    from ..provenance import dependency_versions, git_revision
+    from ..health.features import FEATURE_UNITS
+    from ..sim.engine import DEFAULT_MODEL_PATH
+    from ..util.provenance import dependency_versions, git_revision
     from .identity import digest
 
     p = load_params(overrides=dict(camp.base_params))

@@ -15,9 +15,9 @@ from typing import Any
 
 import pandas as pd
 
-from .. import yamlsafe
-from ..effects import REGISTRY
 from ..errors import ConfigFileError, UnknownNameError
+from ..sim.effects import REGISTRY
+from ..util import yamlsafe
 from .summary import EffectSweep, acceptable_backlash, effect_sweep, severity_table, swept_effects, tcp_table
 
 _log = logging.getLogger(__name__)
@@ -115,7 +115,7 @@ class CampaignResult:
 
     def _resimulate(self, run_ids: list[str]) -> dict[str, pd.DataFrame]:
         from .. import __version__
-        from ..engine import DEFAULT_MODEL_PATH
+        from ..sim.engine import DEFAULT_MODEL_PATH
         from .execute import plan_batches, run_batch
         from .identity import file_sha256
         from .spec import build_campaign

@@ -51,10 +51,10 @@ from typing import Any
 
 import numpy as np
 
-from ..axes import joint_index
 from ..config import parse_trajectory
-from ..effects import REGISTRY, EffectParam, make_effect
 from ..errors import ParameterError, UnknownNameError, Ur5FaultError
+from ..sim.axes import joint_index
+from ..sim.effects import REGISTRY, EffectParam, make_effect
 from .labels import SIZE_PARAM
 
 SAMPLE_KEYS = ("n", "method", "seed", "twins", "joints", "faults", "conditions")

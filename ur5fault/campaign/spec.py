@@ -38,8 +38,6 @@ from typing import Any
 
 import yaml
 
-from ..axes import joint_index
-from ..checks import check_bool, check_int, check_number, check_text, short
 from ..config import (
     Overlay,
     check_duration,
@@ -50,9 +48,11 @@ from ..config import (
     parse_effects,
     parse_trajectory,
 )
-from ..effects import REGISTRY, EffectSpec, make_effect
 from ..errors import ParameterError, UnknownNameError
-from ..params import deep_merge, load_params, read_yaml
+from ..sim.axes import joint_index
+from ..sim.effects import REGISTRY, EffectSpec, make_effect
+from ..sim.params import deep_merge, load_params, read_yaml
+from ..util.checks import check_bool, check_int, check_number, check_text, short
 from .labels import SplitRule, parse_split
 from .sampling import sample_runs
 

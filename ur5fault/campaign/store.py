@@ -23,16 +23,16 @@ from typing import Any
 
 import pandas as pd
 
-from ..effects import REGISTRY
 from ..errors import ConfigFileError, Ur5FaultError
-from ..features import FEATURE_UNITS
-from ..io import OutputError, write_parquet_atomic
+from ..health.features import FEATURE_UNITS
+from ..sim.effects import REGISTRY
+from ..util.io import OutputError, write_parquet_atomic
 from .identity import digest, first_difference
 
 META_KEY = b"ur5fault"
 #: columns every per-run file has (the feature table's schema; others may be added)
 REQUIRED_COLUMNS = ("run_id", "status", "twin_run_id", *FEATURE_UNITS)
-#: units of the run-description columns (features: :data:`ur5fault.features.FEATURE_UNITS`)
+#: units of the run-description columns (features: :data:`ur5fault.health.features.FEATURE_UNITS`)
 COLUMN_UNITS = {
     "run_id": "-", "fault_joint": "-", "fault": "-", "backlash_deg": "deg", "seed": "-", "payload_kg": "kg",
     "temperature_C": "degC", "trajectory": "-", "backlash_deg_swept": "deg", "twin_run_id": "-", "status": "-",

@@ -16,9 +16,9 @@ from collections.abc import Sequence
 import numpy as np
 import pandas as pd
 
-from ..axes import JOINT_NAMES, N_JOINTS
-from ..effects import REGISTRY
 from ..errors import UnknownNameError
+from ..sim.axes import JOINT_NAMES, N_JOINTS
+from ..sim.effects import REGISTRY
 
 HEALTHY = "healthy"
 

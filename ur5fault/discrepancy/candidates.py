@@ -15,8 +15,8 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import NDArray
 
-from ..axes import JOINT_NAMES
-from ..effects import REGISTRY, EffectSpec, make_effect
+from ..sim.axes import JOINT_NAMES
+from ..sim.effects import REGISTRY, EffectSpec, make_effect
 
 
 def _identity(x: float) -> float:

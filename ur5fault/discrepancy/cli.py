@@ -25,8 +25,8 @@ def register(sub) -> None:
 
 def cmd_discrepancy(args: argparse.Namespace) -> int:
     from ..config import Overlay
-    from ..io import check_writable
     from ..logs.options import read_log_option
+    from ..util.io import check_writable
     from .model import DiscrepancyModel
     from .report import summary, write_report
 

@@ -24,10 +24,10 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
-from ..axes import N_JOINTS
-from ..engine import Simulator
-from ..multibody import payload_inertia
-from ..terms import coulomb, harmonic, last_motion_sign, quadratic, rest_weight, stribeck
+from ..sim.axes import N_JOINTS
+from ..sim.engine import Simulator
+from ..sim.multibody import payload_inertia
+from ..sim.terms import coulomb, harmonic, last_motion_sign, quadratic, rest_weight, stribeck
 from .candidates import TermCandidate
 from .replay import Replay, Replayed
 

@@ -9,8 +9,8 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-from ..axes import N_JOINTS
-from ..effects import EffectSpec
+from ..sim.axes import N_JOINTS
+from ..sim.effects import EffectSpec
 from .candidates import Candidate
 from .refinement import FindingSet, Refined
 from .search import Verdict, backward, columns_of, forward, judge

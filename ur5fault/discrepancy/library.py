@@ -15,9 +15,9 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-from ..axes import N_JOINTS
-from ..effects import REGISTRY, EffectSpec, make_effect
-from ..params import RobotParams, load_params
+from ..sim.axes import N_JOINTS
+from ..sim.effects import REGISTRY, EffectSpec, make_effect
+from ..sim.params import RobotParams, load_params
 from .candidates import LibraryCandidate
 from .replay import Replay, Replayed
 

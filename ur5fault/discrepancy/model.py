@@ -22,10 +22,10 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-from ..axes import JOINT_NAMES, N_JOINTS
-from ..effects import EffectSpec
 from ..errors import ParameterError
 from ..logs import MeasuredLog
+from ..sim.axes import JOINT_NAMES, N_JOINTS
+from ..sim.effects import EffectSpec
 from . import discovery, library
 from .candidates import Candidate
 from .judging import Finding, SearchStep, final_verdicts, judge_findings
@@ -56,7 +56,7 @@ def bare_mj_step_us(dt_s: float) -> float:
     around it beyond this one)."""
     import mujoco
 
-    from ..engine import DEFAULT_MODEL_PATH
+    from ..sim.engine import DEFAULT_MODEL_PATH
 
     m = mujoco.MjModel.from_xml_path(str(DEFAULT_MODEL_PATH))
     m.opt.timestep = dt_s
@@ -68,12 +68,12 @@ def bare_mj_step_us(dt_s: float) -> float:
 
 
 class _Stages:
-    """Progress of the workflow on one tqdm bar (``ur5fault.progress``): one unit per stage."""
+    """Progress of the workflow on one tqdm bar (``ur5fault.util.progress``): one unit per stage."""
 
     NAMES = ("screening the library", "discovering terms", "refining the findings", "judging")
 
     def __init__(self, enabled: bool) -> None:
-        from .. import progress
+        from ..util import progress
 
         self.bar = progress.bar(len(self.NAMES), "discrepancy", "stage", enabled=enabled,
                                 bar_format="{desc}: {percentage:3.0f}%|{bar}| {elapsed}<{remaining}")

@@ -12,7 +12,7 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-from ..effects import EffectSpec
+from ..sim.effects import EffectSpec
 from .candidates import Candidate
 from .replay import Replay, Replayed
 from .statistics import weighted

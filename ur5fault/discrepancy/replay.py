@@ -17,12 +17,12 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-from ..effects import EffectSpec
-from ..engine import RunSpec, Simulator
 from ..errors import ParameterError
 from ..logs import MeasuredLog
-from ..params import RobotParams, deep_merge, load_params
-from ..terms import sensor_temperature_term
+from ..sim.effects import EffectSpec
+from ..sim.engine import RunSpec, Simulator
+from ..sim.params import RobotParams, deep_merge, load_params
+from ..sim.terms import sensor_temperature_term
 
 #: the workflow's own sensor-noise stream, unrelated to any log
 WORKFLOW_SEED = 20261121

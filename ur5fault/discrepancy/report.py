@@ -11,10 +11,10 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ..axes import JOINT_NAMES, N_JOINTS
-from ..effects import REGISTRY
-from ..io import write_text_atomic
 from ..logs import MeasuredLog
+from ..sim.axes import JOINT_NAMES, N_JOINTS
+from ..sim.effects import REGISTRY
+from ..util.io import write_text_atomic
 from .candidates import LibraryCandidate, TermCandidate
 from .replay import Replay
 from .statistics import Z_95

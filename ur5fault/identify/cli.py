@@ -25,9 +25,9 @@ def register(sub) -> None:
 
 def cmd_identify(args: argparse.Namespace) -> int:
     from ..errors import ParameterError
-    from ..io import write_json_atomic, write_text_atomic
     from ..logs.options import read_log_option
-    from ..params import load_params
+    from ..sim.params import load_params
+    from ..util.io import write_json_atomic, write_text_atomic
     from . import identify
 
     if args.bootstrap < 20:

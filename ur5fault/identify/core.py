@@ -15,9 +15,9 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from ..axes import N_JOINTS
 from ..logs import MeasuredLog
-from ..params import RobotParams, load_params
+from ..sim.axes import N_JOINTS
+from ..sim.params import RobotParams, load_params
 from . import friction, loop, motor, sensors, stickslip, urmodel
 from .report import Identification, overlay_params
 from .signals import derive
@@ -41,7 +41,7 @@ def identify(log: MeasuredLog, params: RobotParams | None = None, *, model_path:
         seed: seed of the resampling (results are reproducible).
         progress: called with a one-line message before each slow step.
     """
-    from ..engine import DEFAULT_MODEL_PATH
+    from ..sim.engine import DEFAULT_MODEL_PATH
 
     p = params if params is not None else load_params()
     say = progress or (lambda _msg: None)

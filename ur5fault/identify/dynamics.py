@@ -4,7 +4,7 @@ The joint torque the drives must deliver for the logged motion (gravity, Corioli
 inertia of the links and of the log's payload) is what a friction or torque-constant
 regression must remove first: on the shoulder and elbow gravity is ten times the friction.
 The model is the one the simulator steps (``ur5fault/models/ur5.xml``), with the payload
-body set up exactly as :mod:`ur5fault.multibody` does (mass at the TCP, a solid cube's
+body set up exactly as :mod:`ur5fault.sim.multibody` does (mass at the TCP, a solid cube's
 inertia), so an identified parameter means the same thing in a simulation.
 """
 
@@ -16,7 +16,7 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
-from ..multibody import payload_inertia
+from ..sim.multibody import payload_inertia
 
 
 def payload_model(model_path: str | Path, payload_kg: float, tcp_offset_m) -> mujoco.MjModel:

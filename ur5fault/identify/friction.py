@@ -31,7 +31,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from ..params import RobotParams
+from ..sim.params import RobotParams
 from . import motor
 from .signals import LogSignals
 

@@ -5,7 +5,7 @@ the measured one (RMS of the difference over the held-out last 40 %, at rest, ne
 Decided this way (``data/ur5_drive.yaml``, tagged [nist]): the friction law (``friction.model``), the
 motor-side share of friction (``friction.motor_side_share``) and the presliding stiffness
 (``friction.presliding_stiffness_Nm_per_rad``, as a multiple of the default).  ``bench/nist_friction_choice.py``
-prints the full tables; ``tests/test_friction_choice.py`` re-derives the choices.
+prints the full tables; ``tests/identify/test_friction_choice.py`` re-derives the choices.
 """
 
 from __future__ import annotations
@@ -15,10 +15,10 @@ from typing import Any
 
 import numpy as np
 
-from ..effects import make_effect
-from ..engine import RunSpec, Simulator
 from ..logs import MeasuredLog
-from ..params import deep_merge, load_params
+from ..sim.effects import make_effect
+from ..sim.engine import RunSpec, Simulator
+from ..sim.params import deep_merge, load_params
 
 HELD_OUT_FROM = 0.6  # share of the log before the held-out part (the discrepancy workflow's default)
 REST_SPEED_RAD_S = 1e-3  # target speed below which a joint is at rest

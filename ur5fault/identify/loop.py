@@ -23,9 +23,9 @@ from collections.abc import Callable, Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-from ..engine import RunSpec, Simulator
 from ..logs import MeasuredLog
-from ..params import deep_merge, load_params
+from ..sim.engine import RunSpec, Simulator
+from ..sim.params import deep_merge, load_params
 from .signals import LogSignals
 from .stats import BLOCK_S, Estimate, block_indices, bootstrap, interval
 

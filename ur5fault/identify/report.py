@@ -17,8 +17,8 @@ import numpy as np
 import yaml
 from numpy.typing import NDArray
 
-from ..axes import N_JOINTS
-from ..params import FrictionParams, RobotParams
+from ..sim.axes import N_JOINTS
+from ..sim.params import FrictionParams, RobotParams
 from .stats import Estimate
 
 #: stick-slip parameters of issue 10 part A: written as soon as the friction parameters have the field

@@ -16,7 +16,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..logs import MeasuredLog
-from ..params import RobotParams
+from ..sim.params import RobotParams
 from .dynamics import inverse_dynamics_Nm, payload_model
 
 #: a target speed below this is "at rest" [rad/s] (the setpoints are exactly constant at rest)

@@ -8,7 +8,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import LogFormatError
-from ..trajectory import Trajectory
+from ..sim.trajectories import Trajectory
 
 
 @dataclasses.dataclass(frozen=True)

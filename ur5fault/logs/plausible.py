@@ -13,7 +13,7 @@ Limits and their reasons:
 - at least :data:`MIN_DURATION_S` seconds and :data:`MIN_SAMPLES` samples (the discrepancy
   workflow fits on a share of the log and judges on the rest; a 3-row log once produced a
   "finding" and NaN), and at most the run length a simulation may have
-  (:data:`ur5fault.budget.MAX_DURATION_S`);
+  (:data:`ur5fault.sim.budget.MAX_DURATION_S`);
 - exactly six joints;
 - units: where a log carries joint velocities, the time derivative of the positions (as declared,
   converted to radians) must agree with them; a factor of 180/pi = 57.3 either way is named as a
@@ -28,9 +28,9 @@ from collections.abc import Iterable, Mapping
 import numpy as np
 from numpy.typing import NDArray
 
-from ..axes import N_JOINTS
-from ..budget import MAX_DURATION_S
 from ..errors import LogFormatError
+from ..sim.axes import N_JOINTS
+from ..sim.budget import MAX_DURATION_S
 
 MIN_RATE_HZ = 10.0
 MAX_RATE_HZ = 10_000.0

@@ -21,16 +21,16 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from ..checks import check_number
-from ..effects import REGISTRY
 from ..errors import LogFormatError, UnknownNameError
+from ..sim.effects import REGISTRY
+from ..util.checks import check_number
 from . import plausible
 from .measured import MeasuredLog
 from .source import check_log_memory, read_columns, sniff
 
 #: sign of the reported motor current w.r.t. joint torque (all +1 in the NIST log, see above)
 UR_CURRENT_SIGN = np.array([1.0, 1.0, 1.0, 1.0, 1.0, 1.0])
-NIST_TOOL_OFFSET_M = (-0.001, -0.001, 0.1856)  # fitted on the NIST log (tests/test_nist_fk.py)
+NIST_TOOL_OFFSET_M = (-0.001, -0.001, 0.1856)  # fitted on the NIST log (tests/sim/test_nist_fk.py)
 NIST_PAYLOAD_KG = 0.726  # 1.6 lb, from the NIST run name
 
 

@@ -27,8 +27,8 @@ import numpy as np
 import pandas as pd
 from numpy.typing import NDArray
 
-from ..budget import MEMORY_FRACTION, available_memory_bytes, fmt_bytes
 from ..errors import LogFormatError
+from ..sim.budget import MEMORY_FRACTION, available_memory_bytes, fmt_bytes
 
 SNIFF_BYTES = 1 << 16
 CHUNK_ROWS = 100_000

@@ -15,9 +15,9 @@ import pandas as pd
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
-from ..axes import JOINT_NAMES
 from ..campaign.summary import effect_sweep, swept_effects
 from ..errors import ParameterError
+from ..sim.axes import JOINT_NAMES
 from ._figure import figure_and_axes
 
 if TYPE_CHECKING:  # pragma: no cover

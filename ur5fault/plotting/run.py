@@ -10,8 +10,8 @@ import pandas as pd
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
-from ..axes import JOINT_NAMES, N_JOINTS
 from ..errors import ParameterError
+from ..sim.axes import JOINT_NAMES, N_JOINTS
 from .paper import TCP_COLUMNS, tcp_deviation_mm
 
 #: panels of :func:`run_figure`, top to bottom

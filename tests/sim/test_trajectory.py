@@ -1,0 +1,186 @@
+"""The 2 kg pick-and-place and the random pick-and-place family: what the issues ask of them,
+checked on the model and on the independent DH reference."""
+
+
+import mujoco
+import numpy as np
+import pytest
+
+from ur5fault.sim.engine import DEFAULT_MODEL_PATH
+from ur5fault.sim.trajectories import CB3_SETPOINT_PERIOD_S, Trajectory, movej, pick_and_place
+
+
+@pytest.fixture(scope="module")
+def pnp():
+    return pick_and_place()
+
+
+def test_setpoints_at_controller_rate_and_payload_events(pnp):
+    assert pnp.setpoint_period_s == CB3_SETPOINT_PERIOD_S
+    assert pnp.default_payload_kg == 2.0
+    (t_grip, g1), (t_rel, g2) = pnp.payload_events
+    assert g1 and not g2 and 0 < t_grip < t_rel < pnp.duration_s
+    assert not pnp.gripped(np.array([0.0]))[0] and pnp.gripped(np.array([t_grip + 0.01]))[0]
+
+
+def test_speed_and_acceleration_within_ur_defaults(pnp):
+    qd = np.diff(pnp.q_set_rad, axis=0) / pnp.setpoint_period_s
+    qdd = np.diff(qd, axis=0) / pnp.setpoint_period_s
+    assert np.abs(qd).max() <= 1.047 + 1e-6
+    assert np.abs(qdd).max() <= 1.396 * 1.05  # a sample straddling a phase change
+
+
+def _move_directions(q, j):
+    d = np.sign(np.round(np.diff(q[:, j]), 9))
+    d = d[d != 0]
+    return d
+
+
+@pytest.mark.parametrize("j", [0, 1, 2])
+def test_velocity_reversals_on_first_three_joints(pnp, j):
+    d = _move_directions(pnp.q_set_rad, j)
+    assert np.sum(d[1:] != d[:-1]) >= 1
+
+
+def test_gravity_torque_changes_sign_on_shoulder_and_elbow(pnp):
+    m = mujoco.MjModel.from_xml_path(str(DEFAULT_MODEL_PATH))
+    d = mujoco.MjData(m)
+    grav = []
+    for q in pnp.q_set_rad[::10]:
+        d.qpos[:] = q
+        mujoco.mj_forward(m, d)
+        grav.append(d.qfrc_bias.copy())
+    grav = np.array(grav)
+    for j in (1, 2):
+        assert grav[:, j].max() > 5 and grav[:, j].min() < -5, f"joint {j + 1} gravity torque keeps its sign"
+
+
+def test_tool_points_down_at_pick_and_place(pnp):
+    m = mujoco.MjModel.from_xml_path(str(DEFAULT_MODEL_PATH))
+    d = mujoco.MjData(m)
+    site = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SITE, "tcp")
+    from ur5fault.sim.trajectories import PICK, PLACE
+
+    for q in (PICK, PLACE):
+        d.qpos[:] = q
+        mujoco.mj_kinematics(m, d)
+        assert d.site_xmat[site].reshape(3, 3)[2, 2] < -0.999
+
+
+def test_movej_trapezoid_endpoints():
+    q = movej(np.zeros(6), np.full(6, 1.0), 1.0, 1.0, 0.008)
+    np.testing.assert_allclose(q[-1], 1.0)
+    assert np.all(np.diff(q[:, 0]) > 0)
+
+
+def test_interpolation_linear_with_slope():
+    tr = Trajectory("t", 0.01, np.array([[0.0] * 6, [1.0] * 6, [1.0] * 6]))
+    q, qd = tr.interpolate(np.array([0.005, 0.015, 0.5]))
+    np.testing.assert_allclose(q[:, 0], [0.5, 1.0, 1.0])
+    np.testing.assert_allclose(qd[:, 0], [100.0, 0.0, 0.0])
+
+
+# ----------------------------------------------------------------------------- random pick-and-place
+from ur5fault.config import parse_trajectory  # noqa: E402
+from ur5fault.errors import ParameterError  # noqa: E402
+from ur5fault.sim.trajectories import random_pnp  # noqa: E402
+from ur5fault.sim.trajectories.ik import TcpKinematics, down_rotation  # noqa: E402
+
+from reference_ur5 import dh_fk  # noqa: E402
+
+TCP_OFFSET_M = (0.0, 0.0, 0.15)  # the MJCF's tcp site, beyond the flange
+
+
+def tool_fk(q, offset_m):
+    """4x4 TCP pose from the DH reference: the flange pose moved by the tool offset."""
+    t = dh_fk(q).copy()
+    t[:3, 3] += t[:3, :3] @ np.asarray(offset_m)
+    return t
+RANDOM_SEEDS = range(12)
+
+
+@pytest.fixture(scope="module")
+def randoms():
+    return [random_pnp.random_pick_and_place(s) for s in RANDOM_SEEDS]
+
+
+def _grip_poses(tr):
+    """Setpoint at the grip and at the release event (the pick and the place pose)."""
+    k = [round(t / tr.setpoint_period_s) for t, _ in tr.payload_events]
+    return tr.q_set_rad[k[0]], tr.q_set_rad[k[1]]
+
+
+def test_random_family_is_reproducible_and_varied(randoms):
+    again = random_pnp.random_pick_and_place(3)
+    np.testing.assert_array_equal(again.q_set_rad, randoms[3].q_set_rad)
+    assert again.payload_events == randoms[3].payload_events
+    starts = np.array([tr.q_set_rad[0] for tr in randoms])
+    assert len({tuple(np.round(s, 6)) for s in starts}) == len(randoms)
+    assert all(4.0 < tr.duration_s < 12.0 for tr in randoms)
+
+
+def test_random_pick_and_place_in_campaign_syntax():
+    tr = parse_trajectory({"name": "random_pick_and_place", "seed": 5}, "t")
+    np.testing.assert_array_equal(tr.q_set_rad, random_pnp.random_pick_and_place(5).q_set_rad)
+    for bad in (-1, 1.5, True):
+        with pytest.raises(ParameterError, match="seed"):
+            random_pnp.random_pick_and_place(bad)
+
+
+def test_random_poses_point_down_inside_the_workspace(randoms):
+    """Checked on the independent DH reference (tests/reference_ur5.py), not on the MJCF the IK used."""
+    for tr in randoms:
+        pick, place = _grip_poses(tr)
+        for q in (pick, place):
+            t = tool_fk(q, TCP_OFFSET_M)
+            assert t[2, 2] < -0.9999, "tool not pointing down"
+            r, z = np.hypot(t[0, 3], t[1, 3]), t[2, 3]
+            assert random_pnp.REACH_RADIUS_M[0] - 1e-6 <= r <= random_pnp.REACH_RADIUS_M[1] + 1e-6
+            assert random_pnp.HEIGHT_M[0] - 1e-6 <= z <= random_pnp.HEIGHT_M[1] + 1e-6
+        a = np.arctan2(*tool_fk(pick, TCP_OFFSET_M)[1::-1, 3]) - np.arctan2(*tool_fk(place, TCP_OFFSET_M)[1::-1, 3])
+        a = abs((a + np.pi) % (2 * np.pi) - np.pi)
+        assert random_pnp.TRANSFER_ANGLE_RAD[0] - 1e-6 <= a <= random_pnp.TRANSFER_ANGLE_RAD[1] + 1e-6
+
+
+def test_random_motion_grips_low_and_carries_through_a_via_point(randoms):
+    for tr in randoms:
+        (t_grip, g1), (t_rel, g2) = tr.payload_events
+        assert g1 and not g2 and 0 < t_grip < t_rel < tr.duration_s
+        assert not tr.payload_gripped_at_start
+        z = np.array([tool_fk(q, TCP_OFFSET_M)[2, 3] for q in tr.q_set_rad[::5]])
+        pick, place = _grip_poses(tr)
+        z_pick, z_place = tool_fk(pick, TCP_OFFSET_M)[2, 3], tool_fk(place, TCP_OFFSET_M)[2, 3]
+        assert z[0] > z_pick + 0.039 and z[-1] > z_place + 0.039, "approach poses above pick and place"
+        assert z.max() >= max(z[0], z[-1]) - 1e-6, "via point at least as high as the approaches"
+        # moving segments: down | up, via, place approach, down | up (separated by the grip and release dwells);
+        # inside the middle one the arm stops (speed ~ a * dt) at the pick approach, the via point and the
+        # place approach
+        speed = np.abs(np.diff(tr.q_set_rad, axis=0)).max(axis=1) / tr.setpoint_period_s
+        moving = speed > 0
+        edges = np.diff(moving.astype(int))
+        starts, ends = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
+        assert len(starts) == len(ends) == 3
+        mid = speed[starts[1] + 1 : ends[1] + 1]
+        stops = [k for k in range(1, len(mid) - 1) if mid[k] < 0.05 and mid[k] <= mid[k - 1] and mid[k] <= mid[k + 1]]
+        assert len(stops) == 3
+
+
+def test_random_speed_and_acceleration_within_limits(randoms):
+    for tr in randoms:
+        qd = np.diff(tr.q_set_rad, axis=0) / tr.setpoint_period_s
+        qdd = np.diff(qd, axis=0) / tr.setpoint_period_s
+        assert np.abs(qd).max() <= random_pnp.SPEED_RAD_S[1] + 1e-6 <= np.pi
+        assert np.abs(qdd).max() <= random_pnp.ACCEL_RAD_S2[1] * 1.05  # a sample straddling a phase change
+
+
+def test_ik_reaches_poses_of_the_reference_kinematics():
+    """IK on the MJCF against forward kinematics typed in from UR's DH table (seeded poses)."""
+    kin = TcpKinematics.load()
+    rng = np.random.default_rng(11)
+    for _ in range(10):
+        q_true = random_pnp.SEED_POSTURE + rng.uniform(-0.4, 0.4, 6)
+        t = tool_fk(q_true, TCP_OFFSET_M)
+        q = kin.ik(t[:3, 3], t[:3, :3], q_true + rng.uniform(-0.1, 0.1, 6))
+        assert q is not None
+        np.testing.assert_allclose(tool_fk(q, TCP_OFFSET_M), t, atol=2e-6)
+    assert kin.ik(np.array([2.0, 0.0, 0.0]), down_rotation(0.0), random_pnp.SEED_POSTURE) is None  # out of reach

@@ -1,0 +1,93 @@
+"""The benchmark's data: a campaign's feature table split into train and test by its ``split``
+column, with the inputs a classifier may see.
+
+Inputs are the health features a real robot can compute from its own signals (both encoders and
+the motor current: ``track_err_*``, ``enc_mismatch_*``, ``current_*``) and two operating conditions
+the controller knows (the configured payload, the logged joint temperature).  Left out: the
+``tcp_*`` features (they need the true joint angles or the simulated healthy twin, which a robot
+does not have - and the twin exists only for some runs, so they would leak the label), every
+label column, and the nuisance a robot does not know (payload centre of mass, latency, the
+trajectory itself).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from ...errors import ConfigFileError
+from ..features import FEATURE_UNITS
+
+#: operating conditions a UR controller knows and logs, used as inputs beside the features
+CONTEXT_COLUMNS = ("payload_kg", "temperature_C")
+#: features that need the simulation's ground truth (true joint angles, healthy twin)
+SIM_ONLY_PREFIX = "tcp_"
+LABEL_COLUMNS = ("fault", "fault_joint", "fault_scope", "fault_size", "fault_size_unit", "split", "split_group")
+
+
+def input_columns(features: pd.DataFrame) -> list[str]:
+    """The classifier inputs present in ``features`` (see the module docstring)."""
+    cols = [c for c in FEATURE_UNITS if not c.startswith(SIM_ONLY_PREFIX) and c in features.columns]
+    return cols + [c for c in CONTEXT_COLUMNS if c in features.columns]
+
+
+def load_features(path: Path) -> pd.DataFrame:
+    """A campaign folder's (or a file's) feature table."""
+    p = path / "features.parquet" if path.is_dir() else path
+    if not p.exists():
+        raise ConfigFileError(f"{p}: no such feature table (run `ur5fault campaign run` first)")
+    return pd.read_parquet(p)
+
+
+@dataclasses.dataclass(frozen=True)
+class Dataset:
+    """Train and test rows of a campaign (status ``ok`` only).
+
+    Attributes:
+        train, test: the feature-table rows of each side.
+        inputs: classifier input columns.
+        n_dropped: rows left out because their run was not ``ok``, per fault kind.
+    """
+
+    train: pd.DataFrame
+    test: pd.DataFrame
+    inputs: tuple[str, ...]
+    n_dropped: dict[str, int]
+
+    def x(self, side: str) -> np.ndarray:
+        """Inputs of ``side`` (``"train"`` or ``"test"``), ``(n_rows, n_inputs)``."""
+        return getattr(self, side)[list(self.inputs)].to_numpy(dtype=float)
+
+
+def load_dataset(features: pd.DataFrame | str | Path) -> Dataset:
+    """Split a feature table (or a campaign folder / features.parquet path) into a :class:`Dataset`.
+
+    Raises:
+        ConfigFileError: no ``split`` column, one side empty, a group on both sides, or no healthy
+            or no faulty run in train or test.
+    """
+    if not isinstance(features, pd.DataFrame):
+        features = load_features(Path(features))
+    missing = [c for c in LABEL_COLUMNS + ("status",) if c not in features and c != "fault_size_unit"]
+    if missing:
+        raise ConfigFileError(f"feature table lacks {', '.join(missing)}: made before the label columns; "
+                              f"rerun the campaign into a new folder")
+    bad = features["status"] != "ok"
+    n_dropped = features.loc[bad, "fault"].value_counts().to_dict()
+    df = features[~bad]
+    both = set(df.loc[df["split"] == "train", "split_group"]) & set(df.loc[df["split"] == "test", "split_group"])
+    if both:
+        raise ConfigFileError(f"split groups on both sides: {', '.join(sorted(both)[:5])}")
+    train, test = df[df["split"] == "train"].reset_index(drop=True), df[df["split"] == "test"].reset_index(drop=True)
+    for name, side in (("train", train), ("test", test)):
+        healthy = (side["fault"] == "healthy").sum()
+        if healthy == 0 or healthy == len(side):
+            raise ConfigFileError(f"the {name} split needs healthy and faulty runs (has {len(side)} runs, "
+                                  f"{healthy} healthy); check the campaign's split and faults")
+    inputs = input_columns(df)
+    if not inputs:
+        raise ConfigFileError("feature table has no health-feature columns")
+    return Dataset(train, test, tuple(inputs), {str(k): int(v) for k, v in n_dropped.items()})

@@ -1,0 +1,128 @@
+"""The benchmark's files: ``metrics.json`` (every number), ``report.md`` (the headline tables)
+and the figures as PNG."""
+
+from __future__ import annotations
+
+import math
+import os
+from pathlib import Path
+from typing import Any
+
+from ...sim.axes import JOINT_NAMES
+from ...util.io import write_json_atomic, write_text_atomic
+
+
+def _f(v: Any, fmt: str = ".3f") -> str:
+    return "-" if v is None or (isinstance(v, float) and not math.isfinite(v)) else format(v, fmt)
+
+
+def markdown(m: dict[str, Any]) -> str:
+    """The report text from the metrics."""
+    d, det, loc, kind, bl = m["dataset"], m["detection"], m["localisation"], m["kind"], m["backlash"]
+    lines = [
+        f"# Diagnostics benchmark: {d['source']}",
+        "",
+        f"{d['n_train']} train and {d['n_test']} test runs ({d['n_groups_train']} and {d['n_groups_test']} "
+        f"split groups, by {d['split_by']}; no group on both sides); {sum(d['n_dropped_not_ok'].values())} runs "
+        f"left out (not ok). Inputs: {len(d['inputs'])} ({d['n_features']} health features from the robot's own "
+        f"signals and {', '.join(d['context'])}). Classifier: gradient-boosted trees, fixed hyper-parameters."
+        + (" **Control run: training labels shuffled.**" if m["shuffled_labels"] else ""),
+        "",
+        "## Detection (healthy vs faulty)",
+        f"ROC AUC over all faults: **{_f(det['auc_all'])}**; at {det['false_alarm_rate']:.0%} false alarms "
+        f"(measured {_f(det['false_alarm_rate_measured'])}) the detector flags {_f(det['detection_rate_all'])} "
+        f"of the faulty test runs.",
+        "",
+        "| fault kind | test runs | AUC (s.e.) | flagged at 5 % FA | AUC by size bin (size range, runs) |",
+        "| --- | --- | --- | --- | --- |",
+    ]
+    for k, v in det["per_kind"].items():
+        bins = "; ".join(f"{_f(b['auc'], '.2f')} ({b['size_lo']:.3g}-{b['size_hi']:.3g} {v['unit']}, {b['n_test']})"
+                         for b in v["by_size"])
+        lines.append(f"| {k} | {v['n_test']} | {_f(v['auc'])} ({_f(v['auc_se'], '.3f')}) | "
+                     f"{_f(v['detection_rate'], '.2f')} | {bins} |")
+    lines += [
+        "",
+        "## Localisation (which joint) and fault kind",
+        f"Joint accuracy over {loc['n_test']} single-joint-fault test runs: **{_f(loc['accuracy'])}** (chance "
+        f"{_f(loc.get('chance'))}); over the {loc.get('n_test_detected', 0)} the detector flags: "
+        f"**{_f(loc.get('accuracy_detected'))}**.",
+        "",
+        "| fault kind | test runs | joint accuracy | on flagged runs |",
+        "| --- | --- | --- | --- |",
+    ]
+    for k, v in loc.get("per_kind", {}).items():
+        lines.append(f"| {k} | {v['n_test']} | {_f(v['accuracy'], '.2f')} | {_f(v['accuracy_detected'], '.2f')} |")
+    lines += [
+        "",
+        f"Fault-kind accuracy ({len(kind.get('labels', []))} classes incl. healthy): **{_f(kind['accuracy'])}**, "
+        f"balanced {_f(kind.get('balanced_accuracy'))} (chance {_f(kind.get('chance_balanced'))}); on flagged "
+        f"faulty runs {_f(kind.get('accuracy_detected_faulty'))}. Confusion matrices: `confusion.png`.",
+        "",
+        "## Backlash: smallest alpha detected per joint",
+        f"alpha_90: {bl['detection_probability']:.0%} of the runs with that backlash flagged at "
+        f"{det['false_alarm_rate']:.0%} false alarms (logistic fit in log alpha, 90 % bootstrap interval; "
+        f"empirical: smallest tested alpha above which >= 90 % are flagged). TCP deviation: the healthy-twin "
+        f"deviation at alpha_90 (median, 10-90 % over motions). The paper: alpha = "
+        f"{bl['paper']['alpha_deg']:g} deg keeps the TCP within {bl['paper']['tcp_mm']:g} mm.",
+        "",
+        "Crossed: share of all runs with alpha >= 0.2 deg on that joint whose motor-vs-joint encoder mismatch "
+        "spans at least alpha/2, i.e. whose clearance was crossed at all (gravity can keep one flank loaded "
+        "through a whole motion); flagged: share of such test runs the detector flags.",
+        "",
+        "| joint | test runs (flagged) | alpha_90 [deg] | 90 % interval | empirical | TCP dev at alpha_90 [mm] "
+        f"| alpha for {bl['threshold_mm']:g} mm [deg] | crossed (alpha >= 0.2 deg) | flagged when crossed |",
+        "| --- | --- | --- | --- | --- | --- | --- | --- | --- |",
+    ]
+    for j, v in bl["per_joint"].items():
+        tcp = v.get("tcp_at_alpha_90_mm", {})
+        ci = v["alpha_90_ci90_deg"]
+        a90 = v.get("alpha_90_bound") or _f(v["alpha_90_deg"], ".3g")
+        lo = v.get("alpha_90_ci90_open_below") or _f(ci[0], ".3g")
+        hi = v.get("alpha_90_ci90_open_above") or _f(ci[1], ".3g")
+        interval = "-" if lo == hi == "-" else (lo if lo == hi else f"{lo} to {hi}")
+        dev = "-" if tcp.get("median") is None else (
+            f"{_f(tcp.get('median'), '.3g')} ({_f(tcp.get('p10'), '.2g')}-{_f(tcp.get('p90'), '.2g')})")
+        emp = _f(v["alpha_90_empirical_deg"], ".3g")
+        at_thr = v.get("alpha_at_threshold_bound") or _f(v.get("alpha_at_threshold_deg"), ".3g")
+        crossed = f"{_f(v.get('share_crossed'), '.0%')} of {v.get('n_runs_alpha_ge_min', 0)}"
+        flagged = f"{_f(v.get('detection_rate_crossed_test'), '.0%')} of {v.get('n_test_crossed', 0)}"
+        lines.append(f"| J{j} {JOINT_NAMES[int(j) - 1]} | {v['n_test']} ({v['detected']}) | {a90} | {interval} | "
+                     f"{emp} | {dev} | {at_thr} | {crossed} | {flagged} |")
+    lines += ["", "## What the detector uses (permutation importance, test ROC AUC drop)", "",
+              "| input | AUC drop (s.d.) |", "| --- | --- |"]
+    lines += [f"| {x['feature']} | {_f(x['auc_drop_mean'], '.4f')} ({_f(x['auc_drop_std'], '.4f')}) |"
+              for x in m["importance"][:12]]
+    lines += ["", f"Benchmark wall time {m['timing']['benchmark_wall_s']:.1f} s. Figures: "
+              + ", ".join(f"`{f}`" for f in m["figures"]) + "."]
+    return "\n".join(lines) + "\n"
+
+
+def write_report(m: dict[str, Any], figures: dict[str, Any], out: Path) -> list[Path]:
+    """Write ``<name>.png`` for each figure, ``metrics.json`` (NaN as null) and ``report.md``, each
+    atomically; return the paths."""
+    out.mkdir(parents=True, exist_ok=True)
+    paths = []
+    for name, fig in figures.items():
+        p = out / f"{name}.png"
+        tmp = out / f".{name}.png.tmp"
+        fig.savefig(tmp, dpi=110, format="png")
+        os.replace(tmp, p)
+        paths.append(p)
+    m = clean({**m, "figures": [p.name for p in paths]})
+    paths.append(write_json_atomic(out / "metrics.json", m))
+    paths.append(write_text_atomic(out / "report.md", markdown(m)))
+    return paths
+
+
+def clean(v: Any) -> Any:
+    """JSON-ready copy: numpy scalars as Python numbers, NaN and inf as None (strict JSON has no NaN)."""
+    if isinstance(v, dict):
+        return {str(k): clean(x) for k, x in v.items()}
+    if isinstance(v, (list, tuple)):
+        return [clean(x) for x in v]
+    if hasattr(v, "item") and not isinstance(v, (str, bytes)):
+        v = v.item()
+    if isinstance(v, float) and not math.isfinite(v):
+        return None
+    return v

@@ -1,0 +1,11 @@
+"""The simulation core: the MJCF multibody, six drive chains per run, the effects that change them, and the
+typed results a batch returns.
+
+- :mod:`.engine` steps a batch of runs in lockstep; :mod:`.multibody` holds the MuJoCo side,
+  :mod:`.drive` the drive chains (numpy reference and compiled kernel), :mod:`.terms` the data-driven terms.
+- :mod:`.params` the robot's frozen parameters, :mod:`.effects` the one registry of effects,
+  :mod:`.run_arrays` both broadcast over the batch; :mod:`.validated` the frozen, validated dataclass
+  mechanism they are built on.
+- :mod:`.trajectories` the commanded motions, :mod:`.result` what a batch returns, :mod:`.budget` what a
+  simulation will cost before it starts, :mod:`.axes` the joint names and axis conventions.
+"""

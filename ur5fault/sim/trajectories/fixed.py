@@ -1,0 +1,82 @@
+"""The fixed trajectories: the paper's 2 kg pick-and-place (the default), a standstill and a joint
+sweep used to test the discrepancy workflow."""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ...errors import ParameterError
+from .base import CB3_SETPOINT_PERIOD_S, UR_DEFAULT_ACCEL_RAD_S2, UR_DEFAULT_SPEED_RAD_S, Trajectory, dwell, movej
+
+# Pick-and-place waypoints [rad], tool pointing down (z axis of the TCP = -z of the base within 1e-3).
+# Found by numerical IK on ur5fault/models/ur5.xml with TCP offset 0.15 m: the TCP drops 0.12 m from each
+# approach pose; the transfer takes the arm over the top, so the shoulder and elbow gravity torques
+# change sign (checked by tests/sim/test_trajectory.py).
+PICK_APPROACH = (-0.4, -1.0, 1.6, -2.17, -1.5708, 0.0)
+PICK = (-0.4, -0.8132, 1.6555, -2.4131, -1.5708, 0.0)
+PLACE_APPROACH = (0.5, -2.2043, -1.4889, -1.0192, 1.5708, 0.9)
+PLACE = (0.5, -2.3794, -1.5444, -0.7885, 1.5708, 0.9)
+
+
+def pick_and_place(
+    payload_kg: float = 2.0,
+    speed_scale: float = 1.0,
+    setpoint_period_s: float = CB3_SETPOINT_PERIOD_S,
+) -> Trajectory:
+    """Pick a mass in front, carry it over the top and place it behind, then return.
+
+    Moves at the UR controller's default joint speed and acceleration times ``speed_scale``.
+    Contains velocity reversals on every moving joint and gravity-torque sign changes on
+    the shoulder and elbow (the base joint's axis is vertical, so it carries no gravity
+    torque; its torque reverses through inertia).  About 14 s at ``speed_scale = 1``.
+    """
+    if not 0.05 <= speed_scale <= 1.0:
+        raise ParameterError(f"speed_scale = {speed_scale} is out of range [0.05, 1]")
+    v, a, ts = UR_DEFAULT_SPEED_RAD_S * speed_scale, UR_DEFAULT_ACCEL_RAD_S2 * speed_scale, setpoint_period_s
+    parts: list[NDArray] = [dwell(PICK_APPROACH, 0.5, ts)]
+    events: list[tuple[float, bool]] = []
+
+    def go(q_to):
+        parts.append(movej(parts[-1][-1], q_to, v, a, ts))
+
+    def dwell_with_event(seconds, gripped):
+        start = sum(len(p) for p in parts) - 1
+        parts.append(dwell(parts[-1][-1], seconds, ts))
+        events.append(((start + 0.5 * seconds / ts) * ts, gripped))
+
+    go(PICK)
+    dwell_with_event(0.6, True)
+    go(PICK_APPROACH)
+    go(PLACE_APPROACH)
+    go(PLACE)
+    dwell_with_event(0.6, False)
+    go(PLACE_APPROACH)
+    go(PICK_APPROACH)
+    parts.append(dwell(PICK_APPROACH, 0.5, ts))
+    q = np.concatenate(parts, axis=0)
+    return Trajectory("pick_and_place", ts, q, tuple(events), False, float(payload_kg))
+
+
+def hold(q_rad=PICK_APPROACH, seconds: float = 1.0, payload_kg: float = 0.0) -> Trajectory:
+    """Stand still at ``q_rad`` (useful for noise and drift checks)."""
+    q = dwell(q_rad, seconds, CB3_SETPOINT_PERIOD_S)
+    return Trajectory("hold", CB3_SETPOINT_PERIOD_S, np.vstack([q, q[-1:]]), (), payload_kg > 0, payload_kg)
+
+
+def joint_sweep(speed_scale: float = 1.0, payload_kg: float = 1.0) -> Trajectory:
+    """Every joint out and back twice, holding a payload throughout; about 10 s.
+
+    The outward pose leans the arm over the top, so the shoulder and elbow gravity torques
+    change sign (-41 -> +20 N*m and -19 -> +2 N*m with 1 kg); every joint reverses its velocity.
+    Used to test the discrepancy workflow on a motion it was not developed on.
+    """
+    v, a, ts = UR_DEFAULT_SPEED_RAD_S * speed_scale, UR_DEFAULT_ACCEL_RAD_S2 * speed_scale, CB3_SETPOINT_PERIOD_S
+    home = np.asarray(PICK_APPROACH)
+    out_ = np.array([0.5, -2.0, 0.2, -1.5, -1.2, 0.9])
+    back = home + np.array([-0.35, -0.25, 0.3, -0.4, -0.5, -0.6])
+    parts = [dwell(home, 0.4, ts)]
+    for target in (out_, back, out_, home):
+        parts.append(movej(parts[-1][-1], target, v, a, ts))
+    parts.append(dwell(home, 0.4, ts))
+    return Trajectory("joint_sweep", ts, np.concatenate(parts), (), payload_kg > 0, float(payload_kg))

@@ -1,0 +1,67 @@
+"""Small named checks of single values at the public edge (YAML files, command-line options).
+
+Each returns the value in its canonical Python type or raises :class:`ParameterError` with one
+line naming where the value came from, the value (shortened) and what is valid.  No bool passes
+as a number and no string passes as a number: the strict YAML loader (:mod:`ur5fault.util.yamlsafe`)
+already reads ``1e9`` as the number it means, so a string here is a quoted value or a typo.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+from ..errors import ParameterError
+
+_MAX_REPR = 60
+
+
+def short(value: Any) -> str:
+    """``repr(value)`` cut to one short line (a 1 MB string or a deep list stays readable)."""
+    text = " ".join(repr(value).split())
+    return text if len(text) <= _MAX_REPR else text[: _MAX_REPR - 3] + "..."
+
+
+def _range(lo: float, hi: float, unit: str, lo_open: bool) -> str:
+    return f"{'(' if lo_open else '['}{lo:g}, {hi:g}] {unit}".rstrip()
+
+
+def check_number(value: Any, where: str, lo: float = -math.inf, hi: float = math.inf, unit: str = "", *,
+                 lo_open: bool = False) -> float:
+    """A finite real number in ``[lo, hi]`` (``(lo, hi]`` with ``lo_open``); ints are accepted."""
+    rng = _range(lo, hi, unit, lo_open)
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ParameterError(f"{where} = {short(value)} must be a number in {rng}")
+    try:
+        v = float(value)
+    except OverflowError:  # an int beyond the float range
+        raise ParameterError(f"{where} = {short(value)} is out of range {rng}") from None
+    if not math.isfinite(v):
+        raise ParameterError(f"{where} = {short(value)} must be a finite number in {rng}")
+    if (v <= lo if lo_open else v < lo) or v > hi:
+        raise ParameterError(f"{where} = {short(value)} is out of range {rng}")
+    return v
+
+
+def check_int(value: Any, where: str, lo: int, hi: int, what: str = "an integer") -> int:
+    """An integer in ``[lo, hi]``; a float with an integral value (``1e9``) is the integer it means."""
+    if isinstance(value, float) and math.isfinite(value) and value.is_integer() and abs(value) < 2**53:
+        value = int(value)
+    if isinstance(value, bool) or not isinstance(value, int) or not lo <= value <= hi:
+        raise ParameterError(f"{where} = {short(value)} must be {what} in [{lo}, {hi}]")
+    return value
+
+
+def check_bool(value: Any, where: str) -> bool:
+    """``true`` or ``false`` (YAML also reads ``yes``/``no`` as these); never a string or a number."""
+    if not isinstance(value, bool):
+        raise ParameterError(f"{where} = {short(value)} must be true or false")
+    return value
+
+
+def check_text(value: Any, where: str, max_len: int = 200) -> str:
+    """A non-empty single-line string of at most ``max_len`` characters."""
+    if not isinstance(value, str) or not value.strip() or len(value) > max_len or "\n" in value or "\0" in value:
+        raise ParameterError(f"{where} = {short(value)} must be a non-empty one-line text of at most "
+                             f"{max_len} characters")
+    return value

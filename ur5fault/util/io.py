@@ -1,0 +1,90 @@
+"""Atomic file writers: every output is written to a temporary file in the target folder and
+renamed over the target, so a crash never leaves a half-written file.  Files are made readable
+by the group and others (0644), as ordinary tools would write them."""
+
+from __future__ import annotations
+
+import json
+import os
+import tempfile
+from collections.abc import Callable, Mapping
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+
+from ..errors import Ur5FaultError
+
+FILE_MODE = 0o644
+
+
+class OutputError(Ur5FaultError, OSError):
+    """An output file or folder cannot be written (also an :class:`OSError`)."""
+
+
+def check_writable(path: str | Path, *, folder: bool = False) -> Path:
+    """Fail before any work when ``path`` (a file, or a ``folder``) cannot be written.
+
+    Nothing is created: the nearest existing ancestor must be a folder in which a probe file can
+    be made (and removed again), and an existing ``path`` must be of the right kind.
+    """
+    path = Path(path)
+    if path.exists() and folder and not path.is_dir():
+        raise OutputError(f"{path}: exists and is not a folder; choose another output folder")
+    if path.exists() and not folder and path.is_dir():
+        raise OutputError(f"{path}: is a folder; give a file name for the output")
+    probe = path if folder else path.parent
+    probe = probe.absolute()
+    while not probe.exists() and probe != probe.parent:
+        probe = probe.parent
+    if not probe.is_dir():
+        raise OutputError(f"{path}: cannot be created, {probe} is a file and not a folder")
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=".ur5fault-probe-", dir=probe)
+        os.close(fd)
+        os.unlink(tmp)
+    except OSError as exc:
+        raise OutputError(f"{path}: cannot write in {probe} ({exc.strerror or exc})") from None
+    return path
+
+
+def _atomic(path: str | Path, write: Callable[[str], None]) -> Path:
+    """Call ``write(tmp_path)`` and rename the temporary file over ``path``."""
+    path = Path(path)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+        os.close(fd)
+    except OSError as exc:
+        raise OutputError(f"{path}: cannot write ({exc.strerror or exc})") from None
+    try:
+        write(tmp)
+        os.chmod(tmp, FILE_MODE)
+        os.replace(tmp, path)
+    except BaseException as exc:
+        Path(tmp).unlink(missing_ok=True)
+        if isinstance(exc, OSError) and not isinstance(exc, Ur5FaultError):
+            raise OutputError(f"{path}: cannot write ({exc.strerror or exc})") from None
+        raise
+    return path
+
+
+def write_parquet_atomic(df: pd.DataFrame, path: str | Path, metadata: Mapping[str, str] | None = None) -> Path:
+    """Write ``df`` to Parquet atomically, ``metadata`` added to the file's schema metadata."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    table = pa.Table.from_pandas(df, preserve_index=False)
+    if metadata:
+        table = table.replace_schema_metadata({**(table.schema.metadata or {}), **metadata})
+    return _atomic(path, lambda tmp: pq.write_table(table, tmp))
+
+
+def write_text_atomic(path: str | Path, text: str) -> Path:
+    """Write ``text`` atomically."""
+    return _atomic(path, lambda tmp: Path(tmp).write_text(text))
+
+
+def write_json_atomic(path: str | Path, data: Mapping[str, Any]) -> Path:
+    """Write ``data`` as indented JSON atomically."""
+    return write_text_atomic(path, json.dumps(data, indent=2, default=str))
