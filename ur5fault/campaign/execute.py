@@ -18,6 +18,7 @@ import os
 import sys
 import threading
 import time
+import warnings
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -307,6 +308,7 @@ def _execute(camp: Campaign, batches: list[list[CampaignRun]], out: Path, ts_dir
         ctx = joblib.parallel_backend("dask", wait_for_workers_timeout=60)
     else:
         ctx = joblib.parallel_backend("loky")
+    gen = None
     try:
         with ctx:
             par = joblib.Parallel(n_jobs=jobs if client is None else -1, return_as="generator_unordered")
@@ -322,6 +324,10 @@ def _execute(camp: Campaign, batches: list[list[CampaignRun]], out: Path, ts_dir
                         done += 1
                 report(done, time.perf_counter() - t0)
     except BaseException:
+        if gen is not None:  # cancel the batches still out, without joblib's warning after our one-line error
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                gen.close()
         if client is None:
             _stop_loky_workers()
         raise
