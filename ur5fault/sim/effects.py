@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from typing import Any
 
 import numpy as np
@@ -58,6 +58,13 @@ class Effect:
                 return p
         raise UnknownNameError(f"parameter of effect {self.name!r}", name, [p.name for p in self.params])
 
+    def absent(self, name: str) -> float:
+        """The value of parameter ``name`` that means "no effect" (the registry is its only source)."""
+        value = self.param(name).absent
+        if value is None:
+            raise ParameterError(f"effect {self.name!r}: parameter {name!r} has no absent value")
+        return value
+
 
 @dataclasses.dataclass(frozen=True)
 class EffectSpec:
@@ -70,10 +77,52 @@ class EffectSpec:
     def value(self, key: str) -> float:
         return dict(self.values)[key]
 
+    @property
+    def is_absent(self) -> bool:
+        """Every value is the registry's "absent" one: the run carries no such effect."""
+        eff = REGISTRY[self.name]
+        return all(eff.param(k).absent == v for k, v in self.values)
+
     def describe(self) -> str:
         where = f" on {JOINT_NAMES[self.joint]}" if self.joint is not None else ""
         vals = ", ".join(f"{k}={v:g}" for k, v in self.values)
         return f"{self.name}{where} ({vals})"
+
+
+@dataclasses.dataclass(frozen=True)
+class EffectKey:
+    """A ``<effect>.<param>`` key of a campaign sweep or condition (``backlash.backlash_deg``,
+    ``backlash.joint``): the effect's registry name and its parameter (or ``joint``)."""
+
+    effect: str
+    param: str
+
+    @classmethod
+    def parse(cls, key: object) -> EffectKey | None:
+        """The key split at its first dot; None for anything else (``seed``, ``payload_kg``, a non-string).
+        Whether the effect and parameter exist is the caller's check (with its own message)."""
+        if not isinstance(key, str):
+            return None
+        effect, dot, param = key.partition(".")
+        return cls(effect, param) if dot else None
+
+    def __str__(self) -> str:
+        return f"{self.effect}.{self.param}"
+
+
+def effects_of_keys(values: Iterable[tuple[str, Any]], where: str = "") -> tuple[EffectSpec, ...]:
+    """Validated effects of ``(<effect>.<param>, value)`` pairs, one per effect in name order
+    (``<effect>.joint`` is its joint); pairs whose key has no dot are not effects and are skipped."""
+    by_effect: dict[str, dict[str, Any]] = {}
+    for key, v in values:
+        k = EffectKey.parse(key)
+        if k is not None:
+            by_effect.setdefault(k.effect, {})[k.param] = v
+    out = []
+    for name, vals in sorted(by_effect.items()):
+        joint = vals.pop("joint", None)
+        out.append(make_effect(name, joint, where, **vals))
+    return tuple(out)
 
 
 def make_effect(name: str, joint: int | str | None = None, where: str = "", **values: Any) -> EffectSpec:
