@@ -13,13 +13,14 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Iterable
 from typing import Any
 
 import numpy as np
 
 from ..errors import ParameterError, UnknownNameError
 from .axes import JOINT_NAMES, joint_index
+from .interfaces import EffectApplier
 
 
 @dataclasses.dataclass(frozen=True)
@@ -43,14 +44,15 @@ class Effect:
         doc: plain-words description used in reports.
         params: its parameters.
         per_joint: the effect sits on one joint (``joint`` required) or on the whole robot.
-        apply: ``apply(arrays, row, joint_index_or_None, values)`` changes the run's row.
+        apply: ``apply(arrays, row, joint_index_or_None, values)`` changes the run's row
+            (:class:`ur5fault.sim.interfaces.EffectApplier`).
     """
 
     name: str
     doc: str
     params: tuple[EffectParam, ...]
     per_joint: bool
-    apply: Callable[[Any, int, int | None, Mapping[str, float]], None]
+    apply: EffectApplier
 
     def param(self, name: str) -> EffectParam:
         for p in self.params:
