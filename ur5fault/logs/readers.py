@@ -26,7 +26,9 @@ from ..sim.effects import REGISTRY
 from ..util.checks import check_number
 from . import plausible
 from .measured import MeasuredLog
+from .plausible import check_current_units
 from .source import check_log_memory, read_columns, sniff
+from .wrap import unwrap_angles
 
 #: sign of the reported motor current w.r.t. joint torque (all +1 in the NIST log, see above)
 UR_CURRENT_SIGN = np.array([1.0, 1.0, 1.0, 1.0, 1.0, 1.0])
@@ -221,4 +223,6 @@ def read_log(path: str | Path, fmt: str, **kwargs) -> MeasuredLog:
         raise LogFormatError(f"{p}: no such file")
     if not p.is_file():
         raise LogFormatError(f"{p}: not a file")
-    return READERS[fmt](p, **kwargs)
+    log = READERS[fmt](p, **kwargs)
+    check_current_units(log.source, {"current": log.current_A, "target current": log.target_current_A})
+    return unwrap_angles(log)
