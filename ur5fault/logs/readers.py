@@ -64,7 +64,7 @@ def _checked(src: str, t: NDArray, arrays: Mapping[str, NDArray], q_rad: NDArray
 
 def read_nist(path: str | Path) -> MeasuredLog:
     """Read the NIST UR5 layout (positions in degrees, velocities in rad/s; see
-    ../shared/data/nist-ur5/README.md)."""
+    data/nist-ur5/README.md)."""
     path = Path(path)
     src = path.name
     layout = sniff(path, src)
