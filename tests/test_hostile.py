@@ -14,8 +14,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from conftest import NIST_LOG
 from ur5fault.cli import main
+
+from conftest import NIST_LOG
 
 NIST = NIST_LOG
 MAX_TRACED_MB = 150  # every case is refused before anything large is allocated

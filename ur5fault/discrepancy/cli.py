@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import sys
 from pathlib import Path
 
 from ..logs.options import add_log_options
@@ -38,6 +39,8 @@ def cmd_discrepancy(args: argparse.Namespace) -> int:
     log = read_log_option(args)
     overlay = Overlay.load(args.model) if args.model else None
     model.fit(log, dict(overlay.params) if overlay else None, overlay.effects if overlay else ())
+    for line in log.assumptions(model.replay_.params.joint_temperature_C):
+        print(f"note: {line}", file=sys.stderr)
     paths = write_report(model, Path(args.out))
     summ = summary(model)
     print(f"{log.source}: {log.t_s[-1]:.1f} s at {1 / log.period_s:.0f} Hz")

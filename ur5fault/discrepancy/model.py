@@ -275,18 +275,21 @@ class DiscrepancyModel:
 
     def _results(self, rp: Replay, nominal: Replayed, after: Replayed, n_fit: int, n_all: int) -> None:
         meas = rp.measured(n_all)
+        # RMS figures only on the ticks the robot logged (a gap's interpolated readings are left out)
+        logged = rp.log.logged_rows()[1 : n_all + 1]
+        scored = np.where(logged[:, None, None], meas, np.nan)
         held = slice(n_fit, n_all)
         self.sim_before_, self.sim_after_ = nominal, after
         self.residual_before_ = meas - nominal.y
         self.residual_after_ = meas - after.y
-        self.rms_before_ = rms_table(rp.signals, meas, nominal.y, held)
-        self.rms_after_ = rms_table(rp.signals, meas, after.y, held)
-        self.rms_fit_before_ = rms_table(rp.signals, meas, nominal.y, slice(0, n_fit))
-        self.rms_fit_after_ = rms_table(rp.signals, meas, after.y, slice(0, n_fit))
+        self.rms_before_ = rms_table(rp.signals, scored, nominal.y, held)
+        self.rms_after_ = rms_table(rp.signals, scored, after.y, held)
+        self.rms_fit_before_ = rms_table(rp.signals, scored, nominal.y, slice(0, n_fit))
+        self.rms_fit_after_ = rms_table(rp.signals, scored, after.y, slice(0, n_fit))
         # the robot controller's own current model where the log has it (target - actual current)
         tc = rp.log.target_current_A
         self.rms_controller_model_ = None if tc is None else {
-            part: {JOINT_NAMES[j]: float(np.sqrt(np.mean((tc[1 : n_all + 1][sl, j] - meas[sl, 0, j]) ** 2)))
+            part: {JOINT_NAMES[j]: float(np.sqrt(np.nanmean((tc[1 : n_all + 1][sl, j] - scored[sl, 0, j]) ** 2)))
                    for j in range(N_JOINTS)} for part, sl in (("held_out", held), ("fit", slice(0, n_fit)))}
         self.unexplained_ = unexplained(rp, self.residual_after_, after.torque_gear_Nm, n_fit)
         self.localisation_ = localise(rp, self.residual_before_, nominal.torque_gear_Nm)

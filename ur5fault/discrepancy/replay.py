@@ -60,7 +60,7 @@ class Replay:
 
     def __init__(self, log: MeasuredLog, params_overrides: dict | None = None,
                  base_effects: Sequence[EffectSpec] = (), seed: int = WORKFLOW_SEED, jobs: int = 1) -> None:
-        self.log = log
+        self.log = log.require_payload()
         self.jobs = max(1, int(jobs))
         over: dict = {"tcp_offset_m": list(log.tcp_offset_m)}
         if log.temperature_C is not None:

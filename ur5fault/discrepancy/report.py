@@ -220,6 +220,7 @@ def summary(model: DiscrepancyModel) -> dict[str, Any]:
     rp = model.replay_
     return {
         "log": rp.log.source,
+        "log_assumptions": rp.log.assumptions(rp.params.joint_temperature_C),
         "named": [sentence(f) for f in model.findings_ if f.kept],
         "findings": [finding_json(f) for f in model.findings_],
         "dropped": [f"{sentence(f)}: {f.reason}" for f in model.dropped_],

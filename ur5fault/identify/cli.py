@@ -37,6 +37,8 @@ def cmd_identify(args: argparse.Namespace) -> int:
     log = read_log_option(args)
     say = None if args.quiet else (lambda msg: print(f"identify: {msg}...", file=sys.stderr, flush=True))
     params = load_params()
+    for line in log.assumptions(params.joint_temperature_C):
+        print(f"note: {line}", file=sys.stderr)
     result = identify(log, params, sweep=not args.no_sweep, sweep_window_s=args.sweep_window_s,
                       n_boot=args.bootstrap, progress=say)
     print(result.table())
@@ -44,7 +46,8 @@ def cmd_identify(args: argparse.Namespace) -> int:
     write_text_atomic(out, result.to_yaml(params))
     written = [str(out)]
     if args.json:
-        write_json_atomic(Path(args.json), result.to_json())
+        write_json_atomic(Path(args.json), {**result.to_json(),
+                                            "log_assumptions": log.assumptions(params.joint_temperature_C)})
         written.append(args.json)
     print(f"wrote {', '.join(written)}")
     return 0

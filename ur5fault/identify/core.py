@@ -43,6 +43,7 @@ def identify(log: MeasuredLog, params: RobotParams | None = None, *, model_path:
     """
     from ..sim.engine import DEFAULT_MODEL_PATH
 
+    log.require_payload()
     p = params if params is not None else load_params()
     say = progress or (lambda _msg: None)
     say("inverse dynamics of the log's motion")
