@@ -229,6 +229,7 @@ def summary(model: DiscrepancyModel) -> dict[str, Any]:
         "rms_fit_before": model.rms_fit_before_,
         "rms_fit_after": model.rms_fit_after_,
         "rms_controller_model_current_A": model.rms_controller_model_,
+        "per_log": model.per_log_,
         "unexplained": model.unexplained_,
         "localisation_before": model.localisation_,
         "search": [vars(s) for s in model.search_],
