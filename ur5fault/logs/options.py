@@ -5,7 +5,7 @@ A manifest (a ``.yaml`` / ``.yml`` file given in place of the logs) names the lo
 per-log options; paths are relative to the manifest::
 
     format: rtde                 # default of every log (the command line's --format when absent)
-    payload_kg: 0                # defaults for rtde logs (the command line's when absent)
+    payload_kg: 0                # defaults of the rtde logs (the command line's when absent)
     tcp_offset_m: [0, 0, 0]
     logs:
       - path: Movement_No1.csv.gz
@@ -90,8 +90,9 @@ def _manifest(path: Path, args: argparse.Namespace) -> list[LogEntry]:
         fmt = item.get("format", data.get("format", args.fmt))
         if fmt not in args.log_formats:
             raise ParameterError(f"{w}format {fmt!r} is not one of: {', '.join(args.log_formats)}")
-        payload = item.get("payload_kg", data.get("payload_kg", args.payload_kg if fmt == "rtde" else None))
-        tcp = item.get("tcp_offset_m", data.get("tcp_offset_m", args.tcp_offset_m if fmt == "rtde" else None))
+        rtde = fmt == "rtde"  # the manifest's and the command line's payload and tool are defaults of rtde logs
+        payload = item.get("payload_kg", data.get("payload_kg", args.payload_kg) if rtde else None)
+        tcp = item.get("tcp_offset_m", data.get("tcp_offset_m", args.tcp_offset_m) if rtde else None)
         if tcp is not None and (not isinstance(tcp, (list, tuple)) or len(tcp) != 3):
             raise ParameterError(f"{w}tcp_offset_m = {tcp!r} must be 3 numbers [m]")
         _check_payload_options(fmt, payload, tcp, w)
