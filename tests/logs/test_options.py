@@ -6,11 +6,12 @@ from __future__ import annotations
 import argparse
 
 import pytest
-from conftest import KUFIETA_DIR, NIST_LOG
 
 from ur5fault.cli import main
 from ur5fault.errors import ParameterError
 from ur5fault.logs.options import add_log_options, log_entries, read_log_options
+
+from conftest import KUFIETA_DIR, NIST_LOG
 
 
 def _args(argv):
