@@ -50,9 +50,10 @@ def read(name: str):
 
 def score(log, overrides: dict | None) -> dict:
     """Current RMS of the model and of UR's own model per joint on the logged ticks [A], and their ratio."""
-    from ur5fault.discrepancy.replay import Replay
+    from ur5fault.discrepancy.model import WORKFLOW_SEED
+    from ur5fault.twin import LogReplay
 
-    rp = Replay(log, overrides)
+    rp = LogReplay(log, overrides, seed=WORKFLOW_SEED)
     n = rp.n_samples
     sim = rp.run([()], n)[0]
     keep = log.logged_rows()[1 : n + 1]

@@ -1,14 +1,14 @@
 """Several logs of one robot fitted jointly: one replay per log, their samples laid end to end on one axis.
 
 The discrepancy workflow works on one sample axis split in two: samples ``1..n_fit`` are fitted, samples
-``n_fit+1..n_all`` judged (held out). :class:`MultiReplay` stands in for :class:`.replay.Replay` with the
+``n_fit+1..n_all`` judged (held out). :class:`MultiReplay` stands in for :class:`~ur5fault.twin.LogReplay` with the
 samples of several logs in this order:
 
 1. the fitting part of every fitted log (its first ``fit_fraction`` of samples), log by log;
 2. the rest of every fitted log (the time split's held-out part);
 3. every held-out log whole (``--hold-out``: runs the fit never sees).
 
-Each log is simulated by its own :class:`.replay.Replay` (its trajectory, payload, tool offset and
+Each log is simulated by its own :class:`~ur5fault.twin.LogReplay` (its trajectory, payload, tool offset and
 temperatures; the model overlay shared), and a run over the first ``n`` samples of the axis simulates each
 log only as far as those samples reach. :attr:`MultiReplay.log` is the logs' rows in the same order (one
 :class:`~ur5fault.logs.MeasuredLog`, a first row of the first log in front, times continued), for what the
@@ -29,7 +29,7 @@ from numpy.typing import NDArray
 from ..errors import ParameterError
 from ..logs import MeasuredLog
 from ..sim.effects import EffectSpec
-from .replay import WORKFLOW_SEED, Replay, Replayed, _simulate
+from ..twin.replay import LogReplay, Replayed, _simulate
 
 ROLES = ("fit", "held_out")
 
@@ -59,16 +59,18 @@ def _names(logs: Sequence[MeasuredLog]) -> list[str]:
 
 class MultiReplay:
     """Fitted logs ``logs`` (time split at ``fit_fraction``) and whole held-out logs ``hold_out`` under one
-    model overlay; the interface of :class:`.replay.Replay` on the joint sample axis (module docstring)."""
+    model overlay; the interface of :class:`~ur5fault.twin.LogReplay` on the joint sample axis (module
+    docstring)."""
 
     def __init__(self, logs: Sequence[MeasuredLog], hold_out: Sequence[MeasuredLog], fit_fraction: float,
                  params_overrides: dict | None = None, base_effects: Sequence[EffectSpec] = (),
-                 seed: int = WORKFLOW_SEED, jobs: int = 1) -> None:
+                 *, seed: int, jobs: int = 1) -> None:
         if not logs:
             raise ParameterError("a joint fit needs at least one log to fit (every log given is held out)")
         self.names = _names([*logs, *hold_out])
         self.roles = ["fit"] * len(logs) + ["held_out"] * len(hold_out)
-        self.replays = [Replay(log, params_overrides, base_effects, seed, jobs=1) for log in (*logs, *hold_out)]
+        self.replays = [LogReplay(log, params_overrides, base_effects, seed=seed, jobs=1)
+                        for log in (*logs, *hold_out)]
         self.jobs = max(1, int(jobs))
         first = self.replays[0]
         for r in self.replays[1:]:
@@ -182,7 +184,7 @@ class MultiReplay:
         return out
 
 
-def _batch(rp: Replay, sets, m: int, progress=None) -> list[Replayed]:
+def _batch(rp: LogReplay, sets, m: int, progress=None) -> list[Replayed]:
     from ..sim.engine import RunSpec
 
     runs = [RunSpec(f"c{i}", rp.seed, rp.base + tuple(e)) for i, e in enumerate(sets)]
@@ -191,7 +193,7 @@ def _batch(rp: Replay, sets, m: int, progress=None) -> list[Replayed]:
                                                                         progress)]
 
 
-def per_log(rp: Replay | MultiReplay, scored: NDArray, before: NDArray, after: NDArray, n_fit: int, n_all: int
+def per_log(rp: LogReplay | MultiReplay, scored: NDArray, before: NDArray, after: NDArray, n_fit: int, n_all: int
             ) -> dict[str, dict]:
     """Per log: its role, and the RMS of measured - simulated on its held-out samples (a fitted log's time split,
     a held-out log whole) before and after the fit, and of UR's own current model (``target_current``) where the

@@ -141,11 +141,3 @@ def read_log_options(args: argparse.Namespace) -> tuple[list[MeasuredLog], list[
     logs = [(read_entry(e), e.hold_out) for e in entries]
     return [g for g, h in logs if not h], [g for g, h in logs if h]
 
-
-def read_log_option(args: argparse.Namespace) -> MeasuredLog:
-    """The one log a single-log command names."""
-    fit, held = read_log_options(args)
-    logs = fit + held
-    if len(logs) != 1:
-        raise ParameterError(f"this command takes one log; {len(logs)} given")
-    return logs[0]
