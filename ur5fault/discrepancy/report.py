@@ -142,6 +142,7 @@ def summary(model: DiscrepancyModel) -> dict[str, Any]:
     rp = model.replay_
     return {
         "log": rp.log.source,
+        "log_assumptions": rp.log.assumptions(rp.params.joint_temperature_C),
         "named": [sentence(f) for f in model.findings_ if f.kept],
         "findings": [finding_json(f) for f in model.findings_],
         "dropped": [f"{sentence(f)}: {f.reason}" for f in model.dropped_],
@@ -150,6 +151,7 @@ def summary(model: DiscrepancyModel) -> dict[str, Any]:
         "rms_fit_before": model.rms_fit_before_,
         "rms_fit_after": model.rms_fit_after_,
         "rms_controller_model_current_A": model.rms_controller_model_,
+        "per_log": model.per_log_,
         "unexplained": model.unexplained_,
         "localisation_before": model.localisation_,
         "search": [vars(s) for s in model.search_],
