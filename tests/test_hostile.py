@@ -16,8 +16,9 @@ import pytest
 
 from ur5fault.cli import main
 
-NIST = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "nist-ur5" / \
-    "ur5testresult_halfspeed_payload1.6lb_1.csv.gz"
+from conftest import NIST_LOG
+
+NIST = NIST_LOG
 MAX_TRACED_MB = 150  # every case is refused before anything large is allocated
 
 GOOD = "name: ok\nsweep: {backlash.joint: [2], backlash.backlash_deg: [0.1]}\n"
@@ -41,8 +42,6 @@ def rtde_frame(n: int = 1000, period: float = 0.008) -> pd.DataFrame:
 @pytest.fixture(scope="module")
 def nist_small() -> pd.DataFrame:
     """The first 1500 rows (12 s) of the real NIST log."""
-    if not NIST.exists():
-        pytest.skip(f"real UR5 log not found at {NIST}")
     return pd.read_csv(NIST, nrows=1500)
 
 
@@ -187,7 +186,7 @@ def _materialise(tmp: Path, content, name: str, nist_small) -> Path:
     if not isinstance(content, str):
         return _write(tmp, name, content)
     if content == "TRUNCATED":
-        raw = NIST.read_bytes() if NIST.exists() else pytest.skip("no NIST log")
+        raw = NIST.read_bytes()
         return _write(tmp, name, raw[: len(raw) // 3])
     if content == "NONNUMERIC":
         f = rtde_frame().astype(object)

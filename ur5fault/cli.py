@@ -93,7 +93,7 @@ def cmd_effects(args: argparse.Namespace) -> int:
 def cmd_show(args: argparse.Namespace) -> int:
     from .errors import ConfigFileError
     from .plotting import run_figure
-    from .plotting._figure import DPI
+    from .util.io import write_figure_atomic
 
     target = Path(args.target)
     if target.suffix == ".parquet" or target.is_file():
@@ -117,7 +117,7 @@ def cmd_show(args: argparse.Namespace) -> int:
         fig = run_figure(series[row["run_id"]], twin=series[twin] if twin != row["run_id"] else None)
         png = Path(args.out) if args.out else result.out / "plots" / f"show_{row['run_id']}.png"
     png.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(png, dpi=DPI)
+    write_figure_atomic(fig, png)
     print(f"wrote {png}")
     return 0
 

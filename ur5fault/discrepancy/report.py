@@ -12,7 +12,7 @@ import numpy as np
 from ..sim.axes import JOINT_NAMES, N_JOINTS
 from ..sim.effects import REGISTRY
 from ..twin.residuals import UNEXPLAINED_FACTOR
-from ..util.io import write_text_atomic
+from ..util.io import write_figure_atomic, write_text_atomic
 from .candidates import LibraryCandidate, TermCandidate
 from .statistics import Z_95
 
@@ -22,6 +22,9 @@ if TYPE_CHECKING:  # pragma: no cover
 
 #: the links the joints move (MJCF body names), for findings about a link's mass
 LINK_NAMES = ("shoulder_link", "upper_arm_link", "forearm_link", "wrist_1_link", "wrist_2_link", "wrist_3_link")
+#: the residual figures are 11 x 11 in (six joints stacked): at this resolution [dots per inch] 880 px
+#: square, against ur5fault.util.io.FIGURE_DPI for the other figures
+RESIDUAL_FIGURE_DPI = 80
 
 
 # ------------------------------------------------------------------------------------------ sentences
@@ -139,6 +142,7 @@ def summary(model: DiscrepancyModel) -> dict[str, Any]:
     rp = model.replay_
     return {
         "log": rp.log.source,
+        "log_assumptions": rp.log.assumptions(rp.params.joint_temperature_C),
         "named": [sentence(f) for f in model.findings_ if f.kept],
         "findings": [finding_json(f) for f in model.findings_],
         "dropped": [f"{sentence(f)}: {f.reason}" for f in model.dropped_],
@@ -147,6 +151,7 @@ def summary(model: DiscrepancyModel) -> dict[str, Any]:
         "rms_fit_before": model.rms_fit_before_,
         "rms_fit_after": model.rms_fit_after_,
         "rms_controller_model_current_A": model.rms_controller_model_,
+        "per_log": model.per_log_,
         "unexplained": model.unexplained_,
         "localisation_before": model.localisation_,
         "search": [vars(s) for s in model.search_],
@@ -197,9 +202,7 @@ def write_report(model: DiscrepancyModel, out: Path) -> list[Path]:
     write_text_atomic(out / "model.yaml", yaml.safe_dump(model.overlay(), sort_keys=False))
     paths = []
     for s, fig in figures(model).items():
-        p = out / f"residual_{s}.png"
-        fig.savefig(p, dpi=80)
-        paths.append(p)
+        paths.append(write_figure_atomic(fig, out / f"residual_{s}.png", RESIDUAL_FIGURE_DPI))
     write_text_atomic(out / "report.md", _markdown(model, summ, paths))
     return [out / "report.md", out / "model.yaml", out / "summary.json", *paths]
 

@@ -9,28 +9,32 @@ and says so (``identifiable=False``).
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
 
+from ..errors import ParameterError
 from ..logs import MeasuredLog
 from ..sim.axes import N_JOINTS
 from ..sim.params import RobotParams, load_params
 from . import friction, loop, motor, sensors, stickslip, urmodel
 from .report import Identification, overlay_params
-from .signals import derive
+from .signals import derive_all
 from .stats import BLOCK_S, N_BOOT, Estimate, block_indices, bootstrap, fallback, interval
 
 
-def identify(log: MeasuredLog, params: RobotParams | None = None, *, model_path: str | Path | None = None,
+def identify(log: MeasuredLog | Sequence[MeasuredLog], params: RobotParams | None = None, *,
+             model_path: str | Path | None = None,
              sweep: bool = True, bandwidths_Hz=loop.BANDWIDTHS_HZ, sweep_window_s: float = loop.SWEEP_WINDOW_S,
              n_boot: int = N_BOOT, seed: int = 0, progress: Callable[[str], None] | None = None) -> Identification:
     """Identify the ``[nist]`` parameters of ``ur5_drive.yaml`` from ``log``.
 
     Args:
-        log: a measured log (:func:`ur5fault.logs.read_log`) with its payload and tool offset.
+        log: a measured log (:func:`ur5fault.logs.read_log`) with its payload and tool offset, or several
+            logs of one robot identified jointly (every regression over all their samples; a rest or a
+            start from rest never spans two logs; the bandwidth sweep replays the first).
         params: the model whose assumptions are kept (rotor inertia, gear ratio, viscous temperature
             law, the fallbacks); default the packaged ``ur5_drive.yaml``.
         model_path: MJCF for the inverse dynamics (default: the simulator's).
@@ -43,10 +47,18 @@ def identify(log: MeasuredLog, params: RobotParams | None = None, *, model_path:
     """
     from ..sim.engine import DEFAULT_MODEL_PATH
 
+    logs = [log] if isinstance(log, MeasuredLog) else list(log)
+    if not logs:
+        raise ParameterError("identify needs at least one log")
+    for lg in logs:
+        lg.require_payload()
+    log = logs[0]  # the bandwidth sweep replays the first log
     p = params if params is not None else load_params()
     say = progress or (lambda _msg: None)
-    say("inverse dynamics of the log's motion")
-    sig = derive(log, p, model_path or DEFAULT_MODEL_PATH)
+    say("inverse dynamics of the log's motion" if len(logs) == 1 else f"inverse dynamics of {len(logs)} logs")
+    sig = derive_all(logs, p, model_path or DEFAULT_MODEL_PATH)
+    source = " + ".join(lg.source for lg in logs)
+    duration_s = float(sum(lg.t_s[-1] - lg.t_s[0] for lg in logs))
     est: list[Estimate] = []
 
     say("torque constant and friction (moving samples)")
@@ -81,7 +93,7 @@ def identify(log: MeasuredLog, params: RobotParams | None = None, *, model_path:
     lag = np.array([e.value for e in lags])
     ff_prior = np.asarray(p.controller.velocity_feedforward, float)
 
-    result = Identification(log.source, float(log.t_s[-1] - log.t_s[0]), tuple(est), None)
+    result = Identification(source, duration_s, tuple(est), None)
     bw_prior = float(np.mean(p.controller.position_bw_Hz))
     if sweep:
         sw = loop.bandwidth_sweep(log, overlay_params(result, p), lag, lag_ok, ff_prior, bandwidths_Hz,
@@ -94,7 +106,7 @@ def identify(log: MeasuredLog, params: RobotParams | None = None, *, model_path:
                             "kept the model's value"))
         bw = bw_prior
     est += _feedforward(lags, lag_ok, bw, ff_prior)
-    return Identification(log.source, result.duration_s, tuple(est), sw)
+    return Identification(source, result.duration_s, tuple(est), sw)
 
 
 def _torque_constant(fit: friction.FrictionFit, full: NDArray, lo: NDArray, hi: NDArray,

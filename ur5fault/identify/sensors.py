@@ -34,7 +34,8 @@ MAX_QUANTA = 5
 def rest_segments(sig: LogSignals) -> list[NDArray]:
     """Index arrays of the settled rest segments (all six targets constant)."""
     rest = np.all(sig.at_rest(), axis=1)
-    edges = np.flatnonzero(np.diff(rest.astype(int))) + 1
+    starts = np.array([s for s in sig.log_starts if s > 0], dtype=int)
+    edges = np.union1d(np.flatnonzero(np.diff(rest.astype(int))) + 1, starts).astype(int)
     settle = int(round(SETTLE_S / sig.period_s))
     out = []
     for seg in np.split(np.arange(sig.n), edges):

@@ -43,7 +43,7 @@ MIN_DURATION_S = 5.0
 MIN_SAMPLES = 250
 #: joints count as moving above this speed [rad/s] (3 deg/s, far above standstill noise) and
 #: need this many moving samples for the units check
-MOVING_RAD_S = 0.05
+UNITS_CHECK_SPEED_RAD_S = 0.05
 MIN_MOVING = 20
 DEG_PER_RAD = 180.0 / math.pi
 #: range of the joint current sensor [A] (assumption of ur5_drive.yaml's current_lsb_A: 14-bit ADC over +-20 A)
@@ -116,7 +116,7 @@ def velocity_ratio(t: NDArray, q_rad: NDArray, v_rad_s: NDArray) -> float | None
     dq = np.gradient(q_rad, t, axis=0)
     ratios = []
     for j in range(q_rad.shape[1]):
-        m = np.abs(v_rad_s[:, j]) > MOVING_RAD_S
+        m = np.abs(v_rad_s[:, j]) > UNITS_CHECK_SPEED_RAD_S
         if m.sum() >= MIN_MOVING:
             ratios.append(float(np.sum(dq[m, j] * v_rad_s[m, j]) / np.sum(v_rad_s[m, j] ** 2)))
     return float(np.median(ratios)) if ratios else None

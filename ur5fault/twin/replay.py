@@ -116,7 +116,7 @@ class LogReplay:
 
     def __init__(self, log: MeasuredLog, params_overrides: dict | None = None,
                  base_effects: Sequence[EffectSpec] = (), *, seed: int, jobs: int = 1) -> None:
-        self.log = log
+        self.log = log.require_payload()
         self.jobs = max(1, int(jobs))
         self.params: RobotParams = replay_params(log, params_overrides)
         self.traj = log.to_trajectory()

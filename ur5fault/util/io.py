@@ -133,3 +133,12 @@ def write_text_atomic(path: str | Path, text: str) -> Path:
 def write_json_atomic(path: str | Path, data: Mapping[str, Any]) -> Path:
     """Write ``data`` as indented JSON atomically."""
     return write_text_atomic(path, json.dumps(data, indent=2, default=str))
+
+
+#: resolution of every PNG figure ur5fault writes [dots per inch]
+FIGURE_DPI = 110
+
+
+def write_figure_atomic(fig: Any, path: str | Path, dpi: float = FIGURE_DPI) -> Path:
+    """A matplotlib figure as PNG at ``path`` (no backend needed: ``Figure.savefig``)."""
+    return _atomic(path, lambda tmp: fig.savefig(tmp, dpi=dpi, format="png"))
