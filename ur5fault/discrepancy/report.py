@@ -118,10 +118,11 @@ def _term_text(c: TermCandidate, amp: float, lo: float, hi: float) -> str:
 
 def finding_json(f: Finding) -> dict[str, Any]:
     c = f.candidate
-    spec = f.spec()
     lo, hi = f.interval()
+    # as fitted (a dropped finding's may lie outside the valid range), the others at their "absent" values
+    params = {**{p.name: p.absent for p in REGISTRY[c.effect].params if p.absent is not None}, **c.values(f.theta)}
     out = {"source": c.source, "name": c.effect, "joint": JOINT_NAMES[c.joint] if c.joint is not None else None,
-           "parameters": dict(spec.values), "sentence": sentence(f), "size": size(f), "kept": f.kept,
+           "parameters": params, "sentence": sentence(f), "size": size(f), "kept": f.kept,
            "reason": f.reason, "z": f.verdict.z, "delta_bic": f.verdict.delta_bic,
            "block_ratios": list(f.verdict.stability.ratios),
            "held_out": None if f.held_out is None else {"testable": f.held_out.testable, "ratio": f.held_out.ratio,
@@ -141,6 +142,7 @@ def summary(model: DiscrepancyModel) -> dict[str, Any]:
     rp = model.replay_
     return {
         "log": rp.log.source,
+        "log_assumptions": rp.log.assumptions(rp.params.joint_temperature_C),
         "named": [sentence(f) for f in model.findings_ if f.kept],
         "findings": [finding_json(f) for f in model.findings_],
         "dropped": [f"{sentence(f)}: {f.reason}" for f in model.dropped_],
@@ -149,6 +151,7 @@ def summary(model: DiscrepancyModel) -> dict[str, Any]:
         "rms_fit_before": model.rms_fit_before_,
         "rms_fit_after": model.rms_fit_after_,
         "rms_controller_model_current_A": model.rms_controller_model_,
+        "per_log": model.per_log_,
         "unexplained": model.unexplained_,
         "localisation_before": model.localisation_,
         "search": [vars(s) for s in model.search_],

@@ -25,6 +25,7 @@ def markdown(m: dict[str, Any]) -> str:
         f"split groups, by {d['split_by']}; no group on both sides); {sum(d['n_dropped_not_ok'].values())} runs "
         f"left out (not ok). Inputs: {len(d['inputs'])} ({d['n_features']} health features from the robot's own "
         f"signals and {', '.join(d['context'])}). Classifier: gradient-boosted trees, fixed hyper-parameters."
+        + "".join(f" Left out: {c} ({why})." for c, why in d.get("inputs_left_out", {}).items())
         + (" **Control run: training labels shuffled.**" if m["shuffled_labels"] else ""),
         "",
         "## Detection (healthy vs faulty)",
