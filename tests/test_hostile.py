@@ -83,7 +83,7 @@ CAMPAIGN = [
     ("seed-1e20", "base: {seed: 1e20}\n" + GOOD, "base.seed = 1e+20 must be a non-negative integer"),
     ("seed-bool", "base: {seed: true}\n" + GOOD, "base.seed = True must be a non-negative integer"),
     ("duration-1e5", "duration_s: 1.0e+5\nname: x\n", "duration_s = 100000.0 is out of range (0, 3600] s"),
-    ("alias-bomb-in-name", BOMB, "aliases expand to more than 100000 nodes"),
+    ("alias-bomb-in-name", BOMB, "aliases expand to more than 100000 values"),
     ("recursive-alias", "name: &a [*a]\n", "recursive alias"),
     ("deep-nesting", "name: " + "[" * 3000 + "]" * 3000 + "\n", "nested too deeply (more than 64 levels"),
     ("deep-block-nesting", "a:\n" + "".join(" " * i + f"k{i}:\n" for i in range(1, 500)),
@@ -152,6 +152,11 @@ SIMULATE = [
     ("config-duplicate", ["--config", "{tmp}/dup.yaml"], "duplicate key 'params'"),
     ("config-memory", ["--config", "{tmp}/long.yaml"], "of memory, more than 80% of the"),
     ("config-seed-float", ["--config", "{tmp}/seed.yaml"], "seed = 1.5 must be a non-negative integer"),
+    ("model-negative-link-mass", ["--model", "{tmp}/negmass.yaml"],
+     "link_mass on shoulder_pan_joint: mass_kg = -10 would leave the link -6.3 kg (it weighs 3.7 kg)"),
+    ("model-int-beyond-float", ["--model", "{tmp}/bigint.yaml"], "coulomb_Nm[1] = 1000000000"),
+    ("model-long-effect-list", ["--model", "{tmp}/many.yaml"],
+     "the document holds more than 100000 values; a configuration file this large is refused"),
 ]
 LOGS = [
     ("log-empty", "rtde", "log.csv", b"", "empty file"),
@@ -241,6 +246,10 @@ def support_files(tmp_path):
     _write(tmp_path, "dup.yaml", "params: {}\nparams: {gear: {ratio: 50}}\n")
     _write(tmp_path, "long.yaml", "trajectory: {name: hold, seconds: 3500}\nlog_period_s: 0.00005\n")
     _write(tmp_path, "seed.yaml", "seed: 1.5\n")
+    _write(tmp_path, "negmass.yaml", "effects:\n  - {effect: link_mass, joint: 1, mass_kg: -10}\n")
+    _write(tmp_path, "bigint.yaml", f"params:\n  friction:\n    coulomb_Nm: [{10 ** 400}, 1, 1, 1, 1, 1]\n")
+    _write(tmp_path, "many.yaml", "effects:\n" + "  - {effect: current_sensor_offset, joint: 1, offset_A: 0.001}\n"
+           * 15000)
     return tmp_path
 
 

@@ -280,7 +280,8 @@ class DiscrepancyModel:
         failed = final_verdicts(kept, pol, self.n_fit_)
         for f in failed:
             f.kept = False
-            f.reason = f"explains nothing the others do not once refined ({f.verdict.reason})"
+            f.reason = (f.candidate.range_problem(f.theta)
+                        or f"explains nothing the others do not once refined ({f.verdict.reason})")
             self.search_.append(SearchStep.of("final check", dataclasses.replace(f.verdict, reason=f.reason)))
         if failed:
             rest = tuple(f.spec() for f in kept if f.kept)

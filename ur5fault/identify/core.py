@@ -78,9 +78,10 @@ def identify(log: MeasuredLog | Sequence[MeasuredLog], params: RobotParams | Non
     coulomb_A = np.array([e.value for e in fric if e.key == "friction.coulomb_A"])
 
     say("sensor noise at rest and resolver resolution")
-    noise = sensors.noise_at_rest(sig, n_boot, seed)
+    noise = sensors.noise_at_rest(sig, n_boot, seed, {"sensors.current_noise_A": p.sensors.current_noise_A,
+                                                      "sensors.resolver_noise_rad": p.sensors.resolver_noise_rad})
     est += noise
-    est.append(sensors.resolver_resolution(sig, n_boot, seed))
+    est.append(sensors.resolver_resolution(sig, n_boot, seed, float(np.mean(p.sensors.resolver_counts_per_rev))))
 
     say("breakaway and presliding stiffness (starts from rest)")
     q_noise = np.array([e.value for e in noise if e.key == "sensors.resolver_noise_rad"])
@@ -178,9 +179,17 @@ def _friction(fit: friction.FrictionFit, full: NDArray, lo: NDArray, hi: NDArray
 
 
 def _why_not(fit: friction.FrictionFit, j: int) -> str:
-    w = np.abs(fit.sig.qd_target_rad_s[:, j])
-    return (f"J{j + 1} barely moves in the log ({int(fit.moving[:, j].sum())} moving samples, top speed "
-            f"{w.max():.2f} rad/s; needs {friction.MIN_MOVING_SAMPLES} and {friction.MIN_TOP_SPEED_RAD_S:g} rad/s)")
+    """The criterion of :func:`friction.identifiable` that failed on joint ``j``, named."""
+    n = int(fit.moving[:, j].sum())
+    top = float(np.abs(fit.sig.qd_target_rad_s[fit.moving[:, j], j]).max(initial=0.0))
+    failed = []
+    if n < friction.MIN_MOVING_SAMPLES:
+        failed.append(f"{n} moving samples, fewer than the {friction.MIN_MOVING_SAMPLES} needed "
+                      f"({friction.MIN_MOVING_SAMPLES * fit.sig.period_s:.1f} s at this log's rate)")
+    if top < friction.MIN_TOP_SPEED_RAD_S:
+        failed.append(f"top speed {top:.2f} rad/s while moving, below the {friction.MIN_TOP_SPEED_RAD_S:g} rad/s "
+                      "needed to separate Coulomb from viscous friction")
+    return f"J{j + 1}: " + "; ".join(failed)
 
 
 def _breakaway(sig, fit: friction.FrictionFit, full: NDArray, coulomb_A: NDArray, q_noise: NDArray, n_boot: int,
