@@ -81,6 +81,6 @@ def test_installed_wheel_simulates_from_another_folder(wheel, tmp_path):
     assert r.stdout.startswith(f"ur5fault {__version__} (mujoco ")
     r = _sh(exe, "simulate", "--backlash", "shoulder:0.1", "--duration-s", "0.05", "--quiet", "--out", "run.parquet",
             cwd=work, env=env)
-    assert "wrote run.parquet (50 samples" in r.stdout
+    assert "wrote run.parquet (50 samples" in r.stderr
     df = pd.read_parquet(work / "run.parquet")
     assert len(df) == 50 and df.attrs["ur5fault"]["model_path"].startswith(str(site))

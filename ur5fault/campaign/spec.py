@@ -160,8 +160,34 @@ def _check_value(key: Any, value: Any, where: str) -> Any:
         if not eff.per_joint:
             raise ParameterError(f"{where}: effect {name!r} acts on the whole robot and takes no joint")
         return joint_index(value, where) + 1
-    p = eff.param(par)
+    p = eff.param(par, where)
     return check_number(value, f"{where}: {key}", p.lo, p.hi, p.unit)
+
+
+#: the example campaigns shipped inside the package (``ur5fault campaign run paper``)
+SHIPPED_DIR = Path(__file__).resolve().parent.parent / "campaigns"
+
+
+def shipped_campaigns() -> list[str]:
+    """Names of the campaign files shipped with the package (``default``, ``paper``, ...)."""
+    return sorted(p.stem for p in SHIPPED_DIR.glob("*.yaml"))
+
+
+def resolve_campaign(path: str | Path) -> Path:
+    """A campaign file: an existing path, or the name of a shipped campaign (``paper`` or ``paper.yaml``).
+
+    A path that exists always wins, so a user's own ``paper.yaml`` in the working folder is the one run.
+    """
+    p = Path(path)
+    if p.exists() or p.parent != Path("."):
+        return p
+    shipped = SHIPPED_DIR / (p.name if p.suffix in (".yaml", ".yml") else f"{p.name}.yaml")
+    if shipped.is_file():
+        return shipped
+    from ..errors import ConfigFileError
+
+    raise ConfigFileError(f"{p}: no such file, and no shipped campaign of that name "
+                          f"(shipped: {', '.join(shipped_campaigns())})")
 
 
 def load_campaign(path: str | Path, out: str | Path | None = None, overlay: str | Path | None = None) -> Campaign:
@@ -171,7 +197,7 @@ def load_campaign(path: str | Path, out: str | Path | None = None, overlay: str 
     discrepancy``) merged into the campaign's ``base``: its parameters under the campaign's own, its
     effects before them.  The merged text is what the manifest records.
     """
-    path = Path(path)
+    path = resolve_campaign(path)
     data = read_yaml(path)
     text = path.read_text()
     if overlay is not None:
@@ -203,7 +229,7 @@ def build_campaign(data: Mapping[str, Any], where: str, text: str = "", path: Pa
     base = check_mapping(data.get("base"), f"{where}: base")
     check_keys(base, BASE_KEYS, f"{where}: base")
     params = dict(check_mapping(base.get("params"), f"{where}: base.params"))
-    robot = load_params(overrides=params)  # validate robot overrides now
+    robot = load_params(overrides=params, where=f"{where}: base.params")  # validate robot overrides now
     base_effects = parse_effects(base.get("effects"), f"{where}: base.effects")
     cond0 = {
         "seed": _check_value("seed", base.get("seed", 0), f"{where}: base.seed"),

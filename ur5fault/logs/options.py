@@ -12,7 +12,9 @@ from .readers import read_log
 def add_log_options(parser: argparse.ArgumentParser, formats: Sequence[str]) -> None:
     """The log file, its ``--format`` (one of ``formats``) and what an RTDE file does not record."""
     parser.add_argument("log", help="measured log file")
-    parser.add_argument("--format", required=True, choices=tuple(formats), dest="fmt")
+    parser.add_argument("--format", required=True, choices=tuple(formats), dest="fmt",
+                        help="layout of the log (required): rtde = UR RTDE CSV (actual_q_0.., actual_current_0.., "
+                             "target_q_0..), nist = the NIST UR5 CSV, sim = a ur5fault time series (Parquet)")
     parser.add_argument("--payload-kg", type=float,
                         help="payload held during the log (rtde: required if it held one)")
     parser.add_argument("--tcp-offset-m", type=float, nargs=3, help="tool offset in the flange frame [m] (rtde)")

@@ -52,11 +52,11 @@ class Effect:
     per_joint: bool
     apply: Callable[[Any, int, int | None, Mapping[str, float]], None]
 
-    def param(self, name: str) -> EffectParam:
+    def param(self, name: str, where: str = "") -> EffectParam:
         for p in self.params:
             if p.name == name:
                 return p
-        raise UnknownNameError(f"parameter of effect {self.name!r}", name, [p.name for p in self.params])
+        raise UnknownNameError(f"parameter of effect {self.name!r}", name, [p.name for p in self.params], where)
 
 
 @dataclasses.dataclass(frozen=True)
