@@ -275,3 +275,30 @@ def test_reprs_are_short_and_tabular(run_pair, two):
     html = two._repr_html_()
     assert html.count("<table") == 3  # backlash, coulomb friction, acceptable backlash
     assert json.loads((two.out / "manifest.json").read_text())["threshold_mm"] == 0.3
+
+
+def test_tables_carry_run_metadata_so_figures_are_titled(run_pair, two):
+    worn = run_pair.to_pandas("worn")
+    meta = worn.attrs["ur5fault"]
+    assert meta["run_id"] == "worn" and meta["status"] == "ok"
+    assert meta["effects"] == ["backlash on shoulder_lift_joint (backlash_deg=0.2)"]
+    title = run_figure(worn, twin=run_pair.to_pandas("healthy"))._suptitle.get_text()
+    assert title == "worn: backlash on shoulder_lift_joint (backlash_deg=0.2) (ok)"
+    rid = two.features.loc[two.features["fault"] == "backlash", "run_id"].iloc[0]
+    saved = pd.read_parquet(two.out / "timeseries" / f"{rid}.parquet")  # a campaign's time-series file
+    assert saved.attrs["ur5fault"]["run_id"] == rid and "backlash on" in run_figure(saved)._suptitle.get_text()
+
+
+def test_simresult_plot_draws_the_run_figure(run_pair):
+    fig = run_pair.plot("worn", twin="healthy")
+    assert isinstance(fig, Figure) and len(fig.axes) == 5
+    assert fig._suptitle.get_text().startswith("worn: backlash on shoulder_lift_joint")
+    labels = [line.get_label() for line in fig.axes[4].get_lines()]
+    assert labels == ["from desired TCP", "from healthy twin"]
+
+
+def test_wrong_feature_gets_a_did_you_mean(two, capsys):
+    from ur5fault.cli import main
+
+    assert main(["plot", str(two.out), "--feature", "tcp_dev_max_m"]) == 2
+    assert "unknown feature 'tcp_dev_max_m' (did you mean 'tcp_dev_max_mm'" in capsys.readouterr().err

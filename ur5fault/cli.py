@@ -209,15 +209,15 @@ def build_parser() -> argparse.ArgumentParser:
                        description="Simulate one run and write its time series (one row per log sample). "
                                    "Command-line options override the --config file.",
                        epilog=RUN_CONFIG_HELP, formatter_class=argparse.RawDescriptionHelpFormatter)
-    s.add_argument("--config", metavar="RUN.yaml", help="run configuration YAML (format below)")
+    s.add_argument("--config", metavar="RUN.yaml", help="run configuration YAML (format below; default: none, every key at its default)")
     s.add_argument("--model", metavar="OVERLAY.yaml",
                    help="model overlay YAML (only params and effects, format below), e.g. from `ur5fault discrepancy` "
-                        "or `ur5fault identify`")
+                        "or `ur5fault identify` (default: none, the nominal model)")
     s.add_argument("--backlash", action="append", metavar="JOINT:DEG",
-                   help="backlash fault, e.g. shoulder_lift_joint:0.1 (repeatable)")
+                   help="backlash fault, e.g. shoulder_lift_joint:0.1 (repeatable; default: none)")
     s.add_argument("--effect", action="append", metavar="NAME[@JOINT]:K=V,...",
                    help="any registered effect, e.g. coulomb_friction@elbow:scale=1.5 (see `ur5fault effects`; "
-                        "repeatable)")
+                        "repeatable; default: none, a healthy run)")
     s.add_argument("--trajectory", choices=list(TRAJECTORIES),
                    help="trajectory (default pick_and_place; options of a trajectory: --config)")
     s.add_argument("--seed", type=int, help="sensor-noise seed (default 0)")

@@ -19,11 +19,13 @@ def register(sub) -> None:
                    help="campaign YAML, or the name of a campaign shipped with ur5fault: "
                         f"{', '.join(shipped_campaigns())} (e.g. `ur5fault campaign run paper`)")
     r.add_argument("--out", help="output folder (default: the file's `out`, e.g. results/paper)")
-    r.add_argument("--model", help="model overlay YAML (e.g. from `ur5fault discrepancy`) applied to every run")
+    r.add_argument("--model", help="model overlay YAML (e.g. from `ur5fault discrepancy`) applied to every run "
+                                          "(default: none, the nominal model)")
     r.add_argument("--jobs", type=int, help="worker processes (default: all cores)")
     r.add_argument("--backend", choices=("loky", "dask"), default="loky",
                    help="loky: processes on this machine (default); dask: a Dask cluster (--scheduler)")
-    r.add_argument("--scheduler", help="Dask scheduler address for --backend dask, e.g. tcp://127.0.0.1:8786")
+    r.add_argument("--scheduler", help="Dask scheduler address for --backend dask, e.g. tcp://127.0.0.1:8786 "
+                                              "(required with --backend dask)")
     r.add_argument("--save-timeseries", action="store_true", help="also write each run's time series")
     r.add_argument("--threshold-mm", type=float,
                    help="TCP acceptability threshold of the summary [mm] (default: the file's threshold_mm, else 0.5)")
@@ -40,7 +42,8 @@ def register(sub) -> None:
     p.add_argument("dir", help="campaign output folder")
     p.add_argument("--feature", default="tcp_dev_max_mm",
                    help="feature of the severity figures and heat maps: a features.parquet column, or a per-joint "
-                        "feature without _j{j} (e.g. current_spike_max_A: read on the faulty joint)")
+                        "feature without _j{j} (e.g. current_spike_max_A: read on the faulty joint); "
+                        "default tcp_dev_max_mm")
     p.add_argument("--out", help="folder for the PNG files (default: DIR/plots)")
     p.set_defaults(func=cmd_plot)
 

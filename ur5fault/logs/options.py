@@ -16,8 +16,9 @@ def add_log_options(parser: argparse.ArgumentParser, formats: Sequence[str]) -> 
                         help="layout of the log (required): rtde = UR RTDE CSV (actual_q_0.., actual_current_0.., "
                              "target_q_0..), nist = the NIST UR5 CSV, sim = a ur5fault time series (Parquet)")
     parser.add_argument("--payload-kg", type=float,
-                        help="payload held during the log (rtde: required if it held one)")
-    parser.add_argument("--tcp-offset-m", type=float, nargs=3, help="tool offset in the flange frame [m] (rtde)")
+                        help="payload held during the log [kg] (rtde only; default 0; the other formats carry "
+                             "their own)")
+    parser.add_argument("--tcp-offset-m", type=float, nargs=3, help="tool offset in the flange frame [m] (rtde only; default 0 0 0.15)")
 
 
 def read_log_option(args: argparse.Namespace) -> MeasuredLog:
