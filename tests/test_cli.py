@@ -58,7 +58,8 @@ def test_bad_input_one_line_exit_2(args, message):
 def test_bad_yaml_files(tmp_path):
     cases = {
         "broken.yaml": ("a: [1, 2", "is not valid YAML"),
-        "key.yaml": ("trajectori: pick_and_place\n", "unknown key 'trajectori' (did you mean 'trajectory'?); valid: duration_s,"),
+        "key.yaml": ("trajectori: pick_and_place\n",
+                     "unknown key 'trajectori' (did you mean 'trajectory'?); valid: duration_s,"),
         "type.yaml": ("seed: -3\n", "seed = -3 must be a non-negative integer"),
         "param.yaml": ("params: {gear: {stiffness_Nm_per_rad: -1}}\n", "gear.stiffness_Nm_per_rad[1] = -1"),
     }

@@ -209,7 +209,8 @@ def build_parser() -> argparse.ArgumentParser:
                        description="Simulate one run and write its time series (one row per log sample). "
                                    "Command-line options override the --config file.",
                        epilog=RUN_CONFIG_HELP, formatter_class=argparse.RawDescriptionHelpFormatter)
-    s.add_argument("--config", metavar="RUN.yaml", help="run configuration YAML (format below; default: none, every key at its default)")
+    s.add_argument("--config", metavar="RUN.yaml",
+                   help="run configuration YAML (format below; default: none, every key at its default)")
     s.add_argument("--model", metavar="OVERLAY.yaml",
                    help="model overlay YAML (only params and effects, format below), e.g. from `ur5fault discrepancy` "
                         "or `ur5fault identify` (default: none, the nominal model)")

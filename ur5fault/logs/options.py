@@ -18,7 +18,8 @@ def add_log_options(parser: argparse.ArgumentParser, formats: Sequence[str]) -> 
     parser.add_argument("--payload-kg", type=float,
                         help="payload held during the log [kg] (rtde only; default 0; the other formats carry "
                              "their own)")
-    parser.add_argument("--tcp-offset-m", type=float, nargs=3, help="tool offset in the flange frame [m] (rtde only; default 0 0 0.15)")
+    parser.add_argument("--tcp-offset-m", type=float, nargs=3,
+                        help="tool offset in the flange frame [m] (rtde only; default 0 0 0.15)")
 
 
 def read_log_option(args: argparse.Namespace) -> MeasuredLog:

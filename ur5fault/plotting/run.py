@@ -44,7 +44,8 @@ def run_figure(series: pd.DataFrame, twin: pd.DataFrame | None = None, *, gear_r
     missing = [c for c in need if c not in series.columns]
     if missing:
         raise ParameterError(f"time series lacks column {missing[0]!r} (a ur5fault time series has {need[0]}, "
-                             "q_set_rad_j1.., q_FB_rad_j1.., i_FB_A_j1..: a table of `ur5fault simulate` or SimResult.to_pandas)")
+                             "q_set_rad_j1.., q_FB_rad_j1.., i_FB_A_j1..: a table of `ur5fault simulate` or "
+                             "SimResult.to_pandas)")
     meta = series.attrs.get("ur5fault", {})
     ratio = np.asarray(gear_ratio if gear_ratio is not None else meta.get("gear_ratio", [DEFAULT_GEAR_RATIO] * 6))
     if axes is None:
