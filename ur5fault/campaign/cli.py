@@ -21,6 +21,9 @@ def register(sub) -> None:
     r.add_argument("--out", help="output folder (default: the file's `out`, e.g. results/paper)")
     r.add_argument("--model", help="model overlay YAML (e.g. from `ur5fault discrepancy`) applied to every run "
                                           "(default: none, the nominal model)")
+    r.add_argument("--duration-s", type=float, dest="duration_s",
+                   help="simulated time of every run [s], replacing the file's duration_s (a quick trial; default: "
+                        "the file's, else the whole trajectory)")
     r.add_argument("--jobs", type=int, help="worker processes (default: all cores)")
     r.add_argument("--backend", choices=("loky", "dask"), default="loky",
                    help="loky: processes on this machine (default); dask: a Dask cluster (--scheduler)")
@@ -61,7 +64,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     from .limits import confirmation_needed, effective_jobs, estimate
     from .spec import MAX_THRESHOLD_MM
 
-    camp = load_campaign(args.file, args.out, args.model)
+    camp = load_campaign(args.file, args.out, args.model, args.duration_s)
     if args.threshold_mm is not None:
         check_number(args.threshold_mm, "--threshold-mm", 0.0, MAX_THRESHOLD_MM, "mm", lo_open=True)
     jobs, _ = effective_jobs(args.jobs) if args.backend == "loky" else (args.jobs or 1, None)

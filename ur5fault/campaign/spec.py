@@ -186,12 +186,14 @@ def resolve_campaign(path: str | Path) -> Path:
                           f"(shipped: {', '.join(shipped_campaigns())})")
 
 
-def load_campaign(path: str | Path, out: str | Path | None = None, overlay: str | Path | None = None) -> Campaign:
+def load_campaign(path: str | Path, out: str | Path | None = None, overlay: str | Path | None = None,
+                  duration_s: float | None = None) -> Campaign:
     """Read and validate a campaign file; every error names the file and key path.
 
     ``overlay``: a model overlay YAML (``params`` and ``effects``, e.g. written by ``ur5fault
     discrepancy``) merged into the campaign's ``base``: its parameters under the campaign's own, its
-    effects before them.  The merged text is what the manifest records.
+    effects before them.  ``duration_s`` replaces the file's (a quick trial of a campaign).  The merged text is
+    what the manifest records.  ``path`` may also name a shipped campaign (:func:`resolve_campaign`).
     """
     path = resolve_campaign(path)
     data = read_yaml(path)
@@ -208,6 +210,9 @@ def load_campaign(path: str | Path, out: str | Path | None = None, overlay: str 
             raise ParameterError(f"{path.name}: base.effects: expected a list of effects")
         base["effects"] = list(ov.get("effects") or []) + own_effects
         data = {**data, "base": base}
+        text = yaml.safe_dump(dict(data), sort_keys=False)
+    if duration_s is not None:
+        data = {**data, "duration_s": duration_s}
         text = yaml.safe_dump(dict(data), sort_keys=False)
     return build_campaign(data, path.name, text, path, out)
 
