@@ -144,3 +144,18 @@ def test_hints_hold_for_a_wheel_user():
     for path in PACKAGE.rglob("*.py"):
         assert "install 'ur5fault[" not in path.read_text(), path
     assert not [t for t in NOT_IDENTIFIABLE if re.search(r"issue \d", t)]
+
+
+def test_effect_spec_refuses_a_joint_given_the_users_way():
+    """Joints are 1..6 everywhere a user writes them; the 0-based array index is named joint_index, so the
+    ambiguous ``EffectSpec(joint=1)`` fails loudly instead of meaning the second joint."""
+    from ur5fault import make_effect
+    from ur5fault.errors import ParameterError
+    from ur5fault.sim.effects import EffectSpec
+
+    with pytest.raises(TypeError, match="joint"):
+        EffectSpec("backlash", joint=1, values=(("backlash_deg", 0.1),))
+    with pytest.raises(ParameterError, match="joint_index = 6 must be 0..5"):
+        EffectSpec("backlash", 6, (("backlash_deg", 0.1),))
+    spec = make_effect("backlash", 1, backlash_deg=0.1)
+    assert spec.joint_index == 0 and spec.describe() == "backlash on shoulder_pan_joint (backlash_deg=0.1)"
