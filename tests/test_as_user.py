@@ -14,7 +14,7 @@ import pytest
 
 from ur5fault.campaign import load_campaign
 from ur5fault.cli import build_parser, main
-from ur5fault.errors import ConfigFileError, UnknownNameError
+from ur5fault.errors import ConfigFileError, ParameterError, UnknownNameError
 from ur5fault.sim.trajectories import TRAJECTORIES
 
 PACKAGE = Path(__file__).resolve().parents[1] / "ur5fault"
@@ -150,7 +150,6 @@ def test_effect_spec_refuses_a_joint_given_the_users_way():
     """Joints are 1..6 everywhere a user writes them; the 0-based array index is named joint_index, so the
     ambiguous ``EffectSpec(joint=1)`` fails loudly instead of meaning the second joint."""
     from ur5fault import make_effect
-    from ur5fault.errors import ParameterError
     from ur5fault.sim.effects import EffectSpec
 
     with pytest.raises(TypeError, match="joint"):
@@ -159,3 +158,11 @@ def test_effect_spec_refuses_a_joint_given_the_users_way():
         EffectSpec("backlash", 6, (("backlash_deg", 0.1),))
     spec = make_effect("backlash", 1, backlash_deg=0.1)
     assert spec.joint_index == 0 and spec.describe() == "backlash on shoulder_pan_joint (backlash_deg=0.1)"
+
+
+def test_campaign_sweeping_a_joint_without_a_size_refused(tmp_path):
+    f = tmp_path / "j.yaml"
+    f.write_text("name: j\nsweep:\n  backlash.joint: [1, 2]\n")  # ran as one healthy run before
+    with pytest.raises(ParameterError, match=re.escape("j.yaml: sweep of effect 'backlash' gives joints but no "
+                                                       "size; sweep 'backlash.backlash_deg' [deg] too")):
+        load_campaign(f)

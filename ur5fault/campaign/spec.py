@@ -327,10 +327,14 @@ def check_grid_size(axis_lengths: Sequence[int], where: str) -> int:
 
 
 def _check_fault_keys(swept: Sequence[str], where: str) -> None:
-    """A per-joint effect that is swept needs its joint swept (or a single joint) too."""
+    """A per-joint effect that is swept needs its joint swept (or a single joint) too, and a swept joint needs a
+    size: sweeping only ``backlash.joint`` would give runs of size 0, which are healthy runs."""
     effects = {ek.effect for ek in map(EffectKey.parse, swept) if ek is not None}
-    for name in effects:
+    for name in sorted(effects):
         if REGISTRY[name].per_joint and f"{name}.joint" not in swept:
             raise ParameterError(f"{where}: sweep of effect {name!r} needs '{name}.joint' (list of joints 1..6)")
+        if swept.count(f"{name}.joint") and not [k for k in swept if k.startswith(f"{name}.") and k != f"{name}.joint"]:
+            sizes = ", ".join(f"'{name}.{p.name}' [{p.unit}]" for p in REGISTRY[name].params)
+            raise ParameterError(f"{where}: sweep of effect {name!r} gives joints but no size; sweep {sizes} too")
 
 
