@@ -105,14 +105,10 @@ def run_batch(camp: Campaign, batch: Sequence[CampaignRun], ts_dir: str | None,
                              res.tcp_m[twin_i] if ok and twin_i is not None else None)
         if ts_dir is not None:
             meta = {**res.run_metadata(i), "run_identity": (identities or {}).get(rc.run_id)}
-<<<<<<< HEAD
             series = res.to_pandas(i)
             series.attrs["ur5fault"] = meta  # read back as df.attrs by pandas: figures titled with effects, status
-            write_parquet_atomic(series, Path(ts_dir) / f"{rc.run_id}.parquet", {"ur5fault": json.dumps(meta)})
-=======
-            write_parquet_atomic(res.to_pandas(i), Path(ts_dir) / f"{rc.run_id}.parquet",
-                                 {"ur5fault": json.dumps(meta)}, checksum=True)
->>>>>>> main
+            write_parquet_atomic(series, Path(ts_dir) / f"{rc.run_id}.parquet", {"ur5fault": json.dumps(meta)},
+                                 checksum=True)
         eff = rc.fault_effects()
         row: dict[str, Any] = {
             "run_id": rc.run_id,
