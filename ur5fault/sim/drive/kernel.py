@@ -117,119 +117,139 @@ def _bristle(P, r, j, z, w, dt, rate):
     return e * z + dt * rr * w
 
 
+@njit(cache=True, inline="always")
+def servo_rj(X, P, r, j, q_set, qd_set, nz, ts):
+    """Joint ``j`` of run ``r`` at a servo instant: sensors sampled (noise, hold, quantisation), then position ->
+    speed -> current loops and the inverter limit (``sensors.read``, ``controller.*``, ``power.limit_voltage``).
+    ``nz``: the sample's unit noise ``(5, 6)``."""
+    q_fb = _read(X[Y_RES, r, j], P[RES_NOISE, r, j], nz[0, j], P[RES_LSB, r, j]) + P[RES_OFF, r, j]
+    th_fb = _read(X[Y_ENC, r, j], P[ENC_NOISE, r, j], nz[1, j], P[ENC_LSB, r, j])
+    w_fb = _read(X[DY_ENC, r, j], P[ENCV_NOISE, r, j], nz[2, j], P[ENCV_LSB, r, j])
+    g = P[CUR_GAIN, r, j]
+    iq_fb = g * _read(X[Y_IQ, r, j], P[CUR_NOISE, r, j], nz[3, j], P[CUR_LSB, r, j]) + P[CUR_OFF, r, j]
+    id_fb = g * _read(X[Y_ID, r, j], P[CUR_NOISE, r, j], nz[4, j], P[CUR_LSB, r, j])
+    # position loop
+    w_ref = P[RATIO_NOM, r, j] * (P[FF, r, j] * qd_set + P[POS_KP, r, j] * (q_set - q_fb))
+    # speed loop
+    i_max = P[I_MAX, r, j]
+    err = w_ref - w_fb
+    integ_v = _clip(X[INTEG_V, r, j] + P[SPD_KI, r, j] * ts * err, i_max)
+    i_ref = _clip(P[SPD_KP, r, j] * err + integ_v, i_max)
+    # current loops
+    v_max = P[V_LIM, r, j]
+    cross = P[CROSS_NOM, r, j]
+    kp, ki = P[CUR_KP, r, j], P[CUR_KI, r, j]
+    e_q = i_ref - iq_fb
+    e_d = -id_fb
+    integ_q = _clip(X[INTEG_Q, r, j] + ki * ts * e_q, v_max)
+    integ_d = _clip(X[INTEG_D, r, j] + ki * ts * e_d, v_max) if cross != 0.0 else 0.0
+    v_q = kp * e_q + integ_q + P[KE_NOM, r, j] * w_fb + cross * w_fb * id_fb
+    v_d = kp * e_d + integ_d - cross * w_fb * iq_fb if cross != 0.0 else 0.0
+    # inverter
+    mag = math.sqrt(v_d * v_d + v_q * v_q)
+    scale = min(1.0, v_max / max(mag, 1e-300))
+    X[Q_FB, r, j], X[TH_FB, r, j], X[W_FB, r, j] = q_fb, th_fb, w_fb
+    X[IQ_FB, r, j], X[ID_FB, r, j], X[I_REF, r, j] = iq_fb, id_fb, i_ref
+    X[INTEG_V, r, j], X[INTEG_Q, r, j], X[INTEG_D, r, j] = integ_v, integ_q, integ_d
+    X[V_D, r, j], X[V_Q, r, j] = v_d * scale, v_q * scale
+
+
+@njit(cache=True, inline="always")
+def physics_rj(X, P, r, j, q, qd, dt, stribeck, has_cogging):
+    """Joint ``j`` of run ``r`` (link at ``q``, ``qd``) over one physics step: windings, gear eq. (1), friction
+    eq. (2), rotor; returns the link torque (its friction part to be applied implicitly with the joint damping
+    ``X[S_L]``)."""
+    i_d, i_q, w_m, th_m = X[I_D, r, j], X[I_Q, r, j], X[W_M, r, j], X[TH_M, r, j]
+    X[IQ_PREV, r, j], X[ID_PREV, r, j] = i_q, i_d
+    # motor.electrical_step
+    coupling = P[CROSS, r, j] * w_m
+    decay, gain = P[DECAY, r, j], P[GAIN_IV, r, j]
+    i_d_new = decay * i_d + gain * (X[V_D, r, j] + coupling * i_q)
+    i_q_new = decay * i_q + gain * (X[V_Q, r, j] - coupling * i_d - P[KE, r, j] * w_m)
+    # gearbox.gear_torque
+    N = P[RATIO, r, j]
+    th = th_m / N - q
+    dth = w_m / N - qd
+    k, c, a = P[K, r, j], P[C, r, j], P[ALPHA, r, j]
+    t_low = k * th + c * dth
+    t_high = t_low - k * a
+    if a == 0.0:
+        t_id = t_low
+    elif th > a:
+        t_id = max(t_high, 0.0)
+    elif th < 0.0:
+        t_id = min(t_low, 0.0)
+    else:
+        t_id = 0.0
+    # link-side friction at the current speed (applied implicitly by MuJoCo)
+    share = P[SHARE, r, j]
+    _, f_l, s_l = _friction(P, r, j, X[Z_L, r, j], qd, dt, stribeck)
+    f_l, s_l = (1.0 - share) * f_l, (1.0 - share) * s_l
+    # rotor, motor-side friction solved implicitly (friction.implicit_speed)
+    t_m = P[KT, r, j] * i_q_new
+    if has_cogging:
+        t_m = t_m + P[COG_AMP, r, j] * np.sin(P[COG_PER, r, j] * th_m)
+    X[TH_PREV, r, j], X[Q_PREV, r, j] = th_m, q
+    u = w_m / N
+    if share > 0.0:
+        _, f_m, s_m = _friction(P, r, j, X[Z_M, r, j], u, dt, stribeck)
+    else:  # no motor-side friction: skip its evaluation (the bristle state stays as it is)
+        f_m, s_m = 0.0, 0.0
+    w_new = w_m + dt * ((t_m - t_id / N) - share * f_m / N) / (P[JR, r, j] + dt * (share * s_m / (N * N)))
+    X[T_F_M, r, j] = share * (f_m + s_m * (w_new / N - u))
+    if share > 0.0:
+        X[Z_M, r, j] = _bristle(P, r, j, X[Z_M, r, j], w_new / N, dt, stribeck)
+    X[W_M, r, j] = w_new
+    X[TH_M, r, j] = th_m + dt * w_new  # symplectic: the new speed
+    X[I_D, r, j], X[I_Q, r, j] = i_d_new, i_q_new
+    X[T_ID, r, j] = t_id
+    X[F_L, r, j], X[S_L, r, j], X[QD_PREV, r, j] = f_l, s_l, qd
+    return t_id - f_l + s_l * qd
+
+
+@njit(cache=True, inline="always")
+def sensors_rj(X, P, r, j, q, qd, dt, stribeck):
+    """Joint ``j`` of run ``r`` after the MuJoCo step (link at ``q``, ``qd``): applied friction and link bristles
+    at the reached speed, then the analog sensor filters (first-order-hold discretisations)."""
+    X[T_F, r, j] = X[F_L, r, j] + X[S_L, r, j] * (qd - X[QD_PREV, r, j]) + X[T_F_M, r, j]
+    X[Z_L, r, j] = _bristle(P, r, j, X[Z_L, r, j], qd, dt, stribeck)
+    y, dy, u0 = X[Y_RES, r, j], X[DY_RES, r, j], X[Q_PREV, r, j]
+    c = RES_C0
+    X[Y_RES, r, j] = P[c, r, j] * y + P[c + 1, r, j] * dy + P[c + 2, r, j] * u0 + P[c + 3, r, j] * q
+    X[DY_RES, r, j] = P[c + 4, r, j] * y + P[c + 5, r, j] * dy + P[c + 6, r, j] * u0 + P[c + 7, r, j] * q
+    y, dy, u0, u1 = X[Y_ENC, r, j], X[DY_ENC, r, j], X[TH_PREV, r, j], X[TH_M, r, j]
+    c = ENC_C0
+    X[Y_ENC, r, j] = P[c, r, j] * y + P[c + 1, r, j] * dy + P[c + 2, r, j] * u0 + P[c + 3, r, j] * u1
+    X[DY_ENC, r, j] = P[c + 4, r, j] * y + P[c + 5, r, j] * dy + P[c + 6, r, j] * u0 + P[c + 7, r, j] * u1
+    a, c0, c1 = P[CUR_A, r, j], P[CUR_C0, r, j], P[CUR_C1, r, j]
+    X[Y_IQ, r, j] = a * X[Y_IQ, r, j] + c0 * X[IQ_PREV, r, j] + c1 * X[I_Q, r, j]
+    X[Y_ID, r, j] = a * X[Y_ID, r, j] + c0 * X[ID_PREV, r, j] + c1 * X[I_D, r, j]
+
+
+# -- the three calls of a lockstep batch step (``NumbaDrive``); the whole-run loop (``sim/steploop.py``) calls the
+# per-joint functions above directly
 @njit(cache=True)
 def servo(X, P, q_set, qd_set, nz, ts):
-    """Sensors sampled (noise, hold, quantisation), then position -> speed -> current loops
-    and the inverter limit (``sensors.read``, ``controller.*``, ``power.limit_voltage``)."""
+    """:func:`servo_rj` for every run and joint; ``nz``: unit noise ``(n_runs, 5, 6)``."""
     n, nj = X.shape[1], X.shape[2]
     for r in range(n):
         for j in range(nj):
-            q_fb = _read(X[Y_RES, r, j], P[RES_NOISE, r, j], nz[r, 0, j], P[RES_LSB, r, j]) + P[RES_OFF, r, j]
-            th_fb = _read(X[Y_ENC, r, j], P[ENC_NOISE, r, j], nz[r, 1, j], P[ENC_LSB, r, j])
-            w_fb = _read(X[DY_ENC, r, j], P[ENCV_NOISE, r, j], nz[r, 2, j], P[ENCV_LSB, r, j])
-            g = P[CUR_GAIN, r, j]
-            iq_fb = g * _read(X[Y_IQ, r, j], P[CUR_NOISE, r, j], nz[r, 3, j], P[CUR_LSB, r, j]) + P[CUR_OFF, r, j]
-            id_fb = g * _read(X[Y_ID, r, j], P[CUR_NOISE, r, j], nz[r, 4, j], P[CUR_LSB, r, j])
-            # position loop
-            w_ref = P[RATIO_NOM, r, j] * (P[FF, r, j] * qd_set[r, j] + P[POS_KP, r, j] * (q_set[r, j] - q_fb))
-            # speed loop
-            i_max = P[I_MAX, r, j]
-            err = w_ref - w_fb
-            integ_v = _clip(X[INTEG_V, r, j] + P[SPD_KI, r, j] * ts * err, i_max)
-            i_ref = _clip(P[SPD_KP, r, j] * err + integ_v, i_max)
-            # current loops
-            v_max = P[V_LIM, r, j]
-            cross = P[CROSS_NOM, r, j]
-            kp, ki = P[CUR_KP, r, j], P[CUR_KI, r, j]
-            e_q = i_ref - iq_fb
-            e_d = -id_fb
-            integ_q = _clip(X[INTEG_Q, r, j] + ki * ts * e_q, v_max)
-            integ_d = _clip(X[INTEG_D, r, j] + ki * ts * e_d, v_max) if cross != 0.0 else 0.0
-            v_q = kp * e_q + integ_q + P[KE_NOM, r, j] * w_fb + cross * w_fb * id_fb
-            v_d = kp * e_d + integ_d - cross * w_fb * iq_fb if cross != 0.0 else 0.0
-            # inverter
-            mag = math.sqrt(v_d * v_d + v_q * v_q)
-            scale = min(1.0, v_max / max(mag, 1e-300))
-            X[Q_FB, r, j], X[TH_FB, r, j], X[W_FB, r, j] = q_fb, th_fb, w_fb
-            X[IQ_FB, r, j], X[ID_FB, r, j], X[I_REF, r, j] = iq_fb, id_fb, i_ref
-            X[INTEG_V, r, j], X[INTEG_Q, r, j], X[INTEG_D, r, j] = integ_v, integ_q, integ_d
-            X[V_D, r, j], X[V_Q, r, j] = v_d * scale, v_q * scale
+            servo_rj(X, P, r, j, q_set[r, j], qd_set[r, j], nz[r], ts)
 
 
 @njit(cache=True)
 def physics(X, P, q, qd, tau, dt, stribeck, has_cogging):
-    """Windings, gear eq. (1), friction eq. (2), rotor; writes the link torque ``tau`` (its friction part
-    to be applied implicitly with the joint damping ``X[S_L]``)."""
+    """:func:`physics_rj` for every run and joint, the link torques into ``tau``."""
     n, nj = X.shape[1], X.shape[2]
     for r in range(n):
         for j in range(nj):
-            i_d, i_q, w_m, th_m = X[I_D, r, j], X[I_Q, r, j], X[W_M, r, j], X[TH_M, r, j]
-            X[IQ_PREV, r, j], X[ID_PREV, r, j] = i_q, i_d
-            # motor.electrical_step
-            coupling = P[CROSS, r, j] * w_m
-            decay, gain = P[DECAY, r, j], P[GAIN_IV, r, j]
-            i_d_new = decay * i_d + gain * (X[V_D, r, j] + coupling * i_q)
-            i_q_new = decay * i_q + gain * (X[V_Q, r, j] - coupling * i_d - P[KE, r, j] * w_m)
-            # gearbox.gear_torque
-            N = P[RATIO, r, j]
-            th = th_m / N - q[r, j]
-            dth = w_m / N - qd[r, j]
-            k, c, a = P[K, r, j], P[C, r, j], P[ALPHA, r, j]
-            t_low = k * th + c * dth
-            t_high = t_low - k * a
-            if a == 0.0:
-                t_id = t_low
-            elif th > a:
-                t_id = max(t_high, 0.0)
-            elif th < 0.0:
-                t_id = min(t_low, 0.0)
-            else:
-                t_id = 0.0
-            # link-side friction at the current speed (applied implicitly by MuJoCo)
-            share = P[SHARE, r, j]
-            w = qd[r, j]
-            _, f_l, s_l = _friction(P, r, j, X[Z_L, r, j], w, dt, stribeck)
-            f_l, s_l = (1.0 - share) * f_l, (1.0 - share) * s_l
-            # rotor, motor-side friction solved implicitly (friction.implicit_speed)
-            t_m = P[KT, r, j] * i_q_new
-            if has_cogging:
-                t_m = t_m + P[COG_AMP, r, j] * np.sin(P[COG_PER, r, j] * th_m)
-            X[TH_PREV, r, j], X[Q_PREV, r, j] = th_m, q[r, j]
-            u = w_m / N
-            if share > 0.0:
-                _, f_m, s_m = _friction(P, r, j, X[Z_M, r, j], u, dt, stribeck)
-            else:  # no motor-side friction: skip its evaluation (the bristle state stays as it is)
-                f_m, s_m = 0.0, 0.0
-            w_new = w_m + dt * ((t_m - t_id / N) - share * f_m / N) / (P[JR, r, j] + dt * (share * s_m / (N * N)))
-            X[T_F_M, r, j] = share * (f_m + s_m * (w_new / N - u))
-            if share > 0.0:
-                X[Z_M, r, j] = _bristle(P, r, j, X[Z_M, r, j], w_new / N, dt, stribeck)
-            X[W_M, r, j] = w_new
-            X[TH_M, r, j] = th_m + dt * w_new  # symplectic: the new speed
-            X[I_D, r, j], X[I_Q, r, j] = i_d_new, i_q_new
-            X[T_ID, r, j] = t_id
-            X[F_L, r, j], X[S_L, r, j], X[QD_PREV, r, j] = f_l, s_l, w
-            tau[r, j] = t_id - f_l + s_l * w
+            tau[r, j] = physics_rj(X, P, r, j, q[r, j], qd[r, j], dt, stribeck, has_cogging)
 
 
 @njit(cache=True)
 def sensors(X, P, q, qd, dt, stribeck):
-    """After the MuJoCo step: applied friction and link bristles at the reached speed, then the analog
-    sensor filters (first-order-hold discretisations)."""
+    """:func:`sensors_rj` for every run and joint."""
     n, nj = X.shape[1], X.shape[2]
     for r in range(n):
         for j in range(nj):
-            X[T_F, r, j] = X[F_L, r, j] + X[S_L, r, j] * (qd[r, j] - X[QD_PREV, r, j]) + X[T_F_M, r, j]
-            X[Z_L, r, j] = _bristle(P, r, j, X[Z_L, r, j], qd[r, j], dt, stribeck)
-            y, dy, u0 = X[Y_RES, r, j], X[DY_RES, r, j], X[Q_PREV, r, j]
-            u1 = q[r, j]
-            c = RES_C0
-            X[Y_RES, r, j] = P[c, r, j] * y + P[c + 1, r, j] * dy + P[c + 2, r, j] * u0 + P[c + 3, r, j] * u1
-            X[DY_RES, r, j] = P[c + 4, r, j] * y + P[c + 5, r, j] * dy + P[c + 6, r, j] * u0 + P[c + 7, r, j] * u1
-            y, dy, u0, u1 = X[Y_ENC, r, j], X[DY_ENC, r, j], X[TH_PREV, r, j], X[TH_M, r, j]
-            c = ENC_C0
-            X[Y_ENC, r, j] = P[c, r, j] * y + P[c + 1, r, j] * dy + P[c + 2, r, j] * u0 + P[c + 3, r, j] * u1
-            X[DY_ENC, r, j] = P[c + 4, r, j] * y + P[c + 5, r, j] * dy + P[c + 6, r, j] * u0 + P[c + 7, r, j] * u1
-            a, c0, c1 = P[CUR_A, r, j], P[CUR_C0, r, j], P[CUR_C1, r, j]
-            X[Y_IQ, r, j] = a * X[Y_IQ, r, j] + c0 * X[IQ_PREV, r, j] + c1 * X[I_Q, r, j]
-            X[Y_ID, r, j] = a * X[Y_ID, r, j] + c0 * X[ID_PREV, r, j] + c1 * X[I_D, r, j]
+            sensors_rj(X, P, r, j, q[r, j], qd[r, j], dt, stribeck)
