@@ -212,60 +212,74 @@ SENSOR_FIELDS = ("current_temp_drift_A_per_K", "current_time_shift_s", "position
 @njit(cache=True)
 def _load_torque(q, qd, m_ii, dt, grav, amp_j, per_j, coul, coul_w, strib, strib_v, visc, quad,
                  grav_scale, sign_w, hold, hold_w, last_sign, out):
-    """The terms' load torque, run by run and joint by joint, skipping absent terms (same equations as
-    :meth:`TermHook.load_torque_reference`)."""
+    """The terms' load torque, run by run and joint by joint (:func:`load_torque_rj`)."""
     n, nj = q.shape
     for r in range(n):
         for j in range(nj):
-            t = grav_scale[r, j] * grav[r, j]
-            for h in range(amp_j.shape[2]):
-                if amp_j[r, j, h, 0] != 0.0 or amp_j[r, j, h, 1] != 0.0:
-                    x = per_j[r, j, h] * q[r, j]
-                    t += amp_j[r, j, h, 0] * math.sin(x) + amp_j[r, j, h, 1] * math.cos(x)
-            w = qd[r, j]
-            tv = 0.0
-            slope = 0.0
-            if coul[r, j] != 0.0:
-                s = math.tanh(w / coul_w[r, j])
-                tv += coul[r, j] * s
-                slope += coul[r, j] * (1.0 - s * s) / coul_w[r, j]
-            if strib[r, j] != 0.0:
-                s = math.tanh(w / sign_w)
-                vs = strib_v[r, j]
-                e = math.exp(-((w / vs) ** 2))
-                tv += strib[r, j] * s * e
-                slope += strib[r, j] * ((1.0 - s * s) / sign_w * e - s * e * 2.0 * w / (vs * vs))
-            if visc[r, j] != 0.0:
-                tv += visc[r, j] * w
-                slope += visc[r, j]
-            if quad[r, j] != 0.0:
-                tv += quad[r, j] * w * abs(w)
-                slope += quad[r, j] * 2.0 * abs(w)
-            if abs(w) > hold_w[r, j]:
-                last_sign[r, j] = 1.0 if w > 0.0 else -1.0
-            if hold[r, j] != 0.0:
-                e = math.exp(-((w / hold_w[r, j]) ** 2))
-                tv += hold[r, j] * last_sign[r, j] * e
-                slope += abs(hold[r, j] * last_sign[r, j] * 2.0 * w / (hold_w[r, j] * hold_w[r, j]) * e)
-            out[r, j] = t + tv / (1.0 + max(slope, 0.0) * dt / m_ii[r, j])
+            out[r, j] = load_torque_rj(r, j, q[r, j], qd[r, j], m_ii[r, j], dt, grav[r, j], amp_j, per_j, coul,
+                                       coul_w, strib, strib_v, visc, quad, grav_scale, sign_w, hold, hold_w, last_sign)
+
+
+@njit(cache=True, inline="always")
+def load_torque_rj(r, j, q, w, m_ii, dt, grav, amp_j, per_j, coul, coul_w, strib, strib_v, visc, quad,
+                   grav_scale, sign_w, hold, hold_w, last_sign):
+    """Load torque of joint ``j`` of run ``r`` at angle ``q``, speed ``w``, skipping absent terms (same equations
+    as :meth:`TermHook.load_torque_reference`); updates the holding term's ``last_sign[r, j]``."""
+    t = grav_scale[r, j] * grav
+    for h in range(amp_j.shape[2]):
+        if amp_j[r, j, h, 0] != 0.0 or amp_j[r, j, h, 1] != 0.0:
+            x = per_j[r, j, h] * q
+            t += amp_j[r, j, h, 0] * math.sin(x) + amp_j[r, j, h, 1] * math.cos(x)
+    tv = 0.0
+    slope = 0.0
+    if coul[r, j] != 0.0:
+        s = math.tanh(w / coul_w[r, j])
+        tv += coul[r, j] * s
+        slope += coul[r, j] * (1.0 - s * s) / coul_w[r, j]
+    if strib[r, j] != 0.0:
+        s = math.tanh(w / sign_w)
+        vs = strib_v[r, j]
+        e = math.exp(-((w / vs) ** 2))
+        tv += strib[r, j] * s * e
+        slope += strib[r, j] * ((1.0 - s * s) / sign_w * e - s * e * 2.0 * w / (vs * vs))
+    if visc[r, j] != 0.0:
+        tv += visc[r, j] * w
+        slope += visc[r, j]
+    if quad[r, j] != 0.0:
+        tv += quad[r, j] * w * abs(w)
+        slope += quad[r, j] * 2.0 * abs(w)
+    if abs(w) > hold_w[r, j]:
+        last_sign[r, j] = 1.0 if w > 0.0 else -1.0
+    if hold[r, j] != 0.0:
+        e = math.exp(-((w / hold_w[r, j]) ** 2))
+        tv += hold[r, j] * last_sign[r, j] * e
+        slope += abs(hold[r, j] * last_sign[r, j] * 2.0 * w / (hold_w[r, j] * hold_w[r, j]) * e)
+    return t + tv / (1.0 + max(slope, 0.0) * dt / m_ii)
 
 
 @njit(cache=True)
 def gravity_moments(mass, xipos, xanchor, xaxis, subtree, up, out):
-    """Static gravity torque per run and joint: for every body moving with joint j, the moment of its
-    weight (``mass * up``, ``up`` the holding force per kg) about the joint's axis."""
+    """Static gravity torque per run and joint (:func:`gravity_moment_j`) into ``out`` ``(n, 6)``."""
     n = mass.shape[0]
-    nj, nb = subtree.shape
+    nj = subtree.shape[0]
     for r in range(n):
         for j in range(nj):
-            tx, ty, tz = 0.0, 0.0, 0.0
-            for b in range(nb):
-                if subtree[j, b] and mass[r, b] != 0.0:
-                    ax = xipos[r, b, 0] - xanchor[r, j, 0]
-                    ay = xipos[r, b, 1] - xanchor[r, j, 1]
-                    az = xipos[r, b, 2] - xanchor[r, j, 2]
-                    m = mass[r, b]
-                    tx += m * (ay * up[2] - az * up[1])
-                    ty += m * (az * up[0] - ax * up[2])
-                    tz += m * (ax * up[1] - ay * up[0])
-            out[r, j] = tx * xaxis[r, j, 0] + ty * xaxis[r, j, 1] + tz * xaxis[r, j, 2]
+            out[r, j] = gravity_moment_j(j, mass[r], xipos[r], xanchor[r], xaxis[r], subtree, up)
+
+
+@njit(cache=True, inline="always")
+def gravity_moment_j(j, mass, xipos, xanchor, xaxis, subtree, up):
+    """Static gravity torque of joint ``j`` of one run: for every body moving with the joint, the moment of its
+    weight (``mass * up``, ``up`` the holding force per kg) about the joint's axis.  ``mass`` ``(nbody,)``,
+    ``xipos`` ``(nbody, 3)``, ``xanchor`` and ``xaxis`` ``(njnt, 3)``."""
+    tx, ty, tz = 0.0, 0.0, 0.0
+    for b in range(subtree.shape[1]):
+        if subtree[j, b] and mass[b] != 0.0:
+            ax = xipos[b, 0] - xanchor[j, 0]
+            ay = xipos[b, 1] - xanchor[j, 1]
+            az = xipos[b, 2] - xanchor[j, 2]
+            m = mass[b]
+            tx += m * (ay * up[2] - az * up[1])
+            ty += m * (az * up[0] - ax * up[2])
+            tz += m * (ax * up[1] - ay * up[0])
+    return tx * xaxis[j, 0] + ty * xaxis[j, 1] + tz * xaxis[j, 2]
