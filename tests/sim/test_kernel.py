@@ -22,7 +22,7 @@ def packed():
     effects = [(), (make_effect("backlash", 2, backlash_deg=0.1),), (make_effect("cogging", 3, amplitude_Nm=0.05),),
                (make_effect("current_sensor_gain", 4, gain=1.1), make_effect("torque_constant", 2, scale=0.8))]
     a = build_run_arrays(sim.params, effects, 2.0)
-    P = pack_params(sim, a)
+    P = pack_params(sim.params, sim.gains, a)
     # both friction laws, LuGre with bristle damping, friction on both sides of the gear
     rng = np.random.default_rng(99)
     P[PI["lugre"]] = rng.integers(0, 2, P[PI["lugre"]].shape)

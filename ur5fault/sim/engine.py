@@ -3,8 +3,10 @@
 Runs of one batch share a trajectory; each has its own MuJoCo model copy (payload, TCP)
 and data, its own parameter row (:mod:`ur5fault.sim.run_arrays`) and its own random stream
 (seeded by the run's ``seed`` only, so a faulty run and its healthy twin with the same
-seed see the same sensor noise).  Per physics step the drive chain is one set of numpy
-expressions over ``(n_runs, 6)`` arrays; only ``mj_step`` is called per run.
+seed see the same sensor noise).  Two step loops run the same steps: the compiled one
+(``steploop.py``, the default) runs every physics step of a run in machine code; the lockstep
+loop (``_step_lockstep``, the reference) applies the drive chain to ``(n_runs, 6)`` arrays per
+physics step (numpy modules or one compiled call per stage) and steps the multibody.
 
 Step order (semi-implicit Euler for the whole chain):
 
@@ -34,6 +36,7 @@ import numpy as np
 from ..errors import ParameterError
 from .axes import N_JOINTS
 from .drive import controller as ctl
+from .drive.layout import XI
 from .drive.state import DRIVES, initial_state, pack_params
 from .effects import EffectSpec
 from .multibody import BatchMultibody, LoopMultibody
@@ -62,6 +65,8 @@ NOISE_CHANNELS = ("resolver", "encoder_angle", "encoder_speed", "current_q", "cu
 NOISE_CHUNK_SAMPLES = 2000
 #: fraction of the run between two calls of ``run(progress=...)``
 PROGRESS_STEP = 0.02
+#: step loops of :class:`Simulator` (``stepper``)
+STEPPERS = ("compiled", "batch", "loop")
 
 
 class Status(str, enum.Enum):
@@ -87,17 +92,27 @@ class Simulator:
     Args:
         params: robot and drive parameters (default: ``data/ur5_drive.yaml``).
         model_path: MJCF file (default: the packaged ``ur5fault/models/ur5.xml``).
-        stepper: ``"batch"`` (MuJoCo's threaded ``mujoco.batch``) or ``"loop"`` (plain ``mj_step`` per run).
-        nthread: threads of the batch stepper.
+        stepper: ``"compiled"`` (every physics step of a run in compiled code, ``steploop.py``; needs the
+            compiled drive), ``"batch"`` (a Python loop over physics steps stepping all runs in lockstep with
+            MuJoCo's threaded ``mujoco.batch``) or ``"loop"`` (the same with plain ``mj_step`` per run).  Default:
+            ``"compiled"`` with the numba drive, ``"batch"`` with the numpy drive.
+        nthread: threads of the compiled loop (runs spread over them) or of the batch stepper.
         drive: ``"numba"`` (compiled kernel, fast) or ``"numpy"`` (the reference modules).
     """
 
     def __init__(self, params: RobotParams | None = None, model_path: str | Path | None = None,
-                 stepper: str = "batch", nthread: int = 1, drive: str = "numba") -> None:
-        if stepper not in ("batch", "loop"):
-            raise ParameterError(f"stepper = {stepper!r} is not valid; choose one of: batch, loop")
+                 stepper: str | None = None, nthread: int = 1, drive: str = "numba") -> None:
         if drive not in DRIVES:
             raise ParameterError(f"drive = {drive!r} is not valid; choose one of: {', '.join(DRIVES)}")
+        if stepper is None:
+            stepper = "compiled" if drive == "numba" else "batch"
+        if stepper not in STEPPERS:
+            raise ParameterError(f"stepper = {stepper!r} is not valid; choose one of: {', '.join(STEPPERS)}")
+        if stepper == "compiled" and drive != "numba":
+            raise ParameterError(f"stepper = 'compiled' runs the compiled drive only, not drive = {drive!r}; "
+                                 "choose stepper batch or loop for it")
+        if int(nthread) < 1:
+            raise ParameterError(f"nthread = {nthread} must be at least 1")
         self.stepper, self.nthread, self.drive = stepper, int(nthread), drive
         self.params = params if params is not None else load_params()
         self.model_path = Path(model_path) if model_path is not None else DEFAULT_MODEL_PATH
@@ -119,9 +134,22 @@ class Simulator:
             p.gear.ratio,
         )
 
-    def _multibody(self, a: RunArrays):
+    def _stepper_for_run(self) -> tuple[str, str]:
+        """The stepper this run uses, and why it is not the configured one ("" if it is): the compiled loop
+        cannot call Python back from inside ``mj_step`` (a callback set with ``mujoco.set_mjcb_passive`` and
+        the like), so such a batch runs in the lockstep loop over plain ``mj_step``."""
+        if self.stepper != "compiled":
+            return self.stepper, ""
+        from . import mjlib
+
+        why = mjlib.unavailable_reason()
+        if not why and mjlib.python_callbacks_set():
+            why = f"MuJoCo callback {', '.join(mjlib.python_callbacks_set())} is set"
+        return ("loop", why) if why else ("compiled", "")
+
+    def _multibody(self, a: RunArrays, stepper: str):
         tcp = np.asarray(self.params.tcp_offset_m)
-        if self.stepper == "loop":
+        if stepper in ("loop", "compiled"):
             return LoopMultibody(self.model, a.n_runs, tcp, a.payload_com_m)
         return BatchMultibody(self.model, a.n_runs, tcp, a.payload_com_m, self.nthread)
 
@@ -159,8 +187,8 @@ class Simulator:
         if n_steps < 1:
             raise ParameterError(f"duration_s = {duration} s is shorter than one physics step")
         a = build_run_arrays(p, [r.effects for r in runs], trajectory.default_payload_kg)
-        _log.info("simulating %d run(s) x %d physics steps of %g s on %s (drive %s, stepper %s)", len(runs), n_steps,
-                  dt, trajectory.name, self.drive, self.stepper)
+        _log.info("simulating %d run(s) x %d physics steps of %g s on %s (drive %s, stepper %s, %d thread(s))",
+                  len(runs), n_steps, dt, trajectory.name, self.drive, self.stepper, self.nthread)
         t0 = time.perf_counter()
         res = _integrate(self, trajectory, list(runs), a, n_steps, log_every, progress)
         _log.info("simulated %d run(s) in %.2f s wall; status: %s", len(runs), time.perf_counter() - t0,
@@ -172,89 +200,146 @@ class Simulator:
         return res
 
 
-def _integrate(sim: Simulator, traj: Trajectory, runs: list[RunSpec], a: RunArrays, n_steps: int,
-               log_every: int, progress) -> SimResult:
-    p = sim.params
-    dt = p.physics_dt_s
-    sps = p.steps_per_servo
-    ts = p.controller.servo_period_s
-    n = len(runs)
+@dataclasses.dataclass
+class _Batch:
+    """What a step loop needs, prepared once per :meth:`Simulator.run` (batch axis first)."""
 
-    # setpoints at servo instants and payload events at physics steps
-    n_servo = n_steps // sps + 1
+    n_steps: int
+    log_every: int
+    q_set_s: np.ndarray  # setpoints at servo instants (n_servo, 6)
+    qd_set_s: np.ndarray
+    gripped_step: np.ndarray  # gripper closed at physics step k (n_steps + 1,)
+    change: np.ndarray  # payload changes at physics step k (n_steps,) bool
+    mb: object  # LoopMultibody or BatchMultibody, started at rest
+    terms: TermHook
+    drive: object  # NumbaDrive or NumpyDrive, at the consistent initial state
+    q0: np.ndarray  # starting joint angles (n_runs, 6)
+    delay_k: np.ndarray  # setpoint latency per run in whole servo samples (effect "delay")
+    rngs: list
+
+    @property
+    def n_log(self) -> int:
+        return self.n_steps // self.log_every
+
+
+def _prepare(sim: Simulator, traj: Trajectory, runs: list[RunSpec], a: RunArrays, n_steps: int, log_every: int,
+             stepper: str) -> _Batch:
+    """Setpoints, payload events, the multibody at a consistent start at rest and the drive chain holding it."""
+    p = sim.params
+    dt, ts = p.physics_dt_s, p.controller.servo_period_s
+    n_servo = n_steps // p.steps_per_servo + 1
     q_set_s, qd_set_s = traj.interpolate(np.arange(n_servo) * ts)
     gripped_step = traj.gripped(np.arange(n_steps + 1) * dt)
-    change_steps = set((np.flatnonzero(np.diff(gripped_step.astype(int))) + 1).tolist())
-
-    # multibody, consistent start at rest, drive chain
-    mb = sim._multibody(a)
-    # >>> data-driven terms hook (ur5fault/sim/terms.py): None unless some run carries a term effect
+    change = np.zeros(n_steps, dtype=bool)
+    change[1:] = gripped_step[1:n_steps] != gripped_step[:n_steps - 1]
+    mb = sim._multibody(a, stepper)
     terms = TermHook.build(a)
-    if terms is not None:
-        terms.prepare_model(mb)
-    # <<<
+    terms.prepare_model(mb)
     mb.set_payload(a.payload_kg * gripped_step[0])
-    q = np.tile(q_set_s[0], (n, 1))
+    q = np.tile(q_set_s[0], (a.n_runs, 1))
     bias = mb.start(q)
-    if terms is not None and terms.link_torque:  # >>> term hook: the terms' static load is held from the start
-        bias = bias + terms.load_torque(q, np.zeros_like(q), np.ones_like(q), dt,
-                                        mb.gravity_torque() if terms.gravity else None)
-    qd = np.zeros((n, N_JOINTS))
-    P = pack_params(sim, a)
+    bias = bias + terms.static_load(q, mb, dt)  # the terms' static load is held from the start
+    P = pack_params(p, sim.gains, a)
     drive = DRIVES[sim.drive](P, initial_state(P, q, bias), dt, ts, p.friction.stribeck_rate_s_per_rad)
+    return _Batch(n_steps, log_every, q_set_s, qd_set_s, gripped_step, change, mb, terms, drive, q,
+                  np.rint(a.setpoint_delay_s / ts).astype(int), [np.random.default_rng(r.seed) for r in runs])
 
-    # setpoint latency per run, in whole servo samples (effect "delay")
-    delay_k = np.rint(a.setpoint_delay_s / ts).astype(int)
-    delayed = bool(np.any(delay_k))
-    rngs = [np.random.default_rng(r.seed) for r in runs]
+
+def _integrate(sim: Simulator, traj: Trajectory, runs: list[RunSpec], a: RunArrays, n_steps: int,
+               log_every: int, progress) -> SimResult:
+    stepper, why = sim._stepper_for_run()
+    if why:
+        _log.warning("the compiled step loop cannot run this batch (%s): the lockstep loop runs it", why)
+    b = _prepare(sim, traj, runs, a, n_steps, log_every, stepper)
+    if stepper == "compiled":
+        log, status, reason = _step_compiled(sim, b, a, progress)
+    else:
+        log, status, reason = _step_lockstep(sim, b, a, progress)
+    if progress is not None:
+        progress(1.0)
+    t_log = (np.arange(b.n_log) + 1) * log_every * sim.params.physics_dt_s
+    b.terms.apply_sensor_terms(log, t_log)  # sensor terms act on the logged readings
+    for r in np.flatnonzero(b.mb.warnings() > 0):
+        if status[r] is Status.OK:
+            status[r], reason[r] = Status.DIVERGED, "MuJoCo reported a simulation warning (instability)"
+    q_set_log, _ = traj.interpolate(t_log)
+    return SimResult.build(sim.params, sim.model_path, sim.tcp_site, traj, runs, a, t_log, q_set_log, log,
+                           [s.value for s in status], reason, b.mb.run_models())
+
+
+def _diverged(step: int, dt: float) -> str:
+    return f"non-finite or runaway joint state at t={step * dt:.4f} s"
+
+
+def _tripped(step: int, dt: float, joint: int) -> str:
+    return f"tracking error of joint {joint + 1} above {PROTECTIVE_STOP_RAD} rad at t={step * dt:.4f} s"
+
+
+def _step_compiled(sim: Simulator, b: _Batch, a: RunArrays, progress):
+    """Every physics step in compiled code (``steploop.py``); returns the log, status and reasons."""
+    from . import steploop
+
+    p = sim.params
+    dt = p.physics_dt_s
+    src = [-1 if name == "q_rad" else XI[LOG_SOURCES[name]] for name in SimResult.JOINT_SIGNALS]
+    arr, codes, event = steploop.run(
+        b.mb, b.drive.X, b.drive.P, (b.q_set_s, b.qd_set_s), b.delay_k, b.rngs,
+        (b.n_steps, p.steps_per_servo, dt, p.controller.servo_period_s, p.friction.stribeck_rate_s_per_rad,
+         b.drive.has_cogging),
+        (a.payload_kg, b.gripped_step, b.change), (b.log_every, b.n_log, src), b.terms, progress, sim.nthread,
+        (RUNAWAY_LIMIT_RAD, PROTECTIVE_STOP_RAD), (NOISE_CHUNK_SAMPLES, len(NOISE_CHANNELS), N_JOINTS), PROGRESS_STEP)
+    log = {name: arr[i] for i, name in enumerate(SimResult.JOINT_SIGNALS)}
+    status, reason = [Status.OK] * len(codes), [""] * len(codes)
+    for r in np.flatnonzero(codes):
+        step, joint = int(event[r, 0]), int(event[r, 1])
+        if codes[r] == steploop.DIVERGED:
+            status[r], reason[r] = Status.DIVERGED, _diverged(step, dt)
+        else:
+            status[r], reason[r] = Status.PROTECTIVE_STOP, _tripped(step, dt, joint)
+    return log, status, reason
+
+
+def _step_lockstep(sim: Simulator, b: _Batch, a: RunArrays, progress):
+    """The reference loop: per physics step, the drive over the whole batch (numpy or one compiled call per stage)
+    and the multibody step; returns the log, status and reasons."""
+    p = sim.params
+    dt, sps = p.physics_dt_s, p.steps_per_servo
+    n, n_steps, mb, drive = a.n_runs, b.n_steps, b.mb, b.drive
+    q, qd = b.q0, np.zeros_like(b.q0)
+    delayed = bool(np.any(b.delay_k))
     noise = np.empty((n, NOISE_CHUNK_SAMPLES, len(NOISE_CHANNELS), N_JOINTS))
-
-    n_log = n_steps // log_every
-    log = {name: np.full((n, n_log, N_JOINTS), np.nan) for name in SimResult.JOINT_SIGNALS}
+    log = {name: np.full((n, b.n_log, N_JOINTS), np.nan) for name in SimResult.JOINT_SIGNALS}
     logged = [(log[name], name) for name in SimResult.JOINT_SIGNALS]
     active = np.ones(n, dtype=bool)
-    status = [Status.OK] * n
-    reason = [""] * n
+    status, reason = [Status.OK] * n, [""] * n
     next_progress = 0.0
-
     for step in range(n_steps):
         if step % sps == 0:
             si = step // sps
             ci = si % NOISE_CHUNK_SAMPLES
             if ci == 0:
                 for r in range(n):
-                    noise[r] = rngs[r].standard_normal((NOISE_CHUNK_SAMPLES, len(NOISE_CHANNELS), N_JOINTS))
+                    noise[r] = b.rngs[r].standard_normal((NOISE_CHUNK_SAMPLES, len(NOISE_CHANNELS), N_JOINTS))
             if delayed:
-                k = np.maximum(si - delay_k, 0)
-                q_set_now, qd_set_now = q_set_s[k], qd_set_s[k]
+                k = np.maximum(si - b.delay_k, 0)
+                q_set_now, qd_set_now = b.q_set_s[k], b.qd_set_s[k]
             else:
-                q_set_now = np.broadcast_to(q_set_s[si], (n, N_JOINTS))
-                qd_set_now = np.broadcast_to(qd_set_s[si], (n, N_JOINTS))
+                q_set_now = np.broadcast_to(b.q_set_s[si], (n, N_JOINTS))
+                qd_set_now = np.broadcast_to(b.qd_set_s[si], (n, N_JOINTS))
             drive.servo(q_set_now, qd_set_now, noise[:, ci])
             # run health: a diverged or tripped run is frozen and its remaining log left NaN
             bad = ~np.all(np.isfinite(q), axis=1) | np.any(np.abs(q) > RUNAWAY_LIMIT_RAD, axis=1)
-            trip = np.any(np.abs(q_set_now - drive.q_fb) > PROTECTIVE_STOP_RAD, axis=1)
-            if bad.any() or trip.any():
-                for r in np.flatnonzero(active & (bad | trip)):
-                    active[r] = False
-                    if bad[r]:
-                        status[r] = Status.DIVERGED
-                        reason[r] = f"non-finite or runaway joint state at t={step * dt:.4f} s"
-                    else:
-                        j = int(np.argmax(np.abs(q_set_now[r] - drive.q_fb[r])))
-                        status[r] = Status.PROTECTIVE_STOP
-                        reason[r] = (f"tracking error of joint {j + 1} above {PROTECTIVE_STOP_RAD} rad "
-                                     f"at t={step * dt:.4f} s")
+            err = np.abs(q_set_now - drive.q_fb)
+            for r in np.flatnonzero(active & (bad | np.any(err > PROTECTIVE_STOP_RAD, axis=1))):
+                active[r] = False
+                status[r] = Status.DIVERGED if bad[r] else Status.PROTECTIVE_STOP
+                reason[r] = _diverged(step, dt) if bad[r] else _tripped(step, dt, int(np.argmax(err[r])))
             if progress is not None and step >= next_progress * n_steps:
                 progress(step / n_steps)
                 next_progress += PROGRESS_STEP
-
-        tau = drive.physics(q, qd)
-        if terms is not None and terms.link_torque:  # >>> term hook: load torques of data-driven terms
-            tau = tau - terms.load_torque(q, qd, mb.mass_diagonal(), dt,
-                                         mb.gravity_torque() if terms.gravity else None)
-        if step in change_steps:
-            mb.set_payload(a.payload_kg * gripped_step[step])
+        tau = drive.physics(q, qd) - b.terms.step_load(q, qd, mb, dt)
+        if b.change[step]:
+            mb.set_payload(a.payload_kg * b.gripped_step[step])
         mb.qfrc_applied[:] = tau
         # the friction's slope on top of the model's own joint damping: MuJoCo's Euler step applies both implicitly
         mb.dof_damping[:] = mb.model_damping + drive.s_l
@@ -262,27 +347,14 @@ def _integrate(sim: Simulator, traj: Trajectory, runs: list[RunSpec], a: RunArra
         q = mb.qpos.copy()
         qd = mb.qvel.copy()
         drive.sensors(q, qd)
-
-        if (step + 1) % log_every == 0:
-            li = (step + 1) // log_every - 1
+        if (step + 1) % b.log_every == 0:
+            li = (step + 1) // b.log_every - 1
             for arr, name in logged:
                 arr[:, li] = getattr(drive, LOG_SOURCES[name]) if name != "q_rad" else q
             if not active.all():
                 for arr, _ in logged:
                     arr[~active, li] = np.nan
-
-    if progress is not None:
-        progress(1.0)
-    if terms is not None:  # >>> term hook: sensor terms on the logged readings
-        terms.apply_sensor_terms(log, (np.arange(n_log) + 1) * log_every * dt)
-    for r in np.flatnonzero(mb.warnings() > 0):
-        if status[r] is Status.OK:
-            status[r], reason[r] = Status.DIVERGED, "MuJoCo reported a simulation warning (instability)"
-    t_log = (np.arange(n_log) + 1) * log_every * dt
-    q_set_log, _ = traj.interpolate(t_log)
-    return SimResult.build(sim.params, sim.model_path, sim.tcp_site, traj, runs, a, t_log, q_set_log, log,
-                           [s.value for s in status], reason,
-                           mb.run_models())
+    return log, status, reason
 
 
 #: logged signal -> drive state row

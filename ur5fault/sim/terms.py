@@ -105,8 +105,8 @@ def sensor_temperature_term(coeff_A_per_K: ArrayLike, temperature_C: ArrayLike, 
 class TermHook:
     """The data-driven terms of a batch, evaluated inside :func:`ur5fault.sim.engine._integrate`.
 
-    Built only when some run carries a term (:meth:`build` returns ``None`` otherwise), so runs
-    without terms pay nothing.  Arrays are the run arrays' term fields, batch axis first.
+    Its methods do nothing for the parts no run carries, so runs without terms pay nothing.  Arrays are the run
+    arrays' term fields, batch axis first.
     """
 
     a: object  # RunArrays (not imported: the engine imports this module)
@@ -115,34 +115,52 @@ class TermHook:
     last_sign: NDArray | None = None  # holding terms: direction of each joint's last motion (n_runs, 6)
 
     @classmethod
-    def build(cls, a) -> TermHook | None:
+    def build(cls, a) -> TermHook:
+        """The batch's terms; a batch without any is a hook whose methods do nothing."""
         link = any(np.any(getattr(a, f) != 0.0) for f in LINK_TORQUE_FIELDS)
-        model = np.any(a.armature_kgm2 != 0.0) or np.any(a.link_mass_kg != 0.0) or np.any(a.link_com_shift_m != 0.0)
-        sensor = any(np.any(getattr(a, f) != 0.0) for f in SENSOR_FIELDS)
-        if not (link or model or sensor):
-            return None
         return cls(a, bool(link), bool(np.any(a.term_gravity_scale != 0.0)))
+
+    @property
+    def any_term(self) -> bool:
+        """Some run carries a term (link torque, model or sensor)."""
+        a = self.a
+        return bool(self.link_torque or np.any(a.armature_kgm2 != 0.0) or np.any(a.link_mass_kg != 0.0)
+                    or np.any(a.link_com_shift_m != 0.0) or any(np.any(getattr(a, f) != 0.0) for f in SENSOR_FIELDS))
 
     # -- model terms, once before the run starts
     def prepare_model(self, mb) -> None:
         """Armature and link mass / centre-of-mass changes in every run's MuJoCo model."""
         a = self.a
-        if np.any(a.armature_kgm2 != 0.0):
-            arm = mb.model_field("dof_armature")
-            for r in range(a.n_runs):
-                arm[r][:6] = arm[r][:6] + a.armature_kgm2[r]
-        if np.any(a.link_mass_kg != 0.0) or np.any(a.link_com_shift_m != 0.0):
-            mass, ipos = mb.model_field("body_mass"), mb.model_field("body_ipos")
-            bodies = mb.link_bodies()
-            for r in range(a.n_runs):
-                for j, b in enumerate(bodies):
-                    if a.link_mass_kg[r, j] == 0.0 and not np.any(a.link_com_shift_m[r, j]):
-                        continue
-                    ipos[r][b] = ipos[r][b] + a.link_com_shift_m[r, j]
-                    mass[r][b] = mass[r][b] + a.link_mass_kg[r, j]
-        mb.model_changed()
-        if self.gravity:
+        if self.any_term:  # (the models' derived constants are recomputed for any term, as they always were)
+            if np.any(a.armature_kgm2 != 0.0):
+                arm = mb.model_field("dof_armature")
+                for r in range(a.n_runs):
+                    arm[r][:6] = arm[r][:6] + a.armature_kgm2[r]
+            if np.any(a.link_mass_kg != 0.0) or np.any(a.link_com_shift_m != 0.0):
+                mass, ipos = mb.model_field("body_mass"), mb.model_field("body_ipos")
+                bodies = mb.link_bodies()
+                for r in range(a.n_runs):
+                    for j, b in enumerate(bodies):
+                        if a.link_mass_kg[r, j] == 0.0 and not np.any(a.link_com_shift_m[r, j]):
+                            continue
+                        ipos[r][b] = ipos[r][b] + a.link_com_shift_m[r, j]
+                        mass[r][b] = mass[r][b] + a.link_mass_kg[r, j]
+            mb.model_changed()
+        if self.link_torque and self.gravity:
             mb.gravity_torque()  # binds the kinematic fields before the run starts
+
+    def static_load(self, q: NDArray, mb, dt: float) -> NDArray | float:
+        """The link-torque terms' load at rest at ``q`` (held by the drive from the start), or 0."""
+        if not self.link_torque:
+            return 0.0
+        return self.load_torque(q, np.zeros_like(q), np.ones_like(q), dt, mb.gravity_torque() if self.gravity else None)
+
+    def step_load(self, q: NDArray, qd: NDArray, mb, dt: float) -> NDArray | float:
+        """The link-torque terms' load over one physics step (:meth:`load_torque` with the multibody's mass-matrix
+        diagonal and gravity torque), or 0."""
+        if not self.link_torque:
+            return 0.0
+        return self.load_torque(q, qd, mb.mass_diagonal(), dt, mb.gravity_torque() if self.gravity else None)
 
     # -- link torques, every physics step
     def load_torque(self, q: NDArray, qd: NDArray, m_ii: NDArray, dt: float,
@@ -192,6 +210,8 @@ class TermHook:
     def apply_sensor_terms(self, log: dict[str, NDArray], t_log: NDArray) -> None:
         """Temperature drift of the current reading and time shifts of the logged readings, in place."""
         a = self.a
+        if not any(np.any(getattr(a, f) != 0.0) for f in SENSOR_FIELDS):
+            return
         if np.any(a.current_temp_drift_A_per_K != 0.0):
             log["i_FB_A"] += sensor_temperature_term(a.current_temp_drift_A_per_K, a.temperature_C,
                                                      a.current_temp_reference_C)[:, None, :]

@@ -25,12 +25,11 @@ from . import gearbox, motor, power, sensors
 from .layout import PARAM_NAMES, PI, STATE_NAMES, XI  # noqa: F401  (re-exported for callers)
 
 
-def pack_params(sim, a) -> NDArray:
-    """Packed parameter array ``(n_params, n_runs, 6)`` from the simulator and the run arrays."""
-    p = sim.params
+def pack_params(p, g, a) -> NDArray:
+    """Packed parameter array ``(n_params, n_runs, 6)`` from the robot parameters ``p`` (``RobotParams``), the
+    controller gains ``g`` (``controller.design_gains``) and the run arrays ``a`` (``RunArrays``)."""
     dt = p.physics_dt_s
     n = a.n_runs
-    g = sim.gains
     out = np.zeros((len(PARAM_NAMES), n, 6))
     R, L = a.motor_resistance_ohm, a.motor_inductance_H
     decay = np.exp(-R * dt / L)
