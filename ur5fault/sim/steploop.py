@@ -147,11 +147,19 @@ def advance_serial(s0, s1, si0, noise, bt, tm):
 
 @njit(cache=True, parallel=True)
 def advance_threads(s0, s1, si0, noise, bt, tm):
-    """:func:`_advance` for every active run, runs spread over numba's threads."""
-    active = bt[22]
+    """:func:`_advance` for every active run, runs spread over numba's threads (the tuples are unpacked and
+    rebuilt inside: a parallel loop's body cannot take tuples of arrays from outside)."""
+    (fn, adr, sizes, X, P, q_set_s, qd_set_s, delay, sps, dt, ts, stribeck, has_cogging, limits, model_damping,
+     payload_kg, cube2, gripped, change, log, src, log_every, active, status, event) = bt
+    link, grav_on, m_diag, subtree, up, fields = tm
+    amp_j, per_j, coul, coul_w, strib, strib_v, visc, quad, grav_scale, sign_w, hold, hold_w, last_sign = fields
     for r in prange(active.shape[0]):
         if active[r]:
-            _advance(r, s0, s1, si0, noise, bt, tm)
+            _advance(r, s0, s1, si0, noise,
+                     (fn, adr, sizes, X, P, q_set_s, qd_set_s, delay, sps, dt, ts, stribeck, has_cogging, limits,
+                      model_damping, payload_kg, cube2, gripped, change, log, src, log_every, active, status, event),
+                     (link, grav_on, m_diag, subtree, up, (amp_j, per_j, coul, coul_w, strib, strib_v, visc, quad,
+                                                           grav_scale, sign_w, hold, hold_w, last_sign)))
 
 
 def term_arrays(a, last_sign: np.ndarray) -> tuple:
