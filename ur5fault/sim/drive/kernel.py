@@ -19,7 +19,7 @@ from .layout import PARAM_NAMES, PI, STATE_NAMES, XI
 #: changed with this file untouched would reuse cached kernels that index the wrong rows (seen once as a
 #: segfault after a merge).  A changed layout therefore stops here until this number is updated, which also
 #: changes this file and so invalidates the cache.
-LAYOUT_CRC32 = 1131675108
+LAYOUT_CRC32 = 1403349115
 if zlib.crc32(("|".join(PARAM_NAMES) + "#" + "|".join(STATE_NAMES)).encode()) != LAYOUT_CRC32:
     raise ImportError("ur5fault/sim/drive/layout.py changed: update LAYOUT_CRC32 in ur5fault/sim/drive/kernel.py "
                       "(and check the row constants below) so numba recompiles the cached kernels")
@@ -45,6 +45,7 @@ Q_FB, TH_FB, W_FB, IQ_FB, ID_FB, I_REF = (XI[n] for n in ("q_fb", "th_fb", "w_fb
 T_ID, T_F, Q_PREV, TH_PREV, IQ_PREV, ID_PREV = (XI[n] for n in ("t_id", "t_f", "q_prev", "th_prev", "iq_prev",
                                                                "id_prev"))
 Z_L, Z_M, F_L, S_L, QD_PREV, T_F_M = (XI[n] for n in ("z_l", "z_m", "f_l", "s_l", "qd_prev", "t_f_m"))
+MEMO_L, MEMO_M = XI["zl_w"], XI["zm_w"]  # first of six memo rows per side (layout.MEMO_NAMES)
 LEVEL_FLOOR_NM, SMALL_X = 1e-12, 1e-4  # as lugre.py
 
 
@@ -85,18 +86,31 @@ def _sign(w):
 
 
 @njit(cache=True, inline="always")
-def _friction(P, r, j, z, w, dt, rate):
-    """friction.friction_step at speed w: (z+, T_f, S) of the joint's law."""
+def _lugre_factors(X, P, r, j, m, w, dt, rate):
+    """The LuGre law's factors at speed w: Stribeck level g, dg/d|w| (``friction.stribeck_level``) and the bristle
+    decay's x, exp(-x), (1 - exp(-x)) / x (``lugre._decay``), memoised in the six rows from ``m`` (pure functions
+    of w for the run's parameters, so a repeated speed returns the values computed before, bit for bit)."""
+    if X[m, r, j] == w:
+        return X[m + 1, r, j], X[m + 2, r, j], X[m + 3, r, j], X[m + 4, r, j], X[m + 5, r, j]
+    g, dg = _level(w, P[T_COULOMB, r, j], P[T_STATIC, r, j], rate)
+    x, e, rr = _decay(P[SIGMA0, r, j], w, g, dt)  # (_decay floors g itself)
+    X[m, r, j], X[m + 1, r, j], X[m + 2, r, j], X[m + 3, r, j], X[m + 4, r, j], X[m + 5, r, j] = w, g, dg, x, e, rr
+    return g, dg, x, e, rr
+
+
+@njit(cache=True, inline="always")
+def _friction(X, P, r, j, m, z, w, dt, rate):
+    """friction.friction_step at speed w: (z+, T_f, S) of the joint's law (``m``: the side's memo rows)."""
     tc, ts, fv = P[T_COULOMB, r, j], P[T_STATIC, r, j], P[FV, r, j]
-    g, dg = _level(w, tc, ts, rate)
     if P[LUGRE, r, j] == 0.0:
+        g, dg = _level(w, tc, ts, rate)
         eps = P[EPS, r, j]
         y = w / eps
         t_over_y = 1.0 if abs(y) < 1e-8 else np.tanh(y) / y
         return 0.0, g * t_over_y * y + fv * w, g * t_over_y / eps + fv
     s0, s1 = P[SIGMA0, r, j], P[SIGMA1, r, j]
+    g, dg, x, e, rr = _lugre_factors(X, P, r, j, m, w, dt, rate)
     g = max(g, LEVEL_FLOOR_NM)
-    x, e, rr = _decay(s0, w, g, dt)
     phi = dt * rr
     z1 = e * z + phi * w
     k = s0 + s1 / dt
@@ -108,12 +122,11 @@ def _friction(P, r, j, z, w, dt, rate):
 
 
 @njit(cache=True, inline="always")
-def _bristle(P, r, j, z, w, dt, rate):
-    """friction.bristle_update."""
+def _bristle(X, P, r, j, m, z, w, dt, rate):
+    """friction.bristle_update (``m``: the side's memo rows)."""
     if P[LUGRE, r, j] == 0.0:
         return 0.0
-    g = _level(w, P[T_COULOMB, r, j], P[T_STATIC, r, j], rate)[0]
-    _, e, rr = _decay(P[SIGMA0, r, j], w, g, dt)
+    _, _, _, e, rr = _lugre_factors(X, P, r, j, m, w, dt, rate)
     return e * z + dt * rr * w
 
 
@@ -183,7 +196,7 @@ def physics_rj(X, P, r, j, q, qd, dt, stribeck, has_cogging):
         t_id = 0.0
     # link-side friction at the current speed (applied implicitly by MuJoCo)
     share = P[SHARE, r, j]
-    _, f_l, s_l = _friction(P, r, j, X[Z_L, r, j], qd, dt, stribeck)
+    _, f_l, s_l = _friction(X, P, r, j, MEMO_L, X[Z_L, r, j], qd, dt, stribeck)
     f_l, s_l = (1.0 - share) * f_l, (1.0 - share) * s_l
     # rotor, motor-side friction solved implicitly (friction.implicit_speed)
     t_m = P[KT, r, j] * i_q_new
@@ -192,13 +205,13 @@ def physics_rj(X, P, r, j, q, qd, dt, stribeck, has_cogging):
     X[TH_PREV, r, j], X[Q_PREV, r, j] = th_m, q
     u = w_m / N
     if share > 0.0:
-        _, f_m, s_m = _friction(P, r, j, X[Z_M, r, j], u, dt, stribeck)
+        _, f_m, s_m = _friction(X, P, r, j, MEMO_M, X[Z_M, r, j], u, dt, stribeck)
     else:  # no motor-side friction: skip its evaluation (the bristle state stays as it is)
         f_m, s_m = 0.0, 0.0
     w_new = w_m + dt * ((t_m - t_id / N) - share * f_m / N) / (P[JR, r, j] + dt * (share * s_m / (N * N)))
     X[T_F_M, r, j] = share * (f_m + s_m * (w_new / N - u))
     if share > 0.0:
-        X[Z_M, r, j] = _bristle(P, r, j, X[Z_M, r, j], w_new / N, dt, stribeck)
+        X[Z_M, r, j] = _bristle(X, P, r, j, MEMO_M, X[Z_M, r, j], w_new / N, dt, stribeck)
     X[W_M, r, j] = w_new
     X[TH_M, r, j] = th_m + dt * w_new  # symplectic: the new speed
     X[I_D, r, j], X[I_Q, r, j] = i_d_new, i_q_new
@@ -212,7 +225,7 @@ def sensors_rj(X, P, r, j, q, qd, dt, stribeck):
     """Joint ``j`` of run ``r`` after the MuJoCo step (link at ``q``, ``qd``): applied friction and link bristles
     at the reached speed, then the analog sensor filters (first-order-hold discretisations)."""
     X[T_F, r, j] = X[F_L, r, j] + X[S_L, r, j] * (qd - X[QD_PREV, r, j]) + X[T_F_M, r, j]
-    X[Z_L, r, j] = _bristle(P, r, j, X[Z_L, r, j], qd, dt, stribeck)
+    X[Z_L, r, j] = _bristle(X, P, r, j, MEMO_L, X[Z_L, r, j], qd, dt, stribeck)
     y, dy, u0 = X[Y_RES, r, j], X[DY_RES, r, j], X[Q_PREV, r, j]
     c = RES_C0
     X[Y_RES, r, j] = P[c, r, j] * y + P[c + 1, r, j] * dy + P[c + 2, r, j] * u0 + P[c + 3, r, j] * q

@@ -22,7 +22,7 @@ from numpy.typing import NDArray
 from . import controller as ctl
 from . import friction as fr
 from . import gearbox, motor, power, sensors
-from .layout import PARAM_NAMES, PI, STATE_NAMES, XI  # noqa: F401  (re-exported for callers)
+from .layout import MEMO_NAMES, PARAM_NAMES, PI, STATE_NAMES, XI  # noqa: F401  (re-exported for callers)
 
 
 def pack_params(p, g, a) -> NDArray:
@@ -89,6 +89,7 @@ def initial_state(P: NDArray, q: NDArray, bias: NDArray) -> NDArray:
     X[XI["iq_fb"]] = i_q
     X[XI["i_ref"]] = i_q
     X[XI["t_id"]] = bias
+    X[XI["zl_w"]] = X[XI["zm_w"]] = np.nan  # the kernel's memo is empty
     return X
 
 
