@@ -18,7 +18,10 @@ import glob
 import os
 
 import mujoco
+import numba
+import numpy as np
 from llvmlite import ir
+from numba import njit
 from numba import types
 from numba.extending import intrinsic
 
@@ -36,6 +39,8 @@ LIB = _library()
 #: address of ``mj_step`` in the loaded library (0 without it).  Passed to compiled code as an argument, not
 #: captured as a ctypes global: numba cannot cache a function that holds a ctypes function object.
 MJ_STEP_ADDRESS = ctypes.cast(LIB.mj_step, ctypes.c_void_p).value if LIB is not None else 0
+#: address of ``mj_kinematics`` (same signature as ``mj_step``)
+MJ_KINEMATICS_ADDRESS = ctypes.cast(LIB.mj_kinematics, ctypes.c_void_p).value if LIB is not None else 0
 
 
 def unavailable_reason() -> str:
@@ -87,3 +92,24 @@ def as_f64ptr(typingctx, addr):
         return builder.inttoptr(args[0], context.get_value_type(types.CPointer(types.float64)))
 
     return sig, codegen
+
+
+@njit(cache=True)
+def _site_positions(fn, model, data, qpos_adr, site_xpos_adr, nq, nsite, site, q, out):
+    qpos = numba.carray(as_f64ptr(qpos_adr), (nq,))
+    xpos = numba.carray(as_f64ptr(site_xpos_adr), (nsite, 3))
+    for i in range(q.shape[0]):
+        if not np.isfinite(q[i, 0]):
+            continue
+        for k in range(q.shape[1]):
+            qpos[k] = q[i, k]
+        call_step(fn, model, data)
+        for c in range(3):
+            out[i, c] = xpos[site, c]
+
+
+def site_positions(model, data, site: int, q: np.ndarray, out: np.ndarray) -> None:
+    """World position of ``site`` at each row of joint angles ``q`` ``(n, nq)`` into ``out`` ``(n, 3)`` (rows whose
+    first angle is not finite are skipped): ``mj_kinematics`` per row, called from compiled code."""
+    _site_positions(MJ_KINEMATICS_ADDRESS, model._address, data._address, data.qpos.ctypes.data,
+                    data.site_xpos.ctypes.data, model.nq, model.nsite, site, np.ascontiguousarray(q, dtype=float), out)
