@@ -21,8 +21,7 @@ import mujoco
 import numba
 import numpy as np
 from llvmlite import ir
-from numba import njit
-from numba import types
+from numba import njit, types
 from numba.extending import intrinsic
 
 #: MuJoCo's global callbacks that ``mj_step`` calls (``mjcb_time`` is the bindings' own C timer, not listed)
