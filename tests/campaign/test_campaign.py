@@ -499,3 +499,16 @@ def _cmdline(pid: int) -> bytes:
         return b"" if stat[2] == "Z" else Path(f"/proc/{pid}/cmdline").read_bytes()
     except (OSError, IndexError):
         return b""
+
+
+def test_a_run_validates_its_faults_once_when_built():
+    from ur5fault.campaign.spec import CampaignRun
+
+    cond = (("seed", 0),)
+    with pytest.raises(ParameterError, match=r"backlash.backlash_deg = 9 is out of range"):
+        CampaignRun(cond, (("backlash.backlash_deg", 9), ("backlash.joint", 1)))
+    rc = CampaignRun(cond, (("backlash.backlash_deg", 0.2), ("backlash.joint", 2)))
+    assert rc.fault_effects() is rc.fault_effects()  # built once, not re-validated per call
+    assert rc.fault_effects()[0].joint == 1 and not rc.is_healthy()
+    absent = CampaignRun(cond, (("backlash.backlash_deg", 0.0), ("backlash.joint", 2)))
+    assert absent.is_healthy() and absent != rc and len({rc, CampaignRun(cond, rc.faults)}) == 1

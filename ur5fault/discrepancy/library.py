@@ -16,10 +16,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..sim.axes import N_JOINTS
-from ..sim.effects import REGISTRY, EffectSpec, make_effect
+from ..sim.effects import REGISTRY, EffectSpec
 from ..sim.params import RobotParams, load_params
+from ..twin.replay import LogReplay, Replayed
 from .candidates import LibraryCandidate
-from .replay import Replay, Replayed
 
 #: probe value per (effect, parameter): a typical fault size, for the secant of the screening batch
 PROBES: dict[tuple[str, str], float | None] = {
@@ -86,7 +86,7 @@ def _probe_runs(cands: list[LibraryCandidate]) -> list[tuple[list[LibraryCandida
     return runs
 
 
-def screen(rp: Replay, n: int, cands: list[LibraryCandidate], current: Sequence[EffectSpec] = (),
+def screen(rp: LogReplay, n: int, cands: list[LibraryCandidate], current: Sequence[EffectSpec] = (),
            progress=None) -> tuple[Replayed, NDArray, list[LibraryCandidate]]:
     """Simulate the baseline and every probe run over samples ``1..n`` in one batch.
 
@@ -120,8 +120,3 @@ def screen(rp: Replay, n: int, cands: list[LibraryCandidate], current: Sequence[
             cols.append(col.reshape(n, -1))
             kept.append(c)
     return base, np.array(cols), kept
-
-
-def effect_specs(found: Sequence[tuple[LibraryCandidate, float]]) -> tuple[EffectSpec, ...]:
-    """Effects of found library candidates at their values."""
-    return tuple(make_effect(c.effect, None if c.joint is None else c.joint + 1, **{c.param: v}) for c, v in found)

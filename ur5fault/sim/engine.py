@@ -39,6 +39,7 @@ from .drive import controller as ctl
 from .drive.layout import XI
 from .drive.state import DRIVES, initial_state, pack_params
 from .effects import EffectSpec
+from .interfaces import Multibody
 from .multibody import BatchMultibody, LoopMultibody
 from .params import RobotParams, load_params
 from .result import SimResult
@@ -147,7 +148,7 @@ class Simulator:
             why = f"MuJoCo callback {', '.join(mjlib.python_callbacks_set())} is set"
         return ("loop", why) if why else ("compiled", "")
 
-    def _multibody(self, a: RunArrays, stepper: str):
+    def _multibody(self, a: RunArrays, stepper: str) -> Multibody:
         tcp = np.asarray(self.params.tcp_offset_m)
         if stepper in ("loop", "compiled"):
             return LoopMultibody(self.model, a.n_runs, tcp, a.payload_com_m)

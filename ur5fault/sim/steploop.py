@@ -27,8 +27,9 @@ from . import mjlib, terms
 from .drive import kernel
 from .drive.kernel import Q_FB, S_L, physics_rj, sensors_rj, servo_rj
 from .drive.layout import PARAM_NAMES, STATE_NAMES
+from .gravity import gravity_moment_j
 from .mjlib import as_f64ptr, call_step
-from .terms import gravity_moment_j, load_torque_rj
+from .terms import load_torque_rj
 
 #: CRC-32 of everything compiled into this module's cached functions besides this file: numba's cache checks only
 #: this file's time stamp, so a change of the drive kernel, the term functions, the pointer helpers or the row

@@ -38,8 +38,6 @@ MAX_HARMONICS = 3
 #: width of the smooth sign of the Stribeck-like term [rad/s] (assumption: well below any commanded
 #: speed, like ``friction.sign_smoothing_rad_s``, but wide enough for the 8 ms samples of a log)
 STRIBECK_SIGN_WIDTH_RAD_S = 0.01
-#: acceleration of gravity [m/s^2], MuJoCo's default ``opt.gravity``
-GRAVITY_M_S2 = 9.81
 
 
 # ------------------------------------------------------------------------------------ dictionary functions
@@ -275,31 +273,3 @@ def load_torque_rj(r, j, q, w, m_ii, dt, grav, amp_j, per_j, coul, coul_w, strib
         tv += hold[r, j] * last_sign[r, j] * e
         slope += abs(hold[r, j] * last_sign[r, j] * 2.0 * w / (hold_w[r, j] * hold_w[r, j]) * e)
     return t + tv / (1.0 + max(slope, 0.0) * dt / m_ii)
-
-
-@njit(cache=True)
-def gravity_moments(mass, xipos, xanchor, xaxis, subtree, up, out):
-    """Static gravity torque per run and joint (:func:`gravity_moment_j`) into ``out`` ``(n, 6)``."""
-    n = mass.shape[0]
-    nj = subtree.shape[0]
-    for r in range(n):
-        for j in range(nj):
-            out[r, j] = gravity_moment_j(j, mass[r], xipos[r], xanchor[r], xaxis[r], subtree, up)
-
-
-@njit(cache=True, inline="always")
-def gravity_moment_j(j, mass, xipos, xanchor, xaxis, subtree, up):
-    """Static gravity torque of joint ``j`` of one run: for every body moving with the joint, the moment of its
-    weight (``mass * up``, ``up`` the holding force per kg) about the joint's axis.  ``mass`` ``(nbody,)``,
-    ``xipos`` ``(nbody, 3)``, ``xanchor`` and ``xaxis`` ``(njnt, 3)``."""
-    tx, ty, tz = 0.0, 0.0, 0.0
-    for b in range(subtree.shape[1]):
-        if subtree[j, b] and mass[b] != 0.0:
-            ax = xipos[b, 0] - xanchor[j, 0]
-            ay = xipos[b, 1] - xanchor[j, 1]
-            az = xipos[b, 2] - xanchor[j, 2]
-            m = mass[b]
-            tx += m * (ay * up[2] - az * up[1])
-            ty += m * (az * up[0] - ax * up[2])
-            tz += m * (ax * up[1] - ay * up[0])
-    return tx * xaxis[j, 0] + ty * xaxis[j, 1] + tz * xaxis[j, 2]
