@@ -125,7 +125,10 @@ class Simulator:
             why = f"MuJoCo callback {', '.join(mjlib.python_callbacks_set())} is set"
         return ("loop", why) if why else ("compiled", "")
 
-    def _multibody(self, a: RunArrays, stepper: str) -> Multibody:
+    def _multibody(self, a: RunArrays, stepper: str | None = None) -> Multibody:
+        """The runs' multibody for ``stepper`` (default: the configured one); the compiled loop steps per-run
+        models and data, as the plain loop does."""
+        stepper = stepper or self.stepper
         tcp = np.asarray(self.params.tcp_offset_m)
         if stepper in ("loop", "compiled"):
             return LoopMultibody(self.model, a.n_runs, tcp, a.payload_com_m)
