@@ -32,19 +32,19 @@ import numpy as np
 from ur5fault import RunSpec, Simulator, make_effect, pick_and_place
 
 
-def bare_mj_step_us(sim: Simulator, n_steps: int) -> float:
+def bare_mj_step_us(sim: Simulator, n_steps: int, clock=time.perf_counter) -> float:
     m = sim.model
     d = mujoco.MjData(m)
     d.qpos[:] = pick_and_place().q_set_rad[0]
     mujoco.mj_forward(m, d)
     step = mujoco.mj_step
-    t = time.perf_counter()
+    t = clock()
     for _ in range(n_steps):
         step(m, d)
-    return (time.perf_counter() - t) / n_steps * 1e6
+    return (clock() - t) / n_steps * 1e6
 
 
-def bare_compiled_us(sim: Simulator, n_steps: int) -> float:
+def bare_compiled_us(sim: Simulator, n_steps: int, clock=time.perf_counter) -> float:
     """(a0) the same steps from a compiled loop (``sim/mjlib.py``: ``mj_step`` called by its address)."""
     from numba import njit
 
@@ -60,9 +60,9 @@ def bare_compiled_us(sim: Simulator, n_steps: int) -> float:
     d.qpos[:] = pick_and_place().q_set_rad[0]
     mujoco.mj_forward(m, d)
     loop(MJ_STEP_ADDRESS, m._address, d._address, 10)  # compile
-    t = time.perf_counter()
+    t = clock()
     loop(MJ_STEP_ADDRESS, m._address, d._address, n_steps)
-    return (time.perf_counter() - t) / n_steps * 1e6
+    return (clock() - t) / n_steps * 1e6
 
 
 def runs_for(n: int) -> list[RunSpec]:
@@ -74,13 +74,14 @@ def runs_for(n: int) -> list[RunSpec]:
     return out
 
 
-def full_fidelity_us(sim: Simulator, n_runs: int, duration_s: float, first: int = 0) -> float:
+def full_fidelity_us(sim: Simulator, n_runs: int, duration_s: float, first: int = 0,
+                     clock=time.perf_counter) -> float:
     """Per-run-step wall cost [us] of one batch (runs ``first`` .. ``first + n_runs - 1`` of :func:`runs_for`)."""
     traj = pick_and_place()
     n_steps = round(duration_s / sim.params.physics_dt_s)
-    t = time.perf_counter()
+    t = clock()
     sim.run(traj, runs_for(first + n_runs)[first:], duration_s=duration_s)
-    return (time.perf_counter() - t) / (n_runs * n_steps) * 1e6
+    return (clock() - t) / (n_runs * n_steps) * 1e6
 
 
 def _half_batch(args) -> float:
@@ -120,8 +121,13 @@ def main(argv=None) -> int:
     ap.add_argument("--campaign", action="store_true", help="also time the default campaign end to end")
     ap.add_argument("--drive", choices=("numba", "numpy"), default="numba", help="drive implementation")
     ap.add_argument("--repeat", type=int, default=3, help="repetitions of (a), (a0) and (b)")
+    ap.add_argument("--duration-s", type=float, default=None, help="simulated seconds per run (default: 13, the "
+                    "whole pick-and-place; 0.2 with --quick)")
+    ap.add_argument("--cpu-time", action="store_true", help="time (a), (a0), (b) and (c) by the process's CPU time "
+                    "instead of wall time (steadier on a shared, loaded machine; (t) and (d) stay wall time)")
     args = ap.parse_args(argv)
-    dur = 0.2 if args.quick else 13.0  # the whole 2 kg pick-and-place
+    dur = args.duration_s or (0.2 if args.quick else 13.0)  # default: the whole 2 kg pick-and-place
+    clock = time.process_time if args.cpu_time else time.perf_counter
     sim = Simulator(drive=args.drive)
     n_steps = round(dur / sim.params.physics_dt_s)
     out: dict = {
@@ -129,6 +135,7 @@ def main(argv=None) -> int:
                    f"{platform.python_version()}, mujoco {mujoco.__version__}, numpy {np.__version__}",
         "physics_dt_s": sim.params.physics_dt_s,
         "drive": args.drive,
+        "clock": "cpu" if args.cpu_time else "wall",
         "simulated_s_per_run": dur,
         "steps_per_run": n_steps,
     }
@@ -136,9 +143,9 @@ def main(argv=None) -> int:
     bare_compiled_us(sim, 1000)
     a, a0, b = [], [], []
     for _ in range(args.repeat):  # interleaved: a load change on the shared machine hits all three alike
-        a.append(bare_mj_step_us(sim, max(n_steps, 20000)))
-        a0.append(bare_compiled_us(sim, max(n_steps, 20000)))
-        b.append(full_fidelity_us(sim, 1, dur))
+        a.append(bare_mj_step_us(sim, max(n_steps, 20000), clock))
+        a0.append(bare_compiled_us(sim, max(n_steps, 20000), clock))
+        b.append(full_fidelity_us(sim, 1, dur, clock=clock))
     out["a_bare_mj_step_us"] = float(np.median(a))
     out["a0_bare_compiled_loop_us"] = float(np.median(a0))
     out["b_one_run_us_per_step"] = float(np.median(b))
@@ -150,7 +157,7 @@ def main(argv=None) -> int:
     out["ratio_a_to_a0_median"] = float(np.median(np.array(a) / np.array(a0)))
     best = None
     for n in (8, 32, 128):
-        us = full_fidelity_us(sim, n, dur if n <= 32 or args.quick else dur / 4)
+        us = full_fidelity_us(sim, n, dur if n <= 32 or args.quick else dur / 4, clock=clock)
         out[f"c_batch{n}_us_per_run_step"] = us
         out[f"ratio_c_batch{n}_to_a"] = us / out["a_bare_mj_step_us"]
         out[f"ratio_c_batch{n}_to_a0"] = us / out["a0_bare_compiled_loop_us"]
