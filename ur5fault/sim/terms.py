@@ -33,6 +33,9 @@ import numpy as np
 from numba import njit
 from numpy.typing import ArrayLike, NDArray
 
+from ..errors import ParameterError
+from .axes import JOINT_NAMES
+
 #: harmonic terms per joint and kind that one run can carry (slots of ``RunArrays``)
 MAX_HARMONICS = 3
 #: width of the smooth sign of the Stribeck-like term [rad/s] (assumption: well below any commanded
@@ -141,8 +144,14 @@ class TermHook:
                     for j, b in enumerate(bodies):
                         if a.link_mass_kg[r, j] == 0.0 and not np.any(a.link_com_shift_m[r, j]):
                             continue
+                        new_kg = mass[r][b] + a.link_mass_kg[r, j]
+                        if not new_kg > 0.0:  # a massless or negative link: the mass matrix is no longer positive
+                            raise ParameterError(
+                                f"link_mass on {JOINT_NAMES[j]}: mass_kg = {a.link_mass_kg[r, j]:g} would leave the "
+                                f"link {new_kg:.3g} kg (it weighs {mass[r][b]:.3g} kg); a link's mass must stay "
+                                "positive")
                         ipos[r][b] = ipos[r][b] + a.link_com_shift_m[r, j]
-                        mass[r][b] = mass[r][b] + a.link_mass_kg[r, j]
+                        mass[r][b] = new_kg
             mb.model_changed()
         if self.link_torque and self.gravity:
             mb.gravity_torque()  # binds the kinematic fields before the run starts
