@@ -21,13 +21,20 @@ from .source import sniff
 
 #: the memory a fit may take at most [bytes] (issue 23's goal: 3 GB)
 MEMORY_BOUND_BYTES = 3.0e9
-#: measured peak of `discrepancy` at zero length and per log sample (see the module docstring)
-PEAK_BYTES_BASE = 0.0
-PEAK_BYTES_PER_SAMPLE = 0.0
-#: share of the bound the line may reach (margin for a second worker's interpreter and other logs' shapes)
+#: measured peak resident memory of ``ur5fault discrepancy LOG --format nist --jobs 1`` [KiB, GNU time's
+#: "Maximum resident set size"] on the first 10 s of the NIST log (1250 samples) and on all of it (7905),
+#: 2-core x86_64, Python 3.11: 461 640 KiB and 794 520 KiB.  The line through them is an upper bound
+#: beyond 63 s: part of its slope is the library screening, which stops growing at 20 s (SCREEN_S).
+MEASURED_PEAKS_KIB = ((1250, 461_640), (7905, 794_520))
+(_n0, _p0), (_n1, _p1) = MEASURED_PEAKS_KIB
+#: peak memory per log sample and at zero length [bytes] (about 51 kB and 0.41 GB)
+PEAK_BYTES_PER_SAMPLE = (_p1 - _p0) * 1024 / (_n1 - _n0)
+PEAK_BYTES_BASE = _p0 * 1024 - _n0 * PEAK_BYTES_PER_SAMPLE
+#: share of the bound the line may reach (the rest: a second worker process's interpreter, 0.3 GB in
+#: ur5fault/sim/budget.py, and other logs' shapes)
 BOUND_SHARE = 0.8
-#: samples a log may have for identify and discrepancy
-MAX_FIT_SAMPLES = 60_000
+#: samples a log (or the logs fitted together) may have for identify and discrepancy: 38 876, 311 s at 125 Hz
+MAX_FIT_SAMPLES = int((BOUND_SHARE * MEMORY_BOUND_BYTES - PEAK_BYTES_BASE) / PEAK_BYTES_PER_SAMPLE)
 #: sample period of a CB2/CB3 controller's log [s] (125 Hz), for lengths in seconds before the log is read
 UR_TICK_S = 0.008
 #: a CSV's row count is estimated from its first 64 kB; refuse early only beyond this factor of the limit
