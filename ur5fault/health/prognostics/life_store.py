@@ -125,7 +125,8 @@ def add_life_labels(df: pd.DataFrame) -> pd.DataFrame:
 
 def consolidate_life(out: Path, ids: LifeIdentities, done: Mapping[Unit, int]) -> pd.DataFrame:
     """Gather inspections 0..k of every unit (``done``: unit -> its last inspection), each file
-    verified, into ``OUT/inspections.parquet`` with the ground-truth labels."""
+    verified, into ``OUT/inspections.parquet`` with the ground-truth labels.  The split is a label,
+    not a result: it follows the campaign's current split (fleet size, fraction, seed)."""
     import pyarrow.parquet as pq
 
     from ...campaign.store import CampaignChangedError, column_units
@@ -140,7 +141,9 @@ def consolidate_life(out: Path, ids: LifeIdentities, done: Mapping[Unit, int]) -
                                            "run the life campaign again to re-simulate it")
             frames.append(pq.read_table(path).to_pandas())
             identities[run_id(unit, k)] = ids.identity(unit, k)
-    df = add_life_labels(pd.concat(frames, ignore_index=True))
+    df = pd.concat(frames, ignore_index=True)
+    df["split"] = df["unit_id"].map({u.unit_id: u.split for u in done})
+    df = add_life_labels(df)
     units = {**column_units(df.columns), **{c: u for c, u in LIFE_UNITS.items() if c in df.columns}}
     meta = {"units": units, "campaign_identity": digest(identities), "run_identities": identities}
     write_parquet_atomic(df, Path(out) / "inspections.parquet", {"ur5fault": json.dumps(meta, sort_keys=True)})

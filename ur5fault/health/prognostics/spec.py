@@ -82,6 +82,9 @@ class Unit:
     def unit_id(self) -> str:
         return f"u{self.index:05d}"
 
+    def __hash__(self) -> int:  # the trajectory may be a mapping: units are keyed by their index
+        return hash(self.index)
+
 
 @dataclasses.dataclass(frozen=True)
 class LifeCampaign:
