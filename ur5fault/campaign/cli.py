@@ -39,12 +39,11 @@ def register(sub) -> None:
 
 def cmd_run(args: argparse.Namespace) -> int:
     from ..errors import ParameterError
+    from ..health.prognostics.spec import is_life_file
     from ..util.checks import check_number
     from . import acceptable_backlash, load_campaign, run_campaign, tcp_table
     from .limits import confirmation_needed, effective_jobs, estimate
     from .spec import MAX_THRESHOLD_MM
-
-    from ..health.prognostics.spec import is_life_file
 
     if is_life_file(args.file):  # a life campaign (issue 20): units run to failure
         from ..health.prognostics.cli import cmd_life_run

@@ -7,8 +7,7 @@ import sys
 from pathlib import Path
 
 #: `campaign run` options a life campaign does not take (named in the error instead of ignored)
-_NOT_FOR_LIFE = {"model": "--model", "save_timeseries": "--save-timeseries", "threshold_mm": "--threshold-mm",
-                 "replace_changed": "--replace-changed"}
+_NOT_FOR_LIFE = {"model": "--model", "save_timeseries": "--save-timeseries", "threshold_mm": "--threshold-mm"}
 
 
 def register(sub) -> None:
@@ -31,7 +30,7 @@ def cmd_life_run(args: argparse.Namespace) -> int:
             raise ParameterError(f"{flag} does not apply to a life campaign ({args.file} has a `life:` section)")
     camp = load_life(args.file, args.out)
     m = run_life(camp, camp.out, jobs=args.jobs, backend=args.backend, scheduler=args.scheduler,
-                 progress=not args.quiet)
+                 progress=not args.quiet, replace_changed=args.replace_changed)
     if m["state"] != "complete":
         print(f"life campaign stopped early; run it again to resume ({camp.out})")
         return 1
@@ -55,6 +54,7 @@ def cmd_prognose(args: argparse.Namespace) -> int:
         r = m["estimators"][name]
         rm = ", ".join(f"{k}: {v:.4g}" for k, v in r["rmse_cycles"].items())
         print(f"  {name}: RUL RMSE [cycles] at life fraction {rm}; alpha-lambda accuracy (alpha 0.2, lambda 0.5) "
-              f"{r['alpha_lambda_accuracy']:.2f}; median prognostic horizon {r['prognostic_horizon_cycles_median']:.4g}")
+              f"{r['alpha_lambda_accuracy']:.2f}; median prognostic horizon "
+              f"{r['prognostic_horizon_cycles_median']:.4g} cycles")
     print(f"wrote {m['out']}/report.md, metrics.json and figures in {time.perf_counter() - t0:.1f} s", file=sys.stderr)
     return 0

@@ -18,7 +18,7 @@ def rul_alpha_cone(pred: dict[str, pd.DataFrame], alpha: float = ALPHA) -> Figur
     for ax, (name, p) in zip(axes, pred.items()):
         ax.fill_between(x, (1 - alpha) * (1 - x), (1 + alpha) * (1 - x), color="0.85", label=f"alpha = {alpha:g} cone")
         ax.plot(x, 1 - x, color="k", lw=1.2, label="true RUL")
-        for uid, d in p.groupby("unit_id"):
+        for _, d in p.groupby("unit_id"):
             d = d.sort_values("cycles")
             f, eol = d["cycles"] / d["eol_cycles"], d["eol_cycles"]
             ax.plot(f, d["rul_est"] / eol, lw=0.8, alpha=0.7)
@@ -37,7 +37,7 @@ def health_index_paths(df: pd.DataFrame, hi: np.ndarray, level: float) -> Figure
     fig = Figure(figsize=(7, 4.4), layout="constrained")
     ax = fig.subplots()
     d = df.assign(_hi=hi)
-    for (uid, split), g in d.groupby(["unit_id", "split"]):
+    for (_, split), g in d.groupby(["unit_id", "split"]):
         g = g.sort_values("cycles")
         ax.plot(g["cycles"], g["_hi"], lw=0.8 if split == "test" else 0.5,
                 color=None if split == "test" else "0.7", alpha=0.9 if split == "test" else 0.6)

@@ -23,7 +23,7 @@ import numpy as np
 
 from ...campaign.execute import _dask_client, _exit_with_parent, _note_stderr, _stop_loky_workers
 from ...campaign.limits import effective_jobs
-from ...campaign.store import Lock
+from ...campaign.store import CampaignChangedError, Lock
 from ...config import parse_trajectory
 from ...errors import ParameterError
 from ...sim.axes import N_JOINTS
@@ -33,6 +33,7 @@ from ...util.progress import campaign_progress
 from .life_store import (
     LifeIdentities,
     check_inspection,
+    check_reference,
     consolidate_life,
     read_inspection,
     read_reference,
@@ -131,27 +132,30 @@ def next_job(camp: LifeCampaign, unit: Unit, row: Mapping[str, Any]) -> Job | No
     return Job(unit, k + 1, cycles + camp.interval_cycles, tuple(float(v) for v in a))
 
 
-def _resume(camp: LifeCampaign, out: Path, ids: LifeIdentities, n_log: int) -> tuple[dict, dict, dict, int]:
-    """From the stored files: each unit's next job (or its last inspection when finished), its reference."""
-    pending, finished, refs, n_bad = {}, {}, {}, 0
+def _resume(camp: LifeCampaign, out: Path, ids: LifeIdentities, n_log: int) -> tuple[dict, dict, dict, list]:
+    """From the stored files: each unit's next job (or its last inspection when finished), its
+    reference path, and the (file, state, detail) of every stored file that cannot be used."""
+    pending, finished, refs, unusable = {}, {}, {}, []
     for unit in camp.units:
         job: Job | None = Job(unit, 0, 0, (0.0,) * N_JOINTS)
         ref = read_reference(out, ids, unit, n_log)
         k = 0
-        while job is not None and ref is not None:
+        while job is not None:
             check = check_inspection(out, ids, unit, k)
+            if check.state == "ok" and ref is None:  # the reference is missing, bad or changed: start again
+                check = check_reference(out, ids, unit, n_log)
             if check.state != "ok":
-                n_bad += check.state in ("bad", "changed")
+                if check.state != "missing":
+                    unusable.append((run_id(unit, k), check.state, check.detail))
                 break
-            row = read_inspection(out, unit, k)
-            job = next_job(camp, unit, row)
+            job = next_job(camp, unit, read_inspection(out, unit, k))
             if job is None:
                 finished[unit] = k
             k += 1
         if job is not None:
             pending[unit] = job if ref is not None else Job(unit, 0, 0, (0.0,) * N_JOINTS)
         refs[unit.unit_id] = ref
-    return pending, finished, refs, n_bad
+    return pending, finished, refs, unusable
 
 
 def _batches(jobs: Sequence[Job], batch_size: int, n_workers: int) -> list[list[Job]]:
@@ -167,7 +171,8 @@ def _batches(jobs: Sequence[Job], batch_size: int, n_workers: int) -> list[list[
 
 def run_life(camp: LifeCampaign, out: Path | None = None, *, jobs: int | None = None, backend: str = "loky",
              scheduler: str | None = None, progress: bool | Callable[[int, int, float], None] = True,
-             note: Callable[[str], None] | None = _note_stderr, max_rounds: int | None = None) -> dict[str, Any]:
+             note: Callable[[str], None] | None = _note_stderr, max_rounds: int | None = None,
+             replace_changed: bool = False) -> dict[str, Any]:
     """Run (or resume) a life campaign into ``out``; return its manifest.
 
     Args:
@@ -175,6 +180,8 @@ def run_life(camp: LifeCampaign, out: Path | None = None, *, jobs: int | None = 
         backend: ``"loky"`` or ``"dask"`` (``scheduler`` address required).
         progress: a progress bar of finished units on stderr, or a callback ``(done, total, eta_s)``.
         max_rounds: stop after this many rounds (tests: an interrupted campaign); None: to the end.
+        replace_changed: simulate again the units whose stored inspections were made under other
+            settings (default: stop and name the first difference).
     """
     out = Path(out) if out is not None else camp.out
     say = note or (lambda m: None)
@@ -189,13 +196,14 @@ def run_life(camp: LifeCampaign, out: Path | None = None, *, jobs: int | None = 
         with Lock(out):
             if capped:
                 say(capped)
-            return _run_locked(camp, out, n_jobs, client, progress, say, max_rounds, backend)
+            return _run_locked(camp, out, n_jobs, client, progress, say, max_rounds, backend, replace_changed)
     finally:
         if client is not None:
             client.close()
 
 
-def _run_locked(camp, out: Path, n_jobs: int, client, progress, say, max_rounds, backend) -> dict[str, Any]:
+def _run_locked(camp, out: Path, n_jobs: int, client, progress, say, max_rounds, backend,
+                replace_changed) -> dict[str, Any]:
     import joblib
 
     from ...sim.params import load_params
@@ -213,9 +221,15 @@ def _run_locked(camp, out: Path, n_jobs: int, client, progress, say, max_rounds,
             d = parse_trajectory(unit.trajectory, "trajectory").duration_s
             d = d if camp.duration_s is None else camp.duration_s
             n_log[key] = int(round(d / dt)) // int(round(camp.log_period_s / dt))
-    pending, finished, refs, n_bad = _resume_all(camp, out, ids, n_log)
-    if n_bad:
-        say(f"{n_bad} stored inspection file(s) bad or made under other settings: simulating from there again")
+    pending, finished, refs, unusable = _resume_all(camp, out, ids, n_log)
+    changed = [u for u in unusable if u[1] == "changed"]
+    if changed and not replace_changed:
+        rid, _, why = changed[0]
+        raise CampaignChangedError(
+            f"{out / 'runs' / rid}.parquet: made under other settings ({why}); {len(changed)} unit(s) differ from this "
+            "life campaign: use another --out, or --replace-changed to simulate them again")
+    for rid, state, why in unusable[:5]:
+        say(f"{out / 'runs' / rid}.parquet: {why or state}; simulating the unit again from there")
     say(f"life campaign {camp.name}: {len(camp.units)} units, {len(finished)} finished, {len(pending)} to run -> {out}")
     write_json_atomic(out / "manifest.json", _manifest(camp, ids, "running", backend, n_jobs, t0, None))
     report = campaign_progress(progress, len(camp.units))
@@ -261,7 +275,7 @@ def _run_locked(camp, out: Path, n_jobs: int, client, progress, say, max_rounds,
 
 
 def _resume_all(camp, out, ids, n_log):
-    pending, finished, refs, n_bad = {}, {}, {}, 0
+    pending, finished, refs, unusable = {}, {}, {}, []
     by_traj: dict[str, list[Unit]] = {}
     for unit in camp.units:
         by_traj.setdefault(json.dumps(unit.trajectory, sort_keys=True), []).append(unit)
@@ -271,8 +285,8 @@ def _resume_all(camp, out, ids, n_log):
         pending.update(p)
         finished.update(f)
         refs.update(r)
-        n_bad += b
-    return pending, finished, refs, n_bad
+        unusable += b
+    return pending, finished, refs, unusable
 
 
 def _manifest(camp: LifeCampaign, ids: LifeIdentities, state: str, backend: str, jobs: int, t0: float,

@@ -102,10 +102,14 @@ def write_reference(out: Path, ids: LifeIdentities, unit: Unit, t_s: np.ndarray,
     write_parquet_atomic(df, reference_path(out, unit), {"ur5fault": json.dumps(meta)})
 
 
+def check_reference(out: Path, ids: LifeIdentities, unit: Unit, n_log: int) -> FileCheck:
+    return check_timeseries_file(reference_path(out, unit), ids.identity(unit, 0), n_log)
+
+
 def read_reference(out: Path, ids: LifeIdentities, unit: Unit, n_log: int) -> np.ndarray | None:
     """The unit's reference TCP path ``(n_log, 3)`` [m], or None when absent, bad or made under other settings."""
     path = reference_path(out, unit)
-    if check_timeseries_file(path, ids.identity(unit, 0), n_log).state != "ok":
+    if check_reference(out, ids, unit, n_log).state != "ok":
         return None
     df = pd.read_parquet(path)
     return df[["tcp_x_m", "tcp_y_m", "tcp_z_m"]].to_numpy()

@@ -175,7 +175,8 @@ def markdown(m: dict[str, Any]) -> str:
         rm = r["rmse_cycles"]
         lines.append(f"| {name} | {_f(rm['0.25'])} | {_f(rm['0.5'])} | {_f(rm['0.75'])} | "
                      f"{_f(r['alpha_lambda_accuracy'], '.2f')} | {_f(r['prognostic_horizon_cycles_median'])} "
-                     f"({_f(r['prognostic_horizon_fraction_median'], '.2f')}) | {_f(r['interval_coverage_90'], '.2f')} |")
+                     f"({_f(r['prognostic_horizon_fraction_median'], '.2f')}) | "
+                     f"{_f(r['interval_coverage_90'], '.2f')} |")
     g = m["goals"]
     lines += ["", f"Goals: RMSE at 50 % life, wiener / naive = {_f(g['rmse_50_ratio_wiener_to_naive'], '.2f')} "
               f"(goal <= 0.5: {'met' if g['rmse_50_at_most_half_of_naive'] else 'missed'}); alpha-lambda accuracy "
