@@ -7,7 +7,8 @@ import sys
 from pathlib import Path
 
 #: `campaign run` options a life campaign does not take (named in the error instead of ignored)
-_NOT_FOR_LIFE = {"model": "--model", "save_timeseries": "--save-timeseries", "threshold_mm": "--threshold-mm"}
+_NOT_FOR_LIFE = {"model": "--model", "save_timeseries": "--save-timeseries", "threshold_mm": "--threshold-mm",
+                 "yes": "--yes (a life campaign asks for no confirmation)"}
 
 
 def register(sub) -> None:
