@@ -12,24 +12,19 @@ UR's own model, and at rest with the stick-slip (LuGre) law and with the smooth-
 import numpy as np
 import pytest
 
-from ur5fault import RunSpec, Simulator
-from ur5fault.discrepancy.report import conditions
 from ur5fault.logs import read_nist
-from ur5fault.sim.params import load_params
+from ur5fault.twin.replay import LogReplay
+from ur5fault.twin.residuals import conditions, held_out_mask
 
 # replays the whole real log: long; `make test-fast` skips it
 pytestmark = pytest.mark.slow
 
 UR_MODEL_RMS_A = np.array([0.237, 0.524, 0.348, 0.158, 0.123, 0.122])  # whole log, data/nist-ur5/README.md
-HELD_OUT_FROM = 0.6  # share of the log before the held-out part (the discrepancy workflow's default)
 
 
 def _replay(log, friction=None):
-    over = {"tcp_offset_m": list(log.tcp_offset_m), "joint_temperature_C": log.temperature_C.mean(axis=0).tolist()}
-    if friction:
-        over["friction"] = friction
-    return Simulator(load_params(overrides=over)).run(log.to_trajectory(), [RunSpec("nist", 1)],
-                                                      log_period_s=log.period_s)
+    """The log replayed once (noise seed 1): samples 1..n of the log, ``Replayed``."""
+    return LogReplay(log, {"friction": friction} if friction else None, seed=1).run([()])[0]
 
 
 @pytest.fixture(scope="module")
@@ -44,10 +39,10 @@ def _rms_deg(err, sel):
 
 def test_tracking_error_within_factor_three_of_the_real_robot(replay):
     log, res = replay
-    n = res.t_s.size  # samples 1..n of the log (sample 0 is the initial state)
-    sim_err = log.q_target_rad[1 : n + 1] - res["q_FB_rad"][0]
+    n = res.y.shape[0]  # samples 1..n of the log (sample 0 is the initial state)
+    sim_err = log.q_target_rad[1 : n + 1] - res.position_rad
     meas_err = log.q_target_rad[1 : n + 1] - log.q_actual_rad[1 : n + 1]
-    for name, sel in (("whole log", slice(None)), ("held-out 32-63 s", res.t_s >= 32.0)):
+    for name, sel in (("whole log", slice(None)), ("held-out 32-63 s", log.t_s[1 : n + 1] - log.t_s[0] >= 32.0)):
         sim, meas = _rms_deg(sim_err, sel)[:5], _rms_deg(meas_err, sel)[:5]
         ratio = sim / meas
         print(f"{name}: sim {np.round(sim, 4)} deg, measured {np.round(meas, 4)} deg, ratio {np.round(ratio, 2)}")
@@ -57,8 +52,8 @@ def test_tracking_error_within_factor_three_of_the_real_robot(replay):
 
 
 def _current_rms(log, res, mask):
-    n = res.t_s.size
-    err = np.where(mask, res["i_FB_A"][0] - log.current_A[1 : n + 1], np.nan)
+    n = res.y.shape[0]
+    err = np.where(mask, res.current_A - log.current_A[1 : n + 1], np.nan)
     return np.sqrt(np.nanmean(err**2, axis=0))
 
 
@@ -67,8 +62,8 @@ def test_held_out_current_against_urs_own_model(replay):
     model (its target current) on the same samples.  Below UR's on J1-J3 and J5; J4 (a gravity-load
     offset at rest) and J6 (a constant -0.12 A offset in the log) are not, docs/validation.md."""
     log, res = replay
-    n = res.t_s.size
-    held = np.broadcast_to((res.t_s >= HELD_OUT_FROM * (log.t_s[-1] - log.t_s[0]))[:, None], (n, 6))
+    n = res.y.shape[0]
+    held = held_out_mask(log, n)
     sim = _current_rms(log, res, held)
     ur = np.sqrt(np.mean((log.target_current_A[1 : n + 1] - log.current_A[1 : n + 1])[held[:, 0]] ** 2, axis=0))
     print("held-out current RMS [A]: sim", np.round(sim, 3), " UR", np.round(ur, 3))
@@ -85,7 +80,7 @@ def test_stick_slip_law_holds_the_current_at_rest(replay):
     the smooth sign lets the joint creep and the current relax, the LuGre law holds it."""
     log, res = replay
     smooth = _replay(log, {"model": "smooth"})
-    n = res.t_s.size
+    n = res.y.shape[0]
     rest = conditions(log, n, log.current_A[1 : n + 1])["at rest"]
     lugre_rms, smooth_rms = _current_rms(log, res, rest), _current_rms(log, smooth, rest)
     print("at-rest current RMS [A]: LuGre", np.round(lugre_rms, 3), " smooth sign", np.round(smooth_rms, 3))

@@ -7,6 +7,7 @@ import os
 from pathlib import Path
 
 from ..logs.options import add_log_options
+from ..twin.residuals import FIT_FRACTION
 
 
 def register(sub) -> None:
@@ -14,7 +15,8 @@ def register(sub) -> None:
     add_log_options(d, ("rtde", "nist", "sim"))
     d.add_argument("--model", help="model overlay YAML to start from (e.g. an earlier model.yaml)")
     d.add_argument("--out", required=True, help="output folder (report.md, model.yaml, summary.json)")
-    d.add_argument("--fit-fraction", type=float, default=0.6, help="share of the log used for fitting (0.2..0.9)")
+    d.add_argument("--fit-fraction", type=float, default=FIT_FRACTION,
+                   help=f"share of the log used for fitting (0.2..0.9, default {FIT_FRACTION:g})")
     d.add_argument("--max-effects", type=int, default=3, help="most effects of the library named (default 3)")
     d.add_argument("--max-terms", type=int, default=4,
                    help="most terms discovered outside the library (default 4; 0: library only)")

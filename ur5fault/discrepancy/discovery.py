@@ -28,8 +28,8 @@ from ..sim.axes import N_JOINTS
 from ..sim.engine import Simulator
 from ..sim.multibody import payload_inertia
 from ..sim.terms import coulomb, harmonic, last_motion_sign, quadratic, rest_weight, stribeck
+from ..twin.replay import LogReplay, Replayed
 from .candidates import TermCandidate
-from .replay import Replay, Replayed
 
 #: periods per joint revolution searched for ripples periodic in the joint angle (assumption: a gear's
 #: eccentricity or wear shows at low orders; 12 covers the strain-wave gear's two-lobe harmonics)
@@ -61,7 +61,7 @@ def _smooth(x: NDArray, k: int = DERIVATIVE_SMOOTHING) -> NDArray:
     return (c[k:] - c[:-k]) / k
 
 
-def _gravity(rp: Replay, q: NDArray) -> tuple[NDArray, NDArray, NDArray, NDArray]:
+def _gravity(rp: LogReplay, q: NDArray) -> tuple[NDArray, NDArray, NDArray, NDArray]:
     """Gravity torques at the replayed angles: the model's own ``(n, 6)``; per unit mass at each link's
     centre of mass ``(6, n, 6)``; per metre of each link's centre-of-mass shift along its x, y, z axes
     ``(6, 3, n, 6)`` [N*m]; and the links' masses [kg]."""
@@ -95,7 +95,7 @@ def _gravity(rp: Replay, q: NDArray) -> tuple[NDArray, NDArray, NDArray, NDArray
     return own, per_mass, per_shift, np.array([m.body_mass[b] for b in links])
 
 
-def dictionary(rp: Replay, sim: Replayed, n: int, joints: list[int]) -> tuple[list[TermCandidate], NDArray]:
+def dictionary(rp: LogReplay, sim: Replayed, n: int, joints: list[int]) -> tuple[list[TermCandidate], NDArray]:
     """The dictionary's candidates and weighted columns ``(p, n, n_channels)`` over samples ``1..n``.
 
     Args:

@@ -18,8 +18,8 @@ from numpy.typing import NDArray
 from ..sim.axes import N_JOINTS
 from ..sim.effects import REGISTRY, EffectSpec, make_effect
 from ..sim.params import RobotParams, load_params
+from ..twin.replay import LogReplay, Replayed
 from .candidates import LibraryCandidate
-from .replay import Replay, Replayed
 
 #: probe value per (effect, parameter): a typical fault size, for the secant of the screening batch
 PROBES: dict[tuple[str, str], float | None] = {
@@ -86,7 +86,7 @@ def _probe_runs(cands: list[LibraryCandidate]) -> list[tuple[list[LibraryCandida
     return runs
 
 
-def screen(rp: Replay, n: int, cands: list[LibraryCandidate], current: Sequence[EffectSpec] = (),
+def screen(rp: LogReplay, n: int, cands: list[LibraryCandidate], current: Sequence[EffectSpec] = (),
            progress=None) -> tuple[Replayed, NDArray, list[LibraryCandidate]]:
     """Simulate the baseline and every probe run over samples ``1..n`` in one batch.
 

@@ -26,16 +26,19 @@ from ..errors import ParameterError
 from ..logs import MeasuredLog
 from ..sim.axes import JOINT_NAMES, N_JOINTS
 from ..sim.effects import EffectSpec
+from ..twin.replay import LogReplay, Replayed
+from ..twin.residuals import FIT_FRACTION, localise, rms_table, unexplained
 from . import discovery, library
 from .candidates import Candidate
 from .judging import Finding, SearchStep, final_verdicts, judge_findings
 from .refinement import FindingSet, Refined, polish, probe_batch
-from .replay import Replay, Replayed
-from .report import localise, rms_table, unexplained
 from .search import backward, columns_of, forward, judge
 from .statistics import BlockGram, rss_of, weighted
 
 logger = logging.getLogger(__name__)
+
+#: the workflow's own sensor-noise stream of its replays, unrelated to any log
+WORKFLOW_SEED = 20261121
 
 #: residuals above this multiple of the noise floor (sqrt 2 sigma: model and log noise) get joint-local terms
 FLOOR_FACTOR = 2.0
@@ -111,7 +114,7 @@ class DiscrepancyModel:
             [s] (None: the whole fitting part); refinement and judgement use the whole fitting part.
     """
 
-    def __init__(self, fit_fraction: float = 0.6, max_effects: int = 3, max_terms: int = 4,
+    def __init__(self, fit_fraction: float = FIT_FRACTION, max_effects: int = 3, max_terms: int = 4,
                  kinds: Sequence[str] | None = None, jobs: int = 1, refiner: str = "secant",
                  progress: bool = False, screen_s: float | None = SCREEN_S) -> None:
         lo, hi = FIT_FRACTION_RANGE
@@ -133,7 +136,7 @@ class DiscrepancyModel:
     def fit(self, log: MeasuredLog, params_overrides: dict | None = None,
             base_effects: Sequence[EffectSpec] = ()) -> DiscrepancyModel:
         t0 = time.perf_counter()
-        rp = Replay(log, params_overrides, base_effects, jobs=self.jobs)
+        rp = LogReplay(log, params_overrides, base_effects, seed=WORKFLOW_SEED, jobs=self.jobs)
         self.replay_ = rp
         self.base_effects_ = tuple(base_effects)
         self.params_overrides_ = dict(params_overrides or {})
@@ -252,7 +255,7 @@ class DiscrepancyModel:
         return self
 
     # --------------------------------------------------------------------------------- pieces
-    def _polish(self, rp: Replay, kept: list[Finding], first: Refined, fs: FindingSet, progress) -> Replayed:
+    def _polish(self, rp: LogReplay, kept: list[Finding], first: Refined, fs: FindingSet, progress) -> Replayed:
         """Gauss-Newton on the kept findings from their judged coefficients, then their final verdicts (one
         that fails now is dropped and the final model simulated once more)."""
         cols = columns_of(fs.found)
@@ -273,7 +276,7 @@ class DiscrepancyModel:
             return rp.run([rest], rp.n_samples, progress)[0] if rest else first.sim0
         return pol.sim
 
-    def _results(self, rp: Replay, nominal: Replayed, after: Replayed, n_fit: int, n_all: int) -> None:
+    def _results(self, rp: LogReplay, nominal: Replayed, after: Replayed, n_fit: int, n_all: int) -> None:
         meas = rp.measured(n_all)
         held = slice(n_fit, n_all)
         self.sim_before_, self.sim_after_ = nominal, after

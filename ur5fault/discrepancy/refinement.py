@@ -13,8 +13,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..sim.effects import EffectSpec
+from ..twin.replay import LogReplay, Replayed
 from .candidates import Candidate
-from .replay import Replay, Replayed
 from .statistics import weighted
 
 #: refinement rounds by re-simulation at most (each one lockstep batch) ...
@@ -245,7 +245,7 @@ class FindingSet:
         """Index among :meth:`probes` of the one that removes finding ``k``."""
         return sum(c.n_coef for c in self.found[:k])
 
-    def evaluator(self, rp: Replay, progress=None):
+    def evaluator(self, rp: LogReplay, progress=None):
         """``evaluate(thetas, extra=())``: replays of the whole log at each ``theta`` (and, for each extra
         ``(i, alternative, its coefficients)``, the alternative in place of finding ``i``, the others at
         ``thetas[1]``), with their weighted residuals."""

@@ -1,7 +1,7 @@
 """Statistics of the discrepancy workflow: weighted residuals, the linearised least-squares problem in
 time blocks, and the tests a finding must pass.
 
-Every residual is weighted by its sensor's noise sigma (``Replay.sigma``), so a weighted residual of
+Every residual is weighted by its sensor's noise sigma (``ur5fault.twin.LogReplay.sigma``), so a weighted residual of
 pure sensor noise has unit variance.  The linearised problem is ``e ~ X theta``: ``e`` the weighted
 residual ``(n, n_channels)`` (channels = signals x joints), ``X`` one column per coefficient of the
 candidates, same shape.  It is reduced once to sufficient statistics per contiguous time block

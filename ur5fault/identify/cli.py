@@ -7,6 +7,8 @@ import sys
 from pathlib import Path
 
 from ..logs.options import add_log_options
+from .loop import SWEEP_WINDOW_S
+from .stats import N_BOOT
 
 
 def register(sub) -> None:
@@ -16,9 +18,9 @@ def register(sub) -> None:
     d.add_argument("--json", help="also write every estimate with its interval as JSON")
     d.add_argument("--no-sweep", action="store_true",
                    help="skip the position-loop bandwidth sweep (it replays the log once per candidate)")
-    d.add_argument("--sweep-window-s", type=float, default=32.0,
-                   help="the part of the log the sweep replays, from its start (default 32)")
-    d.add_argument("--bootstrap", type=int, default=200, help="resamples per interval (default 200)")
+    d.add_argument("--sweep-window-s", type=float, default=SWEEP_WINDOW_S,
+                   help=f"the part of the log the sweep replays, from its start (default {SWEEP_WINDOW_S:g})")
+    d.add_argument("--bootstrap", type=int, default=N_BOOT, help=f"resamples per interval (default {N_BOOT})")
     d.add_argument("--quiet", action="store_true", help="no progress messages")
     d.set_defaults(func=cmd_identify)
 

@@ -83,11 +83,8 @@ def identify(log: MeasuredLog, params: RobotParams | None = None, *, model_path:
     result = Identification(log.source, float(log.t_s[-1] - log.t_s[0]), tuple(est), None)
     bw_prior = float(np.mean(p.controller.position_bw_Hz))
     if sweep:
-        base = {"tcp_offset_m": list(log.tcp_offset_m), **overlay_params(result, p)}
-        if log.temperature_C is not None:
-            base["joint_temperature_C"] = np.clip(log.temperature_C.mean(axis=0), -20, 120).tolist()
-        sw = loop.bandwidth_sweep(log, base, lag, lag_ok, ff_prior, bandwidths_Hz, sweep_window_s, n_boot, seed,
-                                  progress=say)
+        sw = loop.bandwidth_sweep(log, overlay_params(result, p), lag, lag_ok, ff_prior, bandwidths_Hz,
+                                  sweep_window_s, n_boot, seed, progress=say)
         est.append(loop.sweep_estimate(sw))
         bw = sw.best_Hz
     else:

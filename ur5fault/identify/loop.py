@@ -24,10 +24,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..logs import MeasuredLog
-from ..sim.engine import RunSpec, Simulator
-from ..sim.params import deep_merge, load_params
+from ..sim.params import deep_merge
+from ..twin.replay import LogReplay
 from .signals import LogSignals
-from .stats import BLOCK_S, Estimate, block_indices, bootstrap, interval
+from .stats import BLOCK_S, N_BOOT, Estimate, block_indices, bootstrap, interval
 
 #: the lag counts as identified when the target speed explains this share of the tracking error
 MIN_LAG_R2 = 0.05
@@ -97,13 +97,14 @@ def _score(sq_sim: NDArray, sq_meas: NDArray, idx: NDArray, joints: Sequence[int
 
 def bandwidth_sweep(log: MeasuredLog, base_overrides: dict, lag_s: NDArray, lag_ok: NDArray,
                     ff_fallback: NDArray, bandwidths_Hz: Sequence[float] = BANDWIDTHS_HZ,
-                    window_s: float = SWEEP_WINDOW_S, n_boot: int = 200, seed: int = 0,
+                    window_s: float = SWEEP_WINDOW_S, n_boot: int = N_BOOT, seed: int = 0,
                     progress: Callable[[str], None] | None = None) -> Sweep:
     """Replay the log's first ``window_s`` for each candidate bandwidth and pick the best.
 
     Args:
         log: the measured log.
-        base_overrides: parameter overrides of every replay (tool, temperatures, identified values).
+        base_overrides: parameter overrides of every replay (the identified values; the log's tool and
+            temperatures are the replay's own).
         lag_s, lag_ok: the identified lag per joint and where it is identifiable.
         ff_fallback: feed-forward of the joints without an identifiable lag.
     """
@@ -119,9 +120,8 @@ def bandwidth_sweep(log: MeasuredLog, base_overrides: dict, lag_s: NDArray, lag_
         ff = np.where(lag_ok, feedforward(lag_s, f), ff_fallback)
         over = deep_merge(base_overrides, {"controller": {"position_bw_Hz": float(f),
                                                           "velocity_feedforward": [float(x) for x in ff]}})
-        res = Simulator(load_params(overrides=over)).run(log.to_trajectory(), [RunSpec("sweep", SWEEP_SEED)],
-                                                         log_period_s=log.period_s, duration_s=n * log.period_s)
-        e = log.q_target_rad[1 : n + 1] - res["q_FB_rad"][0]
+        sim = LogReplay(log, over, seed=SWEEP_SEED).run([()], n)[0]
+        e = log.q_target_rad[1 : n + 1] - sim.position_rad
         sq_sim.append(e**2)
     sq_sim = np.array(sq_sim)
     sq_meas = meas**2

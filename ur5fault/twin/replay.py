@@ -1,8 +1,13 @@
 """Replay a measured log through the model: the log's target trajectory, payload, tool offset and joint
-temperatures, simulated under a set of effects, sampled where the log was.
+temperatures, simulated under a model overlay (parameter overrides and effects), sampled where the log was.
+
+This is the one path from a log to the model: ``ur5fault identify`` (bandwidth sweep, friction choices),
+``ur5fault discrepancy`` and the tests against the real log all replay through :class:`LogReplay`.
+:class:`Replay` holds several logs of one robot, each with its own payload, tool and temperatures, under
+one shared overlay.
 
 Residual signals (the log's readings that the model predicts), stacked on a signal axis so that every
-array of the workflow is ``(n_samples, n_signals, 6)``:
+array of a replay is ``(n_samples, n_signals, 6)``:
 
 * ``current_A``: motor current reading;
 * ``position_rad``: joint position reading (resolver);
@@ -12,7 +17,7 @@ array of the workflow is ``(n_samples, n_signals, 6)``:
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 
 import numpy as np
 from numpy.typing import NDArray
@@ -24,10 +29,26 @@ from ..sim.engine import RunSpec, Simulator
 from ..sim.params import RobotParams, deep_merge, load_params
 from ..sim.terms import sensor_temperature_term
 
-#: the workflow's own sensor-noise stream, unrelated to any log
-WORKFLOW_SEED = 20261121
 #: joint temperatures outside this range are clipped before they reach the model [degC] (the params' range)
 TEMPERATURE_RANGE_C = (-20.0, 120.0)
+#: every signal a replay computes, in order; a replay keeps the first two, and the third when the log has
+#: motor encoders
+SIGNALS = ("current_A", "position_rad", "mismatch_rad")
+
+
+def log_overrides(log: MeasuredLog) -> dict:
+    """The parameter overrides a log itself carries: its tool offset and its mean joint temperatures
+    (clipped to :data:`TEMPERATURE_RANGE_C`)."""
+    over: dict = {"tcp_offset_m": list(log.tcp_offset_m)}
+    if log.temperature_C is not None:
+        over["joint_temperature_C"] = np.clip(log.temperature_C.mean(axis=0), *TEMPERATURE_RANGE_C).tolist()
+    return over
+
+
+def replay_params(log: MeasuredLog, params_overrides: dict | None = None) -> RobotParams:
+    """The packaged parameters under the log's own overrides (:func:`log_overrides`), then
+    ``params_overrides`` (which win)."""
+    return load_params(overrides=deep_merge(log_overrides(log), dict(params_overrides or {})))
 
 
 @dataclasses.dataclass(frozen=True)
@@ -46,26 +67,33 @@ class Replayed:
     def ok(self) -> bool:
         return self.status == "ok"
 
+    @property
+    def current_A(self) -> NDArray:
+        """Simulated current reading ``(n, 6)``."""
+        return self.y[:, 0]
 
-class Replay:
-    """Simulates a log's target trajectory under a model (parameter overrides + effects).
+    @property
+    def position_rad(self) -> NDArray:
+        """Simulated joint position reading ``(n, 6)``."""
+        return self.y[:, 1]
+
+
+class LogReplay:
+    """Simulates one log's target trajectory under a model (parameter overrides + effects).
 
     Args:
         log: the measured log.
-        params_overrides: robot-parameter overrides of the model overlay.
+        params_overrides: robot-parameter overrides of the model overlay (applied after the log's own).
         base_effects: effects of the model overlay, carried by every replay.
         seed: sensor-noise seed of the replays.
         jobs: worker processes for batches of replays.
     """
 
     def __init__(self, log: MeasuredLog, params_overrides: dict | None = None,
-                 base_effects: Sequence[EffectSpec] = (), seed: int = WORKFLOW_SEED, jobs: int = 1) -> None:
+                 base_effects: Sequence[EffectSpec] = (), *, seed: int, jobs: int = 1) -> None:
         self.log = log
         self.jobs = max(1, int(jobs))
-        over: dict = {"tcp_offset_m": list(log.tcp_offset_m)}
-        if log.temperature_C is not None:
-            over["joint_temperature_C"] = np.clip(log.temperature_C.mean(axis=0), *TEMPERATURE_RANGE_C).tolist()
-        self.params: RobotParams = load_params(overrides=deep_merge(over, dict(params_overrides or {})))
+        self.params: RobotParams = replay_params(log, params_overrides)
         self.traj = log.to_trajectory()
         self.base = tuple(base_effects)
         self.seed = seed
@@ -73,8 +101,7 @@ class Replay:
         if abs(steps - round(steps)) > 1e-6:
             raise ParameterError(f"{log.source}: sample period {log.period_s:g} s is not a multiple of the physics "
                                  f"step {self.params.physics_dt_s:g} s")
-        self.signals: tuple[str, ...] = ("current_A", "position_rad") + (
-            ("mismatch_rad",) if log.q_motor_rad is not None else ())
+        self.signals: tuple[str, ...] = SIGNALS[:3 if log.q_motor_rad is not None else 2]
         s = self.params.sensors
         noise = {"current_A": s.current_noise_A, "position_rad": s.resolver_noise_rad,
                  "mismatch_rad": s.resolver_noise_rad}
@@ -89,16 +116,28 @@ class Replay:
         """Samples that can be replayed (every sample after the first)."""
         return self.log.t_s.size - 1
 
-    def measured(self, n: int) -> NDArray:
-        """The log's readings at samples ``1..n``, ``(n, n_signals, 6)``."""
+    def _n(self, n: int | None) -> int:
+        if n is None:
+            return self.n_samples
+        if not 1 <= n <= self.n_samples:
+            raise ParameterError(f"{self.log.source}: cannot replay {n} samples; the log has {self.n_samples} "
+                                 "after its first")
+        return int(n)
+
+    def measured(self, n: int | None = None) -> NDArray:
+        """The log's readings at samples ``1..n`` (default: all), ``(n, n_signals, 6)``."""
+        n = self._n(n)
         L = self.log
         out = [L.current_A[1 : n + 1], L.q_actual_rad[1 : n + 1]]
         if L.q_motor_rad is not None:
             out.append(L.q_motor_rad[1 : n + 1] / self.gear_ratio - L.q_actual_rad[1 : n + 1])
         return np.stack(out, axis=1)
 
-    def run(self, effect_sets: Sequence[Sequence[EffectSpec]], n: int, progress=None) -> list[Replayed]:
-        """Replay samples ``1..n`` once per effect set (one lockstep batch, split over ``jobs`` processes)."""
+    def run(self, effect_sets: Sequence[Sequence[EffectSpec]], n: int | None = None, progress=None
+            ) -> list[Replayed]:
+        """Replay samples ``1..n`` (default: all) once per effect set: one lockstep batch, split over
+        ``jobs`` processes, in the order of ``effect_sets``."""
+        n = self._n(n)
         runs = [RunSpec(f"c{i}", self.seed, self.base + tuple(e)) for i, e in enumerate(effect_sets)]
         self.n_simulated += len(runs)
         self.simulated_s += len(runs) * n * self.log.period_s
@@ -113,7 +152,7 @@ class Replay:
             res = [r for part in parts for r in part]
         else:
             res = _simulate(self.params, self.traj, runs, self.log.period_s, n, progress)
-        k = len(self.signals)  # _simulate returns current, position, mismatch: keep those the log has
+        k = len(self.signals)  # _simulate returns every signal of SIGNALS: keep those the log has
         return [self._with_log_temperature(dataclasses.replace(r, y=r.y[:, :k]), effs)
                 for r, effs in zip(res, effect_sets)]
 
@@ -131,6 +170,46 @@ class Replay:
             c = e.value("coeff_A_per_K")
             y[:, 0, e.joint] += sensor_temperature_term(c, t_log[:, e.joint], t_run[e.joint])
         return dataclasses.replace(r, y=y)
+
+
+class Replay:
+    """Several logs of one robot replayed under one model overlay.
+
+    Every log keeps its own payload, tool offset and temperatures (:func:`log_overrides`); the overlay
+    (``params_overrides``, ``base_effects``) is shared.  A lockstep batch shares one trajectory, so each
+    log is its own batch: :meth:`run` returns one list of :class:`Replayed` per log (log axis first, then
+    the effect sets in order, then the samples of that log).
+
+    Args:
+        logs: the measured logs (at least one).
+        params_overrides, base_effects, seed, jobs: as :class:`LogReplay`, for every log.
+    """
+
+    def __init__(self, logs: Sequence[MeasuredLog], params_overrides: dict | None = None,
+                 base_effects: Sequence[EffectSpec] = (), *, seed: int, jobs: int = 1) -> None:
+        if isinstance(logs, MeasuredLog):
+            logs = (logs,)
+        if len(logs) == 0:
+            raise ParameterError("a replay needs at least one log")
+        self.replays: tuple[LogReplay, ...] = tuple(
+            LogReplay(log, params_overrides, base_effects, seed=seed, jobs=jobs) for log in logs)
+
+    def __len__(self) -> int:
+        return len(self.replays)
+
+    def __iter__(self) -> Iterator[LogReplay]:
+        return iter(self.replays)
+
+    def __getitem__(self, k: int) -> LogReplay:
+        return self.replays[k]
+
+    def measured(self) -> tuple[NDArray, ...]:
+        """Every log's readings ``(n_samples_k, n_signals_k, 6)``, one array per log."""
+        return tuple(r.measured() for r in self.replays)
+
+    def run(self, effect_sets: Sequence[Sequence[EffectSpec]], progress=None) -> tuple[list[Replayed], ...]:
+        """Every effect set on every whole log: ``out[k][i]`` is log ``k`` under ``effect_sets[i]``."""
+        return tuple(r.run(effect_sets, None, progress) for r in self.replays)
 
 
 def _simulate(params: RobotParams, traj, runs: list[RunSpec], period_s: float, n: int, progress=None

@@ -1,0 +1,77 @@
+"""The one replay of a log through the model (ur5fault/twin/replay.py): it carries the log's tool,
+temperatures and payload into the model, equals the plain simulator run it stands for bit for bit, and
+replays several logs of one robot each under its own conditions."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from ur5fault import RunSpec, Simulator
+from ur5fault.errors import ParameterError
+from ur5fault.logs import MeasuredLog
+from ur5fault.sim.effects import make_effect
+from ur5fault.sim.params import load_params
+from ur5fault.twin.replay import LogReplay, Replay, log_overrides, replay_params
+
+PERIOD_S = 0.008  # the NIST log's 125 Hz
+N = 40  # samples: 0.32 s
+
+
+def _log(temperature_C: float = 30.0, payload_kg: float = 0.5, tcp=(0.0, 0.0, 0.12), motor: bool = True,
+         amplitude_rad: float = 0.02) -> MeasuredLog:
+    """A short log whose target swings every joint and whose 'measurement' is the target itself."""
+    t = np.arange(N) * PERIOD_S
+    home = np.array([0.0, -1.57, 1.57, -1.57, -1.57, 0.0])
+    q = home + amplitude_rad * (1 - np.cos(2 * np.pi * t / t[-1]))[:, None] * np.linspace(0.5, 1.0, 6)
+    temp = np.full((N, 6), temperature_C)
+    return MeasuredLog("synthetic", t, q, q.copy(), np.zeros((N, 6)), temperature_C=temp,
+                       q_motor_rad=q * 101.0 if motor else None, payload_kg=payload_kg, tcp_offset_m=tcp)
+
+
+def test_log_overrides_carry_the_tool_and_clip_the_temperature():
+    over = log_overrides(_log(temperature_C=150.0, tcp=(0.01, 0.02, 0.2)))
+    assert over["tcp_offset_m"] == [0.01, 0.02, 0.2]
+    assert over["joint_temperature_C"] == [120.0] * 6  # the parameters' upper bound
+    assert log_overrides(_log(temperature_C=-40.0))["joint_temperature_C"] == [-20.0] * 6
+    p = replay_params(_log(temperature_C=35.0), {"joint_temperature_C": [40.0] * 6})
+    assert list(p.joint_temperature_C) == [40.0] * 6  # the overlay wins over the log
+    assert tuple(p.tcp_offset_m) == (0.0, 0.0, 0.12)
+
+
+def test_replay_equals_the_plain_simulator_run():
+    """The obvious way (parameters by hand, Simulator.run) against the replay, bit for bit."""
+    log = _log()
+    eff = (make_effect("coulomb_friction", 2, scale=1.5),)
+    over = {"tcp_offset_m": [0.0, 0.0, 0.12], "joint_temperature_C": [30.0] * 6}
+    res = Simulator(load_params(overrides=over)).run(log.to_trajectory(), [RunSpec("x", 7, eff)],
+                                                     log_period_s=PERIOD_S)
+    sim = LogReplay(log, seed=7).run([eff])[0]
+    assert sim.ok and sim.y.shape == (N - 1, 3, 6)
+    np.testing.assert_array_equal(sim.current_A, res["i_FB_A"][0])
+    np.testing.assert_array_equal(sim.position_rad, res["q_FB_rad"][0])
+    np.testing.assert_array_equal(sim.y[:, 2], res["q_M_FB_rad"][0] / 101.0 - res["q_FB_rad"][0])
+    np.testing.assert_array_equal(sim.torque_gear_Nm, res["T_gear_Nm"][0])
+
+
+def test_signals_follow_the_log_and_bad_lengths_are_refused():
+    rp = LogReplay(_log(motor=False), seed=1)
+    assert rp.signals == ("current_A", "position_rad")
+    assert rp.measured().shape == (N - 1, 2, 6)
+    assert rp.measured(5).shape == (5, 2, 6)
+    with pytest.raises(ParameterError, match="cannot replay 40 samples; the log has 39"):
+        rp.run([()], N)
+    with pytest.raises(ParameterError, match="at least one log"):
+        Replay([], seed=1)
+
+
+def test_several_logs_each_under_its_own_conditions():
+    """Two logs of one robot with different payloads: each replays as it would alone, and the payload
+    reaches the model (the heavier one needs more shoulder current)."""
+    light, heavy = _log(payload_kg=0.0), _log(payload_kg=3.0, temperature_C=40.0)
+    both = Replay([light, heavy], seed=3).run([()])
+    assert len(both) == 2 and len(both[0]) == 1
+    alone = LogReplay(heavy, seed=3).run([()])[0]
+    np.testing.assert_array_equal(both[1][0].y, alone.y)
+    shoulder = [float(np.mean(np.abs(b[0].current_A[:, 1]))) for b in both]
+    assert shoulder[1] > shoulder[0] + 0.1, shoulder
