@@ -10,7 +10,7 @@ Life campaign YAML (see campaigns/prognostics.yaml)::
       interval_cycles: 80000        # duty cycles between two inspections
       max_cycles: 6000000           # a unit still sound here is right-censored
       failure: {feature: tcp_dev_max_mm, threshold: 0.5}   # default: the paper's 0.5 mm TCP deviation
-      wear: {backlash_rate_deg_per_MJ: 7.5e-4, unit_sigma: 0.25, ...}   # WearLaw (wear.py)
+      wear: {backlash_rate_deg_per_MJ: 1.3e-3, unit_sigma: 0.25, ...}   # WearLaw (wear.py)
       duty:                         # each unit draws its task once
         trajectories: [{name: random_pick_and_place, seed: 0}]
         payload_kg: [0.5, 2.0]      # uniform range (or one number)

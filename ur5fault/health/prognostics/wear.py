@@ -57,7 +57,7 @@ class WearLaw:
         stiffness_floor: smallest stiffness factor the law reaches [-].
     """
 
-    backlash_rate_deg_per_MJ: float = 7.5e-4
+    backlash_rate_deg_per_MJ: float = 1.3e-3
     unit_sigma: float = 0.25
     work_scale_MJ: float = 0.05
     friction_per_deg: float = 5.0
