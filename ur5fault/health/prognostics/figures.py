@@ -24,6 +24,8 @@ def rul_alpha_cone(pred: dict[str, pd.DataFrame], alpha: float = ALPHA) -> Figur
             ax.plot(f, d["rul_est"] / eol, lw=0.8, alpha=0.7)
             if "rul_lo" in d:
                 ax.fill_between(f, d["rul_lo"] / eol, d["rul_hi"] / eol, alpha=0.06, color="C0")
+        for sign in (-1, 1):  # the cone's edges on top of the bands
+            ax.plot(x, (1 + sign * alpha) * (1 - x), color="k", lw=0.8, ls="--")
         ax.axvline(LAMBDA, color="0.4", ls=":", lw=0.8, label=f"lambda = {LAMBDA:g}")
         ax.set(xlabel="life fraction (cycles / end of life)", title=f"{name}: {p['unit_id'].nunique()} held-out units",
                xlim=(0, 1), ylim=(0, 2.0))
