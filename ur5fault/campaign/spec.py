@@ -50,7 +50,7 @@ from ..config import (
 )
 from ..errors import ParameterError, UnknownNameError
 from ..sim.axes import joint_index
-from ..sim.effects import REGISTRY, EffectSpec, make_effect
+from ..sim.effects import REGISTRY, EffectKey, EffectSpec, effects_of_keys
 from ..sim.params import deep_merge, load_params, read_yaml
 from ..util.checks import check_bool, check_int, check_number, check_text, short
 from .labels import SplitRule, parse_split
@@ -73,28 +73,24 @@ class CampaignRun:
 
     conditions: tuple[tuple[str, Any], ...]  # seed, payload_kg, temperature_C, trajectory
     faults: tuple[tuple[str, Any], ...]  # swept fault keys -> values, sorted
+    #: the faults as validated effects, built once when the run is (not compared: they follow from ``faults``)
+    _effects: tuple[EffectSpec, ...] = dataclasses.field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        effects = tuple(e for e in effects_of_keys(self.faults) if not e.is_absent)
+        object.__setattr__(self, "_effects", effects)
 
     @property
     def cond(self) -> dict[str, Any]:
         return dict(self.conditions)
 
     def is_healthy(self) -> bool:
-        return not self.fault_effects()
+        return not self._effects
 
     def fault_effects(self) -> tuple[EffectSpec, ...]:
-        """Effects of the swept faults; those at their 'absent' value are dropped."""
-        by_effect: dict[str, dict[str, Any]] = {}
-        for key, v in self.faults:
-            name, _, par = key.partition(".")
-            by_effect.setdefault(name, {})[par] = v
-        out = []
-        for name, vals in sorted(by_effect.items()):
-            joint = vals.pop("joint", None)
-            spec = make_effect(name, joint, **vals)
-            absent = all(REGISTRY[name].param(k).absent == v for k, v in spec.values)
-            if not absent:
-                out.append(spec)
-        return tuple(out)
+        """Effects of the swept faults (validated when the run was built); those at their 'absent' value
+        are dropped."""
+        return self._effects
 
     def twin(self) -> CampaignRun:
         return CampaignRun(self.conditions, ())
@@ -151,16 +147,16 @@ def _check_value(key: Any, value: Any, where: str) -> Any:
     if key == "trajectory":
         parse_trajectory(value, where)
         return value if isinstance(value, str) else dict(value)
-    name, dot, par = key.partition(".") if isinstance(key, str) else ("", "", "")
-    if not dot or name not in REGISTRY:
+    ek = EffectKey.parse(key)
+    if ek is None or ek.effect not in REGISTRY:
         valid = list(CONDITION_KEYS) + [f"{e}.<param>" for e in REGISTRY]
         raise UnknownNameError("sweep key", key if isinstance(key, str) else short(key), valid, where)
-    eff = REGISTRY[name]
-    if par == "joint":
+    eff = REGISTRY[ek.effect]
+    if ek.param == "joint":
         if not eff.per_joint:
-            raise ParameterError(f"{where}: effect {name!r} acts on the whole robot and takes no joint")
+            raise ParameterError(f"{where}: effect {ek.effect!r} acts on the whole robot and takes no joint")
         return joint_index(value, where) + 1
-    p = eff.param(par)
+    p = eff.param(ek.param)
     return check_number(value, f"{where}: {key}", p.lo, p.hi, p.unit)
 
 
@@ -205,13 +201,49 @@ def build_campaign(data: Mapping[str, Any], where: str, text: str = "", path: Pa
     params = dict(check_mapping(base.get("params"), f"{where}: base.params"))
     robot = load_params(overrides=params)  # validate robot overrides now
     base_effects = parse_effects(base.get("effects"), f"{where}: base.effects")
-    cond0 = {
+    cond0 = _base_conditions(data, base, where)
+    axes, swept = _sweep_axes(data, where)
+    sampled = data.get("sample") is not None  # a sampled campaign (campaign/sampling.py) instead of a grid
+    if sampled and (axes or swept):
+        raise ParameterError(f"{where}: sample cannot be combined with sweep or zip; use one of them")
+    if sampled:
+        runs, swept = _sampled_runs(data["sample"], cond0, where)
+    else:
+        runs = _grid_runs(axes, cond0)
+    thr = check_number(data.get("threshold_mm", 0.5), f"{where}: threshold_mm", 0.0, MAX_THRESHOLD_MM, "mm",
+                       lo_open=True)
+    bs = check_int(data.get("batch_size", 32), f"{where}: batch_size", 1, 1024)
+    dur = data.get("duration_s")
+    dur = None if dur is None else check_duration(dur, f"{where}: duration_s")
+    shortest = dur if dur is not None else min(
+        parse_trajectory(t, f"{where}: trajectory").duration_s for t in trajectory_specs(runs.values()))
+    lp = check_log_period(data.get("log_period_s", 1e-3), f"{where}: log_period_s", robot.physics_dt_s, shortest)
+    save_ts = check_bool(data.get("save_timeseries", False), f"{where}: save_timeseries")
+    name = check_text(data["name"], f"{where}: name") if data.get("name") is not None else (
+        path.stem if path else "campaign")
+    file_out = check_text(data["out"], f"{where}: out", max_len=4096) if data.get("out") is not None else None
+    out = out if out is not None else file_out
+    out_dir = Path(out) if out is not None else Path("results") / name
+    resolved = {**dict(data), "base": {**dict(base), "params": params}}
+    return Campaign(name, path, text or yaml.safe_dump(dict(data)), out_dir, base_effects, params,
+                    tuple(runs.values()), tuple(swept), thr, bs, lp, save_ts, dur, resolved,
+                    parse_split(data.get("split"), where))
+
+
+def _base_conditions(data: Mapping[str, Any], base: Mapping[str, Any], where: str) -> dict[str, Any]:
+    """The conditions every run starts from (seed, payload, temperature, trajectory), validated."""
+    return {
         "seed": _check_value("seed", base.get("seed", 0), f"{where}: base.seed"),
         "payload_kg": _check_value("payload_kg", base.get("payload_kg", 2.0), f"{where}: base.payload_kg"),
         "temperature_C": _check_value("temperature_C", base.get("temperature_C", 28.0),
                                       f"{where}: base.temperature_C"),
         "trajectory": _check_value("trajectory", data.get("trajectory", "pick_and_place"), f"{where}: trajectory"),
     }
+
+
+def _sweep_axes(data: Mapping[str, Any], where: str) -> tuple[list[list[dict[str, Any]]], list[str]]:
+    """The grid's axes (``sweep`` keys one axis each, a ``zip`` group one axis) with checked values, and the
+    swept keys; the grid's size is checked before anything is expanded."""
     axes: list[list[dict[str, Any]]] = []
     swept: list[str] = []
     sweep = check_mapping(data.get("sweep"), f"{where}: sweep")
@@ -239,46 +271,35 @@ def build_campaign(data: Mapping[str, Any], where: str, text: str = "", path: Pa
         raise ParameterError(f"{where}: key swept twice: {', '.join(dup)}")
     _check_fault_keys(swept, where)
     check_grid_size([len(a) for a in axes], where)
+    return axes, swept
+
+
+def _grid_runs(axes: Sequence[Sequence[Mapping[str, Any]]], cond0: Mapping[str, Any]) -> dict[str, CampaignRun]:
+    """Every point of the grid and its healthy twin, by run_id (a repeated point is kept once)."""
     runs: dict[str, CampaignRun] = {}
-    sampled = data.get("sample") is not None  # a sampled campaign (campaign/sampling.py) instead of a grid
-    if sampled and (axes or swept):
-        raise ParameterError(f"{where}: sample cannot be combined with sweep or zip; use one of them")
-    for combo in (itertools.product(*axes) if axes else [()]) if not sampled else []:
+    for combo in itertools.product(*axes) if axes else [()]:
         values: dict[str, Any] = {}
         for part in combo:
             values.update(part)
         cond = {**cond0, **{k: v for k, v in values.items() if k in CONDITION_KEYS}}
         faults = tuple(sorted((k, v) for k, v in values.items() if k not in CONDITION_KEYS))
         rc = CampaignRun(tuple(sorted(cond.items(), key=lambda kv: kv[0])), faults)
-        if not rc.fault_effects():  # (also validates the combination) a fault at its "absent" value: the
-            rc = rc.twin()          # healthy run itself, stored without faults whichever sweep point made it
+        if rc.is_healthy():  # (built, so validated) a fault at its "absent" value: the healthy run
+            rc = rc.twin()   # itself, stored without faults whichever sweep point made it
         for r in (rc, rc.twin()):
             runs.setdefault(r.run_id, r)
-    if sampled:
-        drawn, swept = sample_runs(data["sample"], cond0, where)
-        for cond, faults, wants_twin in drawn:
-            rc = CampaignRun(tuple(sorted(cond.items())), tuple(sorted(faults.items())))
-            rc.fault_effects()  # validate the combination
-            for r in (rc, rc.twin()) if wants_twin else (rc,):
-                runs.setdefault(r.run_id, r)
-    thr = check_number(data.get("threshold_mm", 0.5), f"{where}: threshold_mm", 0.0, MAX_THRESHOLD_MM, "mm",
-                       lo_open=True)
-    bs = check_int(data.get("batch_size", 32), f"{where}: batch_size", 1, 1024)
-    dur = data.get("duration_s")
-    dur = None if dur is None else check_duration(dur, f"{where}: duration_s")
-    shortest = dur if dur is not None else min(
-        parse_trajectory(t, f"{where}: trajectory").duration_s for t in trajectory_specs(runs.values()))
-    lp = check_log_period(data.get("log_period_s", 1e-3), f"{where}: log_period_s", robot.physics_dt_s, shortest)
-    save_ts = check_bool(data.get("save_timeseries", False), f"{where}: save_timeseries")
-    name = check_text(data["name"], f"{where}: name") if data.get("name") is not None else (
-        path.stem if path else "campaign")
-    file_out = check_text(data["out"], f"{where}: out", max_len=4096) if data.get("out") is not None else None
-    out = out if out is not None else file_out
-    out_dir = Path(out) if out is not None else Path("results") / name
-    resolved = {**dict(data), "base": {**dict(base), "params": params}}
-    return Campaign(name, path, text or yaml.safe_dump(dict(data)), out_dir, base_effects, params,
-                    tuple(runs.values()), tuple(swept), thr, bs, lp, save_ts, dur, resolved,
-                    parse_split(data.get("split"), where))
+    return runs
+
+
+def _sampled_runs(spec: Any, cond0: Mapping[str, Any], where: str) -> tuple[dict[str, CampaignRun], list[str]]:
+    """The drawn runs (with their twins where wanted) by run_id, and the drawn keys."""
+    runs: dict[str, CampaignRun] = {}
+    drawn, swept = sample_runs(spec, cond0, where)
+    for cond, faults, wants_twin in drawn:
+        rc = CampaignRun(tuple(sorted(cond.items())), tuple(sorted(faults.items())))  # validates them
+        for r in (rc, rc.twin()) if wants_twin else (rc,):
+            runs.setdefault(r.run_id, r)
+    return runs, swept
 
 
 def trajectory_specs(runs: Iterable[CampaignRun]) -> list[Any]:
@@ -302,7 +323,7 @@ def check_grid_size(axis_lengths: Sequence[int], where: str) -> int:
 
 def _check_fault_keys(swept: Sequence[str], where: str) -> None:
     """A per-joint effect that is swept needs its joint swept (or a single joint) too."""
-    effects = {k.partition(".")[0] for k in swept if "." in k}
+    effects = {ek.effect for ek in map(EffectKey.parse, swept) if ek is not None}
     for name in effects:
         if REGISTRY[name].per_joint and f"{name}.joint" not in swept:
             raise ParameterError(f"{where}: sweep of effect {name!r} needs '{name}.joint' (list of joints 1..6)")

@@ -71,6 +71,7 @@ def _evaluate(features: pd.DataFrame, seed: int, shuffle_labels: bool, threshold
             "n_dropped_not_ok": ds.n_dropped,
             "inputs": list(ds.inputs), "n_features": len(ds.inputs) - sum(c in ds.inputs for c in CONTEXT_COLUMNS),
             "context": [c for c in CONTEXT_COLUMNS if c in ds.inputs],
+            "inputs_left_out": dict(ds.inputs_left_out),
         },
         "shuffled_labels": shuffle_labels,
         "seed": seed,
