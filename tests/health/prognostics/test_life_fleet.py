@@ -7,7 +7,8 @@ import pandas as pd
 import pyarrow.parquet as pq
 import pytest
 
-from ur5fault.campaign.store import CampaignChangedError, CampaignLockedError, Lock
+from ur5fault.campaign.lock import CampaignLockedError, Lock
+from ur5fault.campaign.store import CampaignChangedError
 from ur5fault.health.prognostics.fleet import run_life
 from ur5fault.health.prognostics.spec import build_life
 
@@ -23,6 +24,10 @@ TINY = {"name": "tiny", "duration_s": 1.5, "batch_size": 4,
 
 def _tables(folder):
     return {p.name: pq.read_table(p) for p in sorted((folder / "runs").glob("*.parquet"))}
+
+
+def _sidecars(folder):
+    return {p.name: p.read_text() for p in sorted((folder / "runs").glob("*.sha256"))}
 
 
 @pytest.mark.slow
@@ -44,6 +49,7 @@ def test_resumed_fleet_is_bit_identical_to_an_uninterrupted_one(tmp_path):
     for name in a:
         assert a[name].equals(b[name]), name        # every value and the recorded identity
         assert a[name].schema.metadata == b[name].schema.metadata
+    assert _sidecars(tmp_path / "whole") == _sidecars(tmp_path / "resumed")   # the files' bytes, hashed
     ia = pd.read_parquet(tmp_path / "whole" / "inspections.parquet")
     ib = pd.read_parquet(tmp_path / "resumed" / "inspections.parquet")
     pd.testing.assert_frame_equal(ia, ib, check_exact=True)

@@ -23,7 +23,8 @@ import numpy as np
 
 from ...campaign.execute import _dask_client, _exit_with_parent, _note_stderr, _stop_loky_workers
 from ...campaign.limits import effective_jobs
-from ...campaign.store import CampaignChangedError, Lock
+from ...campaign.lock import Lock
+from ...campaign.store import CampaignChangedError
 from ...config import parse_trajectory
 from ...errors import ParameterError
 from ...sim.axes import N_JOINTS

@@ -99,7 +99,7 @@ def write_reference(out: Path, ids: LifeIdentities, unit: Unit, t_s: np.ndarray,
     df = pd.DataFrame({"t_s": t_s, "tcp_x_m": tcp_m[:, 0], "tcp_y_m": tcp_m[:, 1], "tcp_z_m": tcp_m[:, 2]})
     meta = {"run_identity": ids.identity(unit, 0), "units": {"t_s": "s", "tcp_x_m": "m", "tcp_y_m": "m",
                                                              "tcp_z_m": "m"}}
-    write_parquet_atomic(df, reference_path(out, unit), {"ur5fault": json.dumps(meta)})
+    write_parquet_atomic(df, reference_path(out, unit), {"ur5fault": json.dumps(meta)}, checksum=True)
 
 
 def check_reference(out: Path, ids: LifeIdentities, unit: Unit, n_log: int) -> FileCheck:
@@ -150,5 +150,6 @@ def consolidate_life(out: Path, ids: LifeIdentities, done: Mapping[Unit, int]) -
     df = add_life_labels(df)
     units = {**column_units(df.columns), **{c: u for c, u in LIFE_UNITS.items() if c in df.columns}}
     meta = {"units": units, "campaign_identity": digest(identities), "run_identities": identities}
-    write_parquet_atomic(df, Path(out) / "inspections.parquet", {"ur5fault": json.dumps(meta, sort_keys=True)})
+    write_parquet_atomic(df, Path(out) / "inspections.parquet", {"ur5fault": json.dumps(meta, sort_keys=True)},
+                         checksum=True)
     return df
