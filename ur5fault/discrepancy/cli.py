@@ -14,7 +14,8 @@ from ..twin.residuals import FIT_FRACTION
 def register(sub) -> None:
     d = sub.add_parser("discrepancy", help="find, name and fix where the model and a measured log disagree")
     add_log_options(d, ("rtde", "nist", "sim"), hold_out=True)
-    d.add_argument("--model", help="model overlay YAML to start from (e.g. an earlier model.yaml)")
+    d.add_argument("--model", help="model overlay YAML to start from (e.g. an earlier model.yaml; default: none, the "
+                                   "nominal model)")
     d.add_argument("--out", required=True, help="output folder (report.md, model.yaml, summary.json)")
     d.add_argument("--fit-fraction", type=float, default=FIT_FRACTION,
                    help=f"share of the log used for fitting (0.2..0.9, default {FIT_FRACTION:g})")

@@ -15,7 +15,8 @@ def register(sub) -> None:
     d = sub.add_parser("identify", help="re-derive the measured drive parameters from a log (parameter overlay)")
     add_log_options(d, ("nist", "rtde"))
     d.add_argument("--out", required=True, help="parameter overlay YAML to write (accepted by --model)")
-    d.add_argument("--json", help="also write every estimate with its interval as JSON")
+    d.add_argument("--json", metavar="FILE.json", help="also write every estimate with its interval as JSON "
+                                                          "(default: not written)")
     d.add_argument("--no-sweep", action="store_true",
                    help="skip the position-loop bandwidth sweep (it replays the log once per candidate)")
     d.add_argument("--sweep-window-s", type=float, default=SWEEP_WINDOW_S,

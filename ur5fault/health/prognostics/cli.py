@@ -8,6 +8,7 @@ from pathlib import Path
 
 #: `campaign run` options a life campaign does not take (named in the error instead of ignored)
 _NOT_FOR_LIFE = {"model": "--model", "save_timeseries": "--save-timeseries", "threshold_mm": "--threshold-mm",
+                 "duration_s": "--duration-s (set duration_s in the file)",
                  "yes": "--yes (a life campaign asks for no confirmation)"}
 
 

@@ -115,16 +115,23 @@ class LifeCampaign:
 
 
 def is_life_file(path: str | Path) -> bool:
-    """True when a campaign YAML has a top-level ``life:`` section (read without validation)."""
+    """True when a campaign YAML (a path or a shipped campaign's name) has a top-level ``life:``
+    section (read without validation)."""
+    from ...campaign.spec import resolve_campaign
+    from ...errors import ConfigFileError
+
     try:
-        data = yaml.safe_load(Path(path).read_text())
-    except (OSError, yaml.YAMLError):
+        data = yaml.safe_load(resolve_campaign(path).read_text())
+    except (OSError, yaml.YAMLError, ConfigFileError):
         return False
     return isinstance(data, Mapping) and "life" in data
 
 
 def load_life(path: str | Path, out: str | Path | None = None) -> LifeCampaign:
-    path = Path(path)
+    """A life campaign from a file, or a shipped campaign's name (``prognostics``)."""
+    from ...campaign.spec import resolve_campaign
+
+    path = resolve_campaign(path)
     data = read_yaml(path)
     return build_life(data, path.name, path.read_text(), path, out)
 
