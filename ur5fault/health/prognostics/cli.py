@@ -17,7 +17,8 @@ def register(sub) -> None:
                                         "units (report.md, metrics.json, figures)")
     p.add_argument("dir", help="life campaign folder (with inspections.parquet), e.g. results/prognostics/fleet")
     p.add_argument("--out", help="report folder (default: DIR/../benchmark)")
-    p.add_argument("--seed", type=int, default=0, help="random state of the RUL distributions' Monte Carlo draws")
+    p.add_argument("--seed", type=int, default=0,
+                   help="random state of the RUL distributions' Monte Carlo draws (default: 0)")
     p.set_defaults(func=cmd_prognose)
 
 
