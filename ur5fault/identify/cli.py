@@ -28,7 +28,8 @@ def register(sub) -> None:
 
 def cmd_identify(args: argparse.Namespace) -> int:
     from ..errors import ParameterError
-    from ..logs.options import read_log_options
+    from ..logs.length import check_files_length, check_logs_length
+    from ..logs.options import log_entries, read_log_options
     from ..sim.params import load_params
     from ..util.io import write_json_atomic, write_text_atomic
     from . import identify
@@ -37,7 +38,9 @@ def cmd_identify(args: argparse.Namespace) -> int:
         raise ParameterError(f"--bootstrap = {args.bootstrap} must be at least 20")
     if args.sweep_window_s <= 0:
         raise ParameterError(f"--sweep-window-s = {args.sweep_window_s} must be a positive number of seconds")
+    check_files_length([e.path for e in log_entries(args)], "identify")  # an hour-long log: refused in seconds
     logs, _ = read_log_options(args)
+    check_logs_length(logs, "identify")
     log = logs[0]
     say = None if args.quiet else (lambda msg: print(f"identify: {msg}...", file=sys.stderr, flush=True))
     params = load_params()

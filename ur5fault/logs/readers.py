@@ -69,10 +69,10 @@ def _assemble(src: str, t: NDArray, required: Mapping[str, NDArray], optional: M
     t = t[rows]
     req = {k: v[rows] for k, v in required.items()}
     opt = {k: None if v is None else v[rows] for k, v in opt.items()}
-    for k in labels:  # before anything interpolates across a wrap
+    for k, label in zip(("target_q", "actual_q"), labels):  # before anything interpolates across a wrap
         req[k], wrapped = unwrap_joints(req[k])
         if wrapped:
-            notes.append(f"{k} of joint(s) {', '.join(str(j + 1) for j in wrapped)} wrap around (a jump of a whole "
+            notes.append(f"{label} of joint(s) {', '.join(str(j + 1) for j in wrapped)} wrap around (a jump of a whole "
                          "turn between two rows): made continuous")
     plausible.check_increasing(src, t)
     plausible.check_range(src, req["actual_q"], t, opt["actual_qd"], declared)
