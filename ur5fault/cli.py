@@ -253,12 +253,14 @@ def _add_optional_commands(sub) -> None:
     from .campaign import cli as campaign_cli
     from .discrepancy import cli as discrepancy_cli
     from .health.diagnostics import cli as benchmark_cli
+    from .health.prognostics import cli as prognose_cli
     from .identify import cli as identify_cli
 
     campaign_cli.register(sub)
     discrepancy_cli.register(sub)
     identify_cli.register(sub)
     benchmark_cli.register(sub)
+    prognose_cli.register(sub)
 
 
 def _one_line(message: str) -> int:
