@@ -232,13 +232,49 @@ def build_campaign(data: Mapping[str, Any], where: str, text: str = "", path: Pa
     params = dict(check_mapping(base.get("params"), f"{where}: base.params"))
     robot = load_params(overrides=params, where=f"{where}: base.params")  # validate robot overrides now
     base_effects = parse_effects(base.get("effects"), f"{where}: base.effects")
-    cond0 = {
+    cond0 = _base_conditions(data, base, where)
+    axes, swept = _sweep_axes(data, where)
+    sampled = data.get("sample") is not None  # a sampled campaign (campaign/sampling.py) instead of a grid
+    if sampled and (axes or swept):
+        raise ParameterError(f"{where}: sample cannot be combined with sweep or zip; use one of them")
+    if sampled:
+        runs, swept = _sampled_runs(data["sample"], cond0, where)
+    else:
+        runs = _grid_runs(axes, cond0)
+    thr = check_number(data.get("threshold_mm", 0.5), f"{where}: threshold_mm", 0.0, MAX_THRESHOLD_MM, "mm",
+                       lo_open=True)
+    bs = check_int(data.get("batch_size", 32), f"{where}: batch_size", 1, 1024)
+    dur = data.get("duration_s")
+    dur = None if dur is None else check_duration(dur, f"{where}: duration_s")
+    shortest = dur if dur is not None else min(
+        parse_trajectory(t, f"{where}: trajectory").duration_s for t in trajectory_specs(runs.values()))
+    lp = check_log_period(data.get("log_period_s", 1e-3), f"{where}: log_period_s", robot.physics_dt_s, shortest)
+    save_ts = check_bool(data.get("save_timeseries", False), f"{where}: save_timeseries")
+    name = check_text(data["name"], f"{where}: name") if data.get("name") is not None else (
+        path.stem if path else "campaign")
+    file_out = check_text(data["out"], f"{where}: out", max_len=4096) if data.get("out") is not None else None
+    out = out if out is not None else file_out
+    out_dir = Path(out) if out is not None else Path("results") / name
+    resolved = {**dict(data), "base": {**dict(base), "params": params}}
+    return Campaign(name, path, text or yaml.safe_dump(dict(data)), out_dir, base_effects, params,
+                    tuple(runs.values()), tuple(swept), thr, bs, lp, save_ts, dur, resolved,
+                    parse_split(data.get("split"), where))
+
+
+def _base_conditions(data: Mapping[str, Any], base: Mapping[str, Any], where: str) -> dict[str, Any]:
+    """The conditions every run starts from (seed, payload, temperature, trajectory), validated."""
+    return {
         "seed": _check_value("seed", base.get("seed", 0), f"{where}: base.seed"),
         "payload_kg": _check_value("payload_kg", base.get("payload_kg", 2.0), f"{where}: base.payload_kg"),
         "temperature_C": _check_value("temperature_C", base.get("temperature_C", 28.0),
                                       f"{where}: base.temperature_C"),
         "trajectory": _check_value("trajectory", data.get("trajectory", "pick_and_place"), f"{where}: trajectory"),
     }
+
+
+def _sweep_axes(data: Mapping[str, Any], where: str) -> tuple[list[list[dict[str, Any]]], list[str]]:
+    """The grid's axes (``sweep`` keys one axis each, a ``zip`` group one axis) with checked values, and the
+    swept keys; the grid's size is checked before anything is expanded."""
     axes: list[list[dict[str, Any]]] = []
     swept: list[str] = []
     sweep = check_mapping(data.get("sweep"), f"{where}: sweep")
@@ -266,11 +302,13 @@ def build_campaign(data: Mapping[str, Any], where: str, text: str = "", path: Pa
         raise ParameterError(f"{where}: key swept twice: {', '.join(dup)}")
     _check_fault_keys(swept, where)
     check_grid_size([len(a) for a in axes], where)
+    return axes, swept
+
+
+def _grid_runs(axes: Sequence[Sequence[Mapping[str, Any]]], cond0: Mapping[str, Any]) -> dict[str, CampaignRun]:
+    """Every point of the grid and its healthy twin, by run_id (a repeated point is kept once)."""
     runs: dict[str, CampaignRun] = {}
-    sampled = data.get("sample") is not None  # a sampled campaign (campaign/sampling.py) instead of a grid
-    if sampled and (axes or swept):
-        raise ParameterError(f"{where}: sample cannot be combined with sweep or zip; use one of them")
-    for combo in (itertools.product(*axes) if axes else [()]) if not sampled else []:
+    for combo in itertools.product(*axes) if axes else [()]:
         values: dict[str, Any] = {}
         for part in combo:
             values.update(part)
@@ -281,30 +319,18 @@ def build_campaign(data: Mapping[str, Any], where: str, text: str = "", path: Pa
             rc = rc.twin()   # itself, stored without faults whichever sweep point made it
         for r in (rc, rc.twin()):
             runs.setdefault(r.run_id, r)
-    if sampled:
-        drawn, swept = sample_runs(data["sample"], cond0, where)
-        for cond, faults, wants_twin in drawn:
-            rc = CampaignRun(tuple(sorted(cond.items())), tuple(sorted(faults.items())))  # validates them
-            for r in (rc, rc.twin()) if wants_twin else (rc,):
-                runs.setdefault(r.run_id, r)
-    thr = check_number(data.get("threshold_mm", 0.5), f"{where}: threshold_mm", 0.0, MAX_THRESHOLD_MM, "mm",
-                       lo_open=True)
-    bs = check_int(data.get("batch_size", 32), f"{where}: batch_size", 1, 1024)
-    dur = data.get("duration_s")
-    dur = None if dur is None else check_duration(dur, f"{where}: duration_s")
-    shortest = dur if dur is not None else min(
-        parse_trajectory(t, f"{where}: trajectory").duration_s for t in trajectory_specs(runs.values()))
-    lp = check_log_period(data.get("log_period_s", 1e-3), f"{where}: log_period_s", robot.physics_dt_s, shortest)
-    save_ts = check_bool(data.get("save_timeseries", False), f"{where}: save_timeseries")
-    name = check_text(data["name"], f"{where}: name") if data.get("name") is not None else (
-        path.stem if path else "campaign")
-    file_out = check_text(data["out"], f"{where}: out", max_len=4096) if data.get("out") is not None else None
-    out = out if out is not None else file_out
-    out_dir = Path(out) if out is not None else Path("results") / name
-    resolved = {**dict(data), "base": {**dict(base), "params": params}}
-    return Campaign(name, path, text or yaml.safe_dump(dict(data)), out_dir, base_effects, params,
-                    tuple(runs.values()), tuple(swept), thr, bs, lp, save_ts, dur, resolved,
-                    parse_split(data.get("split"), where))
+    return runs
+
+
+def _sampled_runs(spec: Any, cond0: Mapping[str, Any], where: str) -> tuple[dict[str, CampaignRun], list[str]]:
+    """The drawn runs (with their twins where wanted) by run_id, and the drawn keys."""
+    runs: dict[str, CampaignRun] = {}
+    drawn, swept = sample_runs(spec, cond0, where)
+    for cond, faults, wants_twin in drawn:
+        rc = CampaignRun(tuple(sorted(cond.items())), tuple(sorted(faults.items())))  # validates them
+        for r in (rc, rc.twin()) if wants_twin else (rc,):
+            runs.setdefault(r.run_id, r)
+    return runs, swept
 
 
 def trajectory_specs(runs: Iterable[CampaignRun]) -> list[Any]:

@@ -116,8 +116,14 @@ class SimResult:
         tcp = np.full((n, t_log.size, 3), np.nan)
         tcp_des = np.empty((n, t_log.size, 3))
         site = tcp_site
+        from .mjlib import site_positions, unavailable_reason
+
         for r, m in enumerate(models):
             d = mujoco.MjData(m)
+            if not unavailable_reason():  # mj_kinematics per sample from compiled code (same calls, no Python)
+                site_positions(m, d, site, q_set_log, tcp_des[r])
+                site_positions(m, d, site, log["q_rad"][r], tcp[r])
+                continue
             for i in range(t_log.size):
                 d.qpos[:] = q_set_log[i]
                 mujoco.mj_kinematics(m, d)
