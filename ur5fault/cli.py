@@ -74,7 +74,10 @@ def cmd_simulate(args: argparse.Namespace) -> int:
                       bar_format="{desc}: {percentage:3.0f}%|{bar}| {elapsed}<{remaining}") as pbar:
         res = sim.run(cfg.trajectory, [RunSpec("run", cfg.seed, cfg.effects)], log_period_s=cfg.log_period_s,
                       duration_s=cfg.duration_s, progress=progress.fraction_callback(pbar))
-    res.to_csv(out) if out.suffix.lower() == ".csv" else res.to_parquet(out)
+    if out.suffix.lower() == ".csv":
+        res.to_csv(out)
+    else:
+        res.to_parquet(out)
     # prose on stderr, the one data line (the run's summary as JSON) on stdout: `simulate ... | jq` works
     verb = "replaced" if replaced else "wrote"
     sys.stderr.write(f"{verb} {out} ({res.t_s.size} samples x {len(res.to_pandas(0).columns)} columns)\n")
