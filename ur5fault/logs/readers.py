@@ -72,8 +72,9 @@ def _assemble(src: str, t: NDArray, required: Mapping[str, NDArray], optional: M
     for k, label in zip(("target_q", "actual_q"), labels):  # before anything interpolates across a wrap
         req[k], wrapped = unwrap_joints(req[k])
         if wrapped:
-            notes.append(f"{src}: {label} of joint(s) {', '.join(str(j + 1) for j in wrapped)} wrap around (a jump of a whole "
-                         "turn between two rows): made continuous")
+            joints = ", ".join(str(j + 1) for j in wrapped)
+            notes.append(f"{src}: {label} of joint(s) {joints} wrap around (a jump of a whole turn between two "
+                         "rows): made continuous")
     plausible.check_increasing(src, t)
     plausible.check_range(src, req["actual_q"], t, opt["actual_qd"], declared)
     plausible.check_sampling(src, t)
