@@ -98,7 +98,11 @@ def test_unwrap_leaves_a_continuous_log_alone():
     q = np.column_stack([np.sin(t)] * 6)
     same, wrapped = unwrap_joints(q)
     assert same is q and wrapped == []
-    folded = np.where(t[:, None] > 5, q - 2 * np.pi, q)
+    turn = np.column_stack([2.5 + 0.15 * t] * 6)  # crosses +180 deg at t = 4.3 s
+    folded = (turn + np.pi) % (2 * np.pi) - np.pi
     got, wrapped = unwrap_joints(folded)
     assert wrapped == [0, 1, 2, 3, 4, 5]
-    np.testing.assert_allclose(got, q, atol=1e-12)
+    np.testing.assert_allclose(got, turn, atol=1e-12)
+    bad = q.copy()
+    bad[-1, 2] = 12.0  # a bad value, not a fold (spans more than a turn): left for the range check to name
+    assert unwrap_joints(bad)[1] == []

@@ -156,18 +156,46 @@ def _check_value(key: Any, value: Any, where: str) -> Any:
         if not eff.per_joint:
             raise ParameterError(f"{where}: effect {ek.effect!r} acts on the whole robot and takes no joint")
         return joint_index(value, where) + 1
-    p = eff.param(ek.param)
+    p = eff.param(ek.param, where)
     return check_number(value, f"{where}: {key}", p.lo, p.hi, p.unit)
 
 
-def load_campaign(path: str | Path, out: str | Path | None = None, overlay: str | Path | None = None) -> Campaign:
+#: the example campaigns shipped inside the package (``ur5fault campaign run paper``)
+SHIPPED_DIR = Path(__file__).resolve().parent.parent / "campaigns"
+
+
+def shipped_campaigns() -> list[str]:
+    """Names of the campaign files shipped with the package (``default``, ``paper``, ...)."""
+    return sorted(p.stem for p in SHIPPED_DIR.glob("*.yaml"))
+
+
+def resolve_campaign(path: str | Path) -> Path:
+    """A campaign file: an existing path, or the name of a shipped campaign (``paper`` or ``paper.yaml``).
+
+    A path that exists always wins, so a user's own ``paper.yaml`` in the working folder is the one run.
+    """
+    p = Path(path)
+    if p.exists() or p.parent != Path("."):
+        return p
+    shipped = SHIPPED_DIR / (p.name if p.suffix in (".yaml", ".yml") else f"{p.name}.yaml")
+    if shipped.is_file():
+        return shipped
+    from ..errors import ConfigFileError
+
+    raise ConfigFileError(f"{p}: no such file, and no shipped campaign of that name "
+                          f"(shipped: {', '.join(shipped_campaigns())})")
+
+
+def load_campaign(path: str | Path, out: str | Path | None = None, overlay: str | Path | None = None,
+                  duration_s: float | None = None) -> Campaign:
     """Read and validate a campaign file; every error names the file and key path.
 
     ``overlay``: a model overlay YAML (``params`` and ``effects``, e.g. written by ``ur5fault
     discrepancy``) merged into the campaign's ``base``: its parameters under the campaign's own, its
-    effects before them.  The merged text is what the manifest records.
+    effects before them.  ``duration_s`` replaces the file's (a quick trial of a campaign).  The merged text is
+    what the manifest records.  ``path`` may also name a shipped campaign (:func:`resolve_campaign`).
     """
-    path = Path(path)
+    path = resolve_campaign(path)
     data = read_yaml(path)
     text = path.read_text()
     if overlay is not None:
@@ -182,6 +210,9 @@ def load_campaign(path: str | Path, out: str | Path | None = None, overlay: str 
             raise ParameterError(f"{path.name}: base.effects: expected a list of effects")
         base["effects"] = list(ov.get("effects") or []) + own_effects
         data = {**data, "base": base}
+        text = yaml.safe_dump(dict(data), sort_keys=False)
+    if duration_s is not None:
+        data = {**data, "duration_s": duration_s}
         text = yaml.safe_dump(dict(data), sort_keys=False)
     return build_campaign(data, path.name, text, path, out)
 
@@ -199,7 +230,7 @@ def build_campaign(data: Mapping[str, Any], where: str, text: str = "", path: Pa
     base = check_mapping(data.get("base"), f"{where}: base")
     check_keys(base, BASE_KEYS, f"{where}: base")
     params = dict(check_mapping(base.get("params"), f"{where}: base.params"))
-    robot = load_params(overrides=params)  # validate robot overrides now
+    robot = load_params(overrides=params, where=f"{where}: base.params")  # validate robot overrides now
     base_effects = parse_effects(base.get("effects"), f"{where}: base.effects")
     cond0 = _base_conditions(data, base, where)
     axes, swept = _sweep_axes(data, where)
@@ -322,10 +353,14 @@ def check_grid_size(axis_lengths: Sequence[int], where: str) -> int:
 
 
 def _check_fault_keys(swept: Sequence[str], where: str) -> None:
-    """A per-joint effect that is swept needs its joint swept (or a single joint) too."""
+    """A per-joint effect that is swept needs its joint swept (or a single joint) too, and a swept joint needs a
+    size: sweeping only ``backlash.joint`` would give runs of size 0, which are healthy runs."""
     effects = {ek.effect for ek in map(EffectKey.parse, swept) if ek is not None}
-    for name in effects:
+    for name in sorted(effects):
         if REGISTRY[name].per_joint and f"{name}.joint" not in swept:
             raise ParameterError(f"{where}: sweep of effect {name!r} needs '{name}.joint' (list of joints 1..6)")
+        if swept.count(f"{name}.joint") and not [k for k in swept if k.startswith(f"{name}.") and k != f"{name}.joint"]:
+            sizes = ", ".join(f"'{name}.{p.name}' [{p.unit}]" for p in REGISTRY[name].params)
+            raise ParameterError(f"{where}: sweep of effect {name!r} gives joints but no size; sweep {sizes} too")
 
 

@@ -73,8 +73,8 @@ def _assemble(src: str, t: NDArray, required: Mapping[str, NDArray], optional: M
         req[k], wrapped = unwrap_joints(req[k])
         if wrapped:
             joints = ", ".join(str(j + 1) for j in wrapped)
-            notes.append(f"{src}: {label} of joint(s) {joints} wrap around (a jump of a whole turn between two "
-                         "rows): made continuous")
+            notes.append(f"{src}: {label} of joint(s) {joints} wrap around (a jump of a whole turn between two rows): "
+                         "made continuous")
     plausible.check_increasing(src, t)
     plausible.check_range(src, req["actual_q"], t, opt["actual_qd"], declared)
     plausible.check_sampling(src, t)

@@ -5,7 +5,7 @@ both sides).
 Modules by concern: :mod:`.data` (split and inputs), :mod:`.models` (the classifiers),
 :mod:`.metrics` (detection, localisation, kind, importance), :mod:`.thresholds` (smallest backlash
 detected and its TCP deviation), :mod:`.figures` (matplotlib Figures), :mod:`.report` (files).
-Needs scikit-learn: ``pip install 'ur5fault[ml]'``.
+Needs scikit-learn: ``pip install 'scikit-learn>=1.3'`` (from a checkout: ``pip install '.[ml]'``).
 """
 
 from __future__ import annotations
