@@ -116,13 +116,15 @@ class LifeCampaign:
 
 def is_life_file(path: str | Path) -> bool:
     """True when a campaign YAML (a path or a shipped campaign's name) has a top-level ``life:``
-    section (read without validation)."""
+    section.  Read through the one strict, bounded loader (an alias bomb or a deeply nested file must not
+    reach PyYAML's recursion here); a file it refuses is not a life file, and the campaign loader then
+    reports it in one line."""
     from ...campaign.spec import resolve_campaign
     from ...errors import ConfigFileError
 
     try:
-        data = yaml.safe_load(resolve_campaign(path).read_text())
-    except (OSError, yaml.YAMLError, ConfigFileError):
+        data = read_yaml(resolve_campaign(path))
+    except ConfigFileError:
         return False
     return isinstance(data, Mapping) and "life" in data
 
