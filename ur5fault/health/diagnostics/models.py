@@ -39,9 +39,10 @@ def single_threaded():
 
 
 def require_sklearn() -> None:
-    """Import scikit-learn, or say in one line how to install it."""
+    """Import scikit-learn and skops, or say in one line how to install them."""
     try:
         import sklearn.ensemble  # noqa: F401
+        import skops.io  # noqa: F401
     except ImportError:  # pragma: no cover - depends on the installation
         from ...errors import Ur5FaultError
 
