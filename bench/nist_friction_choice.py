@@ -22,8 +22,7 @@ from ur5fault.identify.friction_choice import replay
 from ur5fault.logs import read_nist
 from ur5fault.sim.params import load_params
 
-NIST_LOG = Path(__file__).resolve().parents[2] / "shared" / "data" / "nist-ur5" / \
-    "ur5testresult_halfspeed_payload1.6lb_1.csv.gz"
+NIST_LOG = Path(__file__).resolve().parents[1] / "data" / "nist-ur5" / "ur5testresult_halfspeed_payload1.6lb_1.csv.gz"
 
 
 def table(title: str, rows: list[dict], key: str) -> None:

@@ -1,5 +1,5 @@
-"""Shared test constants (paths, the UR5's joint names) and fixtures: the real NIST log (skipped with
-a message when absent) and cached simulations reused by several physics tests.
+"""Shared test constants (paths, the UR5's joint names) and fixtures: the real NIST log (in the repository's data/:
+a failure, not a skip, when absent) and cached simulations reused by several physics tests.
 
 Test modules import the constants with ``from conftest import ...`` (``tests/`` is on the path through
 ``pythonpath`` in pyproject.toml, which also makes ``reference_ur5`` importable)."""
@@ -11,9 +11,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-#: the repository checkout; ../shared beside it holds the real log
+#: the repository checkout; its data/ folder holds the real logs (data/*/README.md)
 REPO = Path(__file__).resolve().parents[1]
-NIST_LOG = REPO.parent / "shared" / "data" / "nist-ur5" / "ur5testresult_halfspeed_payload1.6lb_1.csv.gz"
+NIST_LOG = REPO / "data" / "nist-ur5" / "ur5testresult_halfspeed_payload1.6lb_1.csv.gz"
+#: the nine runs of a second real UR5 (CB2, 125 Hz, no temperatures; data/kufieta-ur5/README.md)
+KUFIETA_DIR = REPO / "data" / "kufieta-ur5"
+KUFIETA_RUNS = tuple(sorted(KUFIETA_DIR.glob("*.csv.gz")))
 #: the MJCF of the checkout, read directly by the tests of the model file
 MODEL_XML = REPO / "ur5fault" / "models" / "ur5.xml"
 CAMPAIGNS = REPO / "campaigns"
@@ -31,8 +34,8 @@ JOINT_NAMES = (
 
 @pytest.fixture(scope="session")
 def nist_path() -> Path:
-    if not NIST_LOG.exists():
-        pytest.skip(f"real UR5 log not found at {NIST_LOG} (needs ../shared beside the repository)")
+    if not NIST_LOG.exists():  # part of the repository: a missing log is a broken checkout, not a skip
+        pytest.fail(f"real UR5 log missing at {NIST_LOG} (data/ of the repository)")
     return NIST_LOG
 
 

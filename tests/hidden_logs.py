@@ -25,6 +25,8 @@ from ur5fault.sim.trajectories import joint_sweep
 
 #: the payload the 'user' declares (and the log holds)
 PAYLOAD_KG = 1.0
+#: the tool offset the hidden logs are simulated with (the packaged model's, ur5_drive.yaml)
+SIM_TCP_M = (0.0, 0.0, 0.15)
 #: joint temperatures of an RTDE log: a ramp over the log, centred on the model's 28 degC reference
 TEMPERATURE_RAMP_C = (23.0, 33.0)
 

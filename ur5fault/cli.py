@@ -93,7 +93,7 @@ def cmd_effects(args: argparse.Namespace) -> int:
 def cmd_show(args: argparse.Namespace) -> int:
     from .errors import ConfigFileError
     from .plotting import run_figure
-    from .plotting._figure import DPI
+    from .util.io import write_figure_atomic
 
     target = Path(args.target)
     if target.suffix == ".parquet" or target.is_file():
@@ -117,7 +117,7 @@ def cmd_show(args: argparse.Namespace) -> int:
         fig = run_figure(series[row["run_id"]], twin=series[twin] if twin != row["run_id"] else None)
         png = Path(args.out) if args.out else result.out / "plots" / f"show_{row['run_id']}.png"
     png.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(png, dpi=DPI)
+    write_figure_atomic(fig, png)
     print(f"wrote {png}")
     return 0
 
@@ -200,6 +200,21 @@ def _add_optional_commands(sub) -> None:
     benchmark_cli.register(sub)
 
 
+def _one_line(message: str) -> int:
+    sys.stderr.write(f"ur5fault: error: {' '.join(message.split())}\n")
+    return EXIT_USAGE
+
+
+def _silence_stdout() -> None:
+    """Point stdout at /dev/null so that Python's own flush at exit raises no second BrokenPipeError."""
+    import os
+
+    try:
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+    except (OSError, ValueError):
+        pass
+
+
 class Terminated(KeyboardInterrupt):
     """SIGTERM arrived: unwind like Ctrl-C (locks released, workers stopped, temporary files removed)."""
 
@@ -219,8 +234,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         return int(args.func(args) or 0)
     except Ur5FaultError as exc:
-        sys.stderr.write(f"ur5fault: error: {' '.join(str(exc).split())}\n")
-        return EXIT_USAGE
+        return _one_line(str(exc))
+    except BrokenPipeError:  # `ur5fault campaign status DIR | head`: the reader left, nothing is wrong
+        _silence_stdout()
+        return 128 + signal.SIGPIPE
+    except Exception as exc:
+        if type(exc).__name__ != "TerminatedWorkerError":  # joblib's: a worker process was killed
+            raise
+        return _one_line("a worker process died (killed, or out of memory); every result written before it is "
+                         "kept: run the same command again to continue")
     except Terminated:
         sys.stderr.write("ur5fault: terminated\n")
         return 128 + signal.SIGTERM

@@ -193,9 +193,9 @@ def test_second_campaign_on_same_folder_refused(tmp_path):
 
 def test_rerun_of_finished_campaign_does_nothing(small_reference):
     f, ref, out = small_reference
-    stamp = {p.name: p.stat().st_mtime_ns for p in (out / "runs").iterdir()}
+    stamp = {p.name: p.stat().st_mtime_ns for p in (out / "runs").glob("*.parquet")}
     run_campaign(load_campaign(f), out, jobs=2, progress=False)
-    assert stamp == {p.name: p.stat().st_mtime_ns for p in (out / "runs").iterdir()}
+    assert stamp == {p.name: p.stat().st_mtime_ns for p in (out / "runs").glob("*.parquet")}
 
 
 @pytest.mark.slow
@@ -377,9 +377,9 @@ def test_identity_inputs_cover_everything_that_decides_a_result():
 
 def test_added_level_simulates_only_the_new_run(tmp_path, tiny_done):
     out = _copy_done(tiny_done, tmp_path)
-    stamp = {p.name: p.stat().st_mtime_ns for p in (out / "runs").iterdir()}
+    stamp = {p.name: p.stat().st_mtime_ns for p in (out / "runs").glob("*.parquet")}
     run_quiet(load_campaign(tiny(tmp_path, levels="0.1, 0.2, 0.3")), out)
-    now = {p.name: p.stat().st_mtime_ns for p in (out / "runs").iterdir()}
+    now = {p.name: p.stat().st_mtime_ns for p in (out / "runs").glob("*.parquet")}
     assert {k: now[k] for k in stamp} == stamp and len(now) == len(stamp) + 1
     assert len(pd.read_parquet(out / "features.parquet")) == 4
 
@@ -499,3 +499,16 @@ def _cmdline(pid: int) -> bytes:
         return b"" if stat[2] == "Z" else Path(f"/proc/{pid}/cmdline").read_bytes()
     except (OSError, IndexError):
         return b""
+
+
+def test_a_run_validates_its_faults_once_when_built():
+    from ur5fault.campaign.spec import CampaignRun
+
+    cond = (("seed", 0),)
+    with pytest.raises(ParameterError, match=r"backlash.backlash_deg = 9 is out of range"):
+        CampaignRun(cond, (("backlash.backlash_deg", 9), ("backlash.joint", 1)))
+    rc = CampaignRun(cond, (("backlash.backlash_deg", 0.2), ("backlash.joint", 2)))
+    assert rc.fault_effects() is rc.fault_effects()  # built once, not re-validated per call
+    assert rc.fault_effects()[0].joint == 1 and not rc.is_healthy()
+    absent = CampaignRun(cond, (("backlash.backlash_deg", 0.0), ("backlash.joint", 2)))
+    assert absent.is_healthy() and absent != rc and len({rc, CampaignRun(cond, rc.faults)}) == 1

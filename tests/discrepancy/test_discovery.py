@@ -10,7 +10,7 @@ import zlib
 
 import numpy as np
 import pytest
-from hidden_logs import PAYLOAD_KG, edited_model, named, simulate, write_rtde, write_sim
+from hidden_logs import PAYLOAD_KG, SIM_TCP_M, edited_model, named, simulate, write_rtde, write_sim
 
 from ur5fault import make_effect
 from ur5fault.config import Overlay
@@ -51,7 +51,7 @@ def make_log(tmp_path, form: str, h: dict):
     else:
         res = simulate(seed=seed)
     return read_log(write_rtde(res, tmp_path / "m.csv", drift=(j, h["c"]) if form == "temperature_drift" else None),
-                    "rtde", payload_kg=PAYLOAD_KG)
+                    "rtde", payload_kg=PAYLOAD_KG, tcp_offset_m=SIM_TCP_M)
 
 
 #: form -> (dictionary family, effect parameter checked, true size from the drawn values)
@@ -137,12 +137,14 @@ def test_cli_round_trip_through_the_model_overlay(tmp_path):
         assert r.returncode == 0, r.stderr
         return r.stdout
 
-    first = cli("discrepancy", str(log), "--format", "rtde", "--payload-kg", str(PAYLOAD_KG), "--out", "fit1",
+    first = cli("discrepancy", str(log), "--format", "rtde", "--payload-kg", str(PAYLOAD_KG), "--tcp-offset-m",
+                *map(str, SIM_TCP_M), "--out", "fit1",
                 "--jobs", str(JOBS), "--quiet")
     assert "elbow_joint: current drift of" in first, first
     ov = Overlay.load(tmp_path / "fit1" / "model.yaml")
     assert [e.name for e in ov.effects] == ["current_temperature_drift"]
-    second = cli("discrepancy", str(log), "--format", "rtde", "--payload-kg", str(PAYLOAD_KG), "--model",
+    second = cli("discrepancy", str(log), "--format", "rtde", "--payload-kg", str(PAYLOAD_KG), "--tcp-offset-m",
+                 *map(str, SIM_TCP_M), "--model",
                  "fit1/model.yaml", "--out", "fit2", "--jobs", str(JOBS), "--quiet")
     assert "nothing explains the residual better than noise" in second, second
     cli("simulate", "--model", "fit1/model.yaml", "--trajectory", "joint_sweep", "--duration-s", "0.5",
@@ -158,7 +160,7 @@ def test_a_finding_that_does_not_generalise_is_dropped_and_reported(tmp_path):
     n_fit = int((res.t_s.size - 1) * 0.6)
     res["i_FB_A"][0, : n_fit + 1, 3] += 0.2
     model = DiscrepancyModel(jobs=JOBS).fit(read_log(write_rtde(res, tmp_path / "m.csv"), "rtde",
-                                                     payload_kg=PAYLOAD_KG))
+                                                     payload_kg=PAYLOAD_KG, tcp_offset_m=SIM_TCP_M))
     dropped = [f for f in model.dropped_ if f.candidate.effect == "current_sensor_offset" and f.candidate.joint == 3]
     assert dropped and "does not generalise" in dropped[0].reason, [sentence(f) for f in model.findings_]
     assert dropped[0].held_out.ratio < 0

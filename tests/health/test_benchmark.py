@@ -76,6 +76,24 @@ def test_a_group_on_both_sides_is_refused():
         load_dataset(df)
 
 
+def test_an_all_nan_feature_is_left_out_and_said_so():
+    df = synthetic()
+    df["enc_mismatch_hyst_rad_j4"] = np.nan  # was: scikit-learn ValueError
+    m, _ = evaluate(df, with_figures=False, with_importance=True)
+    assert "enc_mismatch_hyst_rad_j4" not in m["dataset"]["inputs"]
+    assert m["dataset"]["inputs_left_out"] == {"enc_mismatch_hyst_rad_j4": "no value in the train split"}
+    assert m["detection"]["per_kind"]["backlash"]["auc"] > 0.85
+
+
+def test_an_infinite_feature_is_one_line():
+    df = synthetic()
+    df["run_id"] = [f"r{i}" for i in range(len(df))]
+    df.loc[3, "current_spike_max_A_j2"] = np.inf
+    with pytest.raises(ConfigFileError, match=r"feature current_spike_max_A_j2 is infinite in 1 run\(s\) with "
+                                              r"status ok \(e.g. r3\)"):
+        load_dataset(df)
+
+
 def test_inputs_are_robot_signals_not_labels_or_twin_features():
     cols = input_columns(synthetic())
     assert not [c for c in cols if c.startswith("tcp_")]

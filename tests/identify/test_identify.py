@@ -47,6 +47,33 @@ def test_position_quantum_recovers_the_encoder_step():
     assert found == pytest.approx(quantum, rel=1e-9)
 
 
+PRIOR_NOISE = {"sensors.current_noise_A": np.full(6, 0.5), "sensors.resolver_noise_rad": np.full(6, 7e-3)}
+
+
+def test_noise_without_rest_keeps_the_model_value_and_one_segment_gives_no_interval():
+    """A robot that never rests (three of the second UR5's runs): the model's value, marked, never a
+    traceback; one rest segment: the value, but no zero-width 'interval' from resampling it alone."""
+    rng = np.random.default_rng(6)
+    n = 3000
+    moving = _signals(n, qd_target_rad_s=np.full((n, 6), 0.3), current_A=rng.normal(0, 0.01, (n, 6)))
+    est = sensors.noise_at_rest(moving, n_boot=50, seed=0, prior=PRIOR_NOISE)
+    assert len(est) == 12 and not any(e.identifiable for e in est)
+    assert {e.value for e in est} == {0.5, 7e-3}
+    assert all("no settled rest segment" in e.note for e in est)
+    qd = np.zeros((n, 6))
+    qd[n // 2:] = 0.3  # one rest segment, then motion
+    once = _signals(n, qd_target_rad_s=qd, current_A=rng.normal(0, 0.01, (n, 6)),
+                    q_actual_rad=rng.normal(0, 2e-5, (n, 6)))
+    est = sensors.noise_at_rest(once, n_boot=50, seed=0, prior=PRIOR_NOISE)
+    assert all(e.identifiable and np.isnan(e.lo) and np.isnan(e.hi) and "no interval" in e.note for e in est)
+
+
+def test_resolution_of_a_robot_that_did_not_move_is_the_model_value_marked():
+    sig = _signals(1000, q_actual_rad=np.full((1000, 6), 0.3))
+    e = sensors.resolver_resolution(sig, n_boot=20, seed=0, prior_counts=2.0**19)
+    assert not e.identifiable and e.value == 2.0**19 and "never change" in e.note
+
+
 def test_noise_at_rest_recovers_white_noise_sigma_and_ignores_a_creeping_trend():
     rng = np.random.default_rng(4)
     n = 3000
@@ -56,7 +83,7 @@ def test_noise_at_rest_recovers_white_noise_sigma_and_ignores_a_creeping_trend()
     trend = np.linspace(0, 0.2, n)[:, None]  # a holding current winding up slowly is not noise
     sig = _signals(n, qd_target_rad_s=qd, current_A=trend + rng.normal(0, 1, (n, 6)) * sigma_A,
                    q_actual_rad=rng.normal(0, 2.3e-5, (n, 6)))
-    est = sensors.noise_at_rest(sig, n_boot=100, seed=0)
+    est = sensors.noise_at_rest(sig, n_boot=100, seed=0, prior=PRIOR_NOISE)
     cur = np.array([e.value for e in est if e.key == "sensors.current_noise_A"])
     np.testing.assert_allclose(cur, sigma_A, rtol=0.06)
     for e in est:

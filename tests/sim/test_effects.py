@@ -59,3 +59,36 @@ def test_each_effect_changes_only_its_run_and_absent_means_no_change(name):
 def test_backlash_in_degrees_becomes_radians():
     a = build_run_arrays(load_params(), [(make_effect("backlash", "shoulder_lift_joint", backlash_deg=0.1),)], 0.0)
     assert a.backlash_rad[0, 1] == pytest.approx(np.radians(0.1))
+
+
+def test_effect_keys_parse_at_the_first_dot_only():
+    from ur5fault.sim.effects import EffectKey
+
+    k = EffectKey.parse("backlash.backlash_deg")
+    assert (k.effect, k.param, str(k)) == ("backlash", "backlash_deg", "backlash.backlash_deg")
+    assert EffectKey.parse("payload_com.dz_m.x") == EffectKey("payload_com", "dz_m.x")
+    assert EffectKey.parse("seed") is None and EffectKey.parse(3) is None
+
+
+def test_effects_of_keys_group_validate_and_skip_plain_keys():
+    from ur5fault.sim.effects import effects_of_keys
+
+    specs = effects_of_keys([("seed", 1), ("payload_com.dz_m", 0.05), ("backlash.joint", 3),
+                             ("backlash.backlash_deg", 0.2)])
+    assert [s.name for s in specs] == ["backlash", "payload_com"]  # name order
+    assert specs[0].joint == 2 and specs[0].values == (("backlash_deg", 0.2),)
+    assert specs[1].values == (("dx_m", 0.0), ("dy_m", 0.0), ("dz_m", 0.05))
+    with pytest.raises(ParameterError, match=r"here: backlash.backlash_deg = 9 is out of range \[0, 5\] deg"):
+        effects_of_keys([("backlash.joint", 1), ("backlash.backlash_deg", 9)], "here")
+
+
+def test_absent_values_come_from_the_registry():
+    assert REGISTRY["cogging"].absent("periods_per_rev") == 6.0
+    with pytest.raises(ParameterError, match="'payload': parameter 'mass_kg' has no absent value"):
+        REGISTRY["payload"].absent("mass_kg")
+    assert make_effect("backlash", 1, backlash_deg=0.0).is_absent
+    assert not make_effect("backlash", 1, backlash_deg=0.1).is_absent
+    # a run without effects holds every term field at the registry's absent value
+    a = build_run_arrays(load_params(), [()], 0.0)
+    assert np.all(a.term_holding_speed_rad_s == REGISTRY["torque_holding"].absent("speed_rad_s"))
+    assert np.all(a.cogging_periods_per_rev == 6.0)

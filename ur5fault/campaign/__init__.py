@@ -3,9 +3,10 @@ over processes (:mod:`.execute`), stored atomically and resumably (:mod:`.store`
 (:mod:`.summary`).  The campaign file's format is documented in :mod:`.spec`."""
 
 from .execute import plan_batches, run_batch, run_campaign
+from .lock import CampaignLockedError, Lock
 from .result import CampaignResult
 from .spec import Campaign, CampaignRun, build_campaign, load_campaign
-from .store import CampaignChangedError, CampaignLockedError, Lock, consolidate
+from .store import CampaignChangedError, consolidate
 from .summary import acceptable_backlash, tcp_table
 from .verify import status
 

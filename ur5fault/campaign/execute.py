@@ -18,6 +18,7 @@ import os
 import sys
 import threading
 import time
+import warnings
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -34,9 +35,10 @@ from .identity import Identities
 from .identity import run_effects as _effects_of
 from .labels import assign_splits, refresh_splits, row_labels
 from .limits import check_limits, effective_jobs, estimate
+from .lock import Lock
 from .manifest import build_manifest
 from .spec import Campaign, CampaignRun
-from .store import CampaignChangedError, Lock, consolidate, run_path, write_run_file
+from .store import BadRunFilesError, CampaignChangedError, consolidate, run_path, write_run_file
 from .verify import scan
 
 _log = logging.getLogger(__name__)
@@ -108,7 +110,7 @@ def run_batch(camp: Campaign, batch: Sequence[CampaignRun], ts_dir: str | None,
         if ts_dir is not None:
             meta = {**res.run_metadata(i), "run_identity": (identities or {}).get(rc.run_id)}
             write_parquet_atomic(res.to_pandas(i), Path(ts_dir) / f"{rc.run_id}.parquet",
-                                 {"ur5fault": json.dumps(meta)})
+                                 {"ur5fault": json.dumps(meta)}, checksum=True)
         eff = rc.fault_effects()
         row: dict[str, Any] = {
             "run_id": rc.run_id,
@@ -244,8 +246,25 @@ def _run_locked(camp: Campaign, out: Path, jobs: int, backend: str, client, prog
         finally:
             report.close()
         records = {rc.run_id: ids.record(rc) for rc in camp.runs}
-        # the split is a label, not a result: stored rows follow the campaign's current split rule
-        features = consolidate(out, records, lambda df: refresh_splits(df, camp.split, camp.runs)[0])
+
+        def relabel(df):  # the split is a label, not a result: stored rows follow the current split rule
+            return refresh_splits(df, camp.split, camp.runs)[0]
+
+        try:
+            features = consolidate(out, records, relabel)
+        except BadRunFilesError as exc:  # damaged after the scan (a disk, another tool): simulate them again
+            for rid, why in exc.bad[:5]:
+                say(f"{run_path(out, rid)}: {why}; simulating it again")
+            redo_ids = {rid for rid, _ in exc.bad}
+            found.bad += [b for b in exc.bad if b[0] not in {r for r, _ in found.bad}]
+            again = plan_batches(camp, [rc for rc in camp.runs if rc.run_id in redo_ids], jobs)
+            report = campaign_progress(progress, total)
+            try:
+                _execute(camp, again, out, ts_dir, jobs, client, ids, set(redo_ids), total - len(redo_ids), report,
+                         t0)
+            finally:
+                report.close()
+            features = consolidate(out, records, relabel)
         manifest = build_manifest(camp, ids, features, "complete", backend, jobs, save_ts, t0)
         manifest["runs_resimulated"] = {"missing": len(found.missing), "bad": len(found.bad),
                                         "changed": len(found.changed)}
@@ -311,6 +330,7 @@ def _execute(camp: Campaign, batches: list[list[CampaignRun]], out: Path, ts_dir
         ctx = joblib.parallel_backend("dask", wait_for_workers_timeout=60)
     else:
         ctx = joblib.parallel_backend("loky")
+    gen = None
     try:
         with ctx:
             par = joblib.Parallel(n_jobs=jobs if client is None else -1, return_as="generator_unordered")
@@ -326,6 +346,10 @@ def _execute(camp: Campaign, batches: list[list[CampaignRun]], out: Path, ts_dir
                         done += 1
                 report(done, time.perf_counter() - t0)
     except BaseException:
+        if gen is not None:  # cancel the batches still out, without joblib's warning after our one-line error
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                gen.close()
         if client is None:
             _stop_loky_workers()
         raise

@@ -25,7 +25,7 @@ from pathlib import Path
 from typing import Any
 
 from ..config import parse_trajectory
-from ..sim.effects import EffectSpec, make_effect
+from ..sim.effects import EffectSpec, effects_of_keys, make_effect
 from ..sim.params import load_params
 from ..util.checks import short
 from .spec import Campaign, CampaignRun
@@ -52,12 +52,7 @@ def run_effects(camp: Campaign, rc: CampaignRun) -> tuple[EffectSpec, ...]:
 def condition_effects(cond: Mapping[str, Any]) -> tuple[EffectSpec, ...]:
     """Whole-robot effects held as run conditions (``<effect>.<param>`` keys, e.g. a sampled campaign's
     ``payload_com.dz_m`` or ``delay.delay_ms``): shared with the healthy twin, not faults."""
-    by_effect: dict[str, dict[str, Any]] = {}
-    for key, v in cond.items():
-        name, dot, par = key.partition(".")
-        if dot:
-            by_effect.setdefault(name, {})[par] = v
-    return tuple(make_effect(name, **vals) for name, vals in sorted(by_effect.items()))
+    return effects_of_keys(cond.items())
 
 
 def file_sha256(path: Path) -> str:

@@ -34,7 +34,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import ParameterError, UnknownNameError
-from ..sim.effects import REGISTRY, EffectSpec
+from ..sim.effects import REGISTRY, EffectKey, EffectSpec
 
 SPLIT_KEYS = ("by", "test_fraction", "seed")
 #: group keys of the split: the trajectory's seed option (runs on a fixed trajectory are grouped by its
@@ -138,10 +138,10 @@ def fault_columns(effects: Sequence[EffectSpec]) -> dict[str, Any]:
 def condition_column(key: str) -> str:
     """Column of a condition key: as is, or ``<effect>.<param>`` -> ``<effect>_<param>`` without a
     repeated prefix (``delay.delay_ms`` -> ``delay_ms``, ``payload_com.dz_m`` -> ``payload_com_dz_m``)."""
-    name, dot, par = key.partition(".")
-    if not dot:
+    ek = EffectKey.parse(key)
+    if ek is None:
         return key
-    return par if par.startswith(name + "_") else f"{name}_{par}"
+    return ek.param if ek.param.startswith(ek.effect + "_") else f"{ek.effect}_{ek.param}"
 
 
 def condition_columns(cond: Mapping[str, Any]) -> dict[str, Any]:

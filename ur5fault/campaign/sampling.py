@@ -54,7 +54,7 @@ import numpy as np
 from ..config import parse_trajectory
 from ..errors import ParameterError, UnknownNameError, Ur5FaultError
 from ..sim.axes import joint_index
-from ..sim.effects import REGISTRY, EffectParam, make_effect
+from ..sim.effects import REGISTRY, EffectKey, EffectParam, effects_of_keys, make_effect
 from .labels import SIZE_PARAM
 
 SAMPLE_KEYS = ("n", "method", "seed", "twins", "joints", "faults", "conditions")
@@ -202,21 +202,20 @@ def _check_condition(key: str, dist: Dist, where: str) -> None:
         elif key == "temperature_C":
             make_effect("temperature", where=where, temperature_C=v)
         else:
-            name, _, par = key.partition(".")
-            make_effect(name, where=where, **{par: v})
+            effects_of_keys([(key, v)], where)
 
 
 def _condition_key(key: str, where: str) -> None:
     if key in BASE_CONDITIONS:
         return
-    name, dot, par = key.partition(".")
-    if not dot or name not in REGISTRY:
+    ek = EffectKey.parse(key)
+    if ek is None or ek.effect not in REGISTRY:
         raise UnknownNameError("condition", key, list(BASE_CONDITIONS) + ["<whole-robot effect>.<param>"], where)
-    eff = REGISTRY[name]
-    if eff.per_joint or name in ("payload", "temperature"):
+    eff = REGISTRY[ek.effect]
+    if eff.per_joint or ek.effect in ("payload", "temperature"):
         why = "is per joint: sample it as a fault kind" if eff.per_joint else "is set by payload_kg / temperature_C"
-        raise ParameterError(f"{where}: condition {key!r}: effect {name!r} {why}")
-    eff.param(par)  # unknown parameter -> lists the effect's parameters
+        raise ParameterError(f"{where}: condition {key!r}: effect {ek.effect!r} {why}")
+    eff.param(ek.param)  # unknown parameter -> lists the effect's parameters
 
 
 def _trajectory_dists(spec: Any, where: str) -> tuple[Any, dict[str, Dist]]:
@@ -307,8 +306,9 @@ def sample_runs(spec: Any, cond0: Mapping[str, Any], where: str) -> tuple[list[t
         if key == "trajectory":
             traj_fixed, traj_drawn = _trajectory_dists(v, cloc)
             continue
-        if str(key).partition(".")[0] in {k.name for k in kinds}:
-            raise ParameterError(f"{cloc}: {key.partition('.')[0]!r} is also a fault kind; choose one")
+        ek = EffectKey.parse(key)
+        if ek is not None and ek.effect in {k.name for k in kinds}:
+            raise ParameterError(f"{cloc}: {ek.effect!r} is also a fault kind; choose one")
         cond_dists[key] = parse_dist(v, cloc)
         _check_condition(key, cond_dists[key], cloc)
 

@@ -52,7 +52,7 @@ from ..config import (
 )
 from ..errors import ParameterError, UnknownNameError
 from ..sim.axes import joint_index
-from ..sim.effects import REGISTRY, EffectSpec, make_effect
+from ..sim.effects import REGISTRY, EffectKey, EffectSpec, effects_of_keys
 from ..sim.params import deep_merge, load_params, read_yaml
 from ..util.checks import check_bool, check_int, check_number, check_text, short
 from .labels import SplitRule, parse_split
@@ -75,28 +75,24 @@ class CampaignRun:
 
     conditions: tuple[tuple[str, Any], ...]  # seed, payload_kg, temperature_C, trajectory
     faults: tuple[tuple[str, Any], ...]  # swept fault keys -> values, sorted
+    #: the faults as validated effects, built once when the run is (not compared: they follow from ``faults``)
+    _effects: tuple[EffectSpec, ...] = dataclasses.field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        effects = tuple(e for e in effects_of_keys(self.faults) if not e.is_absent)
+        object.__setattr__(self, "_effects", effects)
 
     @property
     def cond(self) -> dict[str, Any]:
         return dict(self.conditions)
 
     def is_healthy(self) -> bool:
-        return not self.fault_effects()
+        return not self._effects
 
     def fault_effects(self) -> tuple[EffectSpec, ...]:
-        """Effects of the swept faults; those at their 'absent' value are dropped."""
-        by_effect: dict[str, dict[str, Any]] = {}
-        for key, v in self.faults:
-            name, _, par = key.partition(".")
-            by_effect.setdefault(name, {})[par] = v
-        out = []
-        for name, vals in sorted(by_effect.items()):
-            joint = vals.pop("joint", None)
-            spec = make_effect(name, joint, **vals)
-            absent = all(REGISTRY[name].param(k).absent == v for k, v in spec.values)
-            if not absent:
-                out.append(spec)
-        return tuple(out)
+        """Effects of the swept faults (validated when the run was built); those at their 'absent' value
+        are dropped."""
+        return self._effects
 
     def twin(self) -> CampaignRun:
         return CampaignRun(self.conditions, ())
@@ -154,16 +150,16 @@ def _check_value(key: Any, value: Any, where: str) -> Any:
     if key == "trajectory":
         parse_trajectory(value, where)
         return value if isinstance(value, str) else dict(value)
-    name, dot, par = key.partition(".") if isinstance(key, str) else ("", "", "")
-    if not dot or name not in REGISTRY:
+    ek = EffectKey.parse(key)
+    if ek is None or ek.effect not in REGISTRY:
         valid = list(CONDITION_KEYS) + [f"{e}.<param>" for e in REGISTRY]
         raise UnknownNameError("sweep key", key if isinstance(key, str) else short(key), valid, where)
-    eff = REGISTRY[name]
-    if par == "joint":
+    eff = REGISTRY[ek.effect]
+    if ek.param == "joint":
         if not eff.per_joint:
-            raise ParameterError(f"{where}: effect {name!r} acts on the whole robot and takes no joint")
+            raise ParameterError(f"{where}: effect {ek.effect!r} acts on the whole robot and takes no joint")
         return joint_index(value, where) + 1
-    p = eff.param(par)
+    p = eff.param(ek.param)
     return check_number(value, f"{where}: {key}", p.lo, p.hi, p.unit)
 
 
@@ -253,15 +249,14 @@ def build_campaign(data: Mapping[str, Any], where: str, text: str = "", path: Pa
         cond = {**cond0, **{k: v for k, v in values.items() if k in CONDITION_KEYS}}
         faults = tuple(sorted((k, v) for k, v in values.items() if k not in CONDITION_KEYS))
         rc = CampaignRun(tuple(sorted(cond.items(), key=lambda kv: kv[0])), faults)
-        if not rc.fault_effects():  # (also validates the combination) a fault at its "absent" value: the
-            rc = rc.twin()          # healthy run itself, stored without faults whichever sweep point made it
+        if rc.is_healthy():  # (built, so validated) a fault at its "absent" value: the healthy run
+            rc = rc.twin()   # itself, stored without faults whichever sweep point made it
         for r in (rc, rc.twin()):
             runs.setdefault(r.run_id, r)
     if sampled:
         drawn, swept = sample_runs(data["sample"], cond0, where)
         for cond, faults, wants_twin in drawn:
-            rc = CampaignRun(tuple(sorted(cond.items())), tuple(sorted(faults.items())))
-            rc.fault_effects()  # validate the combination
+            rc = CampaignRun(tuple(sorted(cond.items())), tuple(sorted(faults.items())))  # validates them
             for r in (rc, rc.twin()) if wants_twin else (rc,):
                 runs.setdefault(r.run_id, r)
     thr = check_number(data.get("threshold_mm", 0.5), f"{where}: threshold_mm", 0.0, MAX_THRESHOLD_MM, "mm",
@@ -306,7 +301,7 @@ def check_grid_size(axis_lengths: Sequence[int], where: str) -> int:
 
 def _check_fault_keys(swept: Sequence[str], where: str) -> None:
     """A per-joint effect that is swept needs its joint swept (or a single joint) too."""
-    effects = {k.partition(".")[0] for k in swept if "." in k}
+    effects = {ek.effect for ek in map(EffectKey.parse, swept) if ek is not None}
     for name in effects:
         if REGISTRY[name].per_joint and f"{name}.joint" not in swept:
             raise ParameterError(f"{where}: sweep of effect {name!r} needs '{name}.joint' (list of joints 1..6)")

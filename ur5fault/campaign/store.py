@@ -5,7 +5,7 @@
   (:mod:`.identity`) and the column units.
 - ``OUT/timeseries/<run_id>.parquet``: optional time series, with the identity in its metadata.
 - ``OUT/features.parquet``: exactly the campaign's runs, gathered from verified per-run files.
-- ``OUT/.lock``: host and pid of the process writing the folder.
+- ``OUT/.lock``: held by the process writing the folder (:mod:`.lock`).
 
 Every per-run file is verified before it is used (:func:`check_run_file`): readable as Parquet,
 the feature schema, one row, the run_id of its name, and the identity the campaign expects.
@@ -15,8 +15,6 @@ from __future__ import annotations
 
 import dataclasses
 import json
-import os
-import socket
 from collections.abc import Callable, Iterable, Mapping
 from pathlib import Path
 from typing import Any
@@ -27,10 +25,14 @@ from ..errors import ConfigFileError, Ur5FaultError
 from ..health.features import FEATURE_UNITS
 from ..health.twin_features import FEATURE_UNITS as TWIN_FEATURE_UNITS
 from ..sim.effects import REGISTRY
-from ..util.io import OutputError, write_parquet_atomic
+from ..util.io import verify_checksum, write_parquet_atomic
 from .identity import digest, first_difference
 
 META_KEY = b"ur5fault"
+#: what reading a damaged Parquet file raises: pyarrow's own errors, but also IndexError, KeyError,
+#: UnicodeDecodeError, OverflowError... from values a flipped byte made absurd (found by flipping
+#: every byte of a run file, tests/campaign/test_integrity.py)
+DAMAGED_READ_ERRORS = (OSError, ValueError, LookupError, ArithmeticError, TypeError)
 #: columns every per-run file has (the feature table's schema; others may be added)
 REQUIRED_COLUMNS = ("run_id", "status", "twin_run_id", *FEATURE_UNITS)
 #: units of the run-description columns (features: :data:`ur5fault.health.features.FEATURE_UNITS`)
@@ -41,12 +43,16 @@ COLUMN_UNITS = {
 }
 
 
-class CampaignLockedError(Ur5FaultError, RuntimeError):
-    """Another campaign process is writing the same output folder."""
-
-
 class CampaignChangedError(Ur5FaultError, ValueError):
     """Stored results were made under other settings than the campaign being run."""
+
+
+class BadRunFilesError(CampaignChangedError):
+    """Per-run files found unusable while gathering the feature table; ``bad``: (run_id, why) each."""
+
+    def __init__(self, message: str, bad: list[tuple[str, str]]) -> None:
+        super().__init__(message)
+        self.bad = bad
 
 
 @dataclasses.dataclass(frozen=True)
@@ -114,10 +120,13 @@ def check_run_file(path: Path, expected: Mapping[str, Any] | None = None) -> Fil
         if n_rows != 1:
             return FileCheck("bad", f"{n_rows} rows, expected 1")
         rid = pf.read(columns=["run_id"]).column(0)[0].as_py()
-    except (OSError, ValueError, pa.ArrowException) as exc:
+    except (*DAMAGED_READ_ERRORS, pa.ArrowException) as exc:
         return FileCheck("bad", f"unreadable as Parquet ({' '.join(str(exc).split())[:120]})")
     if rid != path.stem:
         return FileCheck("bad", f"holds run {rid!r}, not {path.stem!r}")
+    corrupt = verify_checksum(path)  # before the identity: a flipped byte is damage, not other settings
+    if corrupt:
+        return FileCheck("bad", corrupt)
     meta = _read_meta(schema)
     if not meta or not isinstance(meta.get("identity"), str):
         return FileCheck("changed", "no recorded run identity (written before identities were recorded)")
@@ -137,10 +146,13 @@ def check_timeseries_file(path: Path, identity: str, n_rows: int) -> FileCheck:
     try:
         pf = pq.ParquetFile(path)
         schema, rows = pf.schema_arrow, pf.metadata.num_rows
-    except (OSError, ValueError, pa.ArrowException) as exc:
+    except (*DAMAGED_READ_ERRORS, pa.ArrowException) as exc:
         return FileCheck("bad", f"unreadable as Parquet ({' '.join(str(exc).split())[:120]})")
     if rows != n_rows or "t_s" not in schema.names:
         return FileCheck("bad", f"{rows} samples, expected {n_rows}")
+    corrupt = verify_checksum(path)
+    if corrupt:
+        return FileCheck("bad", corrupt)
     meta = _read_meta(schema) or {}
     if meta.get("run_identity") != identity:
         return FileCheck("changed", "time series of a run made under other settings")
@@ -151,7 +163,7 @@ def write_run_file(out: Path, row: Mapping[str, Any], record: Mapping[str, Any])
     """Write one run's row atomically, its identity record and column units in the schema metadata."""
     meta = {**record, "units": column_units(row)}
     return write_parquet_atomic(pd.DataFrame([dict(row)]), run_path(out, str(row["run_id"])),
-                                {"ur5fault": json.dumps(meta, sort_keys=True)})
+                                {"ur5fault": json.dumps(meta, sort_keys=True)}, checksum=True)
 
 
 def consolidate(out: Path, records: Mapping[str, Mapping[str, Any]],
@@ -160,16 +172,24 @@ def consolidate(out: Path, records: Mapping[str, Mapping[str, Any]],
     ordered by run_id, each file verified first; stray or duplicate files never leak in.
     ``relabel`` may rewrite label columns (not results) before the table is written, e.g. the
     train/test split when the campaign's split rule changed since the runs were stored."""
+    import pyarrow as pa
     import pyarrow.parquet as pq
 
-    frames = []
+    frames, bad = [], []
     for rid in sorted(records):
         path = run_path(out, rid)
         check = check_run_file(path, records[rid])
-        if check.state != "ok":
-            raise CampaignChangedError(f"{path}: {check.state}{': ' + check.detail if check.detail else ''}; "
-                                       "run the campaign again to re-simulate it")
-        frames.append(pq.read_table(path).to_pandas())
+        if check.state == "ok":
+            try:
+                frames.append(pq.read_table(path).to_pandas())
+                continue
+            except (*DAMAGED_READ_ERRORS, pa.ArrowException) as exc:
+                check = FileCheck("bad", f"unreadable as Parquet ({' '.join(str(exc).split())[:120]})")
+        bad.append((rid, f"{check.state}{': ' + check.detail if check.detail else ''}"))
+    if bad:
+        raise BadRunFilesError(f"{run_path(out, bad[0][0])}: {bad[0][1]}"
+                               + (f" (and {len(bad) - 1} more run files)" if len(bad) > 1 else "")
+                               + "; run the campaign again to re-simulate it", bad)
     if not frames:
         raise ConfigFileError(f"{out}: the campaign has no runs")
     df = pd.concat(frames, ignore_index=True)
@@ -178,62 +198,9 @@ def consolidate(out: Path, records: Mapping[str, Mapping[str, Any]],
     identities = {rid: records[rid]["identity"] for rid in sorted(records)}
     meta = {"units": column_units(df.columns), "campaign_identity": digest(identities),
             "run_identities": identities}
-    write_parquet_atomic(df, Path(out) / "features.parquet", {"ur5fault": json.dumps(meta, sort_keys=True)})
+    write_parquet_atomic(df, Path(out) / "features.parquet", {"ur5fault": json.dumps(meta, sort_keys=True)},
+                         checksum=True)
     return df
-
-
-class Lock:
-    """``OUT/.lock`` holding the owner's host and pid; a stale lock (dead pid) is taken over."""
-
-    def __init__(self, out: Path) -> None:
-        self.path = Path(out) / ".lock"
-
-    def __enter__(self) -> Lock:
-        me = f"{socket.gethostname()} {os.getpid()}"
-        try:
-            self.path.parent.mkdir(parents=True, exist_ok=True)
-        except OSError as exc:
-            raise OutputError(f"{self.path.parent}: cannot create the output folder ({exc.strerror})") from None
-        for _ in range(2):
-            try:
-                fd = os.open(self.path, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
-                os.write(fd, me.encode())
-                os.close(fd)
-                return self
-            except FileExistsError:
-                owner = lock_owner(self.path)
-                if owner and owner[0] == socket.gethostname() and not pid_alive(owner[1]):
-                    self.path.unlink(missing_ok=True)  # stale: its process is gone
-                    continue
-                raise CampaignLockedError(
-                    f"{self.path.parent}: another campaign is writing this folder (host {owner[0] if owner else '?'}, "
-                    f"pid {owner[1] if owner else '?'}); wait for it or choose another --out"
-                ) from None
-            except OSError as exc:
-                raise OutputError(f"{self.path}: cannot create the lock ({exc.strerror})") from None
-        raise CampaignLockedError(f"{self.path}: could not take the lock")
-
-    def __exit__(self, *exc) -> None:
-        self.path.unlink(missing_ok=True)
-
-
-def lock_owner(path: Path) -> tuple[str, int] | None:
-    """(host, pid) written in a lock file, or None when absent or unreadable."""
-    try:
-        host, pid = Path(path).read_text().split()
-        return host, int(pid)
-    except (OSError, ValueError):
-        return None
-
-
-def pid_alive(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        return True
-    return True
 
 
 def read_manifest(out: Path) -> dict[str, Any]:

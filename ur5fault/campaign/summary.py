@@ -18,7 +18,7 @@ import pandas as pd
 
 from ..errors import UnknownNameError
 from ..sim.axes import JOINT_NAMES, N_JOINTS
-from ..sim.effects import REGISTRY
+from ..sim.effects import REGISTRY, EffectKey
 
 HEALTHY = "healthy"
 
@@ -54,11 +54,11 @@ def swept_effects(swept_keys: Sequence[str]) -> dict[str, list[str]]:
     """Swept keys grouped by effect: ``{"backlash": ["backlash_deg"], ...}`` (the joint key left out)."""
     out: dict[str, list[str]] = {}
     for key in swept_keys:
-        name, dot, par = key.partition(".")
-        if dot and name in REGISTRY:
-            params = out.setdefault(name, [])
-            if par != "joint":
-                params.append(par)
+        ek = EffectKey.parse(key)
+        if ek is not None and ek.effect in REGISTRY:
+            params = out.setdefault(ek.effect, [])
+            if ek.param != "joint":
+                params.append(ek.param)
     return out
 
 

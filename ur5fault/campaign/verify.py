@@ -9,14 +9,15 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import ConfigFileError, Ur5FaultError
+from ..util.io import verify_checksum
 from .identity import Identities, digest
+from .lock import lock_holder
 from .spec import Campaign, build_campaign
 from .store import (
+    DAMAGED_READ_ERRORS,
     FileCheck,
     check_run_file,
     check_timeseries_file,
-    lock_owner,
-    pid_alive,
     read_manifest,
     run_path,
     runs_dir,
@@ -88,10 +89,12 @@ def status(out: Path) -> dict[str, Any]:
     if not out.is_dir():
         raise ConfigFileError(f"{out}: no such campaign folder")
     manifest = read_manifest(out)
-    owner = lock_owner(out / ".lock")
+    holder = lock_holder(out)
     info: dict[str, Any] = {
         "folder": str(out), "campaign": manifest.get("name"), "state": manifest.get("state"),
-        "lock": None if owner is None else {"host": owner[0], "pid": owner[1], "alive": pid_alive(owner[1])},
+        # held by a running campaign, or None (a file left by a killed process is not a lock)
+        "lock": (None if holder is None else {"held": True} if holder is True
+                 else {"held": True, "host": holder[0], "pid": holder[1]}),
         "n_runs_expected": None,
     }
     camp = None
@@ -132,9 +135,12 @@ def _check_features(out: Path, identities: dict[str, str]) -> dict[str, Any]:
     path = out / "features.parquet"
     if not path.exists():
         return {"state": "missing"}
+    corrupt = verify_checksum(path)
+    if corrupt:
+        return {"state": "bad", "detail": corrupt}
     try:
         table = pq.read_table(path)
-    except (OSError, ValueError, pa.ArrowException) as exc:
+    except (*DAMAGED_READ_ERRORS, pa.ArrowException) as exc:
         return {"state": "bad", "detail": f"unreadable as Parquet ({' '.join(str(exc).split())[:120]})"}
     if "run_id" not in table.column_names:
         return {"state": "bad", "detail": "no run_id column"}

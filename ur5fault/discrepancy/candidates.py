@@ -59,8 +59,21 @@ class Candidate:
     def label(self) -> str:  # pragma: no cover - overridden
         raise NotImplementedError
 
-    def spec(self, coef: NDArray) -> EffectSpec:  # pragma: no cover - overridden
+    def values(self, coef: NDArray) -> dict[str, float]:  # pragma: no cover - overridden
+        """The effect's parameter values at ``coef`` (not validated: a fit may leave the valid range)."""
         raise NotImplementedError
+
+    def spec(self, coef: NDArray) -> EffectSpec:
+        return make_effect(self.effect, None if self.joint is None else self.joint + 1, **self.values(coef))
+
+    def range_problem(self, coef: NDArray) -> str | None:
+        """Why the values at ``coef`` cannot go into a model (outside an effect parameter's valid range), or None."""
+        eff = REGISTRY[self.effect]
+        for key, v in self.values(coef).items():
+            p = eff.param(key)
+            if not (np.isfinite(v) and p.lo <= v <= p.hi):
+                return f"fitted {self.effect}.{key} = {v:.4g} is outside its valid range [{p.lo:g}, {p.hi:g}] {p.unit}"
+        return None
 
     def bounds(self) -> tuple[NDArray, NDArray]:  # pragma: no cover - overridden
         raise NotImplementedError
@@ -94,9 +107,8 @@ class LibraryCandidate(Candidate):
         fwd, _ = self._tf()
         return fwd(value) - fwd(self.x0)
 
-    def spec(self, coef: NDArray) -> EffectSpec:
-        return make_effect(self.effect, None if self.joint is None else self.joint + 1,
-                           **{self.param: self.value(coef)})
+    def values(self, coef: NDArray) -> dict[str, float]:
+        return {self.param: self.value(coef)}
 
     def bounds(self) -> tuple[NDArray, NDArray]:
         p = REGISTRY[self.effect].param(self.param)
@@ -142,9 +154,8 @@ class TermCandidate(Candidate):
         extra = "".join(f", {k}={v:g}" for k, v in self.fixed)
         return f"{self.where}: {self.family}{extra}"
 
-    def spec(self, coef: NDArray) -> EffectSpec:
-        vals = {k: float(c) * self.to_param for k, c in zip(self.keys, np.ravel(coef))}
-        return make_effect(self.effect, None if self.joint is None else self.joint + 1, **vals, **dict(self.fixed))
+    def values(self, coef: NDArray) -> dict[str, float]:
+        return {**{k: float(c) * self.to_param for k, c in zip(self.keys, np.ravel(coef))}, **dict(self.fixed)}
 
     def bounds(self) -> tuple[NDArray, NDArray]:
         ps = [REGISTRY[self.effect].param(k) for k in self.keys]

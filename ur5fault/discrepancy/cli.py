@@ -1,9 +1,10 @@
-"""``ur5fault discrepancy LOG --format rtde|nist|sim [--model OVERLAY] --out DIR``."""
+"""``ur5fault discrepancy LOG [LOG ...] --format rtde|nist|sim [--hold-out LOG ...] [--model M] --out DIR``."""
 
 from __future__ import annotations
 
 import argparse
 import os
+import sys
 from pathlib import Path
 
 from ..logs.options import add_log_options
@@ -12,7 +13,7 @@ from ..twin.residuals import FIT_FRACTION
 
 def register(sub) -> None:
     d = sub.add_parser("discrepancy", help="find, name and fix where the model and a measured log disagree")
-    add_log_options(d, ("rtde", "nist", "sim"))
+    add_log_options(d, ("rtde", "nist", "sim"), hold_out=True)
     d.add_argument("--model", help="model overlay YAML to start from (e.g. an earlier model.yaml)")
     d.add_argument("--out", required=True, help="output folder (report.md, model.yaml, summary.json)")
     d.add_argument("--fit-fraction", type=float, default=FIT_FRACTION,
@@ -27,7 +28,9 @@ def register(sub) -> None:
 
 def cmd_discrepancy(args: argparse.Namespace) -> int:
     from ..config import Overlay
-    from ..logs.options import read_log_option
+    from ..errors import ParameterError
+    from ..logs.options import read_log_options
+    from ..sim.params import load_params
     from ..util.io import check_writable
     from .model import DiscrepancyModel
     from .report import summary, write_report
@@ -37,12 +40,26 @@ def cmd_discrepancy(args: argparse.Namespace) -> int:
     model = DiscrepancyModel(fit_fraction=args.fit_fraction, max_effects=args.max_effects,
                              max_terms=args.max_terms, jobs=jobs, progress=not args.quiet)
     check_writable(args.out, folder=True)
-    log = read_log_option(args)
+    logs, held = read_log_options(args)
     overlay = Overlay.load(args.model) if args.model else None
-    model.fit(log, dict(overlay.params) if overlay else None, overlay.effects if overlay else ())
+    if not logs:
+        raise ParameterError("every log given is held out; name at least one log to fit")
+    for lg in (*logs, *held):
+        for line in lg.assumptions(load_params(overrides=dict(overlay.params) if overlay else None
+                                               ).joint_temperature_C):
+            print(f"note: {line}", file=sys.stderr)
+    model.fit(logs if len(logs) > 1 else logs[0], dict(overlay.params) if overlay else None,
+              overlay.effects if overlay else (), hold_out=held)
+    log = model.replay_.log
     paths = write_report(model, Path(args.out))
     summ = summary(model)
     print(f"{log.source}: {log.t_s[-1]:.1f} s at {1 / log.period_s:.0f} Hz")
+    for name, e in summ["per_log"].items():
+        cur = e["rms_after"].get("current_A", {})
+        ur = e.get("rms_controller_model_current_A")
+        ratio = " / ".join(f"{cur[j] / ur[j]:.2f}" if ur and cur.get(j) and ur[j] else "-" for j in cur)
+        print(f"{e['role']}: {name}: held-out current RMS after the fit" +
+              (f", as a multiple of UR's own model: {ratio}" if ur else ""))
     for line in summ["named"] or ["nothing explains the residual better than noise"]:
         print(line)
     for line in summ["dropped"]:

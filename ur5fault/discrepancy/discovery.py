@@ -25,6 +25,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..sim.axes import N_JOINTS
+from ..sim.effects import REGISTRY
 from ..sim.engine import Simulator
 from ..sim.multibody import payload_inertia
 from ..sim.terms import coulomb, harmonic, last_motion_sign, quadratic, rest_weight, stribeck
@@ -37,13 +38,13 @@ JOINT_PERIODS = tuple(range(1, 13))
 #: Ripples periodic in the *motor* angle are left to the library's ``cogging`` effect, which acts on the
 #: rotor: at the joints' speeds they are tens of hertz, faster than the speed loop, and a link-side term of
 #: the same shape would misplace them in the drive chain (tried: 26 % low and half the gap left).
-#: width of the Coulomb-like term's smooth sign [rad/s] (registry default of ``torque_coulomb``)
-COULOMB_WIDTH_RAD_S = 0.01
+#: width of the Coulomb-like term's smooth sign [rad/s] (the registry's default of ``torque_coulomb``)
+COULOMB_WIDTH_RAD_S = REGISTRY["torque_coulomb"].absent("width_rad_s")
 #: Stribeck speeds searched [rad/s] (assumption: the span of published Stribeck speeds of harmonic drives)
 STRIBECK_SPEEDS_RAD_S = (0.02, 0.05, 0.1, 0.2)
-#: speed below which a joint counts as at rest for the holding term [rad/s] (registry default of
+#: speed below which a joint counts as at rest for the holding term [rad/s] (the registry's default of
 #: ``torque_holding``; assumption: well below the slowest commanded motion, above the replay's vibration)
-HOLDING_SPEED_RAD_S = 0.02
+HOLDING_SPEED_RAD_S = REGISTRY["torque_holding"].absent("speed_rad_s")
 #: a temperature column is formed when the joint's logged temperature moves at least this much [K]
 MIN_TEMPERATURE_SPAN_K = 0.5
 #: a column whose unit coefficient changes the weighted residual's sum of squares by less than this is

@@ -120,12 +120,18 @@ def judge_findings(found: Sequence[Candidate], ref: Refined, n_fit: int, n_signa
             out.append(f)
             if not f.held_out.passes and (worst is None or f.held_out.ratio < worst[1].held_out.ratio):
                 worst = (k, f)
-        if worst is None:
+        # a value outside an effect's range cannot go into a model: dropped first, the rest refitted
+        bad = next(((k, f, why) for k, f in zip(kept, out) if (why := f.candidate.range_problem(f.theta))), None)
+        if worst is None and bad is None:
             break
-        k, f = worst
-        f.kept = False
-        f.reason = (f"does not generalise: on the held-out part it removes {100 * f.held_out.ratio:.0f} % of the "
-                    "change it makes")
+        if bad is not None:
+            k, f, why = bad
+            f.kept, f.reason = False, why
+        else:
+            k, f = worst
+            f.kept = False
+            f.reason = (f"does not generalise: on the held-out part it removes {100 * f.held_out.ratio:.0f} % of "
+                        "the change it makes")
         f.verdict = judge(bg, e_pseudo, J_fit, found, cols, [o for o in kept if o != k], k)
         f.se = np.asarray(f.verdict.se)
         dropped.append(f)
@@ -172,6 +178,6 @@ def final_verdicts(kept: list[Finding], pol: Refined, n_fit: int) -> list[Findin
     for k, f in enumerate(kept):
         f.verdict = judge(bg, e_pseudo, J_fit, cands, cols, [o for o in range(len(kept)) if o != k], k)
         f.se = np.asarray(f.verdict.se)
-        if not f.verdict.accepted:
+        if not f.verdict.accepted or f.candidate.range_problem(f.theta):
             failed.append(f)
     return failed

@@ -16,7 +16,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..sim.axes import N_JOINTS
-from ..sim.effects import REGISTRY, EffectSpec, make_effect
+from ..sim.effects import REGISTRY, EffectSpec
 from ..sim.params import RobotParams, load_params
 from ..twin.replay import LogReplay, Replayed
 from .candidates import LibraryCandidate
@@ -120,8 +120,3 @@ def screen(rp: LogReplay, n: int, cands: list[LibraryCandidate], current: Sequen
             cols.append(col.reshape(n, -1))
             kept.append(c)
     return base, np.array(cols), kept
-
-
-def effect_specs(found: Sequence[tuple[LibraryCandidate, float]]) -> tuple[EffectSpec, ...]:
-    """Effects of found library candidates at their values."""
-    return tuple(make_effect(c.effect, None if c.joint is None else c.joint + 1, **{c.param: v}) for c, v in found)

@@ -31,6 +31,7 @@ from ..twin.residuals import FIT_FRACTION, localise, rms_table, unexplained
 from . import discovery, library
 from .candidates import Candidate
 from .judging import Finding, SearchStep, final_verdicts, judge_findings
+from .multilog import MultiReplay, per_log
 from .refinement import FindingSet, Refined, polish, probe_batch
 from .search import backward, columns_of, forward, judge
 from .statistics import BlockGram, rss_of, weighted
@@ -133,15 +134,25 @@ class DiscrepancyModel:
         self.screen_s = screen_s
 
     # ------------------------------------------------------------------------------------------- fit
-    def fit(self, log: MeasuredLog, params_overrides: dict | None = None,
-            base_effects: Sequence[EffectSpec] = ()) -> DiscrepancyModel:
+    def fit(self, log: MeasuredLog | Sequence[MeasuredLog], params_overrides: dict | None = None,
+            base_effects: Sequence[EffectSpec] = (), hold_out: Sequence[MeasuredLog] = ()) -> DiscrepancyModel:
+        """Fit ``log`` (one log, or several runs of one robot fitted jointly), each split in time at
+        ``fit_fraction``; ``hold_out``: further runs held out whole (judged and scored, never fitted)."""
         t0 = time.perf_counter()
-        rp = LogReplay(log, params_overrides, base_effects, seed=WORKFLOW_SEED, jobs=self.jobs)
+        logs = [log] if isinstance(log, MeasuredLog) else list(log)
+        rp: LogReplay | MultiReplay
+        if len(logs) == 1 and not hold_out:
+            rp = LogReplay(logs[0], params_overrides, base_effects, seed=WORKFLOW_SEED, jobs=self.jobs)
+            n_fit = int(rp.n_samples * self.fit_fraction)
+        else:
+            rp = MultiReplay(logs, hold_out, self.fit_fraction, params_overrides, base_effects, seed=WORKFLOW_SEED,
+                             jobs=self.jobs)
+            n_fit = rp.n_fit
+        log = rp.log
         self.replay_ = rp
         self.base_effects_ = tuple(base_effects)
         self.params_overrides_ = dict(params_overrides or {})
         n_all = rp.n_samples
-        n_fit = int(n_all * self.fit_fraction)
         n_scr = n_fit if self.screen_s is None else min(n_fit, max(2, round(self.screen_s / log.period_s)))
         self.n_fit_, self.n_all_, self.n_screen_ = n_fit, n_all, n_scr
         stages = _Stages(self.progress)
@@ -269,7 +280,8 @@ class DiscrepancyModel:
         failed = final_verdicts(kept, pol, self.n_fit_)
         for f in failed:
             f.kept = False
-            f.reason = f"explains nothing the others do not once refined ({f.verdict.reason})"
+            f.reason = (f.candidate.range_problem(f.theta)
+                        or f"explains nothing the others do not once refined ({f.verdict.reason})")
             self.search_.append(SearchStep.of("final check", dataclasses.replace(f.verdict, reason=f.reason)))
         if failed:
             rest = tuple(f.spec() for f in kept if f.kept)
@@ -278,19 +290,23 @@ class DiscrepancyModel:
 
     def _results(self, rp: LogReplay, nominal: Replayed, after: Replayed, n_fit: int, n_all: int) -> None:
         meas = rp.measured(n_all)
+        # RMS figures only on the ticks the robot logged (a gap's interpolated readings are left out)
+        logged = rp.log.logged_rows()[1 : n_all + 1]
+        scored = np.where(logged[:, None, None], meas, np.nan)
         held = slice(n_fit, n_all)
         self.sim_before_, self.sim_after_ = nominal, after
         self.residual_before_ = meas - nominal.y
         self.residual_after_ = meas - after.y
-        self.rms_before_ = rms_table(rp.signals, meas, nominal.y, held)
-        self.rms_after_ = rms_table(rp.signals, meas, after.y, held)
-        self.rms_fit_before_ = rms_table(rp.signals, meas, nominal.y, slice(0, n_fit))
-        self.rms_fit_after_ = rms_table(rp.signals, meas, after.y, slice(0, n_fit))
+        self.rms_before_ = rms_table(rp.signals, scored, nominal.y, held)
+        self.rms_after_ = rms_table(rp.signals, scored, after.y, held)
+        self.rms_fit_before_ = rms_table(rp.signals, scored, nominal.y, slice(0, n_fit))
+        self.rms_fit_after_ = rms_table(rp.signals, scored, after.y, slice(0, n_fit))
         # the robot controller's own current model where the log has it (target - actual current)
         tc = rp.log.target_current_A
         self.rms_controller_model_ = None if tc is None else {
-            part: {JOINT_NAMES[j]: float(np.sqrt(np.mean((tc[1 : n_all + 1][sl, j] - meas[sl, 0, j]) ** 2)))
+            part: {JOINT_NAMES[j]: float(np.sqrt(np.nanmean((tc[1 : n_all + 1][sl, j] - scored[sl, 0, j]) ** 2)))
                    for j in range(N_JOINTS)} for part, sl in (("held_out", held), ("fit", slice(0, n_fit)))}
+        self.per_log_ = per_log(rp, scored, nominal.y, after.y, n_fit, n_all)
         self.unexplained_ = unexplained(rp, self.residual_after_, after.torque_gear_Nm, n_fit)
         self.localisation_ = localise(rp, self.residual_before_, nominal.torque_gear_Nm)
 

@@ -1,4 +1,4 @@
-"""``ur5fault identify LOG --format nist|rtde [--payload-kg M] [--tcp-offset-m X Y Z] --out params.yaml``."""
+"""``ur5fault identify LOG [LOG ...] --format nist|rtde [--payload-kg M] [--tcp-offset-m X Y Z] --out params.yaml``."""
 
 from __future__ import annotations
 
@@ -27,7 +27,7 @@ def register(sub) -> None:
 
 def cmd_identify(args: argparse.Namespace) -> int:
     from ..errors import ParameterError
-    from ..logs.options import read_log_option
+    from ..logs.options import read_log_options
     from ..sim.params import load_params
     from ..util.io import write_json_atomic, write_text_atomic
     from . import identify
@@ -36,17 +36,23 @@ def cmd_identify(args: argparse.Namespace) -> int:
         raise ParameterError(f"--bootstrap = {args.bootstrap} must be at least 20")
     if args.sweep_window_s <= 0:
         raise ParameterError(f"--sweep-window-s = {args.sweep_window_s} must be a positive number of seconds")
-    log = read_log_option(args)
+    logs, _ = read_log_options(args)
+    log = logs[0]
     say = None if args.quiet else (lambda msg: print(f"identify: {msg}...", file=sys.stderr, flush=True))
     params = load_params()
-    result = identify(log, params, sweep=not args.no_sweep, sweep_window_s=args.sweep_window_s,
+    notes = [line for lg in logs for line in lg.assumptions(params.joint_temperature_C)]
+    for line in notes:
+        print(f"note: {line}", file=sys.stderr)
+    result = identify(logs if len(logs) > 1 else log, params, sweep=not args.no_sweep,
+                      sweep_window_s=args.sweep_window_s,
                       n_boot=args.bootstrap, progress=say)
     print(result.table())
     out = Path(args.out)
     write_text_atomic(out, result.to_yaml(params))
     written = [str(out)]
     if args.json:
-        write_json_atomic(Path(args.json), result.to_json())
+        write_json_atomic(Path(args.json), {**result.to_json(),
+                                            "log_assumptions": notes})
         written.append(args.json)
     print(f"wrote {', '.join(written)}")
     return 0

@@ -9,28 +9,32 @@ and says so (``identifiable=False``).
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
 
+from ..errors import ParameterError
 from ..logs import MeasuredLog
 from ..sim.axes import N_JOINTS
 from ..sim.params import RobotParams, load_params
 from . import friction, loop, motor, sensors, stickslip, urmodel
 from .report import Identification, overlay_params
-from .signals import derive
+from .signals import derive_all
 from .stats import BLOCK_S, N_BOOT, Estimate, block_indices, bootstrap, fallback, interval
 
 
-def identify(log: MeasuredLog, params: RobotParams | None = None, *, model_path: str | Path | None = None,
+def identify(log: MeasuredLog | Sequence[MeasuredLog], params: RobotParams | None = None, *,
+             model_path: str | Path | None = None,
              sweep: bool = True, bandwidths_Hz=loop.BANDWIDTHS_HZ, sweep_window_s: float = loop.SWEEP_WINDOW_S,
              n_boot: int = N_BOOT, seed: int = 0, progress: Callable[[str], None] | None = None) -> Identification:
     """Identify the ``[nist]`` parameters of ``ur5_drive.yaml`` from ``log``.
 
     Args:
-        log: a measured log (:func:`ur5fault.logs.read_log`) with its payload and tool offset.
+        log: a measured log (:func:`ur5fault.logs.read_log`) with its payload and tool offset, or several
+            logs of one robot identified jointly (every regression over all their samples; a rest or a
+            start from rest never spans two logs; the bandwidth sweep replays the first).
         params: the model whose assumptions are kept (rotor inertia, gear ratio, viscous temperature
             law, the fallbacks); default the packaged ``ur5_drive.yaml``.
         model_path: MJCF for the inverse dynamics (default: the simulator's).
@@ -43,10 +47,18 @@ def identify(log: MeasuredLog, params: RobotParams | None = None, *, model_path:
     """
     from ..sim.engine import DEFAULT_MODEL_PATH
 
+    logs = [log] if isinstance(log, MeasuredLog) else list(log)
+    if not logs:
+        raise ParameterError("identify needs at least one log")
+    for lg in logs:
+        lg.require_payload()
+    log = logs[0]  # the bandwidth sweep replays the first log
     p = params if params is not None else load_params()
     say = progress or (lambda _msg: None)
-    say("inverse dynamics of the log's motion")
-    sig = derive(log, p, model_path or DEFAULT_MODEL_PATH)
+    say("inverse dynamics of the log's motion" if len(logs) == 1 else f"inverse dynamics of {len(logs)} logs")
+    sig = derive_all(logs, p, model_path or DEFAULT_MODEL_PATH)
+    source = " + ".join(lg.source for lg in logs)
+    duration_s = float(sum(lg.t_s[-1] - lg.t_s[0] for lg in logs))
     est: list[Estimate] = []
 
     say("torque constant and friction (moving samples)")
@@ -66,9 +78,10 @@ def identify(log: MeasuredLog, params: RobotParams | None = None, *, model_path:
     coulomb_A = np.array([e.value for e in fric if e.key == "friction.coulomb_A"])
 
     say("sensor noise at rest and resolver resolution")
-    noise = sensors.noise_at_rest(sig, n_boot, seed)
+    noise = sensors.noise_at_rest(sig, n_boot, seed, {"sensors.current_noise_A": p.sensors.current_noise_A,
+                                                      "sensors.resolver_noise_rad": p.sensors.resolver_noise_rad})
     est += noise
-    est.append(sensors.resolver_resolution(sig, n_boot, seed))
+    est.append(sensors.resolver_resolution(sig, n_boot, seed, float(np.mean(p.sensors.resolver_counts_per_rev))))
 
     say("breakaway and presliding stiffness (starts from rest)")
     q_noise = np.array([e.value for e in noise if e.key == "sensors.resolver_noise_rad"])
@@ -80,7 +93,7 @@ def identify(log: MeasuredLog, params: RobotParams | None = None, *, model_path:
     lag = np.array([e.value for e in lags])
     ff_prior = np.asarray(p.controller.velocity_feedforward, float)
 
-    result = Identification(log.source, float(log.t_s[-1] - log.t_s[0]), tuple(est), None)
+    result = Identification(source, duration_s, tuple(est), None)
     bw_prior = float(np.mean(p.controller.position_bw_Hz))
     if sweep:
         sw = loop.bandwidth_sweep(log, overlay_params(result, p), lag, lag_ok, ff_prior, bandwidths_Hz,
@@ -93,7 +106,7 @@ def identify(log: MeasuredLog, params: RobotParams | None = None, *, model_path:
                             "kept the model's value"))
         bw = bw_prior
     est += _feedforward(lags, lag_ok, bw, ff_prior)
-    return Identification(log.source, result.duration_s, tuple(est), sw)
+    return Identification(source, result.duration_s, tuple(est), sw)
 
 
 def _torque_constant(fit: friction.FrictionFit, full: NDArray, lo: NDArray, hi: NDArray,
@@ -166,9 +179,17 @@ def _friction(fit: friction.FrictionFit, full: NDArray, lo: NDArray, hi: NDArray
 
 
 def _why_not(fit: friction.FrictionFit, j: int) -> str:
-    w = np.abs(fit.sig.qd_target_rad_s[:, j])
-    return (f"J{j + 1} barely moves in the log ({int(fit.moving[:, j].sum())} moving samples, top speed "
-            f"{w.max():.2f} rad/s; needs {friction.MIN_MOVING_SAMPLES} and {friction.MIN_TOP_SPEED_RAD_S:g} rad/s)")
+    """The criterion of :func:`friction.identifiable` that failed on joint ``j``, named."""
+    n = int(fit.moving[:, j].sum())
+    top = float(np.abs(fit.sig.qd_target_rad_s[fit.moving[:, j], j]).max(initial=0.0))
+    failed = []
+    if n < friction.MIN_MOVING_SAMPLES:
+        failed.append(f"{n} moving samples, fewer than the {friction.MIN_MOVING_SAMPLES} needed "
+                      f"({friction.MIN_MOVING_SAMPLES * fit.sig.period_s:.1f} s at this log's rate)")
+    if top < friction.MIN_TOP_SPEED_RAD_S:
+        failed.append(f"top speed {top:.2f} rad/s while moving, below the {friction.MIN_TOP_SPEED_RAD_S:g} rad/s "
+                      "needed to separate Coulomb from viscous friction")
+    return f"J{j + 1}: " + "; ".join(failed)
 
 
 def _breakaway(sig, fit: friction.FrictionFit, full: NDArray, coulomb_A: NDArray, q_noise: NDArray, n_boot: int,

@@ -97,6 +97,11 @@ class Identification:
         head.append("#   presliding stiffness: " + (f"written as friction.{PRESLIDING_FIELD}" if written else
                                                  "reported above, not written (the model has no such parameter yet)"))
         head += [f"#   {t}" for t in NOT_IDENTIFIABLE]
+        missing = not_written(self)
+        if missing:
+            head += ["#", "# Not identifiable on this log, so the model's own (packaged) value is written, not a "
+                     "measurement:"]
+            head += [f"#   {m}" for m in missing]
         body = yaml.safe_dump(self.overlay(params), sort_keys=False, default_flow_style=None, width=120)
         return "\n".join(head) + "\n" + body
 
@@ -112,37 +117,63 @@ class Identification:
 
 
 def overlay_params(ident: Identification, params: RobotParams) -> dict[str, Any]:
-    """The identified values as a nested ``params`` mapping (keys present in ``ident`` only)."""
+    """The identified values as a nested ``params`` mapping (keys present in ``ident`` only).
+
+    A value the log cannot give (``identifiable=False``) is never written as if measured: the joint takes
+    the model's own (packaged) value, and :func:`not_written` lists it for the file's header."""
     ratio = np.asarray(params.gear.ratio, float)
-    kt = ident.values("motor.torque_constant_Nm_per_A")
+    kt = _measured(ident, "motor.torque_constant_Nm_per_A", params.motor.torque_constant_Nm_per_A)
     k_joint = kt * ratio
     vec = lambda x: [_round(v) for v in x]  # noqa: E731
+    f = params.friction
     out: dict[str, Any] = {"motor": {"torque_constant_Nm_per_A": vec(kt)}}
-    fr: dict[str, Any] = {"coulomb_Nm": vec(ident.values("friction.coulomb_A") * k_joint)}
+    coulomb = _measured(ident, "friction.coulomb_A", f.coulomb_Nm, k_joint)
+    fr: dict[str, Any] = {"coulomb_Nm": vec(coulomb)}
     if ident.has("friction.breakaway_A"):
-        fr["static_Nm"] = vec(ident.values("friction.breakaway_A") * k_joint)
-    fr["viscous_Nms_per_rad"] = vec(ident.values("friction.viscous_A_s_per_rad") * k_joint)
+        # a packaged breakaway below a measured Coulomb level would make a dip, not a peak: no Stribeck peak then
+        fr["static_Nm"] = vec(np.maximum(_measured(ident, "friction.breakaway_A", f.static_Nm, k_joint), coulomb))
+    fr["viscous_Nms_per_rad"] = vec(_measured(ident, "friction.viscous_A_s_per_rad", f.viscous_Nms_per_rad, k_joint))
     if ident.has("friction.presliding_stiffness_Nm_per_rad") and PRESLIDING_FIELD in {
             f.name for f in dataclasses.fields(FrictionParams)}:
         fr[PRESLIDING_FIELD] = vec(_presliding(ident, params))
     out["friction"] = fr
+    s = params.sensors
     sensors: dict[str, Any] = {}
     if ident.has("sensors.resolver_noise_rad"):
-        sensors["resolver_noise_rad"] = vec(ident.values("sensors.resolver_noise_rad"))
+        sensors["resolver_noise_rad"] = vec(_measured(ident, "sensors.resolver_noise_rad", s.resolver_noise_rad))
     if ident.has("sensors.resolver_counts_per_rev"):
-        counts = ident.get("sensors.resolver_counts_per_rev").value
-        sensors["resolver_counts_per_rev"] = int(2 ** round(np.log2(counts)))  # encoders count in powers of two
+        e = ident.get("sensors.resolver_counts_per_rev")
+        if e.identifiable:
+            sensors["resolver_counts_per_rev"] = int(2 ** round(np.log2(e.value)))  # encoders count in powers of 2
     if ident.has("sensors.current_noise_A"):
-        sensors["current_noise_A"] = vec(ident.values("sensors.current_noise_A"))
+        sensors["current_noise_A"] = vec(_measured(ident, "sensors.current_noise_A", s.current_noise_A))
     out["sensors"] = sensors
     ctrl: dict[str, Any] = {}
-    if ident.has("controller.position_bw_Hz"):
+    if ident.has("controller.position_bw_Hz") and ident.get("controller.position_bw_Hz").identifiable:
         ctrl["position_bw_Hz"] = _round(ident.get("controller.position_bw_Hz").value)
     if ident.has("controller.velocity_feedforward"):
-        ctrl["velocity_feedforward"] = vec(ident.values("controller.velocity_feedforward"))
+        ctrl["velocity_feedforward"] = vec(_measured(ident, "controller.velocity_feedforward",
+                                                     params.controller.velocity_feedforward))
     if ctrl:
         out["controller"] = ctrl
     return out
+
+
+def _measured(ident: Identification, key: str, prior, scale=None) -> NDArray:
+    """Per joint: the estimate (times ``scale``) where identifiable, else the model's ``prior`` value."""
+    sc = np.ones(N_JOINTS) if scale is None else np.asarray(scale, float)
+    pr = np.broadcast_to(np.asarray(prior, float), (N_JOINTS,))
+    return np.array([ident.get(key, j).value * sc[j] if ident.get(key, j).identifiable else pr[j]
+                     for j in range(N_JOINTS)])
+
+
+def not_written(ident: Identification) -> list[str]:
+    """Estimates the log could not give, for which the overlay holds the model's value instead."""
+    by_key: dict[str, list[str]] = {}
+    for e in ident.estimates:
+        if not e.identifiable and not e.key.startswith("check."):
+            by_key.setdefault(e.key, []).append("all" if e.joint is None else f"J{e.joint + 1}")
+    return [f"{key} ({', '.join(joints)})" for key, joints in by_key.items()]
 
 
 def _presliding(ident: Identification, params: RobotParams) -> NDArray:

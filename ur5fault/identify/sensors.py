@@ -17,12 +17,16 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .signals import LogSignals
-from .stats import Estimate, bootstrap, interval
+from .stats import Estimate, bootstrap, fallback, interval
 
 #: settling time after the last joint stopped before samples count as "at rest" [s]
 SETTLE_S = 0.5
 #: a rest segment needs at least this many samples after settling
 MIN_REST_SAMPLES = 20
+#: fewer rest segments than this give a value but no interval (resampling them says nothing)
+MIN_SEGMENTS_FOR_INTERVAL = 2
+#: valid range of an encoder's counts per revolution (``sensors.resolver_counts_per_rev`` in sim/params.py)
+MIN_COUNTS_PER_REV, MAX_COUNTS_PER_REV = 2.0, 2.0**32
 #: steps up to this many quanta are used to fit the quantum (larger ones may be motion)
 MAX_QUANTA = 5
 
@@ -30,7 +34,8 @@ MAX_QUANTA = 5
 def rest_segments(sig: LogSignals) -> list[NDArray]:
     """Index arrays of the settled rest segments (all six targets constant)."""
     rest = np.all(sig.at_rest(), axis=1)
-    edges = np.flatnonzero(np.diff(rest.astype(int))) + 1
+    starts = np.array([s for s in sig.log_starts if s > 0], dtype=int)
+    edges = np.union1d(np.flatnonzero(np.diff(rest.astype(int))) + 1, starts).astype(int)
     settle = int(round(SETTLE_S / sig.period_s))
     out = []
     for seg in np.split(np.arange(sig.n), edges):
@@ -52,26 +57,44 @@ def _detrended_ss(x: NDArray, segments: list[NDArray]) -> tuple[NDArray, NDArray
     return ss, counts
 
 
-def noise_at_rest(sig: LogSignals, n_boot: int, seed: int) -> list[Estimate]:
-    """Current and position noise sigma per joint at rest."""
+def noise_at_rest(sig: LogSignals, n_boot: int, seed: int, prior: dict[str, NDArray]) -> list[Estimate]:
+    """Current and position noise sigma per joint at rest.
+
+    Without a settled rest segment the log cannot give them: ``prior`` (key -> the model's values) is
+    kept and marked not identifiable.  From a single rest segment the value stands but has no interval
+    (resampling one segment gives back the same value: a zero-width interval would claim a certainty
+    the log does not hold).
+    """
     segs = rest_segments(sig)
+    keys = (("sensors.current_noise_A", sig.current_A, "current"),
+            ("sensors.resolver_noise_rad", sig.q_actual_rad, "joint position"))
     if not segs:
-        raise ValueError("no rest segment")
+        why = (f"no settled rest segment (all six targets constant for {SETTLE_S:g} s plus {MIN_REST_SAMPLES} "
+               "samples); a log with the robot standing still for a second would give it")
+        return [fallback(key, j, float(prior[key][j]), "kept the model's value", why)
+                for key, x, _ in keys for j in range(x.shape[1])]
     out = []
-    for key, x, method in (
-        ("sensors.current_noise_A", sig.current_A, "current"),
-        ("sensors.resolver_noise_rad", sig.q_actual_rad, "joint position"),
-    ):
+    for key, x, method in keys:
         ss, counts = _detrended_ss(x, segs)
 
         def stat(idx: NDArray, ss=ss, counts=counts) -> NDArray:
             return np.sqrt(ss[idx].sum(axis=0) / counts[idx].sum())
 
         value = stat(np.arange(len(segs)))
-        lo, hi = interval(bootstrap(stat, [np.array([s]) for s in range(len(segs))], n_boot, seed))
+        if len(segs) >= MIN_SEGMENTS_FOR_INTERVAL:
+            lo, hi = interval(bootstrap(stat, [np.array([s]) for s in range(len(segs))], n_boot, seed))
+            note = ""
+        else:
+            lo = hi = np.full(x.shape[1], np.nan)
+            note = (f"no interval: {len(segs)} rest segment(s), resampling needs at least "
+                    f"{MIN_SEGMENTS_FOR_INTERVAL}")
         for j in range(x.shape[1]):
+            quantised = value[j] == 0.0
             out.append(Estimate(key, j, float(value[j]), float(lo[j]), float(hi[j]),
-                                f"{method} sigma at rest, {len(segs)} settled rest segments, detrended"))
+                                f"{method} sigma at rest, {len(segs)} settled rest segments, detrended",
+                                note=note or ("readings identical at rest: the white noise is below the "
+                                              "quantisation step (weighed by the step where used)" if quantised
+                                              else "")))
     return out
 
 
@@ -89,17 +112,26 @@ def position_quantum(q_rad: NDArray) -> tuple[float, NDArray]:
     return quantum, small
 
 
-def resolver_resolution(sig: LogSignals, n_boot: int, seed: int) -> Estimate:
-    """Counts per revolution of the joint-side encoder (2 pi / quantum), with a bootstrap over steps."""
-    quantum, small = position_quantum(sig.q_actual_rad)
+def resolver_resolution(sig: LogSignals, n_boot: int, seed: int, prior_counts: float) -> Estimate:
+    """Counts per revolution of the joint-side encoder (2 pi / quantum), with a bootstrap over steps;
+    the model's ``prior_counts``, marked not identifiable, when the positions never change."""
+    try:
+        quantum, small = position_quantum(sig.q_actual_rad)
+    except ValueError:
+        return fallback("sensors.resolver_counts_per_rev", None, prior_counts, "kept the model's value",
+                        "the measured positions never change (the robot did not move)")
 
     def stat(idx: NDArray) -> NDArray:
         s = small[idx]
         return np.array(2.0 * np.pi * np.maximum(np.round(s / quantum), 1.0).sum() / s.sum())
 
+    counts = 2.0 * np.pi / quantum
+    if not MIN_COUNTS_PER_REV <= counts <= MAX_COUNTS_PER_REV:  # no step at all: resampled or filtered positions
+        return fallback("sensors.resolver_counts_per_rev", None, prior_counts, "kept the model's value",
+                        f"the measured positions show no quantisation step (smallest step {quantum:.3g} rad, "
+                        f"{counts:.3g} counts/rev, outside {MIN_COUNTS_PER_REV:g}..2^32): interpolated or filtered")
     groups = [np.array([k]) for k in range(small.size)]
     lo, hi = interval(bootstrap(stat, groups, n_boot, seed))
-    counts = 2.0 * np.pi / quantum
     return Estimate("sensors.resolver_counts_per_rev", None, counts, float(lo), float(hi),
                     f"2 pi / quantum of the measured positions ({small.size} steps of 1..{MAX_QUANTA} quanta; "
                     f"nearest power of two 2^{round(np.log2(counts))})")

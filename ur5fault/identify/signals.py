@@ -10,17 +10,20 @@ reflected through the gear (J_rotor * N^2 * qdd): the motor current drives both.
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
 
+from ..errors import ParameterError
 from ..logs import MeasuredLog
 from ..sim.params import RobotParams
 from .dynamics import inverse_dynamics_Nm, payload_model
 
-#: a target speed below this is "at rest" [rad/s] (the setpoints are exactly constant at rest)
-REST_SPEED_RAD_S = 1e-6
+#: a target speed below this is a still target [rad/s]: the setpoints are exactly constant at rest, so
+#: only rounding passes (the residual conditions' looser "at rest" is ur5fault.twin.residuals')
+STILL_TARGET_RAD_S = 1e-6
 
 
 @dataclasses.dataclass(frozen=True)
@@ -38,6 +41,13 @@ class LogSignals:
     model_torque_Nm: NDArray
     target_torque_Nm: NDArray | None
     target_current_A: NDArray | None = None
+    #: first row of each log when several logs are laid end to end (:func:`derive_all`); a rest or a start
+    #: from rest never spans two logs
+    log_starts: tuple[int, ...] = (0,)
+
+    def same_log(self, a: int, b: int) -> bool:
+        """Rows ``a <= b`` belong to one log."""
+        return not any(a < s <= b for s in self.log_starts)
 
     @property
     def n(self) -> int:
@@ -45,7 +55,7 @@ class LogSignals:
 
     def at_rest(self) -> NDArray:
         """``(n, 6)``: the joint's target is not moving."""
-        return np.abs(self.qd_target_rad_s) < REST_SPEED_RAD_S
+        return np.abs(self.qd_target_rad_s) < STILL_TARGET_RAD_S
 
 
 def derive(log: MeasuredLog, params: RobotParams, model_path: str | Path) -> LogSignals:
@@ -62,3 +72,26 @@ def derive(log: MeasuredLog, params: RobotParams, model_path: str | Path) -> Log
             else np.tile(np.asarray(params.joint_temperature_C, float), (log.t_s.size, 1)))
     return LogSignals(dt, log.q_target_rad, qd_t, qdd_t, log.q_actual_rad, qd_a, log.current_A, temp, tau,
                       log.target_torque_Nm, log.target_current_A)
+
+
+def derive_all(logs: Sequence[MeasuredLog], params: RobotParams, model_path: str | Path) -> LogSignals:
+    """:func:`derive` of every log (each differentiated on its own), laid end to end; optional columns only when
+    every log has them. The logs must share one sample period."""
+    parts = [derive(log, params, model_path) for log in logs]
+    if len(parts) == 1:
+        return parts[0]
+    period = parts[0].period_s
+    for log, p in zip(logs, parts):
+        if abs(p.period_s - period) > 1e-9:
+            raise ParameterError(f"{log.source}: sample period {p.period_s:g} s differs from {logs[0].source}'s "
+                                 f"{period:g} s; a joint identification needs one")
+    kw = {}
+    for f in dataclasses.fields(LogSignals):
+        vals = [getattr(p, f.name) for p in parts]
+        if f.name == "period_s":
+            kw[f.name] = period
+        elif f.name == "log_starts":
+            kw[f.name] = tuple(int(x) for x in np.cumsum([0] + [p.n for p in parts[:-1]]))
+        else:
+            kw[f.name] = None if any(v is None for v in vals) else np.concatenate(vals)
+    return LogSignals(**kw)

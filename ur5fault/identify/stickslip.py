@@ -45,9 +45,9 @@ def starts(sig: LogSignals, j: int) -> NDArray:
     rest = sig.at_rest()[:, j]
     k = np.flatnonzero(rest[:-1] & ~rest[1:]) + 1
     need = int(round(MIN_REST_S / sig.period_s))
-    keep = [s for s in k if s >= need and rest[s - need : s].all()]
+    keep = [s for s in k if s >= need and rest[s - need : s].all() and sig.same_log(s - need, s)]
     stick = int(round(MAX_STICK_S / sig.period_s))
-    return np.array([s for s in keep if s + stick < sig.n], dtype=int)
+    return np.array([s for s in keep if s + stick < sig.n and sig.same_log(s, s + stick)], dtype=int)
 
 
 def start_events(sig: LogSignals, j: int, k_joint: float, offset_A: float, noise_rad: float) -> NDArray:

@@ -1,30 +1,143 @@
-"""The command line's options for a measured log, shared by ``ur5fault identify`` and ``ur5fault discrepancy``."""
+"""The command line's options for measured logs, shared by ``ur5fault identify``, ``discrepancy`` and
+``monitor``: one or several log files, or a YAML manifest of logs, with their format, payload and tool.
+
+A manifest (a ``.yaml`` / ``.yml`` file given in place of the logs) names the logs of one robot with
+per-log options; paths are relative to the manifest::
+
+    format: rtde                 # default of every log (the command line's --format when absent)
+    payload_kg: 0                # defaults of the rtde logs (the command line's when absent)
+    tcp_offset_m: [0, 0, 0]
+    logs:
+      - path: Movement_No1.csv.gz
+      - {path: Movement_No2.csv.gz, payload_kg: 0.5}
+      - {path: TEST.csv.gz, hold_out: true}     # held out whole (discrepancy)
+"""
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 from collections.abc import Sequence
+from pathlib import Path
 
-from .measured import MeasuredLog
+from ..errors import ParameterError
+from ..util.checks import check_bool
+from ..util.yamlsafe import read_yaml
+from .measured import UNKNOWN_PAYLOAD, MeasuredLog
 from .readers import read_log
 
+MANIFEST_SUFFIXES = (".yaml", ".yml")
+MANIFEST_KEYS = ("format", "payload_kg", "tcp_offset_m", "logs")
+LOG_KEYS = ("path", "format", "payload_kg", "tcp_offset_m", "hold_out")
 
-def add_log_options(parser: argparse.ArgumentParser, formats: Sequence[str]) -> None:
-    """The log file, its ``--format`` (one of ``formats``) and what an RTDE file does not record."""
-    parser.add_argument("log", help="measured log file")
-    parser.add_argument("--format", required=True, choices=tuple(formats), dest="fmt")
+
+def add_log_options(parser: argparse.ArgumentParser, formats: Sequence[str], *, several: bool = True,
+                    hold_out: bool = False) -> None:
+    """The log files (or a manifest), their ``--format`` (one of ``formats``) and what an RTDE file does not
+    record; ``hold_out``: also ``--hold-out LOG ...`` (runs held out whole)."""
+    parser.add_argument("log", nargs="+" if several else None,
+                        help="measured log file(s) of one robot, or one YAML manifest of logs"
+                        if several else "measured log file")
+    parser.add_argument("--format", choices=tuple(formats), dest="fmt",
+                        help="log format: " + ", ".join(formats) + " (required unless a manifest names it)")
     parser.add_argument("--payload-kg", type=float,
-                        help="payload held during the log (rtde: required if it held one)")
-    parser.add_argument("--tcp-offset-m", type=float, nargs=3, help="tool offset in the flange frame [m] (rtde)")
+                        help="payload held during the log(s) [kg] (rtde: required, 0 for none; other formats carry "
+                             "their own)")
+    parser.add_argument("--tcp-offset-m", type=float, nargs=3,
+                        help="tool offset (payload position) in the flange frame [m] (rtde: required, 0 0 0 for the "
+                             "flange; other formats carry their own)")
+    if hold_out:
+        parser.add_argument("--hold-out", nargs="+", default=[], metavar="LOG",
+                            help="further runs of the robot held out whole: scored, never fitted")
+    parser.set_defaults(log_formats=tuple(formats))
 
 
-def read_log_option(args: argparse.Namespace) -> MeasuredLog:
-    """Read the log named by :func:`add_log_options`' options (payload and tool offset apply to RTDE only:
-    the other formats carry their own)."""
-    kwargs = {}
-    if args.fmt == "rtde":
-        if args.payload_kg is not None:
-            kwargs["payload_kg"] = args.payload_kg
-        if args.tcp_offset_m is not None:
-            kwargs["tcp_offset_m"] = tuple(args.tcp_offset_m)
-    return read_log(args.log, args.fmt, **kwargs)
+@dataclasses.dataclass(frozen=True)
+class LogEntry:
+    path: Path
+    fmt: str
+    payload_kg: float | None
+    tcp_offset_m: tuple[float, float, float] | None
+    hold_out: bool = False
+
+
+def _check_payload_options(fmt: str, payload_kg, tcp_offset_m, where: str) -> None:
+    if fmt != "rtde":
+        for flag, value in (("--payload-kg", payload_kg), ("--tcp-offset-m", tcp_offset_m)):
+            if value is not None:
+                raise ParameterError(f"{where}{flag} applies to --format rtde only: a {fmt} log carries its own "
+                                     "payload and tool offset")
+
+
+def _manifest(path: Path, args: argparse.Namespace) -> list[LogEntry]:
+    data = read_yaml(path)
+    where = f"{path.name}: "
+    bad = sorted(set(data) - set(MANIFEST_KEYS))
+    if bad:
+        raise ParameterError(f"{where}unknown key {bad[0]!r} (keys: {', '.join(MANIFEST_KEYS)})")
+    logs = data.get("logs")
+    if not isinstance(logs, list) or not logs:
+        raise ParameterError(f"{where}'logs' must be a list of at least one log ({{path: FILE, ...}} or FILE)")
+    out = []
+    for k, item in enumerate(logs):
+        item = {"path": item} if isinstance(item, str) else item
+        w = f"{path.name}: logs[{k}]: "
+        if not isinstance(item, dict) or "path" not in item:
+            raise ParameterError(f"{w}a log is a file name or a mapping with 'path'")
+        bad = sorted(set(item) - set(LOG_KEYS))
+        if bad:
+            raise ParameterError(f"{w}unknown key {bad[0]!r} (keys: {', '.join(LOG_KEYS)})")
+        fmt = item.get("format", data.get("format", args.fmt))
+        if fmt not in args.log_formats:
+            raise ParameterError(f"{w}format {fmt!r} is not one of: {', '.join(args.log_formats)}")
+        rtde = fmt == "rtde"  # the manifest's and the command line's payload and tool are defaults of rtde logs
+        payload = item.get("payload_kg", data.get("payload_kg", args.payload_kg) if rtde else None)
+        tcp = item.get("tcp_offset_m", data.get("tcp_offset_m", args.tcp_offset_m) if rtde else None)
+        if tcp is not None and (not isinstance(tcp, (list, tuple)) or len(tcp) != 3):
+            raise ParameterError(f"{w}tcp_offset_m = {tcp!r} must be 3 numbers [m]")
+        _check_payload_options(fmt, payload, tcp, w)
+        out.append(LogEntry((path.parent / str(item["path"])), fmt, payload,
+                            None if tcp is None else tuple(tcp),  # type: ignore[arg-type]
+                            check_bool(item.get("hold_out", False), f"{w}hold_out")))
+    return out
+
+
+def log_entries(args: argparse.Namespace) -> list[LogEntry]:
+    """The logs the command line names (files, or one manifest), and ``--hold-out``'s, in order."""
+    paths = [args.log] if isinstance(args.log, str) else list(args.log)
+    held = list(getattr(args, "hold_out", []) or [])
+    if len(paths) == 1 and Path(paths[0]).suffix.lower() in MANIFEST_SUFFIXES:
+        entries = _manifest(Path(paths[0]), args)
+        return entries + [LogEntry(Path(p), args.fmt, args.payload_kg, _tcp(args), True) for p in held]
+    if args.fmt is None:
+        raise ParameterError("--format is required (or a YAML manifest of logs that names it)")
+    _check_payload_options(args.fmt, args.payload_kg, args.tcp_offset_m, "")
+    return [LogEntry(Path(p), args.fmt, args.payload_kg, _tcp(args), False) for p in paths] + \
+        [LogEntry(Path(p), args.fmt, args.payload_kg, _tcp(args), True) for p in held]
+
+
+def _tcp(args: argparse.Namespace):
+    return None if args.tcp_offset_m is None else tuple(args.tcp_offset_m)
+
+
+def read_entry(e: LogEntry) -> MeasuredLog:
+    """Read one log; an RTDE log without its payload or tool offset is refused with one line (after the file's
+    own checks), never given a default."""
+    kw = {"payload_kg": e.payload_kg, "tcp_offset_m": e.tcp_offset_m} if e.fmt == "rtde" else {}
+    log = read_log(e.path, e.fmt, **kw)
+    if not log.payload_known:
+        flag = "--payload-kg (payload_kg)" if e.payload_kg is None else "--tcp-offset-m (tcp_offset_m)"
+        raise ParameterError(f"{log.source}: {flag} missing: {UNKNOWN_PAYLOAD}")
+    return log
+
+
+def read_log_options(args: argparse.Namespace) -> tuple[list[MeasuredLog], list[MeasuredLog]]:
+    """The logs to fit and the logs held out whole, read and checked."""
+    entries = log_entries(args)
+    names = [e.path.name for e in entries]
+    dup = sorted({n for n in names if names.count(n) > 1})
+    if dup:
+        raise ParameterError(f"log {dup[0]!r} given twice (a log is named by its file name)")
+    logs = [(read_entry(e), e.hold_out) for e in entries]
+    return [g for g, h in logs if not h], [g for g, h in logs if h]
+

@@ -15,6 +15,10 @@ Limits and their reasons:
   "finding" and NaN), and at most the run length a simulation may have
   (:data:`ur5fault.sim.budget.MAX_DURATION_S`);
 - exactly six joints;
+- currents within the current sensor's range, :data:`CURRENT_RANGE_A` (the 14-bit ADC over +-20 A
+  assumed for ``sensors.current_lsb_A`` in ``ur5_drive.yaml``): a reading beyond it is a unit mistake,
+  and one that fits once divided by 1000 is named as milliamperes (a current in mA once reached the
+  discrepancy report as 3300 A "unexplained");
 - units: where a log carries joint velocities, the time derivative of the positions (as declared,
   converted to radians) must agree with them; a factor of 180/pi = 57.3 either way is named as a
   degrees/radians mix-up, any other factor outside [0.5, 2] as a disagreement.
@@ -39,9 +43,11 @@ MIN_DURATION_S = 5.0
 MIN_SAMPLES = 250
 #: joints count as moving above this speed [rad/s] (3 deg/s, far above standstill noise) and
 #: need this many moving samples for the units check
-MOVING_RAD_S = 0.05
+UNITS_CHECK_SPEED_RAD_S = 0.05
 MIN_MOVING = 20
 DEG_PER_RAD = 180.0 / math.pi
+#: range of the joint current sensor [A] (assumption of ur5_drive.yaml's current_lsb_A: 14-bit ADC over +-20 A)
+CURRENT_RANGE_A = 20.0
 
 
 def check_joint_count(src: str, indices: Iterable[int], first: int) -> None:
@@ -110,7 +116,7 @@ def velocity_ratio(t: NDArray, q_rad: NDArray, v_rad_s: NDArray) -> float | None
     dq = np.gradient(q_rad, t, axis=0)
     ratios = []
     for j in range(q_rad.shape[1]):
-        m = np.abs(v_rad_s[:, j]) > MOVING_RAD_S
+        m = np.abs(v_rad_s[:, j]) > UNITS_CHECK_SPEED_RAD_S
         if m.sum() >= MIN_MOVING:
             ratios.append(float(np.sum(dq[m, j] * v_rad_s[m, j]) / np.sum(v_rad_s[m, j] ** 2)))
     return float(np.median(ratios)) if ratios else None
@@ -131,3 +137,18 @@ def check_units(src: str, t: NDArray, q_rad: NDArray, v_rad_s: NDArray | None, w
                              f"they look like radians, but this layout declares {declared}")
     raise LogFormatError(f"{src}: {what} and the logged velocities disagree by a factor {r:.3g} "
                          "(time derivative / velocity); check the units of both")
+
+
+def check_current_units(src: str, arrays: Mapping[str, NDArray | None]) -> None:
+    """Every current column within +-:data:`CURRENT_RANGE_A`; milliamperes named as such."""
+    for name, a in arrays.items():
+        if a is None or a.size == 0:
+            continue
+        peak = float(np.max(np.abs(a)))
+        if peak <= CURRENT_RANGE_A:
+            continue
+        j = int(np.argmax(np.max(np.abs(a), axis=0))) if a.ndim == 2 else 0
+        hint = ("they look like milliamperes; give the log in amperes" if peak / 1000.0 <= CURRENT_RANGE_A
+                else "wrong column or unit")
+        raise LogFormatError(f"{src}: {name} of joint {j + 1} reaches {peak:.4g} A, beyond the +-{CURRENT_RANGE_A:g} A "
+                             f"a UR5 current sensor reads: {hint}")

@@ -21,12 +21,14 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from ..errors import LogFormatError, UnknownNameError
+from ..errors import LogFormatError, ParameterError, UnknownNameError
 from ..sim.effects import REGISTRY
 from ..util.checks import check_number
-from . import plausible
+from . import plausible, regular
 from .measured import MeasuredLog
+from .plausible import check_current_units
 from .source import check_log_memory, read_columns, sniff
+from .wrap import unwrap_angles
 
 #: sign of the reported motor current w.r.t. joint torque (all +1 in the NIST log, see above)
 UR_CURRENT_SIGN = np.array([1.0, 1.0, 1.0, 1.0, 1.0, 1.0])
@@ -54,17 +56,38 @@ def _stack(data: Mapping[str, NDArray], cols: Sequence[str]) -> NDArray | None:
     return np.column_stack([data[c] for c in cols]) if cols else None
 
 
-def _checked(src: str, t: NDArray, arrays: Mapping[str, NDArray], q_rad: NDArray, v_rad_s: NDArray | None = None,
-             declared: str = "radians") -> None:
-    plausible.check_finite(src, {"time": t, **arrays})
+def _assemble(src: str, t: NDArray, required: Mapping[str, NDArray], optional: Mapping[str, NDArray | None],
+              declared: str, labels: tuple[str, str] = ("target_q", "actual_q"), **fields) -> MeasuredLog:
+    """Checks, optional columns completed (:func:`.regular.complete_optional`), the rows put on the controller
+    tick grid (:func:`.regular.on_ticks`), and the log. ``required``: target positions ``"target_q"``, actual
+    positions ``"actual_q"`` (both already in radians) and ``"actual_current"``; ``optional``: ``"target_qd"``,
+    ``"actual_qd"`` (rad/s, for the unit check only), ``"target_current"``, ``"temperature"``, ``"tcp"``,
+    ``"target_torque"``."""
+    plausible.check_finite(src, {"time": t, **required})
+    notes: list[str] = []
+    rows, opt = regular.complete_optional(src, t, optional, notes)
+    t = t[rows]
+    req = {k: v[rows] for k, v in required.items()}
+    opt = {k: None if v is None else v[rows] for k, v in opt.items()}
     plausible.check_increasing(src, t)
-    plausible.check_range(src, q_rad, t, v_rad_s, declared)
+    plausible.check_range(src, req["actual_q"], t, opt["actual_qd"], declared)
     plausible.check_sampling(src, t)
+    plausible.check_units(src, t, req["target_q"], opt["target_qd"], labels[0], declared)
+    plausible.check_units(src, t, req["actual_q"], opt["actual_qd"], labels[1], declared)
+    keep = {**req, **{k: v for k, v in opt.items() if k not in ("target_qd", "actual_qd")}}
+    grid, a, logged = regular.on_ticks(src, t, keep, notes)
+    cur_t = a["target_current"]
+    return MeasuredLog(
+        source=src, t_s=grid, q_target_rad=a["target_q"], q_actual_rad=a["actual_q"],
+        current_A=a["actual_current"] * UR_CURRENT_SIGN,
+        target_current_A=None if cur_t is None else cur_t * UR_CURRENT_SIGN, temperature_C=a["temperature"],
+        tcp_m=a["tcp"], target_torque_Nm=a["target_torque"], logged=logged, notes=tuple(notes), **fields)
 
 
 def read_nist(path: str | Path) -> MeasuredLog:
     """Read the NIST UR5 layout (positions in degrees, velocities in rad/s; see
-    ../shared/data/nist-ur5/README.md)."""
+    data/nist-ur5/README.md). The layout names its payload and tool offset (:data:`NIST_PAYLOAD_KG`,
+    :data:`NIST_TOOL_OFFSET_M`), so the caller gives neither."""
     path = Path(path)
     src = path.name
     layout = sniff(path, src)
@@ -82,47 +105,51 @@ def read_nist(path: str | Path) -> MeasuredLog:
     torq = _have(cols, [f"ROBOT_TARGET_JOINT_TORQUES (J{j})" for j in range(1, 7)])
     d = read_columns(path, src, layout,
                      ["ROBOT_TIME", *pos_t, *pos_a, *cur_a, *cur_t, *temp, *tcp, *vel_t, *vel_a, *torq])
-    t = d["ROBOT_TIME"]
-    arrays = {"target positions": _stack(d, pos_t), "actual positions": _stack(d, pos_a),
-              "actual currents": _stack(d, cur_a)}
-    qt, qa = np.radians(arrays["target positions"]), np.radians(arrays["actual positions"])
-    _checked(src, t, arrays, qa, _stack(d, vel_a), "degrees")
-    plausible.check_units(src, t, qt, _stack(d, vel_t), "target positions", "degrees")
-    plausible.check_units(src, t, qa, _stack(d, vel_a), "actual positions", "degrees")
-    ct = _stack(d, cur_t)
-    return MeasuredLog(
-        source=src, t_s=t - t[0], q_target_rad=qt, q_actual_rad=qa,
-        current_A=arrays["actual currents"] * UR_CURRENT_SIGN,
-        target_current_A=None if ct is None else ct * UR_CURRENT_SIGN, temperature_C=_stack(d, temp),
-        tcp_m=_stack(d, tcp), payload_kg=NIST_PAYLOAD_KG, tcp_offset_m=NIST_TOOL_OFFSET_M,
-        target_torque_Nm=_stack(d, torq),
-    )
+    plausible.check_finite(src, {"target positions": _stack(d, pos_t), "actual positions": _stack(d, pos_a),
+                                 "actual currents": _stack(d, cur_a)})
+    required = {"target_q": np.radians(_stack(d, pos_t)), "actual_q": np.radians(_stack(d, pos_a)),
+                "actual_current": _stack(d, cur_a)}
+    optional = {"target_qd": _stack(d, vel_t), "actual_qd": _stack(d, vel_a), "target_current": _stack(d, cur_t),
+                "temperature": _stack(d, temp), "tcp": _stack(d, tcp), "target_torque": _stack(d, torq)}
+    return _assemble(src, d["ROBOT_TIME"], required, optional, "degrees",
+                     ("target positions", "actual positions"), payload_kg=NIST_PAYLOAD_KG,
+                     tcp_offset_m=NIST_TOOL_OFFSET_M)
 
 
-def read_rtde(path: str | Path, payload_kg: float = 0.0,
-              tcp_offset_m: tuple[float, float, float] = (0.0, 0.0, 0.15)) -> MeasuredLog:
+#: names of the time column an RTDE-style log may carry (UR's recorder writes ``timestamp``; older
+#: tools and the CB2 recordings of data/kufieta-ur5 ``time``); the first present is used
+RTDE_TIME_COLUMNS = ("timestamp", "time")
+
+
+def read_rtde(path: str | Path, payload_kg: float | None = None,
+              tcp_offset_m: tuple[float, float, float] | None = None) -> MeasuredLog:
     """Read a UR RTDE CSV as the ``rtde`` recorder writes it (radians, amperes, metres), comma-,
     tab-, semicolon- or space-separated, plain or gzip, with or without a UTF-8 byte-order mark.
 
-    Required columns: ``timestamp``, ``target_q_0..5``, ``actual_q_0..5``, ``actual_current_0..5``;
-    optional: ``target_current_0..5``, ``joint_temperatures_0..5``, ``actual_TCP_pose_0..5``,
-    ``target_moment_0..5`` (UR's target torque), and
+    Required columns: ``timestamp`` (or ``time``), ``target_q_0..5``, ``actual_q_0..5``,
+    ``actual_current_0..5``; optional: ``target_current_0..5``, ``joint_temperatures_0..5``,
+    ``actual_TCP_pose_0..5``, ``target_moment_0..5`` (UR's target torque), and
     ``target_qd_0..5`` / ``actual_qd_0..5`` (rad/s, used to check the position units).
-    The payload and tool offset are not in the recording and are given by the caller.
+    The payload and tool offset are not in the recording: given by the caller, or ``None`` = unknown
+    (the workflows fit an unknown payload and say so).
     """
     path = Path(path)
     src = path.name
-    mass = REGISTRY["payload"].param("mass_kg")
-    payload_kg = check_number(payload_kg, "payload_kg", mass.lo, mass.hi, mass.unit)
-    if len(tcp_offset_m) != 3:
-        raise LogFormatError(f"tcp_offset_m = {tcp_offset_m!r} must be 3 numbers [m]")
-    tcp_offset_m = tuple(check_number(v, f"tcp_offset_m[{k + 1}]", -2.0, 2.0, "m") for k, v in enumerate(tcp_offset_m))
+    if payload_kg is not None:
+        mass = REGISTRY["payload"].param("mass_kg")
+        payload_kg = check_number(payload_kg, "payload_kg", mass.lo, mass.hi, mass.unit)
+    if tcp_offset_m is not None:
+        if len(tcp_offset_m) != 3:
+            raise LogFormatError(f"tcp_offset_m = {tcp_offset_m!r} must be 3 numbers [m]")
+        tcp_offset_m = tuple(check_number(v, f"tcp_offset_m[{k + 1}]", -2.0, 2.0, "m")  # type: ignore[assignment]
+                             for k, v in enumerate(tcp_offset_m))
     layout = sniff(path, src)
     cols = layout.columns
     qt = [f"target_q_{j}" for j in range(6)]
     qa = [f"actual_q_{j}" for j in range(6)]
     ia = [f"actual_current_{j}" for j in range(6)]
-    _require(cols, ["timestamp", *qt, *qa, *ia], src)
+    time_col = next((c for c in RTDE_TIME_COLUMNS if c in cols), RTDE_TIME_COLUMNS[0])
+    _require(cols, [time_col, *qt, *qa, *ia], src)
     plausible.check_joint_count(src, _joint_numbers(cols, r"actual_q_(\d+)"), 0)
     ct = _have(cols, [f"target_current_{j}" for j in range(6)])
     temp = _have(cols, [f"joint_temperatures_{j}" for j in range(6)])
@@ -130,20 +157,12 @@ def read_rtde(path: str | Path, payload_kg: float = 0.0,
     vt = _have(cols, [f"target_qd_{j}" for j in range(6)])
     va = _have(cols, [f"actual_qd_{j}" for j in range(6)])
     tm = _have(cols, [f"target_moment_{j}" for j in range(6)])
-    d = read_columns(path, src, layout, ["timestamp", *qt, *qa, *ia, *ct, *temp, *tcp, *vt, *va, *tm])
-    t = d["timestamp"]
-    arrays = {"target_q": _stack(d, qt), "actual_q": _stack(d, qa), "actual_current": _stack(d, ia)}
-    _checked(src, t, arrays, arrays["actual_q"], _stack(d, va))
-    plausible.check_units(src, t, arrays["target_q"], _stack(d, vt), "target_q", "radians")
-    plausible.check_units(src, t, arrays["actual_q"], _stack(d, va), "actual_q", "radians")
-    cur_t = _stack(d, ct)
-    return MeasuredLog(
-        source=src, t_s=t - t[0], q_target_rad=arrays["target_q"], q_actual_rad=arrays["actual_q"],
-        current_A=arrays["actual_current"] * UR_CURRENT_SIGN,
-        target_current_A=None if cur_t is None else cur_t * UR_CURRENT_SIGN,
-        temperature_C=_stack(d, temp), tcp_m=_stack(d, tcp),
-        payload_kg=payload_kg, tcp_offset_m=tuple(tcp_offset_m), target_torque_Nm=_stack(d, tm),
-    )
+    d = read_columns(path, src, layout, [time_col, *qt, *qa, *ia, *ct, *temp, *tcp, *vt, *va, *tm])
+    required = {"target_q": _stack(d, qt), "actual_q": _stack(d, qa), "actual_current": _stack(d, ia)}
+    optional = {"target_qd": _stack(d, vt), "actual_qd": _stack(d, va), "target_current": _stack(d, ct),
+                "temperature": _stack(d, temp), "tcp": _stack(d, tcp), "target_torque": _stack(d, tm)}
+    return _assemble(src, d[time_col], required, optional, "radians", payload_kg=payload_kg,
+                     tcp_offset_m=tcp_offset_m)
 
 
 def read_sim(path: str | Path) -> MeasuredLog:
@@ -180,7 +199,10 @@ def read_sim(path: str | Path) -> MeasuredLog:
     t = d["t_s"]
     arrays = {"q_set_rad": _stack(d, cols("q_set_rad")), "q_FB_rad": _stack(d, cols("q_FB_rad")),
               "i_FB_A": _stack(d, cols("i_FB_A"))}
-    _checked(src, t, arrays, arrays["q_FB_rad"])
+    plausible.check_finite(src, {"time": t, **arrays})
+    plausible.check_increasing(src, t)
+    plausible.check_range(src, arrays["q_FB_rad"])
+    plausible.check_sampling(src, t)
     meta = _sim_metadata(schema, src)
     temp = meta.get("joint_temperature_C")
     try:
@@ -213,12 +235,22 @@ READERS = {"nist": read_nist, "rtde": read_rtde, "sim": read_sim}
 
 
 def read_log(path: str | Path, fmt: str, **kwargs) -> MeasuredLog:
-    """Read a log in one of the formats of :data:`READERS` (``nist``, ``rtde``, ``sim``)."""
+    """Read a log in one of the formats of :data:`READERS` (``nist``, ``rtde``, ``sim``); ``payload_kg`` and
+    ``tcp_offset_m`` are for ``rtde`` only (the other formats carry their own) and are refused elsewhere."""
     if fmt not in READERS:
         raise UnknownNameError("log format", fmt, READERS)
+    given = [k for k, v in kwargs.items() if v is not None]
+    if fmt != "rtde" and given:
+        raise ParameterError(f"{given[0]} applies to the rtde format only: a {fmt} log carries its own payload and "
+                             "tool offset")
+    unknown = set(kwargs) - {"payload_kg", "tcp_offset_m"}
+    if unknown:
+        raise ParameterError(f"read_log: unknown option {sorted(unknown)[0]!r} (payload_kg, tcp_offset_m)")
     p = Path(path)
     if not p.exists():
         raise LogFormatError(f"{p}: no such file")
     if not p.is_file():
         raise LogFormatError(f"{p}: not a file")
-    return READERS[fmt](p, **kwargs)
+    log = READERS[fmt](p, **{k: v for k, v in kwargs.items() if v is not None})
+    check_current_units(log.source, {"current": log.current_A, "target current": log.target_current_A})
+    return unwrap_angles(log)

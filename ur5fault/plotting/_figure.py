@@ -10,8 +10,7 @@ from pathlib import Path
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
-#: resolution of saved PNG files [dots per inch]
-DPI = 110
+from ..util.io import write_figure_atomic
 
 
 def figure_and_axes(ax: Axes | None, figsize: tuple[float, float]) -> tuple[Figure, Axes]:
@@ -29,6 +28,5 @@ def save(figures: Mapping[str, Figure], folder: str | Path) -> list[Path]:
     paths = []
     for name, fig in figures.items():
         path = folder / f"{name}.png"
-        fig.savefig(path, dpi=DPI)
-        paths.append(path)
+        paths.append(write_figure_atomic(fig, path))
     return paths

@@ -13,13 +13,14 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Callable, Mapping
+from collections.abc import Iterable
 from typing import Any
 
 import numpy as np
 
 from ..errors import ParameterError, UnknownNameError
 from .axes import JOINT_NAMES, joint_index
+from .interfaces import EffectApplier
 
 
 @dataclasses.dataclass(frozen=True)
@@ -43,20 +44,28 @@ class Effect:
         doc: plain-words description used in reports.
         params: its parameters.
         per_joint: the effect sits on one joint (``joint`` required) or on the whole robot.
-        apply: ``apply(arrays, row, joint_index_or_None, values)`` changes the run's row.
+        apply: ``apply(arrays, row, joint_index_or_None, values)`` changes the run's row
+            (:class:`ur5fault.sim.interfaces.EffectApplier`).
     """
 
     name: str
     doc: str
     params: tuple[EffectParam, ...]
     per_joint: bool
-    apply: Callable[[Any, int, int | None, Mapping[str, float]], None]
+    apply: EffectApplier
 
     def param(self, name: str) -> EffectParam:
         for p in self.params:
             if p.name == name:
                 return p
         raise UnknownNameError(f"parameter of effect {self.name!r}", name, [p.name for p in self.params])
+
+    def absent(self, name: str) -> float:
+        """The value of parameter ``name`` that means "no effect" (the registry is its only source)."""
+        value = self.param(name).absent
+        if value is None:
+            raise ParameterError(f"effect {self.name!r}: parameter {name!r} has no absent value")
+        return value
 
 
 @dataclasses.dataclass(frozen=True)
@@ -70,10 +79,52 @@ class EffectSpec:
     def value(self, key: str) -> float:
         return dict(self.values)[key]
 
+    @property
+    def is_absent(self) -> bool:
+        """Every value is the registry's "absent" one: the run carries no such effect."""
+        eff = REGISTRY[self.name]
+        return all(eff.param(k).absent == v for k, v in self.values)
+
     def describe(self) -> str:
         where = f" on {JOINT_NAMES[self.joint]}" if self.joint is not None else ""
         vals = ", ".join(f"{k}={v:g}" for k, v in self.values)
         return f"{self.name}{where} ({vals})"
+
+
+@dataclasses.dataclass(frozen=True)
+class EffectKey:
+    """A ``<effect>.<param>`` key of a campaign sweep or condition (``backlash.backlash_deg``,
+    ``backlash.joint``): the effect's registry name and its parameter (or ``joint``)."""
+
+    effect: str
+    param: str
+
+    @classmethod
+    def parse(cls, key: object) -> EffectKey | None:
+        """The key split at its first dot; None for anything else (``seed``, ``payload_kg``, a non-string).
+        Whether the effect and parameter exist is the caller's check (with its own message)."""
+        if not isinstance(key, str):
+            return None
+        effect, dot, param = key.partition(".")
+        return cls(effect, param) if dot else None
+
+    def __str__(self) -> str:
+        return f"{self.effect}.{self.param}"
+
+
+def effects_of_keys(values: Iterable[tuple[str, Any]], where: str = "") -> tuple[EffectSpec, ...]:
+    """Validated effects of ``(<effect>.<param>, value)`` pairs, one per effect in name order
+    (``<effect>.joint`` is its joint); pairs whose key has no dot are not effects and are skipped."""
+    by_effect: dict[str, dict[str, Any]] = {}
+    for key, v in values:
+        k = EffectKey.parse(key)
+        if k is not None:
+            by_effect.setdefault(k.effect, {})[k.param] = v
+    out = []
+    for name, vals in sorted(by_effect.items()):
+        joint = vals.pop("joint", None)
+        out.append(make_effect(name, joint, where, **vals))
+    return tuple(out)
 
 
 def make_effect(name: str, joint: int | str | None = None, where: str = "", **values: Any) -> EffectSpec:

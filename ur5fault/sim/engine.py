@@ -36,6 +36,7 @@ from .axes import N_JOINTS
 from .drive import controller as ctl
 from .drive.state import DRIVES, initial_state, pack_params
 from .effects import EffectSpec
+from .interfaces import Multibody
 from .multibody import BatchMultibody, LoopMultibody
 from .params import RobotParams, load_params
 from .result import SimResult
@@ -119,7 +120,7 @@ class Simulator:
             p.gear.ratio,
         )
 
-    def _multibody(self, a: RunArrays):
+    def _multibody(self, a: RunArrays) -> Multibody:
         tcp = np.asarray(self.params.tcp_offset_m)
         if self.stepper == "loop":
             return LoopMultibody(self.model, a.n_runs, tcp, a.payload_com_m)

@@ -20,6 +20,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .axes import N_JOINTS
+from .gravity import gravity_torque
 
 PAYLOAD_CUBE_M = 0.06  # payload inertia: a solid cube of this edge [m] (assumption)
 
@@ -44,18 +45,6 @@ class _Ids:
                     a = int(model.body_parentid[a])
                 self.subtree[j, b] = a == top
         self.up = -np.asarray(model.opt.gravity) / max(np.linalg.norm(model.opt.gravity), 1e-300)
-
-
-def gravity_torque(ids: _Ids, g_m_s2: float, mass: NDArray, xipos: NDArray, xanchor: NDArray,
-                   xaxis: NDArray) -> NDArray:
-    """Static gravity torque each joint's motor supplies ``(n, 6)`` [N*m]: the weight of every body that
-    moves with the joint, ``m_b g`` upwards at its centre of mass, taken about the joint's axis."""
-    from .terms import gravity_moments
-
-    out = np.empty((mass.shape[0], N_JOINTS))
-    gravity_moments(np.ascontiguousarray(mass), np.ascontiguousarray(xipos), np.ascontiguousarray(xanchor),
-                    np.ascontiguousarray(xaxis), ids.subtree, g_m_s2 * ids.up, out)
-    return out
 
 
 class LoopMultibody:

@@ -128,7 +128,7 @@ def build_run_arrays(params: RobotParams, effects: Sequence[Sequence[EffectSpec]
         motor_rotor_inertia_kgm2=joint(m.rotor_inertia_kgm2),
         motor_pole_pairs=joint(m.pole_pairs),
         cogging_Nm=np.zeros((n, N_JOINTS)),
-        cogging_periods_per_rev=np.full((n, N_JOINTS), 6.0),  # the cogging effect's absent value
+        cogging_periods_per_rev=np.full((n, N_JOINTS), REGISTRY["cogging"].absent("periods_per_rev")),
         current_limit_A=joint(params.power.current_limit_A),
         resolver_noise_rad=joint(s.resolver_noise_rad),
         resolver_lsb_rad=joint(two_pi / np.asarray(s.resolver_counts_per_rev)),
@@ -144,7 +144,7 @@ def build_run_arrays(params: RobotParams, effects: Sequence[Sequence[EffectSpec]
         payload_kg=np.full(n, float(payload_kg)),
         payload_com_m=np.zeros((n, 3)),
         setpoint_delay_s=np.zeros(n),
-        **_term_fields(n, params),
+        **_term_fields(n),
     )
     for row, run_effects in enumerate(effects):
         for spec in run_effects:
@@ -152,20 +152,24 @@ def build_run_arrays(params: RobotParams, effects: Sequence[Sequence[EffectSpec]
     return arrays
 
 
-def _term_fields(n: int, params: RobotParams) -> dict[str, NDArray]:
+def _term_fields(n: int) -> dict[str, NDArray]:
     """The data-driven terms' fields at their absent values (the registry's defaults)."""
     h = MAX_HARMONICS
     zeros = np.zeros((n, N_JOINTS))
+
+    def absent(effect: str, param: str, shape: tuple[int, ...] = (n, N_JOINTS)) -> NDArray:
+        return np.full(shape, REGISTRY[effect].absent(param))
+
     return {
         "term_joint_harmonic_Nm": np.zeros((n, N_JOINTS, h, 2)),
-        "term_joint_harmonic_per_rev": np.ones((n, N_JOINTS, h)),
-        "term_coulomb_Nm": zeros.copy(), "term_coulomb_width_rad_s": np.full((n, N_JOINTS), 0.01),
-        "term_stribeck_Nm": zeros.copy(), "term_stribeck_speed_rad_s": np.full((n, N_JOINTS), 0.05),
+        "term_joint_harmonic_per_rev": absent("torque_joint_harmonic", "periods_per_rev", (n, N_JOINTS, h)),
+        "term_coulomb_Nm": zeros.copy(), "term_coulomb_width_rad_s": absent("torque_coulomb", "width_rad_s"),
+        "term_stribeck_Nm": zeros.copy(), "term_stribeck_speed_rad_s": absent("torque_stribeck", "speed_rad_s"),
         "term_viscous_Nms_per_rad": zeros.copy(), "term_quadratic_Nms2_per_rad2": zeros.copy(),
         "term_gravity_scale": zeros.copy(), "term_holding_Nm": zeros.copy(),
-        "term_holding_speed_rad_s": np.full((n, N_JOINTS), 0.02),
+        "term_holding_speed_rad_s": absent("torque_holding", "speed_rad_s"),
         "armature_kgm2": zeros.copy(), "link_mass_kg": zeros.copy(),
         "link_com_shift_m": np.zeros((n, N_JOINTS, 3)), "current_temp_drift_A_per_K": zeros.copy(),
-        "current_temp_reference_C": np.full((n, N_JOINTS), float(params.friction.reference_temp_C)),
+        "current_temp_reference_C": absent("current_temperature_drift", "reference_C"),
         "current_time_shift_s": zeros.copy(), "position_time_shift_s": zeros.copy(),
     }

@@ -33,13 +33,14 @@ import numpy as np
 from numba import njit
 from numpy.typing import ArrayLike, NDArray
 
+from ..errors import ParameterError
+from .axes import JOINT_NAMES
+
 #: harmonic terms per joint and kind that one run can carry (slots of ``RunArrays``)
 MAX_HARMONICS = 3
 #: width of the smooth sign of the Stribeck-like term [rad/s] (assumption: well below any commanded
 #: speed, like ``friction.sign_smoothing_rad_s``, but wide enough for the 8 ms samples of a log)
 STRIBECK_SIGN_WIDTH_RAD_S = 0.01
-#: acceleration of gravity [m/s^2], MuJoCo's default ``opt.gravity``
-GRAVITY_M_S2 = 9.81
 
 
 # ------------------------------------------------------------------------------------ dictionary functions
@@ -138,8 +139,13 @@ class TermHook:
                 for j, b in enumerate(bodies):
                     if a.link_mass_kg[r, j] == 0.0 and not np.any(a.link_com_shift_m[r, j]):
                         continue
+                    new_kg = mass[r][b] + a.link_mass_kg[r, j]
+                    if not new_kg > 0.0:  # a massless or negative link: the mass matrix is no longer positive
+                        raise ParameterError(
+                            f"link_mass on {JOINT_NAMES[j]}: mass_kg = {a.link_mass_kg[r, j]:g} would leave the link "
+                            f"{new_kg:.3g} kg (it weighs {mass[r][b]:.3g} kg); a link's mass must stay positive")
                     ipos[r][b] = ipos[r][b] + a.link_com_shift_m[r, j]
-                    mass[r][b] = mass[r][b] + a.link_mass_kg[r, j]
+                    mass[r][b] = new_kg
         mb.model_changed()
         if self.gravity:
             mb.gravity_torque()  # binds the kinematic fields before the run starts
@@ -248,24 +254,3 @@ def _load_torque(q, qd, m_ii, dt, grav, amp_j, per_j, coul, coul_w, strib, strib
                 tv += hold[r, j] * last_sign[r, j] * e
                 slope += abs(hold[r, j] * last_sign[r, j] * 2.0 * w / (hold_w[r, j] * hold_w[r, j]) * e)
             out[r, j] = t + tv / (1.0 + max(slope, 0.0) * dt / m_ii[r, j])
-
-
-@njit(cache=True)
-def gravity_moments(mass, xipos, xanchor, xaxis, subtree, up, out):
-    """Static gravity torque per run and joint: for every body moving with joint j, the moment of its
-    weight (``mass * up``, ``up`` the holding force per kg) about the joint's axis."""
-    n = mass.shape[0]
-    nj, nb = subtree.shape
-    for r in range(n):
-        for j in range(nj):
-            tx, ty, tz = 0.0, 0.0, 0.0
-            for b in range(nb):
-                if subtree[j, b] and mass[r, b] != 0.0:
-                    ax = xipos[r, b, 0] - xanchor[r, j, 0]
-                    ay = xipos[r, b, 1] - xanchor[r, j, 1]
-                    az = xipos[r, b, 2] - xanchor[r, j, 2]
-                    m = mass[r, b]
-                    tx += m * (ay * up[2] - az * up[1])
-                    ty += m * (az * up[0] - ax * up[2])
-                    tz += m * (ax * up[1] - ay * up[0])
-            out[r, j] = tx * xaxis[r, j, 0] + ty * xaxis[r, j, 1] + tz * xaxis[r, j, 2]

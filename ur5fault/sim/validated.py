@@ -15,6 +15,7 @@ from collections.abc import Mapping
 from typing import Any, TypeVar
 
 from ..errors import ParameterError, UnknownNameError
+from ..util.checks import short
 from .axes import N_JOINTS
 
 T = TypeVar("T", bound="Validated")
@@ -65,7 +66,10 @@ def _check_scalar(where: str, value: Any, meta: Mapping[str, Any]) -> Any:
         return value
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise ParameterError(f"{where} = {value!r} must be a number in {_range_text(meta)}")
-    v = float(value)
+    try:
+        v = float(value)
+    except OverflowError:  # an int beyond the float range (10**400 written out in a YAML file)
+        raise ParameterError(f"{where} = {short(value)} is out of range {_range_text(meta)}") from None
     lo, hi = meta["lo"], meta["hi"]
     bad_lo = v <= lo if meta.get("lo_open") else v < lo
     if not math.isfinite(v) or bad_lo or v > hi:

@@ -24,6 +24,7 @@ from numpy.typing import NDArray
 
 from ..errors import ParameterError
 from ..logs import MeasuredLog
+from ..sim.axes import JOINT_NAMES
 from ..sim.effects import EffectSpec
 from ..sim.engine import RunSpec, Simulator
 from ..sim.params import RobotParams, deep_merge, load_params
@@ -78,6 +79,30 @@ class Replayed:
         return self.y[:, 1]
 
 
+def residual_sigma(params: RobotParams, signals: Sequence[str]) -> NDArray:
+    """Sigma of each signal's measurement error ``(n_signals, 6)``: the sensor's white-noise sigma, but never
+    below its rounding error ``step / sqrt(12)`` (uniform over one quantisation step).  The white noise
+    identified from a log is the scatter of its quantised readings at rest, which already holds the rounding
+    (so the two are not added); a quantised sensor whose readings are identical at rest (identified noise 0)
+    is weighted by its step, never by 0.  A signal with neither noise nor step cannot be weighed: refused."""
+    s = params.sensors
+    resolver_step = 2 * np.pi / np.asarray(s.resolver_counts_per_rev, dtype=float)
+    res = ("sensors.resolver_noise_rad", "sensors.resolver_counts_per_rev")
+    parts = {"current_A": (s.current_noise_A, s.current_lsb_A, "sensors.current_noise_A", "sensors.current_lsb_A"),
+             "position_rad": (s.resolver_noise_rad, resolver_step, *res),
+             "mismatch_rad": (s.resolver_noise_rad, resolver_step, *res)}
+    rows = []
+    for name in signals:
+        noise, step, key, step_key = parts[name]
+        sigma = np.maximum(np.asarray(noise, dtype=float), np.asarray(step, dtype=float) / np.sqrt(12.0))
+        if not np.all(sigma > 0):
+            j = int(np.argmin(sigma))
+            raise ParameterError(f"{key} and {step_key} are both 0 on {JOINT_NAMES[j]}: the {name} residual "
+                                 "needs a noise level to be weighed; give either a positive value")
+        rows.append(sigma)
+    return np.array(rows, dtype=float)
+
+
 class LogReplay:
     """Simulates one log's target trajectory under a model (parameter overrides + effects).
 
@@ -91,7 +116,7 @@ class LogReplay:
 
     def __init__(self, log: MeasuredLog, params_overrides: dict | None = None,
                  base_effects: Sequence[EffectSpec] = (), *, seed: int, jobs: int = 1) -> None:
-        self.log = log
+        self.log = log.require_payload()
         self.jobs = max(1, int(jobs))
         self.params: RobotParams = replay_params(log, params_overrides)
         self.traj = log.to_trajectory()
@@ -102,11 +127,8 @@ class LogReplay:
             raise ParameterError(f"{log.source}: sample period {log.period_s:g} s is not a multiple of the physics "
                                  f"step {self.params.physics_dt_s:g} s")
         self.signals: tuple[str, ...] = SIGNALS[:3 if log.q_motor_rad is not None else 2]
-        s = self.params.sensors
-        noise = {"current_A": s.current_noise_A, "position_rad": s.resolver_noise_rad,
-                 "mismatch_rad": s.resolver_noise_rad}
         #: sensor-noise sigma per signal and joint ``(n_signals, 6)``: the residual weights
-        self.sigma: NDArray = np.array([noise[name] for name in self.signals], dtype=float)
+        self.sigma: NDArray = residual_sigma(self.params, self.signals)
         self.gear_ratio = np.asarray(self.params.gear.ratio, dtype=float)
         self.n_simulated = 0  # replays run so far
         self.simulated_s = 0.0  # simulated seconds so far, summed over replays

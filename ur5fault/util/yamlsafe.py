@@ -90,10 +90,12 @@ def _check_expansion(root: Node | None) -> None:
         return
     size: dict[int, int] = {}
     open_: set[int] = set()
+    reused: list[int] = []
 
     def count(node: Node) -> int:
         key = id(node)
         if key in size:
+            reused.append(key)
             return size[key]
         if key in open_:
             raise ConfigFileError(f"line {node.start_mark.line + 1}: recursive alias (a node that contains itself)")
@@ -108,7 +110,9 @@ def _check_expansion(root: Node | None) -> None:
         for child in children:
             total += count(child)
             if total > MAX_NODES:
-                raise ConfigFileError(f"aliases expand to more than {MAX_NODES} nodes (an alias bomb?)")
+                what = ("aliases expand to" if reused else "the document holds")  # reused: an alias repeated a node
+                raise ConfigFileError(f"{what} more than {MAX_NODES} values; a configuration file this large is "
+                                      "refused (split it, or write the list in a campaign sweep)")
         open_.discard(key)
         size[key] = total
         return total

@@ -89,6 +89,7 @@ def _evaluate(features: pd.DataFrame, seed: int, shuffle_labels: bool, threshold
             "n_dropped_not_ok": ds.n_dropped,
             "inputs": list(ds.inputs), "n_features": len(ds.inputs) - sum(c in ds.inputs for c in CONTEXT_COLUMNS),
             "context": [c for c in CONTEXT_COLUMNS if c in ds.inputs],
+            "inputs_left_out": dict(ds.inputs_left_out),
         },
         "feature_set": feature_set if saved is None else saved[1]["feature_set"],
         "saved_models": None if saved is None else {k: saved[1][k] for k in (

@@ -63,12 +63,14 @@ class Dataset:
         train, test: the feature-table rows of each side.
         inputs: classifier input columns.
         n_dropped: rows left out because their run was not ``ok``, per fault kind.
+        inputs_left_out: input columns left out (all NaN on a side) and why.
     """
 
     train: pd.DataFrame
     test: pd.DataFrame
     inputs: tuple[str, ...]
     n_dropped: dict[str, int]
+    inputs_left_out: dict[str, str] = dataclasses.field(default_factory=dict)
 
     def x(self, side: str) -> np.ndarray:
         """Inputs of ``side`` (``"train"`` or ``"test"``), ``(n_rows, n_inputs)``."""
@@ -80,8 +82,8 @@ def load_dataset(features: pd.DataFrame | str | Path, feature_set: str = "paper"
     inputs of ``feature_set`` (one of :data:`FEATURE_SETS`).
 
     Raises:
-        ConfigFileError: no ``split`` column, one side empty, a group on both sides, or no healthy
-            or no faulty run in train or test.
+        ConfigFileError: no ``split`` column, one side empty, a group on both sides, no healthy
+            or no faulty run in train or test, or an infinite feature value.
     """
     if not isinstance(features, pd.DataFrame):
         features = load_features(Path(features))
@@ -106,4 +108,22 @@ def load_dataset(features: pd.DataFrame | str | Path, feature_set: str = "paper"
         what = "health-feature" if feature_set == "paper" else (
             "twin residual feature (twin_*: a campaign with twin_residuals: true)")
         raise ConfigFileError(f"feature table has no {what} columns")
-    return Dataset(train, test, tuple(inputs), {str(k): int(v) for k, v in n_dropped.items()})
+    values = df[inputs].apply(pd.to_numeric, errors="coerce").to_numpy(dtype=float)
+    inf = np.isinf(values)
+    if inf.any():
+        col = int(np.flatnonzero(inf.any(axis=0))[0])
+        rows = np.flatnonzero(inf[:, col])
+        rid = df["run_id"].iloc[rows[0]] if "run_id" in df else f"row {rows[0]}"
+        raise ConfigFileError(f"feature {inputs[col]} is infinite in {rows.size} run(s) with status ok (e.g. {rid}); "
+                              "an infinite feature is a broken result, not a measurement: simulate those runs again "
+                              "or leave them out")
+    # a column without a single value on a side carries nothing to learn or test: left out, and said so
+    empty: dict[str, str] = {}
+    for name, side in (("train", train), ("test", test)):
+        for c in inputs:
+            if side[c].isna().all():
+                empty.setdefault(c, f"no value in the {name} split")
+    inputs = [c for c in inputs if c not in empty]
+    if not inputs:
+        raise ConfigFileError("feature table has no health-feature columns with values")
+    return Dataset(train, test, tuple(inputs), {str(k): int(v) for k, v in n_dropped.items()}, empty)

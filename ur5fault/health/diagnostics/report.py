@@ -4,12 +4,11 @@ and the figures as PNG."""
 from __future__ import annotations
 
 import math
-import os
 from pathlib import Path
 from typing import Any
 
 from ...sim.axes import JOINT_NAMES
-from ...util.io import write_json_atomic, write_text_atomic
+from ...util.io import write_figure_atomic, write_json_atomic, write_text_atomic
 
 
 def _f(v: Any, fmt: str = ".3f") -> str:
@@ -26,6 +25,7 @@ def markdown(m: dict[str, Any]) -> str:
         f"split groups, by {d['split_by']}; no group on both sides); {sum(d['n_dropped_not_ok'].values())} runs "
         f"left out (not ok). Inputs: {len(d['inputs'])} ({d['n_features']} health features from the robot's own "
         f"signals and {', '.join(d['context'])}). Classifier: gradient-boosted trees, fixed hyper-parameters."
+        + "".join(f" Left out: {c} ({why})." for c, why in d.get("inputs_left_out", {}).items())
         + (" **Control run: training labels shuffled.**" if m["shuffled_labels"] else ""),
         "",
         "## Detection (healthy vs faulty)",
@@ -135,11 +135,7 @@ def write_report(m: dict[str, Any], figures: dict[str, Any], out: Path) -> list[
     out.mkdir(parents=True, exist_ok=True)
     paths = []
     for name, fig in figures.items():
-        p = out / f"{name}.png"
-        tmp = out / f".{name}.png.tmp"
-        fig.savefig(tmp, dpi=110, format="png")
-        os.replace(tmp, p)
-        paths.append(p)
+        paths.append(write_figure_atomic(fig, out / f"{name}.png"))
     m = clean({**m, "figures": [p.name for p in paths]})
     paths.append(write_json_atomic(out / "metrics.json", m))
     paths.append(write_text_atomic(out / "report.md", markdown(m)))

@@ -19,7 +19,7 @@ def gear_torque(
     damping_Nms_per_rad: ArrayLike,
     backlash_rad: ArrayLike,
 ) -> NDArray[np.float64]:
-    """Ideal output torque T_id [N*m] of eq. (1), every branch as printed.
+    """Ideal output torque T_id [N*m] of eq. (1), every branch as printed (``alpha`` is ``backlash_rad``).
 
     1. ``alpha == 0``: ``k*theta + c*dtheta`` (no backlash, no clamp).
     2. ``theta > alpha`` and ``k*(theta-alpha) + c*dtheta > 0``: that value.
@@ -32,8 +32,8 @@ def gear_torque(
     dth = np.asarray(dtheta_rel_rad_s, dtype=float)
     k = np.asarray(stiffness_Nm_per_rad, dtype=float)
     c = np.asarray(damping_Nms_per_rad, dtype=float)
-    a = np.asarray(backlash_rad, dtype=float)
+    backlash_rad = np.asarray(backlash_rad, dtype=float)
     t_low = k * th + c * dth  # contact on the theta = 0 flank (and the alpha = 0 law)
-    t_high = t_low - k * a  # contact on the theta = alpha flank
-    in_gap = np.where(th > a, np.maximum(t_high, 0.0), np.where(th < 0.0, np.minimum(t_low, 0.0), 0.0))
-    return np.where(a == 0.0, t_low, in_gap)
+    t_high = t_low - k * backlash_rad  # contact on the theta = alpha flank
+    in_gap = np.where(th > backlash_rad, np.maximum(t_high, 0.0), np.where(th < 0.0, np.minimum(t_low, 0.0), 0.0))
+    return np.where(backlash_rad == 0.0, t_low, in_gap)

@@ -61,10 +61,6 @@ class Trajectory:
         """Time from the first to the last setpoint [s]."""
         return (self.q_set_rad.shape[0] - 1) * self.setpoint_period_s
 
-    def setpoint_times_s(self) -> NDArray[np.float64]:
-        """Times of the setpoints [s], shape ``(n_setpoints,)``."""
-        return np.arange(self.q_set_rad.shape[0]) * self.setpoint_period_s
-
     def interpolate(self, t_s: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Servo-side setpoint at times ``t_s``: linear interpolation and its slope.
 

@@ -1,0 +1,104 @@
+"""Odd but real logs through `identify`: a robot that never rests (the second UR5's runs), angles
+that wrap at +-180 deg, currents logged in milliamperes.  Each gives a correct result or one line,
+and nothing the log cannot give is written as if measured."""
+
+from __future__ import annotations
+
+import dataclasses
+import gzip
+import subprocess
+import sys
+
+import numpy as np
+import pandas as pd
+import pytest
+import yaml
+
+from ur5fault.config import Overlay
+from ur5fault.errors import LogFormatError
+from ur5fault.logs import MeasuredLog
+from ur5fault.logs.readers import read_log
+from ur5fault.logs.wrap import unwrap_angles
+from ur5fault.sim.params import load_params
+
+from conftest import REPO
+
+KUFIETA = REPO.parent / "shared" / "data" / "kufieta-ur5"
+
+
+def _kufieta(tmp_path, name="Movement_No1.csv.gz", edit=None):
+    """A copy of a Kufieta run with its `time` column named `timestamp` (what the RTDE reader takes)."""
+    src = KUFIETA / name
+    if not src.exists():
+        pytest.skip(f"no Kufieta log at {src}")
+    df = pd.read_csv(src)
+    df = df.rename(columns={"time": "timestamp"})
+    if edit is not None:
+        df = edit(df)
+    out = tmp_path / name
+    with gzip.open(out, "wt") as fh:
+        df.to_csv(fh, index=False)
+    return out
+
+
+def test_identify_on_a_robot_that_never_rests_writes_no_invented_value(tmp_path):
+    """Movement_No1 never rests long enough (was `ValueError: no rest segment`): exit 0; the noise is
+    the packaged value, and the file's header says so."""
+    log = _kufieta(tmp_path)
+    out = tmp_path / "params.yaml"
+    r = subprocess.run([sys.executable, "-m", "ur5fault.cli", "identify", str(log), "--format", "rtde",
+                        "--payload-kg", "0", "--tcp-offset-m", "0", "0", "0", "--no-sweep", "--bootstrap", "20",
+                        "--quiet", "--out", str(out)], capture_output=True, text=True, timeout=600,
+                       env={"PYTHONPATH": str(REPO), "PATH": "/usr/bin:/bin"})
+    assert r.returncode == 0, r.stderr
+    text = out.read_text()
+    assert "# Not identifiable on this log, so the model's own (packaged) value is written" in text
+    assert "sensors.current_noise_A (J1, J2, J3, J4, J5, J6)" in text
+    written = yaml.safe_load(text)["params"]
+    p = load_params()
+    np.testing.assert_allclose(written["sensors"]["current_noise_A"], p.sensors.current_noise_A, rtol=1e-3)
+    Overlay.load(out)  # the overlay is valid for --model
+
+
+def test_currents_in_milliamperes_are_named(tmp_path):
+    def to_mA(df):
+        for j in range(6):
+            df[f"actual_current_{j}"] *= 1000.0
+        return df
+
+    log = _kufieta(tmp_path, edit=to_mA)
+    with pytest.raises(LogFormatError, match="they look like milliamperes"):
+        read_log(log, "rtde", payload_kg=0.0, tcp_offset_m=(0, 0, 0))
+
+
+def test_wrapped_angles_are_made_continuous(tmp_path):
+    """Joint 1 turned so that it crosses +180 deg and folded into +-180 deg, as some loggers write it:
+    read back equal to the continuous angles (up to whole turns), not a 360 deg jump per wrap."""
+    log = _kufieta(tmp_path)
+    clean = read_log(log, "rtde", payload_kg=0.0, tcp_offset_m=(0, 0, 0))
+    off = np.pi - clean.q_target_rad[:, 0].max() + 0.05
+    assert (clean.q_target_rad[:, 0] + off).min() < np.pi  # it crosses, not only sits beyond
+
+    def wrap(df):
+        for col in ("actual_q_0", "target_q_0"):
+            df[col] = (df[col] + off + np.pi) % (2 * np.pi) - np.pi
+        return df
+
+    (tmp_path / "folded").mkdir()
+    folded = _kufieta(tmp_path / "folded", edit=wrap)
+    got = read_log(folded, "rtde", payload_kg=0.0, tcp_offset_m=(0, 0, 0))
+    for name in ("q_target_rad", "q_actual_rad"):
+        d = getattr(got, name)[:, 0] - (getattr(clean, name)[:, 0] + off)
+        turns = np.round(d / (2 * np.pi))
+        assert np.unique(turns).size == 1  # one constant whole-turn offset: continuous
+        np.testing.assert_allclose(d, turns * 2 * np.pi, atol=1e-9)
+        np.testing.assert_array_equal(getattr(got, name)[:, 1:], getattr(clean, name)[:, 1:])
+
+
+def test_unwrap_leaves_a_continuous_log_alone():
+    t = np.arange(0, 10, 0.008)
+    q = np.column_stack([np.sin(t)] * 6)
+    log = MeasuredLog("x", t, q, q.copy(), np.zeros_like(q))
+    assert unwrap_angles(log) is log
+    wrapped = dataclasses.replace(log, q_target_rad=np.where(t[:, None] > 5, q - 2 * np.pi, q))
+    np.testing.assert_allclose(unwrap_angles(wrapped).q_target_rad, q, atol=1e-12)

@@ -1,0 +1,130 @@
+"""Logs as robots write them: the Kufieta runs of a second UR5 read as they are (``time`` column, no
+temperatures, NaN tails in optional columns, rows missing in gaps, a clock 0.35 % off the 8 ms tick), and
+what a reader cannot use refused with one line. References: pandas' own reading of the same files."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from ur5fault.cli import main
+from ur5fault.errors import LogFormatError, ParameterError
+from ur5fault.logs import read_log, read_nist, read_rtde
+
+from conftest import KUFIETA_DIR, KUFIETA_RUNS, NIST_LOG
+
+
+def test_the_nine_runs_are_in_the_repository():
+    assert len(KUFIETA_RUNS) == 9 and (KUFIETA_DIR / "LICENSE-Apache-2.0.txt").exists()
+    assert NIST_LOG.exists()
+
+
+@pytest.mark.parametrize("path", KUFIETA_RUNS, ids=lambda p: p.name.split(".")[0])
+def test_every_kufieta_run_reads_as_written(path):
+    """Each logged row lands on its 8 ms tick with the file's own values; only ticks with no row are filled."""
+    log = read_rtde(path, payload_kg=0.0, tcp_offset_m=(0.0, 0.0, 0.0))
+    df = pd.read_csv(path)
+    assert log.period_s == pytest.approx(0.008, abs=1e-12)
+    np.testing.assert_allclose(np.diff(log.t_s), 0.008, atol=1e-12)
+    rows = log.logged_rows()
+    n = int(rows.sum())
+    assert len(df) - 25 <= n <= len(df)  # at most the NaN tail cut
+    first = df.iloc[:n]
+    np.testing.assert_array_equal(log.current_A[rows], first[[f"actual_current_{j}" for j in range(6)]].to_numpy())
+    np.testing.assert_array_equal(log.q_target_rad[rows], first[[f"target_q_{j}" for j in range(6)]].to_numpy())
+    assert log.temperature_C is None and log.target_current_A is not None
+    assert all(np.isfinite(a).all() for a in (log.current_A, log.q_actual_rad, log.target_current_A))
+    gaps = np.diff(df["time"].to_numpy()).max() > 0.012
+    assert (log.logged is not None) == gaps
+    if gaps:  # half the ticks of Movement_No1-No3 have no row: the replay spans the run's real duration
+        assert log.t_s[-1] == pytest.approx(df["time"].iloc[-1] - df["time"].iloc[0], rel=0.01)
+        assert any("missing in gaps of up to 2" in s for s in log.notes)
+    notes = log.assumptions([28.0] * 6)
+    assert any("no joint temperatures in the log; the model's 28, 28, 28, 28, 28, 28 degC assumed" in s
+               for s in notes)
+
+
+def test_nan_tails_cut_and_named():
+    log = read_rtde(KUFIETA_DIR / "Movement_No4_Acc.csv.gz", payload_kg=0.0, tcp_offset_m=(0.0, 0.0, 0.0))
+    df = pd.read_csv(KUFIETA_DIR / "Movement_No4_Acc.csv.gz")
+    last = int(df[[f"actual_TCP_pose_{j}" for j in range(3)]].dropna().index.max())  # TCP ends first (22 rows)
+    assert log.t_s.size == last + 1 and log.tcp_m is not None and log.target_torque_Nm is not None
+    assert any("end early (NaN there); the log cut to rows 1..2823 of 2844" in s for s in log.notes)
+
+
+def _frame(n=1000, period=0.008):
+    t = np.arange(n) * period
+    cols = {"time": t}
+    for j in range(6):
+        cols[f"target_q_{j}"] = 0.3 * np.sin(0.5 * t + j)
+        cols[f"actual_q_{j}"] = cols[f"target_q_{j}"] + 1e-4
+        cols[f"actual_current_{j}"] = 0.1 * np.cos(t)
+        cols[f"target_moment_{j}"] = np.cos(t)
+    return pd.DataFrame(cols)
+
+
+def _read(tmp_path, df, **kw):
+    p = tmp_path / "log.csv"
+    df.to_csv(p, index=False)
+    return read_rtde(p, payload_kg=0.0, tcp_offset_m=(0, 0, 0), **kw)
+
+
+def test_time_or_timestamp(tmp_path):
+    df = _frame()
+    a = _read(tmp_path, df)
+    b = _read(tmp_path, df.rename(columns={"time": "timestamp"}))
+    np.testing.assert_array_equal(a.current_A, b.current_A)
+
+
+def test_nan_inside_an_optional_column_drops_it_with_a_note(tmp_path):
+    df = _frame()
+    df.loc[500, "target_moment_2"] = np.nan
+    log = _read(tmp_path, df)
+    assert log.target_torque_Nm is None and log.t_s.size == 1000
+    assert any("target_torque missing from data row 501" in s and "not used" in s for s in log.notes)
+
+
+def test_nan_in_a_required_column_is_refused(tmp_path):
+    df = _frame()
+    df.loc[500, "actual_current_2"] = np.nan
+    with pytest.raises(LogFormatError, match="NaN or inf in actual_current at data row 501"):
+        _read(tmp_path, df)
+
+
+def test_gaps_filled_on_the_grid_only_where_rows_are_missing(tmp_path):
+    df = _frame().drop(index=[100, 101, 300]).reset_index(drop=True)
+    log = _read(tmp_path, df)
+    assert log.t_s.size == 1000 and log.logged.sum() == 997
+    assert not log.logged[[100, 101, 300]].any()
+    # the filled setpoint lies between its neighbours (linear), the logged rows are the file's
+    np.testing.assert_array_equal(log.q_target_rad[log.logged], df[[f"target_q_{j}" for j in range(6)]].to_numpy())
+    mid = 0.5 * (log.q_target_rad[299] + log.q_target_rad[301])
+    np.testing.assert_allclose(log.q_target_rad[300], mid, atol=1e-15)
+
+
+def test_stamps_off_the_tick_are_refused(tmp_path):
+    df = _frame()
+    df.loc[500, "time"] += 0.0036  # 0.45 of a tick late: beyond host time-stamp jitter
+    with pytest.raises(LogFormatError, match=r"data row 501 .* off the controller's"):
+        _read(tmp_path, df)
+
+
+def test_payload_for_a_format_that_carries_its_own_is_refused(capsys, tmp_path):
+    with pytest.raises(ParameterError, match="payload_kg applies to the rtde format only"):
+        read_log(NIST_LOG, "nist", payload_kg=3.0)
+    rc = main(["identify", str(NIST_LOG), "--format", "nist", "--payload-kg", "3", "--out", str(tmp_path / "p.yaml")])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 2 and len(err) == 1 and "--payload-kg applies to --format rtde only" in err[0]
+    assert read_nist(NIST_LOG).payload_kg == pytest.approx(0.726)
+
+
+@pytest.mark.parametrize("extra, flag", [((), "--payload-kg"), (("--payload-kg", "0"), "--tcp-offset-m")])
+def test_rtde_without_payload_is_refused_not_defaulted(capsys, tmp_path, extra, flag):
+    rc = main(["discrepancy", str(KUFIETA_RUNS[0]), "--format", "rtde", *extra, "--out", str(tmp_path / "o")])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 2 and len(err) == 1 and f"{flag} missing" in err[0], err
+    log = read_rtde(KUFIETA_RUNS[0])
+    assert log.payload_kg is None and not log.payload_known
+    with pytest.raises(ParameterError, match="payload and tool offset unknown"):
+        log.to_trajectory()

@@ -1,0 +1,133 @@
+"""Logs as robots write them: optional columns that end early, and rows missing from the time base.
+
+*Optional columns with NaN at the ends.* A recorder that merges signal groups (the Kufieta runs of
+``data/kufieta-ur5``) leaves optional columns a few rows shorter than the positions and currents. A
+group of optional columns whose missing values sit only at the start and end of the log is kept, and
+the log is cut to the rows where it is finite, if that costs at most :data:`MAX_CUT_S` seconds;
+otherwise (or where values are missing in the middle) the group is not used. Each case is a note.
+
+*Missing rows.* A UR controller samples on a fixed tick (8 ms on CB2/CB3); host time stamps jitter
+around it by a fraction of a millisecond, and a recorder that drops rows leaves gaps of whole ticks
+(Movement_No1-No3: every other step is 24 ms). The replay drives the model with the log's setpoints
+on a uniform grid, so the log is put on the tick grid: each row goes to its nearest tick, the
+setpoints of a missing tick are interpolated linearly between its neighbours (the setpoints are
+smooth: at the 3.2 rad/s^2 of the fastest run the interpolation error over 24 ms is 2e-4 rad), and
+so are the readings, which the replay needs at every tick; ``MeasuredLog.logged`` marks the ticks the
+robot really wrote, and every RMS figure the workflows report counts only those.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..errors import LogFormatError
+
+#: longest stretch [s] cut from the start or end of a log so that an optional column group is complete
+#: (1 s: the replay's own start-up transient is of that order, and it stays a small share of a 5 s log)
+MAX_CUT_S = 1.0
+#: UR controller ticks [s]: 125 Hz (CB2, CB3) and 500 Hz (e-Series)
+CONTROLLER_TICKS_S = (0.008, 0.002)
+#: a log whose mean tick is within this share of a controller tick was sampled on it (its own clock ran
+#: at a slightly different rate: Movement_No1-No3 of data/kufieta-ur5 give 8.026-8.028 ms, 0.35 %)
+MAX_CLOCK_RATE_DIFF = 0.01
+#: otherwise the tick is the mean step rounded to this resolution [s]
+TICK_RESOLUTION_S = 1e-5
+#: a row lies on its tick when within this share of a period of it, counted on the log's own mean tick
+#: (measured on the Kufieta runs: jitter and clock wander up to 2.1 ms of 8 ms)
+MAX_JITTER_PERIODS = 0.4
+
+
+def finite_span(arr: NDArray) -> tuple[int, int] | None:
+    """``(first, stop)`` of the rows where every value of ``arr`` ``(n, k)`` is finite, when the missing rows
+    are all at the ends; ``None`` when a value is missing between finite rows."""
+    ok = np.all(np.isfinite(arr), axis=1)
+    if ok.all():
+        return 0, ok.size
+    idx = np.flatnonzero(ok)
+    if idx.size == 0 or not ok[idx[0]: idx[-1] + 1].all():
+        return None
+    return int(idx[0]), int(idx[-1]) + 1
+
+
+def complete_optional(src: str, t: NDArray, groups: Mapping[str, NDArray | None],
+                      notes: list[str]) -> tuple[slice, dict[str, NDArray | None]]:
+    """Rows to keep and the optional groups to use (see the module docstring); adds a note per group cut or
+    dropped. ``groups``: name -> ``(n, k)`` array or ``None`` (absent)."""
+    lo, hi = 0, t.size
+    spans: dict[str, tuple[int, int] | None] = {}
+    used: dict[str, NDArray | None] = {}
+    for name, arr in groups.items():
+        if arr is None:
+            used[name] = None
+            continue
+        span = finite_span(arr)
+        if span is not None and (t[span[0]] - t[0] > MAX_CUT_S or t[-1] - t[span[1] - 1] > MAX_CUT_S):
+            span = None
+        spans[name] = span
+        if span is None:
+            bad = int(np.flatnonzero(~np.all(np.isfinite(arr), axis=1))[0])
+            notes.append(f"{src}: {name} missing from data row {bad + 1} on (not only within {MAX_CUT_S:g} s of "
+                         "the ends); not used")
+            used[name] = None
+        else:
+            used[name] = arr
+            lo, hi = max(lo, span[0]), min(hi, span[1])
+    cut = [name for name, s in spans.items() if s is not None and (s[0] > 0 or s[1] < t.size)]
+    if cut:
+        notes.append(f"{src}: {', '.join(cut)} end early (NaN there); the log cut to rows {lo + 1}..{hi} of "
+                     f"{t.size} ({t[hi - 1] - t[lo]:.2f} s kept)")
+    return slice(lo, hi), used
+
+
+def ticks(t: NDArray) -> tuple[NDArray, float]:
+    """Tick index of each row of increasing times ``t`` (steps counted in whole ticks of the shortest common
+    step) and the mean tick [s] on the log's own clock."""
+    dt = np.diff(t)
+    p0 = float(np.median(dt[dt <= 1.5 * np.median(dt)]))
+    k = np.concatenate([[0], np.cumsum(np.maximum(1, np.round(dt / p0)))]).astype(np.int64)
+    return k, float((t[-1] - t[0]) / k[-1])
+
+
+def controller_tick(mean_tick_s: float) -> float:
+    """The controller's tick for a log whose mean tick is ``mean_tick_s``: a known UR tick within
+    :data:`MAX_CLOCK_RATE_DIFF`, else the mean rounded to :data:`TICK_RESOLUTION_S`."""
+    for tick in CONTROLLER_TICKS_S:
+        if abs(mean_tick_s / tick - 1.0) <= MAX_CLOCK_RATE_DIFF:
+            return tick
+    return round(mean_tick_s / TICK_RESOLUTION_S) * TICK_RESOLUTION_S
+
+
+def on_ticks(src: str, t: NDArray, arrays: dict[str, NDArray | None], notes: list[str]
+             ) -> tuple[NDArray, dict[str, NDArray | None], NDArray | None]:
+    """Put the rows of ``t`` (increasing, checked for gaps) on the controller tick grid.
+
+    Returns the grid times (from 0), every array on the grid (interpolated at missing ticks) and the mask of
+    ticks the log really holds (``None`` when none is missing)."""
+    k, mean = ticks(t)
+    off = np.abs((t - t[0]) - k * mean)
+    if off.max() > MAX_JITTER_PERIODS * mean:
+        i = int(np.argmax(off))
+        raise LogFormatError(f"{src}: data row {i + 1} (t = {t[i] - t[0]:.4f} s) is {off[i] * 1e3:.2g} ms off the "
+                             f"controller's {mean * 1e3:.4g} ms tick (irregular time stamps)")
+    p = controller_tick(mean)
+    if abs(mean / p - 1.0) > 1e-4:
+        notes.append(f"{src}: the log's clock gives a mean tick of {mean * 1e3:.4g} ms; replayed on the "
+                     f"controller's {p * 1e3:.4g} ms tick (time scaled by {p / mean:.4f})")
+    grid = np.arange(k[-1] + 1) * p
+    if k.size == grid.size:
+        return grid, arrays, None
+    missing = grid.size - k.size
+    notes.append(f"{src}: {missing} of {grid.size} controller ticks ({p * 1e3:.3g} ms) missing in gaps of up to "
+                 f"{int(np.diff(k).max()) - 1}; setpoints and readings interpolated there for the replay, "
+                 "left out of every RMS figure")
+    out = {name: None if a is None else _interp(grid, k * p, a) for name, a in arrays.items()}
+    logged = np.zeros(grid.size, dtype=bool)
+    logged[k] = True
+    return grid, out, logged
+
+
+def _interp(grid: NDArray, t: NDArray, a: NDArray) -> NDArray:
+    return np.column_stack([np.interp(grid, t, a[:, j]) for j in range(a.shape[1])])
