@@ -99,8 +99,8 @@ def test_run_figure_draws_the_simulated_signals(run_pair):
     ang, err, mis, cur, tcp = fig.axes[:5]
     q_fb, q_set = res["q_FB_rad"][1], res.q_set_rad
     np.testing.assert_allclose(_lines(ang)[3].get_ydata(), np.degrees(q_fb[:, 1]))  # J2 resolver (2nd of pair)
-    np.testing.assert_allclose(_lines(err)[1].get_ydata(), 1e3 * (q_set[:, 1] - q_fb[:, 1]))
-    np.testing.assert_allclose(_lines(mis)[1].get_ydata(), 1e3 * (res["q_M_FB_rad"][1][:, 1] / 101.0 - q_fb[:, 1]))
+    np.testing.assert_allclose(_lines(err)[1].get_ydata(), np.degrees(q_set[:, 1] - q_fb[:, 1]))  # deg, as faults
+    np.testing.assert_allclose(_lines(mis)[1].get_ydata(), np.degrees(res["q_M_FB_rad"][1][:, 1] / 101.0 - q_fb[:, 1]))
     np.testing.assert_allclose(_lines(cur)[1].get_ydata(), res["i_FB_A"][1][:, 1])
     dev_mm = 1e3 * np.linalg.norm(res.tcp_m[1] - res.tcp_m[0], axis=-1)
     np.testing.assert_allclose(_lines(tcp)[1].get_ydata(), dev_mm, atol=1e-12)
@@ -176,7 +176,9 @@ def test_per_joint_feature_read_on_the_faulty_joint(two):
         sub = df[df["fault_joint"] == j].set_index("coulomb_friction_scale")[f"current_spike_max_A_j{j}"]
         np.testing.assert_array_equal(table.loc[f"{j} {('shoulder_lift_joint', 'elbow_joint')[j - 2]}"], sub)
     fig = severity_figure(sweep, "current_spike_max_A")
-    assert fig.axes[0].get_ylabel() == "current_spike_max_A of the faulty joint"
+    assert fig.axes[0].get_ylabel() == "largest current spike at a torque reversal [A] of the faulty joint"
+    assert fig.axes[0].get_title() == "largest current spike at a torque reversal of the faulty joint against " \
+                                      "coulomb_friction size"
     with pytest.raises(UnknownNameError, match="unknown feature 'nope'; valid: .*current_spike_max_A"):
         severity_table(sweep, "nope")
 
@@ -275,3 +277,30 @@ def test_reprs_are_short_and_tabular(run_pair, two):
     html = two._repr_html_()
     assert html.count("<table") == 3  # backlash, coulomb friction, acceptable backlash
     assert json.loads((two.out / "manifest.json").read_text())["threshold_mm"] == 0.3
+
+
+def test_tables_carry_run_metadata_so_figures_are_titled(run_pair, two):
+    worn = run_pair.to_pandas("worn")
+    meta = worn.attrs["ur5fault"]
+    assert meta["run_id"] == "worn" and meta["status"] == "ok"
+    assert meta["effects"] == ["backlash on shoulder_lift_joint (backlash_deg=0.2)"]
+    title = run_figure(worn, twin=run_pair.to_pandas("healthy"))._suptitle.get_text()
+    assert title == "worn: backlash on shoulder_lift_joint (backlash_deg=0.2) (ok)"
+    rid = two.features.loc[two.features["fault"] == "backlash", "run_id"].iloc[0]
+    saved = pd.read_parquet(two.out / "timeseries" / f"{rid}.parquet")  # a campaign's time-series file
+    assert saved.attrs["ur5fault"]["run_id"] == rid and "backlash on" in run_figure(saved)._suptitle.get_text()
+
+
+def test_simresult_plot_draws_the_run_figure(run_pair):
+    fig = run_pair.plot("worn", twin="healthy")
+    assert isinstance(fig, Figure) and len(fig.axes) == 5
+    assert fig._suptitle.get_text().startswith("worn: backlash on shoulder_lift_joint")
+    labels = [line.get_label() for line in fig.axes[4].get_lines()]
+    assert labels == ["from desired TCP", "from healthy twin"]
+
+
+def test_wrong_feature_gets_a_did_you_mean(two, capsys):
+    from ur5fault.cli import main
+
+    assert main(["plot", str(two.out), "--feature", "tcp_dev_max_m"]) == 2
+    assert "unknown feature 'tcp_dev_max_m' (did you mean 'tcp_dev_max_mm'" in capsys.readouterr().err

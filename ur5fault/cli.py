@@ -21,12 +21,31 @@ from .util import progress
 
 EXIT_USAGE = 2
 
+#: the run configuration and overlay formats, shown by `ur5fault simulate --help` (a wheel carries no docs/)
+RUN_CONFIG_HELP = """\
+run configuration (--config RUN.yaml); every key is optional:
+  trajectory: pick_and_place        # or {name: pick_and_place, speed_scale: 0.5}
+  seed: 0                           # sensor-noise seed
+  payload_kg: 2.0                   # gripped mass (the trajectory's default when absent)
+  temperature_C: 28.0               # all joints
+  duration_s: 13.0                  # default: the whole trajectory
+  log_period_s: 0.001               # a whole multiple of the 50 us physics step
+  effects:                          # any entry of `ur5fault effects`, each with its size
+    - {effect: backlash, joint: shoulder_lift_joint, backlash_deg: 0.1}
+    - {effect: coulomb_friction, joint: elbow, scale: 1.5}
+  params:                           # overrides of the robot parameters, merged key by key
+    gear: {damping_Nms_per_rad: 15}
+
+model overlay (--model OVERLAY.yaml): only the keys params and effects, as above.
+joints: shoulder_pan_joint .. wrist_3_joint, 1..6, or UR's short names base, shoulder (= shoulder_lift),
+elbow, wrist1, wrist2, wrist3.
+"""
+
 
 def cmd_simulate(args: argparse.Namespace) -> int:
     from .config import Overlay, build_run_config
     from .sim.engine import RunSpec, Simulator
     from .sim.params import read_yaml
-    from .util.io import check_writable
 
     data = read_yaml(Path(args.config)) if args.config else {}
     where = Path(args.config).name if args.config else "command line"
@@ -48,18 +67,37 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     data["effects"] = effects
     overlay = Overlay.load(args.model) if args.model else None
     cfg = build_run_config(data, where, overlay)
-    out = check_writable(Path(args.out))  # before simulating, not after
+    out = _check_out_file(Path(args.out))  # before simulating, not after
+    replaced = out.exists()
     sim = Simulator(cfg.params)
     with progress.bar(1.0, "simulate", "run", enabled=not args.quiet,
                       bar_format="{desc}: {percentage:3.0f}%|{bar}| {elapsed}<{remaining}") as pbar:
         res = sim.run(cfg.trajectory, [RunSpec("run", cfg.seed, cfg.effects)], log_period_s=cfg.log_period_s,
                       duration_s=cfg.duration_s, progress=progress.fraction_callback(pbar))
-    res.to_parquet(out)
-    summ = res.summary(0)
-    print(f"wrote {out} ({res.t_s.size} samples x {len(res.to_pandas(0).columns)} columns)")
-    print("effects: " + ("; ".join(res.effects[0]) or "none (healthy)"))
-    print(json.dumps(summ, indent=None))
+    res.to_csv(out) if out.suffix.lower() == ".csv" else res.to_parquet(out)
+    # prose on stderr, the one data line (the run's summary as JSON) on stdout: `simulate ... | jq` works
+    verb = "replaced" if replaced else "wrote"
+    sys.stderr.write(f"{verb} {out} ({res.t_s.size} samples x {len(res.to_pandas(0).columns)} columns)\n")
+    sys.stderr.write("effects: " + ("; ".join(res.effects[0]) or "none (healthy)") + "\n")
+    print(json.dumps(res.summary(0), indent=None))
     return 0 if res.status[0] == "ok" else 1
+
+
+#: output formats of `simulate --out`, by file suffix
+OUT_SUFFIXES = (".parquet", ".csv")
+
+
+def _check_out_file(out: Path) -> Path:
+    """``simulate --out``: a ``.parquet`` or ``.csv`` file in an existing, writable folder."""
+    from .util.io import check_writable
+
+    check_writable(out)
+    if not out.parent.is_dir():
+        raise Ur5FaultError(f"--out {out}: folder {out.parent} does not exist; create it first")
+    if out.suffix.lower() not in OUT_SUFFIXES:
+        raise Ur5FaultError(f"--out {out}: unknown file type {out.suffix or '(no suffix)'!r}; "
+                            f"give a {' or '.join(OUT_SUFFIXES)} file")
+    return out
 
 
 def _parse_effect_arg(spec: str) -> dict:
@@ -73,6 +111,8 @@ def _parse_effect_arg(spec: str) -> dict:
         key, eq, val = pair.partition("=")
         if not eq:
             raise Ur5FaultError(f"--effect {spec!r}: expected NAME[@JOINT]:KEY=VALUE[,KEY=VALUE]")
+        if key in item:
+            raise Ur5FaultError(f"--effect {spec!r}: {key} given twice")
         try:
             item[key] = float(val)
         except ValueError:
@@ -96,21 +136,25 @@ def cmd_show(args: argparse.Namespace) -> int:
     from .util.io import write_figure_atomic
 
     target = Path(args.target)
-    if target.suffix == ".parquet" or target.is_file():
+    if target.suffix.lower() in OUT_SUFFIXES or target.is_file():
         import pandas as pd
 
         if not target.is_file():
             raise ConfigFileError(f"{target}: no such file")
+        csv = target.suffix.lower() == ".csv"
         try:
-            series = pd.read_parquet(target)
+            series = pd.read_csv(target) if csv else pd.read_parquet(target)
         except (OSError, ValueError) as exc:
-            raise ConfigFileError(f"{target}: cannot read as Parquet ({exc})") from None
+            raise ConfigFileError(f"{target}: cannot read as {'CSV' if csv else 'Parquet'} ({exc})") from None
         fig = run_figure(series)
         png = Path(args.out) if args.out else target.with_suffix(".png")
     else:
         from .campaign.result import CampaignResult
 
-        result = CampaignResult.load(Path(args.campaign))
+        if args.campaign is None and not Path("features.parquet").is_file():
+            raise ConfigFileError(f"{target}: no such file; to show a run of a campaign, give its folder: "
+                                  f"ur5fault show {target} --campaign DIR")
+        result = CampaignResult.load(Path(args.campaign or "."))
         row = result.run(args.target)
         twin = row.get("twin_run_id", row["run_id"])
         series = result.time_series([row["run_id"], twin])
@@ -157,21 +201,38 @@ def configure_logging(verbosity: int) -> None:
 def build_parser() -> argparse.ArgumentParser:
     p = _Parser(prog="ur5fault", description="UR5 fault-injection simulator")
     p.add_argument("--version", action="version", version=_version())
-    sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
-    s = sub.add_parser("simulate", help="run one configuration and write its time series to Parquet")
-    s.add_argument("--config", help="run configuration YAML (see docs/usage.md)")
-    s.add_argument("--model", help="model overlay YAML (params and effects), e.g. from `discrepancy`")
+    sub = p.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
+    p.set_defaults(func=_usage(p))
+    from .sim.trajectories import TRAJECTORIES
+
+    s = sub.add_parser("simulate", help="run one configuration and write its time series to Parquet or CSV",
+                       description="Simulate one run and write its time series (one row per log sample). "
+                                   "Command-line options override the --config file.",
+                       epilog=RUN_CONFIG_HELP, formatter_class=argparse.RawDescriptionHelpFormatter)
+    s.add_argument("--config", metavar="RUN.yaml",
+                   help="run configuration YAML (format below; default: none, every key at its default)")
+    s.add_argument("--model", metavar="OVERLAY.yaml",
+                   help="model overlay YAML (only params and effects, format below), e.g. from `ur5fault discrepancy` "
+                        "or `ur5fault identify` (default: none, the nominal model)")
     s.add_argument("--backlash", action="append", metavar="JOINT:DEG",
-                   help="backlash fault, e.g. shoulder_lift_joint:0.1 (repeatable)")
+                   help="backlash fault, e.g. shoulder_lift_joint:0.1 (repeatable; default: none)")
     s.add_argument("--effect", action="append", metavar="NAME[@JOINT]:K=V,...",
-                   help="any registered effect, e.g. coulomb_friction@elbow:scale=1.5 (see `ur5fault effects`)")
-    s.add_argument("--trajectory", help="trajectory name (default pick_and_place)")
-    s.add_argument("--seed", type=int)
-    s.add_argument("--payload-kg", type=float, dest="payload_kg")
-    s.add_argument("--temperature-C", type=float, dest="temperature_C")
-    s.add_argument("--duration-s", type=float, dest="duration_s")
-    s.add_argument("--log-period-s", type=float, dest="log_period_s")
-    s.add_argument("--out", default="run.parquet", help="output Parquet file (default run.parquet)")
+                   help="any registered effect, e.g. coulomb_friction@elbow:scale=1.5 (see `ur5fault effects`; "
+                        "repeatable; default: none, a healthy run)")
+    s.add_argument("--trajectory", choices=list(TRAJECTORIES),
+                   help="trajectory (default pick_and_place; options of a trajectory: --config)")
+    s.add_argument("--seed", type=int, help="sensor-noise seed (default 0)")
+    s.add_argument("--payload-kg", type=float, dest="payload_kg",
+                   help="gripped mass [kg] (default: the trajectory's, 2.0 for pick_and_place)")
+    s.add_argument("--temperature-C", type=float, dest="temperature_C",
+                   help="temperature of all joints [degC] (default 28, the paper's reference)")
+    s.add_argument("--duration-s", type=float, dest="duration_s",
+                   help="simulated time [s] (default: the whole trajectory, 13 s for pick_and_place)")
+    s.add_argument("--log-period-s", type=float, dest="log_period_s",
+                   help="time between logged samples [s], a whole multiple of the 50 us physics step (default 0.001)")
+    s.add_argument("--out", default="run.parquet", metavar="FILE.parquet|FILE.csv",
+                   help="output file, Parquet (with the run's metadata) or CSV by its suffix, in an existing folder "
+                        "(default run.parquet)")
     s.add_argument("--quiet", action="store_true", help="no progress bar")
     s.set_defaults(func=cmd_simulate)
     e = sub.add_parser("effects", help="list the effect registry")
@@ -179,7 +240,7 @@ def build_parser() -> argparse.ArgumentParser:
     sh = sub.add_parser("show", help="draw one run: setpoint vs resolver, encoder mismatch, currents, TCP deviation")
     sh.add_argument("target", help="a time-series Parquet file (from `simulate`, or a campaign's timeseries/), or the "
                                    "run_id of a run in the campaign folder --campaign (re-simulated if not saved)")
-    sh.add_argument("--campaign", default=".", help="campaign output folder of a RUN_ID (default: this folder)")
+    sh.add_argument("--campaign", help="campaign output folder of a RUN_ID (default: this folder)")
     sh.add_argument("--out", help="PNG file (default: FILE.png beside the file, or CAMPAIGN/plots/show_RUN_ID.png)")
     sh.set_defaults(func=cmd_show)
     _add_optional_commands(sub)
@@ -221,6 +282,16 @@ class Terminated(KeyboardInterrupt):
 
 def _on_sigterm(signum, frame) -> None:
     raise Terminated()
+
+
+def _usage(parser: argparse.ArgumentParser):
+    """The action of a command group given without its subcommand: its help on stderr, exit 2."""
+
+    def show(args: argparse.Namespace) -> int:
+        parser.print_help(sys.stderr)
+        return EXIT_USAGE
+
+    return show
 
 
 def main(argv: Sequence[str] | None = None) -> int:

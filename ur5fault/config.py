@@ -59,6 +59,10 @@ def parse_effects(items: Any, where: str) -> tuple[EffectSpec, ...]:
         if not isinstance(item, Mapping) or "effect" not in item:
             raise ParameterError(f"{loc}: each effect is a mapping with an 'effect' key (and its parameters)")
         values = {k: v for k, v in item.items() if k not in ("effect", "joint")}
+        eff = REGISTRY.get(str(item["effect"]))
+        if eff is not None and eff.params and not values:  # a fault of size 0 is no fault: say which size
+            sizes = ", ".join(f"{p.name} [{p.lo:g}..{p.hi:g} {p.unit}]" for p in eff.params)
+            raise ParameterError(f"{loc}: effect {eff.name!r} has no size; give {sizes}")
         out.append(make_effect(str(item["effect"]), item.get("joint"), where=loc, **values))
     return tuple(out)
 
@@ -154,7 +158,7 @@ class Overlay:
         data = read_yaml(path)
         check_keys(data, OVERLAY_KEYS, path.name)
         params = check_mapping(data.get("params"), f"{path.name}: params")
-        load_params(overrides=dict(params))  # validate now, with key paths
+        load_params(overrides=dict(params), where=f"{path.name}: params")  # validate now, with key paths
         return cls(dict(params), parse_effects(data.get("effects"), f"{path.name}: effects"))
 
 
@@ -177,7 +181,7 @@ def build_run_config(data: Mapping[str, Any], where: str = "config", overlay: Ov
     overrides = dict(check_mapping(data.get("params"), f"{where}: params"))
     if overlay is not None:
         overrides = deep_merge(dict(overlay.params), overrides)
-    params = load_params(overrides=overrides)
+    params = load_params(overrides=overrides, where=f"{where}: params")
     effects = parse_effects(data.get("effects"), f"{where}: effects")
     if overlay is not None:
         effects = overlay.effects + effects

@@ -8,6 +8,7 @@ name the offending field, its value and the valid choices or range, in one line.
 
 from __future__ import annotations
 
+import difflib
 from collections.abc import Iterable
 
 
@@ -28,7 +29,9 @@ class UnknownNameError(Ur5FaultError, KeyError):
     def __init__(self, kind: str, name: object, choices: Iterable[str], where: str = "") -> None:
         self.kind, self.name, self.choices = kind, name, sorted(choices)
         loc = f"{where}: " if where else ""
-        super().__init__(f"{loc}unknown {kind} {name!r}; valid: {', '.join(self.choices)}")
+        close = difflib.get_close_matches(str(name), self.choices, n=3, cutoff=0.6) if isinstance(name, str) else []
+        hint = f" (did you mean {' or '.join(map(repr, close))}?)" if close else ""
+        super().__init__(f"{loc}unknown {kind} {name!r}{hint}; valid: {', '.join(self.choices)}")
 
 
 class ConfigFileError(Ur5FaultError, ValueError):

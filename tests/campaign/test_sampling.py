@@ -11,8 +11,8 @@ import pandas as pd
 import pytest
 
 from ur5fault.campaign import build_campaign, run_campaign, status
+from ur5fault.campaign.design import parse_dist, unit_design
 from ur5fault.campaign.labels import fault_labels
-from ur5fault.campaign.sampling import parse_dist, unit_design
 from ur5fault.errors import ParameterError, UnknownNameError
 
 SPEC = {

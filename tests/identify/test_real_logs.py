@@ -4,7 +4,6 @@ and nothing the log cannot give is written as if measured."""
 
 from __future__ import annotations
 
-import dataclasses
 import gzip
 import subprocess
 import sys
@@ -16,14 +15,13 @@ import yaml
 
 from ur5fault.config import Overlay
 from ur5fault.errors import LogFormatError
-from ur5fault.logs import MeasuredLog
 from ur5fault.logs.readers import read_log
-from ur5fault.logs.wrap import unwrap_angles
+from ur5fault.logs.wrap import unwrap_joints
 from ur5fault.sim.params import load_params
 
-from conftest import REPO
+from conftest import KUFIETA_DIR, REPO
 
-KUFIETA = REPO.parent / "shared" / "data" / "kufieta-ur5"
+KUFIETA = KUFIETA_DIR
 
 
 def _kufieta(tmp_path, name="Movement_No1.csv.gz", edit=None):
@@ -98,7 +96,13 @@ def test_wrapped_angles_are_made_continuous(tmp_path):
 def test_unwrap_leaves_a_continuous_log_alone():
     t = np.arange(0, 10, 0.008)
     q = np.column_stack([np.sin(t)] * 6)
-    log = MeasuredLog("x", t, q, q.copy(), np.zeros_like(q))
-    assert unwrap_angles(log) is log
-    wrapped = dataclasses.replace(log, q_target_rad=np.where(t[:, None] > 5, q - 2 * np.pi, q))
-    np.testing.assert_allclose(unwrap_angles(wrapped).q_target_rad, q, atol=1e-12)
+    same, wrapped = unwrap_joints(q)
+    assert same is q and wrapped == []
+    turn = np.column_stack([2.5 + 0.15 * t] * 6)  # crosses +180 deg at t = 4.3 s
+    folded = (turn + np.pi) % (2 * np.pi) - np.pi
+    got, wrapped = unwrap_joints(folded)
+    assert wrapped == [0, 1, 2, 3, 4, 5]
+    np.testing.assert_allclose(got, turn, atol=1e-12)
+    bad = q.copy()
+    bad[-1, 2] = 12.0  # a bad value, not a fold (spans more than a turn): left for the range check to name
+    assert unwrap_joints(bad)[1] == []

@@ -123,7 +123,7 @@ def test_payload_for_a_format_that_carries_its_own_is_refused(capsys, tmp_path):
 def test_rtde_without_payload_is_refused_not_defaulted(capsys, tmp_path, extra, flag):
     rc = main(["discrepancy", str(KUFIETA_RUNS[0]), "--format", "rtde", *extra, "--out", str(tmp_path / "o")])
     err = capsys.readouterr().err.strip().splitlines()
-    assert rc == 2 and len(err) == 1 and f"{flag} missing" in err[0], err
+    assert rc == 2 and len(err) == 1 and f"{flag} (" in err[0] and "missing" in err[0], err
     log = read_rtde(KUFIETA_RUNS[0])
     assert log.payload_kg is None and not log.payload_known
     with pytest.raises(ParameterError, match="payload and tool offset unknown"):

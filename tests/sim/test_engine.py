@@ -149,7 +149,7 @@ def test_bad_arguments():
         sim.run(pick_and_place(), [RunSpec("a")], log_period_s=1.3e-4)
     with pytest.raises(ParameterError, match="at least one"):
         sim.run(pick_and_place(), [])
-    with pytest.raises(ParameterError, match="choose one of: batch, loop"):
+    with pytest.raises(ParameterError, match="choose one of: compiled, batch, loop"):
         Simulator(stepper="fast")
     with pytest.raises(ParameterError, match="choose one of: numpy, numba"):
         Simulator(drive="c")

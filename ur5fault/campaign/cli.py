@@ -4,37 +4,57 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 from pathlib import Path
+
+from .spec import shipped_campaigns
 
 
 def register(sub) -> None:
     c = sub.add_parser("campaign", help="run a YAML fault campaign into Parquet feature tables")
-    csub = c.add_subparsers(dest="campaign_command", required=True, parser_class=type(c))
+    csub = c.add_subparsers(dest="campaign_command", metavar="{run,status}", parser_class=type(c))
+    c.set_defaults(func=lambda args: _usage(c))
     r = csub.add_parser("run", help="run (or resume) a campaign")
-    r.add_argument("file", help="campaign YAML, e.g. campaigns/default.yaml")
-    r.add_argument("--out", help="output folder (default: the file's `out`)")
-    r.add_argument("--model", help="model overlay YAML (e.g. from `ur5fault discrepancy`) applied to every run")
+    r.add_argument("file", metavar="FILE|NAME",
+                   help="campaign YAML, or the name of a campaign shipped with ur5fault: "
+                        f"{', '.join(shipped_campaigns())} (e.g. `ur5fault campaign run paper`)")
+    r.add_argument("--out", help="output folder (default: the file's `out`, e.g. results/paper)")
+    r.add_argument("--model", help="model overlay YAML (e.g. from `ur5fault discrepancy`) applied to every run "
+                                          "(default: none, the nominal model)")
+    r.add_argument("--duration-s", type=float, dest="duration_s",
+                   help="simulated time of every run [s], replacing the file's duration_s (a quick trial; default: "
+                        "the file's, else the whole trajectory)")
     r.add_argument("--jobs", type=int, help="worker processes (default: all cores)")
-    r.add_argument("--backend", choices=("loky", "dask"), default="loky")
-    r.add_argument("--scheduler", help="Dask scheduler address for --backend dask, e.g. tcp://127.0.0.1:8786")
+    r.add_argument("--backend", choices=("loky", "dask"), default="loky",
+                   help="loky: processes on this machine (default); dask: a Dask cluster (--scheduler)")
+    r.add_argument("--scheduler", help="Dask scheduler address for --backend dask, e.g. tcp://127.0.0.1:8786 "
+                                              "(required with --backend dask)")
     r.add_argument("--save-timeseries", action="store_true", help="also write each run's time series")
-    r.add_argument("--threshold-mm", type=float, help="TCP acceptability threshold of the summary [mm]")
-    r.add_argument("--quiet", action="store_true")
+    r.add_argument("--threshold-mm", type=float,
+                   help="TCP acceptability threshold of the summary [mm] (default: the file's threshold_mm, else 0.5)")
+    r.add_argument("--quiet", action="store_true", help="no progress bar")
     r.add_argument("--yes", action="store_true",
                    help="start a large campaign (over 1000 runs or 2e9 physics steps) without asking")
     r.add_argument("--replace-changed", action="store_true", dest="replace_changed",
                    help="re-simulate stored runs of OUT made under other settings (default: stop and name them)")
     r.set_defaults(func=cmd_run)
     s = csub.add_parser("status", help="what a campaign folder holds, every run file verified (exit 1 on problems)")
-    s.add_argument("dir")
+    s.add_argument("dir", help="campaign output folder, e.g. results/paper")
     s.set_defaults(func=cmd_status)
     p = sub.add_parser("plot", help="draw the paper's backlash figures and a severity figure per swept effect (PNG)")
     p.add_argument("dir", help="campaign output folder")
     p.add_argument("--feature", default="tcp_dev_max_mm",
                    help="feature of the severity figures and heat maps: a features.parquet column, or a per-joint "
-                        "feature without _j{j} (e.g. current_spike_max_A: read on the faulty joint)")
+                        "feature without _j{j} (e.g. current_spike_max_A: read on the faulty joint); "
+                        "default tcp_dev_max_mm")
     p.add_argument("--out", help="folder for the PNG files (default: DIR/plots)")
     p.set_defaults(func=cmd_plot)
+
+
+def _usage(parser: argparse.ArgumentParser) -> int:
+    """``ur5fault campaign`` without run or status: its help on stderr, exit 2."""
+    parser.print_help(sys.stderr)
+    return 2
 
 
 def cmd_run(args: argparse.Namespace) -> int:
@@ -44,7 +64,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     from .limits import confirmation_needed, effective_jobs, estimate
     from .spec import MAX_THRESHOLD_MM
 
-    camp = load_campaign(args.file, args.out, args.model)
+    camp = load_campaign(args.file, args.out, args.model, args.duration_s)
     if args.threshold_mm is not None:
         check_number(args.threshold_mm, "--threshold-mm", 0.0, MAX_THRESHOLD_MM, "mm", lo_open=True)
     jobs, _ = effective_jobs(args.jobs) if args.backend == "loky" else (args.jobs or 1, None)

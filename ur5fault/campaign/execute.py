@@ -109,8 +109,10 @@ def run_batch(camp: Campaign, batch: Sequence[CampaignRun], ts_dir: str | None,
                              res.tcp_m[twin_i] if ok and twin_i is not None else None)
         if ts_dir is not None:
             meta = {**res.run_metadata(i), "run_identity": (identities or {}).get(rc.run_id)}
-            write_parquet_atomic(res.to_pandas(i), Path(ts_dir) / f"{rc.run_id}.parquet",
-                                 {"ur5fault": json.dumps(meta)}, checksum=True)
+            series = res.to_pandas(i)
+            series.attrs["ur5fault"] = meta  # read back as df.attrs by pandas: figures titled with effects, status
+            write_parquet_atomic(series, Path(ts_dir) / f"{rc.run_id}.parquet", {"ur5fault": json.dumps(meta)},
+                                 checksum=True)
         eff = rc.fault_effects()
         row: dict[str, Any] = {
             "run_id": rc.run_id,
@@ -296,7 +298,11 @@ def _dask_client(scheduler: str, timeout_s: float | None = None):
     with one line (and no logged tracebacks)."""
     import logging
 
-    from dask.distributed import Client
+    try:
+        from dask.distributed import Client
+    except ImportError:  # depends on the installation: say how to get it, no traceback
+        raise ParameterError("--backend dask needs dask.distributed: pip install 'dask[distributed]>=2024.1' "
+                             "(from a checkout: pip install '.[cluster]')") from None
 
     timeout_s = DASK_CONNECT_TIMEOUT_S if timeout_s is None else timeout_s
 

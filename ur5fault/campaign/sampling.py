@@ -46,7 +46,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -55,49 +55,14 @@ from ..config import parse_trajectory
 from ..errors import ParameterError, UnknownNameError, Ur5FaultError
 from ..sim.axes import joint_index
 from ..sim.effects import REGISTRY, EffectKey, EffectParam, effects_of_keys, make_effect
+from .design import METHODS, SIGNIFICANT_DIGITS, Dist, parse_dist, unit_design
 from .labels import SIZE_PARAM
 
 SAMPLE_KEYS = ("n", "method", "seed", "twins", "joints", "faults", "conditions")
-METHODS = ("lhs", "sobol")
-DIST_KEYS = ("uniform", "log", "integers", "choices")
 DIRECTIONS = ("up", "down", "both")
 KIND_KEYS = ("weight", "size", "direction")
 BASE_CONDITIONS = ("seed", "payload_kg", "temperature_C", "trajectory")
 MAX_RUNS = 1_000_000
-SIGNIFICANT_DIGITS = 6
-
-
-@dataclasses.dataclass(frozen=True)
-class Dist:
-    """A one-dimensional distribution mapped from a unit-interval coordinate."""
-
-    kind: str  # uniform, log, integers, choices, fixed
-    args: tuple[Any, ...]
-    step: float | None = None
-
-    @property
-    def drawn(self) -> bool:
-        return self.kind != "fixed"
-
-    def value(self, u: float) -> Any:
-        """The value at coordinate ``u`` in [0, 1) (inverse CDF)."""
-        k, a = self.kind, self.args
-        if k == "fixed":
-            return a[0]
-        if k == "choices":
-            return a[min(int(u * len(a)), len(a) - 1)]
-        if k == "integers":
-            return int(min(a[0] + int(u * (a[1] - a[0] + 1)), a[1]))
-        v = a[0] + u * (a[1] - a[0]) if k == "uniform" else math.exp(math.log(a[0]) + u * math.log(a[1] / a[0]))
-        if self.step:
-            v = min(max(round(v / self.step) * self.step, a[0]), a[1])
-        return float(f"{v:.{SIGNIFICANT_DIGITS}g}")
-
-    def bounds(self) -> tuple[Any, ...]:
-        """The extreme values it can give (for validation before any simulation)."""
-        if self.kind in ("fixed", "choices"):
-            return self.args
-        return (self.value(0.0), self.value(1.0 - 1e-12))
 
 
 @dataclasses.dataclass(frozen=True)
@@ -107,38 +72,6 @@ class FaultKind:
     size: Dist | None
     param: EffectParam | None
     direction: str
-
-
-def parse_dist(spec: Any, where: str) -> Dist:
-    """A distribution from YAML (see the module docstring)."""
-    if isinstance(spec, list):
-        spec = {"uniform": spec}
-    if not isinstance(spec, Mapping):
-        return Dist("fixed", (spec,))
-    keys = [k for k in spec if k in DIST_KEYS]
-    extra = [k for k in spec if k not in DIST_KEYS + ("step",)]
-    if extra or len(keys) != 1:
-        bad = extra[0] if extra else "/".join(keys) or "(none)"
-        raise UnknownNameError("distribution", bad, DIST_KEYS, where)
-    kind, args = keys[0], spec[keys[0]]
-    step = spec.get("step")
-    if step is not None and (isinstance(step, bool) or not isinstance(step, (int, float)) or not step > 0):
-        raise ParameterError(f"{where}: step = {step!r} must be a positive number")
-    if kind == "choices":
-        if not isinstance(args, list) or not args:
-            raise ParameterError(f"{where}: choices must be a non-empty list")
-        return Dist("choices", tuple(args), step)
-    if (not isinstance(args, list) or len(args) != 2
-            or any(isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) for v in args)):
-        raise ParameterError(f"{where}: {kind} = {args!r} must be a list [lo, hi] of two numbers")
-    lo, hi = args
-    if kind == "integers" and not (isinstance(lo, int) and isinstance(hi, int)):
-        raise ParameterError(f"{where}: integers = {args!r} must be two integers")
-    if not lo <= hi:
-        raise ParameterError(f"{where}: {kind} = {args!r} needs lo <= hi")
-    if kind == "log" and not lo > 0:
-        raise ParameterError(f"{where}: log = {args!r} needs 0 < lo <= hi")
-    return Dist(kind, (lo, hi), float(step) if step is not None else None)
 
 
 def _size_param(name: str, where: str) -> EffectParam:
@@ -232,20 +165,34 @@ def _trajectory_dists(spec: Any, where: str) -> tuple[Any, dict[str, Dist]]:
     return fixed, drawn
 
 
-def unit_design(method: str, n: int, d: int, seed: int) -> np.ndarray:
-    """``(n, d)`` points in the unit cube: Latin hypercube (here) or scrambled Sobol (scipy)."""
-    if d == 0:
-        return np.zeros((n, 0))
-    if method == "lhs":
-        rng = np.random.default_rng(seed)
-        return np.stack([(rng.permutation(n) + rng.random(n)) / n for _ in range(d)], axis=1)
-    from scipy.stats import qmc
+@dataclasses.dataclass(frozen=True)
+class SamplePlan:
+    """A validated ``sample`` section: what is drawn, from which distributions, with which design."""
 
-    try:
-        sobol = qmc.Sobol(d, scramble=True, rng=seed)
-    except TypeError:  # scipy < 1.15 names it seed
-        sobol = qmc.Sobol(d, scramble=True, seed=seed)
-    return sobol.random_base2(max(0, math.ceil(math.log2(n))))[:n]
+    n: int
+    method: str
+    seed: int
+    kinds: tuple[FaultKind, ...]
+    joints: tuple[int, ...]  # 1-based
+    twin_kinds: frozenset[str]
+    cond_dists: Mapping[str, Dist]
+    traj_fixed: Any
+    traj_drawn: Mapping[str, Dist]
+
+    @property
+    def drawn_conditions(self) -> list[str]:
+        return [k for k, d in self.cond_dists.items() if d.drawn]
+
+    @property
+    def dims(self) -> list[str]:
+        """Columns of the unit design, in order."""
+        return ["kind", "joint", "size", "sign"] + self.drawn_conditions + [f"trajectory.{k}" for k in self.traj_drawn]
+
+    @property
+    def keys(self) -> list[str]:
+        """The drawn keys (for the manifest)."""
+        return ([k.name for k in self.kinds if k.size is not None] + self.drawn_conditions
+                + [f"trajectory.{k}" for k in self.traj_drawn])
 
 
 def sample_runs(spec: Any, cond0: Mapping[str, Any], where: str) -> tuple[list[tuple[dict, dict, bool]], list[str]]:
@@ -261,6 +208,14 @@ def sample_runs(spec: Any, cond0: Mapping[str, Any], where: str) -> tuple[list[t
         ``{"<effect>.joint": j, "<effect>.<param>": v}``, and the drawn keys (for the manifest).
     """
     loc = f"{where}: sample"
+    plan = parse_sample(spec, cond0, loc)
+    runs, trajectories = draw_runs(plan, cond0)
+    _check_trajectories(trajectories, loc)
+    return runs, plan.keys
+
+
+def parse_sample(spec: Any, cond0: Mapping[str, Any], loc: str) -> SamplePlan:
+    """Validate a ``sample`` mapping (every message starts with ``loc``)."""
     if not isinstance(spec, Mapping):
         raise ParameterError(f"{loc} must be a mapping with keys {', '.join(SAMPLE_KEYS)}")
     for key in spec:
@@ -283,19 +238,28 @@ def sample_runs(spec: Any, cond0: Mapping[str, Any], where: str) -> tuple[list[t
     if not isinstance(joints, list) or not joints:
         raise ParameterError(f"{loc}.joints must be a non-empty list of joints 1..6")
     joints = [joint_index(j, f"{loc}.joints") + 1 for j in joints]
-    twins = spec.get("twins", "all")
+    twin_kinds = _twin_kinds(spec.get("twins", "all"), kinds, loc)
+    cond_dists, traj_fixed, traj_drawn = _condition_dists(spec.get("conditions") or {}, cond0, kinds, loc)
+    return SamplePlan(n, method, seed, tuple(kinds), tuple(joints), frozenset(twin_kinds), cond_dists, traj_fixed,
+                      traj_drawn)
+
+
+def _twin_kinds(twins: Any, kinds: Sequence[FaultKind], loc: str) -> set[str]:
     if twins == "all":
-        twin_kinds = {k.name for k in kinds}
-    elif twins == "none":
-        twin_kinds = set()
-    elif isinstance(twins, list):
+        return {k.name for k in kinds}
+    if twins == "none":
+        return set()
+    if isinstance(twins, list):
         for t in twins:
             if t not in {k.name for k in kinds}:
                 raise UnknownNameError("twin kind", t, [k.name for k in kinds], f"{loc}.twins")
-        twin_kinds = set(twins)
-    else:
-        raise ParameterError(f"{loc}.twins = {twins!r} must be all, none or a list of fault kinds")
-    conds = spec.get("conditions") or {}
+        return set(twins)
+    raise ParameterError(f"{loc}.twins = {twins!r} must be all, none or a list of fault kinds")
+
+
+def _condition_dists(conds: Any, cond0: Mapping[str, Any], kinds: Sequence[FaultKind], loc: str
+                     ) -> tuple[dict[str, Dist], Any, dict[str, Dist]]:
+    """The conditions' distributions, the trajectory's fixed spec and its drawn options."""
     if not isinstance(conds, Mapping):
         raise ParameterError(f"{loc}.conditions must be a mapping of condition -> distribution")
     cond_dists: dict[str, Dist] = {}
@@ -311,24 +275,29 @@ def sample_runs(spec: Any, cond0: Mapping[str, Any], where: str) -> tuple[list[t
             raise ParameterError(f"{cloc}: {ek.effect!r} is also a fault kind; choose one")
         cond_dists[key] = parse_dist(v, cloc)
         _check_condition(key, cond_dists[key], cloc)
+    return cond_dists, traj_fixed, traj_drawn
 
-    weights = np.array([k.weight for k in kinds])
+
+def draw_runs(plan: SamplePlan, cond0: Mapping[str, Any]) -> tuple[list[tuple[dict, dict, bool]], dict[str, Any]]:
+    """The plan's runs ``(conditions, faults, wants_twin)`` and its distinct trajectories (by repr)."""
+    weights = np.array([k.weight for k in plan.kinds])
     cum = np.cumsum(weights) / weights.sum()
-    drawn_conds = [k for k, d in cond_dists.items() if d.drawn]
-    dims = ["kind", "joint", "size", "sign"] + drawn_conds + [f"trajectory.{k}" for k in traj_drawn]
-    u = unit_design(method, n, len(dims), seed)
+    dims = plan.dims
+    u = unit_design(plan.method, plan.n, len(dims), plan.seed)
     col = {name: u[:, i] for i, name in enumerate(dims)}
+    kinds, joints = plan.kinds, plan.joints
     runs = []
     trajectories: dict[str, Any] = {}
-    for r in range(n):
+    for r in range(plan.n):
         kind = kinds[min(int(np.searchsorted(cum, col["kind"][r], side="right")), len(kinds) - 1)]
         cond = dict(cond0)
-        for key, d in cond_dists.items():
+        for key, d in plan.cond_dists.items():
             cond[key] = d.value(col[key][r]) if d.drawn else d.args[0]
-        if traj_drawn:
-            traj = {**traj_fixed, **{k: d.value(col[f"trajectory.{k}"][r]) for k, d in traj_drawn.items()}}
+        if plan.traj_drawn:
+            traj = {**plan.traj_fixed,
+                    **{k: d.value(col[f"trajectory.{k}"][r]) for k, d in plan.traj_drawn.items()}}
         else:
-            traj = traj_fixed
+            traj = plan.traj_fixed
         cond["trajectory"] = traj
         trajectories.setdefault(repr(traj), traj)
         fault: dict[str, Any] = {}
@@ -336,11 +305,17 @@ def sample_runs(spec: Any, cond0: Mapping[str, Any], where: str) -> tuple[list[t
             size = kind.size.value(col["size"][r])
             sign = -1.0 if kind.direction == "down" or (kind.direction == "both" and col["sign"][r] < 0.5) else 1.0
             value = float(f"{kind.param.absent + sign * size:.{SIGNIFICANT_DIGITS + 2}g}")
-            fault[f"{kind.name}.{kind.param.name}"] = value
+            fault[str(EffectKey(kind.name, kind.param.name))] = value
             if REGISTRY[kind.name].per_joint:
-                fault[f"{kind.name}.joint"] = joints[min(int(col["joint"][r] * len(joints)), len(joints) - 1)]
-        runs.append((cond, fault, kind.name in twin_kinds and bool(fault)))
-    for traj in trajectories.values():  # every trajectory builds, before any simulation
+                fault[str(EffectKey(kind.name, "joint"))] = joints[min(int(col["joint"][r] * len(joints)),
+                                                                       len(joints) - 1)]
+        runs.append((cond, fault, kind.name in plan.twin_kinds and bool(fault)))
+    return runs, trajectories
+
+
+def _check_trajectories(trajectories: Mapping[str, Any], loc: str) -> None:
+    """Every drawn trajectory builds, before any simulation."""
+    for traj in trajectories.values():
         tloc = f"{loc}.conditions.trajectory {json.dumps(traj, sort_keys=True)}"
         try:
             parse_trajectory(traj, tloc)
@@ -348,5 +323,3 @@ def sample_runs(spec: Any, cond0: Mapping[str, Any], where: str) -> tuple[list[t
             if str(exc).startswith(tloc):
                 raise
             raise ParameterError(f"{tloc}: {exc}") from None
-    keys = [k.name for k in kinds if k.size is not None] + drawn_conds + [f"trajectory.{k}" for k in traj_drawn]
-    return runs, keys

@@ -159,18 +159,46 @@ def _check_value(key: Any, value: Any, where: str) -> Any:
         if not eff.per_joint:
             raise ParameterError(f"{where}: effect {ek.effect!r} acts on the whole robot and takes no joint")
         return joint_index(value, where) + 1
-    p = eff.param(ek.param)
+    p = eff.param(ek.param, where)
     return check_number(value, f"{where}: {key}", p.lo, p.hi, p.unit)
 
 
-def load_campaign(path: str | Path, out: str | Path | None = None, overlay: str | Path | None = None) -> Campaign:
+#: the example campaigns shipped inside the package (``ur5fault campaign run paper``)
+SHIPPED_DIR = Path(__file__).resolve().parent.parent / "campaigns"
+
+
+def shipped_campaigns() -> list[str]:
+    """Names of the campaign files shipped with the package (``default``, ``paper``, ...)."""
+    return sorted(p.stem for p in SHIPPED_DIR.glob("*.yaml"))
+
+
+def resolve_campaign(path: str | Path) -> Path:
+    """A campaign file: an existing path, or the name of a shipped campaign (``paper`` or ``paper.yaml``).
+
+    A path that exists always wins, so a user's own ``paper.yaml`` in the working folder is the one run.
+    """
+    p = Path(path)
+    if p.exists() or p.parent != Path("."):
+        return p
+    shipped = SHIPPED_DIR / (p.name if p.suffix in (".yaml", ".yml") else f"{p.name}.yaml")
+    if shipped.is_file():
+        return shipped
+    from ..errors import ConfigFileError
+
+    raise ConfigFileError(f"{p}: no such file, and no shipped campaign of that name "
+                          f"(shipped: {', '.join(shipped_campaigns())})")
+
+
+def load_campaign(path: str | Path, out: str | Path | None = None, overlay: str | Path | None = None,
+                  duration_s: float | None = None) -> Campaign:
     """Read and validate a campaign file; every error names the file and key path.
 
     ``overlay``: a model overlay YAML (``params`` and ``effects``, e.g. written by ``ur5fault
     discrepancy``) merged into the campaign's ``base``: its parameters under the campaign's own, its
-    effects before them.  The merged text is what the manifest records.
+    effects before them.  ``duration_s`` replaces the file's (a quick trial of a campaign).  The merged text is
+    what the manifest records.  ``path`` may also name a shipped campaign (:func:`resolve_campaign`).
     """
-    path = Path(path)
+    path = resolve_campaign(path)
     data = read_yaml(path)
     text = path.read_text()
     if overlay is not None:
@@ -185,6 +213,9 @@ def load_campaign(path: str | Path, out: str | Path | None = None, overlay: str 
             raise ParameterError(f"{path.name}: base.effects: expected a list of effects")
         base["effects"] = list(ov.get("effects") or []) + own_effects
         data = {**data, "base": base}
+        text = yaml.safe_dump(dict(data), sort_keys=False)
+    if duration_s is not None:
+        data = {**data, "duration_s": duration_s}
         text = yaml.safe_dump(dict(data), sort_keys=False)
     return build_campaign(data, path.name, text, path, out)
 
@@ -202,15 +233,52 @@ def build_campaign(data: Mapping[str, Any], where: str, text: str = "", path: Pa
     base = check_mapping(data.get("base"), f"{where}: base")
     check_keys(base, BASE_KEYS, f"{where}: base")
     params = dict(check_mapping(base.get("params"), f"{where}: base.params"))
-    robot = load_params(overrides=params)  # validate robot overrides now
+    robot = load_params(overrides=params, where=f"{where}: base.params")  # validate robot overrides now
     base_effects = parse_effects(base.get("effects"), f"{where}: base.effects")
-    cond0 = {
+    cond0 = _base_conditions(data, base, where)
+    axes, swept = _sweep_axes(data, where)
+    sampled = data.get("sample") is not None  # a sampled campaign (campaign/sampling.py) instead of a grid
+    if sampled and (axes or swept):
+        raise ParameterError(f"{where}: sample cannot be combined with sweep or zip; use one of them")
+    if sampled:
+        runs, swept = _sampled_runs(data["sample"], cond0, where)
+    else:
+        runs = _grid_runs(axes, cond0)
+    thr = check_number(data.get("threshold_mm", 0.5), f"{where}: threshold_mm", 0.0, MAX_THRESHOLD_MM, "mm",
+                       lo_open=True)
+    bs = check_int(data.get("batch_size", 32), f"{where}: batch_size", 1, 1024)
+    dur = data.get("duration_s")
+    dur = None if dur is None else check_duration(dur, f"{where}: duration_s")
+    shortest = dur if dur is not None else min(
+        parse_trajectory(t, f"{where}: trajectory").duration_s for t in trajectory_specs(runs.values()))
+    lp = check_log_period(data.get("log_period_s", 1e-3), f"{where}: log_period_s", robot.physics_dt_s, shortest)
+    save_ts = check_bool(data.get("save_timeseries", False), f"{where}: save_timeseries")
+    twin_res = check_bool(data.get("twin_residuals", False), f"{where}: twin_residuals")
+    name = check_text(data["name"], f"{where}: name") if data.get("name") is not None else (
+        path.stem if path else "campaign")
+    file_out = check_text(data["out"], f"{where}: out", max_len=4096) if data.get("out") is not None else None
+    out = out if out is not None else file_out
+    out_dir = Path(out) if out is not None else Path("results") / name
+    resolved = {**dict(data), "base": {**dict(base), "params": params}}
+    return Campaign(name, path, text or yaml.safe_dump(dict(data)), out_dir, base_effects, params,
+                    tuple(runs.values()), tuple(swept), thr, bs, lp, save_ts, dur, resolved,
+                    parse_split(data.get("split"), where), twin_res)
+
+
+def _base_conditions(data: Mapping[str, Any], base: Mapping[str, Any], where: str) -> dict[str, Any]:
+    """The conditions every run starts from (seed, payload, temperature, trajectory), validated."""
+    return {
         "seed": _check_value("seed", base.get("seed", 0), f"{where}: base.seed"),
         "payload_kg": _check_value("payload_kg", base.get("payload_kg", 2.0), f"{where}: base.payload_kg"),
         "temperature_C": _check_value("temperature_C", base.get("temperature_C", 28.0),
                                       f"{where}: base.temperature_C"),
         "trajectory": _check_value("trajectory", data.get("trajectory", "pick_and_place"), f"{where}: trajectory"),
     }
+
+
+def _sweep_axes(data: Mapping[str, Any], where: str) -> tuple[list[list[dict[str, Any]]], list[str]]:
+    """The grid's axes (``sweep`` keys one axis each, a ``zip`` group one axis) with checked values, and the
+    swept keys; the grid's size is checked before anything is expanded."""
     axes: list[list[dict[str, Any]]] = []
     swept: list[str] = []
     sweep = check_mapping(data.get("sweep"), f"{where}: sweep")
@@ -238,11 +306,13 @@ def build_campaign(data: Mapping[str, Any], where: str, text: str = "", path: Pa
         raise ParameterError(f"{where}: key swept twice: {', '.join(dup)}")
     _check_fault_keys(swept, where)
     check_grid_size([len(a) for a in axes], where)
+    return axes, swept
+
+
+def _grid_runs(axes: Sequence[Sequence[Mapping[str, Any]]], cond0: Mapping[str, Any]) -> dict[str, CampaignRun]:
+    """Every point of the grid and its healthy twin, by run_id (a repeated point is kept once)."""
     runs: dict[str, CampaignRun] = {}
-    sampled = data.get("sample") is not None  # a sampled campaign (campaign/sampling.py) instead of a grid
-    if sampled and (axes or swept):
-        raise ParameterError(f"{where}: sample cannot be combined with sweep or zip; use one of them")
-    for combo in (itertools.product(*axes) if axes else [()]) if not sampled else []:
+    for combo in itertools.product(*axes) if axes else [()]:
         values: dict[str, Any] = {}
         for part in combo:
             values.update(part)
@@ -253,31 +323,18 @@ def build_campaign(data: Mapping[str, Any], where: str, text: str = "", path: Pa
             rc = rc.twin()   # itself, stored without faults whichever sweep point made it
         for r in (rc, rc.twin()):
             runs.setdefault(r.run_id, r)
-    if sampled:
-        drawn, swept = sample_runs(data["sample"], cond0, where)
-        for cond, faults, wants_twin in drawn:
-            rc = CampaignRun(tuple(sorted(cond.items())), tuple(sorted(faults.items())))  # validates them
-            for r in (rc, rc.twin()) if wants_twin else (rc,):
-                runs.setdefault(r.run_id, r)
-    thr = check_number(data.get("threshold_mm", 0.5), f"{where}: threshold_mm", 0.0, MAX_THRESHOLD_MM, "mm",
-                       lo_open=True)
-    bs = check_int(data.get("batch_size", 32), f"{where}: batch_size", 1, 1024)
-    dur = data.get("duration_s")
-    dur = None if dur is None else check_duration(dur, f"{where}: duration_s")
-    shortest = dur if dur is not None else min(
-        parse_trajectory(t, f"{where}: trajectory").duration_s for t in trajectory_specs(runs.values()))
-    lp = check_log_period(data.get("log_period_s", 1e-3), f"{where}: log_period_s", robot.physics_dt_s, shortest)
-    save_ts = check_bool(data.get("save_timeseries", False), f"{where}: save_timeseries")
-    twin_res = check_bool(data.get("twin_residuals", False), f"{where}: twin_residuals")
-    name = check_text(data["name"], f"{where}: name") if data.get("name") is not None else (
-        path.stem if path else "campaign")
-    file_out = check_text(data["out"], f"{where}: out", max_len=4096) if data.get("out") is not None else None
-    out = out if out is not None else file_out
-    out_dir = Path(out) if out is not None else Path("results") / name
-    resolved = {**dict(data), "base": {**dict(base), "params": params}}
-    return Campaign(name, path, text or yaml.safe_dump(dict(data)), out_dir, base_effects, params,
-                    tuple(runs.values()), tuple(swept), thr, bs, lp, save_ts, dur, resolved,
-                    parse_split(data.get("split"), where), twin_res)
+    return runs
+
+
+def _sampled_runs(spec: Any, cond0: Mapping[str, Any], where: str) -> tuple[dict[str, CampaignRun], list[str]]:
+    """The drawn runs (with their twins where wanted) by run_id, and the drawn keys."""
+    runs: dict[str, CampaignRun] = {}
+    drawn, swept = sample_runs(spec, cond0, where)
+    for cond, faults, wants_twin in drawn:
+        rc = CampaignRun(tuple(sorted(cond.items())), tuple(sorted(faults.items())))  # validates them
+        for r in (rc, rc.twin()) if wants_twin else (rc,):
+            runs.setdefault(r.run_id, r)
+    return runs, swept
 
 
 def trajectory_specs(runs: Iterable[CampaignRun]) -> list[Any]:
@@ -300,10 +357,14 @@ def check_grid_size(axis_lengths: Sequence[int], where: str) -> int:
 
 
 def _check_fault_keys(swept: Sequence[str], where: str) -> None:
-    """A per-joint effect that is swept needs its joint swept (or a single joint) too."""
+    """A per-joint effect that is swept needs its joint swept (or a single joint) too, and a swept joint needs a
+    size: sweeping only ``backlash.joint`` would give runs of size 0, which are healthy runs."""
     effects = {ek.effect for ek in map(EffectKey.parse, swept) if ek is not None}
-    for name in effects:
+    for name in sorted(effects):
         if REGISTRY[name].per_joint and f"{name}.joint" not in swept:
             raise ParameterError(f"{where}: sweep of effect {name!r} needs '{name}.joint' (list of joints 1..6)")
+        if swept.count(f"{name}.joint") and not [k for k in swept if k.startswith(f"{name}.") and k != f"{name}.joint"]:
+            sizes = ", ".join(f"'{name}.{p.name}' [{p.unit}]" for p in REGISTRY[name].params)
+            raise ParameterError(f"{where}: sweep of effect {name!r} gives joints but no size; sweep {sizes} too")
 
 

@@ -14,7 +14,8 @@ from ..twin.residuals import FIT_FRACTION
 def register(sub) -> None:
     d = sub.add_parser("discrepancy", help="find, name and fix where the model and a measured log disagree")
     add_log_options(d, ("rtde", "nist", "sim"), hold_out=True)
-    d.add_argument("--model", help="model overlay YAML to start from (e.g. an earlier model.yaml)")
+    d.add_argument("--model", help="model overlay YAML to start from (e.g. an earlier model.yaml; default: none, the "
+                                   "nominal model)")
     d.add_argument("--out", required=True, help="output folder (report.md, model.yaml, summary.json)")
     d.add_argument("--fit-fraction", type=float, default=FIT_FRACTION,
                    help=f"share of the log used for fitting (0.2..0.9, default {FIT_FRACTION:g})")
@@ -29,7 +30,8 @@ def register(sub) -> None:
 def cmd_discrepancy(args: argparse.Namespace) -> int:
     from ..config import Overlay
     from ..errors import ParameterError
-    from ..logs.options import read_log_options
+    from ..logs.length import check_files_length, check_logs_length
+    from ..logs.options import log_entries, read_log_options
     from ..sim.params import load_params
     from ..util.io import check_writable
     from .model import DiscrepancyModel
@@ -40,7 +42,9 @@ def cmd_discrepancy(args: argparse.Namespace) -> int:
     model = DiscrepancyModel(fit_fraction=args.fit_fraction, max_effects=args.max_effects,
                              max_terms=args.max_terms, jobs=jobs, progress=not args.quiet)
     check_writable(args.out, folder=True)
+    check_files_length([e.path for e in log_entries(args)], "discrepancy")  # an hour-long log: refused in seconds
     logs, held = read_log_options(args)
+    check_logs_length([*logs, *held], "discrepancy")
     overlay = Overlay.load(args.model) if args.model else None
     if not logs:
         raise ParameterError("every log given is held out; name at least one log to fit")

@@ -116,3 +116,33 @@ FEATURE_UNITS = {
         ("current_spike_count", "count"), ("current_kurtosis", "-"), ("current_crest", "-"),
         ("current_hf_energy_A2s", "A^2*s"))},
 }
+
+#: per-joint feature (without ``_j{j}``) or run feature -> what it is, in words, for figure titles and axes
+FEATURE_NAMES = {
+    "tcp_dev_max_mm": "max TCP deviation from the healthy twin",
+    "tcp_dev_rms_mm": "RMS TCP deviation from the healthy twin",
+    "tcp_track_max_mm": "max TCP deviation from the desired path",
+    "tcp_track_rms_mm": "RMS TCP deviation from the desired path",
+    "track_err_rms_rad": "RMS tracking error",
+    "track_err_max_rad": "max tracking error",
+    "enc_mismatch_p2p_rad": "encoder mismatch, peak to peak",
+    "enc_mismatch_rms_rad": "encoder mismatch, RMS",
+    "enc_mismatch_hyst_rad": "encoder mismatch jump at torque reversals",
+    "current_spike_max_A": "largest current spike at a torque reversal",
+    "current_spike_count": "current spikes at torque reversals",
+    "current_kurtosis": "current kurtosis",
+    "current_crest": "current crest factor",
+    "current_hf_energy_A2s": "current high-frequency energy",
+}
+
+
+def feature_label(feature: str) -> str:
+    """``"max TCP deviation from the healthy twin [mm]"`` for ``tcp_dev_max_mm``; a per-joint feature with or
+    without its ``_j{j}`` suffix (``"... [A], J2"``); any other column by its own name."""
+    base, _, j = feature.rpartition("_j")
+    if not (base and j.isdigit()):
+        base, j = feature, ""
+    if base not in FEATURE_NAMES:
+        return feature
+    unit = FEATURE_UNITS.get(base) or FEATURE_UNITS.get(f"{base}_j1", "-")
+    return f"{FEATURE_NAMES[base]}" + (f" [{unit}]" if unit not in ("-", "count") else "") + (f", J{j}" if j else "")

@@ -15,7 +15,8 @@ def register(sub) -> None:
     d = sub.add_parser("identify", help="re-derive the measured drive parameters from a log (parameter overlay)")
     add_log_options(d, ("nist", "rtde"))
     d.add_argument("--out", required=True, help="parameter overlay YAML to write (accepted by --model)")
-    d.add_argument("--json", help="also write every estimate with its interval as JSON")
+    d.add_argument("--json", metavar="FILE.json", help="also write every estimate with its interval as JSON "
+                                                          "(default: not written)")
     d.add_argument("--no-sweep", action="store_true",
                    help="skip the position-loop bandwidth sweep (it replays the log once per candidate)")
     d.add_argument("--sweep-window-s", type=float, default=SWEEP_WINDOW_S,
@@ -27,7 +28,8 @@ def register(sub) -> None:
 
 def cmd_identify(args: argparse.Namespace) -> int:
     from ..errors import ParameterError
-    from ..logs.options import read_log_options
+    from ..logs.length import check_files_length, check_logs_length
+    from ..logs.options import log_entries, read_log_options
     from ..sim.params import load_params
     from ..util.io import write_json_atomic, write_text_atomic
     from . import identify
@@ -36,7 +38,9 @@ def cmd_identify(args: argparse.Namespace) -> int:
         raise ParameterError(f"--bootstrap = {args.bootstrap} must be at least 20")
     if args.sweep_window_s <= 0:
         raise ParameterError(f"--sweep-window-s = {args.sweep_window_s} must be a positive number of seconds")
+    check_files_length([e.path for e in log_entries(args)], "identify")  # an hour-long log: refused in seconds
     logs, _ = read_log_options(args)
+    check_logs_length(logs, "identify")
     log = logs[0]
     say = None if args.quiet else (lambda msg: print(f"identify: {msg}...", file=sys.stderr, flush=True))
     params = load_params()

@@ -26,7 +26,7 @@ PRESLIDING_FIELD = "presliding_stiffness_Nm_per_rad"
 #: what this log cannot give for the stick-slip law and the friction share, and why
 NOT_IDENTIFIABLE = (
     "friction.model (smooth sign vs stick-slip law): a model choice, made by comparing replays "
-    "(issue 10 part A), not a value this regression can give",
+    "(identify/friction_choice.py), not a value this regression can give",
     "bristle damping (LuGre sigma_1): acts within the milliseconds of presliding, unseen at this log's 8 ms "
     "sampling",
     "friction share motor side / link side of the gear: not identifiable from a healthy log - in steady "
@@ -92,7 +92,7 @@ class Identification:
                 "# Intervals: 95 % bootstrap (time blocks, rest segments or starts).  Friction is identified in A",
                 "# and written in N*m with the identified torque constant.  Estimates:"]
         head += ["#   " + line for line in self.table().splitlines()]
-        head += ["#", "# Stick-slip and friction share (issue 10 part A):"]
+        head += ["#", "# Stick-slip and friction share:"]
         written = PRESLIDING_FIELD in {f.name for f in dataclasses.fields(FrictionParams)}
         head.append("#   presliding stiffness: " + (f"written as friction.{PRESLIDING_FIELD}" if written else
                                                  "reported above, not written (the model has no such parameter yet)"))

@@ -48,7 +48,7 @@ def add_log_options(parser: argparse.ArgumentParser, formats: Sequence[str], *, 
                              "flange; other formats carry their own)")
     if hold_out:
         parser.add_argument("--hold-out", nargs="+", default=[], metavar="LOG",
-                            help="further runs of the robot held out whole: scored, never fitted")
+                            help="further runs of the robot held out whole: scored, never fitted (default: none)")
     parser.set_defaults(log_formats=tuple(formats))
 
 

@@ -28,7 +28,7 @@ from . import plausible, regular
 from .measured import MeasuredLog
 from .plausible import check_current_units
 from .source import check_log_memory, read_columns, sniff
-from .wrap import unwrap_angles
+from .wrap import unwrap_joints
 
 #: sign of the reported motor current w.r.t. joint torque (all +1 in the NIST log, see above)
 UR_CURRENT_SIGN = np.array([1.0, 1.0, 1.0, 1.0, 1.0, 1.0])
@@ -69,6 +69,12 @@ def _assemble(src: str, t: NDArray, required: Mapping[str, NDArray], optional: M
     t = t[rows]
     req = {k: v[rows] for k, v in required.items()}
     opt = {k: None if v is None else v[rows] for k, v in opt.items()}
+    for k, label in zip(("target_q", "actual_q"), labels):  # before anything interpolates across a wrap
+        req[k], wrapped = unwrap_joints(req[k])
+        if wrapped:
+            joints = ", ".join(str(j + 1) for j in wrapped)
+            notes.append(f"{src}: {label} of joint(s) {joints} wrap around (a jump of a whole turn between two rows): "
+                         "made continuous")
     plausible.check_increasing(src, t)
     plausible.check_range(src, req["actual_q"], t, opt["actual_qd"], declared)
     plausible.check_sampling(src, t)
@@ -253,4 +259,4 @@ def read_log(path: str | Path, fmt: str, **kwargs) -> MeasuredLog:
         raise LogFormatError(f"{p}: not a file")
     log = READERS[fmt](p, **{k: v for k, v in kwargs.items() if v is not None})
     check_current_units(log.source, {"current": log.current_A, "target current": log.target_current_A})
-    return unwrap_angles(log)
+    return log

@@ -1,39 +1,31 @@
 """Joint angles that wrap: some loggers write each joint's angle folded into +-180 deg (or 0..360),
 while a UR5 joint turns through +-360 deg and its controller reports the angle continuously.  A
-folded angle jumps by a whole turn between two samples, which no joint can move (a UR5 joint at its
+folded angle jumps by a whole turn between two rows, which no joint can move (a UR5 joint at its
 top speed of 3.2 rad/s moves 0.026 rad in the 8 ms of a 125 Hz sample, ur5-facts.md), so a jump of
-more than half a turn in one sample is a wrap and is undone (``numpy.unwrap``); left in, it reads as
-a speed of hundreds of rad/s and silently changes every fitted value.
+more than half a turn between two rows, in a joint whose values span at most one turn, is a wrap and
+is undone (``numpy.unwrap``) on the rows as written, before anything interpolates between them; left
+in, it reads as a speed of hundreds of rad/s and silently changes every fitted value.
 """
 
 from __future__ import annotations
 
-import dataclasses
-import logging
-
 import numpy as np
+from numpy.typing import NDArray
 
-from .measured import MeasuredLog
-
-_log = logging.getLogger(__name__)
-
-#: a sample-to-sample step above this is a wrap, not motion [rad] (half a turn)
+#: a row-to-row step above this is a wrap, not motion [rad] (half a turn)
 WRAP_STEP_RAD = np.pi
+#: a folded angle spans at most one turn (+-180 deg or 0..360 deg) [rad]; a jump in a joint spanning more is not
+#: a wrap but a bad value (the reader's range check names it)
+FOLDED_SPAN_RAD = 2 * np.pi * (1 + 1e-9)
 
 
-def unwrap_angles(log: MeasuredLog) -> MeasuredLog:
-    """``log`` with every wrapped joint angle (target, actual and motor positions) made continuous;
-    a warning names the joints."""
-    fields = [f for f in ("q_target_rad", "q_actual_rad") if getattr(log, f) is not None]
-    wrapped = sorted({j for f in fields for j in np.flatnonzero(
-        np.any(np.abs(np.diff(getattr(log, f), axis=0)) > WRAP_STEP_RAD, axis=0))})
+def unwrap_joints(q_rad: NDArray) -> tuple[NDArray, list[int]]:
+    """``q_rad`` ``(n, 6)`` with every wrapped joint made continuous, and the (0-based) joints that wrapped."""
+    jumps = np.any(np.abs(np.diff(q_rad, axis=0)) > WRAP_STEP_RAD, axis=0)
+    folded = np.ptp(q_rad, axis=0) <= FOLDED_SPAN_RAD  # a folded angle never spans more than one turn
+    wrapped = [int(j) for j in np.flatnonzero(jumps & folded)]
     if not wrapped:
-        return log
-    new = {}
-    for f in fields:
-        q = np.array(getattr(log, f), dtype=float)
-        q[:, wrapped] = np.unwrap(q[:, wrapped], axis=0)
-        new[f] = q
-    _log.warning("%s: the angles of joint(s) %s wrap around (a jump of a whole turn between two samples); "
-                 "made continuous", log.source, ", ".join(str(j + 1) for j in wrapped))
-    return dataclasses.replace(log, **new)
+        return q_rad, []
+    q = np.array(q_rad, dtype=float)
+    q[:, wrapped] = np.unwrap(q[:, wrapped], axis=0)
+    return q, wrapped

@@ -44,7 +44,8 @@ def run_figure(series: pd.DataFrame, twin: pd.DataFrame | None = None, *, gear_r
     missing = [c for c in need if c not in series.columns]
     if missing:
         raise ParameterError(f"time series lacks column {missing[0]!r} (a ur5fault time series has {need[0]}, "
-                             "q_set_rad_j1.., q_FB_rad_j1.., i_FB_A_j1..; docs/outputs.md)")
+                             "q_set_rad_j1.., q_FB_rad_j1.., i_FB_A_j1..: a table of `ur5fault simulate` or "
+                             "SimResult.to_pandas)")
     meta = series.attrs.get("ur5fault", {})
     ratio = np.asarray(gear_ratio if gear_ratio is not None else meta.get("gear_ratio", [DEFAULT_GEAR_RATIO] * 6))
     if axes is None:
@@ -61,17 +62,17 @@ def run_figure(series: pd.DataFrame, twin: pd.DataFrame | None = None, *, gear_r
         c, lab = f"C{j}", f"J{j + 1} {JOINT_NAMES[j]}"
         a_ang.plot(t, np.degrees(q_set[:, j]), color=c, lw=3, alpha=0.3)
         a_ang.plot(t, np.degrees(q_fb[:, j]), color=c, lw=0.8, label=lab)
-        a_err.plot(t, 1e3 * (q_set[:, j] - q_fb[:, j]), color=c, lw=0.7)
+        a_err.plot(t, np.degrees(q_set[:, j] - q_fb[:, j]), color=c, lw=0.7)
         a_cur.plot(t, series[f"i_FB_A_j{j + 1}"], color=c, lw=0.6)
-    a_ang.set_ylabel("setpoint (wide) and\nresolver q_FB [deg]")
+    a_ang.set_ylabel("joint angle [deg]\nsetpoint (wide), resolver")
     a_ang.legend(fontsize=7, ncol=6, loc="lower center", bbox_to_anchor=(0.5, 1.0), frameon=False)
-    a_err.set_ylabel("q_set - q_FB [mrad]")
-    a_cur.set_ylabel("motor current i_FB [A]")
+    a_err.set_ylabel("tracking error [deg]\nsetpoint - resolver")
+    a_cur.set_ylabel("motor current [A]\n(current sensor)")
     if all(c in series.columns for c in _joint_cols("q_M_FB_rad")):
         mis = series[_joint_cols("q_M_FB_rad")].to_numpy() / ratio - q_fb
         for j in range(N_JOINTS):
-            a_mis.plot(t, 1e3 * mis[:, j], color=f"C{j}", lw=0.7)
-        a_mis.set_ylabel("encoder mismatch\nq_M_FB/N - q_FB [mrad]")
+            a_mis.plot(t, np.degrees(mis[:, j]), color=f"C{j}", lw=0.7)
+        a_mis.set_ylabel("encoder mismatch [deg]\nmotor encoder / N - resolver")
     else:
         a_mis.text(0.5, 0.5, "no motor encoder (q_M_FB_rad) in this table", ha="center", transform=a_mis.transAxes)
     if all(c in series.columns for c in TCP_COLUMNS + ["tcp_des_x_m"]):

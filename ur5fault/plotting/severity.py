@@ -9,6 +9,7 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from ..campaign.summary import EffectSweep, joint_feature, severity_table
+from ..health.features import feature_label
 from ._figure import figure_and_axes
 
 
@@ -54,10 +55,11 @@ def severity_figure(sweep: EffectSweep, feature: str = "tcp_dev_max_mm", *, heal
     if threshold_mm is not None and feature.startswith("tcp_dev_"):
         ax.axhline(threshold_mm, color="k", ls="--", lw=0.8, label=f"{threshold_mm:g} mm threshold")
     on = " of the faulty joint" if generic and sweep.per_joint else (" (max over joints)" if generic else "")
-    title = f"{feature}{on} against {sweep.effect} size"
+    name = feature_label(feature)
+    title = f"{name.split(' [')[0]}{on} against {sweep.effect} size"
     if sweep.n_not_ok:
         title += f" ({sweep.n_not_ok} run(s) not ok, not shown)"
-    ax.set(xlabel=sweep.label, ylabel=feature + on, title=title)
+    ax.set(xlabel=sweep.label, ylabel=name + on, title=title)
     ax.legend(fontsize=8)
     return fig
 
@@ -72,7 +74,7 @@ def heatmap(sweep: EffectSweep, feature: str = "tcp_dev_max_mm", ax: Axes | None
     ax.set_xlabel(sweep.label)
     for (r, c), v in np.ndenumerate(table.to_numpy()):
         ax.text(c, r, f"{v:.3g}", ha="center", va="center", color="w", fontsize=7)
-    fig.colorbar(im, ax=ax, label=feature)
-    ax.set_title(f"{feature} by fault joint and {sweep.effect} size")
+    fig.colorbar(im, ax=ax, label=feature_label(feature))
+    ax.set_title(f"{feature_label(feature).split(' [')[0]} by fault joint and {sweep.effect} size")
     return fig
 

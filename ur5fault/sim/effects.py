@@ -54,11 +54,11 @@ class Effect:
     per_joint: bool
     apply: EffectApplier
 
-    def param(self, name: str) -> EffectParam:
+    def param(self, name: str, where: str = "") -> EffectParam:
         for p in self.params:
             if p.name == name:
                 return p
-        raise UnknownNameError(f"parameter of effect {self.name!r}", name, [p.name for p in self.params])
+        raise UnknownNameError(f"parameter of effect {self.name!r}", name, [p.name for p in self.params], where)
 
     def absent(self, name: str) -> float:
         """The value of parameter ``name`` that means "no effect" (the registry is its only source)."""
@@ -70,11 +70,27 @@ class Effect:
 
 @dataclasses.dataclass(frozen=True)
 class EffectSpec:
-    """An effect as a run carries it: name, joint (0-based, or None) and parameter values."""
+    """An effect as a run carries it: name, joint array index and parameter values.
+
+    Build it with :func:`make_effect`, which takes joints the way a user writes them (1..6 or a name). The field
+    is ``joint_index`` (0..5, or None for robot-level effects), so ``EffectSpec(name, joint=1, ...)``, which
+    would mean joint 1 to a user and joint 2 to the arrays, is refused by Python instead of silently shifted.
+    """
 
     name: str
-    joint: int | None
+    joint_index: int | None
     values: tuple[tuple[str, float], ...]
+
+    def __post_init__(self) -> None:
+        j = self.joint_index
+        if j is not None and (isinstance(j, bool) or not isinstance(j, int) or not 0 <= j < len(JOINT_NAMES)):
+            raise ParameterError(f"EffectSpec.joint_index = {j!r} must be 0..{len(JOINT_NAMES) - 1} or None "
+                                 "(build effects with make_effect, joints 1..6 or names)")
+
+    @property
+    def joint(self) -> int | None:
+        """The 0-based joint index (array position), None for robot-level effects."""
+        return self.joint_index
 
     def value(self, key: str) -> float:
         return dict(self.values)[key]

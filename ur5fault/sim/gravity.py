@@ -29,20 +29,27 @@ def gravity_torque(ids, g_m_s2: float, mass: NDArray, xipos: NDArray, xanchor: N
 
 @njit(cache=True)
 def gravity_moments(mass, xipos, xanchor, xaxis, subtree, up, out):
-    """Static gravity torque per run and joint: for every body moving with joint j, the moment of its
-    weight (``mass * up``, ``up`` the holding force per kg) about the joint's axis."""
+    """Static gravity torque per run and joint (:func:`gravity_moment_j`) into ``out`` ``(n, 6)``."""
     n = mass.shape[0]
-    nj, nb = subtree.shape
+    nj = subtree.shape[0]
     for r in range(n):
         for j in range(nj):
-            tx, ty, tz = 0.0, 0.0, 0.0
-            for b in range(nb):
-                if subtree[j, b] and mass[r, b] != 0.0:
-                    ax = xipos[r, b, 0] - xanchor[r, j, 0]
-                    ay = xipos[r, b, 1] - xanchor[r, j, 1]
-                    az = xipos[r, b, 2] - xanchor[r, j, 2]
-                    m = mass[r, b]
-                    tx += m * (ay * up[2] - az * up[1])
-                    ty += m * (az * up[0] - ax * up[2])
-                    tz += m * (ax * up[1] - ay * up[0])
-            out[r, j] = tx * xaxis[r, j, 0] + ty * xaxis[r, j, 1] + tz * xaxis[r, j, 2]
+            out[r, j] = gravity_moment_j(j, mass[r], xipos[r], xanchor[r], xaxis[r], subtree, up)
+
+
+@njit(cache=True, inline="always")
+def gravity_moment_j(j, mass, xipos, xanchor, xaxis, subtree, up):
+    """Static gravity torque of joint ``j`` of one run: for every body moving with the joint, the moment of its
+    weight (``mass * up``, ``up`` the holding force per kg) about the joint's axis.  ``mass`` ``(nbody,)``,
+    ``xipos`` ``(nbody, 3)``, ``xanchor`` and ``xaxis`` ``(njnt, 3)``."""
+    tx, ty, tz = 0.0, 0.0, 0.0
+    for b in range(subtree.shape[1]):
+        if subtree[j, b] and mass[b] != 0.0:
+            ax = xipos[b, 0] - xanchor[j, 0]
+            ay = xipos[b, 1] - xanchor[j, 1]
+            az = xipos[b, 2] - xanchor[j, 2]
+            m = mass[b]
+            tx += m * (ay * up[2] - az * up[1])
+            ty += m * (az * up[0] - ax * up[2])
+            tz += m * (ax * up[1] - ay * up[0])
+    return tx * xaxis[j, 0] + ty * xaxis[j, 1] + tz * xaxis[j, 2]

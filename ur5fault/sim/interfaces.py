@@ -99,5 +99,11 @@ class DataDrivenTerms(Protocol):
                     gravity_Nm: NDArray | None) -> NDArray:
         """Load torque of the terms on every joint ``(n_runs, 6)`` [N*m]."""
 
+    def static_load(self, q: NDArray, mb: Multibody, dt: float) -> NDArray | float:
+        """The load at rest at ``q``, held by the drive from the start (0 without link-torque terms)."""
+
+    def step_load(self, q: NDArray, qd: NDArray, mb: Multibody, dt: float) -> NDArray | float:
+        """The load over one physics step of the lockstep loop (0 without link-torque terms)."""
+
     def apply_sensor_terms(self, log: dict[str, NDArray], t_log: NDArray) -> None:
         """Change the logged readings in place."""

@@ -154,12 +154,15 @@ class RobotParams(Validated):
         return round(self.controller.servo_period_s / self.physics_dt_s)
 
 
-def load_params(path: str | Path | None = None, overrides: dict[str, Any] | None = None) -> RobotParams:
+def load_params(path: str | Path | None = None, overrides: dict[str, Any] | None = None,
+                where: str | None = None) -> RobotParams:
     """Load robot parameters from YAML (default: the packaged UR5 file) with optional overrides.
 
     Args:
         path: YAML file; ``None`` loads ``data/ur5_drive.yaml``.
         overrides: nested mapping merged over the file, e.g. ``{"physics_dt_s": 2.5e-5}``.
+        where: file and key path of ``overrides`` for error messages (``"run.yaml: params"``): a bad key
+            or value there is the user's, not the parameter file's (the file itself is checked by the tests).
 
     Raises:
         ConfigFileError: the file cannot be read or is not YAML.
@@ -169,7 +172,7 @@ def load_params(path: str | Path | None = None, overrides: dict[str, Any] | None
     data = read_yaml(p)
     if overrides:
         data = deep_merge(data, overrides)
-    return RobotParams.from_dict(data, where=p.name)
+    return RobotParams.from_dict(data, where=where or p.name)
 
 
 def read_yaml(path: Path) -> dict[str, Any]:

@@ -18,7 +18,7 @@ import numpy as np
 import pandas as pd
 from numpy.typing import NDArray
 
-from ..util.io import write_parquet_atomic
+from ..util.io import write_csv_atomic, write_parquet_atomic
 from .axes import JOINT_NAMES, N_JOINTS
 from .drive.motor import phase_currents
 
@@ -116,8 +116,14 @@ class SimResult:
         tcp = np.full((n, t_log.size, 3), np.nan)
         tcp_des = np.empty((n, t_log.size, 3))
         site = tcp_site
+        from .mjlib import site_positions, unavailable_reason
+
         for r, m in enumerate(models):
             d = mujoco.MjData(m)
+            if not unavailable_reason():  # mj_kinematics per sample from compiled code (same calls, no Python)
+                site_positions(m, d, site, q_set_log, tcp_des[r])
+                site_positions(m, d, site, log["q_rad"][r], tcp[r])
+                continue
             for i in range(t_log.size):
                 d.qpos[:] = q_set_log[i]
                 mujoco.mj_kinematics(m, d)
@@ -152,7 +158,11 @@ class SimResult:
 
     # ------------------------------------------------------------------ leaving
     def to_pandas(self, run: int | str = 0) -> pd.DataFrame:
-        """Wide time-series table of one run (index into the batch or its ``run_id``)."""
+        """Wide time-series table of one run (index into the batch or its ``run_id``).
+
+        ``df.attrs["ur5fault"]`` carries the run's metadata (:meth:`run_metadata`: run id, status, effects,
+        seed, gear ratios, versions), so figures drawn from the table alone are titled right.
+        """
         r = self.run_ids.index(run) if isinstance(run, str) else int(run)
         cols: dict[str, NDArray] = {"t_s": self.t_s}
         for j in range(N_JOINTS):
@@ -168,7 +178,9 @@ class SimResult:
             cols[f"tcp_{ax}_m"] = self.tcp_m[r, :, k]
         for k, ax in enumerate("xyz"):
             cols[f"tcp_des_{ax}_m"] = self.tcp_des_m[r, :, k]
-        return pd.DataFrame(cols)
+        df = pd.DataFrame(cols)
+        df.attrs["ur5fault"] = self.run_metadata(r)
+        return df
 
     def run_metadata(self, run: int) -> dict[str, Any]:
         """Per-run metadata written beside the time series."""
@@ -182,8 +194,19 @@ class SimResult:
         """Write one run's wide table to Parquet atomically, metadata in the file's schema."""
         r = self.run_ids.index(run) if isinstance(run, str) else int(run)
         df = self.to_pandas(r)
-        df.attrs["ur5fault"] = self.run_metadata(r)
         return write_parquet_atomic(df, path, {"ur5fault": json.dumps(self.run_metadata(r))})
+
+    def to_csv(self, path: str | Path, run: int | str = 0) -> Path:
+        """Write one run's wide table to CSV atomically (the metadata of :meth:`run_metadata` stays behind:
+        CSV has no place for it; Parquet keeps it)."""
+        return write_csv_atomic(self.to_pandas(run), path)
+
+    def plot(self, run: int | str = 0, twin: int | str | None = None, **kwargs: Any):
+        """The run figure of one run (:func:`ur5fault.plotting.run_figure`), against the run ``twin`` of the
+        same batch when given (its TCP deviation from that twin is drawn too). Returns the figure."""
+        from ..plotting import run_figure
+
+        return run_figure(self.to_pandas(run), twin=None if twin is None else self.to_pandas(twin), **kwargs)
 
     def summary(self, run: int = 0) -> dict[str, float]:
         """A few headline numbers of one run (for the command line)."""

@@ -106,8 +106,8 @@ def sensor_temperature_term(coeff_A_per_K: ArrayLike, temperature_C: ArrayLike, 
 class TermHook:
     """The data-driven terms of a batch, evaluated inside :func:`ur5fault.sim.engine._integrate`.
 
-    Built only when some run carries a term (:meth:`build` returns ``None`` otherwise), so runs
-    without terms pay nothing.  Arrays are the run arrays' term fields, batch axis first.
+    Its methods do nothing for the parts no run carries, so runs without terms pay nothing.  Arrays are the run
+    arrays' term fields, batch axis first.
     """
 
     a: object  # RunArrays (not imported: the engine imports this module)
@@ -116,39 +116,58 @@ class TermHook:
     last_sign: NDArray | None = None  # holding terms: direction of each joint's last motion (n_runs, 6)
 
     @classmethod
-    def build(cls, a) -> TermHook | None:
+    def build(cls, a) -> TermHook:
+        """The batch's terms; a batch without any is a hook whose methods do nothing."""
         link = any(np.any(getattr(a, f) != 0.0) for f in LINK_TORQUE_FIELDS)
-        model = np.any(a.armature_kgm2 != 0.0) or np.any(a.link_mass_kg != 0.0) or np.any(a.link_com_shift_m != 0.0)
-        sensor = any(np.any(getattr(a, f) != 0.0) for f in SENSOR_FIELDS)
-        if not (link or model or sensor):
-            return None
         return cls(a, bool(link), bool(np.any(a.term_gravity_scale != 0.0)))
+
+    @property
+    def any_term(self) -> bool:
+        """Some run carries a term (link torque, model or sensor)."""
+        a = self.a
+        return bool(self.link_torque or np.any(a.armature_kgm2 != 0.0) or np.any(a.link_mass_kg != 0.0)
+                    or np.any(a.link_com_shift_m != 0.0) or any(np.any(getattr(a, f) != 0.0) for f in SENSOR_FIELDS))
 
     # -- model terms, once before the run starts
     def prepare_model(self, mb) -> None:
         """Armature and link mass / centre-of-mass changes in every run's MuJoCo model."""
         a = self.a
-        if np.any(a.armature_kgm2 != 0.0):
-            arm = mb.model_field("dof_armature")
-            for r in range(a.n_runs):
-                arm[r][:6] = arm[r][:6] + a.armature_kgm2[r]
-        if np.any(a.link_mass_kg != 0.0) or np.any(a.link_com_shift_m != 0.0):
-            mass, ipos = mb.model_field("body_mass"), mb.model_field("body_ipos")
-            bodies = mb.link_bodies()
-            for r in range(a.n_runs):
-                for j, b in enumerate(bodies):
-                    if a.link_mass_kg[r, j] == 0.0 and not np.any(a.link_com_shift_m[r, j]):
-                        continue
-                    new_kg = mass[r][b] + a.link_mass_kg[r, j]
-                    if not new_kg > 0.0:  # a massless or negative link: the mass matrix is no longer positive
-                        raise ParameterError(
-                            f"link_mass on {JOINT_NAMES[j]}: mass_kg = {a.link_mass_kg[r, j]:g} would leave the link "
-                            f"{new_kg:.3g} kg (it weighs {mass[r][b]:.3g} kg); a link's mass must stay positive")
-                    ipos[r][b] = ipos[r][b] + a.link_com_shift_m[r, j]
-                    mass[r][b] = new_kg
-        mb.model_changed()
-        if self.gravity:
+        if self.any_term:  # (the models' derived constants are recomputed for any term, as they always were)
+            if np.any(a.armature_kgm2 != 0.0):
+                arm = mb.model_field("dof_armature")
+                for r in range(a.n_runs):
+                    arm[r][:6] = arm[r][:6] + a.armature_kgm2[r]
+            if np.any(a.link_mass_kg != 0.0) or np.any(a.link_com_shift_m != 0.0):
+                mass, ipos = mb.model_field("body_mass"), mb.model_field("body_ipos")
+                bodies = mb.link_bodies()
+                for r in range(a.n_runs):
+                    for j, b in enumerate(bodies):
+                        if a.link_mass_kg[r, j] == 0.0 and not np.any(a.link_com_shift_m[r, j]):
+                            continue
+                        new_kg = mass[r][b] + a.link_mass_kg[r, j]
+                        if not new_kg > 0.0:  # a massless or negative link: the mass matrix is no longer positive
+                            raise ParameterError(
+                                f"link_mass on {JOINT_NAMES[j]}: mass_kg = {a.link_mass_kg[r, j]:g} would leave the "
+                                f"link {new_kg:.3g} kg (it weighs {mass[r][b]:.3g} kg); a link's mass must stay "
+                                "positive")
+                        ipos[r][b] = ipos[r][b] + a.link_com_shift_m[r, j]
+                        mass[r][b] = new_kg
+            mb.model_changed()
+        if self.link_torque and self.gravity:
             mb.gravity_torque()  # binds the kinematic fields before the run starts
+
+    def static_load(self, q: NDArray, mb, dt: float) -> NDArray | float:
+        """The link-torque terms' load at rest at ``q`` (held by the drive from the start), or 0."""
+        if not self.link_torque:
+            return 0.0
+        return self.load_torque(q, np.zeros_like(q), np.ones_like(q), dt, mb.gravity_torque() if self.gravity else None)
+
+    def step_load(self, q: NDArray, qd: NDArray, mb, dt: float) -> NDArray | float:
+        """The link-torque terms' load over one physics step (:meth:`load_torque` with the multibody's mass-matrix
+        diagonal and gravity torque), or 0."""
+        if not self.link_torque:
+            return 0.0
+        return self.load_torque(q, qd, mb.mass_diagonal(), dt, mb.gravity_torque() if self.gravity else None)
 
     # -- link torques, every physics step
     def load_torque(self, q: NDArray, qd: NDArray, m_ii: NDArray, dt: float,
@@ -198,6 +217,8 @@ class TermHook:
     def apply_sensor_terms(self, log: dict[str, NDArray], t_log: NDArray) -> None:
         """Temperature drift of the current reading and time shifts of the logged readings, in place."""
         a = self.a
+        if not any(np.any(getattr(a, f) != 0.0) for f in SENSOR_FIELDS):
+            return
         if np.any(a.current_temp_drift_A_per_K != 0.0):
             log["i_FB_A"] += sensor_temperature_term(a.current_temp_drift_A_per_K, a.temperature_C,
                                                      a.current_temp_reference_C)[:, None, :]
@@ -218,39 +239,46 @@ SENSOR_FIELDS = ("current_temp_drift_A_per_K", "current_time_shift_s", "position
 @njit(cache=True)
 def _load_torque(q, qd, m_ii, dt, grav, amp_j, per_j, coul, coul_w, strib, strib_v, visc, quad,
                  grav_scale, sign_w, hold, hold_w, last_sign, out):
-    """The terms' load torque, run by run and joint by joint, skipping absent terms (same equations as
-    :meth:`TermHook.load_torque_reference`)."""
+    """The terms' load torque, run by run and joint by joint (:func:`load_torque_rj`)."""
     n, nj = q.shape
     for r in range(n):
         for j in range(nj):
-            t = grav_scale[r, j] * grav[r, j]
-            for h in range(amp_j.shape[2]):
-                if amp_j[r, j, h, 0] != 0.0 or amp_j[r, j, h, 1] != 0.0:
-                    x = per_j[r, j, h] * q[r, j]
-                    t += amp_j[r, j, h, 0] * math.sin(x) + amp_j[r, j, h, 1] * math.cos(x)
-            w = qd[r, j]
-            tv = 0.0
-            slope = 0.0
-            if coul[r, j] != 0.0:
-                s = math.tanh(w / coul_w[r, j])
-                tv += coul[r, j] * s
-                slope += coul[r, j] * (1.0 - s * s) / coul_w[r, j]
-            if strib[r, j] != 0.0:
-                s = math.tanh(w / sign_w)
-                vs = strib_v[r, j]
-                e = math.exp(-((w / vs) ** 2))
-                tv += strib[r, j] * s * e
-                slope += strib[r, j] * ((1.0 - s * s) / sign_w * e - s * e * 2.0 * w / (vs * vs))
-            if visc[r, j] != 0.0:
-                tv += visc[r, j] * w
-                slope += visc[r, j]
-            if quad[r, j] != 0.0:
-                tv += quad[r, j] * w * abs(w)
-                slope += quad[r, j] * 2.0 * abs(w)
-            if abs(w) > hold_w[r, j]:
-                last_sign[r, j] = 1.0 if w > 0.0 else -1.0
-            if hold[r, j] != 0.0:
-                e = math.exp(-((w / hold_w[r, j]) ** 2))
-                tv += hold[r, j] * last_sign[r, j] * e
-                slope += abs(hold[r, j] * last_sign[r, j] * 2.0 * w / (hold_w[r, j] * hold_w[r, j]) * e)
-            out[r, j] = t + tv / (1.0 + max(slope, 0.0) * dt / m_ii[r, j])
+            out[r, j] = load_torque_rj(r, j, q[r, j], qd[r, j], m_ii[r, j], dt, grav[r, j], amp_j, per_j, coul,
+                                       coul_w, strib, strib_v, visc, quad, grav_scale, sign_w, hold, hold_w, last_sign)
+
+
+@njit(cache=True, inline="always")
+def load_torque_rj(r, j, q, w, m_ii, dt, grav, amp_j, per_j, coul, coul_w, strib, strib_v, visc, quad,
+                   grav_scale, sign_w, hold, hold_w, last_sign):
+    """Load torque of joint ``j`` of run ``r`` at angle ``q``, speed ``w``, skipping absent terms (same equations
+    as :meth:`TermHook.load_torque_reference`); updates the holding term's ``last_sign[r, j]``."""
+    t = grav_scale[r, j] * grav
+    for h in range(amp_j.shape[2]):
+        if amp_j[r, j, h, 0] != 0.0 or amp_j[r, j, h, 1] != 0.0:
+            x = per_j[r, j, h] * q
+            t += amp_j[r, j, h, 0] * math.sin(x) + amp_j[r, j, h, 1] * math.cos(x)
+    tv = 0.0
+    slope = 0.0
+    if coul[r, j] != 0.0:
+        s = math.tanh(w / coul_w[r, j])
+        tv += coul[r, j] * s
+        slope += coul[r, j] * (1.0 - s * s) / coul_w[r, j]
+    if strib[r, j] != 0.0:
+        s = math.tanh(w / sign_w)
+        vs = strib_v[r, j]
+        e = math.exp(-((w / vs) ** 2))
+        tv += strib[r, j] * s * e
+        slope += strib[r, j] * ((1.0 - s * s) / sign_w * e - s * e * 2.0 * w / (vs * vs))
+    if visc[r, j] != 0.0:
+        tv += visc[r, j] * w
+        slope += visc[r, j]
+    if quad[r, j] != 0.0:
+        tv += quad[r, j] * w * abs(w)
+        slope += quad[r, j] * 2.0 * abs(w)
+    if abs(w) > hold_w[r, j]:
+        last_sign[r, j] = 1.0 if w > 0.0 else -1.0
+    if hold[r, j] != 0.0:
+        e = math.exp(-((w / hold_w[r, j]) ** 2))
+        tv += hold[r, j] * last_sign[r, j] * e
+        slope += abs(hold[r, j] * last_sign[r, j] * 2.0 * w / (hold_w[r, j] * hold_w[r, j]) * e)
+    return t + tv / (1.0 + max(slope, 0.0) * dt / m_ii)

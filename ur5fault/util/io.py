@@ -125,6 +125,11 @@ def write_parquet_atomic(df: pd.DataFrame, path: str | Path, metadata: Mapping[s
     return _atomic(path, lambda tmp: pq.write_table(table, tmp), checksum)
 
 
+def write_csv_atomic(df: pd.DataFrame, path: str | Path) -> Path:
+    """Write ``df`` to CSV (no index) atomically."""
+    return _atomic(path, lambda tmp: df.to_csv(tmp, index=False))
+
+
 def write_text_atomic(path: str | Path, text: str) -> Path:
     """Write ``text`` atomically."""
     return _atomic(path, lambda tmp: Path(tmp).write_text(text))

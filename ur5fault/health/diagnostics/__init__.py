@@ -6,7 +6,8 @@ Modules by concern: :mod:`.data` (split and inputs), :mod:`.models` (the classif
 :mod:`.metrics` (detection, localisation, kind, importance), :mod:`.thresholds` (smallest backlash
 detected and its TCP deviation), :mod:`.figures` (matplotlib Figures), :mod:`.report` (files),
 :mod:`.saved` (the trained classifiers, saved and loaded safely).
-Needs scikit-learn: ``pip install 'ur5fault[ml]'``.
+Needs scikit-learn and skops: ``pip install 'scikit-learn>=1.3' 'skops>=0.10'`` (from a checkout:
+``pip install '.[ml]'``).
 """
 
 from __future__ import annotations

@@ -9,10 +9,10 @@ import sys
 
 def register(sub) -> None:
     b = sub.add_parser("benchmark", help="train baseline classifiers on a campaign's train split, report on its test "
-                                         "split (needs scikit-learn: pip install 'ur5fault[ml]')")
+                                         "split (needs scikit-learn: pip install 'scikit-learn>=1.3')")
     b.add_argument("dir", help="campaign output folder (with features.parquet), e.g. results/diagnostics")
     b.add_argument("--out", help="report folder (default: DIR/benchmark)")
-    b.add_argument("--seed", type=int, default=0, help="random state of the classifiers and the bootstrap")
+    b.add_argument("--seed", type=int, default=0, help="random state of the classifiers and the bootstrap (default 0)")
     b.add_argument("--shuffle-labels", action="store_true",
                    help="control run: permute the training labels (every score must fall to chance)")
     b.add_argument("--features", choices=("paper", "twin", "both"),

@@ -46,7 +46,8 @@ def require_sklearn() -> None:
     except ImportError:  # pragma: no cover - depends on the installation
         from ...errors import Ur5FaultError
 
-        raise Ur5FaultError("ur5fault benchmark needs scikit-learn: pip install 'ur5fault[ml]'") from None
+        raise Ur5FaultError("ur5fault benchmark needs scikit-learn and skops: pip install 'scikit-learn>=1.3' "
+                            "'skops>=0.10' (from a checkout: pip install '.[ml]')") from None
 
 
 def make_classifier(seed: int):

@@ -30,5 +30,11 @@ STATE_NAMES = (
     # speed, that speed, and the motor share's applied torque (joint-side units)
     "z_l", "z_m", "f_l", "s_l", "qd_prev", "t_f_m",
 )
+#: the compiled kernel's memo of the LuGre law's speed-dependent factors, link side then motor side: the speed they
+#: were computed at (NaN: none yet), the Stribeck level g and dg/d|w|, and the bristle decay's x, exp(-x) and
+#: (1 - exp(-x)) / x.  Not model state: the bristle update after a step and the friction of the next step see the
+#: same speed, so the second evaluation reuses the first (the numpy reference recomputes).  Rows after STATE_NAMES.
+MEMO_NAMES = ("zl_w", "zl_g", "zl_dg", "zl_x", "zl_e", "zl_r", "zm_w", "zm_g", "zm_dg", "zm_x", "zm_e", "zm_r")
+STATE_NAMES = STATE_NAMES + MEMO_NAMES
 PI = {name: i for i, name in enumerate(PARAM_NAMES)}
 XI = {name: i for i, name in enumerate(STATE_NAMES)}

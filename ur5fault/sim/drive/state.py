@@ -22,15 +22,14 @@ from numpy.typing import NDArray
 from . import controller as ctl
 from . import friction as fr
 from . import gearbox, motor, power, sensors
-from .layout import PARAM_NAMES, PI, STATE_NAMES, XI  # noqa: F401  (re-exported for callers)
+from .layout import MEMO_NAMES, PARAM_NAMES, PI, STATE_NAMES, XI  # noqa: F401  (re-exported for callers)
 
 
-def pack_params(sim, a) -> NDArray:
-    """Packed parameter array ``(n_params, n_runs, 6)`` from the simulator and the run arrays."""
-    p = sim.params
+def pack_params(p, g, a) -> NDArray:
+    """Packed parameter array ``(n_params, n_runs, 6)`` from the robot parameters ``p`` (``RobotParams``), the
+    controller gains ``g`` (``controller.design_gains``) and the run arrays ``a`` (``RunArrays``)."""
     dt = p.physics_dt_s
     n = a.n_runs
-    g = sim.gains
     out = np.zeros((len(PARAM_NAMES), n, 6))
     R, L = a.motor_resistance_ohm, a.motor_inductance_H
     decay = np.exp(-R * dt / L)
@@ -90,6 +89,7 @@ def initial_state(P: NDArray, q: NDArray, bias: NDArray) -> NDArray:
     X[XI["iq_fb"]] = i_q
     X[XI["i_ref"]] = i_q
     X[XI["t_id"]] = bias
+    X[XI["zl_w"]] = X[XI["zm_w"]] = np.nan  # the kernel's memo is empty
     return X
 
 

@@ -1,0 +1,43 @@
+"""Several logs identified jointly: the signals of each log derived on their own and laid end to end, and no
+rest segment or start from rest spanning two logs."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from ur5fault.identify import sensors, stickslip
+from ur5fault.identify.signals import derive, derive_all
+from ur5fault.logs import read_nist
+from ur5fault.sim.engine import DEFAULT_MODEL_PATH
+from ur5fault.sim.params import load_params
+
+
+@pytest.fixture(scope="module")
+def parts(nist_path):
+    log = read_nist(nist_path)
+    return [log.window(0.0, 12.0), log.window(30.0, 40.0)]
+
+
+def test_joint_signals_are_each_logs_own(parts):
+    p = load_params()
+    own = [derive(g, p, DEFAULT_MODEL_PATH) for g in parts]
+    joint = derive_all(parts, p, DEFAULT_MODEL_PATH)
+    assert joint.log_starts == (0, own[0].n) and joint.n == own[0].n + own[1].n
+    for name in ("q_target_rad", "qd_target_rad_s", "qdd_target_rad_s2", "current_A", "model_torque_Nm",
+                 "temperature_C", "target_torque_Nm"):
+        np.testing.assert_array_equal(getattr(joint, name), np.concatenate([getattr(o, name) for o in own]))
+
+
+def test_no_rest_or_start_spans_two_logs(parts):
+    p = load_params()
+    # the same log twice: its last samples at rest would run straight into its first ones
+    joint = derive_all([parts[0], parts[0]], p, DEFAULT_MODEL_PATH)
+    b = joint.log_starts[1]
+    for seg in sensors.rest_segments(joint):
+        assert joint.same_log(int(seg[0]), int(seg[-1])), (seg[0], seg[-1], b)
+    single = derive(parts[0], p, DEFAULT_MODEL_PATH)
+    assert len(sensors.rest_segments(joint)) == 2 * len(sensors.rest_segments(single))
+    for j in range(6):
+        for s in stickslip.starts(joint, j):
+            assert joint.same_log(s - int(round(stickslip.MIN_REST_S / joint.period_s)), s)
