@@ -5,7 +5,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: venv test campaign bench lint clean diagnostics
+.PHONY: venv test campaign bench lint clean diagnostics prognostics
 
 venv: $(STAMP)
 
@@ -38,6 +38,17 @@ diagnostics: $(STAMP)
 	end=$$(date +%s) && \
 	echo "make diagnostics: $$((end - start)) s end to end (campaign + benchmark)" && \
 	$(BIN)/python bench/diagnostics_timing.py results/diagnostics --wall-s $$((end - start))
+
+# issue 20: the prognostics fleet (campaigns/prognostics.yaml, 100 units run to failure) and its RUL benchmark,
+# end to end, timed, into results/prognostics/{fleet,benchmark}. Resumes an interrupted fleet. On a shared or
+# small machine: PROGNOSTICS=campaigns/prognostics_small.yaml (30 units)
+PROGNOSTICS ?= campaigns/prognostics.yaml
+prognostics: $(STAMP)
+	@start=$$(date +%s); \
+	$(BIN)/ur5fault campaign run $(PROGNOSTICS) --out results/prognostics/fleet --quiet && \
+	$(BIN)/ur5fault prognose results/prognostics/fleet --out results/prognostics/benchmark && \
+	end=$$(date +%s) && \
+	echo "make prognostics: $$((end - start)) s end to end (fleet + benchmark)"
 
 lint: $(STAMP)
 	$(BIN)/ruff check ur5fault tests bench

@@ -74,7 +74,10 @@ def cmd_simulate(args: argparse.Namespace) -> int:
                       bar_format="{desc}: {percentage:3.0f}%|{bar}| {elapsed}<{remaining}") as pbar:
         res = sim.run(cfg.trajectory, [RunSpec("run", cfg.seed, cfg.effects)], log_period_s=cfg.log_period_s,
                       duration_s=cfg.duration_s, progress=progress.fraction_callback(pbar))
-    res.to_csv(out) if out.suffix.lower() == ".csv" else res.to_parquet(out)
+    if out.suffix.lower() == ".csv":
+        res.to_csv(out)
+    else:
+        res.to_parquet(out)
     # prose on stderr, the one data line (the run's summary as JSON) on stdout: `simulate ... | jq` works
     verb = "replaced" if replaced else "wrote"
     sys.stderr.write(f"{verb} {out} ({res.t_s.size} samples x {len(res.to_pandas(0).columns)} columns)\n")
@@ -253,12 +256,14 @@ def _add_optional_commands(sub) -> None:
     from .campaign import cli as campaign_cli
     from .discrepancy import cli as discrepancy_cli
     from .health.diagnostics import cli as benchmark_cli
+    from .health.prognostics import cli as prognose_cli
     from .identify import cli as identify_cli
 
     campaign_cli.register(sub)
     discrepancy_cli.register(sub)
     identify_cli.register(sub)
     benchmark_cli.register(sub)
+    prognose_cli.register(sub)
 
 
 def _one_line(message: str) -> int:

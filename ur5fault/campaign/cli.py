@@ -59,11 +59,16 @@ def _usage(parser: argparse.ArgumentParser) -> int:
 
 def cmd_run(args: argparse.Namespace) -> int:
     from ..errors import ParameterError
+    from ..health.prognostics.spec import is_life_file
     from ..util.checks import check_number
     from . import acceptable_backlash, load_campaign, run_campaign, tcp_table
     from .limits import confirmation_needed, effective_jobs, estimate
     from .spec import MAX_THRESHOLD_MM
 
+    if is_life_file(args.file):  # a life campaign (issue 20): units run to failure
+        from ..health.prognostics.cli import cmd_life_run
+
+        return cmd_life_run(args)
     camp = load_campaign(args.file, args.out, args.model, args.duration_s)
     if args.threshold_mm is not None:
         check_number(args.threshold_mm, "--threshold-mm", 0.0, MAX_THRESHOLD_MM, "mm", lo_open=True)

@@ -1,0 +1,80 @@
+"""Life campaigns on a tiny fleet: resumed after an interruption, the inspections are bit-identical
+to an uninterrupted fleet's (and to one run on another number of processes)."""
+
+from __future__ import annotations
+
+import pandas as pd
+import pyarrow.parquet as pq
+import pytest
+
+from ur5fault.campaign.lock import CampaignLockedError, Lock
+from ur5fault.campaign.store import CampaignChangedError
+from ur5fault.health.prognostics.fleet import run_life
+from ur5fault.health.prognostics.spec import build_life
+
+# 3 units on the first 1.5 s of the pick-and-place (the shoulder's first move), a fast wear rate and a
+# 0.05 mm criterion, so each unit fails within a few inspections
+TINY = {"name": "tiny", "duration_s": 1.5, "batch_size": 4,
+        "life": {"units": 3, "seed": 4, "interval_cycles": 100_000, "max_cycles": 1_500_000,
+                 "failure": {"feature": "tcp_dev_max_mm", "threshold": 0.05},
+                 "wear": {"backlash_rate_deg_per_MJ": 0.01},
+                 "duty": {"trajectories": ["pick_and_place"], "payload_kg": [0.5, 2.0]}},
+        "split": {"test_fraction": 0.34, "seed": 0}}
+
+
+def _tables(folder):
+    return {p.name: pq.read_table(p) for p in sorted((folder / "runs").glob("*.parquet"))}
+
+
+def _sidecars(folder):
+    return {p.name: p.read_text() for p in sorted((folder / "runs").glob("*.sha256"))}
+
+
+@pytest.mark.slow
+def test_resumed_fleet_is_bit_identical_to_an_uninterrupted_one(tmp_path):
+    camp = build_life(TINY, "tiny")
+    whole = run_life(camp, tmp_path / "whole", jobs=1, progress=False, note=None)
+    assert whole["state"] == "complete" and whole["n_failed"] >= 2
+    assert whole["inspections_per_unit"]["min"] >= 2
+    # interrupted after two rounds, then resumed (on two processes instead of one)
+    part = run_life(camp, tmp_path / "resumed", jobs=1, progress=False, note=None, max_rounds=2)
+    assert part["state"] == "running" and len(_tables(tmp_path / "resumed")) == 6
+    # a file of the interrupted run damaged as by a kill during a write, and a stale temporary left behind
+    (tmp_path / "resumed" / "runs" / "u00001_i0001.parquet").write_bytes(b"PAR1 cut")
+    (tmp_path / "resumed" / "runs" / ".u00001_i0002.parquet.x.tmp").write_bytes(b"")
+    again = run_life(camp, tmp_path / "resumed", jobs=2, progress=False, note=None)
+    assert again["state"] == "complete"
+    a, b = _tables(tmp_path / "whole"), _tables(tmp_path / "resumed")
+    assert a.keys() == b.keys()
+    for name in a:
+        assert a[name].equals(b[name]), name        # every value and the recorded identity
+        assert a[name].schema.metadata == b[name].schema.metadata
+    assert _sidecars(tmp_path / "whole") == _sidecars(tmp_path / "resumed")   # the files' bytes, hashed
+    ia = pd.read_parquet(tmp_path / "whole" / "inspections.parquet")
+    ib = pd.read_parquet(tmp_path / "resumed" / "inspections.parquet")
+    pd.testing.assert_frame_equal(ia, ib, check_exact=True)
+    # the ground truth: wear grows, the unit stops at its first failed inspection, rul counts down to it
+    for _, g in ia.groupby("unit_id"):
+        assert (g[[f"backlash_deg_j{j}" for j in range(1, 7)]].diff().dropna() >= 0).all().all()
+        if not g["censored"].iloc[0]:
+            assert g["failed"].tolist() == [False] * (len(g) - 1) + [True]
+            assert (g["rul_cycles"] == g["eol_cycles"] - g["cycles"]).all() and g["rul_cycles"].iloc[-1] == 0
+    assert (ia.groupby("unit_id")["split"].nunique() == 1).all()
+
+
+@pytest.mark.slow
+def test_a_changed_wear_law_is_not_mistaken_for_stored_inspections(tmp_path):
+    camp = build_life(TINY, "tiny")
+    run_life(camp, tmp_path, jobs=1, progress=False, note=None, max_rounds=1)
+    changed = build_life({**TINY, "life": {**TINY["life"], "wear": {"backlash_rate_deg_per_MJ": 0.02}}}, "tiny")
+    with pytest.raises(CampaignChangedError, match=r"u00000_i0000.parquet: made under other settings \(wear"
+                                                   r".backlash_rate_deg_per_MJ: 0.01 in the file, 0.02 now\)"):
+        run_life(changed, tmp_path, jobs=1, progress=False, note=None, max_rounds=1)
+    m = run_life(changed, tmp_path, jobs=1, progress=False, note=None, max_rounds=1, replace_changed=True)
+    assert m["state"] == "running"
+
+
+def test_a_second_writer_is_refused(tmp_path):
+    camp = build_life(TINY, "tiny")
+    with Lock(tmp_path), pytest.raises(CampaignLockedError):
+        run_life(camp, tmp_path, jobs=1, progress=False, note=None)

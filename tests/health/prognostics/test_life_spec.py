@@ -1,0 +1,72 @@
+"""Life-campaign files: validation with one-line errors, the split by unit, the fleet's draws."""
+
+from __future__ import annotations
+
+import pytest
+
+from ur5fault.cli import main
+from ur5fault.errors import ParameterError, UnknownNameError
+from ur5fault.health.prognostics.spec import build_life, is_life_file, split_units
+
+BASE = {"name": "t", "life": {"units": 20, "seed": 3, "interval_cycles": 1000, "max_cycles": 10000,
+                              "duty": {"trajectories": ["pick_and_place"], "payload_kg": [0.5, 2.0]}}}
+
+
+def _with(**life):
+    return {**BASE, "life": {**BASE["life"], **life}}
+
+
+def test_split_is_by_unit_and_never_puts_a_unit_on_both_sides():
+    camp = build_life({**BASE, "split": {"test_fraction": 0.3, "seed": 1}}, "t")
+    test = {u.unit_id for u in camp.units if u.split == "test"}
+    train = {u.unit_id for u in camp.units if u.split == "train"}
+    assert len(test) == 6 and len(train) == 14 and not test & train
+    assert split_units(5, 0.01, 0).count("test") == 1          # at least one held-out unit
+    assert split_units(5, 0.95, 0).count("train") == 1         # at least one unit to fit on
+
+
+def test_fleet_draws_are_deterministic_and_do_not_depend_on_fleet_size():
+    a = build_life(BASE, "t")
+    b = build_life(_with(units=40), "t")
+    assert [(u.payload_kg, u.temperature_C) for u in a.units] == [(u.payload_kg, u.temperature_C) for u in b.units[:20]]
+    assert all(0.5 <= u.payload_kg <= 2.0 for u in a.units)
+    assert len({u.payload_kg for u in a.units}) == 20
+
+
+@pytest.mark.parametrize("life, match", [
+    ({"units": 1}, "life.units"),
+    ({"interval_cycles": 0}, "life.interval_cycles"),
+    ({"max_cycles": 10}, "life.max_cycles"),
+    ({"failure": {"feature": "tcp_dev_max_m"}}, "life.failure.feature"),
+    ({"failure": {"threshold": -1}}, "life.failure.threshold"),
+    ({"wear": {"unit_sigma": -1}}, "life.wear.unit_sigma"),
+    ({"wear": {"rate": 1}}, "life.wear"),
+    ({"duty": {"payload_kg": [2, 1]}}, "life.duty.payload_kg"),
+    ({"duty": {"trajectories": ["nowhere"]}}, "trajector"),
+    ({"lifetime": 3}, "lifetime"),
+])
+def test_bad_life_files_are_refused_naming_the_key(life, match):
+    with pytest.raises((ParameterError, UnknownNameError), match=match):
+        build_life(_with(**life), "t")
+
+
+def test_cli_bad_life_file_is_one_line_exit_2(tmp_path, capsys):
+    f = tmp_path / "life.yaml"
+    f.write_text("name: x\nlife:\n  units: 1\n")
+    assert is_life_file(f)
+    assert main(["campaign", "run", str(f), "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("ur5fault: error: ") and err.count("\n") == 1 and "life.units" in err
+
+
+def test_cli_refuses_campaign_options_a_life_campaign_does_not_take(tmp_path, capsys):
+    f = tmp_path / "life.yaml"
+    f.write_text("name: x\nlife:\n  units: 3\n")
+    assert main(["campaign", "run", str(f), "--out", str(tmp_path / "o"), "--threshold-mm", "0.3"]) == 2
+    assert "--threshold-mm does not apply to a life campaign" in capsys.readouterr().err
+
+
+def test_cli_prognose_without_inspections_is_one_line_exit_2(tmp_path, capsys):
+    assert main(["prognose", str(tmp_path / "nowhere")]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("ur5fault: error: ") and err.count("\n") == 1 and "inspections.parquet" in err

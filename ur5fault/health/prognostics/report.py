@@ -1,0 +1,189 @@
+"""``ur5fault prognose DIR``: fit the RUL estimators on the training units of a life campaign, predict
+at every inspection of the held-out units before their failure, and write ``metrics.json`` (every
+number), ``report.md`` and the figures beside each other."""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from ...errors import ConfigFileError
+from ...util.io import write_json_atomic, write_text_atomic
+from ..diagnostics.report import clean
+from . import metrics as M
+from .figures import health_index_paths, rul_alpha_cone
+from .rul import HealthIndex, PopulationRUL, WienerRUL
+from .spec import Failure
+
+NEEDED = ("unit_id", "inspection", "cycles", "split", "rul_cycles", "eol_cycles", "censored", "failed")
+ESTIMATORS = ("wiener", "naive")
+
+
+def load_inspections(folder: Path) -> tuple[pd.DataFrame, dict[str, Any]]:
+    """The inspections table and manifest of a life-campaign folder (one-line errors)."""
+    path = Path(folder) / "inspections.parquet"
+    if not path.is_file():
+        raise ConfigFileError(f"{path}: not found; run a life campaign into {folder} first "
+                              "(`ur5fault campaign run campaigns/prognostics.yaml`)")
+    try:
+        df = pd.read_parquet(path)
+    except (OSError, ValueError) as exc:
+        raise ConfigFileError(f"{path}: unreadable as Parquet ({' '.join(str(exc).split())[:120]})") from None
+    missing = [c for c in NEEDED if c not in df.columns]
+    if missing:
+        raise ConfigFileError(f"{path}: column {missing[0]!r} missing; not the inspections of a life campaign")
+    try:
+        manifest = json.loads((Path(folder) / "manifest.json").read_text())
+    except (OSError, ValueError):
+        manifest = {}
+    return df, manifest
+
+
+def predict(df: pd.DataFrame, failure: Failure, seed: int = 0) -> tuple[dict[str, pd.DataFrame], dict[str, Any],
+                                                                      np.ndarray]:
+    """Fit on the failed training units; predict at every pre-failure inspection of the failed test units.
+
+    Returns the prediction tables per estimator, the fitted constants, and the health index of every row.
+    """
+    failed = df[~df["censored"]]
+    train, test = failed[failed["split"] == "train"], failed[failed["split"] == "test"]
+    n_tr, n_te = train["unit_id"].nunique(), test["unit_id"].nunique()
+    if n_tr < 3 or n_te < 1:
+        raise ConfigFileError(f"{n_tr} failed training and {n_te} failed test units: need at least 3 and 1 "
+                              "(a larger fleet or a longer max_cycles)")
+    hi_model = HealthIndex(failure.feature, failure.threshold).fit(train)
+    hi_all = hi_model.transform(df)
+    hi_of = pd.Series(hi_all, index=df.index)
+    hist = {uid: (g["cycles"].to_numpy(float), hi_of[g.index].to_numpy()) for uid, g in
+            df.sort_values("cycles").groupby("unit_id")}
+    wiener = WienerRUL(seed).fit([hist[u][0] for u in train["unit_id"].unique()],
+                                 [hist[u][1] for u in train["unit_id"].unique()], hi_model.failure_level_,
+                                 hi_model.residual_sd_)
+    naive = PopulationRUL().fit(train.groupby("unit_id")["eol_cycles"].first().to_numpy())
+    rows: dict[str, list] = {name: [] for name in ESTIMATORS}
+    for uid, g in test.sort_values("cycles").groupby("unit_id"):
+        n_all, h_all = hist[uid]
+        for k, (_, r) in enumerate(g.iterrows()):
+            if r["rul_cycles"] <= 0:
+                continue  # the failure inspection itself: nothing left to predict
+            base = {"unit_id": uid, "cycles": r["cycles"], "eol_cycles": r["eol_cycles"], "rul_true": r["rul_cycles"]}
+            if k == 0:  # no history yet: the population prior alone (theta at its mean)
+                est = naive.predict(r["cycles"])
+                w = (est[0], est[1], est[2])
+            else:
+                w = wiener.predict(n_all[: k + 1], h_all[: k + 1])
+            for name, e in (("wiener", w), ("naive", naive.predict(r["cycles"]))):
+                rows[name].append({**base, "rul_est": e[0], "rul_lo": e[1], "rul_hi": e[2]})
+    pred = {name: pd.DataFrame(v) for name, v in rows.items()}
+    fitted = {
+        "health_index": {"features": hi_model.features_, "coef": hi_model.coef_.tolist(),
+                         "failure_level": hi_model.failure_level_,
+                         "residual_sd": hi_model.residual_sd_, "criterion": failure.feature,
+                         "threshold": failure.threshold},
+        "wiener": {"theta_mean_per_cycle": wiener.theta_mean_, "theta_sd_per_cycle": wiener.theta_sd_,
+                   "sigma2_per_cycle": wiener.sigma2_},
+        "naive": {"train_eol_cycles": naive.eol_.tolist()},
+        "n_train_units": int(n_tr), "n_test_units": int(n_te),
+    }
+    return pred, fitted, hi_all
+
+
+def run_prognose(folder: Path, out: Path | None = None, *, seed: int = 0) -> dict[str, Any]:
+    """The benchmark on a life-campaign folder; returns the metrics written to ``out/metrics.json``."""
+    t0 = time.perf_counter()
+    folder = Path(folder)
+    out = Path(out) if out is not None else folder.parent / "benchmark"
+    df, manifest = load_inspections(folder)
+    failure = Failure(**manifest["failure"]) if isinstance(manifest.get("failure"), dict) else Failure()
+    pred, fitted, hi = predict(df, failure, seed)
+    per_unit = df.groupby("unit_id").agg(split=("split", "first"), n=("inspection", "size"),
+                                         eol=("eol_cycles", "first"))
+    if set(per_unit[per_unit["split"] == "train"].index) & set(per_unit[per_unit["split"] == "test"].index):
+        raise ConfigFileError(f"{folder}: a unit is on both sides of the split")  # cannot happen: one label per unit
+    m: dict[str, Any] = {
+        "source": str(folder),
+        "dataset": {
+            "n_units": int(len(per_unit)), "n_train_units": fitted["n_train_units"],
+            "n_test_units": fitted["n_test_units"], "n_censored_units": int(per_unit["eol"].isna().sum()),
+            "n_inspections": int(len(df)), "split_by": "unit",
+            "inspections_per_unit": {"min": int(per_unit["n"].min()), "mean": float(per_unit["n"].mean()),
+                                     "max": int(per_unit["n"].max())},
+            "eol_cycles": {"median": float(per_unit["eol"].median()), "min": float(per_unit["eol"].min()),
+                           "max": float(per_unit["eol"].max())},
+            "failure": {"feature": failure.feature, "threshold": failure.threshold},
+            "fleet_wall_s": manifest.get("wall_s_this_invocation"),
+        },
+        "alpha": M.ALPHA, "lambda": M.LAMBDA,
+        "estimators": {name: M.summary(p) for name, p in pred.items()},
+        "fitted": fitted,
+    }
+    w, n = m["estimators"]["wiener"], m["estimators"]["naive"]
+    m["goals"] = {
+        "rmse_50_ratio_wiener_to_naive": w["rmse_cycles"]["0.5"] / n["rmse_cycles"]["0.5"],
+        "rmse_50_at_most_half_of_naive": w["rmse_cycles"]["0.5"] <= 0.5 * n["rmse_cycles"]["0.5"],
+        "alpha_lambda_at_least_0.8": w["alpha_lambda_accuracy"] >= 0.8,
+    }
+    figures = {"rul_alpha_cone": rul_alpha_cone(pred), "health_index": health_index_paths(df, hi,
+                                                                                        fitted["health_index"]
+                                                                                        ["failure_level"])}
+    out.mkdir(parents=True, exist_ok=True)
+    names = []
+    for name, fig in figures.items():
+        tmp = out / f".{name}.png.tmp"
+        fig.savefig(tmp, dpi=110, format="png")
+        os.replace(tmp, out / f"{name}.png")
+        names.append(f"{name}.png")
+    for name, p in pred.items():
+        from ...util.io import write_parquet_atomic
+
+        write_parquet_atomic(p, out / f"predictions_{name}.parquet")
+    m["figures"] = names
+    m["benchmark_wall_s"] = time.perf_counter() - t0
+    m["out"] = str(out)
+    m = clean(m)
+    write_json_atomic(out / "metrics.json", m)
+    write_text_atomic(out / "report.md", markdown(m))
+    return m
+
+
+def _f(v: Any, fmt: str = ".3g") -> str:
+    return "-" if v is None or (isinstance(v, float) and not math.isfinite(v)) else format(v, fmt)
+
+
+def markdown(m: dict[str, Any]) -> str:
+    d = m["dataset"]
+    ipu = d["inspections_per_unit"]
+    lines = [
+        f"# RUL benchmark: {m['source']}", "",
+        f"{d['n_units']} units ({d['n_censored_units']} censored), {d['n_inspections']} inspections ({ipu['min']}-"
+        f"{ipu['max']} per unit, mean {ipu['mean']:.1f}); split by unit: {d['n_train_units']} failed training and "
+        f"{d['n_test_units']} failed held-out units. End of life: first inspection with {d['failure']['feature']} >= "
+        f"{d['failure']['threshold']:g}; median {_f(d['eol_cycles']['median'])} cycles "
+        f"({_f(d['eol_cycles']['min'])}-{_f(d['eol_cycles']['max'])}).", "",
+        f"| estimator | RMSE at 25 % life | at 50 % | at 75 % | alpha-lambda accuracy (alpha {m['alpha']:g}, "
+        f"lambda {m['lambda']:g}) | median prognostic horizon (fraction of life) | 90 % interval coverage |",
+        "| --- | --- | --- | --- | --- | --- | --- |",
+    ]
+    for name, r in m["estimators"].items():
+        rm = r["rmse_cycles"]
+        lines.append(f"| {name} | {_f(rm['0.25'])} | {_f(rm['0.5'])} | {_f(rm['0.75'])} | "
+                     f"{_f(r['alpha_lambda_accuracy'], '.2f')} | {_f(r['prognostic_horizon_cycles_median'])} "
+                     f"({_f(r['prognostic_horizon_fraction_median'], '.2f')}) | "
+                     f"{_f(r['interval_coverage_90'], '.2f')} |")
+    g = m["goals"]
+    lines += ["", f"Goals: RMSE at 50 % life, wiener / naive = {_f(g['rmse_50_ratio_wiener_to_naive'], '.2f')} "
+              f"(goal <= 0.5: {'met' if g['rmse_50_at_most_half_of_naive'] else 'missed'}); alpha-lambda accuracy "
+              f">= 0.8: {'met' if g['alpha_lambda_at_least_0.8'] else 'missed'}.", "",
+              "RMSE in cycles. wiener: health index from the unit's own feature changes, Wiener process with a "
+              "population prior on its drift (median of the RUL distribution, 5-95 % interval). naive: mean "
+              "residual life of the training units that outlived the unit's age.", "",
+              "Figures: " + ", ".join(f"`{f}`" for f in m["figures"]) + f". Benchmark wall time "
+              f"{m['benchmark_wall_s']:.1f} s."]
+    return "\n".join(lines) + "\n"
