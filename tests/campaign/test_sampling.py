@@ -206,3 +206,28 @@ def test_small_sampled_campaign_runs_labels_and_resumes(tmp_path):
     assert stamp == {p.name: p.stat().st_mtime_ns for p in (tmp_path / "runs").iterdir()}  # resumed: nothing to do
     info = status(tmp_path)  # rebuilt from the manifest's campaign text: the same draws
     assert info["n_runs_expected"] == len(camp.runs) == info["runs"]["ok"]
+
+
+def test_twin_residuals_add_features_and_change_the_identity(tmp_path):
+    from ur5fault.campaign.digital_twin import twin_effects, twin_id, twin_seed
+    from ur5fault.campaign.identity import Identities
+    from ur5fault.health.twin_features import FEATURE_UNITS as TWIN_UNITS
+
+    spec = {**copy.deepcopy(TINY), "twin_residuals": True}
+    camp = build_campaign(spec, "tiny.yaml", out=tmp_path)
+    plain = build_campaign(copy.deepcopy(TINY), "tiny.yaml")
+    assert Identities(camp).identity(camp.runs[0]) != Identities(plain).identity(plain.runs[0])
+    for rc in camp.runs:  # what the twin knows: payload mass and temperature; never the fault, the centre of
+        names = {e.name for e in twin_effects(camp, rc)}  # mass or the latency; its own noise seed
+        assert names == {"payload", "temperature"} and twin_seed(rc.cond["seed"]) != rc.cond["seed"]
+        if rc.fault_effects():
+            assert twin_id(rc) == twin_id(rc.twin())  # a run and its healthy twin share one digital twin
+    run_campaign(camp, tmp_path, jobs=1, progress=False)
+    df = pd.read_parquet(tmp_path / "features.parquet")
+    assert len(df) == len(camp.runs) and set(df["status"]) == {"ok"} and set(TWIN_UNITS) <= set(df.columns)
+    assert np.isfinite(df[[c for c in TWIN_UNITS if c.startswith("twin_est_")]].to_numpy()).all()
+
+
+def test_twin_residuals_must_be_a_bool():
+    with pytest.raises(ParameterError, match="twin_residuals"):
+        build_campaign({**copy.deepcopy(TINY), "twin_residuals": "yes"}, "tiny.yaml")

@@ -181,3 +181,97 @@ def test_cli_missing_folder_is_one_line_exit_2(tmp_path, capsys):
     assert main(["benchmark", str(tmp_path / "nowhere")]) == 2
     err = capsys.readouterr().err
     assert err.startswith("ur5fault: error: ") and err.count("\n") == 1 and "no such feature table" in err
+
+
+# ----------------------------------------------------------------------------- feature sets and saved classifiers
+def with_twin(df: pd.DataFrame, seed: int = 1, informative: bool = True) -> pd.DataFrame:
+    """The synthetic table with twin residual columns: noise, and on faulty runs a backlash estimate on
+    the fault joint (a twin feature a robot computes from its own signals)."""
+    from ur5fault.health.twin_features import FEATURE_UNITS as TWIN
+
+    rng = np.random.default_rng(seed)
+    twin = pd.DataFrame(rng.normal(0, 1, (len(df), len(TWIN))), columns=list(TWIN))
+    if informative:
+        for j in (2, 3):
+            on = (df["fault_joint"] == j).to_numpy()
+            twin.loc[on, f"twin_est_backlash_rad_j{j}"] += 300 * df.loc[on, "fault_size"].to_numpy()
+    return pd.concat([df.reset_index(drop=True), twin], axis=1)
+
+
+def test_feature_sets_choose_their_inputs_and_no_label():
+    df = with_twin(synthetic())
+    paper, twin, both = (input_columns(df, fs) for fs in ("paper", "twin", "both"))
+    labels = {"fault", "fault_joint", "fault_scope", "fault_size", "split", "split_group", "seed", "trajectory"}
+    for cols in (paper, twin, both):
+        assert not set(cols) & labels and not [c for c in cols if c.startswith("tcp_")]
+    assert all(c.startswith("twin_") for c in twin if c not in ("payload_kg", "temperature_C"))
+    assert not [c for c in paper if c.startswith("twin_")] and set(both) == set(paper) | set(twin)
+    with pytest.raises(ConfigFileError, match="twin residual feature"):
+        load_dataset(synthetic(), "twin")
+
+
+def test_twin_set_learns_and_its_shuffled_control_is_at_chance():
+    df = with_twin(synthetic(informative=False))  # only the twin columns carry the fault
+    paper, _ = evaluate(df, with_figures=False, with_importance=False, feature_set="paper")
+    twin, _ = evaluate(df, with_figures=False, with_importance=False, feature_set="twin")
+    shuffled, _ = evaluate(df, shuffle_labels=True, with_figures=False, with_importance=False, feature_set="twin")
+    assert twin["detection"]["auc_all"] > 0.85 and abs(paper["detection"]["auc_all"] - 0.5) < 0.2
+    assert abs(shuffled["detection"]["auc_all"] - 0.5) < 0.2
+
+
+def test_saved_classifiers_round_trip_and_score_another_campaign(tmp_path):
+    from ur5fault.health.diagnostics import run_benchmark
+    from ur5fault.health.diagnostics.saved import load_models, training_hash
+
+    train_dir, other_dir = tmp_path / "train", tmp_path / "other"
+    train_dir.mkdir()
+    other_dir.mkdir()
+    df = with_twin(synthetic())
+    df.to_parquet(train_dir / "features.parquet")
+    other = with_twin(synthetic(n_groups=6, seed=7), seed=8)  # other motions, other noise
+    other.to_parquet(other_dir / "features.parquet")
+    m = run_benchmark(train_dir, compare=False)
+    assert m["feature_set"] == "both" and "comparison" not in m
+    models, schema = load_models(train_dir / "benchmark")
+    ds = load_dataset(df, "both")
+    assert [c["name"] for c in schema["inputs"]] == list(ds.inputs)
+    assert schema["training_set_sha256"] == training_hash(ds) and schema["ur5fault_version"]
+    refit, _ = evaluate(df, with_figures=False, with_importance=False, feature_set="both")
+    assert refit["detection"]["auc_all"] == pytest.approx(m["detection"]["auc_all"], abs=0)
+    from ur5fault.health.diagnostics.models import fit_models
+
+    fresh = fit_models(ds)  # same data, same seed: the loaded detector predicts what a fresh fit predicts
+    x = ds.x("test")
+    np.testing.assert_array_equal(models.detector.predict_proba(x), fresh.detector.predict_proba(x))
+    np.testing.assert_array_equal(models.kind.predict(x), fresh.kind.predict(x))
+    t = run_benchmark(train_dir, test_dir=other_dir)
+    assert t["saved_models"]["training_set_sha256"] == schema["training_set_sha256"]
+    assert t["dataset"]["n_test"] == len(other) and t["detection"]["auc_all"] > 0.85
+    assert (other_dir / "benchmark_transfer" / "metrics.json").exists()
+
+
+def test_scoring_needs_saved_classifiers_and_their_columns(tmp_path, capsys):
+    d = tmp_path / "c"
+    d.mkdir()
+    synthetic().to_parquet(d / "features.parquet")
+    assert main(["benchmark", str(d), "--test", str(d)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("ur5fault: error: ") and err.count("\n") == 1 and "no saved classifiers" in err
+    with_twin(synthetic()).to_parquet(d / "features.parquet")
+    assert main(["benchmark", str(d), "--features", "twin"]) == 0
+    synthetic().to_parquet(tmp_path / "plain.parquet")
+    assert main(["benchmark", str(d), "--test", str(tmp_path / "plain.parquet")]) == 2
+    assert "lacks" in capsys.readouterr().err.splitlines()[-1]
+
+
+@pytest.mark.slow
+def test_default_benchmark_compares_the_feature_sets(tmp_path):
+    from ur5fault.health.diagnostics import run_benchmark
+
+    with_twin(synthetic(informative=False)).to_parquet(tmp_path / "features.parquet")
+    m = run_benchmark(tmp_path)
+    cmp = m["comparison"]
+    assert set(cmp) == {"paper", "twin", "both"}
+    assert cmp["twin"]["trained"]["auc_all"] > 0.85 and abs(cmp["twin"]["shuffled"]["auc_all"] - 0.5) < 0.2
+    assert abs(cmp["paper"]["trained"]["auc_all"] - 0.5) < 0.2
+    assert "## Feature sets compared" in (tmp_path / "benchmark" / "report.md").read_text()

@@ -30,6 +30,7 @@ from ..errors import ParameterError
 from ..sim.params import load_params
 from ..util.io import check_writable, write_json_atomic, write_parquet_atomic
 from ..util.progress import campaign_progress
+from .digital_twin import twin_id, twin_runs
 from .identity import Identities
 from .identity import run_effects as _effects_of
 from .labels import assign_splits, refresh_splits, row_labels
@@ -89,6 +90,9 @@ def run_batch(camp: Campaign, batch: Sequence[CampaignRun], ts_dir: str | None,
     traj = parse_trajectory(traj_spec, "trajectory")
     sim = Simulator(load_params(overrides=dict(camp.base_params)))
     specs = [RunSpec(rc.run_id, int(rc.cond["seed"]), _effects_of(camp, rc)) for rc in batch]
+    twins = twin_runs(camp, batch) if camp.twin_residuals else {}
+    twin_index = {tid: len(specs) + k for k, tid in enumerate(twins)}
+    specs += [RunSpec(tid, seed, eff) for tid, (seed, eff) in twins.items()]
     t0 = time.perf_counter()
     res = sim.run(traj, specs, log_period_s=camp.log_period_s, duration_s=camp.duration_s)
     wall = time.perf_counter() - t0
@@ -125,8 +129,26 @@ def run_batch(camp: Campaign, batch: Sequence[CampaignRun], ts_dir: str | None,
         }
         for key in FEATURE_UNITS:  # every file has the full schema (tcp_dev_* is NaN without a sound twin)
             row.setdefault(key, float("nan"))
+        if camp.twin_residuals:
+            _add_twin_features(row, res, i, twin_index[twin_id(rc)], sim.params)
         rows.append(row)
     return rows
+
+
+def _add_twin_features(row: dict[str, Any], res, i: int, k: int, params) -> None:
+    """The twin residual features of run ``i`` against its digital twin ``k`` of the same batch (NaN, and the
+    run not ``ok``, when the twin failed)."""
+    from ..health.twin_features import FEATURE_UNITS as TWIN_UNITS
+    from ..health.twin_features import twin_features
+
+    if res.status[k] != "ok":
+        row.update(dict.fromkeys(TWIN_UNITS, float("nan")))
+        if row["status"] == "ok":
+            row["status"], row["reason"] = res.status[k], f"digital twin: {res.reason[k]}"
+        return
+    names = ("q_FB_rad", "q_M_FB_rad", "i_FB_A")
+    row.update(twin_features(res.t_s, res.q_set_rad, {n: res[n][i] for n in names},
+                             {n: res[n][k] for n in (*names, "i_q_A", "T_gear_Nm")}, params))
 
 
 def _exit_with_parent(parent_pid: int | None) -> None:

@@ -6,7 +6,9 @@ setpoints it produces), the simulated duration, the log period, the noise seed, 
 effects the run carries (base effects, swept faults, payload, temperature; in the order applied)
 and the full resolved robot parameter set (packaged defaults + campaign ``base.params`` + ``--model``
 overlay, which includes the physics step).  A run's features also depend on its healthy twin,
-whose inputs are the run's minus its swept faults, so the run's identity covers the twin's too.
+whose inputs are the run's minus its swept faults, so the run's identity covers the twin's too; the
+same holds for the digital twin of ``twin_residuals`` (campaign/digital_twin.py), whose format is
+recorded.
 
 ``run_id`` (the file name, a hash of the run's conditions and faults) names a run within a
 campaign; the identity says whether a stored result was made under the same settings.  Both are
@@ -31,7 +33,9 @@ from .spec import Campaign, CampaignRun
 IDENTITY_FORMAT = 1
 #: how inputs are compared, in this order, to name the first difference
 INPUT_ORDER = ("identity_format", "ur5fault_version", "mujoco_version", "model_sha256", "drive", "stepper",
-               "trajectory", "duration_s", "log_period_s", "seed", "effects", "params")
+               "trajectory", "duration_s", "log_period_s", "seed", "effects", "params", "twin_residuals")
+#: version of the digital twin and its features (health/twin_features.py), recorded when a campaign has them
+TWIN_RESIDUALS_FORMAT = 1
 #: the simulator configuration campaigns run with (engine defaults, recorded because they decide results)
 DRIVE, STEPPER = "numba", "batch"
 
@@ -81,6 +85,8 @@ class Identities:
             "log_period_s": camp.log_period_s,
             "params": load_params(overrides=dict(camp.base_params)).to_dict(),
         }
+        if camp.twin_residuals:  # only then: the identities of campaigns without twins stay as they were
+            self.common["twin_residuals"] = TWIN_RESIDUALS_FORMAT
         self._common_digest = digest(self.common)
         self._traj: dict[str, tuple[dict[str, Any], float]] = {}
 

@@ -69,10 +69,17 @@ def estimate(camp: Campaign, jobs: int) -> Estimate:
     for spec in trajectory_specs(camp.runs):
         durations[repr(spec)] = camp.duration_s or parse_trajectory(spec, "trajectory").duration_s
     steps = sum(round(durations[repr(rc.cond["trajectory"])] / dt) for rc in camp.runs)
+    if camp.twin_residuals:  # every run's digital twin (one per distinct known conditions and seed)
+        from .digital_twin import twin_id
+
+        twins = {twin_id(rc): rc for rc in camp.runs}
+        steps += sum(round(durations[repr(rc.cond["trajectory"])] / dt) for rc in twins.values())
     max_logged = int(max(durations.values()) / camp.log_period_s)
     n = len(camp.runs)
     per_worker = -(-n // max(1, jobs))
     runs_at_once = min(n, 2 * max(1, min(camp.batch_size - 1, per_worker)))  # plan_batches: a chunk + its twins
+    if camp.twin_residuals:
+        runs_at_once += max(1, min(camp.batch_size - 1, per_worker))  # + the chunk's digital twins
     processes = max(1, min(jobs, n))
     memory = sim_bytes(runs_at_once, max_logged, processes) + sim_bytes(0, 0)  # + the parent process
     return Estimate(n, float(steps), core_hours(steps), processes, runs_at_once, max_logged, memory)

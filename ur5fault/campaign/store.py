@@ -23,6 +23,7 @@ import pandas as pd
 
 from ..errors import ConfigFileError, Ur5FaultError
 from ..health.features import FEATURE_UNITS
+from ..health.twin_features import FEATURE_UNITS as TWIN_FEATURE_UNITS
 from ..sim.effects import REGISTRY
 from ..util.io import verify_checksum, write_parquet_atomic
 from .identity import digest, first_difference
@@ -77,7 +78,7 @@ def timeseries_path(out: Path, run_id: str) -> Path:
 
 def column_units(columns: Iterable[str]) -> dict[str, str]:
     """Unit of each known column (swept ``<effect>_<param>`` columns from the effect registry)."""
-    units = {**COLUMN_UNITS, **FEATURE_UNITS}
+    units = {**COLUMN_UNITS, **FEATURE_UNITS, **TWIN_FEATURE_UNITS}
     out = {}
     for col in columns:
         if col in units:

@@ -61,7 +61,18 @@ def conditions(log: MeasuredLog, n: int, torque: NDArray) -> dict[str, NDArray]:
     qd_all = np.gradient(q, log.period_s, axis=0)
     qd = qd_all[1 : n + 1]
     qdd = np.gradient(qd_all, log.period_s, axis=0)[1 : n + 1]
-    win = max(1, round(REVERSAL_WINDOW_S / log.period_s))
+    out = motion_conditions(qd, qdd, torque[:n], log.period_s)
+    if log.temperature_C is not None and np.ptp(log.temperature_C) > WARM_SPAN_K:
+        temp = log.temperature_C[1 : n + 1]
+        out["warmer half"] = temp > np.median(temp, axis=0)
+    return out
+
+
+def motion_conditions(qd: NDArray, qdd: NDArray, torque: NDArray, period_s: float) -> dict[str, NDArray]:
+    """Boolean masks ``(n, 6)`` of the motion conditions ("at speed", "near velocity reversals",
+    "accelerating", "at rest", "under high load") from the target speed ``qd`` [rad/s], acceleration
+    ``qdd`` [rad/s^2] and a torque ``(n, 6)``, sampled every ``period_s``."""
+    win = max(1, round(REVERSAL_WINDOW_S / period_s))
     near = np.zeros_like(qd, dtype=bool)
     moving = np.abs(qd) > CONDITION_REST_SPEED_RAD_S
     sign = np.sign(np.where(moving, qd, 0.0))
@@ -75,12 +86,8 @@ def conditions(log: MeasuredLog, n: int, torque: NDArray) -> dict[str, NDArray]:
     def peak(x: NDArray) -> NDArray:
         return np.abs(x) > PEAK_SHARE * np.maximum(np.abs(x).max(axis=0), 1e-12)
 
-    out = {"at speed": peak(qd), "near velocity reversals": near, "accelerating": peak(qdd),
-           "at rest": ~moving, "under high load": peak(torque[:n])}
-    if log.temperature_C is not None and np.ptp(log.temperature_C) > WARM_SPAN_K:
-        temp = log.temperature_C[1 : n + 1]
-        out["warmer half"] = temp > np.median(temp, axis=0)
-    return out
+    return {"at speed": peak(qd), "near velocity reversals": near, "accelerating": peak(qdd),
+            "at rest": ~moving, "under high load": peak(torque)}
 
 
 def rms_by_condition(r: NDArray, masks: dict[str, NDArray], j: int) -> tuple[dict[str, float], str]:

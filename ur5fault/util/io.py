@@ -135,6 +135,11 @@ def write_text_atomic(path: str | Path, text: str) -> Path:
     return _atomic(path, lambda tmp: Path(tmp).write_text(text))
 
 
+def write_bytes_atomic(path: str | Path, data: bytes) -> Path:
+    """Write ``data`` atomically."""
+    return _atomic(path, lambda tmp: Path(tmp).write_bytes(data))
+
+
 def write_json_atomic(path: str | Path, data: Mapping[str, Any]) -> Path:
     """Write ``data`` as indented JSON atomically."""
     return write_text_atomic(path, json.dumps(data, indent=2, default=str))

@@ -4,12 +4,15 @@ both sides).
 
 Modules by concern: :mod:`.data` (split and inputs), :mod:`.models` (the classifiers),
 :mod:`.metrics` (detection, localisation, kind, importance), :mod:`.thresholds` (smallest backlash
-detected and its TCP deviation), :mod:`.figures` (matplotlib Figures), :mod:`.report` (files).
-Needs scikit-learn: ``pip install 'scikit-learn>=1.3'`` (from a checkout: ``pip install '.[ml]'``).
+detected and its TCP deviation), :mod:`.figures` (matplotlib Figures), :mod:`.report` (files),
+:mod:`.saved` (the trained classifiers, saved and loaded safely).
+Needs scikit-learn and skops: ``pip install 'scikit-learn>=1.3' 'skops>=0.10'`` (from a checkout:
+``pip install '.[ml]'``).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import time
 from pathlib import Path
@@ -17,17 +20,20 @@ from typing import Any
 
 import pandas as pd
 
+from ...errors import ParameterError
 from . import figures as figs
-from .data import CONTEXT_COLUMNS, Dataset, load_dataset, load_features
+from .data import CONTEXT_COLUMNS, FEATURE_SETS, Dataset, has_twin_features, load_dataset, load_features
 from .metrics import alarm_threshold, detection, detector_scores, fault_kind, importance, localisation
-from .models import fit_models
+from .models import Models, fit_models
 from .report import write_report
+from .saved import check_inputs, load_models, save_models
 from .thresholds import PAPER_TCP_MM, backlash_thresholds
 
 
 def evaluate(features: pd.DataFrame, *, seed: int = 0, shuffle_labels: bool = False,
              threshold_mm: float = PAPER_TCP_MM, source: str = "features", with_figures: bool = True,
-             with_importance: bool = True) -> tuple[dict[str, Any], dict[str, Any]]:
+             with_importance: bool = True, feature_set: str = "paper", saved: tuple[Models, dict] | None = None,
+             test_features: pd.DataFrame | None = None) -> tuple[dict[str, Any], dict[str, Any]]:
     """Train on the train split, score on the test split.
 
     Args:
@@ -35,6 +41,10 @@ def evaluate(features: pd.DataFrame, *, seed: int = 0, shuffle_labels: bool = Fa
         seed: random state of the classifiers, the importance and the bootstrap.
         shuffle_labels: the control run: training labels permuted (results must be at chance).
         threshold_mm: TCP threshold for the backlash acceptability column.
+        feature_set: the inputs (:data:`.data.FEATURE_SETS`).
+        saved: ``(models, schema)`` of :func:`.saved.load_models`: score these instead of training
+            (their inputs and detector threshold); ``features`` then only gives the size ranges.
+        test_features: score on every ``ok`` row of this table (another campaign) instead of the test split.
 
     Returns:
         ``(metrics, figures)``: every number (JSON-able) and the matplotlib Figures by name.
@@ -42,20 +52,29 @@ def evaluate(features: pd.DataFrame, *, seed: int = 0, shuffle_labels: bool = Fa
     from .models import single_threaded
 
     with single_threaded():
-        return _evaluate(features, seed, shuffle_labels, threshold_mm, source, with_figures, with_importance)
+        return _evaluate(features, seed, shuffle_labels, threshold_mm, source, with_figures, with_importance,
+                         feature_set, saved, test_features)
 
 
 def _evaluate(features: pd.DataFrame, seed: int, shuffle_labels: bool, threshold_mm: float, source: str,
-              with_figures: bool, with_importance: bool) -> tuple[dict[str, Any], dict[str, Any]]:
+              with_figures: bool, with_importance: bool, feature_set: str = "paper",
+              saved: tuple[Models, dict] | None = None,
+              test_features: pd.DataFrame | None = None) -> tuple[dict[str, Any], dict[str, Any]]:
     t0 = time.perf_counter()
-    ds: Dataset = load_dataset(features)
-    models = fit_models(ds, seed, shuffle_labels)
+    ds: Dataset = load_dataset(features, feature_set if saved is None else saved[1]["feature_set"])
+    if test_features is not None:
+        names = check_inputs(test_features, saved[1], source) if saved is not None else list(ds.inputs)
+        other = test_features[test_features["status"] == "ok"].reset_index(drop=True)
+        ds = dataclasses.replace(ds, test=other, inputs=tuple(names))
+    models = fit_models(ds, seed, shuffle_labels) if saved is None else saved[0]
     t_fit = time.perf_counter() - t0
     te = ds.test
     score = detector_scores(ds, models)
     healthy = (te["fault"] == "healthy").to_numpy()
-    detected = score > alarm_threshold(score, healthy)
-    det = detection(ds, models)
+    saved_thr = None if saved is None else float(saved[1]["detector_threshold_5pct_false_alarms"])
+    thr = alarm_threshold(score, healthy) if saved_thr is None else saved_thr
+    detected = score > thr
+    det = detection(ds, models, saved_thr)
     loc = localisation(ds, models, detected)
     kind = fault_kind(ds, models, detected)
     ok_rows = features[features["status"] == "ok"] if "status" in features else features
@@ -73,6 +92,9 @@ def _evaluate(features: pd.DataFrame, seed: int, shuffle_labels: bool, threshold
             "context": [c for c in CONTEXT_COLUMNS if c in ds.inputs],
             "inputs_left_out": dict(ds.inputs_left_out),
         },
+        "feature_set": feature_set if saved is None else saved[1]["feature_set"],
+        "saved_models": None if saved is None else {k: saved[1][k] for k in (
+            "training_set_sha256", "ur5fault_version", "n_train", "detector_threshold_5pct_false_alarms")},
         "shuffled_labels": shuffle_labels,
         "seed": seed,
         "detection": det,
@@ -95,6 +117,7 @@ def _evaluate(features: pd.DataFrame, seed: int, shuffle_labels: bool, threshold
         if imp:
             out_figs["importance"] = figs.importance_bars(imp)
     metrics["timing"]["benchmark_wall_s"] = time.perf_counter() - t0
+    metrics["_models"] = models  # taken out before writing (run_benchmark saves them)
     return metrics, out_figs
 
 
@@ -104,22 +127,81 @@ def _split_by(te: pd.DataFrame) -> str:
 
 
 def run_benchmark(campaign_dir: str | Path, out: str | Path | None = None, *, seed: int = 0,
-                  shuffle_labels: bool = False) -> dict[str, Any]:
-    """``ur5fault benchmark``: evaluate a campaign folder and write ``report.md``, ``metrics.json`` and
-    the figures into ``out`` (default ``<campaign_dir>/benchmark``); return the metrics."""
+                  shuffle_labels: bool = False, feature_set: str | None = None, test_dir: str | Path | None = None,
+                  compare: bool = True) -> dict[str, Any]:
+    """``ur5fault benchmark``: evaluate a campaign folder and write ``report.md``, ``metrics.json``, the figures
+    and the trained classifiers (``models/``) into ``out`` (default ``<campaign_dir>/benchmark``); return the
+    metrics.
+
+    Args:
+        feature_set: the inputs (default: ``both`` when the table has twin residual features, else ``paper``).
+        test_dir: score the classifiers saved by an earlier ``ur5fault benchmark campaign_dir`` on every run of
+            this other campaign folder, without retraining (default ``out``: ``<test_dir>/benchmark_transfer``).
+        compare: when no ``feature_set`` is chosen, also score every feature set (and its shuffled-label
+            control) and add the table.
+    """
     campaign_dir = Path(campaign_dir)
     features = load_features(campaign_dir)
     thr = PAPER_TCP_MM
     manifest = campaign_dir / "manifest.json"
     if campaign_dir.is_dir() and manifest.exists():
         thr = float(json.loads(manifest.read_text()).get("threshold_mm") or PAPER_TCP_MM)
+    compare = compare and feature_set is None  # a chosen set is scored alone
+    if feature_set is None:
+        feature_set = "both" if has_twin_features(features) else "paper"
+    base = campaign_dir if campaign_dir.is_dir() else campaign_dir.parent
+    if test_dir is not None:
+        if shuffle_labels:
+            raise ParameterError("--shuffle-labels trains new classifiers; --test scores saved ones: use one of them")
+        test_dir = Path(test_dir)
+        saved = load_models(base / "benchmark")
+        metrics, figures = evaluate(features, seed=seed, threshold_mm=thr, source=str(test_dir), saved=saved,
+                                    test_features=load_features(test_dir), with_importance=False)
+        metrics.pop("_models")
+        out_dir = Path(out) if out is not None else (test_dir if test_dir.is_dir() else test_dir.parent) / (
+            "benchmark_transfer")
+        write_report(metrics, figures, out_dir)
+        metrics["out"] = str(out_dir)
+        return metrics
     metrics, figures = evaluate(features, seed=seed, shuffle_labels=shuffle_labels, threshold_mm=thr,
-                                source=str(campaign_dir))
-    out_dir = Path(out) if out is not None else (campaign_dir if campaign_dir.is_dir() else campaign_dir.parent) / (
-        "benchmark_shuffled" if shuffle_labels else "benchmark")
+                                source=str(campaign_dir), feature_set=feature_set)
+    models = metrics.pop("_models")
+    if compare and has_twin_features(features):
+        metrics["comparison"] = compare_feature_sets(features, seed, thr, str(campaign_dir))
+    out_dir = Path(out) if out is not None else base / ("benchmark_shuffled" if shuffle_labels else "benchmark")
     write_report(metrics, figures, out_dir)
+    if not shuffle_labels:
+        save_models(models, load_dataset(features, feature_set), feature_set,
+                    metrics["detection"]["threshold_score"], out_dir)
     metrics["out"] = str(out_dir)
     return metrics
+
+
+def compare_feature_sets(features: pd.DataFrame, seed: int, threshold_mm: float, source: str) -> dict[str, Any]:
+    """Headline figures of every feature set on the same split, each with its shuffled-label control."""
+    out = {}
+    for fs in FEATURE_SETS:
+        row = {}
+        for shuffled in (False, True):
+            m, _ = evaluate(features, seed=seed, shuffle_labels=shuffled, threshold_mm=threshold_mm, source=source,
+                            with_figures=False, with_importance=False, feature_set=fs)
+            row["shuffled" if shuffled else "trained"] = summary(m)
+        out[fs] = row
+    return out
+
+
+def summary(m: dict[str, Any]) -> dict[str, Any]:
+    """The headline numbers of one evaluation."""
+    det, loc, kind, bl = m["detection"], m["localisation"], m["kind"], m["backlash"]
+    return {
+        "n_inputs": len(m["dataset"]["inputs"]),
+        "auc_all": det["auc_all"], "detection_rate_all": det["detection_rate_all"],
+        "auc_per_kind": {k: v["auc"] for k, v in det["per_kind"].items()},
+        "auc_upper_half_per_kind": {k: v["auc_upper_half"] for k, v in det["per_kind"].items()},
+        "joint_accuracy": loc.get("accuracy"), "joint_accuracy_flagged": loc.get("accuracy_detected"),
+        "kind_balanced_accuracy": kind.get("balanced_accuracy"),
+        "alpha_90_deg": {j: v.get("alpha_90_bound") or v["alpha_90_deg"] for j, v in bl["per_joint"].items()},
+    }
 
 
 __all__ = ["evaluate", "load_dataset", "load_features", "run_benchmark"]

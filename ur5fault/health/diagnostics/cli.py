@@ -15,18 +15,29 @@ def register(sub) -> None:
     b.add_argument("--seed", type=int, default=0, help="random state of the classifiers and the bootstrap (default 0)")
     b.add_argument("--shuffle-labels", action="store_true",
                    help="control run: permute the training labels (every score must fall to chance)")
+    b.add_argument("--features", choices=("paper", "twin", "both"),
+                   help="classifier inputs: the paper's health features, the twin residual features or both "
+                        "(default: both when the campaign has twin residuals, else paper)")
+    b.add_argument("--test", metavar="OTHER_DIR",
+                   help="score the classifiers saved in DIR/benchmark/models on every run of this other campaign "
+                        "folder, without retraining (report in OTHER_DIR/benchmark_transfer unless --out)")
     b.set_defaults(func=cmd_benchmark)
 
 
 def cmd_benchmark(args: argparse.Namespace) -> int:
     import time
 
+    from ...errors import ParameterError
     from . import run_benchmark
 
     t0 = time.perf_counter()
-    m = run_benchmark(args.dir, args.out, seed=args.seed, shuffle_labels=args.shuffle_labels)
+    if args.test is not None and args.features is not None:
+        raise ParameterError("--features chooses the inputs of new classifiers; --test scores saved ones with "
+                             "their own inputs: use one of them")
+    m = run_benchmark(args.dir, args.out, seed=args.seed, shuffle_labels=args.shuffle_labels,
+                      feature_set=args.features, test_dir=args.test)
     det, loc, kind = m["detection"], m["localisation"], m["kind"]
-    print(f"{m['dataset']['n_train']} train / {m['dataset']['n_test']} test runs"
+    print(f"{m['dataset']['n_train']} train / {m['dataset']['n_test']} test runs, features {m['feature_set']}"
           + (" (training labels shuffled)" if m["shuffled_labels"] else ""))
     print(f"detection ROC AUC {det['auc_all']:.3f}; joint accuracy {loc['accuracy']:.3f}; "
           f"fault-kind accuracy {kind['accuracy']:.3f}")

@@ -8,6 +8,10 @@ the controller knows (the configured payload, the logged joint temperature).  Le
 does not have - and the twin exists only for some runs, so they would leak the label), every
 label column, and the nuisance a robot does not know (payload centre of mass, latency, the
 trajectory itself).
+
+Feature sets (``--features``): ``paper`` (the health features above), ``twin`` (the twin residual features
+of :mod:`ur5fault.health.twin_features`, from a campaign with ``twin_residuals: true``), ``both``.  The
+two known conditions are inputs of every set.
 """
 
 from __future__ import annotations
@@ -20,18 +24,27 @@ import pandas as pd
 
 from ...errors import ConfigFileError
 from ..features import FEATURE_UNITS
+from ..twin_features import FEATURE_UNITS as TWIN_FEATURE_UNITS
 
 #: operating conditions a UR controller knows and logs, used as inputs beside the features
 CONTEXT_COLUMNS = ("payload_kg", "temperature_C")
 #: features that need the simulation's ground truth (true joint angles, healthy twin)
 SIM_ONLY_PREFIX = "tcp_"
+#: the feature sets the benchmark compares
+FEATURE_SETS = ("paper", "twin", "both")
 LABEL_COLUMNS = ("fault", "fault_joint", "fault_scope", "fault_size", "fault_size_unit", "split", "split_group")
 
 
-def input_columns(features: pd.DataFrame) -> list[str]:
-    """The classifier inputs present in ``features`` (see the module docstring)."""
-    cols = [c for c in FEATURE_UNITS if not c.startswith(SIM_ONLY_PREFIX) and c in features.columns]
-    return cols + [c for c in CONTEXT_COLUMNS if c in features.columns]
+def input_columns(features: pd.DataFrame, feature_set: str = "paper") -> list[str]:
+    """The classifier inputs of ``feature_set`` present in ``features`` (see the module docstring)."""
+    paper = [c for c in FEATURE_UNITS if not c.startswith(SIM_ONLY_PREFIX) and c in features.columns]
+    twin = [c for c in TWIN_FEATURE_UNITS if c in features.columns]
+    chosen = {"paper": paper, "twin": twin, "both": paper + twin if paper and twin else []}[feature_set]
+    return chosen + [c for c in CONTEXT_COLUMNS if c in features.columns] if chosen else []
+
+
+def has_twin_features(features: pd.DataFrame) -> bool:
+    return any(c in features.columns for c in TWIN_FEATURE_UNITS)
 
 
 def load_features(path: Path) -> pd.DataFrame:
@@ -64,8 +77,9 @@ class Dataset:
         return getattr(self, side)[list(self.inputs)].to_numpy(dtype=float)
 
 
-def load_dataset(features: pd.DataFrame | str | Path) -> Dataset:
-    """Split a feature table (or a campaign folder / features.parquet path) into a :class:`Dataset`.
+def load_dataset(features: pd.DataFrame | str | Path, feature_set: str = "paper") -> Dataset:
+    """Split a feature table (or a campaign folder / features.parquet path) into a :class:`Dataset` with the
+    inputs of ``feature_set`` (one of :data:`FEATURE_SETS`).
 
     Raises:
         ConfigFileError: no ``split`` column, one side empty, a group on both sides, no healthy
@@ -89,7 +103,11 @@ def load_dataset(features: pd.DataFrame | str | Path) -> Dataset:
         if healthy == 0 or healthy == len(side):
             raise ConfigFileError(f"the {name} split needs healthy and faulty runs (has {len(side)} runs, "
                                   f"{healthy} healthy); check the campaign's split and faults")
-    inputs = input_columns(df)
+    inputs = input_columns(df, feature_set)
+    if not inputs:
+        what = "health-feature" if feature_set == "paper" else (
+            "twin residual feature (twin_*: a campaign with twin_residuals: true)")
+        raise ConfigFileError(f"feature table has no {what} columns")
     values = df[inputs].apply(pd.to_numeric, errors="coerce").to_numpy(dtype=float)
     inf = np.isinf(values)
     if inf.any():

@@ -55,12 +55,14 @@ def size_edges(sizes: np.ndarray, n_bins: int = N_SIZE_BINS) -> np.ndarray:
     return np.geomspace(s.min(), s.max() * (1 + 1e-9), n_bins + 1)
 
 
-def detection(ds: Dataset, models: Models) -> dict[str, Any]:
-    """Detection AUC overall, per fault kind and per fault-size bin; detection rate at 5 % false alarms."""
+def detection(ds: Dataset, models: Models, threshold: float | None = None) -> dict[str, Any]:
+    """Detection AUC overall, per fault kind, per fault-size bin and over the upper half of each kind's size
+    range (log scale, the range of the train and test runs); detection rate at 5 % false alarms (the
+    threshold on these test runs, or ``threshold``: a saved detector's operating point)."""
     te = ds.test
     score = detector_scores(ds, models)
     healthy = (te["fault"] == "healthy").to_numpy()
-    thr = alarm_threshold(score, healthy)
+    thr = alarm_threshold(score, healthy) if threshold is None else float(threshold)
     detected = score > thr
     all_sizes = np.concatenate([ds.train["fault_size"].to_numpy(float), te["fault_size"].to_numpy(float)])
     all_kinds = np.concatenate([ds.train["fault"].to_numpy(str), te["fault"].to_numpy(str)])
@@ -79,7 +81,11 @@ def detection(ds: Dataset, models: Models) -> dict[str, Any]:
                          "auc_se": auc_standard_error(auc, n, int(healthy.sum())),
                          "detection_rate": float(detected[inb].mean()) if n else math.nan})
         auc = _auc_vs_healthy(score, healthy, pos)
+        upper = pos & (sizes >= math.sqrt(edges[0] * edges[-1])) if edges.size else pos & False
+        auc_up = _auc_vs_healthy(score, healthy, upper) if upper.sum() >= MIN_BIN_RUNS else math.nan
         per_kind[kind] = {"unit": unit, "n_test": int(pos.sum()), "auc": auc,
+                          "auc_upper_half": auc_up, "n_test_upper_half": int(upper.sum()),
+                          "detection_rate_upper_half": float(detected[upper].mean()) if upper.any() else math.nan,
                           "auc_se": auc_standard_error(auc, int(pos.sum()), int(healthy.sum())),
                           "detection_rate": float(detected[pos].mean()), "by_size": bins}
     return {

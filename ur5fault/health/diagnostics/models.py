@@ -39,14 +39,15 @@ def single_threaded():
 
 
 def require_sklearn() -> None:
-    """Import scikit-learn, or say in one line how to install it."""
+    """Import scikit-learn and skops, or say in one line how to install them."""
     try:
         import sklearn.ensemble  # noqa: F401
+        import skops.io  # noqa: F401
     except ImportError:  # pragma: no cover - depends on the installation
         from ...errors import Ur5FaultError
 
-        raise Ur5FaultError("ur5fault benchmark needs scikit-learn: "
-                            "pip install 'scikit-learn>=1.3' (from a checkout: pip install '.[ml]')") from None
+        raise Ur5FaultError("ur5fault benchmark needs scikit-learn and skops: pip install 'scikit-learn>=1.3' "
+                            "'skops>=0.10' (from a checkout: pip install '.[ml]')") from None
 
 
 def make_classifier(seed: int):

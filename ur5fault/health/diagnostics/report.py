@@ -93,9 +93,40 @@ def markdown(m: dict[str, Any]) -> str:
               "| input | AUC drop (s.d.) |", "| --- | --- |"]
     lines += [f"| {x['feature']} | {_f(x['auc_drop_mean'], '.4f')} ({_f(x['auc_drop_std'], '.4f')}) |"
               for x in m["importance"][:12]]
+    if m.get("comparison"):
+        lines += comparison_lines(m["comparison"])
     lines += ["", f"Benchmark wall time {m['timing']['benchmark_wall_s']:.1f} s. Figures: "
               + ", ".join(f"`{f}`" for f in m["figures"]) + "."]
     return "\n".join(lines) + "\n"
+
+
+def comparison_lines(cmp: dict[str, Any]) -> list[str]:
+    """The feature-set table: each set trained and with shuffled training labels, on the same split."""
+    sets = list(cmp)
+    kinds = list(next(iter(cmp.values()))["trained"]["auc_per_kind"])
+    joints = list(next(iter(cmp.values()))["trained"]["alpha_90_deg"])
+    lines = ["", "## Feature sets compared (same split; in brackets: training labels shuffled)", "",
+             "| figure | " + " | ".join(sets) + " |", "| --- |" + " --- |" * len(sets)]
+
+    def row(name: str, get, fmt: str = ".2f") -> None:
+        cells = []
+        for fs in sets:
+            t, s = get(cmp[fs]["trained"]), get(cmp[fs]["shuffled"])
+            cells.append(t if isinstance(t, str) else f"{_f(t, fmt)} ({_f(s, fmt) if not isinstance(s, str) else s})")
+        lines.append(f"| {name} | " + " | ".join(cells) + " |")
+
+    row("inputs", lambda r: str(r["n_inputs"]))
+    row("detection AUC, all faults", lambda r: r["auc_all"])
+    row("flagged at 5 % false alarms", lambda r: r["detection_rate_all"])
+    for k in kinds:
+        row(f"AUC {k}", lambda r, k=k: r["auc_per_kind"][k])
+        row(f"AUC {k}, upper half of its sizes", lambda r, k=k: r["auc_upper_half_per_kind"][k])
+    row("joint accuracy, all single-joint faults", lambda r: r["joint_accuracy"])
+    row("joint accuracy, flagged runs", lambda r: r["joint_accuracy_flagged"])
+    row("fault kind, balanced accuracy", lambda r: r["kind_balanced_accuracy"])
+    for j in joints:
+        row(f"backlash alpha_90 J{j} [deg]", lambda r, j=j: r["alpha_90_deg"][j], ".3g")
+    return lines
 
 
 def write_report(m: dict[str, Any], figures: dict[str, Any], out: Path) -> list[Path]:

@@ -1,0 +1,79 @@
+"""Twin residual features (ur5fault/health/twin_features.py): near zero on a healthy run against its twin
+(independent noise), and the projections of a known injected fault at the size physics says.
+
+The expected sizes come from how each fault enters the drive, not from the feature code: a current-sensor
+offset o is carried by the reading while the loops hold the true current where the motion needs it
+(residual o); a gain g multiplies the reading of an unchanged current (residual (g - 1) i); a resolver
+offset o reads the link o too high, the position loop puts the link o lower and the motor follows it,
+so the encoder mismatch falls by o.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from ur5fault import RunSpec, Simulator, make_effect
+from ur5fault.health.twin_features import FEATURE_UNITS, twin_features
+
+pytestmark = pytest.mark.slow
+
+#: simulated time of the batch [s]
+DURATION_S = 2.5
+
+
+@pytest.fixture(scope="module")
+def batch():
+    from ur5fault.config import parse_trajectory
+
+    traj = parse_trajectory({"name": "random_pick_and_place", "seed": 3}, "trajectory")
+    load = (make_effect("payload", mass_kg=1.0), make_effect("temperature", temperature_C=30.0))
+    runs = [
+        RunSpec("healthy", 11, load),
+        RunSpec("offset", 11, load + (make_effect("current_sensor_offset", 2, offset_A=0.2),)),
+        RunSpec("gain", 11, load + (make_effect("current_sensor_gain", 2, gain=1.1),)),
+        RunSpec("resolver", 11, load + (make_effect("resolver_offset", 4, offset_deg=0.3),)),
+        RunSpec("twin", 12345, load),
+    ]
+    sim = Simulator()
+    res = sim.run(traj, runs, duration_s=DURATION_S)
+    assert all(s == "ok" for s in res.status)
+    names = ("q_FB_rad", "q_M_FB_rad", "i_FB_A")
+    twin = {n: res[n][4] for n in (*names, "i_q_A", "T_gear_Nm")}
+    return {rid: twin_features(res.t_s, res.q_set_rad, {n: res[n][i] for n in names}, twin, sim.params)
+            for i, rid in enumerate(("healthy", "offset", "gain", "resolver"))}
+
+
+def test_schema_and_units(batch):
+    assert list(batch["healthy"]) == list(FEATURE_UNITS)
+    assert all(name.endswith(tuple(f"_j{j}" for j in range(1, 7))) for name in FEATURE_UNITS)
+
+
+def test_healthy_run_is_zero_mean_within_noise(batch):
+    f = batch["healthy"]
+    for j in range(1, 7):
+        # 2.5 s at 1 kHz of two independent sensor streams (0.012 A each): the mean of the residual
+        # over all samples has a standard error near 0.012 * sqrt(2 / 2500) = 3.4e-4 A; filtered noise
+        # is correlated over a few samples, so allow 0.005 A
+        assert abs(f[f"twin_est_current_offset_A_j{j}"]) < 0.005, j
+        # a resolver-offset size estimate of a healthy run: well under the smallest fault of the dataset (0.005 deg)
+        assert abs(f[f"twin_est_mismatch_offset_rad_j{j}"]) < math.radians(0.002), j
+        for cond in ("rest", "speed", "reversal", "accel"):
+            v = f[f"twin_current_mean_A_{cond}_j{j}"]
+            assert np.isnan(v) or abs(v) < 0.03, (j, cond, v)
+
+
+def test_current_sensor_offset_projects_to_its_size(batch):
+    assert batch["offset"]["twin_est_current_offset_A_j2"] == pytest.approx(0.2, abs=0.01)
+    assert abs(batch["offset"]["twin_est_current_offset_A_j1"]) < 0.005  # other joints untouched
+
+
+def test_current_sensor_gain_projects_to_its_size(batch):
+    assert batch["gain"]["twin_est_current_gain_err_j2"] == pytest.approx(0.1, abs=0.01)
+    assert abs(batch["healthy"]["twin_est_current_gain_err_j2"]) < 0.01
+
+
+def test_resolver_offset_lowers_the_mismatch_by_its_size(batch):
+    assert math.degrees(batch["resolver"]["twin_est_mismatch_offset_rad_j4"]) == pytest.approx(-0.3, abs=0.005)

@@ -1,0 +1,52 @@
+"""The digital twin of a campaign run: what the robot's own model predicts from what the robot knows.
+
+A run's twin carries the campaign's base model (its ``base.params`` and ``base.effects``, which a
+``--model`` overlay extends: the robot's fitted model) and the run's commanded trajectory, configured
+payload mass and joint temperature; not its fault, not the nuisance the robot does not know (payload
+centre of mass, setpoint latency: the run's ``<effect>.<param>`` conditions), and not its noise stream
+(an independent seed, so the residual carries the noise of both).  A run and its simulated healthy
+twin share their conditions, hence one digital twin.  Twins are simulated in the batch of their runs
+(:func:`ur5fault.campaign.execute.run_batch`).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from collections.abc import Sequence
+
+from ..sim.effects import EffectSpec, make_effect
+from .spec import Campaign, CampaignRun
+
+#: prefix of a digital twin's run id (it is never stored: its signals only feed its runs' features)
+TWIN_PREFIX = "twin-"
+#: a twin's noise seed: this many bits of a hash of the run's seed (independent of the run's stream)
+TWIN_SEED_BITS = 62
+
+
+def twin_seed(seed: int) -> int:
+    """The twin's noise seed for a run with noise seed ``seed`` (deterministic, not ``seed`` itself)."""
+    digest = hashlib.sha256(f"ur5fault digital twin of seed {int(seed)}".encode()).digest()
+    return int.from_bytes(digest[:8], "big") >> (64 - TWIN_SEED_BITS)
+
+
+def twin_effects(camp: Campaign, rc: CampaignRun) -> tuple[EffectSpec, ...]:
+    """The effects a run's twin carries: the base model, the configured payload mass, the temperature."""
+    c = rc.cond
+    return camp.base_effects + (make_effect("payload", mass_kg=c["payload_kg"]),
+                                make_effect("temperature", temperature_C=c["temperature_C"]))
+
+
+def twin_id(rc: CampaignRun) -> str:
+    """Identifier of a run's digital twin (shared by runs with the same known conditions and seed)."""
+    c = rc.cond
+    key = json.dumps([c["seed"], c["payload_kg"], c["temperature_C"], c["trajectory"]], sort_keys=True, default=str)
+    return TWIN_PREFIX + hashlib.sha1(key.encode()).hexdigest()[:12]
+
+
+def twin_runs(camp: Campaign, batch: Sequence[CampaignRun]) -> dict[str, tuple[int, tuple[EffectSpec, ...]]]:
+    """The distinct digital twins of ``batch``: twin id -> (noise seed, effects)."""
+    out: dict[str, tuple[int, tuple[EffectSpec, ...]]] = {}
+    for rc in batch:
+        out.setdefault(twin_id(rc), (twin_seed(int(rc.cond["seed"])), twin_effects(camp, rc)))
+    return out

@@ -1,0 +1,112 @@
+"""The trained classifiers saved beside the report, in a format a user can load safely.
+
+``<out>/models/``:
+
+* ``classifiers.skops``: the detector, the localiser and the fault-kind classifier (scikit-learn
+  objects in skops' format: loading it runs no code from the file; :func:`load_models` refuses any
+  type outside scikit-learn and numpy);
+* ``schema.json``: the input columns in order with their units, the feature set, the classes of each
+  classifier, the detector threshold at 5 % false alarms (on the training campaign's test split), a
+  SHA-256 of the training rows (inputs and labels), the package, scikit-learn and skops versions.
+
+Scoring another campaign with them (``ur5fault benchmark TRAIN_DIR --test OTHER_DIR``) needs its
+table to hold every input column; a missing one is named.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+
+from ...errors import ConfigFileError
+from ...util.io import write_bytes_atomic, write_json_atomic
+from .data import Dataset
+from .models import Models
+
+MODELS_DIR = "models"
+CLASSIFIERS_FILE = "classifiers.skops"
+SCHEMA_FILE = "schema.json"
+SCHEMA_FORMAT = 1
+#: module prefixes of the types a saved file may hold (anything else is refused on loading)
+TRUSTED_PREFIXES = ("sklearn.", "numpy.", "builtins.")
+
+
+def training_hash(ds: Dataset) -> str:
+    """SHA-256 of the training rows: run ids (when present), inputs and labels, in order."""
+    cols = [c for c in ("run_id",) if c in ds.train] + list(ds.inputs) + ["fault", "fault_joint"]
+    h = hashlib.sha256(json.dumps(cols).encode())
+    h.update(pd.util.hash_pandas_object(ds.train[cols].astype(str), index=False).to_numpy().tobytes())
+    return h.hexdigest()
+
+
+def save_models(models: Models, ds: Dataset, feature_set: str, threshold_score: float, out: Path) -> Path:
+    """Write the classifiers and their schema into ``out/models``; return that folder."""
+    import sklearn
+    import skops
+    import skops.io as sio
+
+    from ... import __version__
+    from ...campaign.store import column_units
+
+    folder = Path(out) / MODELS_DIR
+    folder.mkdir(parents=True, exist_ok=True)
+    objs = {"detector": models.detector, "localiser": models.localiser, "kind": models.kind}
+    write_bytes_atomic(folder / CLASSIFIERS_FILE, sio.dumps({k: v for k, v in objs.items() if v is not None}))
+    units = column_units(ds.inputs)
+    schema = {
+        "schema_format": SCHEMA_FORMAT,
+        "feature_set": feature_set,
+        "inputs": [{"name": c, "unit": units.get(c, "-")} for c in ds.inputs],
+        "classes": {k: [v.item() if hasattr(v, "item") else v for v in m.classes_] for k, m in objs.items()
+                    if m is not None},
+        "detector_threshold_5pct_false_alarms": float(threshold_score),
+        "n_train": len(ds.train),
+        "training_set_sha256": training_hash(ds),
+        "shuffled_labels": models.shuffled_labels,
+        "ur5fault_version": __version__,
+        "sklearn_version": sklearn.__version__,
+        "skops_version": skops.__version__,
+    }
+    write_json_atomic(folder / SCHEMA_FILE, schema)
+    return folder
+
+
+def load_models(folder: str | Path) -> tuple[Models, dict[str, Any]]:
+    """The saved classifiers and their schema from a ``models`` folder (or the report folder holding one).
+
+    Raises:
+        ConfigFileError: no saved models there, or the file holds a type outside scikit-learn and numpy.
+    """
+    import skops.io as sio
+
+    folder = Path(folder)
+    if not (folder / SCHEMA_FILE).exists() and (folder / MODELS_DIR / SCHEMA_FILE).exists():
+        folder = folder / MODELS_DIR
+    path, schema_path = folder / CLASSIFIERS_FILE, folder / SCHEMA_FILE
+    if not path.exists() or not schema_path.exists():
+        raise ConfigFileError(f"{folder}: no saved classifiers ({CLASSIFIERS_FILE} and {SCHEMA_FILE}); "
+                              "run `ur5fault benchmark` on a campaign first")
+    data = path.read_bytes()
+    untrusted = [t for t in sio.get_untrusted_types(data=data) if not t.startswith(TRUSTED_PREFIXES)]
+    if untrusted:
+        raise ConfigFileError(f"{path}: holds types outside scikit-learn and numpy ({', '.join(untrusted[:5])}); "
+                              "not loaded")
+    objs = sio.loads(data, trusted=sio.get_untrusted_types(data=data))
+    schema = json.loads(schema_path.read_text())
+    return Models(objs.get("detector"), objs.get("localiser"), objs.get("kind"),
+                  bool(schema.get("shuffled_labels"))), schema
+
+
+def check_inputs(features: pd.DataFrame, schema: dict[str, Any], where: str) -> list[str]:
+    """The schema's input columns, all present in ``features`` (else the missing ones are named)."""
+    names = [c["name"] for c in schema["inputs"]]
+    missing = [c for c in names if c not in features.columns]
+    if missing:
+        raise ConfigFileError(f"{where}: lacks {len(missing)} input column(s) of the saved classifiers "
+                              f"({', '.join(missing[:5])}{', ...' if len(missing) > 5 else ''}; feature set "
+                              f"{schema['feature_set']!r})")
+    return names

@@ -1,0 +1,140 @@
+"""Digital-twin residual features of one run: what the robot measured minus what its twin predicts.
+
+The twin is the same commanded motion run through the robot's model (the nominal one, or a ``--model``
+overlay) with the configured payload mass and the logged temperatures, an independent noise seed and no
+knowledge of the fault or of the nuisance a robot does not know (its payload's true centre of mass, its
+setpoint latency).  Their difference removes what the motion, payload and temperature do to a signal
+and leaves the fault (and the unknown nuisance, and twice the sensor noise).
+
+Residuals (``(n_log, 6)``, measured - twin):
+
+* ``current``: current-sensor reading ``i_FB`` [A];
+* ``position``: resolver reading ``q_FB`` [rad];
+* ``mismatch``: encoder mismatch ``q_M,FB / N - q_FB`` [rad].
+
+Features per joint ``j`` (units in the names):
+
+* ``twin_<signal>_mean_<unit>_<cond>_j`` and ``twin_<signal>_rms_<unit>_<cond>_j``: mean and RMS of the
+  residual under each motion condition of :func:`ur5fault.twin.motion_conditions` (``rest``, ``speed``,
+  ``reversal``, ``accel``; from the commanded motion, which the robot knows); NaN where the motion never
+  meets the condition on that joint.
+* ``twin_est_*_j``: least-squares projections of the residual onto linearised signatures of the
+  library's effects (:mod:`ur5fault.discrepancy.library` simulates the same secants; here they are
+  written in closed form from the twin's own signals, because a campaign cannot afford a probe batch
+  per run).  Two joint fits per joint:
+
+  - current residual ~ ``a`` * 1 + ``b`` * i_twin + ``c`` * i_coulomb, where i_coulomb =
+    sign(w) T_level(w) / (K_t N) is the motor current that carries the twin's Coulomb/static friction at
+    the commanded speed w: ``twin_est_current_offset_A`` = a (a current-sensor offset gives its offset:
+    the loops hold the true current where the motion needs it, so the reading carries the offset);
+    ``twin_est_current_gain_err`` = b (a gain error g - 1 gives g - 1; a torque-constant scale s needs
+    1/s times the current, b = 1/s - 1: the two are the same shape in the current and told apart only
+    by the rest of the signals); ``twin_est_coulomb_scale_err`` = c (Coulomb scale - 1);
+  - mismatch residual ~ ``d`` * 1 + ``e`` * sign(T_twin) / 2 + ``f`` * T_twin / k, with T_twin the twin's
+    gear torque and k the gear stiffness: ``twin_est_mismatch_offset_rad`` = d (a resolver offset o
+    reads the link o too high, the position loop moves the link back by o and the motor with it, so the
+    mismatch falls by o: d = -o); ``twin_est_backlash_rad`` = e (a clearance alpha swaps flanks with
+    the sign of the gear torque: the mismatch jumps by alpha); ``twin_est_compliance_err`` = f (a
+    stiffness scale s makes the windup T/(s k): f = 1/s - 1).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..sim.axes import N_JOINTS
+from ..sim.drive.friction import stribeck_level
+from ..sim.params import RobotParams
+from ..twin.residuals import motion_conditions
+
+#: motion conditions used, short name -> the key of :func:`ur5fault.twin.motion_conditions`
+CONDITIONS = {"rest": "at rest", "speed": "at speed", "reversal": "near velocity reversals", "accel": "accelerating"}
+#: residual signals, name -> unit
+SIGNAL_UNITS = {"current": "A", "position": "rad", "mismatch": "rad"}
+#: projections, name -> unit (see the module docstring for what each measures)
+ESTIMATE_UNITS = {"current_offset_A": "A", "current_gain_err": "-", "coulomb_scale_err": "-",
+                  "mismatch_offset_rad": "rad", "backlash_rad": "rad", "compliance_err": "-"}
+#: smallest gear-torque magnitude whose sign counts as a flank, as a share of the joint's largest
+#: (assumption: a gear torque within 2 % of its peak may sit in the clearance either way)
+FLANK_SHARE = 0.02
+
+
+def feature_units() -> dict[str, str]:
+    """Every twin feature name -> unit, in the order :func:`twin_features` writes them."""
+    out = {}
+    for j in range(1, N_JOINTS + 1):
+        for sig, unit in SIGNAL_UNITS.items():
+            for stat in ("mean", "rms"):
+                for cond in CONDITIONS:
+                    out[f"twin_{sig}_{stat}_{unit}_{cond}_j{j}"] = unit
+        for name, unit in ESTIMATE_UNITS.items():
+            out[f"twin_est_{name}_j{j}"] = unit
+    return out
+
+
+FEATURE_UNITS = feature_units()
+
+
+def _lstsq(y: NDArray, cols: list[NDArray]) -> NDArray:
+    """Least-squares coefficients of ``y`` on the columns (NaN samples left out; a column that is all
+    zero, or a problem without samples, gives 0 for its coefficient)."""
+    a = np.stack(cols, axis=1)
+    ok = np.isfinite(y) & np.all(np.isfinite(a), axis=1)
+    if ok.sum() < len(cols):
+        return np.zeros(len(cols))
+    scale = np.sqrt(np.mean(a[ok] ** 2, axis=0))
+    live = scale > 0
+    coef = np.zeros(len(cols))
+    if live.any():
+        sol = np.linalg.lstsq(a[ok][:, live] / scale[live], y[ok], rcond=1e-8)[0]
+        coef[live] = sol / scale[live]
+    return coef
+
+
+def twin_features(t_s: NDArray, q_set_rad: NDArray, meas: dict[str, NDArray], twin: dict[str, NDArray],
+                  params: RobotParams) -> dict[str, float]:
+    """Twin residual features of one run.
+
+    Args:
+        t_s: log times ``(n_log,)`` [s].
+        q_set_rad: commanded joint angles ``(n_log, 6)``.
+        meas, twin: the run's and its twin's ``q_FB_rad``, ``q_M_FB_rad``, ``i_FB_A`` (``(n_log, 6)``);
+            ``twin`` also its noise-free motor current ``i_q_A`` and gear torque ``T_gear_Nm`` (the shapes
+            of the projections are taken from the twin's noise-free signals: a noisy regressor would bias
+            its coefficient towards -1 where the joint's current is mostly noise).
+        params: the twin's model (gear ratio and stiffness, torque constant, friction levels).
+    """
+    dt = float(t_s[1] - t_s[0])
+    ratio = np.asarray(params.gear.ratio)
+    mis_m = meas["q_M_FB_rad"] / ratio - meas["q_FB_rad"]
+    mis_t = twin["q_M_FB_rad"] / ratio - twin["q_FB_rad"]
+    res = {"current": meas["i_FB_A"] - twin["i_FB_A"], "position": meas["q_FB_rad"] - twin["q_FB_rad"],
+           "mismatch": mis_m - mis_t}
+    qd = np.gradient(q_set_rad, dt, axis=0)
+    qdd = np.gradient(qd, dt, axis=0)
+    torque = twin["T_gear_Nm"]
+    masks = motion_conditions(qd, qdd, torque, dt)
+    fr, mo = params.friction, params.motor
+    level = stribeck_level(qd, np.asarray(fr.coulomb_Nm), np.asarray(fr.static_Nm), fr.stribeck_rate_s_per_rad)[0]
+    i_coulomb = np.sign(qd) * level / (np.asarray(mo.torque_constant_Nm_per_A) * ratio)
+    flank = np.where(np.abs(torque) > FLANK_SHARE * np.abs(torque).max(axis=0), np.sign(torque), np.nan)
+    windup = torque / np.asarray(params.gear.stiffness_Nm_per_rad)
+    f: dict[str, float] = {}
+    for j in range(N_JOINTS):
+        s = f"_j{j + 1}"
+        for sig, unit in SIGNAL_UNITS.items():
+            r = res[sig][:, j]
+            for stat in ("mean", "rms"):
+                for cond, key in CONDITIONS.items():
+                    m = masks[key][:, j]
+                    v = float("nan")
+                    if m.any():
+                        v = float(np.nanmean(r[m])) if stat == "mean" else float(np.sqrt(np.nanmean(r[m] ** 2)))
+                    f[f"twin_{sig}_{stat}_{unit}_{cond}{s}"] = v
+        ones = np.ones(len(t_s))
+        a, b, c = _lstsq(res["current"][:, j], [ones, twin["i_q_A"][:, j], i_coulomb[:, j]])
+        d, e, g = _lstsq(res["mismatch"][:, j], [ones, 0.5 * np.nan_to_num(flank[:, j]), windup[:, j]])
+        for name, v in zip(ESTIMATE_UNITS, (a, b, c, d, e, g)):
+            f[f"twin_est_{name}{s}"] = float(v)
+    return f
