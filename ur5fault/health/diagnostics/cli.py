@@ -20,7 +20,8 @@ def register(sub) -> None:
                         "(default: both when the campaign has twin residuals, else paper)")
     b.add_argument("--test", metavar="OTHER_DIR",
                    help="score the classifiers saved in DIR/benchmark/models on every run of this other campaign "
-                        "folder, without retraining (report in OTHER_DIR/benchmark_transfer unless --out)")
+                        "folder, without retraining (report in OTHER_DIR/benchmark_transfer unless --out; "
+                        "default: train and score on DIR's own split)")
     b.set_defaults(func=cmd_benchmark)
 
 
