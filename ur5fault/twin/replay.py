@@ -3,8 +3,8 @@ temperatures, simulated under a model overlay (parameter overrides and effects),
 
 This is the one path from a log to the model: ``ur5fault identify`` (bandwidth sweep, friction choices),
 ``ur5fault discrepancy`` and the tests against the real log all replay through :class:`LogReplay`.
-:class:`Replay` holds several logs of one robot, each with its own payload, tool and temperatures, under
-one shared overlay.
+Several logs of one robot are several :class:`LogReplay` under one overlay, each with its own payload, tool
+and temperatures; the discrepancy workflow lays them on one sample axis (:mod:`ur5fault.discrepancy.multilog`).
 
 Residual signals (the log's readings that the model predicts), stacked on a signal axis so that every
 array of a replay is ``(n_samples, n_signals, 6)``:
@@ -17,7 +17,7 @@ array of a replay is ``(n_samples, n_signals, 6)``:
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Iterator, Sequence
+from collections.abc import Sequence
 
 import numpy as np
 from numpy.typing import NDArray
@@ -193,45 +193,6 @@ class LogReplay:
             y[:, 0, e.joint] += sensor_temperature_term(c, t_log[:, e.joint], t_run[e.joint])
         return dataclasses.replace(r, y=y)
 
-
-class Replay:
-    """Several logs of one robot replayed under one model overlay.
-
-    Every log keeps its own payload, tool offset and temperatures (:func:`log_overrides`); the overlay
-    (``params_overrides``, ``base_effects``) is shared.  A lockstep batch shares one trajectory, so each
-    log is its own batch: :meth:`run` returns one list of :class:`Replayed` per log (log axis first, then
-    the effect sets in order, then the samples of that log).
-
-    Args:
-        logs: the measured logs (at least one).
-        params_overrides, base_effects, seed, jobs: as :class:`LogReplay`, for every log.
-    """
-
-    def __init__(self, logs: Sequence[MeasuredLog], params_overrides: dict | None = None,
-                 base_effects: Sequence[EffectSpec] = (), *, seed: int, jobs: int = 1) -> None:
-        if isinstance(logs, MeasuredLog):
-            logs = (logs,)
-        if len(logs) == 0:
-            raise ParameterError("a replay needs at least one log")
-        self.replays: tuple[LogReplay, ...] = tuple(
-            LogReplay(log, params_overrides, base_effects, seed=seed, jobs=jobs) for log in logs)
-
-    def __len__(self) -> int:
-        return len(self.replays)
-
-    def __iter__(self) -> Iterator[LogReplay]:
-        return iter(self.replays)
-
-    def __getitem__(self, k: int) -> LogReplay:
-        return self.replays[k]
-
-    def measured(self) -> tuple[NDArray, ...]:
-        """Every log's readings ``(n_samples_k, n_signals_k, 6)``, one array per log."""
-        return tuple(r.measured() for r in self.replays)
-
-    def run(self, effect_sets: Sequence[Sequence[EffectSpec]], progress=None) -> tuple[list[Replayed], ...]:
-        """Every effect set on every whole log: ``out[k][i]`` is log ``k`` under ``effect_sets[i]``."""
-        return tuple(r.run(effect_sets, None, progress) for r in self.replays)
 
 
 def _simulate(params: RobotParams, traj, runs: list[RunSpec], period_s: float, n: int, progress=None
