@@ -448,9 +448,9 @@ def test_dask_scheduler_that_does_not_answer(support_files, capsys, monkeypatch)
     pytest.importorskip("dask.distributed")
     import time
 
-    from ur5fault.campaign import execute
+    from ur5fault.campaign import workers
 
-    monkeypatch.setattr(execute, "DASK_CONNECT_TIMEOUT_S", 1.0)
+    monkeypatch.setattr(workers, "DASK_CONNECT_TIMEOUT_S", 1.0)
     f = _write(support_files, "c.yaml", GOOD)
     t0 = time.perf_counter()
     rc, err, peak = _run(["campaign", "run", str(f), "--out", str(support_files / "o"), "--backend", "dask",

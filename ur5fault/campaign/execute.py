@@ -15,8 +15,6 @@ from __future__ import annotations
 import json
 import logging
 import os
-import sys
-import threading
 import time
 import warnings
 from collections.abc import Callable, Mapping, Sequence
@@ -26,7 +24,6 @@ from typing import Any
 import numpy as np
 
 from ..config import parse_trajectory
-from ..errors import ParameterError
 from ..sim.params import load_params
 from ..util.io import check_writable, write_json_atomic, write_parquet_atomic
 from ..util.progress import campaign_progress
@@ -34,18 +31,15 @@ from .digital_twin import twin_id, twin_runs
 from .identity import Identities
 from .identity import run_effects as _effects_of
 from .labels import assign_splits, refresh_splits, row_labels
-from .limits import check_limits, effective_jobs, estimate
+from .limits import check_limits, estimate
 from .lock import Lock
 from .manifest import build_manifest
 from .spec import Campaign, CampaignRun
 from .store import BadRunFilesError, CampaignChangedError, consolidate, run_path, write_run_file
 from .verify import scan
+from .workers import check_backend, dask_client, exit_with_parent, note_stderr, stop_loky_workers
 
 _log = logging.getLogger(__name__)
-#: seconds to wait for a Dask scheduler to answer (distributed's own default is 30 s)
-DASK_CONNECT_TIMEOUT_S = 10.0
-#: how often a loky worker checks that the campaign process is still alive [s]
-PARENT_POLL_S = 1.0
 
 
 def plan_batches(camp: Campaign, todo: Sequence[CampaignRun], n_workers: int = 1) -> list[list[CampaignRun]]:
@@ -84,7 +78,7 @@ def run_batch(camp: Campaign, batch: Sequence[CampaignRun], ts_dir: str | None,
     from ..health.features import FEATURE_UNITS, run_features
     from ..sim.engine import RunSpec, Simulator
 
-    _exit_with_parent(parent_pid)
+    exit_with_parent(parent_pid)
 
     traj_spec = batch[0].cond["trajectory"]
     traj = parse_trajectory(traj_spec, "trajectory")
@@ -151,34 +145,10 @@ def _add_twin_features(row: dict[str, Any], res, i: int, k: int, params) -> None
                              {n: res[n][k] for n in (*names, "i_q_A", "T_gear_Nm")}, params))
 
 
-def _exit_with_parent(parent_pid: int | None) -> None:
-    """In a loky worker process started by ``parent_pid``: exit as soon as that process is gone
-    (``parent_pid`` is None on Dask, whose workers belong to their nanny, and equal to our own
-    pid when the batch runs in the campaign process itself)."""
-    if parent_pid is None or os.getpid() == parent_pid:
-        return
-    if os.getppid() != parent_pid:  # the campaign process died before this batch started
-        os._exit(1)
-    if any(t.name == "ur5fault-parent-watch" for t in threading.enumerate()):
-        return
-
-    def watch() -> None:
-        while True:
-            time.sleep(PARENT_POLL_S)
-            if os.getppid() != parent_pid:
-                os._exit(1)
-
-    threading.Thread(target=watch, name="ur5fault-parent-watch", daemon=True).start()
-
-
-def _note_stderr(message: str) -> None:
-    sys.stderr.write(f"ur5fault: note: {message}\n")
-
-
 def run_campaign(camp: Campaign, out: Path | None = None, *, jobs: int | None = None, backend: str = "loky",
                  scheduler: str | None = None, progress: bool | Callable[[int, int, float], None] = True,
                  save_timeseries: bool | None = None, replace_changed: bool = False,
-                 note: Callable[[str], None] | None = _note_stderr) -> dict[str, Any]:
+                 note: Callable[[str], None] | None = note_stderr) -> dict[str, Any]:
     """Run every run of ``camp`` not yet soundly done in ``out``; return the manifest.
 
     Args:
@@ -196,15 +166,11 @@ def run_campaign(camp: Campaign, out: Path | None = None, *, jobs: int | None = 
     """
     out = Path(out) if out is not None else camp.out
     say = note or (lambda message: None)
-    if backend not in ("loky", "dask"):
-        raise ParameterError(f"backend = {backend!r} is not valid; choose one of: loky, dask")
-    if backend == "dask" and not scheduler:
-        raise ParameterError("--backend dask needs --scheduler ADDRESS (e.g. tcp://127.0.0.1:8786)")
-    jobs, capped = effective_jobs(jobs) if backend == "loky" else (jobs or 1, None)
+    jobs, capped = check_backend(backend, scheduler, jobs)
     check_limits(camp, estimate(camp, jobs))
     check_writable(out, folder=True)
     save_ts = camp.save_timeseries if save_timeseries is None else save_timeseries
-    client = _dask_client(str(scheduler)) if backend == "dask" else None  # before anything is written
+    client = dask_client(str(scheduler)) if backend == "dask" else None  # before anything is written
     try:
         return _run_locked(camp, out, jobs, backend, client, progress, save_ts, replace_changed, say, capped)
     finally:
@@ -282,45 +248,6 @@ def _remove_stale_temporaries(out: Path) -> None:
                 p.unlink(missing_ok=True)
 
 
-def _stop_loky_workers() -> None:
-    """Kill the worker processes of joblib's reusable loky executor (after an interruption)."""
-    try:
-        from joblib.externals.loky import reusable_executor
-    except ImportError:  # pragma: no cover - joblib without its vendored loky
-        return
-    executor = getattr(reusable_executor, "_executor", None)
-    if executor is not None:
-        executor.shutdown(wait=False, kill_workers=True)
-
-
-def _dask_client(scheduler: str, timeout_s: float | None = None):
-    """Connect to a Dask scheduler, or fail within ``timeout_s`` (default :data:`DASK_CONNECT_TIMEOUT_S`)
-    with one line (and no logged tracebacks)."""
-    import logging
-
-    try:
-        from dask.distributed import Client
-    except ImportError:  # depends on the installation: say how to get it, no traceback
-        raise ParameterError("--backend dask needs dask.distributed: pip install 'dask[distributed]>=2024.1' "
-                             "(from a checkout: pip install '.[cluster]')") from None
-
-    timeout_s = DASK_CONNECT_TIMEOUT_S if timeout_s is None else timeout_s
-
-    loggers = [logging.getLogger(name) for name in ("distributed", "distributed.client", "distributed.comm.core")]
-    levels = [lg.level for lg in loggers]
-    for lg in loggers:
-        lg.setLevel(logging.CRITICAL)
-    try:
-        return Client(scheduler, timeout=timeout_s)
-    except (OSError, TimeoutError, ValueError, TypeError) as exc:
-        why = " ".join(str(exc).split())[:160] or type(exc).__name__
-        raise ParameterError(f"--scheduler {scheduler}: cannot connect to a Dask scheduler (timeout {timeout_s:g} s: "
-                             f"{why}); check the address or start one with `dask scheduler`") from None
-    finally:
-        for lg, level in zip(loggers, levels):
-            lg.setLevel(level)
-
-
 def _execute(camp: Campaign, batches: list[list[CampaignRun]], out: Path, ts_dir: Path | None, jobs: int,
              client, ids: Identities, todo: set[str], done: int, report, t0: float) -> None:
     """Run the batches in parallel; write each run's row to the store as soon as its batch returns."""
@@ -357,5 +284,5 @@ def _execute(camp: Campaign, batches: list[list[CampaignRun]], out: Path, ts_dir
                 warnings.simplefilter("ignore")
                 gen.close()
         if client is None:
-            _stop_loky_workers()
+            stop_loky_workers()
         raise

@@ -21,12 +21,10 @@ from typing import Any
 
 import numpy as np
 
-from ...campaign.execute import _dask_client, _exit_with_parent, _note_stderr, _stop_loky_workers
-from ...campaign.limits import effective_jobs
 from ...campaign.lock import Lock
 from ...campaign.store import CampaignChangedError
+from ...campaign.workers import check_backend, dask_client, exit_with_parent, note_stderr, stop_loky_workers
 from ...config import parse_trajectory
-from ...errors import ParameterError
 from ...sim.axes import N_JOINTS
 from ...sim.effects import make_effect
 from ...util.io import check_writable, write_json_atomic
@@ -80,7 +78,7 @@ def inspect_batch(camp: LifeCampaign, jobs: Sequence[Job], refs: Mapping[str, np
     from ...sim.params import load_params
     from ..features import FEATURE_UNITS, run_features
 
-    _exit_with_parent(parent_pid)
+    exit_with_parent(parent_pid)
     traj = parse_trajectory(jobs[0].unit.trajectory, "trajectory")
     sim = Simulator(load_params())
     specs = []
@@ -172,7 +170,7 @@ def _batches(jobs: Sequence[Job], batch_size: int, n_workers: int) -> list[list[
 
 def run_life(camp: LifeCampaign, out: Path | None = None, *, jobs: int | None = None, backend: str = "loky",
              scheduler: str | None = None, progress: bool | Callable[[int, int, float], None] = True,
-             note: Callable[[str], None] | None = _note_stderr, max_rounds: int | None = None,
+             note: Callable[[str], None] | None = note_stderr, max_rounds: int | None = None,
              replace_changed: bool = False) -> dict[str, Any]:
     """Run (or resume) a life campaign into ``out``; return its manifest.
 
@@ -186,13 +184,9 @@ def run_life(camp: LifeCampaign, out: Path | None = None, *, jobs: int | None = 
     """
     out = Path(out) if out is not None else camp.out
     say = note or (lambda m: None)
-    if backend not in ("loky", "dask"):
-        raise ParameterError(f"backend = {backend!r} is not valid; choose one of: loky, dask")
-    if backend == "dask" and not scheduler:
-        raise ParameterError("--backend dask needs --scheduler ADDRESS (e.g. tcp://127.0.0.1:8786)")
-    n_jobs, capped = effective_jobs(jobs) if backend == "loky" else (jobs or 1, None)
+    n_jobs, capped = check_backend(backend, scheduler, jobs)
     check_writable(out, folder=True)
-    client = _dask_client(str(scheduler)) if backend == "dask" else None
+    client = dask_client(str(scheduler)) if backend == "dask" else None
     try:
         with Lock(out):
             if capped:
@@ -262,7 +256,7 @@ def _run_locked(camp, out: Path, n_jobs: int, client, progress, say, max_rounds,
                 rounds += 1
     except BaseException:
         if client is None:
-            _stop_loky_workers()
+            stop_loky_workers()
         raise
     finally:
         report.close()

@@ -1,0 +1,89 @@
+"""How campaign work reaches worker processes, shared by fault campaigns and life campaigns: the backend
+check, the Dask connection, the loky workers' watch on their parent and their shutdown after an interruption."""
+
+from __future__ import annotations
+
+import logging
+import os
+import sys
+import threading
+import time
+
+from ..errors import ParameterError
+from .limits import effective_jobs
+
+#: seconds to wait for a Dask scheduler to answer (distributed's own default is 30 s)
+DASK_CONNECT_TIMEOUT_S = 10.0
+#: how often a loky worker checks that the campaign process is still alive [s]
+PARENT_POLL_S = 1.0
+
+
+def check_backend(backend: str, scheduler: str | None, jobs: int | None) -> tuple[int, str | None]:
+    """The worker count for ``backend`` (``"loky"``: at most the cores available, with a note when capped;
+    ``"dask"``: as given), after checking the backend and that Dask has a scheduler address."""
+    if backend not in ("loky", "dask"):
+        raise ParameterError(f"backend = {backend!r} is not valid; choose one of: loky, dask")
+    if backend == "dask" and not scheduler:
+        raise ParameterError("--backend dask needs --scheduler ADDRESS (e.g. tcp://127.0.0.1:8786)")
+    return effective_jobs(jobs) if backend == "loky" else (jobs or 1, None)
+
+
+def exit_with_parent(parent_pid: int | None) -> None:
+    """In a loky worker process started by ``parent_pid``: exit as soon as that process is gone
+    (``parent_pid`` is None on Dask, whose workers belong to their nanny, and equal to our own
+    pid when the batch runs in the campaign process itself)."""
+    if parent_pid is None or os.getpid() == parent_pid:
+        return
+    if os.getppid() != parent_pid:  # the campaign process died before this batch started
+        os._exit(1)
+    if any(t.name == "ur5fault-parent-watch" for t in threading.enumerate()):
+        return
+
+    def watch() -> None:
+        while True:
+            time.sleep(PARENT_POLL_S)
+            if os.getppid() != parent_pid:
+                os._exit(1)
+
+    threading.Thread(target=watch, name="ur5fault-parent-watch", daemon=True).start()
+
+
+def note_stderr(message: str) -> None:
+    sys.stderr.write(f"ur5fault: note: {message}\n")
+
+
+def stop_loky_workers() -> None:
+    """Kill the worker processes of joblib's reusable loky executor (after an interruption)."""
+    try:
+        from joblib.externals.loky import reusable_executor
+    except ImportError:  # pragma: no cover - joblib without its vendored loky
+        return
+    executor = getattr(reusable_executor, "_executor", None)
+    if executor is not None:
+        executor.shutdown(wait=False, kill_workers=True)
+
+
+def dask_client(scheduler: str, timeout_s: float | None = None):
+    """Connect to a Dask scheduler, or fail within ``timeout_s`` (default :data:`DASK_CONNECT_TIMEOUT_S`)
+    with one line (and no logged tracebacks)."""
+    try:
+        from dask.distributed import Client
+    except ImportError:  # depends on the installation: say how to get it, no traceback
+        raise ParameterError("--backend dask needs dask.distributed: pip install 'dask[distributed]>=2024.1' "
+                             "(from a checkout: pip install '.[cluster]')") from None
+
+    timeout_s = DASK_CONNECT_TIMEOUT_S if timeout_s is None else timeout_s
+
+    loggers = [logging.getLogger(name) for name in ("distributed", "distributed.client", "distributed.comm.core")]
+    levels = [lg.level for lg in loggers]
+    for lg in loggers:
+        lg.setLevel(logging.CRITICAL)
+    try:
+        return Client(scheduler, timeout=timeout_s)
+    except (OSError, TimeoutError, ValueError, TypeError) as exc:
+        why = " ".join(str(exc).split())[:160] or type(exc).__name__
+        raise ParameterError(f"--scheduler {scheduler}: cannot connect to a Dask scheduler (timeout {timeout_s:g} s: "
+                             f"{why}); check the address or start one with `dask scheduler`") from None
+    finally:
+        for lg, level in zip(loggers, levels):
+            lg.setLevel(level)
