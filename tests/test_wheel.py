@@ -173,3 +173,34 @@ def test_every_documented_command_works_from_a_wheel(wheel, installed, tmp_path,
     documented = {c for _, c in doc_commands()}
     assert len(ran) >= 12 and any("campaign run" in c for c in ran), ran
     assert {c for c in documented if "ur5fault" in c and not c.startswith("make")} <= set(ran)
+
+
+def doc_python_blocks() -> list[tuple[str, str]]:
+    """(page, code) for every ```python block of :data:`DOCS` written as a script (an IPython session
+    transcript, ``In [1]: ...``, shows the same calls as a README block and is not a script)."""
+    return [(page.name, block) for page in DOCS for block in re.findall(r"```python\n(.*?)```", page.read_text(), re.S)
+            if not block.lstrip().startswith("In [")]
+
+
+def test_every_documented_python_block_runs_from_a_wheel(installed, tmp_path):
+    """Each Python block of README.md and docs/usage.md, run as written with the installed wheel from a folder
+    outside the checkout (one folder per page): exit 0 and no traceback.  A README block reads the default
+    campaign's results, which `make campaign` writes in a checkout; a wheel user writes them with the shipped
+    campaign (durations shortened here)."""
+    venv, _, env = installed
+    env = {**env, "MPLBACKEND": "Agg"}
+    blocks = doc_python_blocks()
+    assert {page for page, _ in blocks} == {"README.md", "usage.md"} and len(blocks) >= 4, blocks
+    failed = []
+    for page in sorted({page for page, _ in blocks}):
+        work = tmp_path / page.replace(".", "_")
+        work.mkdir()
+        if page == "README.md":
+            _sh(venv / "bin" / "ur5fault", "campaign", "run", "default", "--out", "results/default",
+                "--duration-s", "0.5", "--quiet", cwd=work, env=env)
+        for code in (c for p, c in blocks if p == page):
+            r = subprocess.run([venv / "bin" / "python", "-c", code], cwd=work, env=env, capture_output=True,
+                               text=True, timeout=1800)
+            if r.returncode != 0 or "Traceback" in r.stderr:
+                failed.append(f"{page}:\n{code}\n  exit {r.returncode}\n  {r.stderr[-1500:]}")
+    assert not failed, "\n".join(failed)
