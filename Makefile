@@ -18,7 +18,7 @@ $(STAMP): pyproject.toml
 test: $(STAMP)
 	$(BIN)/python -m pytest -q
 
-# daily work: everything except the tests marked slow (long physics, campaigns, wheel, discrepancy); < 3 min
+# daily work: everything except the tests marked slow (long physics, campaigns, wheel, discrepancy); about 5 min
 .PHONY: test-fast
 test-fast: $(STAMP)
 	$(BIN)/python -m pytest -q -m "not slow"
