@@ -183,6 +183,18 @@ def test_per_joint_feature_read_on_the_faulty_joint(two):
         severity_table(sweep, "nope")
 
 
+def test_angle_features_are_drawn_in_degrees(two):
+    """Angles a person reads are in degrees (docs/outputs.md "Units"); the feature table keeps radians."""
+    sweep = effect_sweep(two.features, "backlash", ["backlash_deg"])
+    df = two.features[two.features["fault"] == "backlash"]
+    ax = severity_figure(sweep, "enc_mismatch_p2p_rad").axes[0]
+    assert ax.get_ylabel() == "encoder mismatch, peak to peak [deg] of the faulty joint"
+    for line in _lines(ax):
+        j = int(line.get_label()[1])
+        sub = df[df["fault_joint"] == j].sort_values("backlash_deg")
+        np.testing.assert_allclose(line.get_ydata(), sub[f"enc_mismatch_p2p_rad_j{j}"] * 180.0 / np.pi, rtol=1e-12)
+
+
 def test_tcp_table_is_the_backlash_pivot(two):
     df = two.features
     bl = df[(df["fault"] == "backlash") & (df["status"] == "ok")]

@@ -13,6 +13,15 @@ from ..health.features import feature_label
 from ._figure import figure_and_axes
 
 
+def _display(feature: str) -> tuple[float, str]:
+    """(factor, axis label) to show ``feature`` to a person: angles in degrees (the features are stored in
+    radians, docs/outputs.md "Units"), everything else as stored."""
+    label = feature_label(feature)
+    if " [rad]" in label:
+        return float(np.degrees(1.0)), label.replace(" [rad]", " [deg]")
+    return 1.0, label
+
+
 def _is_generic(df: pd.DataFrame, feature: str) -> bool:
     """A per-joint feature named without its ``_j{j}`` suffix."""
     return feature not in df.columns and f"{feature}_j1" in df.columns
@@ -33,8 +42,9 @@ def severity_figure(sweep: EffectSweep, feature: str = "tcp_dev_max_mm", *, heal
         The figure.
     """
     fig, ax = figure_and_axes(ax, (8, 4.5))
-    table = severity_table(sweep, feature)
-    values = joint_feature(sweep.rows, feature)
+    scale, name = _display(feature)
+    table = severity_table(sweep, feature) * scale
+    values = joint_feature(sweep.rows, feature) * scale
     generic = _is_generic(sweep.rows, feature)
     for k, (label, line) in enumerate(table.iterrows()):
         color = f"C{k % 10}"
@@ -49,13 +59,12 @@ def severity_figure(sweep: EffectSweep, feature: str = "tcp_dev_max_mm", *, heal
         if pts.sum() > len(line):  # several runs per size (seeds, payloads): show them all
             ax.plot(sweep.rows.loc[pts, "size"], values[pts], ".", color=color, alpha=0.4, ms=3)
         if healthy is not None and len(healthy) and generic and sweep.per_joint:
-            ax.axhline(healthy[f"{feature}_j{j}"].max(), color=color, ls=":", lw=0.8)
+            ax.axhline(healthy[f"{feature}_j{j}"].max() * scale, color=color, ls=":", lw=0.8)
     if healthy is not None and len(healthy) and not (generic and sweep.per_joint):
-        ax.axhline(joint_feature(healthy, feature).max(), color="k", ls=":", lw=0.8, label="healthy")
+        ax.axhline(joint_feature(healthy, feature).max() * scale, color="k", ls=":", lw=0.8, label="healthy")
     if threshold_mm is not None and feature.startswith("tcp_dev_"):
         ax.axhline(threshold_mm, color="k", ls="--", lw=0.8, label=f"{threshold_mm:g} mm threshold")
     on = " of the faulty joint" if generic and sweep.per_joint else (" (max over joints)" if generic else "")
-    name = feature_label(feature)
     title = f"{name.split(' [')[0]}{on} against {sweep.effect} size"
     if sweep.n_not_ok:
         title += f" ({sweep.n_not_ok} run(s) not ok, not shown)"
@@ -67,14 +76,15 @@ def severity_figure(sweep: EffectSweep, feature: str = "tcp_dev_max_mm", *, heal
 def heatmap(sweep: EffectSweep, feature: str = "tcp_dev_max_mm", ax: Axes | None = None) -> Figure:
     """``feature`` (largest over repeated runs) by fault joint x fault size, values written in the cells."""
     fig, ax = figure_and_axes(ax, (8, 4.5))
-    table = severity_table(sweep, feature)
+    scale, name = _display(feature)
+    table = severity_table(sweep, feature) * scale
     im = ax.imshow(table.to_numpy(), aspect="auto", cmap="viridis")
     ax.set_xticks(range(table.shape[1]), [f"{v:g}" for v in table.columns])
     ax.set_yticks(range(table.shape[0]), [f"J{label}" for label in table.index] if sweep.per_joint else table.index)
     ax.set_xlabel(sweep.label)
     for (r, c), v in np.ndenumerate(table.to_numpy()):
         ax.text(c, r, f"{v:.3g}", ha="center", va="center", color="w", fontsize=7)
-    fig.colorbar(im, ax=ax, label=feature_label(feature))
-    ax.set_title(f"{feature_label(feature).split(' [')[0]} by fault joint and {sweep.effect} size")
+    fig.colorbar(im, ax=ax, label=name)
+    ax.set_title(f"{name.split(' [')[0]} by fault joint and {sweep.effect} size")
     return fig
 
