@@ -26,7 +26,6 @@ from ..sim.effects import REGISTRY
 from ..util.checks import check_number
 from . import plausible, regular
 from .measured import MeasuredLog
-from .plausible import check_current_units
 from .source import check_log_memory, read_columns, sniff
 from .wrap import unwrap_joints
 
@@ -258,5 +257,5 @@ def read_log(path: str | Path, fmt: str, **kwargs) -> MeasuredLog:
     if not p.is_file():
         raise LogFormatError(f"{p}: not a file")
     log = READERS[fmt](p, **{k: v for k, v in kwargs.items() if v is not None})
-    check_current_units(log.source, {"current": log.current_A, "target current": log.target_current_A})
+    plausible.check_current_units(log.source, {"current": log.current_A, "target current": log.target_current_A})
     return log
