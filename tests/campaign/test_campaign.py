@@ -375,6 +375,25 @@ def test_identity_inputs_cover_everything_that_decides_a_result():
     assert len(inputs["trajectory"]["setpoints_sha256"]) == 64
 
 
+def test_identity_records_the_stepper_and_drive_the_runs_use(tmp_path, monkeypatch):
+    """The recorded stepper is the one the campaign's simulator runs, not an engine default restated."""
+    from ur5fault.campaign.identity import Identities
+    from ur5fault.sim import engine
+
+    used = []
+    real_init = engine.Simulator.__init__
+
+    def spy(self, *a, **kw):
+        real_init(self, *a, **kw)
+        used.append((self.drive, self.stepper))
+
+    monkeypatch.setattr(engine.Simulator, "__init__", spy)
+    camp = load_campaign(tiny(tmp_path))
+    run_quiet(camp, tmp_path / "out")
+    common = Identities(camp).common
+    assert used and set(used) == {(common["drive"], common["stepper"])}
+
+
 def test_added_level_simulates_only_the_new_run(tmp_path, tiny_done):
     out = _copy_done(tiny_done, tmp_path)
     stamp = {p.name: p.stat().st_mtime_ns for p in (out / "runs").glob("*.parquet")}

@@ -28,7 +28,7 @@ from ..sim.params import load_params
 from ..util.io import check_writable, write_json_atomic, write_parquet_atomic
 from ..util.progress import campaign_progress
 from .digital_twin import twin_id, twin_runs
-from .identity import Identities
+from .identity import DRIVE, STEPPER, Identities
 from .identity import run_effects as _effects_of
 from .labels import assign_splits, refresh_splits, row_labels
 from .limits import check_limits, estimate
@@ -82,7 +82,7 @@ def run_batch(camp: Campaign, batch: Sequence[CampaignRun], ts_dir: str | None,
 
     traj_spec = batch[0].cond["trajectory"]
     traj = parse_trajectory(traj_spec, "trajectory")
-    sim = Simulator(load_params(overrides=dict(camp.base_params)))
+    sim = Simulator(load_params(overrides=dict(camp.base_params)), stepper=STEPPER, drive=DRIVE)
     specs = [RunSpec(rc.run_id, int(rc.cond["seed"]), _effects_of(camp, rc)) for rc in batch]
     twins = twin_runs(camp, batch) if camp.twin_residuals else {}
     twin_index = {tid: len(specs) + k for k, tid in enumerate(twins)}

@@ -36,8 +36,9 @@ INPUT_ORDER = ("identity_format", "ur5fault_version", "mujoco_version", "model_s
                "trajectory", "duration_s", "log_period_s", "seed", "effects", "params", "twin_residuals")
 #: version of the digital twin and its features (health/twin_features.py), recorded when a campaign has them
 TWIN_RESIDUALS_FORMAT = 1
-#: the simulator configuration campaigns run with (engine defaults, recorded because they decide results)
-DRIVE, STEPPER = "numba", "batch"
+#: the simulator configuration campaigns run with: passed to the engine by every campaign kind
+#: (campaign/execute.py, health/prognostics/fleet.py) and recorded here, so the identity names what ran
+DRIVE, STEPPER = "numba", "compiled"
 
 
 def run_effects(camp: Campaign, rc: CampaignRun) -> tuple[EffectSpec, ...]:

@@ -21,6 +21,7 @@ from typing import Any
 
 import numpy as np
 
+from ...campaign.identity import DRIVE, STEPPER
 from ...campaign.lock import Lock
 from ...campaign.store import CampaignChangedError
 from ...campaign.workers import check_backend, dask_client, exit_with_parent, note_stderr, stop_loky_workers
@@ -80,7 +81,7 @@ def inspect_batch(camp: LifeCampaign, jobs: Sequence[Job], refs: Mapping[str, np
 
     exit_with_parent(parent_pid)
     traj = parse_trajectory(jobs[0].unit.trajectory, "trajectory")
-    sim = Simulator(load_params())
+    sim = Simulator(load_params(), stepper=STEPPER, drive=DRIVE)
     specs = []
     for job in jobs:
         a = np.asarray(job.backlash_deg)
