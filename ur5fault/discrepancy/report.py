@@ -14,6 +14,7 @@ from ..sim.effects import REGISTRY
 from ..twin.residuals import UNEXPLAINED_FACTOR
 from ..util.io import write_figure_atomic, write_text_atomic
 from .candidates import LibraryCandidate, TermCandidate
+from .speed import bare_mj_step_us, wall_over_mj_steps
 from .statistics import Z_95
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -138,9 +139,11 @@ def finding_json(f: Finding) -> dict[str, Any]:
     return out
 
 
-def summary(model: DiscrepancyModel) -> dict[str, Any]:
+def summary(model: DiscrepancyModel, bare_step_us: float | None = None) -> dict[str, Any]:
+    """Everything ``summary.json`` holds; ``bare_step_us``: one bare mj_step timed now [us] (see ``speed.py``),
+    which adds the fit's wall time in machine-independent units."""
     rp = model.replay_
-    return {
+    out = {
         "log": rp.log.source,
         "log_assumptions": rp.log.assumptions(rp.params.joint_temperature_C),
         "named": [sentence(f) for f in model.findings_ if f.kept],
@@ -161,11 +164,11 @@ def summary(model: DiscrepancyModel) -> dict[str, Any]:
         "wall_s_by_stage": model.timings_s_,
         "simulated_runs": model.n_simulated_runs_,
         "simulated_s": model.simulated_s_,
-        # wall time over (simulated run-steps x one bare mj_step timed at the end of the fit): compares
-        # wall times taken on machines of different speed or load
-        "bare_mj_step_us": model.bare_mj_step_us_,
-        "wall_over_mj_steps": model.wall_over_mj_steps_,
     }
+    if bare_step_us is not None:
+        out["bare_mj_step_us"] = bare_step_us
+        out["wall_over_mj_steps"] = wall_over_mj_steps(model, bare_step_us)
+    return out
 
 
 def figures(model: DiscrepancyModel):
@@ -197,7 +200,7 @@ def write_report(model: DiscrepancyModel, out: Path) -> list[Path]:
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    summ = summary(model)
+    summ = summary(model, bare_mj_step_us(model.replay_.params.physics_dt_s))
     write_text_atomic(out / "summary.json", json.dumps(summ, indent=2, default=float))
     write_text_atomic(out / "model.yaml", yaml.safe_dump(model.overlay(), sort_keys=False))
     paths = []
