@@ -237,8 +237,11 @@ def _markdown(model: DiscrepancyModel, summ: dict[str, Any], figs: list[Path]) -
     lines += ["", "## Unexplained", ""]
     if summ["unexplained"]:
         for u in summ["unexplained"]:
+            reg = u.get("angle_region")
+            local = (f"; between {reg['from_deg']:g} and {reg['to_deg']:g} deg of the joint's travel {reg['rms']:.4g} "
+                     f"(elsewhere {reg['rms_elsewhere']:.4g})") if reg else ""
             lines.append(f"- {u['signal']} on {u['joint']}: held-out RMS {u['rms_held_out']:.4g} against a noise "
-                         f"floor of {u['noise_floor']:.3g}, largest {u['largest_where']}")
+                         f"floor of {u['noise_floor']:.3g}, largest {u['largest_where']}{local}")
     else:
         lines.append(f"- nothing above {UNEXPLAINED_FACTOR:g} times the noise floor")
     lines += ["", "## Residual plots", ""] + [f"![{p.stem}]({p.name})" for p in figs]
