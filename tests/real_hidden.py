@@ -66,3 +66,17 @@ def inject(log: MeasuredLog, kind: str, joint: int, **v: float) -> MeasuredLog:
     else:
         raise ValueError(kind)
     return dataclasses.replace(log, current_A=cur, source=f"{log.source} + {kind} on joint {joint + 1}")
+
+
+#: speed above which a joint counts as moving for placing a local effect [rad/s] (assumption: well above the
+#: friction law's smoothing, so the injected friction is at its full level there)
+MOVING_RAD_S = 0.05
+
+
+def busy_angle_deg(log: MeasuredLog, joint: int, from_share: float = 0.6) -> float:
+    """The median angle [deg] of ``joint`` while it moves in the log's last ``1 - from_share`` (the held-out
+    part): where a worn region of the gear shows both in the fitted and the held-out part."""
+    k = int(from_share * log.t_s.size)
+    w = measured_speed(log)[k:, joint]
+    deg = np.rad2deg(log.q_actual_rad[k:, joint])
+    return float(np.median(deg[np.abs(w) > MOVING_RAD_S]))

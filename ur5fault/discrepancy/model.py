@@ -144,7 +144,7 @@ class DiscrepancyModel:
                     [c.label for c in disc.terms] or "nothing")
 
         t = time.perf_counter()
-        check = steps.joint_check(lib.chosen + disc.terms, disc.X, disc.fixed, lib.e0)
+        check = steps.joint_check(disc.library + disc.terms, disc.X, disc.fixed, lib.e0)
         ref = steps.refine(rp, check.found, disc.X, check.fixed, lib.e0, {**lib.alternatives, **disc.alternatives},
                            n_fit, stages.start("refining the findings"))
         timings["refinement"] = time.perf_counter() - t
@@ -157,6 +157,8 @@ class DiscrepancyModel:
         jr = steps.judge(ref, n_fit, len(rp.signals))
         self.search_: list[SearchStep] = lib.trace + disc.trace + check.trace + jr.trace
         self.refinement_ = list(ref.first.steps) if ref.first is not None else []
+        for f in jr.findings:
+            f.tell_apart = disc.tell_apart.get(f.candidate, "")
         kept = [f for f in jr.findings if f.kept]
         after = self._polish(rp, kept, ref.first, ref.finding_set, prog) if kept else ref.nominal
         self._results(rp, ref.nominal, after, n_fit, n_all)

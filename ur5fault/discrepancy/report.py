@@ -69,6 +69,8 @@ def sentence(f: Finding) -> str:
     if f.alternatives:
         alt = "; indistinguishable in this log from " + ", ".join(
             f"{a.label} {_coef_text(a, th)}" for a, th in f.alternatives)
+    if f.tell_apart:
+        alt += f" ({f.tell_apart})"
     return f"{text} [{tests}]{alt}"
 
 
@@ -129,7 +131,8 @@ def finding_json(f: Finding) -> dict[str, Any]:
            "held_out": None if f.held_out is None else {"testable": f.held_out.testable, "ratio": f.held_out.ratio,
                                                        "energy": f.held_out.energy},
            "indistinguishable_from": [{"candidate": a.label, "coefficients": list(map(float, np.ravel(th)))}
-                                      for a, th in f.alternatives]}
+                                      for a, th in f.alternatives],
+           "tell_apart": f.tell_apart}
     if isinstance(c, LibraryCandidate):
         a, b = sorted((c.value(lo), c.value(hi)))
         out["interval"] = {c.param: [a, b]}

@@ -21,13 +21,14 @@ from numpy.typing import NDArray
 
 from ..sim.axes import N_JOINTS
 from ..twin.replay import LogReplay, Replayed
+from ..twin.residuals import conditions
 from . import discovery, library
-from .candidates import Candidate
+from .candidates import Candidate, TermCandidate
 from .judging import Finding, SearchStep, judge_findings
 from .refinement import FindingSet, Refined, probe_batch
 from .search import backward, columns_of, forward
 from .search import judge as judge_one
-from .statistics import BlockGram, rss_of, weighted
+from .statistics import MIN_DELTA_BIC, BlockGram, effective_n, rss_of, weighted
 
 #: residuals above this multiple of the noise floor (sqrt 2 sigma: model and log noise) get joint-local terms
 FLOOR_FACTOR = 2.0
@@ -45,6 +46,8 @@ class LibraryRecord:
     base: Replayed
     X: NDArray            # (n_columns, n, n_channels) linearised library columns
     e0: NDArray           # weighted residual of the nominal model on the screened part
+    candidates: list[Candidate]  # every screened candidate, its columns ``cols``
+    cols: list[list[int]]
     chosen: list[Candidate]
     chosen_cols: list[int]
     alternatives: Alternatives
@@ -53,13 +56,17 @@ class LibraryRecord:
 
 @dataclasses.dataclass(frozen=True)
 class DiscoveryRecord:
-    """The library's chosen columns and the dictionary's chosen terms' columns (``X[fixed]``)."""
+    """The library's findings (the screening's, and those named in place of a dictionary term that explained
+    nothing more) and the dictionary's kept terms, their columns ``X[fixed]`` in that order; ``tell_apart``:
+    per library finding that stood in for a term, what motion would tell the two apart."""
 
     X: NDArray
     fixed: list[int]
+    library: list[Candidate]
     terms: list[Candidate]
     alternatives: Alternatives
     trace: list[SearchStep]
+    tell_apart: dict[Candidate, str] = dataclasses.field(default_factory=dict)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -94,7 +101,7 @@ def screen_library(rp: LogReplay, n_scr: int, payload_kg: float, kinds: Sequence
     sel = forward(bg, e0, X_lib, cands, cols, max_effects)
     alternatives = {cands[k]: [(cands[a], th) for a, th in alt][:MAX_ALTERNATIVES]
                     for k, alt in zip(sel.chosen, sel.alternatives)}
-    return LibraryRecord(base, X_lib, e0, [cands[k] for k in sel.chosen],
+    return LibraryRecord(base, X_lib, e0, cands, cols, [cands[k] for k in sel.chosen],
                          [c for k in sel.chosen for c in cols[k]], alternatives,
                          [SearchStep.of("library", v) for v in sel.trace])
 
@@ -108,7 +115,7 @@ def joints_above_floor(e: NDArray, n_signals: int) -> list[int]:
 def discover_terms(rp: LogReplay, lib: LibraryRecord, n_scr: int, max_terms: int) -> DiscoveryRecord:
     X_all, fixed = lib.X[lib.chosen_cols], list(range(len(lib.chosen_cols)))
     if max_terms <= 0:
-        return DiscoveryRecord(X_all, fixed, [], {}, [])
+        return DiscoveryRecord(X_all, fixed, lib.chosen, [], {}, [])
     e0 = lib.e0
     G, g, ee = BlockGram.build(lib.X, e0).total()
     e_lib = e0 - np.tensordot(rss_of(G, g, ee, lib.chosen_cols)[1], lib.X[lib.chosen_cols], axes=1)
@@ -119,18 +126,86 @@ def discover_terms(rp: LogReplay, lib: LibraryRecord, n_scr: int, max_terms: int
                     | {c.joint for c in lib.chosen if c.joint is not None})
     dcands, X_dict = discovery.dictionary(rp, lib.base, n_scr, joints)
     if not dcands:
-        return DiscoveryRecord(X_all, fixed, [], {}, [])
+        return DiscoveryRecord(X_all, fixed, lib.chosen, [], {}, [])
     X_all = np.concatenate([X_all, X_dict])
     dcols = columns_of(dcands, start=len(lib.chosen_cols))
     sel = forward(BlockGram.build(X_all, e0), e0, X_all, dcands, dcols, max_terms, fixed=fixed)
-    fixed = fixed + [c for k in sel.chosen for c in dcols[k]]
     alternatives = {dcands[k]: [(dcands[a], th) for a, th in alt][:MAX_ALTERNATIVES]
                     for k, alt in zip(sel.chosen, sel.alternatives)}
-    return DiscoveryRecord(X_all, fixed, [dcands[k] for k in sel.chosen], alternatives,
-                           [SearchStep.of("dictionary", v) for v in sel.trace])
+    trace = [SearchStep.of("dictionary", v) for v in sel.trace]
+    if not sel.chosen:
+        return DiscoveryRecord(X_all, fixed, lib.chosen, [], alternatives, trace)
+    return prefer_library(rp, lib, dcands, X_dict, sel.chosen, alternatives, trace)
+
+
+def prefer_library(rp: LogReplay, lib: LibraryRecord, dcands: list[TermCandidate], X_dict: NDArray,
+                   chosen: list[int], alternatives: Alternatives, trace: list[SearchStep]) -> DiscoveryRecord:
+    """A dictionary term is kept only for what no library effect explains: for each chosen term, the library
+    effect on its joint (or on the whole robot) that best takes its place beside the other findings is
+    judged; when that effect is accepted and the term, judged beside it, adds nothing, the library effect is
+    named in its place and the term listed as indistinguishable from it on this log (a physical parameter
+    with a meaning and a range over a free shape)."""
+    e0 = lib.e0
+    X = np.concatenate([lib.X, X_dict])
+    cands: list[Candidate] = [*lib.candidates, *dcands]
+    cols = lib.cols + columns_of(dcands, start=lib.X.shape[0])
+    bg = BlockGram.build(X, e0)
+    G, g, ee = bg.total()
+    n_lib = len(lib.candidates)
+    current = [lib.candidates.index(c) for c in lib.chosen] + [n_lib + k for k in chosen]
+    named: list[int] = []
+    hints: dict[Candidate, str] = {}
+    for t in [n_lib + k for k in chosen]:
+        term = cands[t]
+        others = [o for o in current if o != t]
+        base = [c for o in others for c in cols[o]]
+        options = [k for k in range(n_lib) if k not in current
+                   and (cands[k].joint is None or cands[k].joint == term.joint)]
+        if not options:
+            continue
+        best = min(options, key=lambda k: rss_of(G, g, ee, base + cols[k])[0])
+        v_lib = judge_one(bg, e0, X, cands, cols, others, best)
+        if not v_lib.accepted:
+            continue
+        v_term = judge_one(bg, e0, X, cands, cols, others + [best], t)
+        if v_term.accepted:
+            continue
+        th_term = rss_of(G, g, ee, base + cols[t])[1][len(base):]
+        current = [best if o == t else o for o in current]
+        named.append(best)
+        alternatives[cands[best]] = [(term, th_term), *alternatives.pop(term, [])][:MAX_ALTERNATIVES]
+        hints[cands[best]] = tell_apart(rp, lib, X[cols[best]], v_lib.theta, X[cols[t]], th_term, term.joint)
+        trace.append(SearchStep.of("library preferred", dataclasses.replace(
+            v_term, accepted=False, reason=f"explains nothing {cands[best].label} does not: the library effect is "
+                                           f"named, the term listed as indistinguishable")))
+    library_found = [cands[o] for o in current if o < n_lib]
+    terms = [cands[o] for o in current if o >= n_lib]
+    idx = [c for o in current if o < n_lib for c in cols[o]] + [c for o in current if o >= n_lib for c in cols[o]]
+    return DiscoveryRecord(X[idx], list(range(len(idx))), library_found, terms, alternatives, trace, hints)
+
+
+def tell_apart(rp: LogReplay, lib: LibraryRecord, X_a: NDArray, th_a, X_b: NDArray, th_b, joint: int | None) -> str:
+    """Where two fitted shapes differ most on the joint's current (the operating condition with the largest
+    RMS difference, as a share of their own RMS): a motion with more of it would tell them apart."""
+    if joint is None:
+        return ""
+    n = lib.e0.shape[0]
+    ch = rp.signals.index("current_A") * N_JOINTS + joint if "current_A" in rp.signals else joint
+    a = np.tensordot(np.asarray(th_a), X_a, axes=1)[:, ch]
+    b = np.tensordot(np.asarray(th_b), X_b, axes=1)[:, ch]
+    masks = conditions(rp.log, n, lib.base.torque_gear_Nm)
+    scale = max(float(np.sqrt(np.mean(a**2))), 1e-12)
+    by = {k: float(np.sqrt(np.mean((a - b)[m[:, joint]] ** 2))) / scale for k, m in masks.items() if m[:, joint].any()}
+    if not by:
+        return ""
+    where = max(by, key=by.__getitem__)
+    return (f"on this log they differ most {where} ({100 * by[where]:.0f} % of the effect); a motion with more "
+            f"time {where} on this joint would tell them apart")
 
 
 def joint_check(found: list[Candidate], X: NDArray, fixed: list[int], e0: NDArray) -> JointCheckRecord:
+    """The findings selected afresh among themselves (forward, then backward), then every dictionary term that
+    shares its joint with another finding checked on data it was not fitted to (:func:`same_joint_check`)."""
     if len(found) <= 1:
         return JointCheckRecord(found, fixed, [])
     fcols = columns_of(found)
@@ -145,7 +220,49 @@ def joint_check(found: list[Candidate], X: NDArray, fixed: list[int], e0: NDArra
             trace.append(SearchStep.of("linear joint check", dataclasses.replace(
                 v, accepted=False, reason=v.reason or "explains nothing the other findings do not")))
     keep = sorted(keep)
+    for k in same_joint_check(bg, e0, Xf, found, fcols, keep):
+        v = judge_one(bg, e0, Xf, found, fcols, [o for o in keep if o != k], k)
+        trace.append(SearchStep.of("same-joint held-out check", dataclasses.replace(
+            v, accepted=False, reason="explains nothing on data it was not fitted to that the other finding on "
+                                      "its joint does not")))
+        keep.remove(k)
     return JointCheckRecord([found[k] for k in keep], [fixed[c] for k in keep for c in fcols[k]], trace)
+
+
+def cross_validated_rss(bg: BlockGram, idx: list[int]) -> float:
+    """Sum over the time blocks of the residual sum of squares of each block predicted by the fit on all the
+    other blocks (leave-one-block-out)."""
+    G, g, ee = bg.total()
+    out = 0.0
+    for b in range(bg.G.shape[0]):
+        th = rss_of(G - bg.G[b], g - bg.g[b], ee - bg.ee[b], idx)[1]
+        Gb = bg.G[b][np.ix_(idx, idx)]
+        out += float(bg.ee[b] - 2.0 * th @ bg.g[b][idx] + th @ Gb @ th)
+    return out
+
+
+def same_joint_check(bg: BlockGram, e0: NDArray, X: NDArray, found: list[Candidate], cols: list[list[int]],
+                     keep: list[int]) -> list[int]:
+    """One fault, one finding: a dictionary term on a joint that carries another kept finding must lower the
+    residual on time blocks it was not fitted to (leave-one-block-out) by more than MIN_DELTA_BIC in effective
+    samples; the terms that do not (a shape that merely shares the other finding's) are returned, to be
+    dropped, so that the other finding's size is estimated without them."""
+    drop: list[int] = []
+    for k in keep:
+        c = found[k]
+        if c.source != "dictionary" or c.joint is None:
+            continue
+        rest = [o for o in keep if o != k and o not in drop]
+        if not any(found[o].joint == c.joint for o in rest):
+            continue
+        base = [i for o in rest for i in cols[o]]
+        with_k = base + cols[k]
+        G, g, ee = bg.total()
+        e_res = e0 - np.tensordot(rss_of(G, g, ee, with_k)[1], X[with_k], axes=1)
+        gain = (cross_validated_rss(bg, base) - cross_validated_rss(bg, with_k)) * effective_n(e_res) / e0.size
+        if gain < MIN_DELTA_BIC:
+            drop.append(k)
+    return drop
 
 
 def refine(rp: LogReplay, found: list[Candidate], X: NDArray, fixed: list[int], e0: NDArray,

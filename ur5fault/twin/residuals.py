@@ -40,6 +40,9 @@ ANGLE_BIN_DEG = 5.0
 #: independent samples lies within 0.7..1.3 of its true value at 95 % (chi distribution), far below the
 #: UNEXPLAINED_FACTOR a region must exceed
 MIN_BIN_SAMPLES = 25
+#: a region of the travel stands out when its RMS exceeds this multiple of the median bin's (assumption: a
+#: local effect, e.g. a worn region of a gear, at least half as large again as the joint's residual elsewhere)
+REGION_FACTOR = 1.5
 
 
 def rms_table(signals: tuple[str, ...], meas: NDArray, sim: NDArray, sl: slice) -> dict[str, dict[str, float]]:
@@ -129,10 +132,14 @@ def rms_by_angle(r: NDArray, q_rad: NDArray, bin_deg: float = ANGLE_BIN_DEG) -> 
 
 
 def angle_region(r: NDArray, q_rad: NDArray, level: float) -> dict[str, float] | None:
-    """The region of the travel around the worst bin where the residual's RMS exceeds ``level`` (adjacent bins
-    above it merged), with its RMS and the RMS elsewhere; None when no bin exceeds ``level``."""
+    """The region of the travel around the worst bin where the residual's RMS exceeds ``level`` and stands out
+    of the joint's own residual (REGION_FACTOR x the median bin's RMS; adjacent such bins merged), with its RMS
+    and the RMS elsewhere; None when no bin does."""
     bins = rms_by_angle(r, q_rad)
-    if not bins or max(b[2] for b in bins) <= level:
+    if not bins:
+        return None
+    level = max(level, REGION_FACTOR * float(np.median([b[2] for b in bins])))
+    if max(b[2] for b in bins) <= level:
         return None
     k = max(range(len(bins)), key=lambda i: bins[i][2])
     lo = hi = k
