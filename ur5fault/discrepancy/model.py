@@ -144,7 +144,7 @@ class DiscrepancyModel:
                     [c.label for c in disc.terms] or "nothing")
 
         t = time.perf_counter()
-        check = steps.joint_check(disc.library + disc.terms, disc.X, disc.fixed, lib.e0)
+        check = steps.joint_check(disc.library + disc.terms, disc.X, disc.fixed, lib.e0, list(disc.tell_apart))
         ref = steps.refine(rp, check.found, disc.X, check.fixed, lib.e0, {**lib.alternatives, **disc.alternatives},
                            n_fit, stages.start("refining the findings"))
         timings["refinement"] = time.perf_counter() - t

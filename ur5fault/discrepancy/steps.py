@@ -141,9 +141,9 @@ def discover_terms(rp: LogReplay, lib: LibraryRecord, n_scr: int, max_terms: int
 def prefer_library(rp: LogReplay, lib: LibraryRecord, dcands: list[TermCandidate], X_dict: NDArray,
                    chosen: list[int], alternatives: Alternatives, trace: list[SearchStep]) -> DiscoveryRecord:
     """A dictionary term is kept only for what no library effect explains: for each chosen term, the library
-    effect on its joint (or on the whole robot) that best takes its place beside the other findings is
-    judged; when that effect is accepted and the term, judged beside it, adds nothing, the library effect is
-    named in its place and the term listed as indistinguishable from it on this log (a physical parameter
+    effect on its joint that best takes its place beside the other findings is judged; when that effect is
+    significant and in range and the term, judged beside it, adds nothing, the library effect is named in its
+    place and the term listed as indistinguishable from it on this log (a physical parameter
     with a meaning and a range over a free shape)."""
     e0 = lib.e0
     X = np.concatenate([lib.X, X_dict])
@@ -153,22 +153,35 @@ def prefer_library(rp: LogReplay, lib: LibraryRecord, dcands: list[TermCandidate
     G, g, ee = bg.total()
     n_lib = len(lib.candidates)
     current = [lib.candidates.index(c) for c in lib.chosen] + [n_lib + k for k in chosen]
+    # first every finding judged against all the others (a library effect that only stood in for a term
+    # found later leaves, as in the joint check), so that what is left is what a library effect may replace
+    current, _, gone = backward(bg, e0, X, cands, cols, current)
+    trace = trace + [SearchStep.of("linear joint check", dataclasses.replace(
+        v, accepted=False, reason=v.reason or "explains nothing the other findings do not")) for v in gone]
     named: list[int] = []
     hints: dict[Candidate, str] = {}
-    for t in [n_lib + k for k in chosen]:
+    for t in [o for o in current if o >= n_lib]:
         term = cands[t]
         others = [o for o in current if o != t]
         base = [c for o in others for c in cols[o]]
-        options = [k for k in range(n_lib) if k not in current
-                   and (cands[k].joint is None or cands[k].joint == term.joint)]
+        options = [k for k in range(n_lib) if k not in current and term.joint is not None
+                   and cands[k].joint == term.joint]
         if not options:
             continue
-        best = min(options, key=lambda k: rss_of(G, g, ee, base + cols[k])[0])
-        v_lib = judge_one(bg, e0, X, cands, cols, others, best)
-        if not v_lib.accepted:
-            continue
-        v_term = judge_one(bg, e0, X, cands, cols, others + [best], t)
-        if v_term.accepted:
+        best = v_lib = None
+        # in order of how much of the residual they take up beside the others, the first library effect that
+        # is significant and in range (its stability across time blocks is not asked here: the term it
+        # replaces varied with the same residual, the model's own error on the joint, and the held-out
+        # judgement after refinement drops a finding that does not generalise) and leaves the term nothing
+        for k in sorted(options, key=lambda k: rss_of(G, g, ee, base + cols[k])[0]):
+            v = judge_one(bg, e0, X, cands, cols, others, k)
+            if not (v.accepted or v.reason.startswith("unstable across time blocks")):
+                continue
+            v_term = judge_one(bg, e0, X, cands, cols, others + [k], t)
+            if not v_term.accepted:
+                best, v_lib = k, v
+                break
+        if best is None:
             continue
         th_term = rss_of(G, g, ee, base + cols[t])[1][len(base):]
         current = [best if o == t else o for o in current]
@@ -203,9 +216,12 @@ def tell_apart(rp: LogReplay, lib: LibraryRecord, X_a: NDArray, th_a, X_b: NDArr
             f"time {where} on this joint would tell them apart")
 
 
-def joint_check(found: list[Candidate], X: NDArray, fixed: list[int], e0: NDArray) -> JointCheckRecord:
+def joint_check(found: list[Candidate], X: NDArray, fixed: list[int], e0: NDArray,
+                preferred: Sequence[Candidate] = ()) -> JointCheckRecord:
     """The findings selected afresh among themselves (forward, then backward), then every dictionary term that
-    shares its joint with another finding checked on data it was not fitted to (:func:`same_joint_check`)."""
+    shares its joint with another finding checked on data it was not fitted to (:func:`same_joint_check`).
+    ``preferred``: library effects named in place of a term (:func:`prefer_library`), kept when they fail only
+    the stability test (the held-out judgement decides)."""
     if len(found) <= 1:
         return JointCheckRecord(found, fixed, [])
     fcols = columns_of(found)
@@ -214,6 +230,11 @@ def joint_check(found: list[Candidate], X: NDArray, fixed: list[int], e0: NDArra
     again = forward(bg, e0, Xf, found, fcols, len(found))
     keep, _, _ = backward(bg, e0, Xf, found, fcols, again.chosen)
     trace = []
+    for k in range(len(found)):
+        if k not in keep and found[k] in preferred:
+            v = judge_one(bg, e0, Xf, found, fcols, keep, k)
+            if v.accepted or v.reason.startswith("unstable across time blocks"):
+                keep.append(k)
     for k in range(len(found)):
         if k not in keep:
             v = judge_one(bg, e0, Xf, found, fcols, keep, k)
