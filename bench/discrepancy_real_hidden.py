@@ -47,7 +47,6 @@ CASES = [
               ("current_sensor_offset", 2, {"offset_A": -0.15})]),                 # issue case 3
     ("nist", [("local_friction", 2, {"amplitude_A": 0.25, "width_deg": 10.0})]),    # issue case 4
     ("nist", [("current_sensor_offset", 4, {"offset_A": 0.05})]),
-    ("nist", [("current_sensor_gain", 0, {"gain": 1.05})]),
     ("nist", [("coulomb_friction", 2, {"scale": 1.3}), ("current_sensor_offset", 5, {"offset_A": 0.08})]),
     ("Movement_No1", [("current_sensor_offset", 1, {"offset_A": 0.1})]),
     ("Movement_No1", [("current_sensor_gain", 2, {"gain": 1.1})]),
