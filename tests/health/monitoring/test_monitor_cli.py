@@ -31,7 +31,9 @@ def monitored(tmp_path_factory):
     tmp = tmp_path_factory.mktemp("monitor")
     model = tmp / "model.yaml"
     model.write_text("params: {}\neffects: []\n")
-    base = [head(tmp, n, 14.0) for n in ("Movement_No1", "Movement_No2", "Movement_No8_Singularity_Free_1")]
+    # the robot's other undisturbed runs (the pair below excepted), as long as the monitored parts
+    base = [head(tmp, n, 14.0) for n in ("Movement_No1", "Movement_No2", "Movement_No3_Acc", "Movement_No4_Acc",
+                                         "Movement_No8_Singularity_Free_1")]
     logs = [head(tmp, "Movement_No5_Acc_slow_no_disturbance", 14.0),
             head(tmp, "Movement_No5_Acc_slow_w_disturbance", 14.0)]
     out = tmp / "out"

@@ -22,6 +22,8 @@ def assess(baseline: Baseline, obs: Observed) -> dict[str, Any]:
                              f"{baseline.period_s:g} s")
     events, over = find_events(obs.t_s, *prepare(obs.residual_A, obs.moving, obs.logged, obs.period_s),
                                baseline.median_A, baseline.threshold_A)
-    changes = find_changes(obs, estimates(obs, keep_mask(obs, over)), baseline.candidates)
+    every = estimates(obs, obs.logged[: obs.e.shape[0]])
+    outside = estimates(obs, keep_mask(obs, over)) if over.any() else every
+    changes = find_changes(obs, every, outside, baseline.candidates)
     verdict = "changed" if changes else "anomaly" if events else "consistent"
     return {"log": obs.name, "verdict": verdict, "changes": changes, "events": events}
