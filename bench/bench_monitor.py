@@ -15,10 +15,13 @@ first :data:`~ur5fault.twin.residuals.FIT_FRACTION` of log time, the rest monito
 injected.
 
 *Push labels* come from UR's own current model (``actual - target_current``), which knows nothing of ours:
-smoothed like the monitor's residual, its deviation from the run's median; a push is where that deviation
-exceeds the largest one of the paired undisturbed run Movement_No5_Acc_slow_no_disturbance (same motion) in the
-same state (robot moving: its moving part, for the pushed moving run; robot standing: its standing start, for
-the standstill run). A label is *found* when an event on one of its joints starts and ends within 0.5 s of it.
+smoothed like the monitor's residual (0.1 s), its deviation from a reference level; a push is a stretch of at
+least :data:`MIN_PUSH_S` where that deviation exceeds the largest one of an undisturbed reference of the same
+motion: for the pushed moving run, the paired undisturbed run Movement_No5_Acc_slow_no_disturbance (whole run,
+deviation from its median); for the standstill run, the same undisturbed run's standing start (before its
+target first moves; the pushed standstill's deviation from its own median). A label is *found* when an event on
+one of
+its joints starts and ends within 0.5 s of it.
 """
 
 from __future__ import annotations
@@ -42,6 +45,10 @@ OTHER_RUNS = (QUIET, "TEST", PUSHED, STANDSTILL)
 #: injected current-sensor gains (joint index, gain) on TEST and on the NIST log's rest
 GAINS = ((1, 1.2), (1, 1.5), (3, 1.2), (3, 1.5))
 WINDOW_S = 0.5
+#: a push by hand lasts at least this long [s] (the monitor's smoothing assumes the same, events.SMOOTH_S)
+MIN_PUSH_S = 0.2
+#: a target this far from its start has begun to move [rad] (the CB2 targets jitter by up to 3e-4 rad at rest)
+START_MOVE_RAD = 1e-3
 
 
 def read(name: str):
@@ -62,48 +69,39 @@ def _observe(log, params, part_s=None):
     return observe(log, params, part_s=part_s)
 
 
-def ur_deviation(log, moving_any):
-    """UR's model residual smoothed, its deviation from the run's median per state ``(n, 6)``."""
+def ur_smoothed(log):
     from ur5fault.health.monitoring.events import smooth
 
-    r = smooth((log.current_A - log.target_current_A)[1:], log.period_s)
-    dev = np.zeros_like(r)
-    for s in (False, True):
-        sel = moving_any == s
-        if sel.any():
-            dev[sel] = np.abs(r[sel] - np.median(r[sel], axis=0))
-    return dev
+    return smooth((log.current_A - log.target_current_A)[1:], log.period_s)
 
 
-def robot_moving(log):
-    from ur5fault.health.monitoring.events import settled_moving
-    from ur5fault.twin.residuals import CONDITION_REST_SPEED_RAD_S
-
-    qd = np.abs(np.gradient(log.q_target_rad, log.period_s, axis=0)[1:]) > CONDITION_REST_SPEED_RAD_S
-    return settled_moving(qd, log.period_s).any(axis=1)
+def standing_start(log) -> np.ndarray:
+    """``(n - 1,)``: the samples before the log's target first leaves its start by :data:`START_MOVE_RAD`."""
+    away = np.abs(log.q_target_rad - log.q_target_rad[0]).max(axis=1)[1:] > START_MOVE_RAD
+    return np.arange(away.size) < int(np.argmax(away))
 
 
-def labels(log, ref_log, state: bool) -> list[dict]:
-    """Push labels of ``log`` (module docstring) against the paired undisturbed ``ref_log`` in ``state``."""
+def labels(log, ref: np.ndarray) -> list[dict]:
+    """Push labels of ``log`` (module docstring): ``ref`` the smoothed UR residual of the undisturbed reference."""
     from ur5fault.health.monitoring.events import MERGE_S
     from ur5fault.sim.axes import JOINT_NAMES
 
-    ref_moving = robot_moving(ref_log)
-    limit = ur_deviation(ref_log, ref_moving)[ref_moving == state].max(axis=0)
-    moving = robot_moving(log)
-    over = (ur_deviation(log, moving) > limit) & (moving == state)[:, None]
+    limit = np.abs(ref - np.median(ref, axis=0)).max(axis=0)
+    r = ur_smoothed(log)
+    level = np.median(r, axis=0)
+    over = np.abs(r - level) > limit
     t = log.t_s[1:] - log.t_s[0]
     rows = np.flatnonzero(over.any(axis=1))
     out, gap = [], int(round(MERGE_S / log.period_s))
-    for k, r in enumerate(rows):
-        if not out or r - rows[k - 1] > gap:
-            out.append({"t_start_s": float(t[r]), "rows": [r]})
-        out[-1]["rows"].append(r)
-        out[-1]["t_end_s"] = float(t[r])
+    for k, row in enumerate(rows):
+        if not out or row - rows[k - 1] > gap:
+            out.append({"t_start_s": float(t[row]), "rows": [row]})
+        out[-1]["rows"].append(row)
+        out[-1]["t_end_s"] = float(t[row])
     for lab in out:
         rs = lab.pop("rows")
         lab["joints"] = [JOINT_NAMES[j] for j in range(6) if over[rs[0] : rs[-1] + 1, j].any()]
-    return out
+    return [lab for lab in out if lab["t_end_s"] - lab["t_start_s"] >= MIN_PUSH_S]
 
 
 def found(label: dict, events: list[dict]) -> bool:
@@ -169,8 +167,10 @@ def main(argv=None) -> int:
         print(f"| {robot} | {e['log']} | {e['verdict']} | {ch} | {ev} |")
     by = {e["log"]: e for _, e in results}
     pushes = {}
-    for name, state in ((PUSHED, True), (STANDSTILL, False)):
-        labs = labels(logs[name], logs[QUIET], state)
+    quiet = ur_smoothed(logs[QUIET])
+    refs = {PUSHED: quiet, STANDSTILL: quiet[standing_start(logs[QUIET])]}
+    for name in (PUSHED, STANDSTILL):
+        labs = labels(logs[name], refs[name])
         ev = by[f"{name}.csv.gz"]["events"]
         for lab in labs:
             lab["found"] = found(lab, ev)
