@@ -21,8 +21,8 @@ def register(sub) -> None:
     src = p.add_mutually_exclusive_group(required=True)
     src.add_argument("--baseline-logs", nargs="+", metavar="LOG",
                      help="healthy runs of the robot, replayed under the overlay for the residual statistics the "
-                          "thresholds come from (same --format / payload options as the logs; or one manifest); this or "
-                          "--baseline-stats is required")
+                          "thresholds come from (same --format / payload options as the logs; or one manifest); "
+                          "this or --baseline-stats is required")
     src.add_argument("--baseline-stats", metavar="FILE",
                      help="baseline.json written by an earlier ur5fault monitor with the same overlay; this or "
                           "--baseline-logs is required")
