@@ -187,8 +187,8 @@ class LinearRUL:
     detrended increments (a measurement error makes consecutive increments anticorrelated by
     ``-meas_sd**2``; a Wiener process does not), ``proc_var`` the rest of the increments' variance.
     The failure level is not the criterion's 1 but what the training units' trends had reached when they
-    failed (mean and spread): on the simulated fleets the TCP deviation often jumps in the last interval
-    before failure, so a trend extrapolated to 1 comes late.
+    failed (mean and spread): the criterion of some units jumps in the last interval before failure (8 of
+    100 on the default fleet), where a trend extrapolated to 1 comes late.
     The RUL is the first passage of the level from the posterior's current trend value, drawn over the
     posterior of (a, theta), rounded up to the inspection grid (median and 5-95 % interval).  The
     update weighs a history's points as independent with variance ``meas_sd**2 + proc_var * interval``
