@@ -63,7 +63,7 @@ def test_held_out_current_against_urs_own_model(replay):
     offset at rest) and J6 (a constant -0.12 A offset in the log) are not, docs/validation.md."""
     log, res = replay
     n = res.y.shape[0]
-    held = held_out_mask(log, n)
+    held = held_out_mask(n)
     sim = _current_rms(log, res, held)
     ur = np.sqrt(np.mean((log.target_current_A[1 : n + 1] - log.current_A[1 : n + 1])[held[:, 0]] ** 2, axis=0))
     print("held-out current RMS [A]: sim", np.round(sim, 3), " UR", np.round(ur, 3))

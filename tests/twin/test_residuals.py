@@ -36,12 +36,18 @@ def test_rms_table_names_signals_and_joints():
 
 
 def test_held_out_mask_is_the_last_part_of_the_log():
-    log = _log(np.zeros((101, 6)))  # 1 s
-    m = held_out_mask(log, 100, 0.6)
+    m = held_out_mask(100, 0.6)
     assert m.shape == (100, 6)
-    # samples 1..100 at 0.01..1.00 s; held out from 0.6 s: samples 60..100 (index 59..99) - up to rounding
-    # of 0.6 * 1.0 against k * 0.01 at the boundary
-    assert 40 <= int(m[:, 0].sum()) <= 41 and m[-1, 0] and not m[55, 0]
+    # 100 samples, the first 60 fitted: samples 61..100 (index 60..99) held out on every joint
+    assert int(m[:, 0].sum()) == 40 and m[60:].all() and not m[:60].any()
+
+
+def test_one_split_for_one_log_and_for_several():
+    """The single-log workflow, the multi-log one and the held-out mask put the split at the same sample."""
+    from ur5fault.twin.residuals import fit_samples
+
+    assert fit_samples(100, 0.6) == 60 and fit_samples(7873, 0.6) == 4723 and fit_samples(1, 0.6) == 1
+    assert int((~held_out_mask(7873, 0.6)[:, 0]).sum()) == fit_samples(7873, 0.6)
 
 
 def test_conditions_rest_and_reversal():

@@ -27,7 +27,7 @@ from ..logs import MeasuredLog
 from ..sim.axes import JOINT_NAMES, N_JOINTS
 from ..sim.effects import EffectSpec
 from ..twin.replay import LogReplay, Replayed
-from ..twin.residuals import FIT_FRACTION, localise, rms_table, unexplained
+from ..twin.residuals import FIT_FRACTION, fit_samples, localise, rms_table, unexplained
 from . import discovery, library
 from .candidates import Candidate
 from .judging import Finding, SearchStep, final_verdicts, judge_findings
@@ -143,7 +143,7 @@ class DiscrepancyModel:
         rp: LogReplay | MultiReplay
         if len(logs) == 1 and not hold_out:
             rp = LogReplay(logs[0], params_overrides, base_effects, seed=WORKFLOW_SEED, jobs=self.jobs)
-            n_fit = int(rp.n_samples * self.fit_fraction)
+            n_fit = fit_samples(rp.n_samples, self.fit_fraction)
         else:
             rp = MultiReplay(logs, hold_out, self.fit_fraction, params_overrides, base_effects, seed=WORKFLOW_SEED,
                              jobs=self.jobs)

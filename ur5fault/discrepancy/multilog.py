@@ -30,6 +30,7 @@ from ..errors import ParameterError
 from ..logs import MeasuredLog
 from ..sim.effects import EffectSpec
 from ..twin.replay import LogReplay, Replayed, _simulate
+from ..twin.residuals import fit_samples
 
 ROLES = ("fit", "held_out")
 
@@ -84,7 +85,7 @@ class MultiReplay:
             first.gear_ratio
         segs: list[Segment] = []
         at = 0
-        split = [max(1, int(r.n_samples * fit_fraction)) for r in self.replays[: len(logs)]]
+        split = [fit_samples(r.n_samples, fit_fraction) for r in self.replays[: len(logs)]]
         for i, f in enumerate(split):
             segs.append(Segment(i, 1, f + 1, at))
             at += f

@@ -27,7 +27,7 @@ REPLAY_SEED = 1
 
 def _masks(log: MeasuredLog, n: int) -> dict[str, np.ndarray]:
     masks = conditions(log, n, log.current_A[1 : n + 1])
-    return {"held_out": held_out_mask(log, n), "at_rest": masks["at rest"],
+    return {"held_out": held_out_mask(n), "at_rest": masks["at rest"],
             "near_reversals": masks["near velocity reversals"]}
 
 

@@ -49,10 +49,18 @@ def masked_rms(x: NDArray, mask: NDArray) -> NDArray:
     return np.where(count > 0, np.sqrt(sq.sum(axis=0) / np.maximum(count, 1)), np.nan)
 
 
-def held_out_mask(log: MeasuredLog, n: int, fit_fraction: float = FIT_FRACTION) -> NDArray:
-    """Samples ``1..n`` at or after ``fit_fraction`` of the log's duration, ``(n, 6)``."""
-    t = log.t_s[1 : n + 1] - log.t_s[0]
-    return np.broadcast_to((t >= fit_fraction * (log.t_s[-1] - log.t_s[0]))[:, None], (n, N_JOINTS))
+def fit_samples(n: int, fit_fraction: float = FIT_FRACTION) -> int:
+    """How many of a log's ``n`` replayed samples are fitted: the first ``fit_fraction`` of them (at least one);
+    the rest are held out.  The one definition of the time split, used by ``identify``, ``discrepancy`` and the
+    twin: logs are read onto a regular tick grid (``logs/regular.py``), so a share of samples is the same
+    share of time."""
+    return max(1, int(n * fit_fraction))
+
+
+def held_out_mask(n: int, fit_fraction: float = FIT_FRACTION) -> NDArray:
+    """The held-out samples of ``n`` replayed ones (:func:`fit_samples`), as a mask ``(n, 6)``."""
+    held = np.arange(n) >= fit_samples(n, fit_fraction)
+    return np.broadcast_to(held[:, None], (n, N_JOINTS))
 
 
 def conditions(log: MeasuredLog, n: int, torque: NDArray) -> dict[str, NDArray]:
