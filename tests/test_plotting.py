@@ -303,8 +303,8 @@ def test_tables_carry_run_metadata_so_figures_are_titled(run_pair, two):
     assert saved.attrs["ur5fault"]["run_id"] == rid and "backlash on" in run_figure(saved)._suptitle.get_text()
 
 
-def test_simresult_plot_draws_the_run_figure(run_pair):
-    fig = run_pair.plot("worn", twin="healthy")
+def test_run_figure_of_a_pair_draws_both_deviations(run_pair):
+    fig = run_figure(run_pair.to_pandas("worn"), twin=run_pair.to_pandas("healthy"))
     assert isinstance(fig, Figure) and len(fig.axes) == 5
     assert fig._suptitle.get_text().startswith("worn: backlash on shoulder_lift_joint")
     labels = [line.get_label() for line in fig.axes[4].get_lines()]

@@ -11,20 +11,11 @@ from .sim.engine import RunSpec, Simulator, Status
 from .sim.params import RobotParams, load_params
 from .sim.result import SimResult
 from .sim.trajectories import Trajectory, get_trajectory, pick_and_place
+from .util.provenance import package_version
 
 __all__ = [
     "JOINT_NAMES", "N_JOINTS", "REGISTRY", "make_effect", "RunSpec", "Simulator", "Status", "RobotParams",
     "load_params", "SimResult", "Trajectory", "get_trajectory", "pick_and_place",
 ]
 
-def _version() -> str:
-    """The installed distribution's version (pyproject.toml is its one source)."""
-    from importlib.metadata import PackageNotFoundError, version
-
-    try:
-        return version("ur5fault")
-    except PackageNotFoundError:  # a source tree on sys.path that was never installed
-        return "0+unknown"
-
-
-__version__ = _version()
+__version__ = package_version()

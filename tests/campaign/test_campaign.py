@@ -353,11 +353,11 @@ def test_changed_condition_makes_new_runs(tmp_path, tiny_done):
 
 
 def test_identity_covers_the_package_version(tmp_path, tiny_done, monkeypatch):
-    import ur5fault
     from ur5fault.campaign import CampaignChangedError
+    from ur5fault.util import provenance
 
     out = _copy_done(tiny_done, tmp_path)
-    monkeypatch.setattr(ur5fault, "__version__", "99.0")
+    monkeypatch.setattr(provenance, "package_version", lambda: "99.0")
     with pytest.raises(CampaignChangedError, match="ur5fault_version: '0.1.0' in the file, '99.0' now"):
         run_quiet(load_campaign(tiny(tmp_path)), out)
 

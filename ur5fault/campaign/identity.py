@@ -27,6 +27,7 @@ from typing import Any
 from ..config import parse_trajectory
 from ..sim.effects import EffectSpec, effects_of_keys, make_effect
 from ..sim.params import load_params
+from ..util import provenance
 from ..util.checks import short
 from .spec import Campaign, CampaignRun
 
@@ -71,14 +72,13 @@ class Identities:
     def __init__(self, camp: Campaign) -> None:
         import mujoco
 
-        from .. import __version__
         from ..sim.engine import DEFAULT_MODEL_PATH
 
         self.camp = camp
         model = Path(DEFAULT_MODEL_PATH)
         self.common = {
             "identity_format": IDENTITY_FORMAT,
-            "ur5fault_version": __version__,
+            "ur5fault_version": provenance.package_version(),
             "mujoco_version": mujoco.__version__,
             "model_sha256": file_sha256(model),
             "drive": DRIVE,

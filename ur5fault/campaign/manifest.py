@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 
 from ..sim.params import load_params
+from ..util import provenance
 from .identity import Identities, file_sha256
 from .spec import Campaign
 
@@ -22,7 +23,6 @@ def build_manifest(camp: Campaign, ids: Identities, features, state: str, backen
     version), and how (backend, jobs, wall time); ``state`` is ``running`` until the end."""
     import mujoco
 
-    from .. import __version__
     from ..health.features import FEATURE_UNITS
     from ..sim.engine import DEFAULT_MODEL_PATH
     from ..util.provenance import dependency_versions, git_revision
@@ -42,7 +42,7 @@ def build_manifest(camp: Campaign, ids: Identities, features, state: str, backen
         "model_file": str(DEFAULT_MODEL_PATH),
         "model_sha256": file_sha256(DEFAULT_MODEL_PATH),
         "params_sha256": hashlib.sha256(json.dumps(p.to_dict(), sort_keys=True).encode()).hexdigest(),
-        "ur5fault_version": __version__,
+        "ur5fault_version": provenance.package_version(),
         "git_revision": git_revision(),
         "mujoco_version": mujoco.__version__,
         "numpy_version": np.__version__,

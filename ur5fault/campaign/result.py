@@ -17,7 +17,7 @@ import pandas as pd
 
 from ..errors import ConfigFileError, UnknownNameError
 from ..sim.effects import REGISTRY
-from ..util import yamlsafe
+from ..util import provenance, yamlsafe
 from .summary import EffectSweep, acceptable_backlash, effect_sweep, severity_table, swept_effects, tcp_table
 
 _log = logging.getLogger(__name__)
@@ -114,7 +114,6 @@ class CampaignResult:
         return {r: self._series[r] for r in ids}
 
     def _resimulate(self, run_ids: list[str]) -> dict[str, pd.DataFrame]:
-        from .. import __version__
         from ..sim.engine import DEFAULT_MODEL_PATH
         from .execute import plan_batches, run_batch
         from .identity import file_sha256
@@ -124,7 +123,7 @@ class CampaignResult:
         data = self.manifest.get("campaign_data")  # the validated mapping (older manifests: the text)
         camp = build_campaign(data if isinstance(data, dict) else yamlsafe.loads(text, "manifest"), "manifest", text)
         then = (self.manifest.get("ur5fault_version"), self.manifest.get("model_sha256"))
-        now = (__version__, file_sha256(DEFAULT_MODEL_PATH))
+        now = (provenance.package_version(), file_sha256(DEFAULT_MODEL_PATH))
         if then != now:
             _log.warning("%s was run with ur5fault %s and model %s; re-simulating with %s and model %s may not give "
                          "the same runs", self.out, then[0], str(then[1])[:12], now[0], now[1][:12])

@@ -13,7 +13,6 @@ The step order is in :mod:`ur5fault.sim.loops`.
 
 from __future__ import annotations
 
-import dataclasses
 import logging
 import time
 from collections.abc import Callable, Sequence
@@ -26,7 +25,6 @@ import numpy as np
 from ..errors import ParameterError
 from .drive import controller as ctl
 from .drive.state import DRIVES
-from .effects import EffectSpec
 from .interfaces import Multibody
 from .loops import (  # noqa: F401  (the run-health limits and noise layout stay importable here)
     LOG_SOURCES,
@@ -44,6 +42,7 @@ from .multibody import BatchMultibody, LoopMultibody
 from .params import RobotParams, load_params
 from .result import SimResult
 from .run_arrays import RunArrays, build_run_arrays
+from .runspec import RunSpec  # noqa: F401  (engine.RunSpec stays importable: users build batches with it)
 from .trajectories import Trajectory
 
 _log = logging.getLogger(__name__)
@@ -53,15 +52,6 @@ DEFAULT_MODEL_PATH = Path(str(resources.files("ur5fault") / "models" / "ur5.xml"
 
 #: step loops of :class:`Simulator` (``stepper``)
 STEPPERS = ("compiled", "batch", "loop")
-
-
-@dataclasses.dataclass(frozen=True)
-class RunSpec:
-    """One run of a batch: identifier, noise seed and the effects it carries."""
-
-    run_id: str
-    seed: int = 0
-    effects: tuple[EffectSpec, ...] = ()
 
 
 class Simulator:

@@ -23,9 +23,9 @@ from .axes import JOINT_NAMES, N_JOINTS
 from .drive.motor import phase_currents
 
 if TYPE_CHECKING:  # pragma: no cover
-    from .engine import RunSpec
     from .params import RobotParams
     from .run_arrays import RunArrays
+    from .runspec import RunSpec
     from .trajectories import Trajectory
 
 
@@ -200,13 +200,6 @@ class SimResult:
         """Write one run's wide table to CSV atomically (the metadata of :meth:`run_metadata` stays behind:
         CSV has no place for it; Parquet keeps it)."""
         return write_csv_atomic(self.to_pandas(run), path)
-
-    def plot(self, run: int | str = 0, twin: int | str | None = None, **kwargs: Any):
-        """The run figure of one run (:func:`ur5fault.plotting.run_figure`), against the run ``twin`` of the
-        same batch when given (its TCP deviation from that twin is drawn too). Returns the figure."""
-        from ..plotting import run_figure
-
-        return run_figure(self.to_pandas(run), twin=None if twin is None else self.to_pandas(twin), **kwargs)
 
     def summary(self, run: int = 0) -> dict[str, float]:
         """A few headline numbers of one run (for the command line)."""

@@ -13,6 +13,14 @@ from typing import Any
 _NAME = re.compile(r"^\s*([A-Za-z0-9][A-Za-z0-9._-]*)(\[[^\]]*\])?")
 
 
+def package_version() -> str:
+    """The installed distribution's version (pyproject.toml is its one source): ``ur5fault.__version__``."""
+    try:
+        return metadata.version("ur5fault")
+    except metadata.PackageNotFoundError:  # a source tree on sys.path that was never installed
+        return "0+unknown"
+
+
 def git_revision(path: str | Path | None = None) -> dict[str, Any] | None:
     """``{"commit": sha, "dirty": bool}`` of the git checkout holding ``path`` (default: this
     package), or None when it is not in a checkout (an installed wheel) or git is absent."""

@@ -23,6 +23,7 @@ from typing import Any
 import pandas as pd
 
 from ...errors import ConfigFileError
+from ...util import provenance
 from ...util.io import write_bytes_atomic, write_json_atomic
 from .data import Dataset
 from .models import Models
@@ -49,7 +50,6 @@ def save_models(models: Models, ds: Dataset, feature_set: str, threshold_score: 
     import skops
     import skops.io as sio
 
-    from ... import __version__
     from ...campaign.store import column_units
 
     folder = Path(out) / MODELS_DIR
@@ -67,7 +67,7 @@ def save_models(models: Models, ds: Dataset, feature_set: str, threshold_score: 
         "n_train": len(ds.train),
         "training_set_sha256": training_hash(ds),
         "shuffled_labels": models.shuffled_labels,
-        "ur5fault_version": __version__,
+        "ur5fault_version": provenance.package_version(),
         "sklearn_version": sklearn.__version__,
         "skops_version": skops.__version__,
     }

@@ -26,6 +26,7 @@ import pandas as pd
 
 from ...campaign.identity import DRIVE, STEPPER, digest, file_sha256
 from ...campaign.store import FileCheck, check_run_file, check_timeseries_file, run_path, write_run_file
+from ...util import provenance
 from ...util.io import write_parquet_atomic
 from .spec import LifeCampaign, Unit
 
@@ -54,12 +55,12 @@ class LifeIdentities:
     def __init__(self, camp: LifeCampaign) -> None:
         import mujoco
 
-        from ... import __version__
         from ...sim.engine import DEFAULT_MODEL_PATH
         from ...sim.params import load_params
 
         self.common = {
-            "identity_format": IDENTITY_FORMAT, "ur5fault_version": __version__, "mujoco_version": mujoco.__version__,
+            "identity_format": IDENTITY_FORMAT, "ur5fault_version": provenance.package_version(),
+            "mujoco_version": mujoco.__version__,
             "model_sha256": file_sha256(Path(DEFAULT_MODEL_PATH)), "drive": DRIVE, "stepper": STEPPER,
             "log_period_s": camp.log_period_s, "duration_s": camp.duration_s, "params": load_params().to_dict(),
             "fleet_seed": camp.seed,

@@ -1,0 +1,16 @@
+"""One run of a batch, as the engine takes it and its result records it."""
+
+from __future__ import annotations
+
+import dataclasses
+
+from .effects import EffectSpec
+
+
+@dataclasses.dataclass(frozen=True)
+class RunSpec:
+    """One run of a batch: identifier, noise seed and the effects it carries."""
+
+    run_id: str
+    seed: int = 0
+    effects: tuple[EffectSpec, ...] = ()
