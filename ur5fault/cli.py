@@ -256,6 +256,7 @@ def _add_optional_commands(sub) -> None:
     from .campaign import cli as campaign_cli
     from .discrepancy import cli as discrepancy_cli
     from .health.diagnostics import cli as benchmark_cli
+    from .health.monitoring import cli as monitor_cli
     from .health.prognostics import cli as prognose_cli
     from .identify import cli as identify_cli
 
@@ -264,6 +265,7 @@ def _add_optional_commands(sub) -> None:
     identify_cli.register(sub)
     benchmark_cli.register(sub)
     prognose_cli.register(sub)
+    monitor_cli.register(sub)
 
 
 def _one_line(message: str) -> int:
