@@ -94,6 +94,7 @@ def spread_us(sim_threads: Simulator, n_runs: int, duration_s: float, cores: int
     process per core each running its share (started and warmed before the clock, as a campaign's workers)."""
     import multiprocessing as mp
 
+    full_fidelity_us(sim_threads, cores, 0.01)  # compile / load the threaded loop before the clock
     threads = full_fidelity_us(sim_threads, n_runs, duration_s)
     share = -(-n_runs // cores)
     with mp.get_context("fork").Pool(cores) as pool:

@@ -46,7 +46,7 @@ def simulate(effects: Sequence[EffectSpec] = (), seed: int = 0, model_path: Path
     """One run of the joint sweep; ``torque(q, qd)`` is an extra load torque on ``joint`` (0-based)
     applied through MuJoCo's passive-force callback (plain-loop stepper)."""
     assert seed != WORKFLOW_SEED
-    sim = Simulator(model_path=model_path, stepper="loop" if torque is not None else "batch")
+    sim = Simulator(model_path=model_path, stepper="loop" if torque is not None else None)
     if torque is not None:
         def passive(m, d):
             d.qfrc_passive[joint] -= torque(d.qpos[joint], d.qvel[joint])

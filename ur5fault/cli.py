@@ -258,6 +258,7 @@ def _add_optional_commands(sub) -> None:
     from .discrepancy import cli as discrepancy_cli
     from .health.diagnosis import cli as diagnose_cli
     from .health.diagnostics import cli as benchmark_cli
+    from .health.monitoring import cli as monitor_cli
     from .health.prognostics import cli as prognose_cli
     from .identify import cli as identify_cli
 
@@ -267,6 +268,7 @@ def _add_optional_commands(sub) -> None:
     benchmark_cli.register(sub)
     diagnose_cli.register(sub)
     prognose_cli.register(sub)
+    monitor_cli.register(sub)
 
 
 def _one_line(message: str) -> int:

@@ -104,8 +104,9 @@ def cmd_status(args: argparse.Namespace) -> int:
 
     info = status(Path(args.dir))
     print(json.dumps(info, indent=2, default=str))
-    runs = info.get("runs", {})
-    stale = info.get("state") == "complete" and (info.get("features") or {}).get("state") != "ok"
+    runs = info.get("runs") or info.get("inspections") or {}   # a life campaign's files are inspections
+    table = info.get("inspections_table" if info.get("kind") == "life" else "features") or {}
+    stale = info.get("state") == "complete" and table.get("state") != "ok"
     return 1 if runs.get("bad") or runs.get("changed") or stale else 0
 
 

@@ -97,6 +97,10 @@ def status(out: Path) -> dict[str, Any]:
                  else {"held": True, "host": holder[0], "pid": holder[1]}),
         "n_runs_expected": None,
     }
+    if manifest.get("kind") == "life":  # a fleet run to failure (issue 20): inspections, not runs
+        from ..health.prognostics.life_status import life_status
+
+        return life_status(out, manifest, info)
     camp = None
     data = manifest.get("campaign_data")
     if isinstance(data, dict):

@@ -87,12 +87,14 @@ def _gravity(rp: LogReplay, q: NDArray) -> tuple[NDArray, NDArray, NDArray, NDAr
         d.qvel[:] = 0.0
         mujoco.mj_forward(m, d)
         own[i] = d.qfrc_bias[:N_JOINTS]
+        # moving a centre of mass by R e_k moves the weight's moment arm by (R e_k) x up: every link and axis in
+        # one call (np.cross per vector cost most of this loop)
+        arm = np.cross(d.xmat[links].reshape(N_JOINTS, 3, 3).transpose(0, 2, 1), up)  # (link, k, 3)
         for li, b in enumerate(links):
             mujoco.mj_jac(m, d, jacp, jacr, d.xipos[b], b)
             per_mass[li, i] = jacp[:, :N_JOINTS].T @ up
-            R = d.xmat[b].reshape(3, 3)
-            for k in range(3):  # moving the centre of mass by R e_k moves the weight's moment arm
-                per_shift[li, k, i] = m.body_mass[b] * (jacr[:, :N_JOINTS].T @ np.cross(R[:, k], up))
+            for k in range(3):
+                per_shift[li, k, i] = m.body_mass[b] * (jacr[:, :N_JOINTS].T @ arm[li, k])
     return own, per_mass, per_shift, np.array([m.body_mass[b] for b in links])
 
 

@@ -53,15 +53,12 @@ def moving_average(x: NDArray, n: int) -> NDArray:
 
 
 def sign_changes(x: NDArray, hysteresis: float) -> NDArray:
-    """Indices where ``x`` (1-D) changes sign, with a dead band of +-hysteresis against chatter."""
-    out, state = [], 0
-    for k, v in enumerate(x):
-        s = 1 if v > hysteresis else (-1 if v < -hysteresis else 0)
-        if s and state and s != state:
-            out.append(k)
-        if s:
-            state = s
-    return np.array(out, dtype=int)
+    """Indices where ``x`` (1-D) changes sign, with a dead band of +-hysteresis against chatter: the samples
+    outside the band whose sign differs from that of the last sample outside it before them."""
+    x = np.asarray(x)
+    s = np.where(x > hysteresis, 1, np.where(x < -hysteresis, -1, 0))
+    out = np.flatnonzero(s)
+    return out[1:][s[out[1:]] != s[out[:-1]]].astype(int)
 
 
 def run_features(t_s: NDArray, q_set: NDArray, q_fb: NDArray, q_m_fb: NDArray, i_fb: NDArray, ratio: NDArray,

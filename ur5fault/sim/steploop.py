@@ -35,7 +35,7 @@ from .terms import load_torque_rj
 #: this file's time stamp, so a change of the drive kernel, the term functions, the pointer helpers or the row
 #: layout would otherwise reuse stale machine code.  A change stops here until this number is updated (which
 #: changes this file and so recompiles); see LAYOUT_CRC32 in ``drive/kernel.py``.
-SOURCES_CRC32 = 1743402709
+SOURCES_CRC32 = 2059067102
 
 
 def sources_crc32() -> int:
@@ -87,6 +87,11 @@ def _advance(r, s0, s1, si0, noise, bt, tm):
     xaxis = numba.carray(as_f64ptr(adr[r, XAXIS]), (njnt, 3))
     body_mass = numba.carray(as_f64ptr(adr[r, BODY_MASS]), (nbody,))
     body_inertia = numba.carray(as_f64ptr(adr[r, BODY_INERTIA]), (nbody, 3))
+    # the run's drive state and parameters as one contiguous block for the chunk (run index 0 of ``x``, ``p``):
+    # in the batch layout ``(rows, n_runs, 6)`` a run's rows lie n_runs * 48 bytes apart, and at 128 runs they
+    # fall into a few cache sets and evict each other (measured, 128 runs: 4.3 us per run-step against 3.1 us)
+    x = X[:, r:r + 1, :].copy()
+    p = P[:, r:r + 1, :].copy()
     nj = X.shape[2]
     for step in range(s0, s1):
         if step % sps == 0:
@@ -94,13 +99,13 @@ def _advance(r, s0, s1, si0, noise, bt, tm):
             k = max(si - delay[r], 0)
             nz = noise[r, si - si0]
             for j in range(nj):
-                servo_rj(X, P, r, j, q_set_s[k, j], qd_set_s[k, j], nz, ts)
+                servo_rj(x, p, 0, j, q_set_s[k, j], qd_set_s[k, j], nz, ts)
             # run health: a diverged or tripped run stops here and its remaining log stays NaN
             bad, trip, worst, jw = False, False, -1.0, 0
             for j in range(nj):
                 if not np.isfinite(qpos[j]) or abs(qpos[j]) > limits[0]:
                     bad = True
-                e = abs(q_set_s[k, j] - X[Q_FB, r, j])
+                e = abs(q_set_s[k, j] - x[Q_FB, 0, j])
                 if e > limits[1]:
                     trip = True
                 if e > worst:
@@ -109,9 +114,9 @@ def _advance(r, s0, s1, si0, noise, bt, tm):
                 active[r] = False
                 status[r] = DIVERGED if bad else PROTECTIVE_STOP
                 event[r, 0], event[r, 1] = step, jw
-                return
+                break
         for j in range(nj):
-            tau = physics_rj(X, P, r, j, qpos[j], qvel[j], dt, stribeck, has_cogging)
+            tau = physics_rj(x, p, 0, j, qpos[j], qvel[j], dt, stribeck, has_cogging)
             if link:
                 g = gravity_moment_j(j, body_mass, xipos, xanchor, xaxis, subtree, up) if grav_on else 0.0
                 tau = tau - load_torque_rj(r, j, qpos[j], qvel[j], mass_matrix[m_diag[j]], dt, g, amp_j, per_j, coul,
@@ -120,7 +125,7 @@ def _advance(r, s0, s1, si0, noise, bt, tm):
             qfrc[j] = tau
             # the friction's slope on top of the model's own joint damping: MuJoCo's Euler step applies both
             # implicitly
-            damping[j] = model_damping[j] + X[S_L, r, j]
+            damping[j] = model_damping[j] + x[S_L, 0, j]
         if change[step]:
             mass = payload_kg[r] * gripped[step]
             body_mass[pb] = mass
@@ -128,13 +133,14 @@ def _advance(r, s0, s1, si0, noise, bt, tm):
                 body_inertia[pb, c] = mass * cube2 / 6.0  # multibody.payload_inertia
         call_step(fn, adr[r, MODEL], adr[r, DATA])
         for j in range(nj):
-            sensors_rj(X, P, r, j, qpos[j], qvel[j], dt, stribeck)
+            sensors_rj(x, p, 0, j, qpos[j], qvel[j], dt, stribeck)
         if (step + 1) % log_every == 0:
             li = (step + 1) // log_every - 1
             for s in range(src.shape[0]):
                 row = src[s]
                 for j in range(nj):
-                    log[s, r, li, j] = qpos[j] if row < 0 else X[row, r, j]
+                    log[s, r, li, j] = qpos[j] if row < 0 else x[row, 0, j]
+    X[:, r, :] = x[:, 0, :]
 
 
 @njit(cache=True)
@@ -234,7 +240,7 @@ def run(mb, X, P, setpoints, delay_k, rngs, timing, payload, logging, hook, prog
         si0 = si - si % chunk
         if si % chunk == 0:
             for r in range(n):
-                noise[r] = rngs[r].standard_normal(noise_shape)
+                rngs[r].standard_normal(noise_shape, out=noise[r])  # in place: no temporary of the chunk
         end = min(n_steps, (si0 + chunk) * sps)
         if progress is not None:
             if s >= next_progress * n_steps:

@@ -7,7 +7,7 @@ import pandas as pd
 import pytest
 
 from ur5fault.health.prognostics import metrics as M
-from ur5fault.health.prognostics.rul import PopulationRUL, WienerRUL
+from ur5fault.health.prognostics.rul import HealthIndex, LinearRUL, PopulationRUL, TaskHealthIndex, WienerRUL
 
 
 def _pred(rows):
@@ -70,4 +70,60 @@ def test_wiener_posterior_by_hand_and_median_near_gap_over_drift():
     assert lo < med < hi
     # inverse-Gaussian median ~ its mean for a small diffusion, rounded up to the 10-cycle inspection grid
     assert med == pytest.approx(np.ceil(0.64 / mean / 10) * 10, abs=10)
-    assert w.predict(n, np.array([0.0, 0.5, 0.9, 1.2])) == (0.0, 0.0, 0.0)   # past the failure level
+    # past the failure level but found sound now: it fails at the next inspection at the earliest
+    assert w.predict(n, np.array([0.0, 0.5, 0.9, 1.2])) == (10.0, 10.0, 10.0)
+
+
+def _noiseless_training():
+    """Three failed units on a 10-cycle grid whose index is exactly n / c, c = 95, 145, 195: each crosses 1
+    in the middle of its last interval (found failed at 100, 150, 200)."""
+    cycles = [np.arange(0.0, eol + 1, 10.0) for eol in (100.0, 150.0, 200.0)]
+    return cycles, [n / c for n, c in zip(cycles, (95.0, 145.0, 195.0))]
+
+
+def test_linear_rul_of_a_noiseless_linear_index_is_exact():
+    lin = LinearRUL(seed=0).fit(*_noiseless_training())
+    # every training trend was at 1 in the middle of its failure interval; nothing random is left
+    assert lin.level_ == pytest.approx(1.0) and lin.level_sd_ == pytest.approx(0.0, abs=1e-12)
+    assert lin.meas_var_ == pytest.approx(0.0, abs=1e-20) and lin.proc_var_ == pytest.approx(0.0, abs=1e-20)
+    assert lin.prior_mean_[1] == pytest.approx(np.mean([1 / 95, 1 / 145, 1 / 195]))
+    # a held-out unit with index n / 125, seen to cycle 60: its trend crosses 1 at 125, 65 cycles from now,
+    # found failed at the first inspection after it: 130, a RUL of 70 (whatever the prior says)
+    n = np.arange(0.0, 61.0, 10.0)
+    assert lin.predict(n, n / 125.0) == pytest.approx((70.0, 70.0, 70.0))
+    mean, cov = lin.posterior(n, n / 125.0)
+    assert mean[1] == pytest.approx(1 / 125, rel=1e-6) and cov[1, 1] ** 0.5 < 1e-3 / 125
+    # the trend already at the level, the unit still sound: the next inspection
+    assert lin.predict(n, n / 55.0) == pytest.approx((10.0, 10.0, 10.0))
+
+
+def test_linear_rul_starts_from_the_trend_not_the_last_noisy_value():
+    lin = LinearRUL(seed=0).fit(*_noiseless_training())
+    lin.meas_var_ = 0.01**2                     # a measured index: the same line with an error
+    n = np.arange(0.0, 61.0, 10.0)
+    h = n / 125.0
+    h[-1] += 0.05                                # one high reading (5 sd): the trend hardly moves
+    med = lin.predict(n, h)[0]
+    assert med == pytest.approx(70.0, abs=10.0)
+    w = WienerRUL(seed=0)                        # from the last value: that reading takes 0.05 x 125 cycles off
+    w.level_, w.level_sd_, w.theta_mean_, w.theta_sd_, w.sigma2_ = 1.0, 0.0, 1 / 125, 1e-9, 1e-12
+    assert w.predict(n, h)[0] == pytest.approx(60.0)
+
+
+def test_health_index_per_task_maps_each_task_onto_the_criterion():
+    # two tasks whose feature grows at 2 and 0.5 x the criterion: one pooled line fits neither, one per task both
+    rows = []
+    for u in range(8):
+        task, gain = ("A", 2.0) if u < 4 else ("B", 0.5)
+        for k in range(5):
+            y = 0.1 * k * (1 + 0.1 * u)
+            rows.append({"unit_id": f"u{u}", "trajectory": task, "tcp_dev_max_mm": 0.5 * y,
+                         "enc_mismatch_hyst_rad_j2": gain * y})
+    df = pd.DataFrame(rows)
+    y = df["tcp_dev_max_mm"] / 0.5
+    per_task = TaskHealthIndex().fit(df)
+    assert sorted(per_task.by_task_) == ["A", "B"]
+    assert np.abs(per_task.transform(df) - y).max() < 0.01
+    assert np.abs(HealthIndex().fit(df).transform(df) - y).max() > 0.1
+    few = TaskHealthIndex().fit(df[df["unit_id"].isin(["u0", "u1", "u4", "u5", "u6"])])   # A has 2 units only
+    assert sorted(few.by_task_) == ["B"]

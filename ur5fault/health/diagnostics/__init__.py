@@ -21,7 +21,6 @@ from typing import Any
 import pandas as pd
 
 from ...errors import ParameterError
-from . import figures as figs
 from .data import CONTEXT_COLUMNS, FEATURE_SETS, Dataset, has_twin_features, load_dataset, load_features
 from .metrics import alarm_threshold, detection, detector_scores, fault_kind, importance, localisation
 from .models import Models, fit_models
@@ -106,6 +105,8 @@ def _evaluate(features: pd.DataFrame, seed: int, shuffle_labels: bool, threshold
     }
     out_figs: dict[str, Any] = {}
     if with_figures:
+        from . import figures as figs  # matplotlib only when figures are drawn: every CLI command imports this package
+
         on = (te["fault"] == "backlash").to_numpy()
         out_figs = {
             "roc": figs.roc_curves(te["fault"].to_numpy(str), score),

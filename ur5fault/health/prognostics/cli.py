@@ -53,7 +53,7 @@ def cmd_prognose(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
     m = run_prognose(Path(args.dir), Path(args.out) if args.out else None, seed=args.seed)
     print(f"{m['dataset']['n_train_units']} train / {m['dataset']['n_test_units']} test units")
-    for name in ("wiener", "naive"):
+    for name in m["estimators"]:
         r = m["estimators"][name]
         rm = ", ".join(f"{k}: {v:.4g}" for k, v in r["rmse_cycles"].items())
         print(f"  {name}: RUL RMSE [cycles] at life fraction {rm}; alpha-lambda accuracy (alpha 0.2, lambda 0.5) "

@@ -202,22 +202,12 @@ def _run_locked(camp, out: Path, n_jobs: int, client, progress, say, max_rounds,
                 replace_changed) -> dict[str, Any]:
     import joblib
 
-    from ...sim.params import load_params
-
     t0 = time.perf_counter()
     for folder in (out, out / "runs", out / "reference"):
         for p in folder.glob(".*.tmp") if folder.is_dir() else ():
             p.unlink(missing_ok=True)  # a writer killed mid-write; we hold the lock
     ids = LifeIdentities(camp)
-    dt = load_params().physics_dt_s
-    n_log = {}
-    for unit in camp.units:
-        key = json.dumps(unit.trajectory, sort_keys=True)
-        if key not in n_log:
-            d = parse_trajectory(unit.trajectory, "trajectory").duration_s
-            d = d if camp.duration_s is None else camp.duration_s
-            n_log[key] = int(round(d / dt)) // int(round(camp.log_period_s / dt))
-    pending, finished, refs, unusable = _resume_all(camp, out, ids, n_log)
+    pending, finished, refs, unusable = resume_state(camp, out, ids)
     changed = [u for u in unusable if u[1] == "changed"]
     if changed and not replace_changed:
         rid, _, why = changed[0]
@@ -270,7 +260,25 @@ def _run_locked(camp, out: Path, n_jobs: int, client, progress, say, max_rounds,
     return manifest
 
 
-def _resume_all(camp, out, ids, n_log):
+def log_lengths(camp: LifeCampaign) -> dict[str, int]:
+    """Logged samples of one inspection per task (keyed by the trajectory's JSON)."""
+    from ...sim.params import load_params
+
+    dt = load_params().physics_dt_s
+    n_log = {}
+    for unit in camp.units:
+        key = json.dumps(unit.trajectory, sort_keys=True)
+        if key not in n_log:
+            d = parse_trajectory(unit.trajectory, "trajectory").duration_s
+            d = d if camp.duration_s is None else camp.duration_s
+            n_log[key] = int(round(d / dt)) // int(round(camp.log_period_s / dt))
+    return n_log
+
+
+def resume_state(camp: LifeCampaign, out: Path, ids: LifeIdentities) -> tuple[dict, dict, dict, list]:
+    """What the stored files of ``out`` say (read only): each running unit's next job, each finished
+    unit's last inspection, the reference paths, and the (run_id, state, detail) of every unusable file."""
+    n_log = log_lengths(camp)
     pending, finished, refs, unusable = {}, {}, {}, []
     by_traj: dict[str, list[Unit]] = {}
     for unit in camp.units:

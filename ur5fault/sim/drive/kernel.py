@@ -19,14 +19,14 @@ from .layout import PARAM_NAMES, PI, STATE_NAMES, XI
 #: changed with this file untouched would reuse cached kernels that index the wrong rows (seen once as a
 #: segfault after a merge).  A changed layout therefore stops here until this number is updated, which also
 #: changes this file and so invalidates the cache.
-LAYOUT_CRC32 = 1403349115
+LAYOUT_CRC32 = 64641414
 if zlib.crc32(("|".join(PARAM_NAMES) + "#" + "|".join(STATE_NAMES)).encode()) != LAYOUT_CRC32:
     raise ImportError("ur5fault/sim/drive/layout.py changed: update LAYOUT_CRC32 in ur5fault/sim/drive/kernel.py "
                       "(and check the row constants below) so numba recompiles the cached kernels")
 
 # parameter rows
-RATIO, K, C, ALPHA, T_COULOMB, T_STATIC, FV, EPS = (PI[n] for n in ("ratio", "k", "c", "alpha", "t_coulomb", "t_static",
-                                                                   "fv", "eps"))
+RATIO, K, C, BACKLASH_RAD, T_COULOMB, T_STATIC, FV, EPS = (
+    PI[n] for n in ("ratio", "k", "c", "backlash_rad", "t_coulomb", "t_static", "fv", "eps"))
 DECAY, GAIN_IV, CROSS, KE, KT, JR = (PI[n] for n in ("decay", "gain_iv", "cross", "ke", "kt", "jr"))
 COG_AMP, COG_PER, V_LIM, I_MAX = (PI[n] for n in ("cog_amp", "cog_per", "v_lim", "i_max"))
 RES_NOISE, RES_LSB, RES_OFF, ENC_NOISE, ENC_LSB = (PI[n] for n in ("res_noise", "res_lsb", "res_off", "enc_noise",
@@ -183,12 +183,12 @@ def physics_rj(X, P, r, j, q, qd, dt, stribeck, has_cogging):
     N = P[RATIO, r, j]
     th = th_m / N - q
     dth = w_m / N - qd
-    k, c, a = P[K, r, j], P[C, r, j], P[ALPHA, r, j]
+    k, c, backlash_rad = P[K, r, j], P[C, r, j], P[BACKLASH_RAD, r, j]
     t_low = k * th + c * dth
-    t_high = t_low - k * a
-    if a == 0.0:
+    t_high = t_low - k * backlash_rad
+    if backlash_rad == 0.0:
         t_id = t_low
-    elif th > a:
+    elif th > backlash_rad:
         t_id = max(t_high, 0.0)
     elif th < 0.0:
         t_id = min(t_low, 0.0)

@@ -9,8 +9,8 @@ from __future__ import annotations
 
 # names of the per-run, per-joint parameters (rows of the packed array P)
 PARAM_NAMES = (
-    "ratio", "k", "c", "alpha", "t_coulomb", "t_static", "fv", "eps", "decay", "gain_iv", "cross", "ke", "kt", "jr",
-    "cog_amp", "cog_per", "v_lim", "i_max", "res_noise", "res_lsb", "res_off", "enc_noise", "enc_lsb",
+    "ratio", "k", "c", "backlash_rad", "t_coulomb", "t_static", "fv", "eps", "decay", "gain_iv", "cross", "ke", "kt",
+    "jr", "cog_amp", "cog_per", "v_lim", "i_max", "res_noise", "res_lsb", "res_off", "enc_noise", "enc_lsb",
     "encv_noise", "encv_lsb", "cur_noise", "cur_lsb", "cur_gain", "cur_off",
     # controller (nominal: the controller does not know the faults)
     "pos_kp", "spd_kp", "spd_ki", "cur_kp", "cur_ki", "ff", "ratio_nom", "ke_nom", "cross_nom",

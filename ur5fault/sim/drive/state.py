@@ -41,7 +41,7 @@ def pack_params(p, g, a) -> NDArray:
     c_cur = sensors.first_order_coefficients(s.current_bw_Hz, dt)
     values = {
         "ratio": a.gear_ratio, "k": a.gear_stiffness_Nm_per_rad, "c": a.gear_damping_Nms_per_rad,
-        "alpha": a.backlash_rad, "t_coulomb": a.friction_coulomb_Nm, "t_static": a.friction_static_Nm,
+        "backlash_rad": a.backlash_rad, "t_coulomb": a.friction_coulomb_Nm, "t_static": a.friction_static_Nm,
         "fv": fr.viscous_coefficient(a.friction_viscous_Nms_per_rad, a.friction_temp_coeff_per_K, a.temperature_C,
                                      p.friction.reference_temp_C),
         "eps": a.friction_sign_smoothing_rad_s, "decay": decay, "gain_iv": (1.0 - decay) / R,
@@ -71,8 +71,8 @@ def initial_state(P: NDArray, q: NDArray, bias: NDArray) -> NDArray:
     """Consistent equilibrium at rest: gears pre-deflected by the static load on the flank it
     pushes, currents and integrators holding it, filters at their steady values."""
     X = np.zeros((len(STATE_NAMES),) + q.shape)
-    k, alpha, N, kt = P[PI["k"]], P[PI["alpha"]], P[PI["ratio"]], P[PI["kt"]]
-    th_rel = np.where(bias >= 0.0, alpha + bias / k, bias / k)
+    k, backlash_rad, N, kt = P[PI["k"]], P[PI["backlash_rad"]], P[PI["ratio"]], P[PI["kt"]]
+    th_rel = np.where(bias >= 0.0, backlash_rad + bias / k, bias / k)
     th_m = N * (q + th_rel)
     i_q = bias / (N * kt)
     R = np.where(P[PI["gain_iv"]] > 0, (1.0 - P[PI["decay"]]) / P[PI["gain_iv"]], 0.0)
@@ -146,7 +146,7 @@ class NumpyDrive(_Views):
         X[XI["i_d"]], X[XI["i_q"]] = motor.electrical_step(self.i_d, self.i_q, self.v_d, self.v_q, self.w_m,
                                                            p("decay"), p("gain_iv"), p("cross"), p("ke"))
         N, share = p("ratio"), p("share")
-        X[XI["t_id"]] = gearbox.gear_torque(self.th_m / N - q, self.w_m / N - qd, p("k"), p("c"), p("alpha"))
+        X[XI["t_id"]] = gearbox.gear_torque(self.th_m / N - q, self.w_m / N - qd, p("k"), p("c"), p("backlash_rad"))
         # link side: torque at the current speed and its slope; MuJoCo applies T_f + S (w+ - w) implicitly
         _, f_l, s_l = self._friction(self.z_l, qd)
         X[XI["f_l"]], X[XI["s_l"]], X[XI["qd_prev"]] = (1.0 - share) * f_l, (1.0 - share) * s_l, qd

@@ -1,0 +1,21 @@
+"""Monitoring: a robot's new logs against its own fitted baseline (``ur5fault monitor``).
+
+A baseline is a model overlay fitted to the robot (``ur5fault identify`` / ``discrepancy``) plus the
+residual statistics of healthy runs of that robot replayed under it (:mod:`.baseline`). A new log is
+replayed under the same overlay (:mod:`.observe`, through :class:`ur5fault.twin.LogReplay`) and judged:
+
+* *events* (:mod:`.events`): where the smoothed current residual leaves the band the baseline runs stayed
+  in: a push, a collision, a transient; ``{"t_start_s", "t_end_s", "joints", "peak_A"}`` each;
+* *changes* (:mod:`.changes`): a library effect of the discrepancy workflow whose estimate on the new log
+  (outside its events) lies outside the spread of its estimates on the baseline runs: a persistent change,
+  named with size and interval.
+
+Verdict per log (:mod:`.verdict`): ``"changed"`` when a change is found, else ``"anomaly"`` when an event is,
+else ``"consistent"``. See docs/monitoring.md.
+"""
+
+from .baseline import Baseline, fit_baseline
+from .observe import Observed, observe
+from .verdict import assess
+
+__all__ = ["Baseline", "Observed", "assess", "fit_baseline", "observe"]

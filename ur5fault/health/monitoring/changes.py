@@ -1,0 +1,136 @@
+"""Persistent changes: the discrepancy workflow's library and statistics on a new log, against the baseline.
+
+Every screened candidate (:mod:`.observe`) is fitted alone to the log's weighted residual and judged by the
+discrepancy workflow's own test (:func:`ur5fault.discrepancy.search.judge`: BIC, block-jackknife z, stability in
+time blocks). A candidate is a *change* when the log's estimate is significant and lies
+ outside the prediction interval of the baseline's estimates of the same candidate:
+``|theta - mean_b| / sqrt(se^2 + var_b (1 + 1/k)) > t_{k-1}``, ``var_b`` the variance of the estimates over the
+``k`` baseline segments and ``t_{k-1}`` Student's quantile at the tail probability of
+:data:`~ur5fault.discrepancy.statistics.MIN_Z` standard errors (the discrepancy workflow's bar, corrected for the
+few runs a baseline has); a single segment: its own jackknife variance and ``MIN_Z``. The spread between healthy
+runs holds the model's own motion-dependent error, so a run unlike the baseline's is not called changed for that
+alone.
+
+A push is an event, not a worn gear: a change must also hold on the samples outside the log's events (and
+:data:`EVENT_GUARD_S` around them), or those samples must be unable to tell (their standard error larger than
+the change over the bar) - a changed gain that itself leaves the event band on most of a joint's samples stays
+a change.
+
+Per joint the change with the largest distance is named; the others on that joint are its alternatives (a
+current-sensor gain and a torque constant read alike in the current).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ...discrepancy.search import columns_of, judge
+from ...discrepancy.statistics import MIN_Z, Z_95, BlockGram
+from ...sim.axes import JOINT_NAMES
+from .observe import Observed
+
+#: samples this close to an event are left out of the change test [s] (the controller's recovery after a push)
+EVENT_GUARD_S = 0.5
+
+
+@dataclasses.dataclass(frozen=True)
+class Estimate:
+    """One candidate fitted alone on one log part: coefficient, jackknife SE, and the workflow's verdict."""
+
+    label: str
+    theta: float
+    se: float
+    accepted: bool
+    reason: str
+
+
+def keep_mask(obs: Observed, over: NDArray) -> NDArray:
+    """Samples of the screened part ``(m,)`` outside every exceedance (``over`` ``(n, 6)``) by
+    :data:`EVENT_GUARD_S`, and logged."""
+    m = obs.e.shape[0]
+    bad = over[:m].any(axis=1)
+    guard = int(round(EVENT_GUARD_S / obs.period_s))
+    if bad.any() and guard:
+        bad = np.convolve(bad.astype(float), np.ones(2 * guard + 1), mode="same") > 0
+    return ~bad & obs.logged[:m]
+
+
+def estimates(obs: Observed, keep: NDArray) -> dict[str, Estimate]:
+    """Each candidate of ``obs`` fitted alone on the samples ``keep`` ``(m,)``."""
+    if not obs.cands:
+        return {}
+    e = np.where(keep[:, None], obs.e, 0.0)
+    X = np.where(keep[None, :, None], obs.X, 0.0)
+    bg = BlockGram.build(X, e)
+    cols = columns_of(obs.cands)
+    out = {}
+    for k, c in enumerate(obs.cands):
+        v = judge(bg, e, X, obs.cands, cols, [], k)
+        out[c.label] = Estimate(c.label, v.theta[0], v.se[0], v.accepted, v.reason)
+    return out
+
+
+def spread(thetas: list[float], ses: list[float]) -> tuple[float, float, int]:
+    """Mean, variance and count of a candidate's estimates over baseline segments (one segment: its SE squared)."""
+    th = np.asarray(thetas, dtype=float)
+    if th.size >= 2:
+        return float(th.mean()), float(th.var(ddof=1)), int(th.size)
+    return float(th[0]), float(np.asarray(ses, dtype=float)[0] ** 2), 1
+
+
+def bar(n_segments: int) -> tuple[float, float]:
+    """The distance a change must exceed, and the factor on the baseline variance, for ``n_segments`` runs."""
+    if n_segments < 2:
+        return MIN_Z, 1.0
+    from scipy import stats
+
+    return float(stats.t.isf(stats.norm.sf(MIN_Z), n_segments - 1)), 1.0 + 1.0 / n_segments
+
+
+def _distance(e: Estimate, base: tuple[float, float, int]) -> float:
+    """How far ``e`` lies from the baseline's estimates, in multiples of the bar (>= 1: a change)."""
+    mean, var, k = base
+    limit, inflate = bar(k)
+    return abs(e.theta - mean) / float(np.sqrt(e.se**2 + var * inflate)) / limit
+
+
+def find_changes(obs: Observed, est: dict[str, Estimate], outside: dict[str, Estimate],
+                 base: dict[str, tuple[float, float, int]]) -> list[dict]:
+    """Changes of ``obs`` against the baseline's ``{label: (mean, variance, n)}``, one per joint (module docstring):
+    ``est`` on every logged sample, ``outside`` on those outside the events."""
+    flagged = []
+    for c in obs.cands:
+        e, o = est[c.label], outside[c.label]
+        if c.label not in base or not e.accepted or not np.isfinite(e.se):
+            continue
+        d = _distance(e, base[c.label])
+        if d < 1.0:
+            continue
+        mean, var, k = base[c.label]
+        limit = bar(k)[0]
+        holds = (o.accepted and _distance(o, base[c.label]) >= 1.0) or not np.isfinite(o.se) \
+            or o.se > abs(e.theta - mean) / limit
+        if holds:
+            flagged.append((d, c, e, mean))
+    out = []
+    for j in sorted({c.joint for _, c, _, _ in flagged}, key=lambda j: -1 if j is None else j):
+        mine = sorted((f for f in flagged if f[1].joint == j), key=lambda f: -f[0])
+        z, c, e, mean = mine[0]
+        lo, hi = sorted((c.value(e.theta - Z_95 * e.se), c.value(e.theta + Z_95 * e.se)))
+        alts = [{"effect": a.effect, "parameter": a.param, "value": a.value(ea.theta), "baseline_value": a.value(am)}
+                for _, a, ea, am in mine[1:]]
+        out.append({"joint": JOINT_NAMES[j] if j is not None else None, "effect": c.effect, "parameter": c.param,
+                    "value": c.value(e.theta), "interval": [lo, hi], "baseline_value": c.value(mean),
+                    "distance": z, "alternatives": alts})
+    return out
+
+
+def sentence(ch: dict) -> str:
+    """One line per change, as the discrepancy workflow names a finding."""
+    lo, hi = ch["interval"]
+    alt = "".join(f"; or {a['effect']}.{a['parameter']} = {a['value']:.4g}" for a in ch["alternatives"])
+    return (f"{ch['joint']}: {ch['effect']}.{ch['parameter']} = {ch['value']:.4g} ({lo:.4g}..{hi:.4g}), "
+            f"baseline {ch['baseline_value']:.4g}, {ch['distance']:.1f}x the bar away{alt}")

@@ -1,0 +1,82 @@
+"""``ur5fault monitor LOG [LOG ...] --baseline MODEL.yaml (--baseline-logs LOG ... | --baseline-stats FILE)
+--out DIR``."""
+
+from __future__ import annotations
+
+import argparse
+import copy
+import os
+import sys
+from pathlib import Path
+
+from ...logs.options import add_log_options
+
+
+def register(sub) -> None:
+    p = sub.add_parser("monitor", help="compare new logs of a robot with its fitted baseline: consistent, changed "
+                                       "or anomaly")
+    add_log_options(p, ("rtde", "nist", "sim"))
+    p.add_argument("--baseline", required=True, metavar="MODEL.yaml",
+                   help="the robot's fitted model overlay (model.yaml of ur5fault discrepancy, or identify's)")
+    src = p.add_mutually_exclusive_group(required=True)
+    src.add_argument("--baseline-logs", nargs="+", metavar="LOG",
+                     help="healthy runs of the robot, replayed under the overlay for the residual statistics the "
+                          "thresholds come from (same --format / payload options as the logs; or one manifest); "
+                          "this or --baseline-stats is required")
+    src.add_argument("--baseline-stats", metavar="FILE",
+                     help="baseline.json written by an earlier ur5fault monitor with the same overlay; this or "
+                          "--baseline-logs is required")
+    p.add_argument("--out", required=True, help="output folder (monitor.json, baseline.json, report.md, figures)")
+    p.add_argument("--jobs", type=int, help="worker processes for the simulation batches (default: all cores)")
+    p.set_defaults(func=cmd_monitor)
+
+
+def cmd_monitor(args: argparse.Namespace) -> int:
+    from ...config import Overlay
+    from ...errors import ParameterError
+    from ...logs.length import check_files_length, check_logs_length
+    from ...logs.options import log_entries, read_log_options
+    from ...sim.params import load_params
+    from ...util.io import check_writable
+    from .baseline import Baseline, fit_baseline, overlay_sha256
+    from .observe import observe
+    from .report import write
+    from .verdict import assess
+
+    jobs = (os.cpu_count() or 1) if args.jobs is None else args.jobs
+    if jobs < 1:
+        raise ParameterError(f"--jobs {jobs} must be at least 1")
+    check_writable(args.out, folder=True)
+    overlay = Overlay.load(args.baseline)
+    sha = overlay_sha256(dict(overlay.params), overlay.effects)
+    stats = None
+    if args.baseline_stats:
+        stats = Baseline.load(args.baseline_stats)
+        if stats.overlay_sha256 != sha:
+            raise ParameterError(f"{args.baseline_stats}: was built under another model overlay than "
+                                 f"{args.baseline}; rebuild it with --baseline-logs")
+    base_args = None
+    if args.baseline_logs:
+        base_args = copy.copy(args)
+        base_args.log = args.baseline_logs
+    check_files_length([e.path for a in (args, base_args) if a is not None for e in log_entries(a)], "monitor")
+    logs, _ = read_log_options(args)
+    healthy = read_log_options(base_args)[0] if base_args is not None else []
+    check_logs_length([*logs, *healthy], "monitor")
+    clash = sorted({g.source for g in logs} & {g.source for g in healthy})
+    if clash:
+        raise ParameterError(f"log {clash[0]!r} is both monitored and a baseline log; a run cannot judge itself")
+    temps = load_params(overrides=dict(overlay.params)).joint_temperature_C
+    for lg in (*healthy, *logs):
+        for line in lg.assumptions(temps):
+            print(f"note: {line}", file=sys.stderr)
+    params, effects = dict(overlay.params), overlay.effects
+    if stats is None:
+        stats = fit_baseline([observe(g, params, effects, jobs=jobs) for g in healthy], sha)
+    observed = [observe(g, params, effects, jobs=jobs) for g in logs]
+    entries = [assess(stats, o) for o in observed]
+    paths = write(Path(args.out), stats, observed, entries, args.baseline)
+    for e in entries:
+        print(f"{e['log']}: {e['verdict']} ({len(e['changes'])} changes, {len(e['events'])} events)")
+    print(f"wrote {', '.join(str(p) for p in paths[:2])}, {paths[-1]}")
+    return 0

@@ -1,0 +1,100 @@
+"""One log (or a part of one) replayed under the baseline's model overlay: the current residual the events are
+found in, and the screened library columns the change test fits (:mod:`.changes`).
+
+The replay is :class:`ur5fault.twin.LogReplay` (the one path from a log to the model); the screening is the
+discrepancy workflow's own (:func:`ur5fault.discrepancy.library.screen`), on at most
+:data:`~ur5fault.discrepancy.model.SCREEN_S` of the part, as that workflow screens.
+
+Shapes: ``(n, 6)`` per sample and joint; the screened columns ``(p, m, n_channels)`` and the weighted residual
+``(m, n_channels)`` on the part's first ``m`` samples (channels = the replay's signals x joints).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Sequence
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ...discrepancy.candidates import LibraryCandidate
+from ...discrepancy.library import candidates, screen
+from ...discrepancy.model import SCREEN_S, WORKFLOW_SEED
+from ...discrepancy.statistics import weighted
+from ...errors import ParameterError
+from ...logs import MeasuredLog
+from ...sim.effects import EffectSpec
+from ...twin.replay import LogReplay
+from ...twin.residuals import CONDITION_REST_SPEED_RAD_S
+
+#: the library effects a monitor tests for a persistent change: wear of the drive train (Coulomb and viscous
+#: friction, gear clearance and stiffness) and drift of the motor and its current sensor (torque constant,
+#: current-sensor gain and offset). Left out: what a running robot does not acquire by itself (payload,
+#: tool, where friction sits, cogging, delays, resolver offsets) - a job change, not a health change.
+MONITOR_KINDS = ("coulomb_friction", "viscous_friction", "backlash", "gear_stiffness", "torque_constant",
+                 "current_sensor_gain", "current_sensor_offset")
+
+
+@dataclasses.dataclass(frozen=True)
+class Observed:
+    """A log part replayed under the baseline.
+
+    Attributes:
+        name: the log's name (its file name; ``NAME[t0-t1 s]`` for a part).
+        t_s: log time of each sample ``(n,)`` [s].
+        residual_A: measured - simulated motor current ``(n, 6)`` [A].
+        moving: the joint's target moves (target speed above the twin's rest speed) ``(n, 6)``.
+        logged: the robot wrote the tick (not filled in a gap) ``(n,)``.
+        cands, X, e: the screened library candidates, their weighted columns ``(p, m, n_channels)`` and the
+            weighted residual ``(m, n_channels)`` on the part's first ``m`` samples.
+    """
+
+    name: str
+    period_s: float
+    t_s: NDArray
+    residual_A: NDArray
+    moving: NDArray
+    logged: NDArray
+    cands: tuple[LibraryCandidate, ...]
+    X: NDArray
+    e: NDArray
+
+    @property
+    def n(self) -> int:
+        return self.t_s.size
+
+
+def observe(log: MeasuredLog, params_overrides: dict | None = None, effects: Sequence[EffectSpec] = (), *,
+            part_s: tuple[float, float] | None = None, kinds: Sequence[str] = MONITOR_KINDS,
+            screen_s: float = SCREEN_S, jobs: int = 1) -> Observed:
+    """Replay ``log`` under the overlay (``params_overrides``, ``effects``) and screen ``kinds`` on it.
+
+    ``part_s``: keep only the samples with ``t0 <= t < t1`` of log time (the replay still starts at the log's
+    start, so a part is simulated from the robot's real initial state)."""
+    rp = LogReplay(log, params_overrides, effects, seed=WORKFLOW_SEED, jobs=jobs)
+    n_all = rp.n_samples
+    t = log.t_s[1 : n_all + 1] - log.t_s[0]
+    if part_s is None:
+        lo, hi, name = 0, n_all, log.source
+    else:
+        t0, t1 = part_s
+        idx = np.flatnonzero((t >= t0) & (t < t1))
+        if idx.size < 2:
+            raise ParameterError(f"{log.source}: the part [{t0:g}, {t1:g}) s holds fewer than 2 samples")
+        lo, hi, name = int(idx[0]), int(idx[-1]) + 1, f"{log.source}[{t0:g}-{min(t1, t[-1]):g} s]"
+    m = min(hi - lo, max(2, round(screen_s / log.period_s)))
+    cands = candidates(log.payload_kg, kinds=kinds, params=rp.params)
+    # the screen simulates samples 1..lo+m; its baseline run is the replay itself there
+    base, X, kept = screen(rp, lo + m, cands)
+    if not base.ok:
+        raise ParameterError(f"{log.source}: the replay under the baseline model failed ({base.status})")
+    if hi > lo + m:
+        base = rp.run([()], hi)[0]
+        if not base.ok:
+            raise ParameterError(f"{log.source}: the replay under the baseline model failed ({base.status})")
+    meas = rp.measured(hi)
+    e = weighted(meas[lo : lo + m], base.y[lo : lo + m], rp.sigma)
+    qd = np.gradient(log.q_target_rad, log.period_s, axis=0)[1 : n_all + 1]
+    return Observed(name, log.period_s, t[lo:hi], (meas[:, 0] - base.current_A[:hi])[lo:hi],
+                    np.abs(qd[lo:hi]) > CONDITION_REST_SPEED_RAD_S, log.logged_rows()[1 : n_all + 1][lo:hi],
+                    tuple(kept), X[:, lo : lo + m], e)
