@@ -1,4 +1,5 @@
-"""Command line: ``ur5fault simulate | effects | campaign | plot | show | discrepancy | identify``.
+"""Command line: ``ur5fault simulate | effects | campaign | plot | show | discrepancy | identify | benchmark |
+diagnose | prognose``.
 
 Bad input prints one line ``ur5fault: error: ...`` naming the problem and the valid
 choices, and exits with status 2; never a traceback.  ``-v`` (before or after the
@@ -255,6 +256,7 @@ def _add_optional_commands(sub) -> None:
     not a silently missing command)."""
     from .campaign import cli as campaign_cli
     from .discrepancy import cli as discrepancy_cli
+    from .health.diagnosis import cli as diagnose_cli
     from .health.diagnostics import cli as benchmark_cli
     from .health.monitoring import cli as monitor_cli
     from .health.prognostics import cli as prognose_cli
@@ -264,6 +266,7 @@ def _add_optional_commands(sub) -> None:
     discrepancy_cli.register(sub)
     identify_cli.register(sub)
     benchmark_cli.register(sub)
+    diagnose_cli.register(sub)
     prognose_cli.register(sub)
     monitor_cli.register(sub)
 

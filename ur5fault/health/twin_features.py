@@ -92,6 +92,22 @@ def _lstsq(y: NDArray, cols: list[NDArray]) -> NDArray:
     return coef
 
 
+def projection_columns(t_s: NDArray, q_set_rad: NDArray, twin: dict[str, NDArray], params: RobotParams
+                       ) -> tuple[list[NDArray], list[NDArray]]:
+    """The regressors of the two least-squares fits, ``(n_log, 6)`` each: the current fit's (1, i_twin,
+    i_coulomb) and the mismatch fit's (1, sign(T_twin) / 2, T_twin / k), as the module docstring defines them."""
+    dt = float(t_s[1] - t_s[0])
+    qd = np.gradient(q_set_rad, dt, axis=0)
+    torque = twin["T_gear_Nm"]
+    fr, mo = params.friction, params.motor
+    level = stribeck_level(qd, np.asarray(fr.coulomb_Nm), np.asarray(fr.static_Nm), fr.stribeck_rate_s_per_rad)[0]
+    i_coulomb = np.sign(qd) * level / (np.asarray(mo.torque_constant_Nm_per_A) * np.asarray(params.gear.ratio))
+    flank = np.where(np.abs(torque) > FLANK_SHARE * np.abs(torque).max(axis=0), np.sign(torque), np.nan)
+    windup = torque / np.asarray(params.gear.stiffness_Nm_per_rad)
+    ones = np.ones_like(torque)
+    return [ones, twin["i_q_A"], i_coulomb], [ones, 0.5 * np.nan_to_num(flank), windup]
+
+
 def twin_features(t_s: NDArray, q_set_rad: NDArray, meas: dict[str, NDArray], twin: dict[str, NDArray],
                   params: RobotParams) -> dict[str, float]:
     """Twin residual features of one run.
@@ -113,13 +129,8 @@ def twin_features(t_s: NDArray, q_set_rad: NDArray, meas: dict[str, NDArray], tw
            "mismatch": mis_m - mis_t}
     qd = np.gradient(q_set_rad, dt, axis=0)
     qdd = np.gradient(qd, dt, axis=0)
-    torque = twin["T_gear_Nm"]
-    masks = motion_conditions(qd, qdd, torque, dt)
-    fr, mo = params.friction, params.motor
-    level = stribeck_level(qd, np.asarray(fr.coulomb_Nm), np.asarray(fr.static_Nm), fr.stribeck_rate_s_per_rad)[0]
-    i_coulomb = np.sign(qd) * level / (np.asarray(mo.torque_constant_Nm_per_A) * ratio)
-    flank = np.where(np.abs(torque) > FLANK_SHARE * np.abs(torque).max(axis=0), np.sign(torque), np.nan)
-    windup = torque / np.asarray(params.gear.stiffness_Nm_per_rad)
+    masks = motion_conditions(qd, qdd, twin["T_gear_Nm"], dt)
+    current_cols, mismatch_cols = projection_columns(t_s, q_set_rad, twin, params)
     f: dict[str, float] = {}
     for j in range(N_JOINTS):
         s = f"_j{j + 1}"
@@ -132,9 +143,8 @@ def twin_features(t_s: NDArray, q_set_rad: NDArray, meas: dict[str, NDArray], tw
                     if m.any():
                         v = float(np.nanmean(r[m])) if stat == "mean" else float(np.sqrt(np.nanmean(r[m] ** 2)))
                     f[f"twin_{sig}_{stat}_{unit}_{cond}{s}"] = v
-        ones = np.ones(len(t_s))
-        a, b, c = _lstsq(res["current"][:, j], [ones, twin["i_q_A"][:, j], i_coulomb[:, j]])
-        d, e, g = _lstsq(res["mismatch"][:, j], [ones, 0.5 * np.nan_to_num(flank[:, j]), windup[:, j]])
+        a, b, c = _lstsq(res["current"][:, j], [col[:, j] for col in current_cols])
+        d, e, g = _lstsq(res["mismatch"][:, j], [col[:, j] for col in mismatch_cols])
         for name, v in zip(ESTIMATE_UNITS, (a, b, c, d, e, g)):
             f[f"twin_est_{name}{s}"] = float(v)
     return f

@@ -145,8 +145,10 @@ def run_benchmark(campaign_dir: str | Path, out: str | Path | None = None, *, se
     features = load_features(campaign_dir)
     thr = PAPER_TCP_MM
     manifest = campaign_dir / "manifest.json"
+    man: dict[str, Any] = {}
     if campaign_dir.is_dir() and manifest.exists():
-        thr = float(json.loads(manifest.read_text()).get("threshold_mm") or PAPER_TCP_MM)
+        man = json.loads(manifest.read_text())
+        thr = float(man.get("threshold_mm") or PAPER_TCP_MM)
     compare = compare and feature_set is None  # a chosen set is scored alone
     if feature_set is None:
         feature_set = "both" if has_twin_features(features) else "paper"
@@ -173,9 +175,18 @@ def run_benchmark(campaign_dir: str | Path, out: str | Path | None = None, *, se
     write_report(metrics, figures, out_dir)
     if not shuffle_labels:
         save_models(models, load_dataset(features, feature_set), feature_set,
-                    metrics["detection"]["threshold_score"], out_dir)
+                    metrics["detection"]["threshold_score"], out_dir, mean_run_duration_s(man), man.get("log_period_s"))
     metrics["out"] = str(out_dir)
     return metrics
+
+
+def mean_run_duration_s(manifest: dict[str, Any]) -> float | None:
+    """The mean simulated duration of a campaign's runs [s] from its manifest (its total steps x the physics
+    step / its runs; the fixed ``duration_s`` when every run has it), or None when the manifest does not say."""
+    try:
+        return float(manifest["n_steps_total"]) * float(manifest["physics_dt_s"]) / int(manifest["n_runs"])
+    except (KeyError, TypeError, ValueError, ZeroDivisionError):
+        return None
 
 
 def compare_feature_sets(features: pd.DataFrame, seed: int, threshold_mm: float, source: str) -> dict[str, Any]:

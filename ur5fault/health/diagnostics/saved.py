@@ -7,7 +7,10 @@
   type outside scikit-learn and numpy);
 * ``schema.json``: the input columns in order with their units, the feature set, the classes of each
   classifier, the detector threshold at 5 % false alarms (on the training campaign's test split), a
-  SHA-256 of the training rows (inputs and labels), the package, scikit-learn and skops versions.
+  SHA-256 of the training rows (inputs and labels), the package, scikit-learn and skops versions, and the
+  training runs' duration and log period (``window_s``, ``log_period_s``: ``ur5fault diagnose`` cuts a log
+  into windows of that length, so that its features are taken over as long a stretch as the training
+  runs'; ``None`` when the campaign's manifest does not say them).
 
 Scoring another campaign with them (``ur5fault benchmark TRAIN_DIR --test OTHER_DIR``) needs its
 table to hold every input column; a missing one is named.
@@ -44,8 +47,10 @@ def training_hash(ds: Dataset) -> str:
     return h.hexdigest()
 
 
-def save_models(models: Models, ds: Dataset, feature_set: str, threshold_score: float, out: Path) -> Path:
-    """Write the classifiers and their schema into ``out/models``; return that folder."""
+def save_models(models: Models, ds: Dataset, feature_set: str, threshold_score: float, out: Path,
+                window_s: float | None = None, log_period_s: float | None = None) -> Path:
+    """Write the classifiers and their schema into ``out/models``; return that folder (``window_s``,
+    ``log_period_s``: the training runs' simulated duration and log period, from the campaign manifest)."""
     import sklearn
     import skops
     import skops.io as sio
@@ -70,6 +75,8 @@ def save_models(models: Models, ds: Dataset, feature_set: str, threshold_score: 
         "ur5fault_version": provenance.package_version(),
         "sklearn_version": sklearn.__version__,
         "skops_version": skops.__version__,
+        "window_s": None if window_s is None else float(window_s),
+        "log_period_s": None if log_period_s is None else float(log_period_s),
     }
     write_json_atomic(folder / SCHEMA_FILE, schema)
     return folder

@@ -1,0 +1,83 @@
+"""``diagnosis.json``, ``report.md`` and ``diagnosis.png`` of a diagnosed log."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ...util.io import write_figure_atomic, write_json_atomic, write_text_atomic
+
+JSON_FILE, REPORT_FILE, FIGURE_FILE = "diagnosis.json", "report.md", "diagnosis.png"
+
+
+def _figure(d: dict[str, Any]):
+    """Per window: the fault probability and each joint's share, with the 5 % false-alarm threshold."""
+    from matplotlib.figure import Figure
+
+    w = d["windows"]
+    mid = np.array([(x["start_s"] + x["end_s"]) / 2 for x in w])
+    fig = Figure(figsize=(8, 4.5), layout="constrained")
+    ax = fig.add_subplot(2, 1, 1)
+    ax.step(mid, [x["p_fault"] for x in w], where="mid", color="k", label="p(fault)")
+    ax.axhline(d["detector"]["threshold_5pct_false_alarms"], color="r", ls="--", lw=1,
+               label="threshold at 5 % false alarms")
+    ax.set_ylim(0, 1.02)
+    ax.set_ylabel("p(fault)")
+    ax.legend(loc="upper right", fontsize=7)
+    ax.set_title(f"{d['log']}: {d['n_flagged']} of {d['n_windows']} windows of {d['detector']['window_s']:g} s "
+                 "flagged", fontsize=9)
+    ax2 = fig.add_subplot(2, 1, 2, sharex=ax)
+    pj = np.array([[j["p_fault_joint"] or 0.0 for j in x["joints"]] for x in w])
+    for j in range(pj.shape[1]):
+        ax2.plot(mid, pj[:, j], marker="o", ms=3, label=f"J{j + 1}")
+    ax2.set_ylim(0, 1.02)
+    ax2.set_xlabel("window centre [s]")
+    ax2.set_ylabel("p(fault on joint)")
+    ax2.legend(ncol=6, fontsize=7, loc="upper right")
+    return fig
+
+
+def _fmt(v: float | None, unit: str) -> str:
+    return "-" if v is None else f"{v:.3g} {unit}"
+
+
+def _report(d: dict[str, Any]) -> str:
+    det = d["detector"]
+    lines = [f"# Diagnosis of {d['log']}", "",
+             f"{d['duration_s']:.1f} s sampled every {1e3 * d['log_period_s']:g} ms; payload "
+             f"{d['conditions']['payload_kg']:g} kg, temperature {d['conditions']['temperature_C']:.1f} degC. "
+             f"Detector: {det['folder']} ({det['feature_set']} features, training set "
+             f"{str(det['training_set_sha256'])[:12]}), windows of {det['window_s']:g} s, flagged at "
+             f"p(fault) >= {det['threshold_5pct_false_alarms']:.3f} (5 % false alarms on its test split).", "",
+             f"**{d['n_flagged']} of {d['n_windows']} windows flagged.**", "",
+             "| window [s] | p(fault) | flagged | likeliest joint | likeliest kinds there (size, interval) |",
+             "| --- | --- | --- | --- | --- |"]
+    for w in d["windows"]:
+        js = [j for j in w["joints"] if j["p_fault_joint"] is not None]
+        top = max(js, key=lambda j: j["p_fault_joint"]) if js else None
+        kinds = "-"
+        if top is not None:
+            kinds = "; ".join(
+                f"{k['kind']} {k['p_given_fault']:.2f}" + (" (cannot tell)" if k["cannot_tell"] else
+                                                            f" ({_fmt(k['size'], k['unit'])}" +
+                                                            (f", {k['interval'][0]:.3g}..{k['interval'][1]:.3g})"
+                                                             if k["interval"] else ")"))
+                for k in top["kinds"])
+        where = f"J{top['joint']} {top['p_fault_joint']:.2f}" if top else "-"
+        lines.append(f"| {w['start_s']:.1f}-{w['end_s']:.1f} | {w['p_fault']:.3f} | {'yes' if w['flagged'] else 'no'}"
+                     f" | {where} | {kinds} |")
+    lines += ["", f"![p(fault) per window and joint]({FIGURE_FILE})", ""]
+    if d["notes"]:
+        lines += ["Notes:", *[f"- {n}" for n in d["notes"]], ""]
+    return "\n".join(lines)
+
+
+def write_diagnosis(d: dict[str, Any], out: str | Path) -> list[Path]:
+    """Write the three files into ``out``; return their paths."""
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    data = {k: v for k, v in d.items() if not k.startswith("_")}
+    return [write_json_atomic(out / JSON_FILE, data), write_text_atomic(out / REPORT_FILE, _report(d)),
+            write_figure_atomic(_figure(d), out / FIGURE_FILE)]

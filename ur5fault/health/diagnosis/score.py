@@ -1,0 +1,167 @@
+"""Scoring a log's windows with the classifiers ``ur5fault benchmark`` saved: the schema check, the probability
+of a fault per window and joint, the likeliest fault kinds with their size estimates, and "cannot tell" where
+the window's motion does not exercise a kind.
+
+Probabilities: ``p_fault`` is the detector's probability that the window's robot is faulty; ``flagged`` compares
+it with the detector's threshold at 5 % false alarms on the training campaign's test split (the benchmark's
+operating point, saved in the schema). Per joint, ``p_fault_joint`` = ``p_fault`` x the localiser's probability
+of that joint (the localiser is trained on single-joint faults, so the six sum to ``p_fault``). Kinds: the kind
+classifier's probabilities over the fault kinds, renormalised without ``healthy`` (the probability of each kind
+given a fault). How well these probabilities are calibrated is measured on the benchmark's test split by
+``bench/diagnose_real_logs.py`` (docs/diagnostics.md).
+
+Size estimates are the twin features' least-squares projections (:mod:`ur5fault.health.twin_features`),
+converted to the unit of the campaign's ``fault_size``; the interval is the range of the same estimate on the
+window's two halves (an empirical spread, not a confidence interval: NaN where a half has no value). Each size
+carries the variance inflation of its signature against the others of its fit; above :data:`MAX_VIF` it is
+marked ``confounded`` (it holds only if the other faults of that fit are absent: in a window where wrist 1
+turns one way only, a current offset and a Coulomb-friction change look alike).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from ...errors import ConfigFileError
+from ...sim.axes import N_JOINTS
+from ..diagnostics.data import CONTEXT_COLUMNS, SIM_ONLY_PREFIX
+from ..diagnostics.saved import SCHEMA_FORMAT
+from ..features import FEATURE_UNITS
+from ..twin_features import FEATURE_UNITS as TWIN_FEATURE_UNITS
+from .windows import Window
+
+#: every input column ``ur5fault diagnose`` computes from a log
+COMPUTABLE = frozenset([c for c in FEATURE_UNITS if not c.startswith(SIM_ONLY_PREFIX)]
+                       + list(TWIN_FEATURE_UNITS) + list(CONTEXT_COLUMNS))
+#: the least share of a window's samples in which a joint must move for Coulomb friction to be judged
+#: (assumption: a tenth of the window gives the Coulomb projection a few hundred samples at 1 kHz)
+MIN_SHARE_MOVING = 0.1
+#: kinds a log without motor encoders cannot show: they live in the encoder mismatch (a clearance, a
+#: resolver offset that the position loop hides in the link reading, the gear windup)
+NEEDS_MOTOR_ENCODERS = ("backlash", "resolver_offset", "gear_stiffness")
+#: each kind's size estimate (name of :data:`ur5fault.health.twin_features.ESTIMATE_UNITS`)
+ESTIMATE_OF = {"current_sensor_offset": "current_offset_A", "current_sensor_gain": "current_gain_err",
+               "torque_constant": "current_gain_err", "coulomb_friction": "coulomb_scale_err",
+               "resolver_offset": "mismatch_offset_rad", "backlash": "backlash_rad", "gear_stiffness": "compliance_err"}
+#: largest variance inflation factor at which a size estimate counts as told apart from the others of its fit
+#: (the usual rule of thumb for collinear regressors: above 10 a coefficient's variance is ten times what
+#: independent regressors would give, e.g. an offset and a gain in a window whose current hardly varies);
+#: above it the size is still given, marked ``confounded``: it holds if the other faults of its fit are absent
+MAX_VIF = 10.0
+#: how many of the likeliest kinds are written per joint
+N_KINDS = 3
+
+
+def check_schema(schema: dict[str, Any], where: str) -> float:
+    """The window length [s] of a saved detector whose schema ``ur5fault diagnose`` can serve; else one line."""
+    if schema.get("schema_format") != SCHEMA_FORMAT:
+        raise ConfigFileError(f"{where}: schema format {schema.get('schema_format')!r}, this version reads "
+                              f"{SCHEMA_FORMAT}; run `ur5fault benchmark` again with this version")
+    if schema.get("shuffled_labels"):
+        raise ConfigFileError(f"{where}: these classifiers were trained on shuffled labels (a control); "
+                              "they diagnose nothing")
+    if "detector" not in schema.get("classes", {}):
+        raise ConfigFileError(f"{where}: holds no detector")
+    window = schema.get("window_s")
+    if not isinstance(window, (int, float)) or not math.isfinite(window) or window <= 0:
+        raise ConfigFileError(f"{where}: the schema does not say the training runs' duration (window_s): saved "
+                              "before `ur5fault diagnose` existed; run `ur5fault benchmark` on the campaign again")
+    names = [c.get("name") for c in schema.get("inputs", [])]
+    odd = [c for c in names if c not in COMPUTABLE]
+    if not names or odd:
+        raise ConfigFileError(f"{where}: its inputs do not match the features this version computes from a log "
+                              f"({', '.join(map(str, odd[:5])) or 'no inputs'}); run `ur5fault benchmark` on the "
+                              "campaign again with this version")
+    return float(window)
+
+
+def size_estimate(kind: str, est: dict[str, float], j: int) -> tuple[float, str]:
+    """The size of ``kind`` on joint ``j`` (1-based) from the ``twin_est_*`` values in ``est``, in the unit of
+    the campaign's ``fault_size`` (signed where the fault has a direction); NaN when there is none."""
+    def g(name: str) -> float:
+        v = est.get(f"twin_est_{name}_j{j}", float("nan"))
+        return float(v) if v is not None else float("nan")
+
+    def loss(inv_err: float) -> float:  # an estimate of 1/s - 1 -> the loss 1 - s
+        return 1.0 - 1.0 / (1.0 + inv_err) if 1.0 + inv_err > 0 else float("nan")
+
+    return {
+        "backlash": (math.degrees(g("backlash_rad")), "deg"),
+        "current_sensor_offset": (g("current_offset_A"), "A"),
+        "current_sensor_gain": (g("current_gain_err"), "gain - 1"),
+        "torque_constant": (loss(g("current_gain_err")), "loss (1 - scale)"),
+        "coulomb_friction": (g("coulomb_scale_err"), "scale - 1"),
+        "resolver_offset": (-math.degrees(g("mismatch_offset_rad")), "deg"),
+        "gear_stiffness": (loss(g("compliance_err")), "loss (1 - scale)"),
+    }.get(kind, (float("nan"), "-"))
+
+
+def cannot_tell(w: Window, j: int, has_motor_encoders: bool) -> dict[str, str]:
+    """Kinds the window cannot show on joint ``j`` (0-based), with why."""
+    out = {}
+    if not has_motor_encoders:
+        for k in NEEDS_MOTOR_ENCODERS:
+            out[k] = "the log has no motor encoders, and this fault shows in the encoder mismatch"
+    if "backlash" not in out and w.torque_reversals[j] == 0:
+        out["backlash"] = "no gear-torque reversal in this window: the clearance is never crossed"
+    if w.share_moving[j] < MIN_SHARE_MOVING:
+        out["coulomb_friction"] = (f"the joint moves in {100 * w.share_moving[j]:.0f} % of this window "
+                                   f"(needs {100 * MIN_SHARE_MOVING:.0f} %): friction is not exercised")
+    if w.vif:
+        for kind, est in ESTIMATE_OF.items():
+            if kind not in out and not np.isfinite(w.vif[j][est]):
+                out[kind] = ("its signature is absent from this window or the same as another's of its fit "
+                             "(e.g. an offset and a backlash without a torque reversal)")
+    return out
+
+
+def _finite(v: float) -> float | None:
+    return float(v) if np.isfinite(v) else None
+
+
+def score_windows(models, schema: dict[str, Any], windows: list[Window], has_motor_encoders: bool
+                  ) -> list[dict[str, Any]]:
+    """Per window: its times, ``p_fault``, ``flagged``, and per joint ``p_fault_joint``, the likeliest kinds
+    with size estimates and intervals, and the kinds it cannot tell."""
+    from ..diagnostics.models import single_threaded
+
+    names = [c["name"] for c in schema["inputs"]]
+    x = pd.DataFrame([w.features for w in windows])[names].to_numpy(dtype=float)
+    thr = float(schema["detector_threshold_5pct_false_alarms"])
+    with single_threaded():
+        p = models.detector.predict_proba(x)[:, list(models.detector.classes_).index(1)]
+        loc = models.localiser.predict_proba(x) if models.localiser is not None else None
+        kind = models.kind.predict_proba(x) if models.kind is not None else None
+    out = []
+    for i, w in enumerate(windows):
+        joints = []
+        for j in range(N_JOINTS):
+            pj = None
+            if loc is not None:
+                cls = list(models.localiser.classes_)
+                pj = float(p[i] * loc[i, cls.index(j + 1)]) if j + 1 in cls else 0.0
+            blind = cannot_tell(w, j, has_motor_encoders)
+            kinds = []
+            if kind is not None:
+                cls = [str(c) for c in models.kind.classes_]
+                faulty = [(c, kind[i, k]) for k, c in enumerate(cls) if c != "healthy"]
+                total = sum(v for _, v in faulty) or 1.0
+                for c, v in sorted(faulty, key=lambda cv: -cv[1])[:N_KINDS]:
+                    size, unit = size_estimate(c, w.features, j + 1)
+                    halves = [size_estimate(c, h, j + 1)[0] for h in w.halves]
+                    ok = c not in blind and np.isfinite(size)
+                    vif = w.vif[j].get(ESTIMATE_OF.get(c, ""), float("nan")) if w.vif else float("nan")
+                    kinds.append({"kind": c, "p_given_fault": float(v / total),
+                                  "variance_inflation": _finite(vif), "confounded": bool(ok and vif > MAX_VIF),
+                                  "size": _finite(size) if ok else None, "unit": unit,
+                                  "interval": [_finite(min(halves)), _finite(max(halves))]
+                                  if ok and all(np.isfinite(halves)) else None,
+                                  "cannot_tell": c in blind})
+            joints.append({"joint": j + 1, "p_fault_joint": pj, "kinds": kinds, "cannot_tell": blind})
+        out.append({"start_s": w.start_s, "end_s": w.end_s, "p_fault": float(p[i]), "flagged": bool(p[i] >= thr),
+                    "joints": joints})
+    return out
