@@ -23,6 +23,7 @@ from test_discrepancy import CONDITIONS, KINDS, draw, noise_seed  # noqa: E402
 from ur5fault import make_effect  # noqa: E402
 from ur5fault.discrepancy import DiscrepancyModel  # noqa: E402
 from ur5fault.discrepancy.report import size  # noqa: E402
+from ur5fault.discrepancy.speed import bare_mj_step_us, wall_over_mj_steps  # noqa: E402
 from ur5fault.logs import read_sim  # noqa: E402
 from ur5fault.sim.axes import JOINT_NAMES  # noqa: E402
 
@@ -34,7 +35,7 @@ def row(label, truth, est, model, signal, joint_name, wall):
     extra = [f.candidate.label for f in model.findings_ if f.kept]
     print(f"| {label} | {truth:.4g} | {est:.4g} | {100 * (est - truth) / truth:+.1f} % | {signal} {joint_name}: "
           f"{b:.3g} -> {a:.3g} | {len(extra)} | {model.n_simulated_runs_} | {wall:.0f} s "
-          f"({model.wall_over_mj_steps_:.2f}) |", flush=True)
+          f"({wall_over_mj_steps(model, bare_mj_step_us(model.replay_.params.physics_dt_s)):.2f}) |", flush=True)
 
 
 def main() -> None:

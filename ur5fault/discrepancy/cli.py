@@ -64,7 +64,9 @@ def cmd_discrepancy(args: argparse.Namespace) -> int:
         ratio = " / ".join(f"{cur[j] / ur[j]:.2f}" if ur and cur.get(j) and ur[j] else "-" for j in cur)
         print(f"{e['role']}: {name}: held-out current RMS after the fit" +
               (f", as a multiple of UR's own model: {ratio}" if ur else ""))
-    for line in summ["named"] or ["nothing explains the residual better than noise"]:
+    nothing = ("nothing named: what the model leaves is listed as unexplained below" if summ["unexplained"]
+               else "nothing explains the residual better than noise")
+    for line in summ["named"] or [nothing]:
         print(line)
     for line in summ["dropped"]:
         print(f"dropped: {line}")

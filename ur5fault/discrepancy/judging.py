@@ -28,6 +28,7 @@ class Finding:
         alternatives: candidates this log cannot tell from it, with their own coefficients.
         held_out: what it does on the held-out part (None if it was dropped before that check).
         kept: False when it was dropped; ``reason`` says why.
+        tell_apart: what motion would tell it from a dictionary term it stood in for ("" when none).
     """
 
     candidate: Candidate
@@ -38,6 +39,7 @@ class Finding:
     held_out: Generalisation | None = None
     kept: bool = True
     reason: str = ""
+    tell_apart: str = ""
 
     def spec(self) -> EffectSpec:
         return self.candidate.spec(self.theta)

@@ -20,7 +20,6 @@ import time
 from collections.abc import Sequence
 
 import numpy as np
-from numpy.typing import NDArray
 
 from ..errors import ParameterError
 from ..logs import MeasuredLog
@@ -28,49 +27,21 @@ from ..sim.axes import JOINT_NAMES, N_JOINTS
 from ..sim.effects import EffectSpec
 from ..twin.replay import LogReplay, Replayed
 from ..twin.residuals import FIT_FRACTION, fit_samples, localise, rms_table, unexplained
-from . import discovery, library
-from .candidates import Candidate
-from .judging import Finding, SearchStep, final_verdicts, judge_findings
+from . import steps
+from .judging import Finding, SearchStep, final_verdicts
 from .multilog import MultiReplay, per_log
-from .refinement import FindingSet, Refined, polish, probe_batch
-from .search import backward, columns_of, forward, judge
-from .statistics import BlockGram, rss_of, weighted
+from .refinement import FindingSet, Refined, polish
+from .search import columns_of
 
 logger = logging.getLogger(__name__)
 
 #: the workflow's own sensor-noise stream of its replays, unrelated to any log
 WORKFLOW_SEED = 20261121
 
-#: residuals above this multiple of the noise floor (sqrt 2 sigma: model and log noise) get joint-local terms
-FLOOR_FACTOR = 2.0
 FIT_FRACTION_RANGE = (0.2, 0.9)
 #: the library is screened and the dictionary selected on at most this much of the fitting part [s]
 #: (assumption: 20 s of a robot program hold its motions several times; refinement and judgement use all)
 SCREEN_S = 20.0
-#: indistinguishable alternatives per finding simulated (for their own estimates) at most
-MAX_ALTERNATIVES = 3
-
-
-#: bare MuJoCo steps timed to measure the machine's speed (about 0.1 s)
-SPEED_PROBE_STEPS = 20000
-
-
-def bare_mj_step_us(dt_s: float) -> float:
-    """Wall time of one bare ``mujoco.mj_step`` of the packaged UR5 now [us] (no drive, no Python loop
-    around it beyond this one)."""
-    import mujoco
-
-    from ..sim.engine import DEFAULT_MODEL_PATH
-
-    m = mujoco.MjModel.from_xml_path(str(DEFAULT_MODEL_PATH))
-    m.opt.timestep = dt_s
-    d = mujoco.MjData(m)
-    t = time.perf_counter()
-    for _ in range(SPEED_PROBE_STEPS):
-        mujoco.mj_step(m, d)
-    return (time.perf_counter() - t) / SPEED_PROBE_STEPS * 1e6
-
-
 class _Stages:
     """Progress of the workflow on one tqdm bar (``ur5fault.util.progress``): one unit per stage."""
 
@@ -156,113 +127,50 @@ class DiscrepancyModel:
         n_scr = n_fit if self.screen_s is None else min(n_fit, max(2, round(self.screen_s / log.period_s)))
         self.n_fit_, self.n_all_, self.n_screen_ = n_fit, n_all, n_scr
         stages = _Stages(self.progress)
-        self.search_: list[SearchStep] = []
         timings: dict[str, float] = {}
 
-        # ---- 1. the library, screened in one batch and selected on the linearised problem
         t = time.perf_counter()
-        cands = library.candidates(log.payload_kg, kinds=self.kinds, params=rp.params)
-        base, X_lib, cands = library.screen(rp, n_scr, cands, progress=stages.start("screening the library"))
-        e0 = weighted(rp.measured(n_scr), base.y, rp.sigma)
-        bg = BlockGram.build(X_lib, e0)
-        cols = columns_of(cands)
-        sel = forward(bg, e0, X_lib, cands, cols, self.max_effects)
-        self.search_ += [SearchStep.of("library", v) for v in sel.trace]
-        lib = [cands[k] for k in sel.chosen]
-        lib_cols = [c for k in sel.chosen for c in cols[k]]
-        # a finding's indistinguishable alternatives with their linear estimates (simulated later)
-        alternatives = {cands[k]: [(cands[a], th) for a, th in alt][:MAX_ALTERNATIVES]
-                        for k, alt in zip(sel.chosen, sel.alternatives)}
+        lib = steps.screen_library(rp, n_scr, log.payload_kg, self.kinds, self.max_effects,
+                                   stages.start("screening the library"))
         timings["library screening"] = time.perf_counter() - t
-        logger.info("library screened in %.0f s: %s", timings["library screening"], [c.label for c in lib] or "nothing")
+        logger.info("library screened in %.0f s: %s", timings["library screening"],
+                    [c.label for c in lib.chosen] or "nothing")
 
-        # ---- 2. discovery: the dictionary's terms on what the library leaves (library columns free to readjust)
         t = time.perf_counter()
         stages.start("discovering terms")
-        terms: list[Candidate] = []
-        X_all, fixed = X_lib[lib_cols], list(range(len(lib_cols)))
-        if self.max_terms > 0:
-            G, g, ee = bg.total()
-            e_lib = e0 - np.tensordot(rss_of(G, g, ee, lib_cols)[1], X_lib[lib_cols], axes=1)
-            # offered where the library leaves a residual above the floor, and on the joints of the library's
-            # findings: a library effect may stand in for a term outside the library (viscous and Coulomb
-            # scales for a speed-squared drag); the joint check below keeps what explains what the rest does not
-            joints = sorted(set(self._joints_above_floor(e_lib, len(rp.signals)))
-                            | {c.joint for c in lib if c.joint is not None})
-            dcands, X_dict = discovery.dictionary(rp, base, n_scr, joints)
-            if dcands:
-                X_all = np.concatenate([X_all, X_dict])
-                dcols = columns_of(dcands, start=len(lib_cols))
-                bg2 = BlockGram.build(X_all, e0)
-                sel2 = forward(bg2, e0, X_all, dcands, dcols, self.max_terms, fixed=fixed)
-                self.search_ += [SearchStep.of("dictionary", v) for v in sel2.trace]
-                terms = [dcands[k] for k in sel2.chosen]
-                fixed += [c for k in sel2.chosen for c in dcols[k]]
-                for k, alt in zip(sel2.chosen, sel2.alternatives):
-                    alternatives[dcands[k]] = [(dcands[a], th) for a, th in alt][:MAX_ALTERNATIVES]
+        disc = steps.discover_terms(rp, lib, n_scr, self.max_terms)
         timings["discovery"] = time.perf_counter() - t
-        logger.info("dictionary selected in %.0f s: %s", timings["discovery"], [c.label for c in terms] or "nothing")
+        logger.info("dictionary selected in %.0f s: %s", timings["discovery"],
+                    [c.label for c in disc.terms] or "nothing")
 
-        # ---- 3. every finding refined by re-simulating the whole log (one batch of probes), then judged;
-        # first the findings selected afresh among themselves on the linearised problem (free), so that
-        # library effects that only stood in for a term discovered later are not re-simulated
         t = time.perf_counter()
-        found = lib + terms
-        if len(found) > 1:
-            fcols = columns_of(found)
-            bg3 = BlockGram.build(X_all[fixed], e0)
-            again = forward(bg3, e0, X_all[fixed], found, fcols, len(found))
-            keep, _, _ = backward(bg3, e0, X_all[fixed], found, fcols, again.chosen)
-            for k in range(len(found)):
-                if k not in keep:
-                    v = judge(bg3, e0, X_all[fixed], found, fcols, keep, k)
-                    self.search_.append(SearchStep.of("linear joint check", dataclasses.replace(
-                        v, accepted=False, reason=v.reason or "explains nothing the other findings do not")))
-            keep = sorted(keep)
-            fixed = [fixed[c] for k in keep for c in fcols[k]]
-            found = [found[k] for k in keep]
-        prog = stages.start("refining the findings")
-        self.refinement_ = []
-        fs = FindingSet(found)
-        alts = [(i, a, th) for i, c in enumerate(found) for a, th in alternatives.get(c, [])]
-        if found:
-            G, g, ee = BlockGram.build(X_all[fixed], e0).total()
-            theta0 = rss_of(G, g, ee, list(range(len(fixed))))[1]
-            evaluate = fs.evaluator(rp, prog)
-            first = probe_batch(evaluate, theta0, fs.probes(theta0), fs.bounds(), n_fit, alts, evaluate)
-            self.refinement_ += first.steps
-            nominal = first.sim0
-        else:
-            nominal = rp.run([()], n_all, prog)[0]
+        check = steps.joint_check(disc.library + disc.terms, disc.X, disc.fixed, lib.e0, list(disc.tell_apart))
+        ref = steps.refine(rp, check.found, disc.X, check.fixed, lib.e0, {**lib.alternatives, **disc.alternatives},
+                           n_fit, stages.start("refining the findings"))
         timings["refinement"] = time.perf_counter() - t
-        logger.info("probe batch over the whole log in %.0f s (%d findings)", timings["refinement"], len(found))
+        logger.info("probe batch over the whole log in %.0f s (%d findings)", timings["refinement"], len(ref.found))
 
-        # ---- 4. judged on the fitting and the held-out part; the kept ones polished by Gauss-Newton (the
-        # first simulation of which is the final model when the estimate has converged)
+        # judged on the fitting and the held-out part; the kept ones polished by Gauss-Newton (the first
+        # simulation of which is the final model when the estimate has converged)
         t = time.perf_counter()
         prog = stages.start("judging")
-        findings: list[Finding] = []
-        after = nominal
-        if found:
-            findings, trace = judge_findings(found, first, n_fit, len(rp.signals), alts)
-            self.search_ += trace
-            kept = [f for f in findings if f.kept]
-            if kept:
-                after = self._polish(rp, kept, first, fs, prog)
-        self._results(rp, nominal, after, n_fit, n_all)
+        jr = steps.judge(ref, n_fit, len(rp.signals))
+        self.search_: list[SearchStep] = lib.trace + disc.trace + check.trace + jr.trace
+        self.refinement_ = list(ref.first.steps) if ref.first is not None else []
+        for f in jr.findings:
+            f.tell_apart = disc.tell_apart.get(f.candidate, "")
+        kept = [f for f in jr.findings if f.kept]
+        after = self._polish(rp, kept, ref.first, ref.finding_set, prog) if kept else ref.nominal
+        self._results(rp, ref.nominal, after, n_fit, n_all)
         timings["judging"] = time.perf_counter() - t
         logger.info("judged and polished in %.0f s: kept %s", timings["judging"],
-                    [f.candidate.label for f in findings if f.kept] or "nothing")
+                    [f.candidate.label for f in jr.findings if f.kept] or "nothing")
         stages.close()
-        self.findings_ = findings
+        self.findings_ = jr.findings
         self.timings_s_ = timings
         self.wall_s_ = time.perf_counter() - t0
         self.n_simulated_runs_ = rp.n_simulated
         self.simulated_s_ = rp.simulated_s
-        # the machine's speed right now, for wall times that mean something on a shared machine
-        self.bare_mj_step_us_ = bare_mj_step_us(rp.params.physics_dt_s)
-        steps = rp.simulated_s / rp.params.physics_dt_s
-        self.wall_over_mj_steps_ = self.wall_s_ / (steps * self.bare_mj_step_us_ * 1e-6) if steps else float("nan")
         return self
 
     # --------------------------------------------------------------------------------- pieces
@@ -309,12 +217,6 @@ class DiscrepancyModel:
         self.per_log_ = per_log(rp, scored, nominal.y, after.y, n_fit, n_all)
         self.unexplained_ = unexplained(rp, self.residual_after_, after.torque_gear_Nm, n_fit)
         self.localisation_ = localise(rp, self.residual_before_, nominal.torque_gear_Nm)
-
-    @staticmethod
-    def _joints_above_floor(e: NDArray, n_signals: int) -> list[int]:
-        """Joints whose weighted residual RMS exceeds FLOOR_FACTOR x the noise floor in some signal."""
-        rms = np.sqrt(np.mean(e**2, axis=0)).reshape(n_signals, N_JOINTS)
-        return [j for j in range(N_JOINTS) if np.any(rms[:, j] > FLOOR_FACTOR * np.sqrt(2.0))]
 
     # ------------------------------------------------------------------------------------------ outputs
     @property

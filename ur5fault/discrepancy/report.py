@@ -14,6 +14,7 @@ from ..sim.effects import REGISTRY
 from ..twin.residuals import UNEXPLAINED_FACTOR
 from ..util.io import write_figure_atomic, write_text_atomic
 from .candidates import LibraryCandidate, TermCandidate
+from .speed import bare_mj_step_us, wall_over_mj_steps
 from .statistics import Z_95
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -68,6 +69,8 @@ def sentence(f: Finding) -> str:
     if f.alternatives:
         alt = "; indistinguishable in this log from " + ", ".join(
             f"{a.label} {_coef_text(a, th)}" for a, th in f.alternatives)
+    if f.tell_apart:
+        alt += f" ({f.tell_apart})"
     return f"{text} [{tests}]{alt}"
 
 
@@ -128,7 +131,8 @@ def finding_json(f: Finding) -> dict[str, Any]:
            "held_out": None if f.held_out is None else {"testable": f.held_out.testable, "ratio": f.held_out.ratio,
                                                        "energy": f.held_out.energy},
            "indistinguishable_from": [{"candidate": a.label, "coefficients": list(map(float, np.ravel(th)))}
-                                      for a, th in f.alternatives]}
+                                      for a, th in f.alternatives],
+           "tell_apart": f.tell_apart}
     if isinstance(c, LibraryCandidate):
         a, b = sorted((c.value(lo), c.value(hi)))
         out["interval"] = {c.param: [a, b]}
@@ -138,9 +142,11 @@ def finding_json(f: Finding) -> dict[str, Any]:
     return out
 
 
-def summary(model: DiscrepancyModel) -> dict[str, Any]:
+def summary(model: DiscrepancyModel, bare_step_us: float | None = None) -> dict[str, Any]:
+    """Everything ``summary.json`` holds; ``bare_step_us``: one bare mj_step timed now [us] (see ``speed.py``),
+    which adds the fit's wall time in machine-independent units."""
     rp = model.replay_
-    return {
+    out = {
         "log": rp.log.source,
         "log_assumptions": rp.log.assumptions(rp.params.joint_temperature_C),
         "named": [sentence(f) for f in model.findings_ if f.kept],
@@ -161,11 +167,11 @@ def summary(model: DiscrepancyModel) -> dict[str, Any]:
         "wall_s_by_stage": model.timings_s_,
         "simulated_runs": model.n_simulated_runs_,
         "simulated_s": model.simulated_s_,
-        # wall time over (simulated run-steps x one bare mj_step timed at the end of the fit): compares
-        # wall times taken on machines of different speed or load
-        "bare_mj_step_us": model.bare_mj_step_us_,
-        "wall_over_mj_steps": model.wall_over_mj_steps_,
     }
+    if bare_step_us is not None:
+        out["bare_mj_step_us"] = bare_step_us
+        out["wall_over_mj_steps"] = wall_over_mj_steps(model, bare_step_us)
+    return out
 
 
 def figures(model: DiscrepancyModel):
@@ -197,7 +203,7 @@ def write_report(model: DiscrepancyModel, out: Path) -> list[Path]:
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    summ = summary(model)
+    summ = summary(model, bare_mj_step_us(model.replay_.params.physics_dt_s))
     write_text_atomic(out / "summary.json", json.dumps(summ, indent=2, default=float))
     write_text_atomic(out / "model.yaml", yaml.safe_dump(model.overlay(), sort_keys=False))
     paths = []
@@ -234,8 +240,11 @@ def _markdown(model: DiscrepancyModel, summ: dict[str, Any], figs: list[Path]) -
     lines += ["", "## Unexplained", ""]
     if summ["unexplained"]:
         for u in summ["unexplained"]:
+            reg = u.get("angle_region")
+            local = (f"; between {reg['from_deg']:g} and {reg['to_deg']:g} deg of the joint's travel {reg['rms']:.4g} "
+                     f"(elsewhere {reg['rms_elsewhere']:.4g})") if reg else ""
             lines.append(f"- {u['signal']} on {u['joint']}: held-out RMS {u['rms_held_out']:.4g} against a noise "
-                         f"floor of {u['noise_floor']:.3g}, largest {u['largest_where']}")
+                         f"floor of {u['noise_floor']:.3g}, largest {u['largest_where']}{local}")
     else:
         lines.append(f"- nothing above {UNEXPLAINED_FACTOR:g} times the noise floor")
     lines += ["", "## Residual plots", ""] + [f"![{p.stem}]({p.name})" for p in figs]
