@@ -210,3 +210,27 @@ def read_manifest(out: Path) -> dict[str, Any]:
     except (OSError, ValueError):
         return {}
     return m if isinstance(m, dict) else {}
+
+
+def read_consolidated(path: Path) -> tuple[Any, str | None, dict[str, Any] | None]:
+    """A consolidated table (``features.parquet``, ``inspections.parquet``) read as a resume would trust it:
+    ``(table, recorded campaign identity, None)``, or ``(None, None, state)`` with ``state`` ``{"state":
+    "missing"}`` or ``{"state": "bad", "detail": ...}`` when it is absent, fails its checksum or is not Parquet."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    if not path.exists():
+        return None, None, {"state": "missing"}
+    corrupt = verify_checksum(path)
+    if corrupt:
+        return None, None, {"state": "bad", "detail": corrupt}
+    try:
+        table = pq.read_table(path)
+    except (*DAMAGED_READ_ERRORS, pa.ArrowException) as exc:
+        return None, None, {"state": "bad", "detail": f"unreadable as Parquet ({' '.join(str(exc).split())[:120]})"}
+    raw = (table.schema.metadata or {}).get(b"ur5fault")
+    try:
+        recorded = json.loads(raw).get("campaign_identity") if raw else None
+    except (ValueError, AttributeError):
+        recorded = None
+    return table, recorded, None

@@ -4,20 +4,18 @@ which stored results to refuse) and by ``ur5fault campaign status``."""
 from __future__ import annotations
 
 import dataclasses
-import json
 from pathlib import Path
 from typing import Any
 
 from ..errors import ConfigFileError, Ur5FaultError
-from ..util.io import verify_checksum
 from .identity import Identities, digest
 from .lock import lock_holder
 from .spec import Campaign, build_campaign
 from .store import (
-    DAMAGED_READ_ERRORS,
     FileCheck,
     check_run_file,
     check_timeseries_file,
+    read_consolidated,
     read_manifest,
     run_path,
     runs_dir,
@@ -133,27 +131,12 @@ def status(out: Path) -> dict[str, Any]:
 
 
 def _check_features(out: Path, identities: dict[str, str]) -> dict[str, Any]:
-    import pyarrow as pa
-    import pyarrow.parquet as pq
-
-    path = out / "features.parquet"
-    if not path.exists():
-        return {"state": "missing"}
-    corrupt = verify_checksum(path)
-    if corrupt:
-        return {"state": "bad", "detail": corrupt}
-    try:
-        table = pq.read_table(path)
-    except (*DAMAGED_READ_ERRORS, pa.ArrowException) as exc:
-        return {"state": "bad", "detail": f"unreadable as Parquet ({' '.join(str(exc).split())[:120]})"}
+    table, recorded, state = read_consolidated(out / "features.parquet")
+    if state is not None:
+        return state
     if "run_id" not in table.column_names:
         return {"state": "bad", "detail": "no run_id column"}
     df = table.select([c for c in ("run_id", "status") if c in table.column_names]).to_pandas()
-    raw = (table.schema.metadata or {}).get(b"ur5fault")
-    try:
-        recorded = json.loads(raw).get("campaign_identity") if raw else None
-    except (ValueError, AttributeError):
-        recorded = None
     exact = (len(df) == len(identities) and set(df["run_id"]) == set(identities))
     out_info: dict[str, Any] = {"state": "ok" if exact and recorded == digest(identities) else "stale",
                                 "rows": int(len(df))}

@@ -4,15 +4,13 @@ whether ``inspections.parquet`` holds exactly the finished units' verified inspe
 
 from __future__ import annotations
 
-import json
 import re
 from pathlib import Path
 from typing import Any
 
 from ...campaign.identity import digest
-from ...campaign.store import DAMAGED_READ_ERRORS, runs_dir
+from ...campaign.store import read_consolidated, runs_dir
 from ...errors import Ur5FaultError
-from ...util.io import verify_checksum
 from .life_store import LifeIdentities, run_id
 from .spec import build_life
 
@@ -76,24 +74,9 @@ def _listed(items: list[str]) -> list[str]:
 
 def _check_table(out: Path, ids: LifeIdentities, finished) -> dict[str, Any]:
     """``inspections.parquet`` against the finished units' inspections (its recorded identities)."""
-    import pyarrow as pa
-    import pyarrow.parquet as pq
-
-    path = out / "inspections.parquet"
-    if not path.exists():
-        return {"state": "missing"}
-    corrupt = verify_checksum(path)
-    if corrupt:
-        return {"state": "bad", "detail": corrupt}
-    try:
-        table = pq.read_table(path)
-    except (*DAMAGED_READ_ERRORS, pa.ArrowException) as exc:
-        return {"state": "bad", "detail": f"unreadable as Parquet ({' '.join(str(exc).split())[:120]})"}
-    raw = (table.schema.metadata or {}).get(b"ur5fault")
-    try:
-        recorded = json.loads(raw).get("campaign_identity") if raw else None
-    except (ValueError, AttributeError):
-        recorded = None
+    table, recorded, state = read_consolidated(out / "inspections.parquet")
+    if state is not None:
+        return state
     expected = digest({run_id(u, k): ids.identity(u, k) for u, last in sorted(finished.items(),
                                                                               key=lambda x: x[0].index)
                        for k in range(last + 1)})
