@@ -4,7 +4,6 @@ to an uninterrupted fleet's (and to one run on another number of processes)."""
 from __future__ import annotations
 
 import pandas as pd
-import pyarrow.parquet as pq
 import pytest
 
 from ur5fault.campaign.lock import CampaignLockedError, Lock
@@ -12,18 +11,7 @@ from ur5fault.campaign.store import CampaignChangedError
 from ur5fault.health.prognostics.fleet import run_life
 from ur5fault.health.prognostics.spec import build_life
 
-# 3 units on the first 1.5 s of the pick-and-place (the shoulder's first move), a fast wear rate and a
-# 0.05 mm criterion, so each unit fails within a few inspections
-TINY = {"name": "tiny", "duration_s": 1.5, "batch_size": 4,
-        "life": {"units": 3, "seed": 4, "interval_cycles": 100_000, "max_cycles": 1_500_000,
-                 "failure": {"feature": "tcp_dev_max_mm", "threshold": 0.05},
-                 "wear": {"backlash_rate_deg_per_MJ": 0.01},
-                 "duty": {"trajectories": ["pick_and_place"], "payload_kg": [0.5, 2.0]}},
-        "split": {"test_fraction": 0.34, "seed": 0}}
-
-
-def _tables(folder):
-    return {p.name: pq.read_table(p) for p in sorted((folder / "runs").glob("*.parquet"))}
+from tiny_fleet import TINY, run_tables
 
 
 def _sidecars(folder):
@@ -38,13 +26,13 @@ def test_resumed_fleet_is_bit_identical_to_an_uninterrupted_one(tmp_path):
     assert whole["inspections_per_unit"]["min"] >= 2
     # interrupted after two rounds, then resumed (on two processes instead of one)
     part = run_life(camp, tmp_path / "resumed", jobs=1, progress=False, note=None, max_rounds=2)
-    assert part["state"] == "running" and len(_tables(tmp_path / "resumed")) == 6
+    assert part["state"] == "running" and len(run_tables(tmp_path / "resumed")) == 6
     # a file of the interrupted run damaged as by a kill during a write, and a stale temporary left behind
     (tmp_path / "resumed" / "runs" / "u00001_i0001.parquet").write_bytes(b"PAR1 cut")
     (tmp_path / "resumed" / "runs" / ".u00001_i0002.parquet.x.tmp").write_bytes(b"")
     again = run_life(camp, tmp_path / "resumed", jobs=2, progress=False, note=None)
     assert again["state"] == "complete"
-    a, b = _tables(tmp_path / "whole"), _tables(tmp_path / "resumed")
+    a, b = run_tables(tmp_path / "whole"), run_tables(tmp_path / "resumed")
     assert a.keys() == b.keys()
     for name in a:
         assert a[name].equals(b[name]), name        # every value and the recorded identity

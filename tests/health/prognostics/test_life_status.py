@@ -11,17 +11,7 @@ from ur5fault.cli import main
 from ur5fault.health.prognostics.fleet import run_life
 from ur5fault.health.prognostics.spec import build_life
 
-# as in test_life_fleet.py: 3 units on the first 1.5 s of the pick-and-place, fast wear, a 0.05 mm criterion
-TINY = {"name": "tiny", "duration_s": 1.5, "batch_size": 4,
-        "life": {"units": 3, "seed": 4, "interval_cycles": 100_000, "max_cycles": 1_500_000,
-                 "failure": {"feature": "tcp_dev_max_mm", "threshold": 0.05},
-                 "wear": {"backlash_rate_deg_per_MJ": 0.01},
-                 "duty": {"trajectories": ["pick_and_place"], "payload_kg": [0.5, 2.0]}},
-        "split": {"test_fraction": 0.34, "seed": 0}}
-
-
-def _tables(folder):
-    return {p.name: pq.read_table(p) for p in sorted((folder / "runs").glob("*.parquet"))}
+from tiny_fleet import TINY, run_tables
 
 
 def _status(folder, capsys):
@@ -72,7 +62,7 @@ def test_life_campaign_on_dask_equals_loky(tmp_path):
         dask = run_life(camp, tmp_path / "dask", backend="dask", scheduler=cluster.scheduler_address,
                         progress=False, note=None)
     assert dask["state"] == local["state"] == "complete" and dask["backend"] == "dask"
-    a, b = _tables(tmp_path / "loky"), _tables(tmp_path / "dask")
+    a, b = run_tables(tmp_path / "loky"), run_tables(tmp_path / "dask")
     assert a.keys() == b.keys() and len(a) == local["n_inspections"]
     for name in a:
         assert a[name].equals(b[name]), name
