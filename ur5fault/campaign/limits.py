@@ -26,7 +26,7 @@ MAX_RUN_STEPS = 1e12
 
 
 @dataclasses.dataclass(frozen=True)
-class Estimate:
+class CostEstimate:
     """What a campaign will cost (before resume: every run counted)."""
 
     n_runs: int
@@ -62,7 +62,7 @@ def effective_jobs(requested: int | None) -> tuple[int, str | None]:
     return requested, None
 
 
-def estimate(camp: Campaign, jobs: int) -> Estimate:
+def estimate(camp: Campaign, jobs: int) -> CostEstimate:
     """Steps, compute time and peak memory of running every run of ``camp`` on ``jobs`` processes."""
     dt = load_params(overrides=dict(camp.base_params)).physics_dt_s
     durations = {}
@@ -82,10 +82,10 @@ def estimate(camp: Campaign, jobs: int) -> Estimate:
         runs_at_once += max(1, min(camp.batch_size - 1, per_worker))  # + the chunk's digital twins
     processes = max(1, min(jobs, n))
     memory = sim_bytes(runs_at_once, max_logged, processes) + sim_bytes(0, 0)  # + the parent process
-    return Estimate(n, float(steps), core_hours(steps), processes, runs_at_once, max_logged, memory)
+    return CostEstimate(n, float(steps), core_hours(steps), processes, runs_at_once, max_logged, memory)
 
 
-def check_limits(camp: Campaign, est: Estimate) -> None:
+def check_limits(camp: Campaign, est: CostEstimate) -> None:
     """Refuse a campaign beyond the hard limits (memory, total steps), with the estimate."""
     if est.run_steps > MAX_RUN_STEPS:
         raise ParameterError(f"campaign {camp.name}: {est.describe()}; above the limit of {MAX_RUN_STEPS:g} "
@@ -94,7 +94,7 @@ def check_limits(camp: Campaign, est: Estimate) -> None:
                  f"x {est.max_logged} logged samples)", "raise log_period_s, lower batch_size or --jobs")
 
 
-def confirmation_needed(camp: Campaign, est: Estimate) -> str | None:
+def confirmation_needed(camp: Campaign, est: CostEstimate) -> str | None:
     """Why this campaign needs ``--yes`` (too many runs or steps), or None."""
     if est.n_runs > CONFIRM_RUNS or est.run_steps > CONFIRM_RUN_STEPS:
         return (f"campaign {camp.name}: {est.describe()}; more than {CONFIRM_RUNS} runs or {CONFIRM_RUN_STEPS:g} "
