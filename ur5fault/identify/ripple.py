@@ -5,13 +5,14 @@ constant the log does not show: a ripple of ``k`` periods per motor turn is ``a 
 log's joint angle, its phase carried by ``(a, b)``.  On the moving samples (friction sliding, so it does not hold the
 ripple as it does at rest) the current minus the model torque over the identified torque constant is regressed on
 ``sin, cos(k N q)`` together with the friction columns of :mod:`.friction` (Coulomb, viscous, offset) for each ``k``
-in :data:`PERIODS_PER_REV`; the largest is the joint's ripple.  Measured this way, not assumed: on the NIST log
-5 per motor turn on J1-J3 and 3 on the wrists (J2 0.11 A, J4 0.09 A, J5 0.11 A); on the Kufieta robot 4 per turn on
-the wrists (J4 0.12 A) (``bench/residual_bins.py``, docs/validation.md).
+in :data:`PERIODS_PER_REV`, on the samples where that ripple is slower than :data:`MAX_RIPPLE_HZ`; the largest is the
+joint's ripple.  Measured this way, not assumed: on the NIST log
+5 per motor turn on J2-J3 and 3 on the wrists, on the Kufieta robot 4 per turn on J3-J5 (docs/validation.md).
 
-The speed loop answers a rotor torque ``T`` at these frequencies with ``-T / K_t`` of current (it rejects it;
-checked in ``tests/sim/test_motor_harmonic.py``), so the torque written is ``-K_t`` times the current's
-coefficients (motor side, ``K_t`` the identified torque constant).
+Below that frequency the speed loop answers a rotor torque ``T`` with ``-T / K_t`` of current (it rejects it;
+checked in ``tests/sim/test_motor_harmonic.py``): the simulated loop passes 0.9-1.2x of it with a few degrees of
+phase below 10 Hz (the shoulder highest) and 0.3-0.8x above 10 Hz, where it no longer rejects it.  So the torque
+written is ``-K_t`` times the current's coefficients (motor side, ``K_t`` the identified torque constant).
 
 Identifiable when the chosen period stands out of the joint's own spectrum: the lower bound of its amplitude
 interval exceeds the largest amplitude at every other period searched (those are what noise, friction-model error
@@ -31,8 +32,12 @@ from .stats import Estimate, bootstrap, fallback, interval
 #: periods per motor turn searched (assumption: cogging, pole-pair and wave-generator orders are low; the logs
 #: show 3 and 4)
 PERIODS_PER_REV = tuple(range(1, 9))
-#: fewest moving samples for a ripple estimate (as the friction fit's own threshold)
+#: fewest samples for a ripple estimate (as the friction fit's own threshold)
 MIN_MOVING_SAMPLES = 500
+#: highest ripple frequency used [Hz]: below it the simulated speed loop answers a rotor torque T with -T/K_t of
+#: current to within 8 % on every joint (pick-and-place, k = 3; 1.2x near 8 Hz on J1-J2, 0.3-0.8x above 10 Hz,
+#: where the loop no longer rejects it), so -K_t times the current's ripple is the torque
+MAX_RIPPLE_HZ = 5.0
 
 
 def columns(q_rad: NDArray, ratio: float, k: float) -> NDArray:
@@ -47,6 +52,12 @@ def model_residual(fit: FrictionFit, full: NDArray, j: int) -> NDArray:
     return sig.current_A[:, j] - sig.model_torque_Nm[:, j] / full[0, j]
 
 
+def slow_rows(fit: FrictionFit, j: int, ratio: float, k: float, max_hz: float = MAX_RIPPLE_HZ) -> NDArray:
+    """``(n,)`` bool: the joint slides and a ripple of ``k`` per motor turn is at most ``max_hz``."""
+    w = np.abs(fit.sig.qd_target_rad_s[:, j])
+    return fit.moving[:, j] & (k * ratio * w / (2.0 * np.pi) <= max_hz)
+
+
 def _fit(fit: FrictionFit, y: NDArray, q: NDArray, ratio: float, j: int, k: float, rows: NDArray) -> NDArray:
     """sin and cos coefficients [A] of period ``k``, fitted on ``rows`` together with the joint's friction columns
     (Coulomb, viscous, offset: nuisance terms here, so a joint whose friction is not identifiable still gets them)."""
@@ -54,25 +65,30 @@ def _fit(fit: FrictionFit, y: NDArray, q: NDArray, ratio: float, j: int, k: floa
     return np.linalg.lstsq(X, y[rows], rcond=None)[0][-2:]
 
 
-def identify_ripple(fit: FrictionFit, full: NDArray, blocks, n_boot: int, seed: int) -> list[Estimate]:
+def identify_ripple(fit: FrictionFit, full: NDArray, blocks, n_boot: int, seed: int,
+                    max_hz: float = MAX_RIPPLE_HZ) -> list[Estimate]:
     """Per joint: ``ripple.periods_per_rev``, ``ripple.amplitude_A`` (with its interval) and the motor-side torque
-    coefficients ``ripple.sin_Nm`` / ``ripple.cos_Nm`` of the effect ``motor_harmonic``."""
+    coefficients ``ripple.sin_Nm`` / ``ripple.cos_Nm`` of the effect ``motor_harmonic``; ``max_hz``: the fastest
+    ripple used (``inf``: every moving sample, the variant ``bench/cross_robot.py`` also scores)."""
     sig = fit.sig
     out: list[Estimate] = []
     for j in range(N_JOINTS):
         ratio = float(fit.ratio[j])
-        moving = fit.moving[:, j]
-        n_mv = int(moving.sum())
-        if n_mv < MIN_MOVING_SAMPLES:
-            out += _absent(j, f"J{j + 1}: {n_mv} moving samples, fewer than {MIN_MOVING_SAMPLES}")
+        masks = [slow_rows(fit, j, ratio, k, max_hz) for k in PERIODS_PER_REV]
+        ks = [k for k, m in zip(PERIODS_PER_REV, masks) if m.sum() >= MIN_MOVING_SAMPLES]  # the periods with data
+        if len(ks) < 2:
+            out += _absent(j, f"J{j + 1}: fewer than two periods with {MIN_MOVING_SAMPLES} moving samples whose "
+                              f"ripple is below {max_hz:g} Hz (none to compare a ripple with)")
             continue
+        masks = [m for k, m in zip(PERIODS_PER_REV, masks) if k in ks]
         y = model_residual(fit, full, j)
         q = sig.q_actual_rad[:, j]
-        rows = np.flatnonzero(moving)
-        coef = np.array([_fit(fit, y, q, ratio, j, k, rows) for k in PERIODS_PER_REV])
+        coef = np.array([_fit(fit, y, q, ratio, j, k, np.flatnonzero(m)) for k, m in zip(ks, masks)])
         amp = np.hypot(coef[:, 0], coef[:, 1])
         best = int(np.argmax(amp))
-        k = PERIODS_PER_REV[best]
+        k = ks[best]
+        moving = masks[best]
+        n_mv = int(moving.sum())
 
         def stat(idx: NDArray, k=k, j=j, y=y, q=q, ratio=ratio, moving=moving) -> NDArray:
             c = _fit(fit, y, q, ratio, j, k, idx[moving[idx]])
@@ -81,8 +97,8 @@ def identify_ripple(fit: FrictionFit, full: NDArray, blocks, n_boot: int, seed: 
         lo, hi = interval(bootstrap(stat, blocks, n_boot, seed + j))
         floor = float(np.max(np.delete(amp, best)))
         kt = full[0, j] / ratio  # motor-side torque constant [N*m/A]
-        how = (f"largest of {len(PERIODS_PER_REV)} motor-angle periods in the current (model torque removed, "
-               f"friction fitted alongside), {n_mv} moving samples")
+        how = (f"largest of {len(ks)} motor-angle periods in the current (model torque removed, "
+               f"friction fitted alongside), {n_mv} moving samples with the ripple below {max_hz:g} Hz")
         if not lo[2] > floor:
             out += _absent(j, f"J{j + 1}: {k} per motor turn, {amp[best]:.3f} A (interval {lo[2]:.3f}..{hi[2]:.3f}) "
                               f"does not stand out of the other periods (up to {floor:.3f} A)")
