@@ -16,6 +16,10 @@ reversals; which physical effect is missing there?).
 3. *Candidates*: least-squares fits of the residual [A] of the fit runs on one physical regressor at a time
    (each with an intercept-free coefficient per joint), scored on the held-out samples: the held-out RMS
    before and after, per joint.  A regressor that does not lower the held-out RMS is not what is missing.
+   Candidates: Coulomb and viscous corrections, direction asymmetry, load-dependent (harmonic-drive) friction
+   ``|tau| sgn(w)`` (also per direction), a torque-constant error, a holding current at rest, a Stribeck term, a
+   term decaying after each reversal, and torque ripples periodic in the motor angle (``k`` per motor turn,
+   phase free), the one that pays (docs/validation.md; the effect ``motor_harmonic``).
 
 Samples are the ticks the robot logged; the first 0.5 s of each run is left out (start transient).
 """
@@ -55,7 +59,8 @@ def _arrays(log, sim_A, role: np.ndarray) -> dict:
     a = np.gradient(np.gradient(q, log.t_s, axis=0), log.t_s, axis=0)[1 : n + 1]
     keep = log.logged_rows()[1 : n + 1] & (t >= SKIP_S)
     tau = log.target_torque_Nm[1 : n + 1] if log.target_torque_Nm is not None else np.full_like(sim_A, np.nan)
-    return {"t": t, "w": w, "a": a, "tau": np.nan_to_num(tau), "meas": log.current_A[1 : n + 1], "sim": sim_A,
+    return {"t": t, "w": w, "a": a, "q": log.q_actual_rad[1 : n + 1], "tau": np.nan_to_num(tau),
+            "meas": log.current_A[1 : n + 1], "sim": sim_A,
             "ur": log.target_current_A[1 : n + 1], "keep": keep, "role": role[:n]}
 
 
@@ -159,6 +164,12 @@ def regressors(d: dict) -> dict[str, np.ndarray]:
         s = np.where(mv[i], sg[i], s)
         last[i] = s
     near = np.exp(-d["since"] / 0.3)
+    from ur5fault.sim.params import load_params
+
+    ratio = np.asarray(load_params().gear.ratio)
+    harmonics = {f"motor-angle harmonic {k}/turn sin,cos(k N q) while moving":
+                 np.stack([np.sin(k * ratio * d["q"]) * mv, np.cos(k * ratio * d["q"]) * mv], axis=-1)
+                 for k in (2, 3, 4, 5)}
     return {
         "coulomb sgn(w)": sg[..., None],
         "viscous w": w[..., None],
@@ -170,6 +181,7 @@ def regressors(d: dict) -> dict[str, np.ndarray]:
         "Stribeck sgn(w) exp(-(w/0.05)^2)": (sg * np.exp(-(w / 0.05) ** 2))[..., None],
         "after reversal sgn(w) exp(-since/0.3s)": (sg * near)[..., None],
         "coulomb + load-dep + K_t": np.stack([sg, np.abs(tau) * sg, tau], axis=-1),
+        **harmonics,
     }
 
 
