@@ -167,9 +167,8 @@ def regressors(d: dict) -> dict[str, np.ndarray]:
     from ur5fault.sim.params import load_params
 
     ratio = np.asarray(load_params().gear.ratio)
-    harmonics = {f"motor-angle harmonic {k}/turn sin,cos(k N q) while moving":
-                 np.stack([np.sin(k * ratio * d["q"]) * mv, np.cos(k * ratio * d["q"]) * mv], axis=-1)
-                 for k in (2, 3, 4, 5)}
+    harmonics = {f"motor-angle harmonic {k}/turn sin,cos(k N q)":
+                 np.stack([np.sin(k * ratio * d["q"]), np.cos(k * ratio * d["q"])], axis=-1) for k in (2, 3, 4, 5)}
     return {
         "coulomb sgn(w)": sg[..., None],
         "viscous w": w[..., None],
