@@ -103,7 +103,8 @@ def identify_ripple(fit: FrictionFit, full: NDArray, blocks, n_boot: int, seed: 
             out += _absent(j, f"J{j + 1}: {k} per motor turn, {amp[best]:.3f} A (interval {lo[2]:.3f}..{hi[2]:.3f}) "
                               f"does not stand out of the other periods (up to {floor:.3f} A)")
             continue
-        out.append(Estimate("ripple.periods_per_rev", j, float(k), float(k), float(k), how))
+        # a choice among the periods searched, not a measurement with a spread: no interval
+        out.append(Estimate("ripple.periods_per_rev", j, float(k), float("nan"), float("nan"), how))
         out.append(Estimate("ripple.amplitude_A", j, float(amp[best]), float(lo[2]), float(hi[2]),
                             f"{how}; the other periods reach {floor:.3f} A"))
         # torque = -K_t * current coefficient (the loop rejects the ripple); the interval flips with the sign
