@@ -1,6 +1,10 @@
 """Monitoring without false alarms (docs/monitoring.md): ``ur5fault monitor``'s verdicts on every real run.
 
-    python bench/bench_monitor.py [--jobs N] [--no-identify] [--out results/bench_monitor.json]
+    python bench/bench_monitor.py [--jobs N] [--no-identify] [--out results/bench_monitor.json] [--cache FILE]
+
+``--cache FILE``: keep the replayed log parts (and the identified overlay) in FILE, a pickle, and reuse them when
+it exists: the verdicts can then be recomputed in seconds after a change to the monitor's rules (not to its
+replay, :mod:`ur5fault.health.monitoring.observe`, nor to identify: delete the file then).
 
 *Kufieta robot* (data/kufieta-ur5, payload 0 kg, TCP at the flange). The baseline overlay is ``ur5fault
 identify`` fitted jointly on the five undisturbed runs :data:`BASE_RUNS` (``--no-identify``: the packaged
@@ -122,10 +126,21 @@ def main(argv=None) -> int:
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--no-identify", action="store_true", help="the packaged model as the Kufieta baseline overlay")
     ap.add_argument("--out", default=str(REPO / "results" / "bench_monitor.json"))
+    ap.add_argument("--cache", help="pickle of the replayed parts: written if absent, reused if present")
     args = ap.parse_args(argv)
     t0 = time.perf_counter()
+    cached = None
+    if args.cache and Path(args.cache).exists():
+        import pickle
+
+        with open(args.cache, "rb") as f:
+            cached = pickle.load(f)
+        if cached["no_identify"] != args.no_identify:
+            ap.error(f"{args.cache} was written with{'' if cached['no_identify'] else 'out'} --no-identify")
     params = {}
-    if not args.no_identify:
+    if cached is not None:
+        params = cached["params"]
+    elif not args.no_identify:
         from ur5fault.identify import identify
 
         print("identifying on", ", ".join(BASE_RUNS), file=sys.stderr, flush=True)
@@ -140,8 +155,18 @@ def main(argv=None) -> int:
     nist_inj = [inject(nist, j, g) for j, g in GAINS]
     tasks = [(logs[n], params, None) for n in BASE_RUNS + OTHER_RUNS] + [(lg, params, None) for lg in injected] + \
         [(nist, {}, (0.0, split)), (nist, {}, (split, span + 1))] + [(lg, {}, (split, span + 1)) for lg in nist_inj]
-    print(f"replaying {len(tasks)} log parts", file=sys.stderr, flush=True)
-    obs = joblib.Parallel(n_jobs=args.jobs)(joblib.delayed(_observe)(*t) for t in tasks)
+    if cached is not None:
+        obs = cached["obs"]
+    else:
+        print(f"replaying {len(tasks)} log parts", file=sys.stderr, flush=True)
+        obs = joblib.Parallel(n_jobs=args.jobs)(joblib.delayed(_observe)(*t) for t in tasks)
+        if args.cache:
+            import pickle
+
+            from ur5fault.util.io import write_bytes_atomic
+
+            write_bytes_atomic(Path(args.cache), pickle.dumps({"no_identify": args.no_identify, "params": params,
+                                                               "obs": obs, "identify_s": t_ident}))
     k = len(BASE_RUNS)
     base_obs, other_obs = obs[:k], obs[k : k + len(OTHER_RUNS)]
     inj_obs = obs[k + len(OTHER_RUNS) : k + len(OTHER_RUNS) + len(GAINS)]
