@@ -108,6 +108,26 @@ def labels(log, ref: np.ndarray) -> list[dict]:
     return [lab for lab in out if lab["t_end_s"] - lab["t_start_s"] >= MIN_PUSH_S]
 
 
+def separable(base) -> dict[str, dict[str, float]]:
+    """Per joint, the smallest current-sensor offset [A] and gain change [-] the change test can tell from the
+    baseline's blocks: the bar times the prediction interval's width with the new log's own standard error taken
+    as 0 (a lower bound: a real log's SE adds to it)."""
+    from ur5fault.health.monitoring.changes import bar
+    from ur5fault.sim.axes import JOINT_NAMES
+
+    out = {}
+    for j in JOINT_NAMES:
+        row = {}
+        for key, label in (("offset_A", f"{j}: current_sensor_offset.offset_A"),
+                           ("gain", f"{j}: current_sensor_gain.gain")):
+            if label in base.candidates:
+                _, var, k = base.candidates[label]
+                limit, inflate = bar(k)
+                row[key] = float(limit * np.sqrt(var * inflate))
+        out[j] = row
+    return out
+
+
 def found(label: dict, events: list[dict]) -> bool:
     return any(abs(e["t_start_s"] - label["t_start_s"]) <= WINDOW_S and abs(e["t_end_s"] - label["t_end_s"]) <= WINDOW_S
                and set(e["joints"]) & set(label["joints"]) for e in events)
@@ -190,6 +210,11 @@ def main(argv=None) -> int:
                        f"{','.join(j.split('_joint')[0] for j in x['joints'])} {x['peak_A']:.2f} A"
                        for x in e["events"]) or "-"
         print(f"| {robot} | {e['log']} | {e['verdict']} | {ch} | {ev} |")
+    sep = {"kufieta": separable(full), "nist": separable(nb)}
+    for robot, rows in sep.items():
+        print(f"\n{robot}: smallest separable change (lower bound), offset [A] / gain [-]: " + "; ".join(
+            f"{j.split('_joint')[0]} {r.get('offset_A', float('nan')):.3f} / {r.get('gain', float('nan')):.3f}"
+            for j, r in rows.items()))
     by = {e["log"]: e for _, e in results}
     pushes = {}
     quiet = ur_smoothed(logs[QUIET])
@@ -204,7 +229,7 @@ def main(argv=None) -> int:
         for lab in labs:
             print(f"  {lab['t_start_s']:.2f}-{lab['t_end_s']:.2f} s {', '.join(lab['joints'])}: "
                   f"{'found' if lab['found'] else 'missed'}")
-    out = {"overlay": params, "results": [{"robot": r, **e} for r, e in results], "pushes": pushes,
+    out = {"overlay": params, "results": [{"robot": r, **e} for r, e in results], "pushes": pushes, "separable": sep,
            "identify_s": t_ident, "wall_s": time.perf_counter() - t0}
     from ur5fault.util.io import write_json_atomic
 

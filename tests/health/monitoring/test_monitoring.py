@@ -1,7 +1,7 @@
 """Monitoring's pieces: event limits from the baseline's own residual transients (scaled with the motion, a bar
 from the tail of their window maxima), a slow drift not an event while a push of its size is, a baseline's
-within-run drift widening the change bar, the baseline file round trip; and on the real NIST log (slow) an
-injected current gain named on its joint with its size."""
+within-run drift widening the change bar, the baseline file round trip; and on the real NIST log (slow) its
+undisturbed rest consistent with its first part."""
 
 import dataclasses
 import json
@@ -133,10 +133,11 @@ def test_baseline_round_trip_and_refusals(tmp_path):
 
 
 @pytest.mark.slow
-def test_nist_rest_and_an_injected_gain_on_its_joint(nist_path):
-    """Baseline: the first FIT_FRACTION of the real NIST log under the packaged model; the rest with the logged
-    shoulder_lift current times 1.3 (a current-sensor gain fault) is 'changed' on that joint, the gain read as
-    about the injected one relative to the baseline's own estimate."""
+def test_nist_rest_consistent_with_its_first_part_despite_the_wrist_3_offset_drift(nist_path):
+    """Baseline: the first FIT_FRACTION of the real NIST log under the packaged model (whose values were fitted
+    on this log). The logged wrist_3 current's offset moves from about -0.10 A there to -0.14 A in the rest (the
+    reading of docs/monitoring.md's earlier version, which called the rest 'changed' for it); the drift between
+    the first part's time blocks now bounds it, and the undisturbed rest raises no event."""
     from ur5fault.health.monitoring import observe
     from ur5fault.logs import read_log
     from ur5fault.twin.residuals import FIT_FRACTION
@@ -145,14 +146,6 @@ def test_nist_rest_and_an_injected_gain_on_its_joint(nist_path):
     span = float(log.t_s[-1] - log.t_s[0])
     split = FIT_FRACTION * span
     b = fit_baseline([observe(log, part_s=(0.0, split), jobs=2)], overlay_sha256({}, ()))
-    cur = log.current_A.copy()
-    cur[:, 1] *= 1.3
-    out = assess(b, observe(dataclasses.replace(log, current_A=cur), part_s=(split, span + 1), jobs=2))
-    assert out["verdict"] == "changed"
-    ch = [c for c in out["changes"] if c["joint"] == "shoulder_lift_joint"]
-    assert ch, out["changes"]
-    c = ch[0]
-    gains = [x for x in [c, *c["alternatives"]] if (x["effect"], x["parameter"]) == ("current_sensor_gain", "gain")]
-    assert gains, c
-    # read relative to what the baseline part itself gives on that joint (the model's own gain error there)
-    assert gains[0]["value"] / gains[0]["baseline_value"] == pytest.approx(1.3, abs=0.06)
+    assert b.candidates["wrist_3_joint: current_sensor_offset.offset_A"][2] == 4  # four 5 s blocks of 20 s
+    out = assess(b, observe(log, part_s=(split, span + 1), jobs=2))
+    assert out["verdict"] == "consistent", out

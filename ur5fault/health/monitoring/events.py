@@ -114,7 +114,7 @@ def fit_scale(segments: Sequence[tuple[NDArray, NDArray, NDArray]]) -> NDArray:
     """Spread coefficients ``(6, 4)`` from baseline segments ``(h (n, 6), features (n, 6, 4), judged (n,))``:
     ``h^2`` on the features, least squares with ``c >= 0``, then twice reweighted by the fitted variance squared
     (a squared residual's scatter grows with its variance: the efficient fit of a variance model)."""
-    coef = np.zeros((N_JOINTS, len(FEATURES)))
+    coef = np.zeros((N_JOINTS, segments[0][1].shape[2]))
     for j in range(N_JOINTS):
         F = np.concatenate([f[ok, j] for _, f, ok in segments])
         y = np.concatenate([h[ok, j] ** 2 for h, _, ok in segments])
@@ -126,7 +126,7 @@ def fit_scale(segments: Sequence[tuple[NDArray, NDArray, NDArray]]) -> NDArray:
             w = 1.0 / np.maximum(pred, 1e-3 * pred.max())
             c = _nnls(F * w[:, None], y * w)
         if not np.any(F @ c > 0):
-            c = np.zeros(len(FEATURES))
+            c = np.zeros(F.shape[1])
             c[0] = float(np.mean(y)) or 1e-12
         coef[j] = c
     return coef
