@@ -128,6 +128,8 @@ def test_baseline_round_trip_and_refusals(tmp_path):
     path.write_text(json.dumps({**b.to_json(), "tail": 3}))
     with pytest.raises(ParameterError, match="not a valid monitor baseline"):
         Baseline.load(path)
+    with pytest.raises(ParameterError, match="too few judged samples"):
+        fit_baseline([part("short", noise(4, n=40))], "sha")  # 0.32 s
     with pytest.raises(ParameterError, match="sample period"):
         assess(b, dataclasses.replace(part("x", noise(3)), period_s=0.002))
 

@@ -27,6 +27,7 @@ from .events import (
     FEATURES,
     LEVEL_S,
     SMOOTH_S,
+    WINDOW_S,
     features,
     fit_scale,
     fit_tail,
@@ -128,7 +129,11 @@ def fit_baseline(healthy: Sequence[Observed], overlay_sha: str) -> Baseline:
         if abs(o.period_s - period) > 1e-9:
             raise ParameterError(f"{o.name}: sample period {o.period_s:g} s differs from {healthy[0].name}'s "
                                  f"{period:g} s")
-    scale, tail = fit_events([segment(o) for o in healthy], period)
+    segs = [segment(o) for o in healthy]
+    if sum(int(ok.sum()) for _, _, ok in segs) * period < 2 * WINDOW_S:
+        raise ParameterError("the baseline logs hold too few judged samples (under 0.5 s after each replay's first "
+                             "0.25 s) to fit the event limits")
+    scale, tail = fit_events(segs, period)
     per: dict[str, tuple[list[float], list[float]]] = {}
     for o in healthy:
         for block in block_estimates(o):
