@@ -12,7 +12,8 @@ Limits and their reasons:
   rest of the replay in time;
 - at least :data:`MIN_DURATION_S` seconds and :data:`MIN_SAMPLES` samples (the discrepancy
   workflow fits on a share of the log and judges on the rest; a 3-row log once produced a
-  "finding" and NaN), and at most the run length a simulation may have
+  "finding" and NaN; ``ur5fault diagnose``, which fits nothing, asks instead for one window of its
+  detector, a :class:`MinLength` of its own), and at most the run length a simulation may have
   (:data:`ur5fault.sim.budget.MAX_DURATION_S`);
 - exactly six joints;
 - currents within the current sensor's range, :data:`CURRENT_RANGE_A` (the 14-bit ADC over +-20 A
