@@ -65,6 +65,8 @@ class Models:
     localiser: Any
     kind: Any
     shuffled_labels: bool
+    #: the map from the detector's probability to a calibrated one (:mod:`.calibration`); None: not calibrated
+    calibrator: Any = None
 
 
 def joint_fault_rows(df) -> np.ndarray:
