@@ -87,7 +87,7 @@ class DiscrepancyModel:
             [s] (None: the whole fitting part); refinement and judgement use the whole fitting part.
     """
 
-    def __init__(self, fit_fraction: float = FIT_FRACTION, max_effects: int = 2, max_terms: int = 4,
+    def __init__(self, fit_fraction: float = FIT_FRACTION, max_effects: int = 1, max_terms: int = 4,
                  kinds: Sequence[str] | None = None, jobs: int = 1, refiner: str = "secant",
                  progress: bool = False, screen_s: float | None = SCREEN_S) -> None:
         lo, hi = FIT_FRACTION_RANGE
