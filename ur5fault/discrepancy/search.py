@@ -133,7 +133,7 @@ def forward(bg: BlockGram, e_fit: NDArray, X: NDArray, cands: Sequence[Candidate
         full = set() if per_joint is None else {
             c.joint for c in (cands[k] for k in chosen) if sum(cands[o].joint == c.joint for o in chosen) >= per_joint}
         for k in range(len(cands)):
-            if k in chosen or cands[k].joint in full:
+            if k in chosen or (per_joint is not None and cands[k].joint in full):
                 continue
             rss1, _ = rss_of(G, g, ee, base + cols[k])
             gains.append((rss0 - rss1, k))
