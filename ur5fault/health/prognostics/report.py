@@ -18,13 +18,14 @@ from ...errors import ConfigFileError
 from ...util.io import write_json_atomic, write_text_atomic
 from ..diagnostics.report import clean
 from . import metrics as M
+from .clearance_rul import ClearanceRUL
 from .figures import health_index_paths, rul_alpha_cone
 from .joint_index import JOINTS, JointHealthIndex
 from .rul import LinearRUL, PopulationRUL, TaskHealthIndex, WienerRUL
 from .spec import Failure
 
 NEEDED = ("unit_id", "inspection", "cycles", "split", "rul_cycles", "eol_cycles", "censored", "failed")
-ESTIMATORS = ("wiener", "linear", "wiener_joint", "naive")
+ESTIMATORS = ("wiener", "linear", "wiener_joint", "clearance", "naive")
 #: the estimator the issue's goals are judged on (the others are shown beside it)
 BASELINE = "wiener"
 
@@ -73,8 +74,13 @@ def predict(df: pd.DataFrame, failure: Failure, seed: int = 0) -> tuple[dict[str
     linear = LinearRUL(seed).fit([hist[u][0] for u in train_ids], [hist[u][1] for u in train_ids])
     # the per-joint index (joint_index.py) under the same Wiener estimator, reported beside the baseline
     # (only where the fleet records per-joint clearances to fit its first stage on)
-    joint_model = wiener_j = None
+    joint_model = wiener_j = clear = None
     if all(f"backlash_deg_j{j}" in df.columns for j in JOINTS):
+        # the clearance-space estimator (clearance_rul.py): per-joint growth meets the task's failure boundary
+        clear = ClearanceRUL(seed=seed).fit(train)
+        a_of = clear.clearances(df)
+        hist_a = {uid: (g["cycles"].to_numpy(float), a_of[df.index.get_indexer(g.index)], str(g["trajectory"].iloc[0])
+                        if "trajectory" in g.columns else "") for uid, g in df.sort_values("cycles").groupby("unit_id")}
         joint_model = JointHealthIndex(failure.feature, failure.threshold).fit(train)
         hj_of = pd.Series(joint_model.transform(df), index=df.index)
         hist_j = {uid: (g["cycles"].to_numpy(float), hj_of[g.index].to_numpy()) for uid, g in
@@ -92,11 +98,13 @@ def predict(df: pd.DataFrame, failure: Failure, seed: int = 0) -> tuple[dict[str
             if k == 0:  # no history yet: the population's residual life
                 w = lin = naive.predict(r["cycles"])
                 wj = w if wiener_j else None
+                cl = w if clear else None
             else:
                 w = wiener.predict(n_all[: k + 1], h_all[: k + 1])
                 lin = linear.predict(n_all[: k + 1], h_all[: k + 1])
                 wj = wiener_j.predict(hist_j[uid][0][: k + 1], hist_j[uid][1][: k + 1]) if wiener_j else None
-            for name, e in (("linear", lin), ("wiener", w), ("wiener_joint", wj),
+                cl = clear.predict(hist_a[uid][2], hist_a[uid][0][: k + 1], hist_a[uid][1][: k + 1]) if clear else None
+            for name, e in (("linear", lin), ("wiener", w), ("wiener_joint", wj), ("clearance", cl),
                             ("naive", naive.predict(r["cycles"]))):
                 if e is not None:
                     rows[name].append({**base, "rul_est": e[0], "rul_lo": e[1], "rul_hi": e[2]})
@@ -118,6 +126,9 @@ def predict(df: pd.DataFrame, failure: Failure, seed: int = 0) -> tuple[dict[str
         "wiener_joint": None if joint_model is None else {"index_residual_sd": joint_model.residual_sd_,
                          "lever_arms_per_deg": {t: v[:-1].tolist() for t, v in joint_model.lever_.items()},
                          "theta_mean_per_cycle": wiener_j.theta_mean_, "sigma2_per_cycle": wiener_j.sigma2_},
+        "clearance": None if clear is None else {"kernel_kappa": clear.kappa_,
+                      "loo_rmse_log_radius_by_kappa": {f"{k:g}": v for k, v in clear.loo_rmse_log_radius_.items()},
+                      "boundary_log_sd_by_task": clear.boundary_sd_},
         "naive": {"train_eol_cycles": naive.eol_.tolist()},
         "n_train_units": int(n_tr), "n_test_units": int(n_te),
     }
@@ -219,7 +230,11 @@ def markdown(m: dict[str, Any]) -> str:
               "history; RUL from the fitted trend. wiener: the index as a Wiener process with a population "
               "prior on its drift, RUL from the last index value. Both: median of the RUL distribution, 5-95 % "
               "interval. wiener_joint: the same Wiener estimator on a per-joint index (each joint's features estimate "
-              "its clearance growth, combined per task with non-negative lever arms onto the criterion). naive: mean "
+              "its clearance growth, combined per task with non-negative lever arms onto the criterion). "
+              "clearance: each joint's clearance estimated from its own features (maps per task), its growth "
+              "extrapolated as a line from the new robot with a population prior, the end of life where that "
+              "line meets the failure boundary of the task's training units (radius by direction of growth, "
+              "kernel width by leave-one-unit-out). naive: mean "
               "residual life of the training units that outlived the unit's age.", "",
               "Figures: " + ", ".join(f"`{f}`" for f in m["figures"]) + f". Benchmark wall time "
               f"{m['benchmark_wall_s']:.1f} s."]
