@@ -112,12 +112,14 @@ class ClearanceRUL:
         # 3. per unit: rate, direction, failure radius; per task: prior and scatter
         tasks = _tasks(df)
         per_unit = []
-        for _, g in df.groupby("unit_id", sort=True):
+        self.train_units_: dict[str, tuple[str, NDArray, float]] = {}  # unit -> (task, rate, failure cycles)
+        for uid, g in df.groupby("unit_id", sort=True):
             ii = df.index.get_indexer(g.index)
             n, a = g["cycles"].to_numpy(float), a_cf[ii]
             r = np.maximum(line_rates(n, a), 0.0)
             n_f = n[-1] - (n[-1] - n[-2]) / 2 if len(n) > 1 else n[-1]
             per_unit.append((str(tasks.loc[g.index[0]]), r, n_f, a - np.outer(n, r)))
+            self.train_units_[str(uid)] = per_unit[-1][:3]
         self.units_: dict[str, tuple[NDArray, NDArray]] = {}   # task -> (directions, log radii)
         self.prior_: dict[str, tuple[NDArray, NDArray, NDArray]] = {}  # task -> (mean r, cov r, scatter var)
         by_task: dict[str, list] = {}
@@ -159,6 +161,11 @@ class ClearanceRUL:
         """Kernel-weighted mean of the training log radii at directions ``d`` (m, 6)."""
         w = np.exp(kappa * (d @ d_train.T - 1.0))
         return (w @ logrho) / np.maximum(w.sum(1), 1e-300)
+
+    def radius(self, task: str, d: NDArray) -> float:
+        """The kernel boundary's failure radius [deg] along the unit direction ``d`` (6,) of duty ``task``."""
+        d_train, logrho = self.units_[self.task_key(task)]
+        return float(np.exp(self._log_radius(d_train, logrho, np.asarray(d, float)[None], self.kappa_)[0]))
 
     def task_key(self, task: str) -> str:
         return task if task in self.units_ else POOLED

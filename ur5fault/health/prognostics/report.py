@@ -23,9 +23,11 @@ from .figures import health_index_paths, rul_alpha_cone
 from .joint_index import JOINTS, JointHealthIndex
 from .rul import LinearRUL, PopulationRUL, TaskHealthIndex, WienerRUL
 from .spec import Failure
+from .twin_boundary import TwinSetup
+from .twin_rul import TwinRUL
 
 NEEDED = ("unit_id", "inspection", "cycles", "split", "rul_cycles", "eol_cycles", "censored", "failed")
-ESTIMATORS = ("wiener", "linear", "wiener_joint", "clearance", "naive")
+ESTIMATORS = ("wiener", "linear", "wiener_joint", "clearance", "twin", "naive")
 #: the estimator the issue's goals are judged on (the others are shown beside it)
 BASELINE = "wiener"
 
@@ -50,9 +52,10 @@ def load_inspections(folder: Path) -> tuple[pd.DataFrame, dict[str, Any]]:
     return df, manifest
 
 
-def predict(df: pd.DataFrame, failure: Failure, seed: int = 0) -> tuple[dict[str, pd.DataFrame], dict[str, Any],
-                                                                      np.ndarray]:
+def predict(df: pd.DataFrame, failure: Failure, seed: int = 0, twin: TwinSetup | None = None
+            ) -> tuple[dict[str, pd.DataFrame], dict[str, Any], np.ndarray]:
     """Fit on the failed training units; predict at every pre-failure inspection of the failed test units.
+    ``twin``: also the estimator whose failure boundary the digital twin simulates (twin_rul.py; minutes).
 
     Returns the prediction tables per estimator, the fitted constants, and the health index of every row.
     """
@@ -88,6 +91,14 @@ def predict(df: pd.DataFrame, failure: Failure, seed: int = 0) -> tuple[dict[str
         wiener_j = WienerRUL(seed).fit([hist_j[u][0] for u in train_ids], [hist_j[u][1] for u in train_ids],
                                        joint_model.failure_level_, joint_model.residual_sd_)
     naive = PopulationRUL().fit(train.groupby("unit_id")["eol_cycles"].first().to_numpy())
+    twin_rul, twin_pred = None, {}
+    if twin is not None and clear is not None:
+        cond = {str(uid): (str(g["trajectory"].iloc[0]), float(g["payload_kg"].iloc[0]),
+                           float(g["temperature_C"].iloc[0])) for uid, g in df.groupby("unit_id")}
+        twin_rul = TwinRUL(twin, clear, seed).calibrate({u: cond[u] for u in map(str, train_ids)})
+        sound = test[test["rul_cycles"] > 0].groupby("unit_id").size()   # a unit's inspections before failure
+        twin_pred = twin_rul.predict_units({str(uid): (cond[str(uid)], hist_a[uid][0][:k], hist_a[uid][1][:k])
+                                            for uid, k in sound.items()})
     rows: dict[str, list] = {name: [] for name in ESTIMATORS}
     for uid, g in test.sort_values("cycles").groupby("unit_id"):
         n_all, h_all = hist[uid]
@@ -99,12 +110,14 @@ def predict(df: pd.DataFrame, failure: Failure, seed: int = 0) -> tuple[dict[str
                 w = lin = naive.predict(r["cycles"])
                 wj = w if wiener_j else None
                 cl = w if clear else None
+                tw = w if twin_rul else None
             else:
                 w = wiener.predict(n_all[: k + 1], h_all[: k + 1])
                 lin = linear.predict(n_all[: k + 1], h_all[: k + 1])
                 wj = wiener_j.predict(hist_j[uid][0][: k + 1], hist_j[uid][1][: k + 1]) if wiener_j else None
                 cl = clear.predict(hist_a[uid][2], hist_a[uid][0][: k + 1], hist_a[uid][1][: k + 1]) if clear else None
-            for name, e in (("linear", lin), ("wiener", w), ("wiener_joint", wj), ("clearance", cl),
+                tw = twin_pred[str(uid)][k - 1] if twin_rul else None
+            for name, e in (("linear", lin), ("wiener", w), ("wiener_joint", wj), ("clearance", cl), ("twin", tw),
                             ("naive", naive.predict(r["cycles"]))):
                 if e is not None:
                     rows[name].append({**base, "rul_est": e[0], "rul_lo": e[1], "rul_hi": e[2]})
@@ -129,20 +142,29 @@ def predict(df: pd.DataFrame, failure: Failure, seed: int = 0) -> tuple[dict[str
         "clearance": None if clear is None else {"kernel_kappa": clear.kappa_,
                       "loo_rmse_log_radius_by_kappa": {f"{k:g}": v for k, v in clear.loo_rmse_log_radius_.items()},
                       "boundary_log_sd_by_task": clear.boundary_sd_},
+        "twin": None if twin_rul is None else {"log_radius_bias": twin_rul.bias_, "log_radius_sd": twin_rul.sd_,
+                                                "n_calibration_units": twin_rul.n_calibration_units_,
+                                                "n_twin_rays_test": twin_rul.n_twin_rays_},
         "naive": {"train_eol_cycles": naive.eol_.tolist()},
         "n_train_units": int(n_tr), "n_test_units": int(n_te),
     }
     return pred, fitted, hi_all
 
 
-def run_prognose(folder: Path, out: Path | None = None, *, seed: int = 0) -> dict[str, Any]:
+def run_prognose(folder: Path, out: Path | None = None, *, seed: int = 0, twin: bool = False) -> dict[str, Any]:
     """The benchmark on a life-campaign folder; returns the metrics written to ``out/metrics.json``."""
     t0 = time.perf_counter()
     folder = Path(folder)
     out = Path(out) if out is not None else folder.parent / "benchmark"
     df, manifest = load_inspections(folder)
     failure = Failure(**manifest["failure"]) if isinstance(manifest.get("failure"), dict) else Failure()
-    pred, fitted, hi = predict(df, failure, seed)
+    setup = None
+    if twin:
+        if "wear" not in manifest or "identity_inputs" not in manifest:
+            raise ConfigFileError(f"{folder}/manifest.json: no wear law or identity inputs; --twin needs the manifest "
+                                  "of a life campaign")
+        setup = TwinSetup.from_manifest(manifest, seed)
+    pred, fitted, hi = predict(df, failure, seed, setup)
     per_unit = df.groupby("unit_id").agg(split=("split", "first"), n=("inspection", "size"),
                                          eol=("eol_cycles", "first"))
     if set(per_unit[per_unit["split"] == "train"].index) & set(per_unit[per_unit["split"] == "test"].index):
