@@ -3,6 +3,7 @@ simulation), and the whole path on a tiny simulated fleet (slow)."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 
 import numpy as np
@@ -101,3 +102,7 @@ def test_tiny_fleet_prognose_with_the_twin(tmp_path):
     rho = failure_radii(setup, [ray])[0]
     before, after = np.linalg.norm(a[-2]) if len(a) > 1 else 0.0, np.linalg.norm(a[-1])
     assert 0.9 * before <= rho <= 1.1 * after
+    # rays of other payloads in the same batches (each against its own reference run) change nothing
+    heavy = dataclasses.replace(ray, payload_kg=ray.payload_kg + 1.0)
+    both = failure_radii(setup, [heavy, ray, heavy])
+    assert both[1] == rho and both[0] == both[2] == failure_radii(setup, [heavy])[0]

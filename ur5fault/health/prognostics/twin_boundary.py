@@ -94,31 +94,31 @@ def _criteria(setup: TwinSetup, trajectory: str, points: Sequence[tuple[Ray, flo
     refs: dict[tuple[float, float], np.ndarray] = {}
     todo = list(range(len(points)))
     while todo:
-        batch, specs, need_ref = [], [], []
+        specs, at_ref, at_point = [], {}, {}      # spec index of each new reference and of each point
         for i in todo:
             ray, s = points[i]
             key = (ray.payload_kg, ray.temperature_C)
             cond = (make_effect("payload", mass_kg=ray.payload_kg),
                     make_effect("temperature", temperature_C=ray.temperature_C))
-            if key not in refs and key not in need_ref:
-                need_ref.append(key)
-                specs.append(RunSpec(f"ref{len(specs)}", setup.seed, cond))
-            if len(specs) >= BATCH:
+            if len(specs) + (key not in refs and key not in at_ref) + 1 > BATCH:
                 break
+            if key not in refs and key not in at_ref:
+                at_ref[key] = len(specs)
+                specs.append(RunSpec(f"ref{len(specs)}", setup.seed, cond))
+            at_point[i] = len(specs)
             a = s * np.asarray(ray.direction)
             specs.append(RunSpec(f"p{i}", setup.seed, wear_effects(setup.wear, a, s / ray.speed) + cond))
-            batch.append(i)
         res = sim.run(traj, specs, log_period_s=setup.log_period_s, duration_s=setup.duration_s)
-        for k, key in enumerate(need_ref):
+        for key, k in at_ref.items():
             refs[key] = res.tcp_m[k]
-        for k, i in enumerate(batch, start=len(need_ref)):
+        for i, k in at_point.items():
             ray = points[i][0]
             if res.status[k] != "ok":
                 continue
             f = run_features(res.t_s, res.q_set_rad, res["q_FB_rad"][k], res["q_M_FB_rad"][k], res["i_FB_A"][k], ratio,
                              res.tcp_m[k], res.tcp_des_m[k], refs[(ray.payload_kg, ray.temperature_C)])
             out[i] = float(f.get(setup.failure.feature, np.inf))
-        todo = todo[len(batch):]
+        todo = todo[len(at_point):]
     return out
 
 
