@@ -1,6 +1,10 @@
 """Monitoring without false alarms (docs/monitoring.md): ``ur5fault monitor``'s verdicts on every real run.
 
-    python bench/bench_monitor.py [--jobs N] [--no-identify] [--out results/bench_monitor.json]
+    python bench/bench_monitor.py [--jobs N] [--no-identify] [--out results/bench_monitor.json] [--cache FILE]
+
+``--cache FILE``: keep the replayed log parts (and the identified overlay) in FILE, a pickle, and reuse them when
+it exists: the verdicts can then be recomputed in seconds after a change to the monitor's rules (not to its
+replay, :mod:`ur5fault.health.monitoring.observe`, nor to identify: delete the file then).
 
 *Kufieta robot* (data/kufieta-ur5, payload 0 kg, TCP at the flange). The baseline overlay is ``ur5fault
 identify`` fitted jointly on the five undisturbed runs :data:`BASE_RUNS` (``--no-identify``: the packaged
@@ -104,6 +108,26 @@ def labels(log, ref: np.ndarray) -> list[dict]:
     return [lab for lab in out if lab["t_end_s"] - lab["t_start_s"] >= MIN_PUSH_S]
 
 
+def separable(base) -> dict[str, dict[str, float]]:
+    """Per joint, the smallest current-sensor offset [A] and gain change [-] the change test can tell from the
+    baseline's blocks: the bar times the prediction interval's width with the new log's own standard error taken
+    as 0 (a lower bound: a real log's SE adds to it)."""
+    from ur5fault.health.monitoring.changes import bar
+    from ur5fault.sim.axes import JOINT_NAMES
+
+    out = {}
+    for j in JOINT_NAMES:
+        row = {}
+        for key, label in (("offset_A", f"{j}: current_sensor_offset.offset_A"),
+                           ("gain", f"{j}: current_sensor_gain.gain")):
+            if label in base.candidates:
+                _, var, k = base.candidates[label]
+                limit, inflate = bar(k)
+                row[key] = float(limit * np.sqrt(var * inflate))
+        out[j] = row
+    return out
+
+
 def found(label: dict, events: list[dict]) -> bool:
     return any(abs(e["t_start_s"] - label["t_start_s"]) <= WINDOW_S and abs(e["t_end_s"] - label["t_end_s"]) <= WINDOW_S
                and set(e["joints"]) & set(label["joints"]) for e in events)
@@ -122,10 +146,21 @@ def main(argv=None) -> int:
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--no-identify", action="store_true", help="the packaged model as the Kufieta baseline overlay")
     ap.add_argument("--out", default=str(REPO / "results" / "bench_monitor.json"))
+    ap.add_argument("--cache", help="pickle of the replayed parts: written if absent, reused if present")
     args = ap.parse_args(argv)
     t0 = time.perf_counter()
+    cached = None
+    if args.cache and Path(args.cache).exists():
+        import pickle
+
+        with open(args.cache, "rb") as f:
+            cached = pickle.load(f)
+        if cached["no_identify"] != args.no_identify:
+            ap.error(f"{args.cache} was written with{'' if cached['no_identify'] else 'out'} --no-identify")
     params = {}
-    if not args.no_identify:
+    if cached is not None:
+        params = cached["params"]
+    elif not args.no_identify:
         from ur5fault.identify import identify
 
         print("identifying on", ", ".join(BASE_RUNS), file=sys.stderr, flush=True)
@@ -140,8 +175,18 @@ def main(argv=None) -> int:
     nist_inj = [inject(nist, j, g) for j, g in GAINS]
     tasks = [(logs[n], params, None) for n in BASE_RUNS + OTHER_RUNS] + [(lg, params, None) for lg in injected] + \
         [(nist, {}, (0.0, split)), (nist, {}, (split, span + 1))] + [(lg, {}, (split, span + 1)) for lg in nist_inj]
-    print(f"replaying {len(tasks)} log parts", file=sys.stderr, flush=True)
-    obs = joblib.Parallel(n_jobs=args.jobs)(joblib.delayed(_observe)(*t) for t in tasks)
+    if cached is not None:
+        obs = cached["obs"]
+    else:
+        print(f"replaying {len(tasks)} log parts", file=sys.stderr, flush=True)
+        obs = joblib.Parallel(n_jobs=args.jobs)(joblib.delayed(_observe)(*t) for t in tasks)
+        if args.cache:
+            import pickle
+
+            from ur5fault.util.io import write_bytes_atomic
+
+            write_bytes_atomic(Path(args.cache), pickle.dumps({"no_identify": args.no_identify, "params": params,
+                                                               "obs": obs, "identify_s": t_ident}))
     k = len(BASE_RUNS)
     base_obs, other_obs = obs[:k], obs[k : k + len(OTHER_RUNS)]
     inj_obs = obs[k + len(OTHER_RUNS) : k + len(OTHER_RUNS) + len(GAINS)]
@@ -165,6 +210,11 @@ def main(argv=None) -> int:
                        f"{','.join(j.split('_joint')[0] for j in x['joints'])} {x['peak_A']:.2f} A"
                        for x in e["events"]) or "-"
         print(f"| {robot} | {e['log']} | {e['verdict']} | {ch} | {ev} |")
+    sep = {"kufieta": separable(full), "nist": separable(nb)}
+    for robot, rows in sep.items():
+        print(f"\n{robot}: smallest separable change (lower bound), offset [A] / gain [-]: " + "; ".join(
+            f"{j.split('_joint')[0]} {r.get('offset_A', float('nan')):.3f} / {r.get('gain', float('nan')):.3f}"
+            for j, r in rows.items()))
     by = {e["log"]: e for _, e in results}
     pushes = {}
     quiet = ur_smoothed(logs[QUIET])
@@ -179,7 +229,7 @@ def main(argv=None) -> int:
         for lab in labs:
             print(f"  {lab['t_start_s']:.2f}-{lab['t_end_s']:.2f} s {', '.join(lab['joints'])}: "
                   f"{'found' if lab['found'] else 'missed'}")
-    out = {"overlay": params, "results": [{"robot": r, **e} for r, e in results], "pushes": pushes,
+    out = {"overlay": params, "results": [{"robot": r, **e} for r, e in results], "pushes": pushes, "separable": sep,
            "identify_s": t_ident, "wall_s": time.perf_counter() - t0}
     from ur5fault.util.io import write_json_atomic
 

@@ -15,7 +15,11 @@ and the identified parameters of the two robots side by side.
    targets move by up to 3e-4 rad), so the identification also gets the standstill run from :data:`REST_FROM_S`
    on: its only constant-target stretch (12.6-14.1 s), after the last push (the current's standard deviation
    per 1 s window is 0.5-1.0 A on J1 while pushed, 0.014-0.021 A from 12 s on, as before the first push).
-3. *Parameters*: the same identification on the NIST log (with its payload 0.726 kg) beside the Kufieta one.
+   The same held-out runs again with the motor-angle ripples (effect ``motor_harmonic``) that identification finds,
+   for both choices of the fastest ripple it uses (:data:`RIPPLE_MAX_HZ`).
+3. *NIST*: the packaged model with the discrepancy workflow's three current offsets on the NIST log's held-out last
+   40 %, without and with the ripples identified on its first 60 %.
+4. *Parameters*: the same identification on the NIST log (with its payload 0.726 kg) beside the Kufieta one.
 
 Prints Markdown tables and writes the figures as JSON. Wall time is dominated by the replays (12 runs of
 15-36 s of log).
@@ -38,6 +42,13 @@ FIT_RUNS = ("Movement_No1", "Movement_No2", "Movement_No3_Acc", "Movement_No4_Ac
             "Movement_No5_Acc_slow_no_disturbance", "Movement_No8_Singularity_Free_1")
 HELD_OUT_RUNS = ("TEST", "Movement_No5_Acc_slow_w_disturbance", "Movement_No10_Standstill_WDist")
 REST_RUN, REST_FROM_S = "Movement_No10_Standstill_WDist", 12.0
+#: the discrepancy workflow's split of the NIST log (fit on the first 60 %, scored on the rest) and its findings there
+#: (docs/validation.md): three current-sensor offsets [A]
+NIST_FIT_FRACTION = 0.6
+NIST_OFFSETS_A = {"elbow": 0.094, "wrist_1": 0.170, "wrist_3": -0.113}
+#: the fastest motor-angle ripple identify uses (ur5fault.identify.ripple.MAX_RIPPLE_HZ) and the variant with every
+#: moving sample: the choice moves the Kufieta figures, so both are scored
+RIPPLE_MAX_HZ = (5.0, float("inf"))
 KEYS = ("motor.torque_constant_Nm_per_A", "friction.coulomb_A", "friction.viscous_A_s_per_rad",
         "check.current_offset_A", "sensors.current_noise_A", "controller.tracking_lag_s")
 
@@ -48,23 +59,40 @@ def read(name: str):
     return read_rtde(KUFIETA / f"{name}.csv.gz", payload_kg=0.0, tcp_offset_m=(0.0, 0.0, 0.0))
 
 
-def score(log, overrides: dict | None) -> dict:
-    """Current RMS of the model and of UR's own model per joint on the logged ticks [A], and their ratio."""
+def effects_of(overlay_effects) -> tuple:
+    """The ``effects`` entries of a model overlay as effect specs."""
+    from ur5fault.sim.effects import make_effect
+
+    skip = ("effect", "joint")
+    return tuple(make_effect(e["effect"], e.get("joint"), **{k: v for k, v in e.items() if k not in skip})
+                 for e in overlay_effects or ())
+
+
+def score(log, overrides: dict | None, effects=(), from_s: float = 0.0) -> dict:
+    """Current RMS of the model and of UR's own model per joint on the logged ticks [A] (from ``from_s`` on), and
+    their ratio."""
     from ur5fault.discrepancy.model import WORKFLOW_SEED
     from ur5fault.twin import LogReplay
 
     rp = LogReplay(log, overrides, seed=WORKFLOW_SEED)
     n = rp.n_samples
-    sim = rp.run([()], n)[0]
-    keep = log.logged_rows()[1 : n + 1]
+    sim = rp.run([tuple(effects)], n)[0]
+    keep = log.logged_rows()[1 : n + 1] & (log.t_s[1 : n + 1] - log.t_s[0] >= from_s)
     meas = log.current_A[1 : n + 1][keep]
     model = np.sqrt(np.mean((meas - sim.y[:, 0][keep]) ** 2, axis=0))
     ur = np.sqrt(np.mean((meas - log.target_current_A[1 : n + 1][keep]) ** 2, axis=0))
     return {"status": sim.status, "model_A": model.tolist(), "ur_A": ur.tolist(), "ratio": (model / ur).tolist()}
 
 
-def _score_job(name: str, overrides: dict | None) -> tuple[str, dict]:
-    return name, score(read(name), overrides)
+def _score_job(name: str, overrides: dict | None, effects=()) -> tuple[str, dict]:
+    return name, score(read(name), overrides, effects)
+
+
+def _nist_job(overrides: dict | None, effects) -> dict:
+    from ur5fault.logs import read_nist
+
+    log = read_nist(NIST_LOG)
+    return score(log, overrides, effects, from_s=NIST_FIT_FRACTION * (log.t_s[-1] - log.t_s[0]))
 
 
 def table(title: str, rows: dict[str, dict]) -> None:
@@ -99,20 +127,49 @@ def main(argv=None) -> int:
     names = sorted(p.name.split(".")[0] for p in KUFIETA.glob("*.csv.gz"))
 
     print("identifying on", ", ".join(FIT_RUNS), file=sys.stderr, flush=True)
-    ident_k = identify([read(n) for n in FIT_RUNS] + [read(REST_RUN).window(REST_FROM_S, 60.0)], params, sweep=False,
-                       n_boot=100)
+    fit_logs = [read(n) for n in FIT_RUNS] + [read(REST_RUN).window(REST_FROM_S, 60.0)]
+    idents = {hz: identify(fit_logs, params, sweep=False, n_boot=100, ripple_max_hz=hz) for hz in RIPPLE_MAX_HZ}
+    ident_k = idents[RIPPLE_MAX_HZ[0]]
     overlay = ident_k.overlay(params)["params"]
+    ripples = {hz: effects_of(i.overlay(params).get("effects")) for hz, i in idents.items()}
     print("identifying on the NIST log", file=sys.stderr, flush=True)
-    ident_n = identify(read_nist(NIST_LOG), params, sweep=False, n_boot=100)
+    nist = read_nist(NIST_LOG)
+    ident_n = identify(nist, params, sweep=False, n_boot=100)
+    nist_fit = nist.window(0.0, NIST_FIT_FRACTION * (nist.t_s[-1] - nist.t_s[0]))
+    nist_ripples = {hz: effects_of(identify(nist_fit, params, sweep=False, n_boot=100, ripple_max_hz=hz)
+                                   .overlay(params).get("effects")) for hz in RIPPLE_MAX_HZ}
     t_ident = time.perf_counter() - t0
 
     print("replaying", file=sys.stderr, flush=True)
-    jobs = [(n, None) for n in names] + [(n, overlay) for n in HELD_OUT_RUNS]
-    res = joblib.Parallel(n_jobs=args.jobs)(joblib.delayed(_score_job)(n, o) for n, o in jobs)
-    packaged = dict(res[: len(names)])
-    fitted = dict(res[len(names):])
+    from ur5fault.sim.effects import make_effect
+
+    offsets = tuple(make_effect("current_sensor_offset", j, offset_A=v) for j, v in NIST_OFFSETS_A.items())
+    jobs = ([joblib.delayed(_score_job)(n, None) for n in names]
+            + [joblib.delayed(_score_job)(n, overlay) for n in HELD_OUT_RUNS]
+            + [joblib.delayed(_score_job)(n, overlay, ripples[hz]) for hz in RIPPLE_MAX_HZ for n in HELD_OUT_RUNS]
+            + [joblib.delayed(_nist_job)(None, offsets)]
+            + [joblib.delayed(_nist_job)(None, offsets + nist_ripples[hz]) for hz in RIPPLE_MAX_HZ])
+    res = joblib.Parallel(n_jobs=args.jobs)(jobs)
+    k = len(names)
+    packaged = dict(res[:k])
+    fitted = dict(res[k : k + len(HELD_OUT_RUNS)])
+    k += len(HELD_OUT_RUNS)
+    with_ripple = {}
+    for hz in RIPPLE_MAX_HZ:
+        with_ripple[hz] = dict(res[k : k + len(HELD_OUT_RUNS)])
+        k += len(HELD_OUT_RUNS)
+    nist_rows = {"workflow's offsets": res[k]}
+    nist_rows.update({f"+ ripples identified on the first 60 % (<= {hz:g} Hz)": r
+                      for hz, r in zip(RIPPLE_MAX_HZ, res[k + 1 :])})
     table("Packaged model on every Kufieta run (payload 0 kg, TCP at the flange)", packaged)
     table(f"Identified on {len(FIT_RUNS)} runs ({', '.join(FIT_RUNS)}), scored on held-out runs", fitted)
+    for hz in RIPPLE_MAX_HZ:
+        found = ", ".join(e.describe() for e in ripples[hz]) or "none"
+        table(f"Same, with the motor-angle ripples identify finds (<= {hz:g} Hz): {found}", with_ripple[hz])
+    for hz in RIPPLE_MAX_HZ:
+        print(f"\nNIST ripples (first 60 %, <= {hz:g} Hz): "
+              + (", ".join(e.describe() for e in nist_ripples[hz]) or "none"))
+    table("NIST log, held-out last 40 %: packaged model + the discrepancy workflow's offsets", nist_rows)
     est_k, est_n = estimates(ident_k), estimates(ident_n)
     print("\n| parameter | joint | Kufieta [95 %] | NIST [95 %] | ratio |\n| --- | --- | --- | --- | --- |")
     for key in KEYS:
@@ -124,7 +181,12 @@ def main(argv=None) -> int:
             fb = f"{b['value']:.4g} [{b['lo']:.3g}, {b['hi']:.3g}]" if b["identifiable"] else f"{b['value']:.4g} (n.i.)"
             ratio = a["value"] / b["value"] if b["value"] else float("nan")
             print(f"| {key} | {j} | {fa} | {fb} | {ratio:.2f} |")
-    out = {"packaged": packaged, "fitted_on": FIT_RUNS, "held_out": fitted, "kufieta": est_k, "nist": est_n,
+    out = {"packaged": packaged, "fitted_on": FIT_RUNS, "held_out": fitted,
+           "held_out_with_ripple": {str(hz): v for hz, v in with_ripple.items()},
+           "ripples": {str(hz): [e.describe() for e in v] for hz, v in ripples.items()},
+           "nist_held_out": nist_rows,
+           "nist_ripples": {str(hz): [e.describe() for e in v] for hz, v in nist_ripples.items()},
+           "kufieta": est_k, "nist": est_n,
            "identify_s": t_ident, "wall_s": time.perf_counter() - t0}
     Path(args.out).parent.mkdir(parents=True, exist_ok=True)
     from ur5fault.util.io import write_json_atomic

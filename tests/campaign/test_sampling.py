@@ -4,6 +4,7 @@ validation before any simulation, twins only where asked, and a small sampled ca
 from __future__ import annotations
 
 import copy
+import json
 import math
 
 import numpy as np
@@ -231,3 +232,28 @@ def test_twin_residuals_add_features_and_change_the_identity(tmp_path):
 def test_twin_residuals_must_be_a_bool():
     with pytest.raises(ParameterError, match="twin_residuals"):
         build_campaign({**copy.deepcopy(TINY), "twin_residuals": "yes"}, "tiny.yaml")
+
+
+def test_runs_logged_without_motor_encoders_have_no_mismatch_features(tmp_path):
+    # motor_encoders: false logs the runs like a UR robot: every feature of the encoder mismatch is NaN (as
+    # `ur5fault diagnose` computes it from a real log), everything else is there
+    from ur5fault.campaign.identity import Identities
+    from ur5fault.health.features import FEATURE_UNITS
+    from ur5fault.health.twin_features import FEATURE_UNITS as TWIN_UNITS
+
+    spec = {**copy.deepcopy(TINY), "twin_residuals": True, "motor_encoders": False, "log_period_s": 0.008,
+            "duration_s": 0.2}
+    camp = build_campaign(spec, "tiny.yaml", out=tmp_path)
+    with_enc = build_campaign({**spec, "motor_encoders": True}, "tiny.yaml")
+    assert Identities(camp).identity(camp.runs[0]) != Identities(with_enc).identity(with_enc.runs[0])
+    run_campaign(camp, tmp_path, jobs=1, progress=False)
+    df = pd.read_parquet(tmp_path / "features.parquet")
+    assert set(df["status"]) == {"ok"}
+    blind = [c for c in list(FEATURE_UNITS) + list(TWIN_UNITS) if "mismatch" in c or "backlash" in c
+             or "compliance" in c]
+    seen = [c for c in list(FEATURE_UNITS) + list(TWIN_UNITS) if c.startswith(("twin_est_current", "current_"))]
+    assert len(blind) == 6 * 3 + 6 * (8 + 3) and df[blind].isna().all().all()
+    assert len(seen) > 18 and np.isfinite(df[seen].to_numpy()).all()
+    assert json.loads((tmp_path / "manifest.json").read_text())["motor_encoders"] is False
+    with pytest.raises(ParameterError, match="motor_encoders"):
+        build_campaign({**copy.deepcopy(TINY), "motor_encoders": "no"}, "tiny.yaml")

@@ -275,3 +275,81 @@ def test_default_benchmark_compares_the_feature_sets(tmp_path):
     assert cmp["twin"]["trained"]["auc_all"] > 0.85 and abs(cmp["twin"]["shuffled"]["auc_all"] - 0.5) < 0.2
     assert abs(cmp["paper"]["trained"]["auc_all"] - 0.5) < 0.2
     assert "## Feature sets compared" in (tmp_path / "benchmark" / "report.md").read_text()
+
+
+# ----------------------------------------------------------------------------- calibration of p(fault)
+def test_reliability_against_hand_computed_values():
+    from ur5fault.health.diagnostics.calibration import reliability
+
+    r = reliability(np.array([0.1, 0.1, 0.9, 0.9]), np.array([0, 1, 1, 1]))
+    # Brier: (0.01 + 0.81 + 0.01 + 0.01) / 4; ECE: half the runs at 0.1 with half faulty (|0.1 - 0.5| = 0.4),
+    # half at 0.9 all faulty (0.1): 0.5 * 0.4 + 0.5 * 0.1
+    assert r["brier"] == pytest.approx(0.21) and r["ece"] == pytest.approx(0.25)
+    assert [(b["n"], b["share_faulty"]) for b in r["bins"]] == [(2, 0.5), (2, 1.0)]
+
+
+def test_platt_map_recovers_a_known_miscalibration():
+    from ur5fault.health.diagnostics.calibration import apply, fit_platt, reliability
+
+    rng = np.random.default_rng(3)
+    p = rng.uniform(0.02, 0.98, 4000)  # an over-confident score: the true frequency is flatter than p
+    true = 1 / (1 + np.exp(-(0.4 * np.log(p / (1 - p)) + 0.3)))
+    y = (rng.uniform(size=p.size) < true).astype(int)
+    cal = apply(fit_platt(p, y), p)
+    assert np.max(np.abs(cal - true)) < 0.05
+    assert reliability(cal, y)["ece"] < 0.03 < reliability(p, y)["ece"]
+
+
+def test_out_of_fold_predictions_never_see_their_own_motion():
+    # a per-motion fingerprint with a per-motion share of faults: a model that saw the motion would read the
+    # share off the fingerprint; out of fold (motions held out whole) it cannot, so the train AUC is at chance
+    from ur5fault.health.diagnostics.calibration import out_of_fold
+    from ur5fault.health.diagnostics.data import Dataset
+
+    rng = np.random.default_rng(5)
+    rows = []
+    for g in range(16):
+        share = 0.1 if rng.uniform() < 0.5 else 0.9
+        for _ in range(20):
+            rows.append({"fingerprint": float(g), "noise": rng.normal(),
+                         "fault": "backlash" if rng.uniform() < share else "healthy", "split_group": f"m{g}"})
+    tr = pd.DataFrame(rows)
+    ds = Dataset(tr, tr.iloc[:0], ("fingerprint", "noise"), {})
+    p, y, k = out_of_fold(ds, seed=0)
+    from sklearn.metrics import roc_auc_score
+
+    assert k == 5 and abs(roc_auc_score(y, p) - 0.5) < 0.15
+    from ur5fault.health.diagnostics.models import make_classifier
+
+    seen = make_classifier(0).fit(ds.x("train"), y).predict_proba(ds.x("train"))[:, 1]
+    assert roc_auc_score(y, seen) > 0.8  # the same model fitted on the motions reads the share off them
+
+
+def test_calibration_is_saved_loaded_and_reported(tmp_path):
+    from ur5fault.health.diagnostics import run_benchmark
+    from ur5fault.health.diagnostics.calibration import apply
+    from ur5fault.health.diagnostics.saved import SCHEMA_FILE, load_models
+
+    df = with_twin(synthetic(n_groups=16))
+    df.to_parquet(tmp_path / "features.parquet")
+    m = run_benchmark(tmp_path, compare=False)
+    cal = m["calibration"]
+    assert cal["method"] == "platt" and cal["n_folds"] == 5 and set(cal["test"]) == {"detector", "calibrated",
+                                                                                      "isotonic"}
+    models, schema = load_models(tmp_path / "benchmark")
+    assert schema["calibration"]["method"] == "platt" and models.calibrator is not None
+    ds = load_dataset(df, "both")
+    raw = models.detector.predict_proba(ds.x("test"))[:, 1]
+    p = apply(models.calibrator, raw)
+    y = (ds.test["fault"] != "healthy").to_numpy(int)
+    assert cal["test"]["calibrated"]["brier"] == pytest.approx(np.mean((p - y) ** 2))
+    assert cal["test"]["detector"]["brier"] == pytest.approx(np.mean((raw - y) ** 2))
+    assert np.all(np.diff(p[np.argsort(raw)]) >= -1e-12)  # monotonic: no ranking, AUC or flag changes
+    assert (tmp_path / "benchmark" / "reliability.png").exists()
+    assert "## Calibration of p(fault)" in (tmp_path / "benchmark" / "report.md").read_text()
+    # a schema that claims a calibration the file does not hold (or the reverse) is refused in one line
+    s = json.loads((tmp_path / "benchmark" / "models" / SCHEMA_FILE).read_text())
+    s["calibration"] = None
+    (tmp_path / "benchmark" / "models" / SCHEMA_FILE).write_text(json.dumps(s))
+    with pytest.raises(ConfigFileError, match="disagree on the calibration"):
+        load_models(tmp_path / "benchmark")

@@ -167,4 +167,53 @@ def test_missing_detector_and_too_short_log_are_one_line(logs, tmp_path, detecto
     rc = main(["diagnose", str(logs["healthy"]), "--format", "sim", "--detector", str(long), "--out",
                str(tmp_path / "o")])
     err = capsys.readouterr().err.strip()
-    assert rc == 2 and "shorter than one window" in err and len(err.splitlines()) == 1
+    assert rc == 2 and "needs at least one window of 10 s" in err and len(err.splitlines()) == 1
+
+
+def test_a_log_of_one_window_is_diagnosed_and_a_shorter_one_refused_naming_the_window(detector, tmp_path, capsys):
+    # diagnose fits nothing: a log as long as one window (here 2.6 s, under the 5 s a fit needs) is enough
+    short = tmp_path / "short.parquet"
+    assert main(["simulate", "--duration-s", "2.6", "--seed", "4", "--out", str(short)]) == 0
+    d = _diagnose(short, detector, tmp_path / "s")
+    assert d["n_windows"] == 1 and d["duration_s"] < 5.0
+    longer = _rewrite_schema(detector, tmp_path / "longer", window_s=3.0)
+    capsys.readouterr()
+    rc = main(["diagnose", str(short), "--format", "sim", "--detector", str(longer), "--out", str(tmp_path / "o")])
+    err = capsys.readouterr().err.strip()
+    assert rc == 2 and err.startswith("ur5fault: error: short.parquet: 2.6 s")
+    assert "one window of 3 s" in err and len(err.splitlines()) == 1 and not (tmp_path / "o").exists()
+    # the fitting commands' reading still refuses it: they fit on a share of the log and judge the rest
+    from ur5fault.errors import LogFormatError
+    from ur5fault.logs.readers import read_log
+
+    with pytest.raises(LogFormatError, match="fitting needs at least 5 s"):
+        read_log(short, "sim")
+
+
+def test_classifiers_saved_without_calibration_load_and_say_so(logs, detector, tmp_path):
+    d = _diagnose(logs["healthy"], detector, tmp_path / "h")  # the stand-in detector is saved uncalibrated
+    assert d["detector"]["calibrated"] is False
+    assert any("without a calibration" in n for n in d["notes"])
+    assert all(w["p_fault"] == w["p_fault_detector"] for w in d["windows"])
+    assert d["detector"]["p_fault_at_threshold"] == d["detector"]["threshold_5pct_false_alarms"]
+
+
+NIST_LOG = Path(__file__).resolve().parents[2] / "data" / "nist-ur5" / "ur5testresult_halfspeed_payload1.6lb_1.csv.gz"
+
+
+def test_real_nist_log_few_seconds_diagnosed_without_motor_encoders(detector, tmp_path):
+    # a real UR5 log (CB3, 125 Hz, no motor encoders): its first 5.3 s, two windows of the stand-in detector
+    head = tmp_path / "nist_head.csv.gz"
+    pd.read_csv(NIST_LOG).head(int(5.3 / 0.008) + 1).to_csv(head, index=False)
+    assert main(["diagnose", str(head), "--format", "nist", "--detector", str(detector), "--out",
+                 str(tmp_path / "n")]) == 0
+    d = json.loads((tmp_path / "n" / "diagnosis.json").read_text())
+    assert d["n_windows"] == 2 and d["log_period_s"] == pytest.approx(0.008)
+    assert any("no motor encoders" in n for n in d["notes"]) and any("every 8 ms" in n for n in d["notes"])
+    for w in d["windows"]:
+        assert 0.0 <= w["p_fault"] <= 1.0
+        for j in w["joints"]:  # what lives in the encoder mismatch is "cannot tell" on every joint, and why
+            for k in ("backlash", "resolver_offset", "gear_stiffness"):
+                assert "motor encoders" in j["cannot_tell"][k]
+            est = next(k for k in j["kinds"] if k["kind"] == "current_sensor_offset")
+            assert est["size"] is None or abs(est["size"]) < 1.0  # A: within the sensor's plausible range

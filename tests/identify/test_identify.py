@@ -314,7 +314,11 @@ def test_overlay_is_accepted_by_simulate(nist_identified, tmp_path):
     assert rc == 0
     text = (out / "params.yaml").read_text()
     assert "95 %" in text and "not identifiable" in text
-    assert yaml.safe_load(text).keys() == {"params"}
+    data = yaml.safe_load(text)
+    # parameters, plus the motor-angle ripples the log shows (docs/validation.md: wrist_2's is 3 per motor turn)
+    assert data.keys() == {"params", "effects"}
+    assert {e["effect"] for e in data["effects"]} == {"motor_harmonic"}
+    assert {e["joint"]: e["periods_per_rev"] for e in data["effects"]}["wrist_2_joint"] == 3.0
 
 
 def test_identify_cli_errors(tmp_path, capsys):

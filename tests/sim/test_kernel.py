@@ -20,7 +20,8 @@ from ur5fault.sim.run_arrays import build_run_arrays
 def packed():
     sim = Simulator()
     effects = [(), (make_effect("backlash", 2, backlash_deg=0.1),), (make_effect("cogging", 3, amplitude_Nm=0.05),),
-               (make_effect("current_sensor_gain", 4, gain=1.1), make_effect("torque_constant", 2, scale=0.8))]
+               (make_effect("current_sensor_gain", 4, gain=1.1), make_effect("torque_constant", 2, scale=0.8),
+                make_effect("motor_harmonic", 5, sin_Nm=0.01, cos_Nm=-0.02, periods_per_rev=3))]
     a = build_run_arrays(sim.params, effects, 2.0)
     P = pack_params(sim.params, sim.gains, a)
     # both friction laws, LuGre with bristle damping, friction on both sides of the gear
@@ -72,11 +73,13 @@ def test_one_step_agrees_to_rounding(packed, seed):
 def test_runs_agree_within_the_self_perturbation_baseline(duration_s):
     p = load_params()
     nudged = load_params(overrides={"friction": {"coulomb_Nm": [c * (1 + 1e-12) for c in p.friction.coulomb_Nm]}})
-    runs = [RunSpec("h", 3), RunSpec("b", 3, (make_effect("backlash", 2, backlash_deg=0.1),))]
+    runs = [RunSpec("h", 3), RunSpec("b", 3, (make_effect("backlash", 2, backlash_deg=0.1),)),
+            RunSpec("m", 3, (make_effect("motor_harmonic", 4, sin_Nm=0.012, cos_Nm=-0.008, periods_per_rev=4),
+                             make_effect("motor_harmonic", 2, sin_Nm=0.02, cos_Nm=0.01, periods_per_rev=3)))]
     ref = Simulator(p, drive="numpy").run(pick_and_place(), runs, duration_s=duration_s)
     fast = Simulator(p, drive="numba").run(pick_and_place(), runs, duration_s=duration_s)
     base = Simulator(nudged, drive="numba").run(pick_and_place(), runs, duration_s=duration_s)
-    assert ref.status == fast.status == base.status == ("ok", "ok")
+    assert ref.status == fast.status == base.status == ("ok", "ok", "ok")
     for s in ("q_rad", "q_FB_rad", "i_q_A", "i_FB_A", "T_gear_Nm", "T_f_Nm"):
         kernel = np.max(np.abs(fast[s] - ref[s]), axis=(0, 1))  # per joint
         baseline = np.max(np.abs(base[s] - fast[s]))

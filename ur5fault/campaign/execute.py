@@ -76,6 +76,7 @@ def run_batch(camp: Campaign, batch: Sequence[CampaignRun], ts_dir: str | None,
         parent_pid: the campaign process, for loky workers: a worker exits when it dies.
     """
     from ..health.features import FEATURE_UNITS, run_features
+    from ..health.signals import needs_motor_encoders
     from ..sim.engine import RunSpec, Simulator
 
     exit_with_parent(parent_pid)
@@ -125,6 +126,8 @@ def run_batch(camp: Campaign, batch: Sequence[CampaignRun], ts_dir: str | None,
             row.setdefault(key, float("nan"))
         if camp.twin_residuals:
             _add_twin_features(row, res, i, twin_index[twin_id(rc)], sim.params)
+        if not camp.motor_encoders:  # logged like a UR robot: what the motor encoder gives is unknown
+            row.update({k: float("nan") for k in row if needs_motor_encoders(k)})
         rows.append(row)
     return rows
 

@@ -34,7 +34,8 @@ from .spec import Campaign, CampaignRun
 IDENTITY_FORMAT = 1
 #: how inputs are compared, in this order, to name the first difference
 INPUT_ORDER = ("identity_format", "ur5fault_version", "mujoco_version", "model_sha256", "drive", "stepper",
-               "trajectory", "duration_s", "log_period_s", "seed", "effects", "params", "twin_residuals")
+               "trajectory", "duration_s", "log_period_s", "seed", "effects", "params", "twin_residuals",
+               "motor_encoders")
 #: version of the digital twin and its features (health/twin_features.py), recorded when a campaign has them
 TWIN_RESIDUALS_FORMAT = 1
 #: the simulator configuration campaigns run with: passed to the engine by every campaign kind
@@ -88,6 +89,8 @@ class Identities:
         }
         if camp.twin_residuals:  # only then: the identities of campaigns without twins stay as they were
             self.common["twin_residuals"] = TWIN_RESIDUALS_FORMAT
+        if not camp.motor_encoders:  # likewise: recorded only when the runs are logged without them
+            self.common["motor_encoders"] = False
         self._common_digest = digest(self.common)
         self._traj: dict[str, tuple[dict[str, Any], float]] = {}
 

@@ -53,6 +53,7 @@ def build_manifest(camp: Campaign, ids: Identities, features, state: str, backen
         "duration_s": max(durations),
         "n_steps_total": int(sum(round(d / p.physics_dt_s) for d in durations)),
         "log_period_s": camp.log_period_s,
+        "motor_encoders": camp.motor_encoders,
         "threshold_mm": camp.threshold_mm,
         "swept_keys": list(camp.swept_keys),
         "save_timeseries": save_ts,

@@ -18,6 +18,8 @@ Campaign YAML (see campaigns/default.yaml)::
     save_timeseries: false
     twin_residuals: false           # give every run its digital twin and the twin residual features
                                     # (ur5fault/health/twin_features.py); about twice the simulation
+    motor_encoders: true            # false: log like a UR robot (no motor-side encoder): every feature of
+                                    # the encoder mismatch is NaN (ur5fault/health/signals.py)
 
 Sweep keys: ``seed``, ``payload_kg``, ``temperature_C``, ``trajectory`` (conditions), and
 ``<effect>.<parameter>`` / ``<effect>.joint`` for any entry of the effect registry (faults).
@@ -59,7 +61,8 @@ from .labels import SplitRule, parse_split
 from .sampling import sample_runs
 
 CAMPAIGN_KEYS = ("name", "out", "trajectory", "base", "sweep", "zip", "threshold_mm", "batch_size",
-                 "log_period_s", "save_timeseries", "duration_s", "split", "sample", "twin_residuals")
+                 "log_period_s", "save_timeseries", "duration_s", "split", "sample", "twin_residuals",
+                 "motor_encoders")
 BASE_KEYS = ("seed", "payload_kg", "temperature_C", "effects", "params")
 CONDITION_KEYS = ("seed", "payload_kg", "temperature_C", "trajectory")
 #: largest grid expanded at all (checked from the list lengths before expanding; assumption: a
@@ -125,6 +128,8 @@ class Campaign:
     data: Mapping[str, Any] = dataclasses.field(default_factory=dict)  # the validated mapping (JSON-able)
     split: SplitRule = SplitRule()  # train/test split of the feature rows (campaign/labels.py)
     twin_residuals: bool = False  # every run gets its digital twin and the twin residual features
+    #: False: the runs are logged like a UR robot's, without the motor-side encoder (its features are NaN)
+    motor_encoders: bool = True
 
     @property
     def sha256(self) -> str:
@@ -254,6 +259,7 @@ def build_campaign(data: Mapping[str, Any], where: str, text: str = "", path: Pa
     lp = check_log_period(data.get("log_period_s", 1e-3), f"{where}: log_period_s", robot.physics_dt_s, shortest)
     save_ts = check_bool(data.get("save_timeseries", False), f"{where}: save_timeseries")
     twin_res = check_bool(data.get("twin_residuals", False), f"{where}: twin_residuals")
+    motor_enc = check_bool(data.get("motor_encoders", True), f"{where}: motor_encoders")
     name = check_text(data["name"], f"{where}: name") if data.get("name") is not None else (
         path.stem if path else "campaign")
     file_out = check_text(data["out"], f"{where}: out", max_len=4096) if data.get("out") is not None else None
@@ -262,7 +268,7 @@ def build_campaign(data: Mapping[str, Any], where: str, text: str = "", path: Pa
     resolved = {**dict(data), "base": {**dict(base), "params": params}}
     return Campaign(name, path, text or yaml.safe_dump(dict(data)), out_dir, base_effects, params,
                     tuple(runs.values()), tuple(swept), thr, bs, lp, save_ts, dur, resolved,
-                    parse_split(data.get("split"), where), twin_res)
+                    parse_split(data.get("split"), where), twin_res, motor_enc)
 
 
 def _base_conditions(data: Mapping[str, Any], base: Mapping[str, Any], where: str) -> dict[str, Any]:

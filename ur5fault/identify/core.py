@@ -19,7 +19,7 @@ from ..errors import ParameterError
 from ..logs import MeasuredLog
 from ..sim.axes import N_JOINTS
 from ..sim.params import RobotParams, load_params
-from . import friction, loop, motor, sensors, stickslip, urmodel
+from . import friction, loop, motor, ripple, sensors, stickslip, urmodel
 from .report import Identification, overlay_params
 from .signals import derive_all
 from .stats import BLOCK_S, N_BOOT, Estimate, block_indices, bootstrap, fallback, interval
@@ -28,7 +28,8 @@ from .stats import BLOCK_S, N_BOOT, Estimate, block_indices, bootstrap, fallback
 def identify(log: MeasuredLog | Sequence[MeasuredLog], params: RobotParams | None = None, *,
              model_path: str | Path | None = None,
              sweep: bool = True, bandwidths_Hz=loop.BANDWIDTHS_HZ, sweep_window_s: float = loop.SWEEP_WINDOW_S,
-             n_boot: int = N_BOOT, seed: int = 0, progress: Callable[[str], None] | None = None) -> Identification:
+             n_boot: int = N_BOOT, seed: int = 0, progress: Callable[[str], None] | None = None,
+             ripple_max_hz: float = ripple.MAX_RIPPLE_HZ) -> Identification:
     """Identify the ``[nist]`` parameters of ``ur5_drive.yaml`` from ``log``.
 
     Args:
@@ -44,6 +45,7 @@ def identify(log: MeasuredLog | Sequence[MeasuredLog], params: RobotParams | Non
         n_boot: resamples of every interval.
         seed: seed of the resampling (results are reproducible).
         progress: called with a one-line message before each slow step.
+        ripple_max_hz: fastest motor-angle ripple used to identify it (:mod:`.ripple`).
     """
     from ..sim.engine import DEFAULT_MODEL_PATH
 
@@ -76,6 +78,8 @@ def identify(log: MeasuredLog | Sequence[MeasuredLog], params: RobotParams | Non
     est += fric
     est += urmodel.ur_model(fit)
     coulomb_A = np.array([e.value for e in fric if e.key == "friction.coulomb_A"])
+    say("torque ripple periodic in the motor angle (moving samples)")
+    est += ripple.identify_ripple(fit, full, blocks, n_boot, seed, ripple_max_hz)
 
     say("sensor noise at rest and resolver resolution")
     noise = sensors.noise_at_rest(sig, n_boot, seed, {"sensors.current_noise_A": p.sensors.current_noise_A,

@@ -71,8 +71,12 @@ class Identification:
         return np.array([self.get(key, j).value for j in range(N_JOINTS)])
 
     def overlay(self, params: RobotParams) -> dict[str, Any]:
-        """The model overlay ``{"params": ...}``."""
-        return {"params": overlay_params(self, params)}
+        """The model overlay ``{"params": ...}``, with ``"effects"`` when the log shows a motor-angle ripple
+        (``motor_harmonic``, :mod:`.ripple`)."""
+        from .ripple import ripple_effects
+
+        effects = ripple_effects(self.estimates)
+        return {"params": overlay_params(self, params), **({"effects": effects} if effects else {})}
 
     def table(self) -> str:
         """One line per estimate: key, joint, value, interval, method / caveat."""

@@ -24,6 +24,7 @@ from ..errors import ParameterError
 from ..util.checks import check_bool
 from ..util.yamlsafe import read_yaml
 from .measured import UNKNOWN_PAYLOAD, MeasuredLog
+from .plausible import MinLength
 from .readers import read_log
 
 MANIFEST_SUFFIXES = (".yaml", ".yml")
@@ -120,11 +121,11 @@ def _tcp(args: argparse.Namespace):
     return None if args.tcp_offset_m is None else tuple(args.tcp_offset_m)
 
 
-def read_entry(e: LogEntry) -> MeasuredLog:
-    """Read one log; an RTDE log without its payload or tool offset is refused with one line (after the file's
-    own checks), never given a default."""
+def read_entry(e: LogEntry, length: MinLength | None = None) -> MeasuredLog:
+    """Read one log (at least ``length`` long, default what fitting needs); an RTDE log without its payload or
+    tool offset is refused with one line (after the file's own checks), never given a default."""
     kw = {"payload_kg": e.payload_kg, "tcp_offset_m": e.tcp_offset_m} if e.fmt == "rtde" else {}
-    log = read_log(e.path, e.fmt, **kw)
+    log = read_log(e.path, e.fmt, length, **kw)
     if not log.payload_known:
         flag = "--payload-kg (payload_kg)" if e.payload_kg is None else "--tcp-offset-m (tcp_offset_m)"
         raise ParameterError(f"{log.source}: {flag} missing: {UNKNOWN_PAYLOAD}")

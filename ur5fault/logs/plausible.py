@@ -12,7 +12,8 @@ Limits and their reasons:
   rest of the replay in time;
 - at least :data:`MIN_DURATION_S` seconds and :data:`MIN_SAMPLES` samples (the discrepancy
   workflow fits on a share of the log and judges on the rest; a 3-row log once produced a
-  "finding" and NaN), and at most the run length a simulation may have
+  "finding" and NaN; ``ur5fault diagnose``, which fits nothing, asks instead for one window of its
+  detector, a :class:`MinLength` of its own), and at most the run length a simulation may have
   (:data:`ur5fault.sim.budget.MAX_DURATION_S`);
 - exactly six joints;
 - currents within the current sensor's range, :data:`CURRENT_RANGE_A` (the 14-bit ADC over +-20 A
@@ -26,6 +27,7 @@ Limits and their reasons:
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Iterable, Mapping
 
@@ -41,6 +43,21 @@ MAX_RATE_HZ = 10_000.0
 MAX_GAP_PERIODS = 5.0
 MIN_DURATION_S = 5.0
 MIN_SAMPLES = 250
+
+
+@dataclasses.dataclass(frozen=True)
+class MinLength:
+    """The least a log must cover for a command: ``duration_s`` and ``samples``, and the reason, said when a log
+    is refused."""
+
+    duration_s: float
+    samples: int
+    why: str
+
+
+#: what ``identify``, ``discrepancy`` and ``monitor`` need (they fit on a share of the log and judge the rest)
+FIT_LENGTH = MinLength(MIN_DURATION_S, MIN_SAMPLES,
+                       f"fitting needs at least {MIN_DURATION_S:g} s and {MIN_SAMPLES} samples")
 #: joints count as moving above this speed [rad/s] (3 deg/s, far above standstill noise) and
 #: need this many moving samples for the units check
 UNITS_CHECK_SPEED_RAD_S = 0.05
@@ -74,8 +91,10 @@ def check_increasing(src: str, t: NDArray) -> None:
         raise LogFormatError(f"{src}: time is not increasing at data row {row + 1} (t={t[row]})")
 
 
-def check_sampling(src: str, t: NDArray) -> None:
-    """A plausible sample rate, no long gap, a usable length (``t`` increasing)."""
+def check_sampling(src: str, t: NDArray, length: MinLength | None = None) -> None:
+    """A plausible sample rate, no long gap, a usable length (``t`` increasing; ``length``: the least a log
+    must cover, default :data:`FIT_LENGTH`; a log short of it by less than half a sample period passes)."""
+    length = length or FIT_LENGTH
     dt = np.diff(t)
     if t.size < 2:
         raise LogFormatError(f"{src}: {t.size} sample; at least {MIN_SAMPLES} are needed")
@@ -92,9 +111,8 @@ def check_sampling(src: str, t: NDArray) -> None:
     if duration > MAX_DURATION_S:
         raise LogFormatError(f"{src}: {duration:.0f} s long, above the {MAX_DURATION_S:g} s one simulation may "
                              "cover; cut the log into pieces")
-    if duration < MIN_DURATION_S or t.size < MIN_SAMPLES:
-        raise LogFormatError(f"{src}: {duration:.3g} s and {t.size} samples; fitting needs at least "
-                             f"{MIN_DURATION_S:g} s and {MIN_SAMPLES} samples")
+    if duration + 0.5 * period < length.duration_s or t.size < length.samples:
+        raise LogFormatError(f"{src}: {duration:.3g} s and {t.size} samples; {length.why}")
 
 
 def check_range(src: str, q_rad: NDArray, t: NDArray | None = None, v_rad_s: NDArray | None = None,

@@ -56,7 +56,8 @@ def _stack(data: Mapping[str, NDArray], cols: Sequence[str]) -> NDArray | None:
 
 
 def _assemble(src: str, t: NDArray, required: Mapping[str, NDArray], optional: Mapping[str, NDArray | None],
-              declared: str, labels: tuple[str, str] = ("target_q", "actual_q"), **fields) -> MeasuredLog:
+              declared: str, labels: tuple[str, str] = ("target_q", "actual_q"),
+              length: plausible.MinLength | None = None, **fields) -> MeasuredLog:
     """Checks, optional columns completed (:func:`.regular.complete_optional`), the rows put on the controller
     tick grid (:func:`.regular.on_ticks`), and the log. ``required``: target positions ``"target_q"``, actual
     positions ``"actual_q"`` (both already in radians) and ``"actual_current"``; ``optional``: ``"target_qd"``,
@@ -76,7 +77,7 @@ def _assemble(src: str, t: NDArray, required: Mapping[str, NDArray], optional: M
                          "made continuous")
     plausible.check_increasing(src, t)
     plausible.check_range(src, req["actual_q"], t, opt["actual_qd"], declared)
-    plausible.check_sampling(src, t)
+    plausible.check_sampling(src, t, length)
     plausible.check_units(src, t, req["target_q"], opt["target_qd"], labels[0], declared)
     plausible.check_units(src, t, req["actual_q"], opt["actual_qd"], labels[1], declared)
     keep = {**req, **{k: v for k, v in opt.items() if k not in ("target_qd", "actual_qd")}}
@@ -89,7 +90,7 @@ def _assemble(src: str, t: NDArray, required: Mapping[str, NDArray], optional: M
         tcp_m=a["tcp"], target_torque_Nm=a["target_torque"], logged=logged, notes=tuple(notes), **fields)
 
 
-def read_nist(path: str | Path) -> MeasuredLog:
+def read_nist(path: str | Path, length: plausible.MinLength | None = None) -> MeasuredLog:
     """Read the NIST UR5 layout (positions in degrees, velocities in rad/s; see
     data/nist-ur5/README.md). The layout names its payload and tool offset (:data:`NIST_PAYLOAD_KG`,
     :data:`NIST_TOOL_OFFSET_M`), so the caller gives neither."""
@@ -117,7 +118,7 @@ def read_nist(path: str | Path) -> MeasuredLog:
     optional = {"target_qd": _stack(d, vel_t), "actual_qd": _stack(d, vel_a), "target_current": _stack(d, cur_t),
                 "temperature": _stack(d, temp), "tcp": _stack(d, tcp), "target_torque": _stack(d, torq)}
     return _assemble(src, d["ROBOT_TIME"], required, optional, "degrees",
-                     ("target positions", "actual positions"), payload_kg=NIST_PAYLOAD_KG,
+                     ("target positions", "actual positions"), length, payload_kg=NIST_PAYLOAD_KG,
                      tcp_offset_m=NIST_TOOL_OFFSET_M)
 
 
@@ -127,7 +128,8 @@ RTDE_TIME_COLUMNS = ("timestamp", "time")
 
 
 def read_rtde(path: str | Path, payload_kg: float | None = None,
-              tcp_offset_m: tuple[float, float, float] | None = None) -> MeasuredLog:
+              tcp_offset_m: tuple[float, float, float] | None = None,
+              length: plausible.MinLength | None = None) -> MeasuredLog:
     """Read a UR RTDE CSV as the ``rtde`` recorder writes it (radians, amperes, metres), comma-,
     tab-, semicolon- or space-separated, plain or gzip, with or without a UTF-8 byte-order mark.
 
@@ -166,11 +168,11 @@ def read_rtde(path: str | Path, payload_kg: float | None = None,
     required = {"target_q": _stack(d, qt), "actual_q": _stack(d, qa), "actual_current": _stack(d, ia)}
     optional = {"target_qd": _stack(d, vt), "actual_qd": _stack(d, va), "target_current": _stack(d, ct),
                 "temperature": _stack(d, temp), "tcp": _stack(d, tcp), "target_torque": _stack(d, tm)}
-    return _assemble(src, d[time_col], required, optional, "radians", payload_kg=payload_kg,
+    return _assemble(src, d[time_col], required, optional, "radians", length=length, payload_kg=payload_kg,
                      tcp_offset_m=tcp_offset_m)
 
 
-def read_sim(path: str | Path) -> MeasuredLog:
+def read_sim(path: str | Path, length: plausible.MinLength | None = None) -> MeasuredLog:
     """Read a time series written by ``ur5fault simulate`` (or a campaign's ``timeseries/``).
 
     Uses ``q_set_rad_j*`` as target, ``q_FB_rad_j*`` as the measured position, ``i_FB_A_j*`` as the
@@ -207,7 +209,7 @@ def read_sim(path: str | Path) -> MeasuredLog:
     plausible.check_finite(src, {"time": t, **arrays})
     plausible.check_increasing(src, t)
     plausible.check_range(src, arrays["q_FB_rad"])
-    plausible.check_sampling(src, t)
+    plausible.check_sampling(src, t, length)
     meta = _sim_metadata(schema, src)
     temp = meta.get("joint_temperature_C")
     try:
@@ -239,9 +241,10 @@ def _sim_metadata(schema, src: str) -> dict:
 READERS = {"nist": read_nist, "rtde": read_rtde, "sim": read_sim}
 
 
-def read_log(path: str | Path, fmt: str, **kwargs) -> MeasuredLog:
+def read_log(path: str | Path, fmt: str, length: plausible.MinLength | None = None, **kwargs) -> MeasuredLog:
     """Read a log in one of the formats of :data:`READERS` (``nist``, ``rtde``, ``sim``); ``payload_kg`` and
-    ``tcp_offset_m`` are for ``rtde`` only (the other formats carry their own) and are refused elsewhere."""
+    ``tcp_offset_m`` are for ``rtde`` only (the other formats carry their own) and are refused elsewhere;
+    ``length``: the least the log must cover (default :data:`.plausible.FIT_LENGTH`, what fitting needs)."""
     if fmt not in READERS:
         raise UnknownNameError("log format", fmt, READERS)
     given = [k for k, v in kwargs.items() if v is not None]
@@ -256,6 +259,6 @@ def read_log(path: str | Path, fmt: str, **kwargs) -> MeasuredLog:
         raise LogFormatError(f"{p}: no such file")
     if not p.is_file():
         raise LogFormatError(f"{p}: not a file")
-    log = READERS[fmt](p, **{k: v for k, v in kwargs.items() if v is not None})
+    log = READERS[fmt](p, length=length, **{k: v for k, v in kwargs.items() if v is not None})
     plausible.check_current_units(log.source, {"current": log.current_A, "target current": log.target_current_A})
     return log

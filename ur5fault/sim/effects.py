@@ -249,6 +249,20 @@ def _harmonic(field: str):
     return apply
 
 
+def _motor_harmonic(a, row, j, v):
+    """Add to the joint's motor-angle harmonic of the same period, or set it if the joint has none; one period per
+    joint and run (a second one is refused rather than silently merged)."""
+    k = v["periods_per_rev"]
+    amp = a.motor_harmonic_Nm[row, j]
+    if v["sin_Nm"] == 0.0 and v["cos_Nm"] == 0.0:
+        return
+    if np.any(amp != 0.0) and a.motor_harmonic_per_rev[row, j] != k:
+        raise ParameterError(f"motor_harmonic: one period per joint in one run ({JOINT_NAMES[j]} already has "
+                             f"{a.motor_harmonic_per_rev[row, j]:g} per turn, not {k:g})")
+    a.motor_harmonic_per_rev[row, j] = k
+    amp += (v["sin_Nm"], v["cos_Nm"])
+
+
 def _link_mass(a, row, j, v):
     a.link_mass_kg[row, j] += v["mass_kg"]
     a.link_com_shift_m[row, j] += (v["com_dx_m"], v["com_dy_m"], v["com_dz_m"])
@@ -412,6 +426,18 @@ REGISTRY: dict[str, Effect] = {
             ),
             True,
             _both(_set("cogging_Nm", "amplitude_Nm"), _set("cogging_periods_per_rev", "periods_per_rev")),
+        ),
+        Effect(
+            "motor_harmonic",
+            "rotor torque periodic in the motor angle, with its phase (cogging, motor torque ripple or the strain-wave "
+            "gear's wave generator; the phase is the log's: motor angle = ratio x joint angle)",
+            (
+                EffectParam("sin_Nm", "N*m", -0.5, 0.5, 0.0, "motor-side amplitude of sin(k * motor angle)"),
+                EffectParam("cos_Nm", "N*m", -0.5, 0.5, 0.0, "motor-side amplitude of cos(k * motor angle)"),
+                EffectParam("periods_per_rev", "1/rev", 1.0, 200.0, 1.0, "k: periods per motor turn"),
+            ),
+            True,
+            _motor_harmonic,
         ),
         Effect(
             "breakaway_friction",

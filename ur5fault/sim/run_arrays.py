@@ -47,6 +47,8 @@ class RunArrays:
     motor_pole_pairs: NDArray
     cogging_Nm: NDArray
     cogging_periods_per_rev: NDArray
+    motor_harmonic_Nm: NDArray  # (n_runs, 6, 2): sin and cos amplitudes of the effect ``motor_harmonic``
+    motor_harmonic_per_rev: NDArray
     current_limit_A: NDArray
     resolver_noise_rad: NDArray
     resolver_lsb_rad: NDArray
@@ -129,6 +131,8 @@ def build_run_arrays(params: RobotParams, effects: Sequence[Sequence[EffectSpec]
         motor_pole_pairs=joint(m.pole_pairs),
         cogging_Nm=np.zeros((n, N_JOINTS)),
         cogging_periods_per_rev=np.full((n, N_JOINTS), REGISTRY["cogging"].absent("periods_per_rev")),
+        motor_harmonic_Nm=np.zeros((n, N_JOINTS, 2)),
+        motor_harmonic_per_rev=np.full((n, N_JOINTS), REGISTRY["motor_harmonic"].absent("periods_per_rev")),
         current_limit_A=joint(params.power.current_limit_A),
         resolver_noise_rad=joint(s.resolver_noise_rad),
         resolver_lsb_rad=joint(two_pi / np.asarray(s.resolver_counts_per_rev)),

@@ -1,6 +1,7 @@
-"""Monitoring's pieces: event thresholds from the baseline's own residuals, events on the right joint and time,
-the baseline file round trip; and on the real NIST log (slow) a healthy part consistent with the first part and
-an injected current gain named on its joint with its size."""
+"""Monitoring's pieces: event limits from the baseline's own residual transients (scaled with the motion, a bar
+from the tail of their window maxima), a slow drift not an event while a push of its size is, a baseline's
+within-run drift widening the change bar, the baseline file round trip; and on the real NIST log (slow) its
+undisturbed rest consistent with its first part."""
 
 import dataclasses
 import json
@@ -8,48 +9,112 @@ import json
 import numpy as np
 import pytest
 
+from ur5fault.discrepancy.candidates import LibraryCandidate
 from ur5fault.errors import ParameterError
 from ur5fault.health.monitoring import Observed, assess, fit_baseline
 from ur5fault.health.monitoring.baseline import Baseline, overlay_sha256
-from ur5fault.health.monitoring.events import SETTLE_S, smooth
+from ur5fault.health.monitoring.events import multiplier
 
 PERIOD = 0.008
 
 
-def part(name: str, residual: np.ndarray, moving: bool = True) -> Observed:
+def part(name: str, residual: np.ndarray, moving: bool = True, speed: np.ndarray | None = None,
+         cands=(), X=None, e=None) -> Observed:
     n = residual.shape[0]
-    return Observed(name, PERIOD, np.arange(n) * PERIOD, residual, np.full((n, 6), moving), np.ones(n, bool), (),
-                    np.zeros((0, n, 12)), np.zeros((n, 12)))
+    speed = np.full((n, 6), 0.5 if moving else 0.0) if speed is None else speed
+    X = np.zeros((0, n, 12)) if X is None else X
+    e = np.zeros((n, 12)) if e is None else e
+    return Observed(name, PERIOD, np.arange(n) * PERIOD, residual, speed > 1e-3, np.ones(n, bool), tuple(cands),
+                    X, e, speed, np.zeros((n, 6)))
 
 
 def noise(seed: int, n: int = 2000, sigma: float = 0.1) -> np.ndarray:
     return np.random.default_rng(seed).normal(0.0, sigma, (n, 6))
 
 
-def test_threshold_is_the_largest_smoothed_deviation_of_any_baseline_run():
-    runs = [part(f"r{k}", noise(k)) for k in range(3)]
+def test_spread_grows_with_speed_as_the_baseline_residual_did():
+    """Baseline noise with variance 0.05^2 + 0.1^2 |qd|: the spread at 1.4 rad/s over the one at 0.1 rad/s is
+    the ratio of the generating standard deviations, sqrt(0.0165 / 0.0035), whatever the smoothing does to
+    both."""
+    rng = np.random.default_rng(0)
+    runs = []
+    for k in range(6):
+        speed = np.repeat(rng.uniform(0.01, 1.5, (30, 6)), 150, axis=0)  # 1.2 s plateaus of target speed
+        runs.append(part(f"r{k}", rng.normal(0.0, 1.0, speed.shape) * np.sqrt(0.05**2 + 0.1**2 * speed),
+                         speed=speed))
     b = fit_baseline(runs, "sha")
-    skip = int(round(SETTLE_S / PERIOD))
-    for j in range(6):
-        sm = [smooth(r.residual_A, PERIOD)[skip:, j] for r in runs]
-        med = np.median(np.concatenate(sm))
-        assert b.threshold_A[j, 1] == pytest.approx(max(np.abs(s - med).max() for s in sm))
-    # no baseline sample at rest: the joint's moving threshold stands in
-    np.testing.assert_array_equal(b.threshold_A[:, 0], b.threshold_A[:, 1])
+    slow, fast = (b.scale[:, 0] + b.scale[:, 1] + b.scale[:, 2] * v for v in (0.1, 1.4))  # moving, no accel.
+    np.testing.assert_allclose(np.sqrt(fast / slow), np.sqrt(0.0165 / 0.0035), rtol=0.2)  # 6 x 36 s of noise
 
 
 def test_a_pulse_is_an_event_on_its_joint_and_time_and_noise_is_not():
     b = fit_baseline([part(f"r{k}", noise(k)) for k in range(3)], "sha")
-    quiet = assess(b, part("quiet", noise(10) * 0.8))
+    quiet = assess(b, part("quiet", noise(10)))
     assert quiet == {"log": "quiet", "verdict": "consistent", "changes": [], "events": []}
-    r = noise(11) * 0.8
+    r = noise(11)
     r[1000:1060, 2] += 1.0  # 1 A for 0.48 s on the elbow
     out = assess(b, part("pushed", r))
     assert out["verdict"] == "anomaly" and len(out["events"]) == 1
     ev = out["events"][0]
     assert ev["joints"] == ["elbow_joint"]
     assert abs(ev["t_start_s"] - 8.0) < 0.1 and abs(ev["t_end_s"] - 8.472) < 0.1
-    assert 0.9 < ev["peak_A"] < 1.1
+    assert 0.85 < ev["peak_A"] < 1.15
+
+
+def test_a_slow_drift_at_rest_is_not_an_event_and_a_push_of_its_size_is():
+    """The real wrists at rest: a current that moves by 0.3 A over 3 s (TEST's wrist_2) on sensor noise of
+    0.02 A; the baseline runs stand still with noise only. The drift is no event; a 0.5 s push of 0.3 A is,
+    on its joint, within 0.1 s of its edges."""
+    b = fit_baseline([part(f"r{k}", noise(k, sigma=0.02), moving=False) for k in range(3)], "sha")
+    n = 2000
+    t = np.arange(n) * PERIOD
+    drift = noise(20, sigma=0.02)
+    drift[:, 4] += 0.3 * np.clip((t - 6.0) / 3.0, 0.0, 1.0)  # 0.3 A over 3 s from 6 s on, wrist_2
+    out = assess(b, part("drift", drift, moving=False))
+    assert out["events"] == [] and out["verdict"] == "consistent", out
+    pushed = noise(21, sigma=0.02)
+    pushed[(t >= 7.0) & (t < 7.5), 4] += 0.3
+    out = assess(b, part("pushed", pushed, moving=False))
+    assert out["verdict"] == "anomaly" and len(out["events"]) == 1, out
+    ev = out["events"][0]
+    assert ev["joints"] == ["wrist_2_joint"]
+    assert abs(ev["t_start_s"] - 7.0) < 0.1 and abs(ev["t_end_s"] - 7.5) < 0.1
+
+
+def test_a_longer_log_gets_a_higher_bar_not_more_false_alarms():
+    b = fit_baseline([part(f"r{k}", noise(k)) for k in range(3)], "sha")
+    assert np.all(multiplier(b.tail, 400) > multiplier(b.tail, 100))
+    # 20 undisturbed logs of 64 s from the baseline's own noise: at 1 % per log, at most one may raise an event
+    alarms = sum(assess(b, part(f"q{k}", noise(100 + k, n=8000)))["verdict"] != "consistent" for k in range(20))
+    assert alarms <= 1
+
+
+def offset_run(name: str, offset_A: np.ndarray, seed: int) -> Observed:
+    """A run whose wrist_3 current carries ``offset_A`` ``(n,)`` plus 0.05 A of noise, with the one library
+    column of a wrist_3 current-sensor offset (weighted by a 1 A sigma)."""
+    n = offset_A.size
+    X = np.zeros((1, n, 12))
+    X[0, :, 5] = 1.0
+    e = np.random.default_rng(seed).normal(0.0, 0.05, (n, 12))
+    e[:, 5] += offset_A
+    cand = LibraryCandidate("current_sensor_offset", 5, param="offset_A", x0=0.0, probe=0.01)
+    return part(name, np.zeros((n, 6)), cands=(cand,), X=X, e=e)
+
+
+def test_a_drift_within_the_baseline_runs_widens_the_change_bar():
+    """Three baseline runs of 20 s, wrist_3 offset -0.10 A: steady, or drifting -0.08 -> -0.12 A within each run.
+    A new run steady at -0.16 A is a change against the steady baseline, not against the drifting one."""
+    n = 2500
+    steady = fit_baseline([offset_run(f"s{k}", np.full(n, -0.10), k) for k in range(3)], "sha")
+    drifting = fit_baseline([offset_run(f"d{k}", np.linspace(-0.08, -0.12, n), k) for k in range(3)], "sha")
+    label = "wrist_3_joint: current_sensor_offset.offset_A"
+    (m_s, v_s, k_s), (m_d, v_d, k_d) = steady.candidates[label], drifting.candidates[label]
+    assert k_s == k_d == 12  # four 5 s blocks of each run
+    assert m_s == pytest.approx(-0.10, abs=0.005) and m_d == pytest.approx(-0.10, abs=0.005)
+    assert v_d > 20 * v_s
+    new = offset_run("new", np.full(n, -0.16), 9)
+    assert assess(steady, new)["verdict"] == "changed"
+    assert assess(drifting, new)["verdict"] == "consistent"
 
 
 def test_baseline_round_trip_and_refusals(tmp_path):
@@ -57,21 +122,24 @@ def test_baseline_round_trip_and_refusals(tmp_path):
     path = tmp_path / "baseline.json"
     path.write_text(json.dumps(b.to_json()))
     back = Baseline.load(path)
-    np.testing.assert_array_equal(back.threshold_A, b.threshold_A)
-    np.testing.assert_array_equal(back.median_A, b.median_A)
+    np.testing.assert_array_equal(back.scale, b.scale)
+    np.testing.assert_array_equal(back.tail, b.tail)
     assert back.segments == ("a", "b") and back.overlay_sha256 == b.overlay_sha256
-    path.write_text(json.dumps({**b.to_json(), "threshold_A": 3}))
+    path.write_text(json.dumps({**b.to_json(), "tail": 3}))
     with pytest.raises(ParameterError, match="not a valid monitor baseline"):
         Baseline.load(path)
+    with pytest.raises(ParameterError, match="too few judged samples"):
+        fit_baseline([part("short", noise(4, n=40))], "sha")  # 0.32 s
     with pytest.raises(ParameterError, match="sample period"):
         assess(b, dataclasses.replace(part("x", noise(3)), period_s=0.002))
 
 
 @pytest.mark.slow
-def test_nist_rest_and_an_injected_gain_on_its_joint(nist_path):
-    """Baseline: the first FIT_FRACTION of the real NIST log under the packaged model; the rest with the logged
-    shoulder_lift current times 1.3 (a current-sensor gain fault) is 'changed' on that joint, the gain read as
-    about the injected one relative to the baseline's own estimate."""
+def test_nist_rest_consistent_with_its_first_part_despite_the_wrist_3_offset_drift(nist_path):
+    """Baseline: the first FIT_FRACTION of the real NIST log under the packaged model (whose values were fitted
+    on this log). The logged wrist_3 current's offset moves from about -0.10 A there to -0.14 A in the rest (the
+    reading of docs/monitoring.md's earlier version, which called the rest 'changed' for it); the drift between
+    the first part's time blocks now bounds it, and the undisturbed rest raises no event."""
     from ur5fault.health.monitoring import observe
     from ur5fault.logs import read_log
     from ur5fault.twin.residuals import FIT_FRACTION
@@ -80,14 +148,6 @@ def test_nist_rest_and_an_injected_gain_on_its_joint(nist_path):
     span = float(log.t_s[-1] - log.t_s[0])
     split = FIT_FRACTION * span
     b = fit_baseline([observe(log, part_s=(0.0, split), jobs=2)], overlay_sha256({}, ()))
-    cur = log.current_A.copy()
-    cur[:, 1] *= 1.3
-    out = assess(b, observe(dataclasses.replace(log, current_A=cur), part_s=(split, span + 1), jobs=2))
-    assert out["verdict"] == "changed"
-    ch = [c for c in out["changes"] if c["joint"] == "shoulder_lift_joint"]
-    assert ch, out["changes"]
-    c = ch[0]
-    gains = [x for x in [c, *c["alternatives"]] if (x["effect"], x["parameter"]) == ("current_sensor_gain", "gain")]
-    assert gains, c
-    # read relative to what the baseline part itself gives on that joint (the model's own gain error there)
-    assert gains[0]["value"] / gains[0]["baseline_value"] == pytest.approx(1.3, abs=0.06)
+    assert b.candidates["wrist_3_joint: current_sensor_offset.offset_A"][2] == 4  # four 5 s blocks of 20 s
+    out = assess(b, observe(log, part_s=(split, span + 1), jobs=2))
+    assert out["verdict"] == "consistent", out

@@ -18,7 +18,7 @@ import numpy as np
 from ...errors import ParameterError
 from ...logs import MeasuredLog
 from ...sim.effects import EffectSpec
-from ...twin import LogReplay
+from ...twin import LogReplay, Replayed
 from .score import check_schema, score_windows
 from .windows import Window, window_features
 
@@ -26,18 +26,29 @@ from .windows import Window, window_features
 TWIN_SEED = 1
 
 
-def diagnose(log: MeasuredLog, detector_dir: str | Path, params_overrides: dict | None = None,
-             base_effects: Sequence[EffectSpec] = (), *, seed: int = TWIN_SEED) -> dict[str, Any]:
-    """Diagnose ``log`` with the classifiers saved in ``detector_dir``; return the diagnosis (``diagnosis.json``'s
-    content) with the windows' features under ``"_windows"``."""
-    from ..diagnostics.saved import load_models
-
-    models, schema = load_models(detector_dir)
-    window_s = check_schema(schema, str(detector_dir))
+def replay_twin(log: MeasuredLog, params_overrides: dict | None = None, base_effects: Sequence[EffectSpec] = (),
+                *, seed: int = TWIN_SEED) -> tuple[LogReplay, Replayed]:
+    """The log's digital twin: its commands replayed through the model (it depends on the log's commands,
+    payload, tool and temperatures only, never on its measured signals)."""
     replay = LogReplay(log, params_overrides, base_effects, seed=seed)
     rep = replay.run([()])[0]
     if not rep.ok:
         raise ParameterError(f"{log.source}: the twin's replay failed ({rep.status}); check the log and the model")
+    return replay, rep
+
+
+def diagnose(log: MeasuredLog, detector_dir: str | Path, params_overrides: dict | None = None,
+             base_effects: Sequence[EffectSpec] = (), *, seed: int = TWIN_SEED,
+             twin: tuple[LogReplay, Replayed] | None = None) -> dict[str, Any]:
+    """Diagnose ``log`` with the classifiers saved in ``detector_dir``; return the diagnosis (``diagnosis.json``'s
+    content) with the windows' features under ``"_windows"``.  ``twin``: the :func:`replay_twin` of a log with
+    the same commands, conditions and model (e.g. the same log before a fault was written into its measured
+    signals), reused instead of replayed again."""
+    from ..diagnostics.saved import load_models
+
+    models, schema = load_models(detector_dir)
+    window_s = check_schema(schema, str(detector_dir))
+    replay, rep = twin if twin is not None else replay_twin(log, params_overrides, base_effects, seed=seed)
     temp = (np.mean(log.temperature_C) if log.temperature_C is not None
             else float(np.mean(replay.params.joint_temperature_C)))
     context = {"payload_kg": float(log.payload_kg), "temperature_C": float(temp)}
@@ -53,6 +64,14 @@ def diagnose(log: MeasuredLog, detector_dir: str | Path, params_overrides: dict 
                      "rate-dependent features (current spikes, kurtosis, crest factor, high-frequency energy, "
                      "residual RMS) are not on the scale the detector learned")
     thr = float(schema["detector_threshold_5pct_false_alarms"])
+    p_thr = thr
+    if models.calibrator is None:
+        notes.append("these classifiers were saved without a calibration: p_fault is the detector's own "
+                     "probability, not a calibrated frequency (run `ur5fault benchmark` again to calibrate it)")
+    else:
+        from ..diagnostics.calibration import apply
+
+        p_thr = float(apply(models.calibrator, np.array([thr]))[0])
     flagged = [w for w in scored if w["flagged"]]
     return {
         "log": log.source,
@@ -60,7 +79,10 @@ def diagnose(log: MeasuredLog, detector_dir: str | Path, params_overrides: dict 
         "log_period_s": log.period_s,
         "detector": {"folder": str(detector_dir), "feature_set": schema.get("feature_set"),
                      "training_set_sha256": schema.get("training_set_sha256"),
-                     "threshold_5pct_false_alarms": thr, "window_s": window_s,
+                     "threshold_5pct_false_alarms": thr, "calibrated": models.calibrator is not None,
+                     "calibration": schema.get("calibration", {}) and {
+                         k: v for k, v in schema["calibration"].items() if k in ("method", "n_folds", "grouped_by")},
+                     "p_fault_at_threshold": p_thr, "window_s": window_s,
                      "ur5fault_version": schema.get("ur5fault_version")},
         "conditions": context,
         "n_windows": len(scored),
@@ -71,4 +93,4 @@ def diagnose(log: MeasuredLog, detector_dir: str | Path, params_overrides: dict 
     }
 
 
-__all__ = ["diagnose"]
+__all__ = ["diagnose", "replay_twin"]

@@ -31,6 +31,7 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
     from . import diagnose
     from .report import write_diagnosis
     from .score import check_schema
+    from .windows import window_length
 
     entries = log_entries(args)
     if len(entries) != 1:
@@ -39,9 +40,9 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
         raise ParameterError(f"diagnose reads one log; the manifest names {len(entries)}")
     require_sklearn()
     check_writable(args.out, folder=True)
-    check_schema(load_models(args.detector)[1], args.detector)  # refused before the replay
+    window_s = check_schema(load_models(args.detector)[1], args.detector)  # refused before the replay
     check_files_length([e.path for e in entries], "diagnose")
-    log = read_entry(entries[0])
+    log = read_entry(entries[0], window_length(window_s))
     check_logs_length([log], "diagnose")
     overlay = Overlay.load(args.model) if args.model else None
     d = diagnose(log, args.detector, dict(overlay.params) if overlay else None, overlay.effects if overlay else ())
@@ -49,7 +50,7 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
         print(f"note: {n}", file=sys.stderr)
     paths = write_diagnosis(d, args.out)
     print(f"{d['log']}: {d['n_flagged']} of {d['n_windows']} windows of {d['detector']['window_s']:g} s flagged "
-          f"(p(fault) >= {d['detector']['threshold_5pct_false_alarms']:.3f}); largest p(fault) "
+          f"(p(fault) >= {d['detector']['p_fault_at_threshold']:.3f}); largest p(fault) "
           f"{max(w['p_fault'] for w in d['windows']):.3f}")
     print(f"wrote {', '.join(str(p) for p in paths)}")
     return 0

@@ -21,7 +21,7 @@ def _figure(d: dict[str, Any]):
     fig = Figure(figsize=(8, 4.5), layout="constrained")
     ax = fig.add_subplot(2, 1, 1)
     ax.step(mid, [x["p_fault"] for x in w], where="mid", color="k", label="p(fault)")
-    ax.axhline(d["detector"]["threshold_5pct_false_alarms"], color="r", ls="--", lw=1,
+    ax.axhline(d["detector"]["p_fault_at_threshold"], color="r", ls="--", lw=1,
                label="threshold at 5 % false alarms")
     ax.set_ylim(0, 1.02)
     ax.set_ylabel("p(fault)")
@@ -50,7 +50,8 @@ def _report(d: dict[str, Any]) -> str:
              f"{d['conditions']['payload_kg']:g} kg, temperature {d['conditions']['temperature_C']:.1f} degC. "
              f"Detector: {det['folder']} ({det['feature_set']} features, training set "
              f"{str(det['training_set_sha256'])[:12]}), windows of {det['window_s']:g} s, flagged at "
-             f"p(fault) >= {det['threshold_5pct_false_alarms']:.3f} (5 % false alarms on its test split).", "",
+             f"p(fault) >= {det['p_fault_at_threshold']:.3f} (5 % false alarms on its test split; p(fault) "
+             f"{'calibrated' if det['calibrated'] else 'NOT calibrated: the detector saved no calibration'}).", "",
              f"**{d['n_flagged']} of {d['n_windows']} windows flagged.**", "",
              "| window [s] | p(fault) | flagged | likeliest joint | likeliest kinds there (size, interval) |",
              "| --- | --- | --- | --- | --- |"]

@@ -2,13 +2,16 @@
 of a fault per window and joint, the likeliest fault kinds with their size estimates, and "cannot tell" where
 the window's motion does not exercise a kind.
 
-Probabilities: ``p_fault`` is the detector's probability that the window's robot is faulty; ``flagged`` compares
-it with the detector's threshold at 5 % false alarms on the training campaign's test split (the benchmark's
-operating point, saved in the schema). Per joint, ``p_fault_joint`` = ``p_fault`` x the localiser's probability
+Probabilities: ``p_fault`` is the probability that the window's robot is faulty - the detector's probability
+through the calibration map saved with it (:mod:`ur5fault.health.diagnostics.calibration`: fitted on training
+runs the detector was not fitted on), or the detector's own when the classifiers were saved without one;
+``p_fault_detector`` is the detector's own.  ``flagged`` compares the detector's own probability with its
+threshold at 5 % false alarms on the training campaign's test split (the benchmark's operating point, saved in
+the schema; the map is monotonic, so this is the same as the calibrated one against the mapped threshold).
+Per joint, ``p_fault_joint`` = ``p_fault`` x the localiser's probability
 of that joint (the localiser is trained on single-joint faults, so the six sum to ``p_fault``). Kinds: the kind
 classifier's probabilities over the fault kinds, renormalised without ``healthy`` (the probability of each kind
-given a fault). How well these probabilities are calibrated is measured on the benchmark's test split by
-``bench/diagnose_real_logs.py`` (docs/diagnostics.md).
+given a fault; not calibrated).
 
 Size estimates are the twin features' least-squares projections (:mod:`ur5fault.health.twin_features`),
 converted to the unit of the campaign's ``fault_size``; the interval is the range of the same estimate on the
@@ -28,6 +31,7 @@ import pandas as pd
 
 from ...errors import ConfigFileError
 from ...sim.axes import N_JOINTS
+from ..diagnostics import calibration
 from ..diagnostics.data import CONTEXT_COLUMNS, SIM_ONLY_PREFIX
 from ..diagnostics.saved import SCHEMA_FORMAT
 from ..features import FEATURE_UNITS
@@ -133,7 +137,8 @@ def score_windows(models, schema: dict[str, Any], windows: list[Window], has_mot
     x = pd.DataFrame([w.features for w in windows])[names].to_numpy(dtype=float)
     thr = float(schema["detector_threshold_5pct_false_alarms"])
     with single_threaded():
-        p = models.detector.predict_proba(x)[:, list(models.detector.classes_).index(1)]
+        p_det = models.detector.predict_proba(x)[:, list(models.detector.classes_).index(1)]
+        p = p_det if models.calibrator is None else calibration.apply(models.calibrator, p_det)
         loc = models.localiser.predict_proba(x) if models.localiser is not None else None
         kind = models.kind.predict_proba(x) if models.kind is not None else None
     out = []
@@ -162,6 +167,7 @@ def score_windows(models, schema: dict[str, Any], windows: list[Window], has_mot
                                   if ok and all(np.isfinite(halves)) else None,
                                   "cannot_tell": c in blind})
             joints.append({"joint": j + 1, "p_fault_joint": pj, "kinds": kinds, "cannot_tell": blind})
-        out.append({"start_s": w.start_s, "end_s": w.end_s, "p_fault": float(p[i]), "flagged": bool(p[i] >= thr),
+        out.append({"start_s": w.start_s, "end_s": w.end_s, "p_fault": float(p[i]), "p_fault_detector": float(p_det[i]),
+                    "flagged": bool(p_det[i] >= thr),
                     "joints": joints})
     return out

@@ -18,15 +18,13 @@ from numpy.typing import NDArray
 
 from ...errors import ParameterError
 from ...logs import MeasuredLog
+from ...logs.plausible import MinLength
 from ...sim.axes import N_JOINTS
 from ...twin import LogReplay, Replayed
 from ...twin.residuals import CONDITION_REST_SPEED_RAD_S
 from ..features import run_features
+from ..signals import needs_motor_encoders
 from ..twin_features import ESTIMATE_UNITS, FLANK_SHARE, projection_columns, twin_features
-
-#: features that need the motor encoders (NaN for a log without them)
-MISMATCH_MARKERS = ("enc_mismatch_", "twin_mismatch_", "twin_est_mismatch_offset", "twin_est_backlash",
-                    "twin_est_compliance")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -59,6 +57,17 @@ def _signals(log: MeasuredLog, rep: Replayed, lo: int, hi: int, ratio: NDArray) 
     twin = {"q_FB_rad": pos, "i_FB_A": rep.y[lo:hi, 0], "q_M_FB_rad": twin_motor,
             "i_q_A": rep.current_true_A[lo:hi], "T_gear_Nm": rep.torque_gear_Nm[lo:hi]}
     return meas, twin
+
+
+#: the fewest samples a window may have (the features take gradients of gradients)
+MIN_WINDOW_SAMPLES = 3
+
+
+def window_length(window_s: float) -> MinLength:
+    """What ``ur5fault diagnose`` needs of a log: one whole window of ``window_s`` (the detector's training runs'
+    duration), nothing more - it fits nothing to the log."""
+    return MinLength(window_s, MIN_WINDOW_SAMPLES, f"`ur5fault diagnose` needs at least one window of {window_s:g} s "
+                                                   "(the detector's training runs' duration)")
 
 
 def torque_reversals(torque_Nm: NDArray) -> tuple[int, ...]:
@@ -99,7 +108,7 @@ def window_features(log: MeasuredLog, replay: LogReplay, rep: Replayed, window_s
     period = log.period_s
     n_win = int(round(window_s / period))
     n = rep.y.shape[0]
-    if n_win < 3 or n < n_win:
+    if n_win < MIN_WINDOW_SAMPLES or n < n_win:
         raise ParameterError(f"{log.source}: {n * period:.2f} s after its first sample, shorter than one window "
                              f"of {window_s:g} s (the detector's training runs' duration)")
     ratio = replay.gear_ratio
@@ -124,7 +133,7 @@ def window_features(log: MeasuredLog, replay: LogReplay, rep: Replayed, window_s
                                                             replay.params).items() if k.startswith("twin_est_")}
                            for sl in (slice(0, mid), slice(mid, None)))
         if log.q_motor_rad is None:
-            f.update({k: float("nan") for k in f if any(m in k for m in MISMATCH_MARKERS)})
+            f.update({k: float("nan") for k in f if needs_motor_encoders(k)})
         f.update(context)
         cur, mis = projection_columns(t[lo:hi], q_set[lo:hi], twin, replay.params)
         vif = tuple(dict(zip(ESTIMATE_UNITS, inflation([c[:, j] for c in cur]) + inflation([c[:, j] for c in mis])))

@@ -21,6 +21,7 @@ from typing import Any
 import pandas as pd
 
 from ...errors import ParameterError
+from .calibration import fit_calibration, test_reliability
 from .data import CONTEXT_COLUMNS, FEATURE_SETS, Dataset, has_twin_features, load_dataset, load_features
 from .metrics import alarm_threshold, detection, detector_scores, fault_kind, importance, localisation
 from .models import Models, fit_models
@@ -32,7 +33,8 @@ from .thresholds import PAPER_TCP_MM, backlash_thresholds
 def evaluate(features: pd.DataFrame, *, seed: int = 0, shuffle_labels: bool = False,
              threshold_mm: float = PAPER_TCP_MM, source: str = "features", with_figures: bool = True,
              with_importance: bool = True, feature_set: str = "paper", saved: tuple[Models, dict] | None = None,
-             test_features: pd.DataFrame | None = None) -> tuple[dict[str, Any], dict[str, Any]]:
+             test_features: pd.DataFrame | None = None, calibrate: bool = False
+             ) -> tuple[dict[str, Any], dict[str, Any]]:
     """Train on the train split, score on the test split.
 
     Args:
@@ -44,6 +46,8 @@ def evaluate(features: pd.DataFrame, *, seed: int = 0, shuffle_labels: bool = Fa
         saved: ``(models, schema)`` of :func:`.saved.load_models`: score these instead of training
             (their inputs and detector threshold); ``features`` then only gives the size ranges.
         test_features: score on every ``ok`` row of this table (another campaign) instead of the test split.
+        calibrate: also calibrate the detector's probability on out-of-fold predictions of the train split
+            (:mod:`.calibration`; not with shuffled labels) and report its reliability on the test split.
 
     Returns:
         ``(metrics, figures)``: every number (JSON-able) and the matplotlib Figures by name.
@@ -52,13 +56,13 @@ def evaluate(features: pd.DataFrame, *, seed: int = 0, shuffle_labels: bool = Fa
 
     with single_threaded():
         return _evaluate(features, seed, shuffle_labels, threshold_mm, source, with_figures, with_importance,
-                         feature_set, saved, test_features)
+                         feature_set, saved, test_features, calibrate)
 
 
 def _evaluate(features: pd.DataFrame, seed: int, shuffle_labels: bool, threshold_mm: float, source: str,
               with_figures: bool, with_importance: bool, feature_set: str = "paper",
-              saved: tuple[Models, dict] | None = None,
-              test_features: pd.DataFrame | None = None) -> tuple[dict[str, Any], dict[str, Any]]:
+              saved: tuple[Models, dict] | None = None, test_features: pd.DataFrame | None = None,
+              calibrate: bool = False) -> tuple[dict[str, Any], dict[str, Any]]:
     t0 = time.perf_counter()
     ds: Dataset = load_dataset(features, feature_set if saved is None else saved[1]["feature_set"])
     if test_features is not None:
@@ -66,10 +70,17 @@ def _evaluate(features: pd.DataFrame, seed: int, shuffle_labels: bool, threshold
         other = test_features[test_features["status"] == "ok"].reset_index(drop=True)
         ds = dataclasses.replace(ds, test=other, inputs=tuple(names))
     models = fit_models(ds, seed, shuffle_labels) if saved is None else saved[0]
+    cal_fit: dict[str, Any] = {}
+    if calibrate and saved is None and not shuffle_labels:
+        models.calibrator, cal_fit = fit_calibration(ds, seed)
     t_fit = time.perf_counter() - t0
     te = ds.test
     score = detector_scores(ds, models)
     healthy = (te["fault"] == "healthy").to_numpy()
+    calib = None
+    if models.calibrator is not None:
+        calib = {**(cal_fit.get("info") or saved[1].get("calibration") or {}),
+                 "test": test_reliability(score, ~healthy, models.calibrator, cal_fit.get("isotonic"))}
     saved_thr = None if saved is None else float(saved[1]["detector_threshold_5pct_false_alarms"])
     thr = alarm_threshold(score, healthy) if saved_thr is None else saved_thr
     detected = score > thr
@@ -100,6 +111,7 @@ def _evaluate(features: pd.DataFrame, seed: int, shuffle_labels: bool, threshold
         "localisation": loc,
         "kind": kind,
         "backlash": bl,
+        "calibration": calib,
         "importance": imp,
         "timing": {"fit_s": t_fit, "benchmark_wall_s": time.perf_counter() - t0},
     }
@@ -117,6 +129,8 @@ def _evaluate(features: pd.DataFrame, seed: int, shuffle_labels: bool, threshold
         }
         if imp:
             out_figs["importance"] = figs.importance_bars(imp)
+        if calib is not None:
+            out_figs["reliability"] = figs.reliability_diagram(calib["test"])
     metrics["timing"]["benchmark_wall_s"] = time.perf_counter() - t0
     metrics["_models"] = models  # taken out before writing (run_benchmark saves them)
     return metrics, out_figs
@@ -167,7 +181,7 @@ def run_benchmark(campaign_dir: str | Path, out: str | Path | None = None, *, se
         metrics["out"] = str(out_dir)
         return metrics
     metrics, figures = evaluate(features, seed=seed, shuffle_labels=shuffle_labels, threshold_mm=thr,
-                                source=str(campaign_dir), feature_set=feature_set)
+                                source=str(campaign_dir), feature_set=feature_set, calibrate=not shuffle_labels)
     models = metrics.pop("_models")
     if compare and has_twin_features(features):
         metrics["comparison"] = compare_feature_sets(features, seed, thr, str(campaign_dir))
@@ -175,7 +189,9 @@ def run_benchmark(campaign_dir: str | Path, out: str | Path | None = None, *, se
     write_report(metrics, figures, out_dir)
     if not shuffle_labels:
         save_models(models, load_dataset(features, feature_set), feature_set,
-                    metrics["detection"]["threshold_score"], out_dir, mean_run_duration_s(man), man.get("log_period_s"))
+                    metrics["detection"]["threshold_score"], out_dir, mean_run_duration_s(man), man.get("log_period_s"),
+                    calibration=None if metrics["calibration"] is None else {
+                        k: v for k, v in metrics["calibration"].items() if k != "test"})
     metrics["out"] = str(out_dir)
     return metrics
 

@@ -127,6 +127,27 @@ def importance_bars(importance: list[dict[str, Any]], ax=None) -> Figure:
     return fig
 
 
+def reliability_diagram(test: dict[str, Any], ax=None) -> Figure:
+    """Reliability on the test split: per probability bin, the share of faulty runs against the mean
+    probability, for the detector's own probability and the calibrated one (``test``: :mod:`.calibration`'s
+    ``test_reliability``); the diagonal is a perfectly calibrated probability."""
+    fig, ax = _axes(ax, (5, 5))
+    styles = {"detector": ("0.45", "s", "detector's probability"), "calibrated": ("C0", "o", "calibrated (Platt)"),
+              "isotonic": ("C2", "^", "isotonic (comparison)")}
+    for key, rel in test.items():
+        color, marker, label = styles.get(key, ("k", "x", key))
+        b = rel["bins"]
+        sizes = 12 + 60 * np.sqrt(np.array([x["n"] for x in b]) / max(rel["n"], 1))
+        ax.plot([x["mean_p"] for x in b], [x["share_faulty"] for x in b], color=color, lw=1, alpha=0.8)
+        ax.scatter([x["mean_p"] for x in b], [x["share_faulty"] for x in b], s=sizes, color=color, marker=marker,
+                   label=f"{label}: Brier {rel['brier']:.3f}, ECE {rel['ece']:.3f}")
+    ax.plot([0, 1], [0, 1], color="0.6", lw=0.8, ls=":", label="calibrated exactly")
+    ax.set(xlim=(0, 1), ylim=(0, 1), xlabel="mean p(fault) in the bin", ylabel="share of faulty test runs",
+           title="Reliability of p(fault), test split (marker area ~ runs)")
+    ax.legend(fontsize=7, loc="upper left")
+    return fig
+
+
 def _axes(ax, size):
     if ax is not None:
         return ax.figure, ax

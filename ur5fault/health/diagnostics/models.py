@@ -46,8 +46,8 @@ def require_sklearn() -> None:
     except ImportError:  # pragma: no cover - depends on the installation
         from ...errors import Ur5FaultError
 
-        raise Ur5FaultError("ur5fault benchmark needs scikit-learn and skops: pip install 'scikit-learn>=1.3' "
-                            "'skops>=0.10' (from a checkout: pip install '.[ml]')") from None
+        raise Ur5FaultError("ur5fault benchmark and diagnose need scikit-learn and skops: pip install "
+                            "'scikit-learn>=1.3' 'skops>=0.10' (the package's [ml] extra)") from None
 
 
 def make_classifier(seed: int):
@@ -65,6 +65,8 @@ class Models:
     localiser: Any
     kind: Any
     shuffled_labels: bool
+    #: the map from the detector's probability to a calibrated one (:mod:`.calibration`); None: not calibrated
+    calibrator: Any = None
 
 
 def joint_fault_rows(df) -> np.ndarray:

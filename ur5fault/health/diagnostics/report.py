@@ -93,11 +93,24 @@ def markdown(m: dict[str, Any]) -> str:
               "| input | AUC drop (s.d.) |", "| --- | --- |"]
     lines += [f"| {x['feature']} | {_f(x['auc_drop_mean'], '.4f')} ({_f(x['auc_drop_std'], '.4f')}) |"
               for x in m["importance"][:12]]
+    if m.get("calibration"):
+        lines += calibration_lines(m["calibration"])
     if m.get("comparison"):
         lines += comparison_lines(m["comparison"])
     lines += ["", f"Benchmark wall time {m['timing']['benchmark_wall_s']:.1f} s. Figures: "
               + ", ".join(f"`{f}`" for f in m["figures"]) + "."]
     return "\n".join(lines) + "\n"
+
+
+def calibration_lines(cal: dict[str, Any]) -> list[str]:
+    """Reliability of p(fault) on the test runs, before and after the calibration."""
+    names = {"detector": "detector's probability", "calibrated": f"calibrated ({cal.get('method', '?')}, saved)",
+             "isotonic": "isotonic (comparison, not saved)"}
+    lines = ["", f"## Calibration of p(fault) (fitted on out-of-fold predictions of the train split, "
+                 f"{cal.get('n_folds', '?')} folds grouped by motion; scored on {cal['test']['detector']['n']} "
+                 "test runs)", "", "| probability | Brier score | expected calibration error |", "| --- | --- | --- |"]
+    lines += [f"| {names.get(k, k)} | {_f(v['brier'])} | {_f(v['ece'])} |" for k, v in cal["test"].items()]
+    return lines
 
 
 def comparison_lines(cmp: dict[str, Any]) -> list[str]:

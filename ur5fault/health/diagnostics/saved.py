@@ -2,9 +2,10 @@
 
 ``<out>/models/``:
 
-* ``classifiers.skops``: the detector, the localiser and the fault-kind classifier (scikit-learn
-  objects in skops' format: loading it runs no code from the file; :func:`load_models` refuses any
-  type outside scikit-learn and numpy);
+* ``classifiers.skops``: the detector, the localiser, the fault-kind classifier and the calibration map of
+  the detector's probability (:mod:`.calibration`; absent from classifiers saved before it: they still load,
+  and ``ur5fault diagnose`` says that its p(fault) is not calibrated) - scikit-learn objects in skops' format:
+  loading it runs no code from the file; :func:`load_models` refuses any type outside scikit-learn and numpy;
 * ``schema.json``: the input columns in order with their units, the feature set, the classes of each
   classifier, the detector threshold at 5 % false alarms (on the training campaign's test split), a
   SHA-256 of the training rows (inputs and labels), the package, scikit-learn and skops versions, and the
@@ -48,9 +49,11 @@ def training_hash(ds: Dataset) -> str:
 
 
 def save_models(models: Models, ds: Dataset, feature_set: str, threshold_score: float, out: Path,
-                window_s: float | None = None, log_period_s: float | None = None) -> Path:
+                window_s: float | None = None, log_period_s: float | None = None,
+                calibration: dict[str, Any] | None = None) -> Path:
     """Write the classifiers and their schema into ``out/models``; return that folder (``window_s``,
-    ``log_period_s``: the training runs' simulated duration and log period, from the campaign manifest)."""
+    ``log_period_s``: the training runs' simulated duration and log period, from the campaign manifest;
+    ``calibration``: how ``models.calibrator`` was fitted, recorded in the schema)."""
     import sklearn
     import skops
     import skops.io as sio
@@ -60,7 +63,8 @@ def save_models(models: Models, ds: Dataset, feature_set: str, threshold_score: 
     folder = Path(out) / MODELS_DIR
     folder.mkdir(parents=True, exist_ok=True)
     objs = {"detector": models.detector, "localiser": models.localiser, "kind": models.kind}
-    write_bytes_atomic(folder / CLASSIFIERS_FILE, sio.dumps({k: v for k, v in objs.items() if v is not None}))
+    stored = {**objs, "calibrator": models.calibrator}
+    write_bytes_atomic(folder / CLASSIFIERS_FILE, sio.dumps({k: v for k, v in stored.items() if v is not None}))
     units = column_units(ds.inputs)
     schema = {
         "schema_format": SCHEMA_FORMAT,
@@ -77,6 +81,8 @@ def save_models(models: Models, ds: Dataset, feature_set: str, threshold_score: 
         "skops_version": skops.__version__,
         "window_s": None if window_s is None else float(window_s),
         "log_period_s": None if log_period_s is None else float(log_period_s),
+        # None: p(fault) is the detector's own probability, not calibrated (classifiers saved before calibration)
+        "calibration": None if models.calibrator is None else (calibration or {"method": "unrecorded"}),
     }
     write_json_atomic(folder / SCHEMA_FILE, schema)
     return folder
@@ -104,8 +110,11 @@ def load_models(folder: str | Path) -> tuple[Models, dict[str, Any]]:
                               "not loaded")
     objs = sio.loads(data, trusted=sio.get_untrusted_types(data=data))
     schema = json.loads(schema_path.read_text())
+    if (objs.get("calibrator") is None) != (schema.get("calibration") is None):
+        raise ConfigFileError(f"{folder}: {CLASSIFIERS_FILE} and {SCHEMA_FILE} disagree on the calibration of "
+                              "p(fault); the folder is mixed from two runs: run `ur5fault benchmark` again")
     return Models(objs.get("detector"), objs.get("localiser"), objs.get("kind"),
-                  bool(schema.get("shuffled_labels"))), schema
+                  bool(schema.get("shuffled_labels")), objs.get("calibrator")), schema
 
 
 def check_inputs(features: pd.DataFrame, schema: dict[str, Any], where: str) -> list[str]:

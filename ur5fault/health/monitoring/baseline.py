@@ -1,8 +1,9 @@
 """The baseline of a robot: its fitted model overlay and the residual statistics of healthy runs under it.
 
 :func:`fit_baseline` takes healthy runs of the robot replayed under the overlay (:func:`.observe.observe`) and
-keeps, per joint and motion state, the smoothed current residual's median and threshold (:mod:`.events`),
-and per library candidate the mean and spread of its estimates over the runs (:mod:`.changes`). It is written
+keeps, per joint, the spread model of the current residual's transient and the tail of its normalised window
+maxima (:mod:`.events`), and per library candidate the mean and spread of its estimates over time blocks of the
+runs (:mod:`.changes`). It is written
 as ``baseline.json`` (:meth:`Baseline.to_json`) with the SHA-256 of the overlay it belongs to, so a later
 ``ur5fault monitor --baseline-stats`` reuses it only with that same overlay.
 """
@@ -21,11 +22,23 @@ from numpy.typing import NDArray
 
 from ...errors import ParameterError
 from ...sim.axes import JOINT_NAMES, N_JOINTS
-from .changes import estimates, spread
-from .events import SMOOTH_S, STATES, deviation_stats, prepare
+from .changes import BLOCK_S, block_estimates, spread
+from .events import (
+    FEATURES,
+    LEVEL_S,
+    SMOOTH_S,
+    WINDOW_S,
+    features,
+    fit_scale,
+    fit_tail,
+    judged_rows,
+    sigma,
+    transient,
+    window_maxima,
+)
 from .observe import Observed
 
-FORMAT = "ur5fault-monitor-baseline-1"
+FORMAT = "ur5fault-monitor-baseline-2"
 
 
 def overlay_sha256(params: dict, effects: Sequence) -> str:
@@ -36,27 +49,24 @@ def overlay_sha256(params: dict, effects: Sequence) -> str:
 
 @dataclasses.dataclass(frozen=True)
 class Baseline:
-    """Residual statistics of healthy runs under one overlay (module docstring). Arrays ``(6, 2)`` per joint and
-    state :data:`~.events.STATES`; ``candidates``: ``{label: (mean, variance, n_segments)}`` of the coefficient."""
+    """Residual statistics of healthy runs under one overlay (module docstring). ``scale`` ``(6, 4)``: the
+    transient's spread coefficients on :data:`~.events.FEATURES`; ``tail`` ``(6, 3)``: ``(u0, beta, p0)`` of
+    its normalised window maxima; ``candidates``: ``{label: (mean, variance, n_blocks)}`` of the coefficient."""
 
     overlay_sha256: str
     period_s: float
     segments: tuple[str, ...]
-    median_A: NDArray
-    threshold_A: NDArray
-    deviation_A: NDArray  # (k, 6, 2): the largest deviation on each event segment
+    scale: NDArray
+    tail: NDArray
     candidates: dict[str, tuple[float, float, int]]
 
     def to_json(self) -> dict[str, Any]:
-        def table(a: NDArray) -> dict:
-            return {JOINT_NAMES[j]: {s: None if np.isnan(a[j, i]) else float(a[j, i]) for i, s in enumerate(STATES)}
-                    for j in range(N_JOINTS)}
-
         return {"format": FORMAT, "overlay_sha256": self.overlay_sha256, "period_s": self.period_s,
-                "smooth_s": SMOOTH_S, "segments": list(self.segments), "median_A": table(self.median_A),
-                "threshold_A": table(self.threshold_A),
-                "deviation_A": [table(d) for d in self.deviation_A],
-                "candidates": {k: {"mean": m, "variance": v, "n_segments": n}
+                "smooth_s": SMOOTH_S, "level_s": LEVEL_S, "block_s": BLOCK_S, "segments": list(self.segments),
+                "scale": {JOINT_NAMES[j]: dict(zip(FEATURES, map(float, self.scale[j]))) for j in range(N_JOINTS)},
+                "tail": {JOINT_NAMES[j]: dict(zip(("u0", "beta", "p0"), map(float, self.tail[j])))
+                         for j in range(N_JOINTS)},
+                "candidates": {k: {"mean": m, "variance": v, "n_blocks": n}
                                for k, (m, v, n) in self.candidates.items()}}
 
     @classmethod
@@ -64,21 +74,18 @@ class Baseline:
         """Read a ``baseline.json`` written by :meth:`to_json`; anything else is refused with one line."""
         try:
             if data.get("format") != FORMAT:
-                raise ParameterError(f"{where}: not a monitor baseline (format {data.get('format')!r}, expected "
-                                     f"{FORMAT!r}); write one with ur5fault monitor --baseline-logs")
-            if data["smooth_s"] != SMOOTH_S:
-                raise ParameterError(f"{where}: written with a {data['smooth_s']} s smoothing window, this version "
-                                     f"uses {SMOOTH_S} s; rebuild it with --baseline-logs")
-
-            def array(t: dict) -> NDArray:
-                return np.array([[np.nan if t[j][s] is None else float(t[j][s]) for s in STATES]
-                                 for j in JOINT_NAMES])
-
+                raise ParameterError(f"{where}: not a monitor baseline of this version (format "
+                                     f"{data.get('format')!r}, expected {FORMAT!r}); write one with ur5fault "
+                                     f"monitor --baseline-logs")
+            for key, value in (("smooth_s", SMOOTH_S), ("level_s", LEVEL_S), ("block_s", BLOCK_S)):
+                if data[key] != value:
+                    raise ParameterError(f"{where}: written with {key} = {data[key]}, this version uses {value}; "
+                                         f"rebuild it with --baseline-logs")
+            scale = np.array([[float(data["scale"][j][f]) for f in FEATURES] for j in JOINT_NAMES])
+            tail = np.array([[float(data["tail"][j][k]) for k in ("u0", "beta", "p0")] for j in JOINT_NAMES])
             return cls(str(data["overlay_sha256"]), float(data["period_s"]), tuple(map(str, data["segments"])),
-                       array(data["median_A"]), array(data["threshold_A"]),
-                       np.array([array(d) for d in data["deviation_A"]]),
-                       {str(k): (float(v["mean"]), float(v["variance"]), int(v["n_segments"]))
-                        for k, v in data["candidates"].items()})
+                       scale, tail, {str(k): (float(v["mean"]), float(v["variance"]), int(v["n_blocks"]))
+                                     for k, v in data["candidates"].items()})
         except (KeyError, TypeError, ValueError, AttributeError) as exc:
             raise ParameterError(f"{where}: not a valid monitor baseline ({type(exc).__name__}: {exc})") from None
 
@@ -94,6 +101,25 @@ class Baseline:
         return cls.from_json(data, str(path))
 
 
+def segment(obs: Observed) -> tuple[NDArray, NDArray, NDArray]:
+    """A log part's transient ``h`` ``(n, 6)``, spread features ``(n, 6, 4)`` and judged samples ``(n,)``."""
+    return (transient(obs.residual_A, obs.period_s),
+            features(obs.moving, obs.speed_rad_s, obs.accel_rad_s2, obs.period_s),
+            judged_rows(obs.logged, obs.period_s))
+
+
+def fit_events(segs: list[tuple[NDArray, NDArray, NDArray]], period_s: float) -> tuple[NDArray, NDArray]:
+    """Spread coefficients ``(6, 4)`` on all segments, and the tail ``(6, 3)`` of the normalised window maxima.
+    With two or more segments each segment is normalised by the spread fitted on the others (leave one out), so
+    the tail holds how far a healthy run the model was not fitted on strays, not how well it fits its own."""
+    coef = fit_scale(segs)
+    maxima = []
+    for k, (h, f, ok) in enumerate(segs):
+        c = fit_scale(segs[:k] + segs[k + 1 :]) if len(segs) >= 2 else coef
+        maxima.append(window_maxima(np.abs(h) / sigma(f, c), ok, period_s))
+    return coef, fit_tail(np.concatenate(maxima))
+
+
 def fit_baseline(healthy: Sequence[Observed], overlay_sha: str) -> Baseline:
     """The baseline from healthy log parts replayed under the overlay."""
     if not healthy:
@@ -103,13 +129,17 @@ def fit_baseline(healthy: Sequence[Observed], overlay_sha: str) -> Baseline:
         if abs(o.period_s - period) > 1e-9:
             raise ParameterError(f"{o.name}: sample period {o.period_s:g} s differs from {healthy[0].name}'s "
                                  f"{period:g} s")
-    segs = [prepare(o.residual_A, o.moving, o.logged, o.period_s) for o in healthy]
-    median, dev, thr = deviation_stats(segs)
+    segs = [segment(o) for o in healthy]
+    if sum(int(ok.sum()) for _, _, ok in segs) * period < 2 * WINDOW_S:
+        raise ParameterError("the baseline logs hold too few judged samples (under 0.5 s after each replay's first "
+                             "0.25 s) to fit the event limits")
+    scale, tail = fit_events(segs, period)
     per: dict[str, tuple[list[float], list[float]]] = {}
     for o in healthy:
-        for label, est in estimates(o, o.logged[: o.e.shape[0]]).items():
-            if np.isfinite(est.se):
-                per.setdefault(label, ([], []))[0].append(est.theta)
-                per[label][1].append(est.se)
+        for block in block_estimates(o):
+            for label, est in block.items():
+                if np.isfinite(est.se):
+                    per.setdefault(label, ([], []))[0].append(est.theta)
+                    per[label][1].append(est.se)
     cands = {k: spread(th, se) for k, (th, se) in per.items()}
-    return Baseline(overlay_sha, period, tuple(o.name for o in healthy), median, thr, dev, cands)
+    return Baseline(overlay_sha, period, tuple(o.name for o in healthy), scale, tail, cands)

@@ -3,13 +3,16 @@
 Every screened candidate (:mod:`.observe`) is fitted alone to the log's weighted residual and judged by the
 discrepancy workflow's own test (:func:`ur5fault.discrepancy.search.judge`: BIC, block-jackknife z, stability in
 time blocks). A candidate is a *change* when the log's estimate is significant and lies
- outside the prediction interval of the baseline's estimates of the same candidate:
-``|theta - mean_b| / sqrt(se^2 + var_b (1 + 1/k)) > t_{k-1}``, ``var_b`` the variance of the estimates over the
-``k`` baseline segments and ``t_{k-1}`` Student's quantile at the tail probability of
+outside the prediction interval of the baseline's estimates of the same candidate:
+``|theta - mean_b| / sqrt(se^2 + var_b (1 + 1/k)) > t_{k-1}``. The baseline's estimates are made per time block
+of :data:`BLOCK_S` of every baseline run (:func:`block_estimates`), so ``var_b``, the variance of the ``k`` block
+estimates, holds both the spread between healthy runs (the model's own motion-dependent error) and the drift
+within a run (a warming motor's offset); ``t_{k-1}`` is Student's quantile at the tail probability of
 :data:`~ur5fault.discrepancy.statistics.MIN_Z` standard errors (the discrepancy workflow's bar, corrected for the
-few runs a baseline has); a single segment: its own jackknife variance and ``MIN_Z``. The spread between healthy
-runs holds the model's own motion-dependent error, so a run unlike the baseline's is not called changed for that
-alone.
+few blocks a baseline has; the blocks of one run are counted as independent, an assumption that makes the bar
+lower than if only runs were counted). A single block: its own jackknife variance and ``MIN_Z``. A block estimate
+also carries its own noise (a 5 s block is noisier than the monitored log's 20 s), which widens the interval:
+a conservative choice.
 
 A push is an event, not a worn gear: a change must also hold on the samples outside the log's events (and
 :data:`EVENT_GUARD_S` around them), or those samples must be unable to tell (their standard error larger than
@@ -34,6 +37,10 @@ from .observe import Observed
 
 #: samples this close to an event are left out of the change test [s] (the controller's recovery after a push)
 EVENT_GUARD_S = 0.5
+#: the time block of a baseline run a candidate is estimated on [s]: long enough to hold several motions of
+#: each joint (the real runs reverse a joint every 2-5 s), short enough that the screened 20 s of a run give four
+#: blocks, so a drift within the run shows as spread between its blocks
+BLOCK_S = 5.0
 
 
 @dataclasses.dataclass(frozen=True)
@@ -73,12 +80,28 @@ def estimates(obs: Observed, keep: NDArray) -> dict[str, Estimate]:
     return out
 
 
-def spread(thetas: list[float], ses: list[float]) -> tuple[float, float, int]:
-    """Mean, variance and count of a candidate's estimates over baseline segments (one segment: its SE squared)."""
+def block_estimates(obs: Observed) -> list[dict[str, Estimate]]:
+    """Each candidate fitted alone on each :data:`BLOCK_S` block of the screened part (the last block joins the
+    one before when shorter than half a block); one block when the part is shorter than two."""
+    m = obs.e.shape[0]
+    n = max(1, int(round(m * obs.period_s / BLOCK_S)))
+    edges = np.linspace(0, m, n + 1).round().astype(int)
+    out = []
+    for a, b in zip(edges[:-1], edges[1:]):
+        keep = obs.logged[:m].copy()
+        keep[:a] = False
+        keep[b:] = False
+        out.append(estimates(obs, keep))
+    return out
+
+
+def spread(thetas: list[float], ses: list[float] | None = None) -> tuple[float, float, int]:
+    """Mean, variance and count of a candidate's block estimates (one block: its SE squared, from ``ses``)."""
     th = np.asarray(thetas, dtype=float)
     if th.size >= 2:
         return float(th.mean()), float(th.var(ddof=1)), int(th.size)
-    return float(th[0]), float(np.asarray(ses, dtype=float)[0] ** 2), 1
+    se = np.asarray(ses if ses is not None else [np.nan], dtype=float)
+    return float(th[0]), float(se[0] ** 2), 1
 
 
 def bar(n_segments: int) -> tuple[float, float]:

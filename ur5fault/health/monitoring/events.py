@@ -1,46 +1,80 @@
-"""Transient events: where a log's smoothed current residual leaves the band the baseline runs stayed in.
+"""Transient events: where a log's current residual leaves its own recent level by more than the baseline's
+model error does at the same motion.
 
-The residual (measured - simulated current under the baseline model) is smoothed by a centred moving average
-of :data:`SMOOTH_S` (a push by hand or a collision lasts longer; the current sensor's noise and the model's
-sample-to-sample error do not). Its deviation from the baseline's median is measured per joint in two states:
-the joint's target at rest, and moving (or stopped less than :data:`SETTLE_S` ago). The threshold per joint and
-state is the largest deviation any baseline segment showed there: an event is what no healthy run of the robot
-did. The first :data:`SETTLE_S` of a replay is not judged (the replay starts from the log's first sample with
-the model's own friction state). Nothing is set on the runs being monitored.
+*Transient, not drift.* The residual (measured - simulated current under the baseline model) is smoothed by a
+centred moving average of :data:`SMOOTH_S` (sensor noise averages out; a push keeps its peak) and its own recent
+level is removed: a centred running median over :data:`LEVEL_S`. A median ignores a bump that fills less than
+half its window, so a push by hand or a collision (assumption: under :data:`PUSH_MAX_S` = 1 s) stays whole in
+the *transient* ``h = smoothed - level``; a drift slower than the window (the wrist currents that move by
+0.3-0.5 A over seconds while the arm stands, a warming motor's offset) is followed by the level and does not.
 
-An event is a stretch where some joint exceeds its threshold; stretches closer than :data:`MERGE_S` (on any
-joints) are one event. Shapes: ``(n, 6)``; thresholds ``(6, 2)`` with states :data:`STATES`.
+*Threshold scaled with the motion.* The model's own error is larger when a joint accelerates and moves fast.
+The transient's spread is modelled per joint as ``sigma^2 = c . [1, moving, |qd|, |qdd|]`` (target speed and
+acceleration of the joint, smoothed over :data:`SMOOTH_S`; ``moving`` its target moving or stopped less than
+:data:`SETTLE_S` ago), ``c >= 0`` fitted by least squares to ``h^2`` on the baseline runs.
+
+*Multiplier from the baseline's own extremes.* The normalised transient ``|h| / sigma`` is cut into independent
+windows of :data:`WINDOW_S`; the largest value of each baseline window is kept, and the upper tail of those
+window maxima (above their :data:`TAIL_QUANTILE` quantile) is fitted by an exponential (peaks over threshold;
+scale = mean excess). For a log of ``n_w`` windows the multiplier is the level that the maxima of all its
+``n_w x 6`` joint-windows exceed with probability :data:`FALSE_ALARM_PER_LOG` together: a longer log gets a
+higher bar, not more false alarms. Nothing is set on the runs being monitored.
+
+An event is a stretch where some joint's ``|h|`` exceeds ``multiplier x sigma``; stretches closer than
+:data:`MERGE_S` (on any joints) are one event, ``peak_A`` its largest ``|h|``. The first :data:`SETTLE_S` of a
+replay is not judged (it starts from the log's first sample with the model's own friction state).
+Shapes: ``(n, 6)`` per sample and joint; scale coefficients ``(6, 4)``; tail ``(6, 3)`` ``(u0, beta, p0)``.
 """
 
 from __future__ import annotations
 
-import warnings
 from collections.abc import Sequence
 
 import numpy as np
 from numpy.typing import NDArray
+from scipy.ndimage import median_filter
+from scipy.optimize import nnls
 
 from ...sim.axes import JOINT_NAMES, N_JOINTS
 from ...twin.residuals import REVERSAL_WINDOW_S
 
-#: centred moving-average window of the residual [s] (assumption: a push or a collision loads a joint for
-#: 0.2 s or more, so 0.1 s keeps its peak while averaging 12 samples of sensor noise at 125 Hz)
+#: centred moving-average window of the residual [s] (12 samples of sensor noise at 125 Hz; a push lasts longer)
 SMOOTH_S = 0.1
+#: the longest push or collision an event is built for [s] (assumption: a push by hand, a bump: < 1 s)
+PUSH_MAX_S = 1.0
+#: the running-median window of the residual's own level [s]: twice :data:`PUSH_MAX_S`, so a push fills at most
+#: half of it and the median passes it over, while a drift over seconds is followed
+LEVEL_S = 2.0 * PUSH_MAX_S
 #: stretches above threshold closer than this are one event [s] (a push's residual crosses back and forth)
 MERGE_S = 0.25
+#: the length of the independent windows the multiplier counts [s]: exceedances closer are one event anyway
+WINDOW_S = MERGE_S
+#: the window maxima above this quantile form the fitted tail
+TAIL_QUANTILE = 0.9
+#: the probability that an undisturbed log of the baseline's robot raises an event anywhere (all joints)
+FALSE_ALARM_PER_LOG = 0.01
 #: a joint counts as moving this long after its target stops, and a replay's first samples this long are not
 #: judged [s]: the twin's window around a velocity reversal, in which the drive settles
 SETTLE_S = REVERSAL_WINDOW_S
-STATES = ("at rest", "moving")
+#: the features of the spread model, in order
+FEATURES = ("1", "moving", "|qd| [rad/s]", "|qdd| [rad/s^2]")
 
 
-def smooth(x: NDArray, period_s: float) -> NDArray:
-    """Centred moving average of ``x`` ``(n, 6)`` over :data:`SMOOTH_S` (shorter at the ends)."""
-    w = max(1, int(round(SMOOTH_S / period_s)) | 1)
+def smooth(x: NDArray, period_s: float, window_s: float = SMOOTH_S) -> NDArray:
+    """Centred moving average of ``x`` ``(n, k)`` over ``window_s`` (shorter at the ends)."""
+    w = max(1, int(round(window_s / period_s)) | 1)
     kernel = np.ones(w)
     num = np.stack([np.convolve(x[:, j], kernel, mode="same") for j in range(x.shape[1])], axis=1)
     den = np.convolve(np.ones(x.shape[0]), kernel, mode="same")[:, None]
     return num / den
+
+
+def transient(residual_A: NDArray, period_s: float) -> NDArray:
+    """``h`` ``(n, 6)``: the smoothed residual minus its running median over :data:`LEVEL_S`."""
+    w = max(1, int(round(LEVEL_S / period_s)) | 1)
+    level = np.stack([median_filter(residual_A[:, j], size=w, mode="nearest") for j in range(residual_A.shape[1])],
+                     axis=1)  # per column: far faster than one 2-D filter
+    return smooth(residual_A, period_s) - level
 
 
 def settled_moving(moving: NDArray, period_s: float) -> NDArray:
@@ -56,58 +90,92 @@ def settled_moving(moving: NDArray, period_s: float) -> NDArray:
     return out
 
 
-def deviation(smoothed: NDArray, moving: NDArray, median: NDArray) -> NDArray:
-    """Deviation ``(n, 6)`` of the smoothed residual from the baseline median ``(6, 2)`` of its state."""
-    return np.abs(smoothed - median[np.arange(smoothed.shape[1])[None, :], moving.astype(int)])
+def features(moving: NDArray, speed_rad_s: NDArray, accel_rad_s2: NDArray, period_s: float) -> NDArray:
+    """``(n, 6, 4)``: the spread model's :data:`FEATURES` per sample and joint."""
+    mv = settled_moving(moving, period_s).astype(float)
+    return np.stack([np.ones_like(mv), mv, smooth(speed_rad_s, period_s), smooth(accel_rad_s2, period_s)], axis=2)
 
 
-def prepare(residual_A: NDArray, moving: NDArray, logged: NDArray, period_s: float
-            ) -> tuple[NDArray, NDArray, NDArray]:
-    """Smoothed residual, settled motion mask and the judged samples (logged, after the first :data:`SETTLE_S`)."""
+def judged_rows(logged: NDArray, period_s: float) -> NDArray:
+    """The samples judged ``(n,)``: logged, after the first :data:`SETTLE_S`."""
     judged = logged.copy()
     judged[: int(round(SETTLE_S / period_s))] = False
-    return smooth(residual_A, period_s), settled_moving(moving, period_s), judged
+    return judged
 
 
-def deviation_stats(segments: Sequence[tuple[NDArray, NDArray, NDArray]]) -> tuple[NDArray, NDArray, NDArray]:
-    """From baseline segments ``(smoothed residual (n, 6), settled moving (n, 6), judged (n,))``: the median
-    ``(6, 2)`` per joint and state (0 where no segment has the state), the largest deviation per segment
-    ``(k, 6, 2)`` (NaN where a segment has no judged sample in that state) and the threshold ``(6, 2)``."""
-    med = np.zeros((N_JOINTS, 2))
+def _nnls(F: NDArray, y: NDArray) -> NDArray:
+    """``argmin |F c - y|, c >= 0`` through the QR factors of ``F`` (the same minimiser, a small problem)."""
+    scale = np.maximum(np.abs(F).max(axis=0), 1e-12)  # columns of one magnitude for the solver
+    q, r = np.linalg.qr(F / scale)
+    return nnls(r, q.T @ y)[0] / scale
+
+
+def fit_scale(segments: Sequence[tuple[NDArray, NDArray, NDArray]]) -> NDArray:
+    """Spread coefficients ``(6, 4)`` from baseline segments ``(h (n, 6), features (n, 6, 4), judged (n,))``:
+    ``h^2`` on the features, least squares with ``c >= 0``, then twice reweighted by the fitted variance squared
+    (a squared residual's scatter grows with its variance: the efficient fit of a variance model)."""
+    coef = np.zeros((N_JOINTS, segments[0][1].shape[2]))
     for j in range(N_JOINTS):
-        for s in range(2):
-            vals = np.concatenate([r[(m[:, j] == bool(s)) & ok, j] for r, m, ok in segments])
-            med[j, s] = np.median(vals) if vals.size else 0.0
-    dev = np.full((len(segments), N_JOINTS, 2), np.nan)
-    for k, (r, m, ok) in enumerate(segments):
-        d = deviation(r, m, med)
-        for j in range(N_JOINTS):
-            for s in range(2):
-                sel = (m[:, j] == bool(s)) & ok
-                if sel.any():
-                    dev[k, j, s] = np.max(d[sel, j])
-    return med, dev, thresholds(dev)
+        F = np.concatenate([f[ok, j] for _, f, ok in segments])
+        y = np.concatenate([h[ok, j] ** 2 for h, _, ok in segments])
+        c = _nnls(F, y)
+        for _ in range(2):
+            pred = F @ c
+            if not np.any(pred > 0):
+                break
+            w = 1.0 / np.maximum(pred, 1e-3 * pred.max())
+            c = _nnls(F * w[:, None], y * w)
+        if not np.any(F @ c > 0):
+            c = np.zeros(F.shape[1])
+            c[0] = float(np.mean(y)) or 1e-12
+        coef[j] = c
+    return coef
 
 
-def thresholds(dev: NDArray) -> NDArray:
-    """Threshold per joint and state: the largest deviation of any baseline segment. A state no baseline segment
-    holds takes the joint's threshold of the other state."""
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN slices: handled below
-        out = np.nanmax(dev, axis=0)
-    for j in range(out.shape[0]):
-        if np.isnan(out[j]).any():
-            out[j] = np.nanmax(out[j])
+def sigma(feats: NDArray, coef: NDArray) -> NDArray:
+    """The transient's modelled spread ``(n, 6)`` [A] (floored at a thousandth of its largest value)."""
+    s2 = np.einsum("njk,jk->nj", feats, coef)
+    return np.sqrt(np.maximum(s2, 1e-6 * np.max(s2, axis=0, keepdims=True) + 1e-18))
+
+
+def window_maxima(z: NDArray, judged: NDArray, period_s: float) -> NDArray:
+    """``(w, 6)``: the largest ``z`` of each joint in consecutive :data:`WINDOW_S` windows of judged samples."""
+    step = max(1, int(round(WINDOW_S / period_s)))
+    zz = np.where(judged[:, None], z, -np.inf)
+    out = [zz[a : a + step].max(axis=0) for a in range(0, zz.shape[0], step)]
+    out = np.array(out) if out else np.zeros((0, z.shape[1]))
+    return out[np.isfinite(out).all(axis=1)]
+
+
+def fit_tail(maxima: NDArray) -> NDArray:
+    """``(6, 3)`` per joint ``(u0, beta, p0)``: the window maxima exceed ``u0 + x`` with probability
+    ``p0 exp(-x / beta)`` (exponential tail above the :data:`TAIL_QUANTILE` quantile, beta its mean excess)."""
+    out = np.zeros((maxima.shape[1], 3))
+    for j in range(maxima.shape[1]):
+        m = maxima[:, j]
+        u0 = float(np.quantile(m, TAIL_QUANTILE))
+        exc = m[m > u0] - u0
+        out[j] = (u0, float(exc.mean()) if exc.size else 0.0, exc.size / m.size if m.size else 1.0)
     return out
 
 
-def find_events(t_s: NDArray, smoothed: NDArray, moving: NDArray, judged: NDArray, median: NDArray,
-                threshold: NDArray) -> tuple[list[dict], NDArray]:
+def multiplier(tail: NDArray, n_windows: int) -> NDArray:
+    """``(6,)``: the level of ``|h| / sigma`` the window maxima of a log of ``n_windows`` windows exceed on any
+    joint with probability :data:`FALSE_ALARM_PER_LOG`."""
+    p = FALSE_ALARM_PER_LOG / (max(n_windows, 1) * tail.shape[0])
+    u0, beta, p0 = tail.T
+    return u0 + beta * np.log(np.maximum(p0 / p, 1.0))
+
+
+def n_windows(judged: NDArray, period_s: float) -> int:
+    return int(np.ceil(judged.sum() * period_s / WINDOW_S))
+
+
+def find_events(t_s: NDArray, h: NDArray, limit_A: NDArray, judged: NDArray) -> tuple[list[dict], NDArray]:
     """Events of one log part: ``[{"t_start_s", "t_end_s", "joints", "peak_A"}]`` (``peak_A``: the largest
-    smoothed deviation in the event) and the exceedance mask ``(n, 6)``."""
-    state = moving.astype(int)
-    dev = deviation(smoothed, moving, median)
-    over = (dev > threshold[np.arange(N_JOINTS)[None, :], state]) & judged[:, None]
+    ``|h|`` above the limit in the event) and the exceedance mask ``(n, 6)``."""
+    dev = np.abs(h)
+    over = (dev > limit_A) & judged[:, None]
     rows = np.flatnonzero(over.any(axis=1))
     if not rows.size:
         return [], over

@@ -47,6 +47,8 @@ class Observed:
         logged: the robot wrote the tick (not filled in a gap) ``(n,)``.
         cands, X, e: the screened library candidates, their weighted columns ``(p, m, n_channels)`` and the
             weighted residual ``(m, n_channels)`` on the part's first ``m`` samples.
+        speed_rad_s, accel_rad_s2: the joint target's absolute speed and acceleration ``(n, 6)`` (the motion the
+            event threshold scales with, :mod:`.events`).
     """
 
     name: str
@@ -58,6 +60,8 @@ class Observed:
     cands: tuple[LibraryCandidate, ...]
     X: NDArray
     e: NDArray
+    speed_rad_s: NDArray
+    accel_rad_s2: NDArray
 
     @property
     def n(self) -> int:
@@ -94,7 +98,9 @@ def observe(log: MeasuredLog, params_overrides: dict | None = None, effects: Seq
             raise ParameterError(f"{log.source}: the replay under the baseline model failed ({base.status})")
     meas = rp.measured(hi)
     e = weighted(meas[lo : lo + m], base.y[lo : lo + m], rp.sigma)
-    qd = np.gradient(log.q_target_rad, log.period_s, axis=0)[1 : n_all + 1]
+    qd_all = np.gradient(log.q_target_rad, log.period_s, axis=0)
+    qdd = np.abs(np.gradient(qd_all, log.period_s, axis=0)[1 : n_all + 1][lo:hi])
+    qd = np.abs(qd_all[1 : n_all + 1][lo:hi])
     return Observed(name, log.period_s, t[lo:hi], (meas[:, 0] - base.current_A[:hi])[lo:hi],
-                    np.abs(qd[lo:hi]) > CONDITION_REST_SPEED_RAD_S, log.logged_rows()[1 : n_all + 1][lo:hi],
-                    tuple(kept), X[:, lo : lo + m], e)
+                    qd > CONDITION_REST_SPEED_RAD_S, log.logged_rows()[1 : n_all + 1][lo:hi],
+                    tuple(kept), X[:, lo : lo + m], e, qd, qdd)

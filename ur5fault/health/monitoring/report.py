@@ -1,5 +1,5 @@
 """What ``ur5fault monitor`` writes: ``monitor.json``, ``baseline.json``, ``report.md`` and one figure per log
-(the smoothed current residual's deviation against its threshold per joint, the events shaded)."""
+(the current residual's transient against its limit per joint, the events shaded)."""
 
 from __future__ import annotations
 
@@ -12,23 +12,24 @@ from matplotlib.figure import Figure
 
 from ...sim.axes import JOINT_NAMES, N_JOINTS
 from ...util.io import write_figure_atomic, write_json_atomic, write_text_atomic
-from .baseline import Baseline
+from .baseline import Baseline, segment
 from .changes import sentence
-from .events import STATES, deviation, prepare
+from .events import FEATURES, WINDOW_S, multiplier
 from .observe import Observed
+from .verdict import limit_A
 
 
 def figure(baseline: Baseline, obs: Observed, entry: dict[str, Any]) -> Figure:
-    """Per joint: the smoothed residual's deviation from the baseline median [A] and the threshold of its state;
-    the log's events shaded."""
-    sm, moving, judged = prepare(obs.residual_A, obs.moving, obs.logged, obs.period_s)
-    dev = np.where(judged[:, None], deviation(sm, moving, baseline.median_A), np.nan)
-    thr = baseline.threshold_A[np.arange(N_JOINTS)[None, :], moving.astype(int)]
+    """Per joint: the residual's transient ``|h|`` [A] and its limit (the baseline's spread at the log's motion
+    times the multiplier for its length); the log's events shaded."""
+    h, feats, judged = segment(obs)
+    dev = np.where(judged[:, None], np.abs(h), np.nan)
+    thr = limit_A(baseline, feats, judged)
     fig = Figure(figsize=(10, 9), layout="constrained")
     axes = fig.subplots(N_JOINTS, 1, sharex=True)
     for j, ax in enumerate(axes):
-        ax.plot(obs.t_s, dev[:, j], lw=0.7, color="tab:blue", label="|residual - baseline median|")
-        ax.plot(obs.t_s, thr[:, j], lw=0.9, color="tab:red", label="threshold (" + " / ".join(STATES) + ")")
+        ax.plot(obs.t_s, dev[:, j], lw=0.7, color="tab:blue", label="|transient| (residual - its running median)")
+        ax.plot(obs.t_s, thr[:, j], lw=0.9, color="tab:red", label="limit")
         for ev in entry["events"]:
             ax.axvspan(ev["t_start_s"], ev["t_end_s"], color="orange", alpha=0.35 if JOINT_NAMES[j] in ev["joints"]
                        else 0.1, lw=0)
@@ -43,11 +44,14 @@ def markdown(baseline: Baseline, entries: Sequence[dict[str, Any]], figs: Sequen
     lines = ["# Monitoring report", "",
              f"Baseline: model overlay `{model}`, residual statistics of {len(baseline.segments)} healthy run(s): "
              + ", ".join(f"`{s}`" for s in baseline.segments) + ".", "",
-             "Event thresholds (largest smoothed current-residual deviation of the baseline runs) [A]:", "",
-             "| joint | " + " | ".join(STATES) + " |", "| --- | " + " | ".join("---" for _ in STATES) + " |"]
+             "Spread of the current residual's transient, sigma^2 = c . [" + ", ".join(FEATURES) + "], and the "
+             f"multiplier on sigma for a 20 s log ({int(20 / WINDOW_S)} windows of {WINDOW_S:g} s):", "",
+             "| joint | " + " | ".join(f"c[{f}]" for f in FEATURES) + " | multiplier (20 s) |",
+             "| --- |" + " --- |" * (len(FEATURES) + 1)]
+    mult = multiplier(baseline.tail, int(20 / WINDOW_S))
     for j in range(N_JOINTS):
-        lines.append(f"| {JOINT_NAMES[j]} | " + " | ".join(f"{baseline.threshold_A[j, s]:.3f}"
-                                                             for s in range(len(STATES))) + " |")
+        lines.append(f"| {JOINT_NAMES[j]} | " + " | ".join(f"{c:.3g}" for c in baseline.scale[j])
+                     + f" | {mult[j]:.2f} |")
     lines += ["", "| log | verdict | changes | events |", "| --- | --- | --- | --- |"]
     for e in entries:
         lines.append(f"| {e['log']} | {e['verdict']} | {len(e['changes'])} | {len(e['events'])} |")

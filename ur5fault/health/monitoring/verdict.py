@@ -4,13 +4,21 @@ from __future__ import annotations
 
 from typing import Any
 
+from numpy.typing import NDArray
+
 from ...errors import ParameterError
-from .baseline import Baseline
+from .baseline import Baseline, segment
 from .changes import estimates, find_changes, keep_mask
-from .events import find_events, prepare
+from .events import find_events, multiplier, n_windows, sigma
 from .observe import Observed
 
 VERDICTS = ("consistent", "changed", "anomaly")
+
+
+def limit_A(baseline: Baseline, feats: NDArray, judged: NDArray) -> NDArray:
+    """The event limit ``(n, 6)`` [A] of a log part: the baseline's spread at its motion times the multiplier
+    for its length (:mod:`.events`)."""
+    return sigma(feats, baseline.scale) * multiplier(baseline.tail, n_windows(judged, baseline.period_s))[None, :]
 
 
 def assess(baseline: Baseline, obs: Observed) -> dict[str, Any]:
@@ -20,8 +28,8 @@ def assess(baseline: Baseline, obs: Observed) -> dict[str, Any]:
     if abs(obs.period_s - baseline.period_s) > 1e-9:
         raise ParameterError(f"{obs.name}: sample period {obs.period_s:g} s differs from the baseline's "
                              f"{baseline.period_s:g} s")
-    events, over = find_events(obs.t_s, *prepare(obs.residual_A, obs.moving, obs.logged, obs.period_s),
-                               baseline.median_A, baseline.threshold_A)
+    h, feats, judged = segment(obs)
+    events, over = find_events(obs.t_s, h, limit_A(baseline, feats, judged), judged)
     every = estimates(obs, obs.logged[: obs.e.shape[0]])
     outside = estimates(obs, keep_mask(obs, over)) if over.any() else every
     changes = find_changes(obs, every, outside, baseline.candidates)

@@ -19,7 +19,7 @@ from .layout import PARAM_NAMES, PI, STATE_NAMES, XI
 #: changed with this file untouched would reuse cached kernels that index the wrong rows (seen once as a
 #: segfault after a merge).  A changed layout therefore stops here until this number is updated, which also
 #: changes this file and so invalidates the cache.
-LAYOUT_CRC32 = 64641414
+LAYOUT_CRC32 = 153234730
 if zlib.crc32(("|".join(PARAM_NAMES) + "#" + "|".join(STATE_NAMES)).encode()) != LAYOUT_CRC32:
     raise ImportError("ur5fault/sim/drive/layout.py changed: update LAYOUT_CRC32 in ur5fault/sim/drive/kernel.py "
                       "(and check the row constants below) so numba recompiles the cached kernels")
@@ -37,6 +37,7 @@ POS_KP, SPD_KP, SPD_KI, CUR_KP, CUR_KI, FF = (PI[n] for n in ("pos_kp", "spd_kp"
 RATIO_NOM, KE_NOM, CROSS_NOM = PI["ratio_nom"], PI["ke_nom"], PI["cross_nom"]
 RES_C0, ENC_C0, CUR_A, CUR_C0, CUR_C1 = PI["res_c0"], PI["enc_c0"], PI["cur_a"], PI["cur_c0"], PI["cur_c1"]
 LUGRE, SIGMA0, SIGMA1, SHARE = PI["lugre"], PI["sigma0"], PI["sigma1"], PI["share"]
+MH_SIN, MH_COS, MH_PER = PI["mh_sin"], PI["mh_cos"], PI["mh_per"]
 # state rows
 TH_M, W_M, I_Q, I_D, V_Q, V_D = (XI[n] for n in ("th_m", "w_m", "i_q", "i_d", "v_q", "v_d"))
 INTEG_V, INTEG_Q, INTEG_D = XI["integ_v"], XI["integ_q"], XI["integ_d"]
@@ -200,8 +201,10 @@ def physics_rj(X, P, r, j, q, qd, dt, stribeck, has_cogging):
     f_l, s_l = (1.0 - share) * f_l, (1.0 - share) * s_l
     # rotor, motor-side friction solved implicitly (friction.implicit_speed)
     t_m = P[KT, r, j] * i_q_new
-    if has_cogging:
-        t_m = t_m + P[COG_AMP, r, j] * np.sin(P[COG_PER, r, j] * th_m)
+    if has_cogging:  # motor.ripple_torque
+        x = P[MH_PER, r, j] * th_m
+        t_m = (t_m + P[COG_AMP, r, j] * np.sin(P[COG_PER, r, j] * th_m)
+               + (P[MH_SIN, r, j] * np.sin(x) + P[MH_COS, r, j] * np.cos(x)))
     X[TH_PREV, r, j], X[Q_PREV, r, j] = th_m, q
     u = w_m / N
     if share > 0.0:

@@ -20,6 +20,8 @@ PARAM_NAMES = (
     "cur_a", "cur_c0", "cur_c1",
     # friction law (1 = LuGre, 0 = smooth sign), LuGre sigma0 and sigma1, motor-side share
     "lugre", "sigma0", "sigma1", "share",
+    # motor-angle harmonic (effect ``motor_harmonic``): sin and cos amplitudes [N*m, motor side], periods per turn
+    "mh_sin", "mh_cos", "mh_per",
 )
 #: drive state (rows of the packed array X)
 STATE_NAMES = (

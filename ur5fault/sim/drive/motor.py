@@ -53,3 +53,13 @@ def phase_currents(i_d_A: NDArray, i_q_A: NDArray, electrical_angle_rad: NDArray
     shifts = np.array([0.0, -2.0 * np.pi / 3.0, 2.0 * np.pi / 3.0])
     ang = th[..., None] + shifts
     return np.asarray(i_d_A)[..., None] * np.cos(ang) - np.asarray(i_q_A)[..., None] * np.sin(ang)
+
+
+def ripple_torque(motor_angle_rad: NDArray, cogging_Nm: NDArray, cogging_per_rev: NDArray, harmonic_sin_Nm: NDArray,
+                  harmonic_cos_Nm: NDArray, harmonic_per_rev: NDArray) -> NDArray[np.float64]:
+    """Rotor torque periodic in the motor angle [N*m]: the ``cogging`` effect ``A sin(k th)`` plus the
+    ``motor_harmonic`` effect ``a sin(m th) + b cos(m th)`` (its phase fitted to a log)."""
+    th = np.asarray(motor_angle_rad)
+    x = np.asarray(harmonic_per_rev) * th
+    return (np.asarray(cogging_Nm) * np.sin(np.asarray(cogging_per_rev) * th)
+            + (np.asarray(harmonic_sin_Nm) * np.sin(x) + np.asarray(harmonic_cos_Nm) * np.cos(x)))

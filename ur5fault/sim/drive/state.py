@@ -61,6 +61,8 @@ def pack_params(p, g, a) -> NDArray:
         "cur_a": c_cur[0], "cur_c0": c_cur[1], "cur_c1": c_cur[2],
         "lugre": a.friction_is_lugre, "sigma0": a.friction_presliding_stiffness_Nm_per_rad,
         "sigma1": a.friction_bristle_damping_Nms_per_rad, "share": a.friction_motor_side_share,
+        "mh_sin": a.motor_harmonic_Nm[..., 0], "mh_cos": a.motor_harmonic_Nm[..., 1],
+        "mh_per": a.motor_harmonic_per_rev,
     }
     for name, v in values.items():
         out[PI[name]] = np.broadcast_to(np.asarray(v, dtype=float), (n, 6))
@@ -102,12 +104,17 @@ class _Views:
         raise AttributeError(name)
 
 
+def has_ripple(P: NDArray) -> bool:
+    """Some run carries a torque periodic in the motor angle (``cogging`` or ``motor_harmonic``)."""
+    return bool(np.any(P[PI["cog_amp"]] != 0.0) or np.any(P[PI["mh_sin"]] != 0.0) or np.any(P[PI["mh_cos"]] != 0.0))
+
+
 class NumpyDrive(_Views):
     """Reference implementation: the drive modules' vectorised functions."""
 
     def __init__(self, P: NDArray, X: NDArray, dt: float, ts: float, stribeck: float) -> None:
         self.P, self.X, self.dt, self.ts, self.stribeck = P, X, dt, ts, stribeck
-        self.has_cogging = bool(np.any(P[PI["cog_amp"]] != 0.0))
+        self.has_cogging = has_ripple(P)
 
     def _p(self, name):
         return self.P[PI[name]]
@@ -153,7 +160,8 @@ class NumpyDrive(_Views):
         # rotor, with the motor side's friction (joint-side law at the rotor speed / N) solved implicitly
         t_m = p("kt") * self.i_q
         if self.has_cogging:
-            t_m = t_m + p("cog_amp") * np.sin(p("cog_per") * self.th_m)
+            t_m = t_m + motor.ripple_torque(self.th_m, p("cog_amp"), p("cog_per"), p("mh_sin"), p("mh_cos"),
+                                            p("mh_per"))
         u = self.w_m / N
         _, f_m, s_m = self._friction(self.z_m, u)
         X[XI["th_prev"]], X[XI["q_prev"]] = self.th_m, q
@@ -187,7 +195,7 @@ class NumbaDrive(_Views):
 
         self.k = kernel
         self.P, self.X, self.dt, self.ts, self.stribeck = P, X, dt, ts, stribeck
-        self.has_cogging = bool(np.any(P[PI["cog_amp"]] != 0.0))
+        self.has_cogging = has_ripple(P)
         self.tau = np.zeros(X.shape[1:])
 
     def servo(self, q_set: NDArray, qd_set: NDArray, nz: NDArray) -> None:
