@@ -5,37 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 import pytest
+from synthetic_wear import LEVER, STEP, linear_wear_fleet
 
 from ur5fault.health.prognostics.clearance_rul import ClearanceRUL, line_rates
 from ur5fault.health.prognostics.joint_index import JOINTS
-
-STEP = 500.0
-#: failure boundary of the synthetic fleet: b2 + 5 b3 >= 1 [deg] (the elbow weighs more, as a lever arm)
-LEVER = {2: 1.0, 3: 5.0}
-NOISE_DEG = 2e-3
-
-
-def _fleet(n_units: int, seed: int, prefix: str) -> pd.DataFrame:
-    """Units whose clearances of joints 2 and 3 grow linearly, b_j = r_j N, at lognormal rates (sigma 0.3,
-    independent per joint, so some units are shoulder-led and some elbow-led); the feature of joint j reads
-    2 b_j plus Gaussian noise (sd 2 NOISE_DEG); a unit fails at the first inspection with b2 + 5 b3 >= 1,
-    that is after N* = 1 / (r2 + 5 r3) cycles, so its true RUL is known in closed form."""
-    rng = np.random.default_rng(seed)
-    rows = []
-    for u in range(n_units):
-        r = {2: 1e-5 * np.exp(0.3 * rng.standard_normal()), 3: 1e-5 * np.exp(0.3 * rng.standard_normal())}
-        n_star = 1.0 / sum(LEVER[j] * r[j] for j in LEVER)
-        eol = np.ceil(n_star / STEP) * STEP
-        for k in range(int(eol / STEP) + 1):
-            n = k * STEP
-            row = {"unit_id": f"{prefix}{u:03d}", "inspection": k, "cycles": n, "trajectory": "task",
-                   "eol_cycles": eol, "rul_cycles": eol - n}
-            for j in JOINTS:
-                b = r.get(j, 0.0) * n
-                row[f"backlash_deg_j{j}"] = b
-                row[f"enc_mismatch_hyst_rad_j{j}"] = 2.0 * b + 2.0 * NOISE_DEG * rng.standard_normal()
-            rows.append(row)
-    return pd.DataFrame(rows)
 
 
 def _at_half_life(est: ClearanceRUL, test: pd.DataFrame) -> pd.DataFrame:
@@ -50,7 +23,7 @@ def _at_half_life(est: ClearanceRUL, test: pd.DataFrame) -> pd.DataFrame:
 
 
 def test_rul_of_a_linear_drift_with_known_noise_is_accurate_and_its_interval_covers():
-    train, test = _fleet(60, 0, "a"), _fleet(40, 1, "t")
+    train, test = linear_wear_fleet(60, 0, "a"), linear_wear_fleet(40, 1, "t")
     est = ClearanceRUL(ridge=1e-8).fit(train)
     r = _at_half_life(est, test)
     # the boundary b2 + 5 b3 = 1 has radius 1 / (d2 + 5 d3) along a direction d: the kernel learns it
@@ -70,7 +43,7 @@ def test_rul_of_a_linear_drift_with_known_noise_is_accurate_and_its_interval_cov
 def test_the_failure_radius_depends_on_the_direction_of_growth():
     # an elbow-led unit (b3 grows 2x faster) fails at a smaller clearance radius than a shoulder-led one,
     # because the elbow weighs 5 vs 1 in the boundary: 1 / (d2 + 5 d3)
-    est = ClearanceRUL(ridge=1e-8).fit(_fleet(60, 0, "a"))
+    est = ClearanceRUL(ridge=1e-8).fit(linear_wear_fleet(60, 0, "a"))
     d_tr, logrho = est.units_["task"]
     for d in (np.array([0, 1, 2, 0, 0, 0]) / 5**0.5, np.array([0, 2, 1, 0, 0, 0]) / 5**0.5):
         expect = 1.0 / (LEVER[2] * d[1] + LEVER[3] * d[2])
@@ -79,7 +52,7 @@ def test_the_failure_radius_depends_on_the_direction_of_growth():
 
 
 def test_prediction_reads_no_truth_and_clearances_grow_from_zero():
-    train, test = _fleet(20, 0, "a"), _fleet(3, 1, "t")
+    train, test = linear_wear_fleet(20, 0, "a"), linear_wear_fleet(3, 1, "t")
     est = ClearanceRUL(ridge=1e-8).fit(train)
     blind = test.drop(columns=[f"backlash_deg_j{j}" for j in JOINTS] + ["eol_cycles", "rul_cycles"])
     assert np.array_equal(est.clearances(blind), est.clearances(test))
@@ -90,7 +63,7 @@ def test_prediction_reads_no_truth_and_clearances_grow_from_zero():
 
 
 def test_a_sound_unit_past_the_boundary_fails_at_the_next_inspection_at_the_earliest():
-    est = ClearanceRUL(ridge=1e-8).fit(_fleet(20, 0, "a"))
+    est = ClearanceRUL(ridge=1e-8).fit(linear_wear_fleet(20, 0, "a"))
     n = np.arange(0.0, 5 * STEP + 1, STEP)
     a = np.zeros((len(n), 6))
     a[:, 2] = n * 1e-3                   # 2.5 deg of elbow clearance at 2,500 cycles: far past 1 / 5

@@ -9,13 +9,15 @@ import json
 import numpy as np
 import pandas as pd
 import pytest
+from synthetic_wear import LEVER, linear_wear_fleet
 
 import ur5fault.health.prognostics.twin_boundary as TB
 from ur5fault.cli import main
-from ur5fault.health.prognostics.clearance_rul import line_rates
+from ur5fault.health.prognostics.clearance_rul import ClearanceRUL, line_rates
 from ur5fault.health.prognostics.fleet import run_life
 from ur5fault.health.prognostics.spec import Failure, build_life
 from ur5fault.health.prognostics.twin_boundary import Ray, TwinSetup, failure_radii
+from ur5fault.health.prognostics.twin_rul import TwinRUL
 from ur5fault.health.prognostics.wear import WearLaw
 
 from tiny_fleet import TINY
@@ -65,6 +67,33 @@ def test_a_jump_is_located_within_the_refined_bracket_and_far_guesses_are_extend
 def test_a_ray_that_never_fails_reports_its_last_radius_as_a_bound(monkeypatch):
     _closed_form(monkeypatch, lambda ray, s: 0.0)
     assert failure_radii(SETUP, [_ray(1, 1, 0.1)])[0] == pytest.approx(max(TB.ABOVE) * 0.1)
+
+
+def test_twin_rul_of_a_linear_drift_with_a_known_boundary(monkeypatch):
+    # the twin replaced by the synthetic fleet's own criterion, 0.5 mm x (b2 + 5 b3): its boundary is exact, so
+    # the calibration finds no bias, and the RUL errs only by the growth line's estimate (closed-form truth)
+    calls = _closed_form(monkeypatch, lambda ray, s: 0.5 * s * (LEVER[2] * ray.direction[1]
+                                                                + LEVER[3] * ray.direction[2]))
+    train, test = linear_wear_fleet(40, 0, "a"), linear_wear_fleet(30, 1, "t")
+    clear = ClearanceRUL(ridge=1e-8).fit(train)
+    twin = TwinRUL(SETUP, clear).calibrate({u: ("task", 1.0, 25.0) for u in train["unit_id"].unique()})
+    cal = [twin.calibration_[c] for c in sorted(twin.calibration_)]
+    assert len(cal) >= 2 and all(abs(bias) < 0.03 and n_rays >= 2 for bias, _, n_rays in cal)
+    # the spread carries the direction's error, which the history shrinks: largest after one interval
+    sds = [sd for _, sd, _ in cal]
+    assert sds == sorted(sds, reverse=True) and sds[-1] < 0.05
+    units, truth = {}, {}
+    for uid, g in test.groupby("unit_id"):
+        g = g.sort_values("cycles")
+        k = int(np.argmin(np.abs(g["cycles"] / g["eol_cycles"] - 0.5)))
+        units[uid] = (("task", 1.0, 25.0), g["cycles"].to_numpy()[: k + 1], clear.clearances(g)[: k + 1])
+        truth[uid] = (g["rul_cycles"].iloc[k], g["eol_cycles"].iloc[0])
+    est = twin.predict_units(units)
+    err = np.array([(est[u][-1][0] - t) / eol for u, (t, eol) in truth.items()])
+    inside = np.mean([est[u][-1][1] <= t <= est[u][-1][2] for u, (t, _) in truth.items()])
+    assert np.sqrt(np.mean(err**2)) < 0.05 and abs(err.mean()) < 0.02
+    assert 0.75 <= inside <= 1.0
+    assert calls  # the boundary came from the (replaced) twin, not from the kernel
 
 
 def test_setup_from_a_manifest():

@@ -113,6 +113,7 @@ class ClearanceRUL:
         tasks = _tasks(df)
         per_unit = []
         self.train_units_: dict[str, tuple[str, NDArray, float]] = {}  # unit -> (task, rate, failure cycles)
+        self.train_history_: dict[str, tuple[NDArray, NDArray]] = {}  # unit -> (cycles, cross-fitted estimates)
         for uid, g in df.groupby("unit_id", sort=True):
             ii = df.index.get_indexer(g.index)
             n, a = g["cycles"].to_numpy(float), a_cf[ii]
@@ -120,6 +121,7 @@ class ClearanceRUL:
             n_f = n[-1] - (n[-1] - n[-2]) / 2 if len(n) > 1 else n[-1]
             per_unit.append((str(tasks.loc[g.index[0]]), r, n_f, a - np.outer(n, r)))
             self.train_units_[str(uid)] = per_unit[-1][:3]
+            self.train_history_[str(uid)] = (n, a)
         self.units_: dict[str, tuple[NDArray, NDArray]] = {}   # task -> (directions, log radii)
         self.prior_: dict[str, tuple[NDArray, NDArray, NDArray]] = {}  # task -> (mean r, cov r, scatter var)
         by_task: dict[str, list] = {}

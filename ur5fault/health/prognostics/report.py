@@ -95,7 +95,10 @@ def predict(df: pd.DataFrame, failure: Failure, seed: int = 0, twin: TwinSetup |
     if twin is not None and clear is not None:
         cond = {str(uid): (str(g["trajectory"].iloc[0]), float(g["payload_kg"].iloc[0]),
                            float(g["temperature_C"].iloc[0])) for uid, g in df.groupby("unit_id")}
-        twin_rul = TwinRUL(twin, clear, seed).calibrate({u: cond[u] for u in map(str, train_ids)})
+        try:
+            twin_rul = TwinRUL(twin, clear, seed).calibrate({u: cond[u] for u in map(str, train_ids)})
+        except ValueError as exc:
+            raise ConfigFileError(f"--twin: {exc}") from None
         sound = test[test["rul_cycles"] > 0].groupby("unit_id").size()   # a unit's inspections before failure
         twin_pred = twin_rul.predict_units({str(uid): (cond[str(uid)], hist_a[uid][0][:k], hist_a[uid][1][:k])
                                             for uid, k in sound.items()})
@@ -142,9 +145,10 @@ def predict(df: pd.DataFrame, failure: Failure, seed: int = 0, twin: TwinSetup |
         "clearance": None if clear is None else {"kernel_kappa": clear.kappa_,
                       "loo_rmse_log_radius_by_kappa": {f"{k:g}": v for k, v in clear.loo_rmse_log_radius_.items()},
                       "boundary_log_sd_by_task": clear.boundary_sd_},
-        "twin": None if twin_rul is None else {"log_radius_bias": twin_rul.bias_, "log_radius_sd": twin_rul.sd_,
-                                                "n_calibration_units": twin_rul.n_calibration_units_,
-                                                "n_twin_rays_test": twin_rul.n_twin_rays_},
+        "twin": None if twin_rul is None else {
+            "log_radius_bias_sd_rays_by_checkpoint": {str(c): list(v) for c, v in twin_rul.calibration_.items()},
+            "n_calibration_units": twin_rul.n_calibration_units_, "n_calibration_rays": twin_rul.n_calibration_rays_,
+            "n_twin_rays_test": twin_rul.n_twin_rays_},
         "naive": {"train_eol_cycles": naive.eol_.tolist()},
         "n_train_units": int(n_tr), "n_test_units": int(n_te),
     }

@@ -13,10 +13,12 @@ error falls as the history grows (on the default fleet: median 7.5 deg after one
 1.8 deg at half-life).
 
 Calibration on up to :data:`CALIBRATION_UNITS` failed training units (every m-th by name; their
-cross-fitted estimates, as a held-out unit's): the log
-ratio of the radius each reached when it failed to the twin's radius along its direction; its mean
-corrects the twin's radius (the estimates' scale, the twin's shared noise seed), its sd is the
-boundary's uncertainty in every RUL distribution.
+cross-fitted estimates, as a held-out unit's), at each of :data:`CHECKPOINTS` a unit lived past: the
+direction the unit's history up to that inspection gave, the twin's radius along it, and the log ratio of
+the radius the unit's growth line had reached along that direction when it failed (``(r . d) N_f``) to the
+twin's; per checkpoint, its mean corrects the twin's radius and its sd (which carries the direction's
+error at that point of life) is the boundary's uncertainty in every RUL distribution of a ray simulated
+at that checkpoint.
 
 Prediction: draws of the growth rate from the posterior, the speed along the direction ``r . d``, the
 crossing ``N* = rho_twin exp(bias + sd eps) / (r . d)``, the RUL rounded up to the inspection grid and at
@@ -64,31 +66,54 @@ class TwinRUL:
     seed: int = 0
 
     def calibrate(self, conditions: Mapping[str, Conditions]) -> TwinRUL:
-        """Simulate the boundary along every failed training unit's direction (``conditions``: per training
-        unit, its task conditions) and compare it with where the unit failed."""
-        rays, log_reached = [], []
+        """Simulate the boundary along the directions the failed training units' histories gave at each
+        checkpoint (``conditions``: per training unit, its task conditions) and compare it with where each
+        unit failed."""
         units = sorted(self.clearance.train_units_.items())
         units = units[:: max(1, -(-len(units) // CALIBRATION_UNITS))]
+        rays, log_reached, at = [], [], []
         for uid, (task, r, n_f) in units:
             if np.linalg.norm(r) <= 0 or uid not in conditions:
                 continue
-            d, speed = _unit_direction(r, r)
+            n, a = self.clearance.train_history_[uid]
             traj, payload, temp = conditions[uid]
-            rays.append(Ray(traj, payload, temp, tuple(d), speed, self.clearance.radius(task, d)))
-            log_reached.append(np.log(speed * n_f))
+            prior = self.clearance.prior_[self.clearance.task_key(task)][0]
+            for c in CHECKPOINTS:
+                if c > len(n) - 2:       # the unit failed before this inspection could be a sound one
+                    break
+                d, speed = _unit_direction(self.clearance.posterior(task, n[: c + 1], a[: c + 1])[0], prior)
+                rays.append(Ray(traj, payload, temp, tuple(d), speed, self.clearance.radius(task, d)))
+                log_reached.append(np.log(max(float(np.maximum(r, 0.0) @ d), 1e-12) * n_f))
+                at.append(c)
         if len(rays) < 2:
-            raise ValueError("TwinRUL needs at least two failed training units with clearance growth")
-        twin = failure_radii(self.setup, rays)
-        resid = np.asarray(log_reached) - np.log(twin)
-        self.bias_, self.sd_ = float(np.mean(resid)), float(np.std(resid, ddof=1))
-        self.n_calibration_units_ = len(rays)
+            raise ValueError("the twin estimator needs at least two calibration directions: failed training units "
+                             f"sound at inspection {CHECKPOINTS[0]} or later")
+        resid = np.asarray(log_reached) - np.log(failure_radii(self.setup, rays))
+        at_arr = np.asarray(at)
+        self.calibration_: dict[int, tuple[float, float, int]] = {}   # checkpoint -> (bias, sd, rays)
+        for c in CHECKPOINTS:
+            e = resid[at_arr == c]
+            if len(e) >= 2:
+                self.calibration_[c] = (float(np.mean(e)), float(np.std(e, ddof=1)), len(e))
+        if not self.calibration_:  # no checkpoint with two units: one calibration for all
+            self.calibration_[CHECKPOINTS[0]] = (float(np.mean(resid)), float(np.std(resid, ddof=1)), len(resid))
+        self.n_calibration_units_ = len({u for u, _ in units})
+        self.n_calibration_rays_ = len(rays)
         return self
+
+    def _calibration_at(self, checkpoint: int) -> tuple[float, float]:
+        """(bias, sd) of the log radius for a ray simulated at ``checkpoint``: that checkpoint's, else the
+        latest calibrated one before it (the earliest when there is none)."""
+        known = sorted(self.calibration_)
+        c = max([k for k in known if k <= checkpoint], default=known[0])
+        return self.calibration_[c][:2]
 
     def predict_units(self, units: Mapping[str, tuple[Conditions, NDArray, NDArray]]) -> dict[str, list[tuple]]:
         """Per unit (``units``: its conditions, cycles ``n`` and clearance estimates ``a`` of its inspections
         so far), the (median, 5 %, 95 %) RUL [cycles] after each inspection k >= 1 (list index k - 1)."""
         plan: dict[str, list[tuple[int, int, NDArray, NDArray]]] = {}
         rays: list[Ray] = []
+        ray_checkpoint: list[int] = []
         for uid, ((traj, payload, temp), n, a) in units.items():
             plan[uid], current = [], None
             prior = self.clearance.prior_[self.clearance.task_key(traj)][0]
@@ -97,6 +122,7 @@ class TwinRUL:
                 d, speed = _unit_direction(mean, prior)
                 if current is None or k in CHECKPOINTS:
                     rays.append(Ray(traj, payload, temp, tuple(d), speed, self.clearance.radius(traj, d)))
+                    ray_checkpoint.append(k)
                     current = len(rays) - 1
                 plan[uid].append((k, current, mean, cov))
         radii = failure_radii(self.setup, rays) if rays else np.zeros(0)
@@ -110,7 +136,8 @@ class TwinRUL:
                 d = np.asarray(rays[ray_i].direction)
                 r = rng.multivariate_normal(mean, cov, N_DRAWS, method="eigh")
                 speed = np.maximum(np.maximum(r, 0.0) @ d, 1e-3 * rays[ray_i].speed)  # clearances do not shrink
-                rho = radii[ray_i] * np.exp(self.bias_ + self.sd_ * rng.standard_normal(N_DRAWS))
+                bias, sd = self._calibration_at(ray_checkpoint[ray_i])
+                rho = radii[ray_i] * np.exp(bias + sd * rng.standard_normal(N_DRAWS))
                 t = grid_rul(rho / speed - n[k], n[k] - n[k - 1])
                 lo, med, hi = np.quantile(t, [Q_LO, 0.5, Q_HI])
                 out[uid].append((float(med), float(lo), float(hi)))
