@@ -96,6 +96,16 @@ def test_twin_rul_of_a_linear_drift_with_a_known_boundary(monkeypatch):
     assert calls  # the boundary came from the (replaced) twin, not from the kernel
 
 
+def test_twin_without_a_life_manifest_is_one_line_exit_2(tmp_path, capsys):
+    fleet = tmp_path / "fleet"
+    fleet.mkdir()
+    df = linear_wear_fleet(6, 0, "a").assign(split="train", failed=False, censored=False)
+    df.to_parquet(fleet / "inspections.parquet")
+    assert main(["prognose", str(fleet), "--out", str(tmp_path / "bench"), "--twin"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("ur5fault: error:") and "--twin" in err[0]
+
+
 def test_setup_from_a_manifest():
     m = {"wear": {"friction_per_deg": 3.0}, "failure": {"feature": "tcp_dev_rms_mm", "threshold": 0.2},
          "identity_inputs": {"log_period_s": 0.002, "duration_s": 1.5}}
