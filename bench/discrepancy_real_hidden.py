@@ -3,7 +3,9 @@ the measured current of the NIST log and of Kufieta runs (``tests/real_hidden.py
 time on different joints; each log and its clean original fitted once.  Prints a Markdown table per case and
 the detection rate, size error and extra-finding rate per effect kind.  Usage::
 
-    .venv/bin/python bench/discrepancy_real_hidden.py > table.md
+    .venv/bin/python bench/discrepancy_real_hidden.py [--jobs N] [--cases 0,2,5] > table.md
+
+(``--cases``: indices into :data:`CASES`, to measure a few cases before the whole table.)
 
 A case is *named* when a kept library finding (or one of its indistinguishable alternatives) is of the
 injected kind on the injected joint, and its estimate, less the clean log's own estimate of that kind there
@@ -13,6 +15,7 @@ on another effect or joint that the clean log's fit does not have.
 
 from __future__ import annotations
 
+import argparse
 import sys
 import time
 from pathlib import Path
@@ -83,15 +86,21 @@ def kept_keys(m) -> set[tuple[str, int | None]]:
 
 
 def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--jobs", type=int, default=JOBS, help=f"worker processes per fit (default {JOBS})")
+    ap.add_argument("--cases", default=None, help="comma-separated indices into CASES (default: all)")
+    args = ap.parse_args()
+    jobs = args.jobs
+    cases = CASES if args.cases is None else [CASES[int(i)] for i in args.cases.split(",")]
     clean: dict[str, DiscrepancyModel] = {}
     rows, per_kind = [], {}
     print("| log | injected | named as | estimate - clean | truth | error | extra findings | unexplained | wall |")
     print("| --- | --- | --- | --- | --- | --- | --- | --- | --- |")
-    for name, effects in CASES:
+    for name, effects in cases:
         base = read(name)
         if name not in clean:
             t = time.perf_counter()
-            clean[name] = DiscrepancyModel(jobs=JOBS).fit(base)
+            clean[name] = DiscrepancyModel(jobs=jobs).fit(base)
             print(f"| {name} | clean | {', '.join(f.candidate.label for f in clean[name].findings_ if f.kept)} "
                   f"| | | | | {len(clean[name].unexplained_)} | {time.perf_counter() - t:.0f} s |", flush=True)
         log = base
@@ -100,7 +109,7 @@ def main() -> None:
                 v["centre_deg"] = busy_angle_deg(base, j)
             log = inject(log, kind, j, **v)
         t = time.perf_counter()
-        m = DiscrepancyModel(jobs=JOBS).fit(log)
+        m = DiscrepancyModel(jobs=jobs).fit(log)
         wall = time.perf_counter() - t
         injected = {(NAMED_AS[k][0], j) for k, j, _ in effects if k in NAMED_AS}
         extra = kept_keys(m) - kept_keys(clean[name]) - injected - {("torque_constant", j) for _, j in injected}

@@ -19,7 +19,9 @@ def register(sub) -> None:
     d.add_argument("--out", required=True, help="output folder (report.md, model.yaml, summary.json)")
     d.add_argument("--fit-fraction", type=float, default=FIT_FRACTION,
                    help=f"share of the log used for fitting (0.2..0.9, default {FIT_FRACTION:g})")
-    d.add_argument("--max-effects", type=int, default=3, help="most effects of the library named (default 3)")
+    d.add_argument("--max-effects", type=int, default=1,
+                   help="most effects of the library named per joint; robot-wide ones count as one more joint "
+                        "(default 1)")
     d.add_argument("--max-terms", type=int, default=4,
                    help="most terms discovered outside the library (default 4; 0: library only)")
     d.add_argument("--jobs", type=int, help="worker processes for the simulation batches (default: all cores)")

@@ -12,6 +12,7 @@ from numpy.typing import NDArray
 from ..sim.axes import N_JOINTS
 from ..sim.effects import EffectSpec
 from .candidates import Candidate
+from .drift import Drift
 from .refinement import FindingSet, Refined
 from .search import Verdict, backward, columns_of, forward, judge
 from .statistics import Z_95, BlockGram, Generalisation, generalisation, rss_of
@@ -77,7 +78,8 @@ def channels(c: Candidate, n_signals: int) -> NDArray:
 
 
 def judge_findings(found: Sequence[Candidate], ref: Refined, n_fit: int, n_signals: int,
-                   alts: Sequence[tuple[int, Candidate, NDArray]] = ()) -> tuple[list[Finding], list[SearchStep]]:
+                   alts: Sequence[tuple[int, Candidate, NDArray]] = (), drift: Drift | None = None
+                   ) -> tuple[list[Finding], list[SearchStep]]:
     """Judge the findings on the problem linearised by the probe batch ``ref``.
 
     On the fitting part they are selected afresh from among themselves (two that only cancel each other,
@@ -86,6 +88,8 @@ def judge_findings(found: Sequence[Candidate], ref: Refined, n_fit: int, n_signa
     simulated Jacobian) must move the model towards the measurement; the worst that does not is dropped
     and the rest judged again.
 
+    ``drift``: the model's own drift on the fitting part (``drift.py``), fitted beside the findings there.
+
     Returns:
         The kept findings (then the dropped ones, with their reasons) and the trace of the drops.
     """
@@ -93,6 +97,8 @@ def judge_findings(found: Sequence[Candidate], ref: Refined, n_fit: int, n_signa
     cols = columns_of(found)
     J_fit = ref.J[:, :n_fit]
     e_pseudo = ref.e[:n_fit] + np.tensordot(ref.theta, J_fit, axes=1)  # the residual without the findings
+    if drift is not None:
+        J_fit, e_pseudo = drift.remove(J_fit), drift.remove(e_pseudo)
     bg = BlockGram.build(J_fit, e_pseudo)
     G, g, ee = bg.total()
     again = forward(bg, e_pseudo, J_fit, found, cols, len(found))
@@ -168,13 +174,15 @@ def alternatives(fs: FindingSet, kept: list[int], k: int, ref: Refined, J_fit: N
     return out
 
 
-def final_verdicts(kept: list[Finding], pol: Refined, n_fit: int) -> list[Finding]:
-    """Each kept finding judged against the others once more, linearised at the polished coefficients;
-    returns those that fail now."""
+def final_verdicts(kept: list[Finding], pol: Refined, n_fit: int, drift: Drift | None = None) -> list[Finding]:
+    """Each kept finding judged against the others once more, linearised at the polished coefficients (beside
+    the ``drift``); returns those that fail now."""
     cands = [f.candidate for f in kept]
     cols = columns_of(cands)
     J_fit = pol.J[:, :n_fit]
     e_pseudo = pol.e[:n_fit] + np.tensordot(pol.theta, J_fit, axes=1)
+    if drift is not None:
+        J_fit, e_pseudo = drift.remove(J_fit), drift.remove(e_pseudo)
     bg = BlockGram.build(J_fit, e_pseudo)
     failed = []
     for k, f in enumerate(kept):

@@ -76,7 +76,8 @@ class DiscrepancyModel:
 
     Args:
         fit_fraction: share of the log (from its start) used for fitting; the rest is held out.
-        max_effects: most library effects named.
+        max_effects: most library effects named per joint (robot-wide effects count as one more joint), so
+            that one joint's findings cannot use up another's.
         max_terms: most dictionary terms added (0: no discovery).
         kinds: restrict the library's effect kinds (default: the whole registry).
         jobs: worker processes for lockstep batches.
@@ -86,7 +87,7 @@ class DiscrepancyModel:
             [s] (None: the whole fitting part); refinement and judgement use the whole fitting part.
     """
 
-    def __init__(self, fit_fraction: float = FIT_FRACTION, max_effects: int = 3, max_terms: int = 4,
+    def __init__(self, fit_fraction: float = FIT_FRACTION, max_effects: int = 1, max_terms: int = 4,
                  kinds: Sequence[str] | None = None, jobs: int = 1, refiner: str = "secant",
                  progress: bool = False, screen_s: float | None = SCREEN_S) -> None:
         lo, hi = FIT_FRACTION_RANGE
@@ -154,13 +155,14 @@ class DiscrepancyModel:
         # simulation of which is the final model when the estimate has converged)
         t = time.perf_counter()
         prog = stages.start("judging")
-        jr = steps.judge(ref, n_fit, len(rp.signals))
+        drift = steps.drift_of(rp, n_fit)
+        jr = steps.judge(ref, n_fit, len(rp.signals), drift)
         self.search_: list[SearchStep] = lib.trace + disc.trace + check.trace + jr.trace
         self.refinement_ = list(ref.first.steps) if ref.first is not None else []
         for f in jr.findings:
             f.tell_apart = disc.tell_apart.get(f.candidate, "")
         kept = [f for f in jr.findings if f.kept]
-        after = self._polish(rp, kept, ref.first, ref.finding_set, prog) if kept else ref.nominal
+        after = self._polish(rp, kept, ref.first, ref.finding_set, prog, drift) if kept else ref.nominal
         self._results(rp, ref.nominal, after, n_fit, n_all)
         timings["judging"] = time.perf_counter() - t
         logger.info("judged and polished in %.0f s: kept %s", timings["judging"],
@@ -174,7 +176,8 @@ class DiscrepancyModel:
         return self
 
     # --------------------------------------------------------------------------------- pieces
-    def _polish(self, rp: LogReplay, kept: list[Finding], first: Refined, fs: FindingSet, progress) -> Replayed:
+    def _polish(self, rp: LogReplay, kept: list[Finding], first: Refined, fs: FindingSet, progress,
+                drift) -> Replayed:
         """Gauss-Newton on the kept findings from their judged coefficients, then their final verdicts (one
         that fails now is dropped and the final model simulated once more)."""
         cols = columns_of(fs.found)
@@ -185,7 +188,7 @@ class DiscrepancyModel:
         self.refinement_ += pol.steps
         for f, th in zip(kept, kfs.split(pol.theta)):
             f.theta = th
-        failed = final_verdicts(kept, pol, self.n_fit_)
+        failed = final_verdicts(kept, pol, self.n_fit_, drift)
         for f in failed:
             f.kept = False
             f.reason = (f.candidate.range_problem(f.theta)

@@ -115,10 +115,11 @@ def columns_of(cands: Sequence[Candidate], start: int = 0) -> list[list[int]]:
 
 
 def forward(bg: BlockGram, e_fit: NDArray, X: NDArray, cands: Sequence[Candidate], cols: list[list[int]],
-            max_n: int, fixed: Sequence[int] = ()) -> Selection:
+            max_n: int, fixed: Sequence[int] = (), per_joint: int | None = None) -> Selection:
     """Forward selection: at each step the candidates are tried in order of the improvement they add to the
     joint fit; the first one :func:`judge` accepts is taken.  Stops when no candidate can lower BIC enough
-    or none that could is accepted."""
+    or none that could is accepted.  ``per_joint``: at most this many chosen per joint (robot-wide
+    candidates count as one more "joint"), so that one joint's findings cannot use up another's budget."""
     G, g, ee = bg.total()
     chosen: list[int] = []
     verdicts: list[Verdict] = []
@@ -129,8 +130,10 @@ def forward(bg: BlockGram, e_fit: NDArray, X: NDArray, cands: Sequence[Candidate
         rss0, th0 = rss_of(G, g, ee, base)
         n_eff = effective_n(e_fit - np.tensordot(th0, X[base], axes=1)) if base else effective_n(e_fit)
         gains = []
+        full = set() if per_joint is None else {
+            c.joint for c in (cands[k] for k in chosen) if sum(cands[o].joint == c.joint for o in chosen) >= per_joint}
         for k in range(len(cands)):
-            if k in chosen:
+            if k in chosen or (per_joint is not None and cands[k].joint in full):
                 continue
             rss1, _ = rss_of(G, g, ee, base + cols[k])
             gains.append((rss0 - rss1, k))

@@ -24,6 +24,7 @@ from ..twin.replay import LogReplay, Replayed
 from ..twin.residuals import conditions
 from . import discovery, library
 from .candidates import Candidate, TermCandidate
+from .drift import Drift
 from .judging import Finding, SearchStep, judge_findings
 from .refinement import FindingSet, Refined, probe_batch
 from .search import backward, columns_of, forward
@@ -52,6 +53,7 @@ class LibraryRecord:
     chosen_cols: list[int]
     alternatives: Alternatives
     trace: list[SearchStep]
+    drift: Drift | None = None  # projected out of ``X`` and ``e0`` (and of the dictionary's columns)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -91,19 +93,27 @@ class JudgeRecord:
     trace: list[SearchStep]
 
 
+def drift_of(rp: LogReplay, n: int) -> Drift:
+    """The nuisance drift of the log's samples ``1..n`` (``drift.py``)."""
+    return Drift(n, rp.log.period_s, rp.signals, rp.log.temperature_C)
+
+
 def screen_library(rp: LogReplay, n_scr: int, payload_kg: float, kinds: Sequence[str] | None,
                    max_effects: int, progress: Callable[[float], None] | None = None) -> LibraryRecord:
+    """``max_effects``: most library effects named per joint (robot-wide effects count as one more joint)."""
     cands = library.candidates(payload_kg, kinds=kinds, params=rp.params)
     base, X_lib, cands = library.screen(rp, n_scr, cands, progress=progress)
-    e0 = weighted(rp.measured(n_scr), base.y, rp.sigma)
+    drift = drift_of(rp, n_scr)
+    e0 = drift.remove(weighted(rp.measured(n_scr), base.y, rp.sigma))
+    X_lib = drift.remove(X_lib)
     bg = BlockGram.build(X_lib, e0)
     cols = columns_of(cands)
-    sel = forward(bg, e0, X_lib, cands, cols, max_effects)
+    sel = forward(bg, e0, X_lib, cands, cols, max_effects * (N_JOINTS + 1), per_joint=max_effects)
     alternatives = {cands[k]: [(cands[a], th) for a, th in alt][:MAX_ALTERNATIVES]
                     for k, alt in zip(sel.chosen, sel.alternatives)}
     return LibraryRecord(base, X_lib, e0, cands, cols, [cands[k] for k in sel.chosen],
                          [c for k in sel.chosen for c in cols[k]], alternatives,
-                         [SearchStep.of("library", v) for v in sel.trace])
+                         [SearchStep.of("library", v) for v in sel.trace], drift)
 
 
 def joints_above_floor(e: NDArray, n_signals: int) -> list[int]:
@@ -125,6 +135,8 @@ def discover_terms(rp: LogReplay, lib: LibraryRecord, n_scr: int, max_terms: int
     joints = sorted(set(joints_above_floor(e_lib, len(rp.signals)))
                     | {c.joint for c in lib.chosen if c.joint is not None})
     dcands, X_dict = discovery.dictionary(rp, lib.base, n_scr, joints)
+    if lib.drift is not None and dcands:
+        X_dict = lib.drift.remove(X_dict)
     if not dcands:
         return DiscoveryRecord(X_all, fixed, lib.chosen, [], {}, [])
     X_all = np.concatenate([X_all, X_dict])
@@ -299,8 +311,9 @@ def refine(rp: LogReplay, found: list[Candidate], X: NDArray, fixed: list[int], 
     return RefineRecord(found, first, first.sim0, alts, fs)
 
 
-def judge(ref: RefineRecord, n_fit: int, n_signals: int) -> JudgeRecord:
+def judge(ref: RefineRecord, n_fit: int, n_signals: int, drift: Drift | None = None) -> JudgeRecord:
+    """``drift``: the nuisance drift of the fitting part, projected out before the findings are judged there."""
     if not ref.found:
         return JudgeRecord([], [])
-    findings, trace = judge_findings(ref.found, ref.first, n_fit, n_signals, ref.alts)
+    findings, trace = judge_findings(ref.found, ref.first, n_fit, n_signals, ref.alts, drift)
     return JudgeRecord(findings, list(trace))
