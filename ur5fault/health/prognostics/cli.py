@@ -19,6 +19,9 @@ def register(sub) -> None:
     p.add_argument("--out", help="report folder (default: DIR/../benchmark)")
     p.add_argument("--seed", type=int, default=0,
                    help="random state of the RUL distributions' Monte Carlo draws (default: 0)")
+    p.add_argument("--twin", action="store_true",
+                   help="also the estimator whose failure boundary the digital twin simulates along each unit's "
+                        "direction of clearance growth (simulations: minutes on the default fleet)")
     p.set_defaults(func=cmd_prognose)
 
 
@@ -51,7 +54,7 @@ def cmd_prognose(args: argparse.Namespace) -> int:
     from .report import run_prognose
 
     t0 = time.perf_counter()
-    m = run_prognose(Path(args.dir), Path(args.out) if args.out else None, seed=args.seed)
+    m = run_prognose(Path(args.dir), Path(args.out) if args.out else None, seed=args.seed, twin=args.twin)
     print(f"{m['dataset']['n_train_units']} train / {m['dataset']['n_test_units']} test units")
     for name in m["estimators"]:
         r = m["estimators"][name]

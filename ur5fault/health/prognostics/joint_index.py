@@ -39,6 +39,37 @@ def joint_features(columns, j: int) -> list[str]:
     return [c for c in index_features(columns) if c.endswith(f"_j{j}")]
 
 
+#: stage 1 of one joint: its feature columns, their mean and scale, and the ridge coefficients (+ constant)
+ClearanceMap = tuple[list[str], NDArray, NDArray, NDArray]
+
+
+def fit_clearance_maps(df: pd.DataFrame, ridge: float = JOINT_RIDGE) -> dict[int, ClearanceMap]:
+    """Stage 1 on training inspections: per joint, ridge from the change of its own features since the
+    unit's inspection 0 onto the change of its clearance (the training units' truth is the target)."""
+    maps: dict[int, ClearanceMap] = {}
+    for j in JOINTS:
+        cols = joint_features(df.columns, j)
+        x = feature_changes(df, cols).to_numpy()
+        mu, sd = x.mean(0), x.std(0)
+        sd[sd == 0] = 1.0
+        z = np.column_stack([(x - mu) / sd, np.ones(len(x))])
+        b = df[f"backlash_deg_j{j}"].astype(float)
+        y = (b - b.groupby(df["unit_id"]).transform("first")).to_numpy()
+        reg = ridge * len(x) * np.eye(z.shape[1])
+        reg[-1, -1] = 0.0
+        maps[j] = (cols, mu, sd, np.linalg.solve(z.T @ z + reg, z.T @ y))
+    return maps
+
+
+def estimate_clearances(maps: dict[int, ClearanceMap], df: pd.DataFrame) -> NDArray:
+    """Estimated clearance growth per joint since inspection 0 [deg], shape (rows, 6); reads features only."""
+    out = np.zeros((len(df), len(JOINTS)))
+    for k, j in enumerate(JOINTS):
+        cols, mu, sd, c = maps[j]
+        out[:, k] = ((feature_changes(df, cols).to_numpy() - mu) / sd) @ c[:-1] + c[-1]
+    return out
+
+
 @dataclasses.dataclass
 class JointHealthIndex:
     """Per-joint clearance estimates through per-task lever arms; ``fit`` on training inspections."""
@@ -48,18 +79,7 @@ class JointHealthIndex:
     ridge: float = JOINT_RIDGE
 
     def fit(self, df: pd.DataFrame) -> JointHealthIndex:
-        self.stage1_: dict[int, tuple[list[str], NDArray, NDArray, NDArray]] = {}
-        for j in JOINTS:
-            cols = joint_features(df.columns, j)
-            x = feature_changes(df, cols).to_numpy()
-            mu, sd = x.mean(0), x.std(0)
-            sd[sd == 0] = 1.0
-            z = np.column_stack([(x - mu) / sd, np.ones(len(x))])
-            b = df[f"backlash_deg_j{j}"].astype(float)
-            y = (b - b.groupby(df["unit_id"]).transform("first")).to_numpy()
-            reg = self.ridge * len(x) * np.eye(z.shape[1])
-            reg[-1, -1] = 0.0
-            self.stage1_[j] = (cols, mu, sd, np.linalg.solve(z.T @ z + reg, z.T @ y))
+        self.stage1_ = fit_clearance_maps(df, self.ridge)
         clear = self.clearances(df)
         y = df[self.criterion].to_numpy(float) / self.threshold
         tasks = df["trajectory"].astype(str) if "trajectory" in df.columns else pd.Series("", index=df.index)
@@ -75,11 +95,7 @@ class JointHealthIndex:
 
     def clearances(self, df: pd.DataFrame) -> NDArray:
         """Estimated clearance growth per joint since inspection 0 [deg], shape (rows, 6)."""
-        out = np.zeros((len(df), len(JOINTS)))
-        for k, j in enumerate(JOINTS):
-            cols, mu, sd, c = self.stage1_[j]
-            out[:, k] = ((feature_changes(df, cols).to_numpy() - mu) / sd) @ c[:-1] + c[-1]
-        return out
+        return estimate_clearances(self.stage1_, df)
 
     def transform(self, df: pd.DataFrame) -> NDArray:
         """The index (criterion / threshold scale) of every row; reads features and the task only."""

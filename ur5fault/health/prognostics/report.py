@@ -18,13 +18,16 @@ from ...errors import ConfigFileError
 from ...util.io import write_json_atomic, write_text_atomic
 from ..diagnostics.report import clean
 from . import metrics as M
+from .clearance_rul import ClearanceRUL
 from .figures import health_index_paths, rul_alpha_cone
 from .joint_index import JOINTS, JointHealthIndex
 from .rul import LinearRUL, PopulationRUL, TaskHealthIndex, WienerRUL
 from .spec import Failure
+from .twin_boundary import TwinSetup
+from .twin_rul import TwinRUL
 
 NEEDED = ("unit_id", "inspection", "cycles", "split", "rul_cycles", "eol_cycles", "censored", "failed")
-ESTIMATORS = ("wiener", "linear", "wiener_joint", "naive")
+ESTIMATORS = ("wiener", "linear", "wiener_joint", "clearance", "twin", "naive")
 #: the estimator the issue's goals are judged on (the others are shown beside it)
 BASELINE = "wiener"
 
@@ -49,9 +52,10 @@ def load_inspections(folder: Path) -> tuple[pd.DataFrame, dict[str, Any]]:
     return df, manifest
 
 
-def predict(df: pd.DataFrame, failure: Failure, seed: int = 0) -> tuple[dict[str, pd.DataFrame], dict[str, Any],
-                                                                      np.ndarray]:
+def predict(df: pd.DataFrame, failure: Failure, seed: int = 0, twin: TwinSetup | None = None
+            ) -> tuple[dict[str, pd.DataFrame], dict[str, Any], np.ndarray]:
     """Fit on the failed training units; predict at every pre-failure inspection of the failed test units.
+    ``twin``: also the estimator whose failure boundary the digital twin simulates (twin_rul.py; minutes).
 
     Returns the prediction tables per estimator, the fitted constants, and the health index of every row.
     """
@@ -73,8 +77,13 @@ def predict(df: pd.DataFrame, failure: Failure, seed: int = 0) -> tuple[dict[str
     linear = LinearRUL(seed).fit([hist[u][0] for u in train_ids], [hist[u][1] for u in train_ids])
     # the per-joint index (joint_index.py) under the same Wiener estimator, reported beside the baseline
     # (only where the fleet records per-joint clearances to fit its first stage on)
-    joint_model = wiener_j = None
+    joint_model = wiener_j = clear = None
     if all(f"backlash_deg_j{j}" in df.columns for j in JOINTS):
+        # the clearance-space estimator (clearance_rul.py): per-joint growth meets the task's failure boundary
+        clear = ClearanceRUL(seed=seed).fit(train)
+        a_of = clear.clearances(df)
+        hist_a = {uid: (g["cycles"].to_numpy(float), a_of[df.index.get_indexer(g.index)], str(g["trajectory"].iloc[0])
+                        if "trajectory" in g.columns else "") for uid, g in df.sort_values("cycles").groupby("unit_id")}
         joint_model = JointHealthIndex(failure.feature, failure.threshold).fit(train)
         hj_of = pd.Series(joint_model.transform(df), index=df.index)
         hist_j = {uid: (g["cycles"].to_numpy(float), hj_of[g.index].to_numpy()) for uid, g in
@@ -82,6 +91,17 @@ def predict(df: pd.DataFrame, failure: Failure, seed: int = 0) -> tuple[dict[str
         wiener_j = WienerRUL(seed).fit([hist_j[u][0] for u in train_ids], [hist_j[u][1] for u in train_ids],
                                        joint_model.failure_level_, joint_model.residual_sd_)
     naive = PopulationRUL().fit(train.groupby("unit_id")["eol_cycles"].first().to_numpy())
+    twin_rul, twin_pred = None, {}
+    if twin is not None and clear is not None:
+        cond = {str(uid): (str(g["trajectory"].iloc[0]), float(g["payload_kg"].iloc[0]),
+                           float(g["temperature_C"].iloc[0])) for uid, g in df.groupby("unit_id")}
+        try:
+            twin_rul = TwinRUL(twin, clear, seed).calibrate({u: cond[u] for u in map(str, train_ids)})
+        except ValueError as exc:
+            raise ConfigFileError(f"--twin: {exc}") from None
+        sound = test[test["rul_cycles"] > 0].groupby("unit_id").size()   # a unit's inspections before failure
+        twin_pred = twin_rul.predict_units({str(uid): (cond[str(uid)], hist_a[uid][0][:k], hist_a[uid][1][:k])
+                                            for uid, k in sound.items()})
     rows: dict[str, list] = {name: [] for name in ESTIMATORS}
     for uid, g in test.sort_values("cycles").groupby("unit_id"):
         n_all, h_all = hist[uid]
@@ -92,11 +112,15 @@ def predict(df: pd.DataFrame, failure: Failure, seed: int = 0) -> tuple[dict[str
             if k == 0:  # no history yet: the population's residual life
                 w = lin = naive.predict(r["cycles"])
                 wj = w if wiener_j else None
+                cl = w if clear else None
+                tw = w if twin_rul else None
             else:
                 w = wiener.predict(n_all[: k + 1], h_all[: k + 1])
                 lin = linear.predict(n_all[: k + 1], h_all[: k + 1])
                 wj = wiener_j.predict(hist_j[uid][0][: k + 1], hist_j[uid][1][: k + 1]) if wiener_j else None
-            for name, e in (("linear", lin), ("wiener", w), ("wiener_joint", wj),
+                cl = clear.predict(hist_a[uid][2], hist_a[uid][0][: k + 1], hist_a[uid][1][: k + 1]) if clear else None
+                tw = twin_pred[str(uid)][k - 1] if twin_rul else None
+            for name, e in (("linear", lin), ("wiener", w), ("wiener_joint", wj), ("clearance", cl), ("twin", tw),
                             ("naive", naive.predict(r["cycles"]))):
                 if e is not None:
                     rows[name].append({**base, "rul_est": e[0], "rul_lo": e[1], "rul_hi": e[2]})
@@ -118,20 +142,33 @@ def predict(df: pd.DataFrame, failure: Failure, seed: int = 0) -> tuple[dict[str
         "wiener_joint": None if joint_model is None else {"index_residual_sd": joint_model.residual_sd_,
                          "lever_arms_per_deg": {t: v[:-1].tolist() for t, v in joint_model.lever_.items()},
                          "theta_mean_per_cycle": wiener_j.theta_mean_, "sigma2_per_cycle": wiener_j.sigma2_},
+        "clearance": None if clear is None else {"kernel_kappa": clear.kappa_,
+                      "loo_rmse_log_radius_by_kappa": {f"{k:g}": v for k, v in clear.loo_rmse_log_radius_.items()},
+                      "boundary_log_sd_by_task": clear.boundary_sd_},
+        "twin": None if twin_rul is None else {
+            "log_radius_bias_sd_rays_by_checkpoint": {str(c): list(v) for c, v in twin_rul.calibration_.items()},
+            "n_calibration_units": twin_rul.n_calibration_units_, "n_calibration_rays": twin_rul.n_calibration_rays_,
+            "n_twin_rays_test": twin_rul.n_twin_rays_},
         "naive": {"train_eol_cycles": naive.eol_.tolist()},
         "n_train_units": int(n_tr), "n_test_units": int(n_te),
     }
     return pred, fitted, hi_all
 
 
-def run_prognose(folder: Path, out: Path | None = None, *, seed: int = 0) -> dict[str, Any]:
+def run_prognose(folder: Path, out: Path | None = None, *, seed: int = 0, twin: bool = False) -> dict[str, Any]:
     """The benchmark on a life-campaign folder; returns the metrics written to ``out/metrics.json``."""
     t0 = time.perf_counter()
     folder = Path(folder)
     out = Path(out) if out is not None else folder.parent / "benchmark"
     df, manifest = load_inspections(folder)
     failure = Failure(**manifest["failure"]) if isinstance(manifest.get("failure"), dict) else Failure()
-    pred, fitted, hi = predict(df, failure, seed)
+    setup = None
+    if twin:
+        if "wear" not in manifest or "identity_inputs" not in manifest:
+            raise ConfigFileError(f"{folder}/manifest.json: no wear law or identity inputs; --twin needs the manifest "
+                                  "of a life campaign")
+        setup = TwinSetup.from_manifest(manifest, seed)
+    pred, fitted, hi = predict(df, failure, seed, setup)
     per_unit = df.groupby("unit_id").agg(split=("split", "first"), n=("inspection", "size"),
                                          eol=("eol_cycles", "first"))
     if set(per_unit[per_unit["split"] == "train"].index) & set(per_unit[per_unit["split"] == "test"].index):
@@ -159,6 +196,10 @@ def run_prognose(folder: Path, out: Path | None = None, *, seed: int = 0) -> dic
         "rmse_50_ratio_baseline_to_naive": w["rmse_cycles"]["0.5"] / n["rmse_cycles"]["0.5"],
         "rmse_50_at_most_half_of_naive": w["rmse_cycles"]["0.5"] <= 0.5 * n["rmse_cycles"]["0.5"],
         "alpha_lambda_at_least_0.8": w["alpha_lambda_accuracy"] >= 0.8,
+        "by_estimator": {name: {"rmse_50_ratio_to_naive": (q := r["rmse_cycles"]["0.5"] / n["rmse_cycles"]["0.5"]),
+                                "rmse_50_at_most_half_of_naive": q <= 0.5,
+                                "alpha_lambda_at_least_0.8": r["alpha_lambda_accuracy"] >= 0.8}
+                         for name, r in m["estimators"].items() if name != "naive"},
     }
     figures = {"rul_alpha_cone": rul_alpha_cone(pred), "health_index": health_index_paths(df, hi,
                                                                                         fitted["health_index"]
@@ -211,7 +252,11 @@ def markdown(m: dict[str, Any]) -> str:
     lines += ["", f"Goals: RMSE at 50 % life, {g['baseline']} / naive = "
               f"{_f(g['rmse_50_ratio_baseline_to_naive'], '.2f')} "
               f"(goal <= 0.5: {'met' if g['rmse_50_at_most_half_of_naive'] else 'missed'}); alpha-lambda accuracy "
-              f">= 0.8: {'met' if g['alpha_lambda_at_least_0.8'] else 'missed'}.", "",
+              f">= 0.8: {'met' if g['alpha_lambda_at_least_0.8'] else 'missed'}. Each estimator: "
+              + "; ".join(f"{k} {_f(v['rmse_50_ratio_to_naive'], '.2f')} x naive "
+                          f"({'met' if v['rmse_50_at_most_half_of_naive'] else 'missed'}), alpha-lambda "
+                          f"{'met' if v['alpha_lambda_at_least_0.8'] else 'missed'}"
+                          for k, v in g["by_estimator"].items()) + ".", "",
               "RMSE in cycles. Health index: the unit's own feature changes since its inspection 0, mapped onto "
               "the failure criterion on the training units of the same duty task. linear: the index as a "
               "linear trend measured with "
@@ -219,7 +264,13 @@ def markdown(m: dict[str, Any]) -> str:
               "history; RUL from the fitted trend. wiener: the index as a Wiener process with a population "
               "prior on its drift, RUL from the last index value. Both: median of the RUL distribution, 5-95 % "
               "interval. wiener_joint: the same Wiener estimator on a per-joint index (each joint's features estimate "
-              "its clearance growth, combined per task with non-negative lever arms onto the criterion). naive: mean "
+              "its clearance growth, combined per task with non-negative lever arms onto the criterion). "
+              "clearance: each joint's clearance estimated from its own features (maps per task), its growth "
+              "extrapolated as a line from the new robot with a population prior, the end of life where that "
+              "line meets the failure boundary of the task's training units (radius by direction of growth, "
+              "kernel width by leave-one-unit-out). twin (with --twin): the same clearance estimates and growth "
+              "line, the failure boundary simulated by the digital twin along the unit's direction of growth on "
+              "its own duty cycle (task, payload, temperature), calibrated on training units. naive: mean "
               "residual life of the training units that outlived the unit's age.", "",
               "Figures: " + ", ".join(f"`{f}`" for f in m["figures"]) + f". Benchmark wall time "
               f"{m['benchmark_wall_s']:.1f} s."]
