@@ -145,3 +145,33 @@ def test_tiny_fleet_prognose_with_the_twin(tmp_path):
     heavy = dataclasses.replace(ray, payload_kg=ray.payload_kg + 1.0)
     both = failure_radii(setup, [heavy, ray, heavy])
     assert both[1] == rho and both[0] == both[2] == failure_radii(setup, [heavy])[0]
+
+
+def test_the_twin_runs_its_model_overlay():
+    """The twin's model overlay reaches its simulations: a shoulder gear of half the packaged stiffness moves
+    the failure feature at the same clearance (the fleet's own model: None)."""
+    from ur5fault.config import Overlay
+
+    setup = TwinSetup(WearLaw(), Failure(), log_period_s=0.002, duration_s=2.0)
+    soft = dataclasses.replace(setup, model=Overlay({"gear": {"stiffness_Nm_per_rad": [6.7e4, 5.5e4, 6.7e4, 1.25e4,
+                                                                                       1.25e4, 1.25e4]}}))
+    ray = Ray(json.dumps("pick_and_place"), 1.0, 28.0, (0.0, 1.0, 0.0, 0.0, 0.0, 0.0), 1e-7, 0.1)
+    packaged = TB._criteria(setup, ray.trajectory, [(ray, 0.1)])
+    softer = TB._criteria(soft, ray.trajectory, [(ray, 0.1)])
+    assert np.isfinite(packaged).all() and np.isfinite(softer).all()
+    assert abs(softer[0] - packaged[0]) > 1e-3 * packaged[0]
+
+
+def test_a_twin_model_with_wear_effects_is_one_line_exit_2(tmp_path, capsys):
+    ov = tmp_path / "ov.yaml"
+    ov.write_text("effects: [{effect: backlash, joint: 2, backlash_deg: 0.1}]\n")
+    assert main(["prognose", str(tmp_path), "--model", str(ov)]) == 2
+    assert "--twin" in capsys.readouterr().err
+    fleet = tmp_path / "fleet"
+    fleet.mkdir()
+    df = linear_wear_fleet(6, 0, "a").assign(split="train", failed=False, censored=False)
+    df.to_parquet(fleet / "inspections.parquet")
+    (fleet / "manifest.json").write_text(json.dumps({"wear": {}, "identity_inputs": {}, "failure": {}}))
+    assert main(["prognose", str(fleet), "--out", str(tmp_path / "bench"), "--twin", "--model", str(ov)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("ur5fault: error:") and "backlash" in err[0]

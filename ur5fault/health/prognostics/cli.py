@@ -22,6 +22,9 @@ def register(sub) -> None:
     p.add_argument("--twin", action="store_true",
                    help="also the estimator whose failure boundary the digital twin simulates along each unit's "
                         "direction of clearance growth (simulations: minutes on the default fleet)")
+    p.add_argument("--model", metavar="OVERLAY",
+                   help="with --twin: the model overlay YAML the twin runs (default: the packaged model, the one the "
+                        "fleet was simulated with); e.g. a robot's fitted model, or parameters off by a model error")
     p.set_defaults(func=cmd_prognose)
 
 
@@ -51,10 +54,16 @@ def cmd_life_run(args: argparse.Namespace) -> int:
 def cmd_prognose(args: argparse.Namespace) -> int:
     import time
 
+    from ...config import Overlay
+    from ...errors import ParameterError
     from .report import run_prognose
 
     t0 = time.perf_counter()
-    m = run_prognose(Path(args.dir), Path(args.out) if args.out else None, seed=args.seed, twin=args.twin)
+    if args.model and not args.twin:
+        raise ParameterError("--model sets the twin's model: it needs --twin")
+    model = Overlay.load(args.model) if args.model else None
+    m = run_prognose(Path(args.dir), Path(args.out) if args.out else None, seed=args.seed, twin=args.twin,
+                     twin_model=model)
     print(f"{m['dataset']['n_train_units']} train / {m['dataset']['n_test_units']} test units")
     for name in m["estimators"]:
         r = m["estimators"][name]

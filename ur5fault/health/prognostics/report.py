@@ -9,7 +9,7 @@ import math
 import os
 import time
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pandas as pd
@@ -25,6 +25,12 @@ from .rul import LinearRUL, PopulationRUL, TaskHealthIndex, WienerRUL
 from .spec import Failure
 from .twin_boundary import TwinSetup
 from .twin_rul import TwinRUL
+
+if TYPE_CHECKING:
+    from ...config import Overlay
+
+#: the effects the wear law itself puts on a unit (wear.wear_effects): a twin overlay must not carry them
+WEAR_KINDS = frozenset({"backlash", "gear_stiffness", "coulomb_friction"})
 
 NEEDED = ("unit_id", "inspection", "cycles", "split", "rul_cycles", "eol_cycles", "censored", "failed")
 ESTIMATORS = ("wiener", "linear", "wiener_joint", "clearance", "twin", "naive")
@@ -148,15 +154,19 @@ def predict(df: pd.DataFrame, failure: Failure, seed: int = 0, twin: TwinSetup |
         "twin": None if twin_rul is None else {
             "log_radius_bias_sd_rays_by_checkpoint": {str(c): list(v) for c, v in twin_rul.calibration_.items()},
             "n_calibration_units": twin_rul.n_calibration_units_, "n_calibration_rays": twin_rul.n_calibration_rays_,
-            "n_twin_rays_test": twin_rul.n_twin_rays_},
+            "n_twin_rays_test": twin_rul.n_twin_rays_,
+            "model": None if twin.model is None else {"params": dict(twin.model.params),
+                                                      "effects": [e.describe() for e in twin.model.effects]}},
         "naive": {"train_eol_cycles": naive.eol_.tolist()},
         "n_train_units": int(n_tr), "n_test_units": int(n_te),
     }
     return pred, fitted, hi_all
 
 
-def run_prognose(folder: Path, out: Path | None = None, *, seed: int = 0, twin: bool = False) -> dict[str, Any]:
-    """The benchmark on a life-campaign folder; returns the metrics written to ``out/metrics.json``."""
+def run_prognose(folder: Path, out: Path | None = None, *, seed: int = 0, twin: bool = False,
+                 twin_model: Overlay | None = None) -> dict[str, Any]:
+    """The benchmark on a life-campaign folder; returns the metrics written to ``out/metrics.json``.
+    ``twin_model``: the overlay the twin runs instead of the packaged model (a model error the twin carries)."""
     t0 = time.perf_counter()
     folder = Path(folder)
     out = Path(out) if out is not None else folder.parent / "benchmark"
@@ -167,7 +177,11 @@ def run_prognose(folder: Path, out: Path | None = None, *, seed: int = 0, twin: 
         if "wear" not in manifest or "identity_inputs" not in manifest:
             raise ConfigFileError(f"{folder}/manifest.json: no wear law or identity inputs; --twin needs the manifest "
                                   "of a life campaign")
-        setup = TwinSetup.from_manifest(manifest, seed)
+        worn = sorted({e.name for e in (twin_model.effects if twin_model else ())} & WEAR_KINDS)
+        if worn:
+            raise ConfigFileError(f"the twin's model overlay carries {', '.join(worn)}: the wear law sets those "
+                                  "effects itself; give them as params instead")
+        setup = TwinSetup.from_manifest(manifest, seed, twin_model)
     pred, fitted, hi = predict(df, failure, seed, setup)
     per_unit = df.groupby("unit_id").agg(split=("split", "first"), n=("inspection", "size"),
                                          eol=("eol_cycles", "first"))

@@ -25,13 +25,16 @@ from __future__ import annotations
 import dataclasses
 import json
 from collections.abc import Mapping, Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from .spec import Failure
 from .wear import WearLaw, wear_effects
+
+if TYPE_CHECKING:
+    from ...config import Overlay
 
 #: coarse search, in multiples of the guessed radius (assumption: the kernel boundary's guess is within
 #: -30 %/+70 % of the twin's; outside, :data:`BELOW` or :data:`ABOVE` extend the search; a ray that does not
@@ -47,19 +50,22 @@ BATCH = 32
 
 @dataclasses.dataclass(frozen=True)
 class TwinSetup:
-    """What the twin needs from a life campaign: its wear law, failure criterion, log period and duration."""
+    """What the twin needs from a life campaign: its wear law, failure criterion, log period and duration;
+    ``model``: the overlay of the robot model the twin runs (``None``: the packaged model, the one the fleet was
+    simulated with, i.e. a perfect model)."""
 
     wear: WearLaw
     failure: Failure
     log_period_s: float = 1e-3
     duration_s: float | None = None
     seed: int = 0
+    model: Overlay | None = None
 
     @classmethod
-    def from_manifest(cls, manifest: Mapping[str, Any], seed: int = 0) -> TwinSetup:
+    def from_manifest(cls, manifest: Mapping[str, Any], seed: int = 0, model: Overlay | None = None) -> TwinSetup:
         ids = manifest.get("identity_inputs", {})
         return cls(WearLaw.from_mapping(manifest.get("wear")), Failure(**manifest["failure"]),
-                   float(ids.get("log_period_s", 1e-3)), ids.get("duration_s"), seed)
+                   float(ids.get("log_period_s", 1e-3)), ids.get("duration_s"), seed, model)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -88,7 +94,9 @@ def _criteria(setup: TwinSetup, trajectory: str, points: Sequence[tuple[Ray, flo
     from ..features import run_features
 
     traj = parse_trajectory(json.loads(trajectory), "trajectory")
-    sim = Simulator(load_params(), stepper=STEPPER, drive=DRIVE)
+    model = setup.model
+    sim = Simulator(load_params(overrides=dict(model.params) if model else None), stepper=STEPPER, drive=DRIVE)
+    extra = model.effects if model else ()
     ratio = np.asarray(sim.params.gear.ratio)
     out = np.full(len(points), np.inf)
     refs: dict[tuple[float, float], np.ndarray] = {}
@@ -98,8 +106,8 @@ def _criteria(setup: TwinSetup, trajectory: str, points: Sequence[tuple[Ray, flo
         for i in todo:
             ray, s = points[i]
             key = (ray.payload_kg, ray.temperature_C)
-            cond = (make_effect("payload", mass_kg=ray.payload_kg),
-                    make_effect("temperature", temperature_C=ray.temperature_C))
+            cond = extra + (make_effect("payload", mass_kg=ray.payload_kg),
+                            make_effect("temperature", temperature_C=ray.temperature_C))
             if len(specs) + (key not in refs and key not in at_ref) + 1 > BATCH:
                 break
             if key not in refs and key not in at_ref:
