@@ -28,11 +28,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..sim.axes import N_JOINTS
+from .discovery import MIN_TEMPERATURE_SPAN_K  # a joint whose temperature gets a dictionary column keeps it
 
 #: spacing of the drift's bumps [s] (one per 5 s stability block of the 20 s screened part; see above)
 KNOT_S = 5.0
-#: a joint's logged temperature that moves at least this much [K] is kept out of its drift (as in discovery)
-MIN_TEMPERATURE_SPAN_K = 0.5
 
 
 def bumps(n: int, period_s: float, knot_s: float = KNOT_S) -> NDArray:
