@@ -26,14 +26,12 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..sim.axes import JOINT_NAMES, N_JOINTS
-from .friction import FrictionFit
+from .friction import MIN_MOVING_SAMPLES, FrictionFit  # fewest samples for a ripple: the friction fit's own
 from .stats import Estimate, bootstrap, fallback, interval
 
 #: periods per motor turn searched (assumption: cogging, pole-pair and wave-generator orders are low; the logs
 #: show 3 and 4)
 PERIODS_PER_REV = tuple(range(1, 9))
-#: fewest samples for a ripple estimate (as the friction fit's own threshold)
-MIN_MOVING_SAMPLES = 500
 #: highest ripple frequency used [Hz]: below it the simulated speed loop answers a rotor torque T with -T/K_t of
 #: current to within 8 % on every joint (pick-and-place, k = 3; 1.2x near 8 Hz on J1-J2, 0.3-0.8x above 10 Hz,
 #: where the loop no longer rejects it), so -K_t times the current's ripple is the torque
