@@ -37,6 +37,7 @@ from scipy.optimize import nnls
 
 from ...sim.axes import JOINT_NAMES, N_JOINTS
 from ...twin.residuals import REVERSAL_WINDOW_S
+from ..features import moving_average
 
 #: centred moving-average window of the residual [s] (12 samples of sensor noise at 125 Hz; a push lasts longer)
 SMOOTH_S = 0.1
@@ -62,11 +63,7 @@ FEATURES = ("1", "moving", "|qd| [rad/s]", "|qdd| [rad/s^2]")
 
 def smooth(x: NDArray, period_s: float, window_s: float = SMOOTH_S) -> NDArray:
     """Centred moving average of ``x`` ``(n, k)`` over ``window_s`` (shorter at the ends)."""
-    w = max(1, int(round(window_s / period_s)) | 1)
-    kernel = np.ones(w)
-    num = np.stack([np.convolve(x[:, j], kernel, mode="same") for j in range(x.shape[1])], axis=1)
-    den = np.convolve(np.ones(x.shape[0]), kernel, mode="same")[:, None]
-    return num / den
+    return moving_average(x, max(1, int(round(window_s / period_s)) | 1))
 
 
 def transient(residual_A: NDArray, period_s: float) -> NDArray:
