@@ -92,3 +92,10 @@ def test_gear_work_of_a_constant_torque_at_constant_speed():
 def test_bad_constants_are_refused_by_name(field, value):
     with pytest.raises(ParameterError, match=f"life.wear.{field}"):
         WearLaw(**{field: value})
+
+
+def test_wear_kinds_are_the_effects_wear_puts_on_a_unit():
+    from ur5fault.health.prognostics.wear import WEAR_KINDS, WearLaw, wear_effects
+
+    names = {e.name for e in wear_effects(WearLaw(), np.full(6, 0.05), 1e6)}
+    assert names == WEAR_KINDS

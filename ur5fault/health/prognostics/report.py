@@ -25,12 +25,10 @@ from .rul import LinearRUL, PopulationRUL, TaskHealthIndex, WienerRUL
 from .spec import Failure
 from .twin_boundary import TwinSetup
 from .twin_rul import TwinRUL
+from .wear import WEAR_KINDS
 
 if TYPE_CHECKING:
     from ...config import Overlay
-
-#: the effects the wear law itself puts on a unit (wear.wear_effects): a twin overlay must not carry them
-WEAR_KINDS = frozenset({"backlash", "gear_stiffness", "coulomb_friction"})
 
 NEEDED = ("unit_id", "inspection", "cycles", "split", "rul_cycles", "eol_cycles", "censored", "failed")
 ESTIMATORS = ("wiener", "linear", "wiener_joint", "clearance", "twin", "naive")

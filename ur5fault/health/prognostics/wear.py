@@ -140,6 +140,10 @@ def stiffness_scale(law: WearLaw, backlash_deg: NDArray) -> NDArray:
     return np.maximum(law.stiffness_floor, 1.0 - law.stiffness_loss_per_deg * np.asarray(backlash_deg, float))
 
 
+#: the effects :func:`wear_effects` puts on a unit (so a model overlay beside them must not carry them)
+WEAR_KINDS = frozenset({"backlash", "gear_stiffness", "coulomb_friction"})
+
+
 def wear_effects(law: WearLaw, backlash_deg: NDArray, cycles: float) -> tuple[EffectSpec, ...]:
     """The registry effects a unit carries in this wear state (none for a joint with no wear)."""
     fr, st = friction_scale(law, backlash_deg, cycles), stiffness_scale(law, backlash_deg)
