@@ -24,6 +24,7 @@ from .joint_index import JOINTS, JointHealthIndex
 from .rul import LinearRUL, PopulationRUL, TaskHealthIndex, WienerRUL
 from .spec import Failure
 from .twin_boundary import TwinSetup
+from .twin_cache import RadiusCache
 from .twin_rul import TwinRUL
 from .wear import WEAR_KINDS
 
@@ -56,7 +57,8 @@ def load_inspections(folder: Path) -> tuple[pd.DataFrame, dict[str, Any]]:
     return df, manifest
 
 
-def predict(df: pd.DataFrame, failure: Failure, seed: int = 0, twin: TwinSetup | None = None
+def predict(df: pd.DataFrame, failure: Failure, seed: int = 0, twin: TwinSetup | None = None,
+            twin_calibration: str = "task", twin_cache: RadiusCache | None = None
             ) -> tuple[dict[str, pd.DataFrame], dict[str, Any], np.ndarray]:
     """Fit on the failed training units; predict at every pre-failure inspection of the failed test units.
     ``twin``: also the estimator whose failure boundary the digital twin simulates (twin_rul.py; minutes).
@@ -100,7 +102,8 @@ def predict(df: pd.DataFrame, failure: Failure, seed: int = 0, twin: TwinSetup |
         cond = {str(uid): (str(g["trajectory"].iloc[0]), float(g["payload_kg"].iloc[0]),
                            float(g["temperature_C"].iloc[0])) for uid, g in df.groupby("unit_id")}
         try:
-            twin_rul = TwinRUL(twin, clear, seed).calibrate({u: cond[u] for u in map(str, train_ids)})
+            twin_rul = TwinRUL(twin, clear, seed, twin_calibration, twin_cache).calibrate(
+                {u: cond[u] for u in map(str, train_ids)})
         except ValueError as exc:
             raise ConfigFileError(f"--twin: {exc}") from None
         sound = test[test["rul_cycles"] > 0].groupby("unit_id").size()   # a unit's inspections before failure
@@ -150,7 +153,12 @@ def predict(df: pd.DataFrame, failure: Failure, seed: int = 0, twin: TwinSetup |
                       "loo_rmse_log_radius_by_kappa": {f"{k:g}": v for k, v in clear.loo_rmse_log_radius_.items()},
                       "boundary_log_sd_by_task": clear.boundary_sd_},
         "twin": None if twin_rul is None else {
+            "calibration": twin_rul.calibration,
             "log_radius_bias_sd_rays_by_checkpoint": {str(c): list(v) for c, v in twin_rul.calibration_.items()},
+            "log_radius_by_task_by_checkpoint": {str(c): v.to_dict() for c, v in twin_rul.task_calibration_.items()},
+            "calibration_residuals_task_checkpoint_log_ratio": twin_rul.calibration_residuals_,
+            "radius_cache": None if twin_cache is None else {"path": str(twin_cache.path), "hits": twin_cache.hits,
+                                                             "simulated": twin_cache.misses},
             "n_calibration_units": twin_rul.n_calibration_units_, "n_calibration_rays": twin_rul.n_calibration_rays_,
             "n_twin_rays_test": twin_rul.n_twin_rays_,
             "model": None if twin.model is None else {"params": dict(twin.model.params),
@@ -162,9 +170,12 @@ def predict(df: pd.DataFrame, failure: Failure, seed: int = 0, twin: TwinSetup |
 
 
 def run_prognose(folder: Path, out: Path | None = None, *, seed: int = 0, twin: bool = False,
-                 twin_model: Overlay | None = None) -> dict[str, Any]:
+                 twin_model: Overlay | None = None, twin_calibration: str = "task",
+                 twin_cache: Path | None = None) -> dict[str, Any]:
     """The benchmark on a life-campaign folder; returns the metrics written to ``out/metrics.json``.
-    ``twin_model``: the overlay the twin runs instead of the packaged model (a model error the twin carries)."""
+    ``twin_model``: the overlay the twin runs instead of the packaged model (a model error the twin carries);
+    ``twin_calibration``: "task" or "pooled" (twin_rul.CALIBRATIONS); ``twin_cache``: the file of the twin's
+    radii (twin_cache.py), default ``out/twin_radii.json``."""
     t0 = time.perf_counter()
     folder = Path(folder)
     out = Path(out) if out is not None else folder.parent / "benchmark"
@@ -180,7 +191,8 @@ def run_prognose(folder: Path, out: Path | None = None, *, seed: int = 0, twin: 
             raise ConfigFileError(f"the twin's model overlay carries {', '.join(worn)}: the wear law sets those "
                                   "effects itself; give them as params instead")
         setup = TwinSetup.from_manifest(manifest, seed, twin_model)
-    pred, fitted, hi = predict(df, failure, seed, setup)
+    cache = RadiusCache(twin_cache if twin_cache is not None else out / "twin_radii.json") if twin else None
+    pred, fitted, hi = predict(df, failure, seed, setup, twin_calibration, cache)
     per_unit = df.groupby("unit_id").agg(split=("split", "first"), n=("inspection", "size"),
                                          eol=("eol_cycles", "first"))
     if set(per_unit[per_unit["split"] == "train"].index) & set(per_unit[per_unit["split"] == "test"].index):

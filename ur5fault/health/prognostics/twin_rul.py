@@ -28,7 +28,8 @@ least one interval (median and 5-95 % interval).
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
@@ -36,6 +37,10 @@ from numpy.typing import NDArray
 from .clearance_rul import ClearanceRUL
 from .rul import N_DRAWS, Q_HI, Q_LO, grid_rul
 from .twin_boundary import Ray, TwinSetup, failure_radii
+from .twin_calibration import TaskCalibration, task_calibration
+
+if TYPE_CHECKING:
+    from .twin_cache import RadiusCache
 
 #: inspections at which a unit's boundary is simulated along its current direction estimate (assumption:
 #: powers of 4, so at most 4-5 searches per unit; measured on the default fleet: the task-0 training units'
@@ -45,6 +50,8 @@ CHECKPOINTS = (1, 4, 16, 64, 256)
 #: training units the twin is calibrated on (assumption: enough for the mean and sd of a log ratio to
 #: ~0.25 sd; each costs ~10 simulated duty cycles per checkpoint it lived past)
 CALIBRATION_UNITS = 16
+#: ways of calibrating the twin (TwinRUL.calibration)
+CALIBRATIONS = ("task", "pooled")
 
 #: (trajectory JSON, payload [kg], cell temperature [degC]) of a unit
 Conditions = tuple[str, float, float]
@@ -65,6 +72,17 @@ class TwinRUL:
     setup: TwinSetup
     clearance: ClearanceRUL
     seed: int = 0
+    #: "task": the calibration of the unit's own duty cycle, shrunk towards the pooled one (task_calibration);
+    #: "pooled": one calibration of all tasks' training units
+    calibration: str = "task"
+    cache: RadiusCache | None = None
+
+    def __post_init__(self) -> None:
+        if self.calibration not in CALIBRATIONS:
+            raise ValueError(f"calibration must be one of {', '.join(CALIBRATIONS)}, not {self.calibration!r}")
+
+    def _radii(self, rays: Sequence[Ray]) -> NDArray:
+        return self.cache.radii(self.setup, rays) if self.cache is not None else failure_radii(self.setup, rays)
 
     def calibrate(self, conditions: Mapping[str, Conditions]) -> TwinRUL:
         """Simulate the boundary along the directions the failed training units' histories gave at each
@@ -72,7 +90,7 @@ class TwinRUL:
         unit failed."""
         units = sorted(self.clearance.train_units_.items())
         units = units[:: max(1, -(-len(units) // CALIBRATION_UNITS))]
-        rays, log_reached, at = [], [], []
+        rays, log_reached, at, tasks = [], [], [], []
         for uid, (task, r, n_f) in units:
             if np.linalg.norm(r) <= 0 or uid not in conditions:
                 continue
@@ -86,28 +104,35 @@ class TwinRUL:
                 rays.append(Ray(traj, payload, temp, tuple(d), speed, self.clearance.radius(task, d)))
                 log_reached.append(np.log(max(float(np.maximum(r, 0.0) @ d), 1e-12) * n_f))
                 at.append(c)
+                tasks.append(self.clearance.task_key(traj))
         if len(rays) < 2:
             raise ValueError("the twin estimator needs at least two calibration directions: failed training units "
                              f"sound at inspection {CHECKPOINTS[0]} or later")
-        resid = np.asarray(log_reached) - np.log(failure_radii(self.setup, rays))
-        at_arr = np.asarray(at)
+        resid = np.asarray(log_reached) - np.log(self._radii(rays))
+        at_arr, task_arr = np.asarray(at), np.asarray(tasks)
+        self.calibration_residuals_ = list(zip(tasks, at, resid.tolist(), strict=True))
+        self.task_calibration_: dict[int, TaskCalibration] = {}
         self.calibration_: dict[int, tuple[float, float, int]] = {}   # checkpoint -> (bias, sd, rays)
         for c in CHECKPOINTS:
             e = resid[at_arr == c]
             if len(e) >= 2:
                 self.calibration_[c] = (float(np.mean(e)), float(np.std(e, ddof=1)), len(e))
+                self.task_calibration_[c] = task_calibration(e, task_arr[at_arr == c])
         if not self.calibration_:  # no checkpoint with two units: one calibration for all
             self.calibration_[CHECKPOINTS[0]] = (float(np.mean(resid)), float(np.std(resid, ddof=1)), len(resid))
+            self.task_calibration_[CHECKPOINTS[0]] = task_calibration(resid, task_arr)
         self.n_calibration_units_ = len({u for u, _ in units})
         self.n_calibration_rays_ = len(rays)
         return self
 
-    def _calibration_at(self, checkpoint: int) -> tuple[float, float]:
-        """(bias, sd) of the log radius for a ray simulated at ``checkpoint``: that checkpoint's, else the
-        latest calibrated one before it (the earliest when there is none)."""
+    def _calibration_at(self, checkpoint: int, task: str) -> tuple[float, float]:
+        """(bias, sd) of the log radius for a ray of duty ``task`` simulated at ``checkpoint``: that
+        checkpoint's, else the latest calibrated one before it (the earliest when there is none)."""
         known = sorted(self.calibration_)
         c = max([k for k in known if k <= checkpoint], default=known[0])
-        return self.calibration_[c][:2]
+        if self.calibration == "pooled":
+            return self.calibration_[c][:2]
+        return self.task_calibration_[c].at(task)
 
     def predict_units(self, units: Mapping[str, tuple[Conditions, NDArray, NDArray]]) -> dict[str, list[tuple]]:
         """Per unit (``units``: its conditions, cycles ``n`` and clearance estimates ``a`` of its inspections
@@ -126,7 +151,7 @@ class TwinRUL:
                     ray_checkpoint.append(k)
                     current = len(rays) - 1
                 plan[uid].append((k, current, mean, cov))
-        radii = failure_radii(self.setup, rays) if rays else np.zeros(0)
+        radii = self._radii(rays) if rays else np.zeros(0)
         self.n_twin_rays_ = len(rays)
         out: dict[str, list[tuple]] = {}
         for uid, steps in plan.items():
@@ -137,7 +162,7 @@ class TwinRUL:
                 d = np.asarray(rays[ray_i].direction)
                 r = rng.multivariate_normal(mean, cov, N_DRAWS, method="eigh")
                 speed = np.maximum(np.maximum(r, 0.0) @ d, 1e-3 * rays[ray_i].speed)  # clearances do not shrink
-                bias, sd = self._calibration_at(ray_checkpoint[ray_i])
+                bias, sd = self._calibration_at(ray_checkpoint[ray_i], self.clearance.task_key(units[uid][0][0]))
                 rho = radii[ray_i] * np.exp(bias + sd * rng.standard_normal(N_DRAWS))
                 t = grid_rul(rho / speed - n[k], n[k] - n[k - 1])
                 lo, med, hi = np.quantile(t, [Q_LO, 0.5, Q_HI])

@@ -1,0 +1,75 @@
+"""A file of the twin's failure radii (twin_boundary.failure_radii), so that a second ``prognose --twin`` on
+the same fleet with the same twin simulates only the rays it has not seen.
+
+A radius is a function of the ray (task, payload, temperature, direction, speed, guess) and of everything
+the search runs: the resolved robot parameters of the twin's model (its overlay applied), the overlay's
+effects, the wear law, the failure criterion, log period, duration, noise seed, drive and stepper, the search
+constants and the package version.  Each entry is keyed by the SHA-256 of all of them, so a changed model,
+setup or search can never read another's radius; the file holds only radii, written atomically.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import json
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ...errors import ConfigFileError
+from ...util.io import write_json_atomic
+from . import twin_boundary as tb
+
+#: format of the file (a change of the key's contents bumps it)
+VERSION = 1
+
+
+def setup_key(setup: tb.TwinSetup) -> str:
+    """SHA-256 of everything a radius depends on besides its ray."""
+    from ... import __version__
+    from ...campaign.identity import DRIVE, STEPPER
+    from ...sim.params import load_params
+
+    model = setup.model
+    params = load_params(overrides=dict(model.params) if model else None)
+    text = repr((VERSION, __version__, DRIVE, STEPPER, repr(params), repr(model.effects if model else ()),
+                 repr(dataclasses.asdict(setup.wear)), repr(setup.failure), setup.log_period_s, setup.duration_s,
+                 setup.seed, tb.COARSE, tb.BELOW, tb.ABOVE, tb.REFINE))
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+def ray_key(setup_sha: str, ray: tb.Ray) -> str:
+    text = repr((setup_sha, ray.trajectory, ray.payload_kg, ray.temperature_C, ray.direction, ray.speed, ray.guess))
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+class RadiusCache:
+    """Radii by key in one JSON file (``path``); :meth:`radii` looks up, simulates the rest and saves."""
+
+    def __init__(self, path: str | Path) -> None:
+        self.path = Path(path)
+        self.entries: dict[str, float] = {}
+        if self.path.is_file():
+            try:
+                data = json.loads(self.path.read_text())
+            except (OSError, ValueError):
+                raise ConfigFileError(f"{self.path}: not a twin radius cache (unreadable JSON); remove it") from None
+            if not isinstance(data, dict) or data.get("version") != VERSION or not isinstance(data.get("radii"), dict):
+                raise ConfigFileError(f"{self.path}: not a twin radius cache of version {VERSION}; remove it")
+            self.entries = {str(k): float(v) for k, v in data["radii"].items()}
+        self.hits = self.misses = 0
+
+    def radii(self, setup: tb.TwinSetup, rays: Sequence[tb.Ray]) -> NDArray:
+        sha = setup_key(setup)
+        keys = [ray_key(sha, r) for r in rays]
+        todo = [i for i, k in enumerate(keys) if k not in self.entries]
+        self.hits += len(rays) - len(todo)
+        self.misses += len(todo)
+        if todo:
+            new = tb.failure_radii(setup, [rays[i] for i in todo])
+            self.entries.update({keys[i]: float(v) for i, v in zip(todo, new, strict=True)})
+            write_json_atomic(self.path, {"version": VERSION, "radii": self.entries})
+        return np.array([self.entries[k] for k in keys])
