@@ -155,3 +155,24 @@ def test_twin_options_without_twin_are_one_line_exit_2(tmp_path, capsys, flag):
 def test_an_unknown_calibration_is_refused():
     with pytest.raises(ValueError, match="calibration"):
         TwinRUL(SETUP, ClearanceRUL(), calibration="per-unit")
+
+
+def test_the_direction_correction_follows_the_calibration_units_of_nearby_directions():
+    from ur5fault.health.prognostics.twin_calibration import direction_bias
+
+    def unit(deg):   # a direction in the shoulder-elbow plane, deg from the shoulder axis
+        return np.array([0.0, np.cos(np.radians(deg)), np.sin(np.radians(deg)), 0.0, 0.0, 0.0])
+
+    # the twin's jump misplaced on elbow-led directions only: log ratio +0.25 there, 0 on shoulder-led ones
+    dirs = np.array([unit(a) for a in (10, 15, 20, 25, 70, 72, 75)])
+    e = np.array([0.0, 0.0, 0.0, 0.0, 0.25, 0.25, 0.25])
+    task = float(e.mean())                                      # 0.107: wrong on both kinds of unit
+    kappa = 300.0                                               # the default fleet's kernel (docs/prognostics.md)
+    elbow = direction_bias(task, e, dirs, unit(72), kappa)
+    shoulder = direction_bias(task, e, dirs, unit(18), kappa)
+    assert elbow == pytest.approx(task + (0.25 - task) * 0.7, abs=0.03)   # three near units and one pseudo-unit
+    assert 0.0 < shoulder < 0.5 * task                                     # most of the way to its units' 0
+    # far from every calibration unit (the wrist): the task's bias; no kernel width: every unit counts alike
+    assert direction_bias(task, e, dirs, np.eye(6)[4], kappa) == pytest.approx(task, abs=1e-9)
+    assert direction_bias(task, e, dirs, unit(72), 0.0) == pytest.approx(task, abs=1e-9)
+    assert direction_bias(task, e[:0], dirs[:0], unit(72), kappa) == task

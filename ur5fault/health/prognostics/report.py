@@ -25,7 +25,7 @@ from .rul import LinearRUL, PopulationRUL, TaskHealthIndex, WienerRUL
 from .spec import Failure
 from .twin_boundary import TwinSetup
 from .twin_cache import RadiusCache
-from .twin_rul import TwinRUL
+from .twin_rul import CALIBRATION_UNITS_PER_TASK, TwinRUL
 from .wear import WEAR_KINDS
 
 if TYPE_CHECKING:
@@ -58,7 +58,7 @@ def load_inspections(folder: Path) -> tuple[pd.DataFrame, dict[str, Any]]:
 
 
 def predict(df: pd.DataFrame, failure: Failure, seed: int = 0, twin: TwinSetup | None = None,
-            twin_calibration: str = "task", twin_cache: RadiusCache | None = None
+            twin_calibration: str = "direction", twin_cache: RadiusCache | None = None
             ) -> tuple[dict[str, pd.DataFrame], dict[str, Any], np.ndarray]:
     """Fit on the failed training units; predict at every pre-failure inspection of the failed test units.
     ``twin``: also the estimator whose failure boundary the digital twin simulates (twin_rul.py; minutes).
@@ -102,7 +102,8 @@ def predict(df: pd.DataFrame, failure: Failure, seed: int = 0, twin: TwinSetup |
         cond = {str(uid): (str(g["trajectory"].iloc[0]), float(g["payload_kg"].iloc[0]),
                            float(g["temperature_C"].iloc[0])) for uid, g in df.groupby("unit_id")}
         try:
-            twin_rul = TwinRUL(twin, clear, seed, twin_calibration, twin_cache).calibrate(
+            per_task = 0 if twin_calibration == "pooled" else CALIBRATION_UNITS_PER_TASK
+            twin_rul = TwinRUL(twin, clear, seed, twin_calibration, twin_cache, per_task).calibrate(
                 {u: cond[u] for u in map(str, train_ids)})
         except ValueError as exc:
             raise ConfigFileError(f"--twin: {exc}") from None
@@ -170,11 +171,11 @@ def predict(df: pd.DataFrame, failure: Failure, seed: int = 0, twin: TwinSetup |
 
 
 def run_prognose(folder: Path, out: Path | None = None, *, seed: int = 0, twin: bool = False,
-                 twin_model: Overlay | None = None, twin_calibration: str = "task",
+                 twin_model: Overlay | None = None, twin_calibration: str = "direction",
                  twin_cache: Path | None = None) -> dict[str, Any]:
     """The benchmark on a life-campaign folder; returns the metrics written to ``out/metrics.json``.
     ``twin_model``: the overlay the twin runs instead of the packaged model (a model error the twin carries);
-    ``twin_calibration``: "task" or "pooled" (twin_rul.CALIBRATIONS); ``twin_cache``: the file of the twin's
+    ``twin_calibration``: one of twin_rul.CALIBRATIONS; ``twin_cache``: the file of the twin's
     radii (twin_cache.py), default ``out/twin_radii.json``."""
     t0 = time.perf_counter()
     folder = Path(folder)

@@ -24,7 +24,7 @@ import dataclasses
 from collections.abc import Mapping
 
 import numpy as np
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
 
 
 @dataclasses.dataclass(frozen=True)
@@ -72,3 +72,20 @@ def task_calibration(resid: ArrayLike, tasks: ArrayLike) -> TaskCalibration:
         w = between / (between + within / g.size) if between > 0 else 0.0
         out[str(k)] = (mu + w * (float(g.mean()) - mu), float(np.sqrt(within + (1 - w) * between)), int(g.size))
     return TaskCalibration(mu, within, between, out)
+
+
+def direction_bias(task_bias: float, resid: NDArray, directions: NDArray, direction: NDArray, kappa: float) -> float:
+    """The task's bias corrected by its calibration residuals ``resid`` (m,) along ``directions`` (m, 6) near
+    ``direction`` (6,): ``task_bias + sum w (e - task_bias) / (sum w + 1)``, ``w = exp(kappa (cos theta - 1))``.
+
+    Why: a model error moves where along a direction the failure criterion jumps (task 0's elbow jump), so
+    the twin's error is a function of the direction, not one number per task.  The kernel and its width
+    ``kappa`` are the clearance estimator's (chosen by leave-one-unit-out on how the training units' failure
+    radius varies with direction); the ``+ 1`` is one pseudo-unit at the task's bias (assumption), so a
+    direction without calibration units nearby keeps the task's bias and one unit straight along it moves
+    the bias half-way to its own residual.
+    """
+    if len(resid) == 0:
+        return task_bias
+    w = np.exp(kappa * (np.asarray(directions, float) @ np.asarray(direction, float) - 1.0))
+    return float(task_bias + w @ (np.asarray(resid, float) - task_bias) / (w.sum() + 1.0))

@@ -37,7 +37,7 @@ from numpy.typing import NDArray
 from .clearance_rul import ClearanceRUL
 from .rul import N_DRAWS, Q_HI, Q_LO, grid_rul
 from .twin_boundary import Ray, TwinSetup, failure_radii
-from .twin_calibration import TaskCalibration, task_calibration
+from .twin_calibration import TaskCalibration, direction_bias, task_calibration
 
 if TYPE_CHECKING:
     from .twin_cache import RadiusCache
@@ -50,8 +50,13 @@ CHECKPOINTS = (1, 4, 16, 64, 256)
 #: training units the twin is calibrated on (assumption: enough for the mean and sd of a log ratio to
 #: ~0.25 sd; each costs ~10 simulated duty cycles per checkpoint it lived past)
 CALIBRATION_UNITS = 16
-#: ways of calibrating the twin (TwinRUL.calibration)
-CALIBRATIONS = ("task", "pooled")
+#: calibration units per task of the "task" and "direction" calibrations (assumption: the 12 failed training
+#: units of the default fleet's smallest task, so that its two elbow-led units are among them; each costs ~10
+#: simulated duty cycles per checkpoint it lived past)
+CALIBRATION_UNITS_PER_TASK = 12
+#: ways of calibrating the twin (TwinRUL.calibration): "direction" the task's calibration corrected by its
+#: calibration units of nearby directions of growth, "task" the task's, "pooled" all tasks' at once
+CALIBRATIONS = ("direction", "task", "pooled")
 
 #: (trajectory JSON, payload [kg], cell temperature [degC]) of a unit
 Conditions = tuple[str, float, float]
@@ -72,10 +77,12 @@ class TwinRUL:
     setup: TwinSetup
     clearance: ClearanceRUL
     seed: int = 0
-    #: "task": the calibration of the unit's own duty cycle, shrunk towards the pooled one (task_calibration);
-    #: "pooled": one calibration of all tasks' training units
-    calibration: str = "task"
+    #: one of :data:`CALIBRATIONS` (twin_calibration.py)
+    calibration: str = "direction"
     cache: RadiusCache | None = None
+    #: calibration units per task (every m-th of the task's failed training units); 0: :data:`CALIBRATION_UNITS`
+    #: of all tasks together (every m-th by name)
+    units_per_task: int = 0
 
     def __post_init__(self) -> None:
         if self.calibration not in CALIBRATIONS:
@@ -89,7 +96,13 @@ class TwinRUL:
         checkpoint (``conditions``: per training unit, its task conditions) and compare it with where each
         unit failed."""
         units = sorted(self.clearance.train_units_.items())
-        units = units[:: max(1, -(-len(units) // CALIBRATION_UNITS))]
+        if self.units_per_task:
+            by_task: dict[str, list] = {}
+            for item in units:
+                by_task.setdefault(self.clearance.task_key(item[1][0]), []).append(item)
+            units = sorted(x for g in by_task.values() for x in g[:: max(1, -(-len(g) // self.units_per_task))])
+        else:
+            units = units[:: max(1, -(-len(units) // CALIBRATION_UNITS))]
         rays, log_reached, at, tasks = [], [], [], []
         for uid, (task, r, n_f) in units:
             if np.linalg.norm(r) <= 0 or uid not in conditions:
@@ -111,6 +124,8 @@ class TwinRUL:
         resid = np.asarray(log_reached) - np.log(self._radii(rays))
         at_arr, task_arr = np.asarray(at), np.asarray(tasks)
         self.calibration_residuals_ = list(zip(tasks, at, resid.tolist(), strict=True))
+        self.calibration_directions_ = np.array([r.direction for r in rays])
+        self._resid, self._at, self._tasks = resid, at_arr, task_arr
         self.task_calibration_: dict[int, TaskCalibration] = {}
         self.calibration_: dict[int, tuple[float, float, int]] = {}   # checkpoint -> (bias, sd, rays)
         for c in CHECKPOINTS:
@@ -125,14 +140,20 @@ class TwinRUL:
         self.n_calibration_rays_ = len(rays)
         return self
 
-    def _calibration_at(self, checkpoint: int, task: str) -> tuple[float, float]:
-        """(bias, sd) of the log radius for a ray of duty ``task`` simulated at ``checkpoint``: that
-        checkpoint's, else the latest calibrated one before it (the earliest when there is none)."""
+    def _calibration_at(self, checkpoint: int, task: str, direction: NDArray) -> tuple[float, float]:
+        """(bias, sd) of the log radius for a ray of duty ``task`` along ``direction`` simulated at
+        ``checkpoint``: that checkpoint's, else the latest calibrated one before it (the earliest when there
+        is none)."""
         known = sorted(self.calibration_)
         c = max([k for k in known if k <= checkpoint], default=known[0])
         if self.calibration == "pooled":
             return self.calibration_[c][:2]
-        return self.task_calibration_[c].at(task)
+        bias, sd = self.task_calibration_[c].at(task)
+        if self.calibration == "direction":
+            pick = (self._tasks == task) & (self._at == c)
+            bias = direction_bias(bias, self._resid[pick], self.calibration_directions_[pick], direction,
+                                  self.clearance.kappa_)
+        return bias, sd
 
     def predict_units(self, units: Mapping[str, tuple[Conditions, NDArray, NDArray]]) -> dict[str, list[tuple]]:
         """Per unit (``units``: its conditions, cycles ``n`` and clearance estimates ``a`` of its inspections
@@ -162,7 +183,7 @@ class TwinRUL:
                 d = np.asarray(rays[ray_i].direction)
                 r = rng.multivariate_normal(mean, cov, N_DRAWS, method="eigh")
                 speed = np.maximum(np.maximum(r, 0.0) @ d, 1e-3 * rays[ray_i].speed)  # clearances do not shrink
-                bias, sd = self._calibration_at(ray_checkpoint[ray_i], self.clearance.task_key(units[uid][0][0]))
+                bias, sd = self._calibration_at(ray_checkpoint[ray_i], self.clearance.task_key(units[uid][0][0]), d)
                 rho = radii[ray_i] * np.exp(bias + sd * rng.standard_normal(N_DRAWS))
                 t = grid_rul(rho / speed - n[k], n[k] - n[k - 1])
                 lo, med, hi = np.quantile(t, [Q_LO, 0.5, Q_HI])
