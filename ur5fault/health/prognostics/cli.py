@@ -28,7 +28,8 @@ def register(sub) -> None:
     p.add_argument("--twin-calibration", choices=("direction", "task", "pooled"),
                    help="with --twin: calibrate the twin's boundary on the failed training units of the unit's own "
                         "duty cycle, shrunk towards all tasks' (task), that corrected by the units of nearby "
-                        "directions of growth (direction, the default), or on 16 units of all tasks at once (pooled)")
+                        "directions of growth (direction; the one to use when the twin's model may be off, "
+                        "docs/prognostics.md), or on 16 units of all tasks at once (pooled, the default)")
     p.add_argument("--twin-cache", metavar="FILE",
                    help="with --twin: file of the twin's simulated failure radii, keyed by model, setup and ray, "
                         "read and extended (default: OUT/twin_radii.json)")
@@ -72,7 +73,7 @@ def cmd_prognose(args: argparse.Namespace) -> int:
             raise ParameterError(f"{flag} sets up the twin estimator: it needs --twin")
     model = Overlay.load(args.model) if args.model else None
     m = run_prognose(Path(args.dir), Path(args.out) if args.out else None, seed=args.seed, twin=args.twin,
-                     twin_model=model, twin_calibration=args.twin_calibration or "direction",
+                     twin_model=model, twin_calibration=args.twin_calibration or "pooled",
                      twin_cache=Path(args.twin_cache) if args.twin_cache else None)
     print(f"{m['dataset']['n_train_units']} train / {m['dataset']['n_test_units']} test units")
     for name in m["estimators"]:

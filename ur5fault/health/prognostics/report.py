@@ -58,7 +58,7 @@ def load_inspections(folder: Path) -> tuple[pd.DataFrame, dict[str, Any]]:
 
 
 def predict(df: pd.DataFrame, failure: Failure, seed: int = 0, twin: TwinSetup | None = None,
-            twin_calibration: str = "direction", twin_cache: RadiusCache | None = None
+            twin_calibration: str = "pooled", twin_cache: RadiusCache | None = None
             ) -> tuple[dict[str, pd.DataFrame], dict[str, Any], np.ndarray]:
     """Fit on the failed training units; predict at every pre-failure inspection of the failed test units.
     ``twin``: also the estimator whose failure boundary the digital twin simulates (twin_rul.py; minutes).
@@ -171,7 +171,7 @@ def predict(df: pd.DataFrame, failure: Failure, seed: int = 0, twin: TwinSetup |
 
 
 def run_prognose(folder: Path, out: Path | None = None, *, seed: int = 0, twin: bool = False,
-                 twin_model: Overlay | None = None, twin_calibration: str = "direction",
+                 twin_model: Overlay | None = None, twin_calibration: str = "pooled",
                  twin_cache: Path | None = None) -> dict[str, Any]:
     """The benchmark on a life-campaign folder; returns the metrics written to ``out/metrics.json``.
     ``twin_model``: the overlay the twin runs instead of the packaged model (a model error the twin carries);

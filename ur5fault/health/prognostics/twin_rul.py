@@ -20,6 +20,13 @@ twin's; per checkpoint, its mean corrects the twin's radius and its sd (which ca
 error at that point of life) is the boundary's uncertainty in every RUL distribution of a ray simulated
 at that checkpoint.
 
+``calibration`` (:data:`CALIBRATIONS`): "pooled" (the default; the above over all tasks together, on
+:data:`CALIBRATION_UNITS` units), "task" (on :data:`CALIBRATION_UNITS_PER_TASK` units per task, each task's
+mean shrunk towards all tasks', twin_calibration.task_calibration) or "direction" (the task's corrected by its
+calibration units of nearby directions of growth, twin_calibration.direction_bias): a model error in the twin
+moves where along a direction its criterion jumps, so the twin's error depends on the task and the direction
+(docs/prognostics.md, "The twin with a model error").
+
 Prediction: draws of the growth rate from the posterior, the speed along the direction ``r . d``, the
 crossing ``N* = rho_twin exp(bias + sd eps) / (r . d)``, the RUL rounded up to the inspection grid and at
 least one interval (median and 5-95 % interval).
@@ -78,7 +85,7 @@ class TwinRUL:
     clearance: ClearanceRUL
     seed: int = 0
     #: one of :data:`CALIBRATIONS` (twin_calibration.py)
-    calibration: str = "direction"
+    calibration: str = "pooled"
     cache: RadiusCache | None = None
     #: calibration units per task (every m-th of the task's failed training units); 0: :data:`CALIBRATION_UNITS`
     #: of all tasks together (every m-th by name)
