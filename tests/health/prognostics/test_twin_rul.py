@@ -127,6 +127,15 @@ def test_tiny_fleet_prognose_with_the_twin(tmp_path):
     df = pd.read_parquet(tmp_path / "fleet" / "inspections.parquet")
     test_rows = int(((df["split"] == "test") & (df["rul_cycles"] > 0)).sum())
     assert len(pd.read_parquet(tmp_path / "bench" / "predictions_twin.parquet")) == test_rows
+    # calibrated per task and direction from the first run's radii (a fleet this small calibrates on every
+    # training unit either way): the same rays, read from the file, none simulated
+    cache = tmp_path / "bench" / "twin_radii.json"
+    assert m["fitted"]["twin"]["radius_cache"]["simulated"] > 0 and cache.is_file()
+    assert main(["prognose", str(tmp_path / "fleet"), "--out", str(tmp_path / "bench2"), "--twin",
+                 "--twin-calibration", "direction", "--twin-cache", str(cache)]) == 0
+    m2 = json.loads((tmp_path / "bench2" / "metrics.json").read_text())
+    assert m2["fitted"]["twin"]["radius_cache"]["simulated"] == 0 and m2["fitted"]["twin"]["calibration"] == "direction"
+    assert len(pd.read_parquet(tmp_path / "bench2" / "predictions_twin.parquet")) == test_rows
     # the twin alone, along the true direction of one unit: the radius lies between its clearance radius at
     # its last sound inspection and at its failed one (to the search's resolution and the noise seeds)
     manifest = json.loads((tmp_path / "fleet" / "manifest.json").read_text())

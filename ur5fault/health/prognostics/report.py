@@ -295,7 +295,9 @@ def markdown(m: dict[str, Any]) -> str:
               "line meets the failure boundary of the task's training units (radius by direction of growth, "
               "kernel width by leave-one-unit-out). twin (with --twin): the same clearance estimates and growth "
               "line, the failure boundary simulated by the digital twin along the unit's direction of growth on "
-              "its own duty cycle (task, payload, temperature), calibrated on training units. naive: mean "
+              "its own duty cycle (task, payload, temperature), calibrated on training units"
+              + (f" ({tw['calibration']}: --twin-calibration)" if (tw := m["fitted"].get("twin")) else "")
+              + ". naive: mean "
               "residual life of the training units that outlived the unit's age.", "",
               "Figures: " + ", ".join(f"`{f}`" for f in m["figures"]) + f". Benchmark wall time "
               f"{m['benchmark_wall_s']:.1f} s."]
