@@ -5,29 +5,45 @@ start-up (importing ur5fault with pandas, MuJoCo and numba, loading the cached c
 CPU, docs/performance.md).  With ``jobs = 2`` one worker is started instead of two, and the calling process starts
 on its first task at once.  Tasks are taken in order by the workers and from the end by the calling process
 (a task a worker has not started is cancelled there and run here), so uneven tasks still keep every process busy.
-Results come back in the order of the tasks, and a task's result does not depend on where it ran.
+A task's result does not depend on where it ran.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
 
-def map_tasks(fn: Callable[..., Any], tasks: Sequence[tuple], jobs: int) -> list[Any]:
-    """``[fn(*t) for t in tasks]`` over this process and ``jobs - 1`` workers (``jobs <= 1``: here, in order).
-    ``fn`` and the tasks' arguments must be picklable; an exception of a task is raised here."""
+def iter_tasks(fn: Callable[..., Any], tasks: Sequence[tuple], jobs: int) -> Iterator[tuple[int, Any]]:
+    """``(index, fn(*tasks[index]))`` for every task as it finishes, over this process and ``jobs - 1`` workers
+    (``jobs <= 1``: here, in order).  ``fn`` and the tasks' arguments must be picklable; an exception of a task is
+    raised here."""
     if jobs <= 1 or len(tasks) <= 1:
-        return [fn(*t) for t in tasks]
+        for i, t in enumerate(tasks):
+            yield i, fn(*t)
+        return
+    from concurrent.futures import as_completed
+
     from joblib.externals.loky import get_reusable_executor
 
     executor = get_reusable_executor(max_workers=jobs - 1)
-    futures = [executor.submit(fn, *t) for t in tasks[1:]]
-    out: list[Any] = [fn(*tasks[0])]
-    here: dict[int, Any] = {}
-    for i in range(len(futures) - 1, -1, -1):  # from the end: what no worker has started yet
-        if not futures[i].cancel():
-            break
-        here[i] = fn(*tasks[i + 1])
-    out += [here[i] if i in here else f.result() for i, f in enumerate(futures)]
+    futures = {executor.submit(fn, *t): i for i, t in enumerate(tasks[1:], start=1)}
+    pending = sorted(futures, key=futures.__getitem__)
+    try:
+        yield 0, fn(*tasks[0])
+        while pending and pending[-1].cancel():  # from the end: what no worker has started yet
+            f = pending.pop()
+            yield futures[f], fn(*tasks[futures[f]])
+        for f in as_completed(pending):
+            yield futures[f], f.result()
+    finally:
+        for f in pending:  # an exception or an interruption here: nothing more is started
+            f.cancel()
+
+
+def map_tasks(fn: Callable[..., Any], tasks: Sequence[tuple], jobs: int) -> list[Any]:
+    """``[fn(*t) for t in tasks]`` by :func:`iter_tasks`, in the order of the tasks."""
+    out: list[Any] = [None] * len(tasks)
+    for i, r in iter_tasks(fn, tasks, jobs):
+        out[i] = r
     return out
