@@ -167,7 +167,8 @@ class MultiReplay:
         if self.jobs > 1 and len(tasks) > 1:
             from ..util.parallel import map_tasks  # this process takes tasks too
 
-            parts = map_tasks(_batch, [(self.replays[k], sets, m) for k, _, sets, m in tasks], self.jobs)
+            parts = map_tasks(_batch, [(self.replays[k], sets, m) for k, _, sets, m in tasks], self.jobs,
+                              cost=[len(sets) * m for _, _, sets, m in tasks])
         else:
             parts = [_batch(self.replays[k], sets, m, progress) for k, _, sets, m in tasks]
         per_log: dict[int, list[Replayed]] = {}
