@@ -136,8 +136,8 @@ def rescreen(rp: LogReplay, lib_X: NDArray, lib_drift: Drift | None, candidates:
     out: list[Finding] = []
     for v in gone:
         i = next(i for i, c in enumerate(names) if c.label == v.label)
-        out.append(Finding(names[i], new[i][1] * v.theta[0], np.abs(new[i][1]) * v.se[0], v, kept=False,
-                           reason=f"explains nothing the kept findings do not ({v.reason})"))
+        out.append(_finding(names[i], new[i][1], v.theta[0], v, kept=False,
+                            reason=f"explains nothing the kept findings do not ({v.reason})"))
     e_held = e_after[n_fit:]
     while keep:
         a = rss_of(G, g, ee, keep)[1]
@@ -158,8 +158,7 @@ def rescreen(rp: LogReplay, lib_X: NDArray, lib_drift: Drift | None, candidates:
         why = names[worst].range_problem(new[worst][1] * ai) or (
             f"does not generalise: on the held-out part it removes {100 * gens[worst].ratio:.0f} % of the change it "
             "makes")
-        out.append(Finding(names[worst], new[worst][1] * ai, np.abs(new[worst][1]) * v.se[0], v,
-                           held_out=gens[worst], kept=False, reason=why))
+        out.append(_finding(names[worst], new[worst][1], ai, v, held_out=gens[worst], kept=False, reason=why))
         keep.remove(worst)
     if not keep:
         trace += [SearchStep.of("re-screened joint, whole log", dataclasses.replace(f.verdict, accepted=False,
@@ -169,7 +168,7 @@ def rescreen(rp: LogReplay, lib_X: NDArray, lib_drift: Drift | None, candidates:
     named = []
     for i, ai in zip(keep, a):
         v = judge(bg, e_fit, J_fit, scaled, one, [o for o in keep if o != i], i)
-        named.append(Finding(names[i], new[i][1] * ai, np.abs(new[i][1]) * v.se[0], v, held_out=gens[i]))
+        named.append(_finding(names[i], new[i][1], float(ai), v, held_out=gens[i]))
     trace += [SearchStep.of("re-screened joint, whole log", dataclasses.replace(f.verdict, accepted=f.kept,
                                                                                 reason=f.reason))
               for f in named + out]
@@ -178,6 +177,14 @@ def rescreen(rp: LogReplay, lib_X: NDArray, lib_drift: Drift | None, candidates:
     else:
         final = rp.run([kept_specs + tuple(f.spec() for f in named)], rp.n_samples, progress)[0]
     return RescreenRecord(named + out, trace, final)
+
+
+def _finding(c: Candidate, theta: NDArray, a: float, v, **kw) -> Finding:
+    """The finding of ``c`` at ``a`` x its linearised size ``theta``, its verdict (judged in multiples of that
+    size) given in the candidate's own coefficients."""
+    th, se = np.asarray(theta, dtype=float) * a, np.abs(np.asarray(theta, dtype=float)) * v.se[0]
+    v = dataclasses.replace(v, theta=tuple(float(x) for x in th), se=tuple(float(x) for x in se))
+    return Finding(c, th, se, v, **kw)
 
 
 class _Scaled:
