@@ -228,6 +228,7 @@ def summary(m: dict[str, Any]) -> dict[str, Any]:
         "auc_upper_half_per_kind": {k: v["auc_upper_half"] for k, v in det["per_kind"].items()},
         "joint_accuracy": loc.get("accuracy"), "joint_accuracy_flagged": loc.get("accuracy_detected"),
         "kind_balanced_accuracy": kind.get("balanced_accuracy"),
+        "kind_balanced_accuracy_merged": kind.get("balanced_accuracy_merged"),
         "alpha_90_deg": {j: v.get("alpha_90_bound") or v["alpha_90_deg"] for j, v in bl["per_joint"].items()},
     }
 

@@ -56,7 +56,9 @@ def markdown(m: dict[str, Any]) -> str:
     lines += [
         "",
         f"Fault-kind accuracy ({len(kind.get('labels', []))} classes incl. healthy): **{_f(kind['accuracy'])}**, "
-        f"balanced {_f(kind.get('balanced_accuracy'))} (chance {_f(kind.get('chance_balanced'))}); on flagged "
+        f"balanced {_f(kind.get('balanced_accuracy'))} (chance {_f(kind.get('chance_balanced'))}), "
+        f"{_f(kind.get('balanced_accuracy_merged'))} with {' and '.join(kind.get('merged_kinds', []))} merged "
+        "(the same shape in every signal); on flagged "
         f"faulty runs {_f(kind.get('accuracy_detected_faulty'))}. Confusion matrices: `confusion.png`.",
         "",
         "## Backlash: smallest alpha detected per joint",
@@ -137,6 +139,8 @@ def comparison_lines(cmp: dict[str, Any]) -> list[str]:
     row("joint accuracy, all single-joint faults", lambda r: r["joint_accuracy"])
     row("joint accuracy, flagged runs", lambda r: r["joint_accuracy_flagged"])
     row("fault kind, balanced accuracy", lambda r: r["kind_balanced_accuracy"])
+    row("fault kind, balanced accuracy, gain and torque constant merged",
+        lambda r: r.get("kind_balanced_accuracy_merged"))
     for j in joints:
         row(f"backlash alpha_90 J{j} [deg]", lambda r, j=j: r["alpha_90_deg"][j], ".3g")
     return lines

@@ -35,7 +35,9 @@ from .models import Models
 MODELS_DIR = "models"
 CLASSIFIERS_FILE = "classifiers.skops"
 SCHEMA_FILE = "schema.json"
-SCHEMA_FORMAT = 1
+#: 2: the twin features' current estimates are fitted with the payload CoM and latency held out and carry
+#: standard errors and t values (a format-1 detector with twin estimates among its inputs is refused)
+SCHEMA_FORMAT = 2
 #: module prefixes of the types a saved file may hold (anything else is refused on loading)
 TRUSTED_PREFIXES = ("sklearn.", "numpy.", "builtins.")
 
@@ -110,6 +112,13 @@ def load_models(folder: str | Path) -> tuple[Models, dict[str, Any]]:
                               "not loaded")
     objs = sio.loads(data, trusted=sio.get_untrusted_types(data=data))
     schema = json.loads(schema_path.read_text())
+    fmt = schema.get("schema_format", 1)
+    if fmt < 2 and any(c["name"].startswith("twin_est_") for c in schema.get("inputs", [])):
+        raise ConfigFileError(f"{folder}: saved with schema format {fmt}, whose twin size estimates were fitted "
+                              "without the payload CoM and latency held out; run `ur5fault benchmark` again")
+    if fmt > SCHEMA_FORMAT:
+        raise ConfigFileError(f"{folder}: schema format {fmt} is newer than this version reads ({SCHEMA_FORMAT}); "
+                              "update ur5fault")
     if (objs.get("calibrator") is None) != (schema.get("calibration") is None):
         raise ConfigFileError(f"{folder}: {CLASSIFIERS_FILE} and {SCHEMA_FILE} disagree on the calibration of "
                               "p(fault); the folder is mixed from two runs: run `ur5fault benchmark` again")
