@@ -229,6 +229,9 @@ def summary(m: dict[str, Any]) -> dict[str, Any]:
         "joint_accuracy": loc.get("accuracy"), "joint_accuracy_flagged": loc.get("accuracy_detected"),
         "kind_balanced_accuracy": kind.get("balanced_accuracy"),
         "kind_balanced_accuracy_merged": kind.get("balanced_accuracy_merged"),
+        "kind_by_joint_balanced_accuracy": kind.get("by_joint", {}).get("balanced_accuracy"),
+        "kind_by_joint_balanced_accuracy_merged": kind.get("by_joint", {}).get("balanced_accuracy_merged"),
+        "kind_by_joint_joint_accuracy": kind.get("by_joint", {}).get("joint_accuracy"),
         "alpha_90_deg": {j: v.get("alpha_90_bound") or v["alpha_90_deg"] for j, v in bl["per_joint"].items()},
     }
 

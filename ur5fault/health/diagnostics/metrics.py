@@ -13,6 +13,7 @@ from typing import Any
 
 import numpy as np
 
+from . import joint_kind
 from .data import Dataset
 from .models import Models, joint_fault_rows
 
@@ -174,6 +175,31 @@ def fault_kind(ds: Dataset, models: Models, detected: np.ndarray) -> dict[str, A
         "accuracy_detected_faulty": float((pred[faulty_det] == y[faulty_det]).mean()) if faulty_det.any()
         else math.nan,
         "chance_balanced": 1.0 / len(set(y)),
+        "labels": labels,
+        "confusion": confusion(y, pred, labels),
+        "by_joint": _kind_by_joint(ds, models, detected),
+    }
+
+
+def _kind_by_joint(ds: Dataset, models: Models, detected: np.ndarray) -> dict[str, Any]:
+    """The fault-kind classifier by joint (:mod:`.joint_kind`): kind and joint of every test run."""
+    from sklearn.metrics import balanced_accuracy_score
+
+    if models.joint_kind is None:
+        return {}
+    y = ds.test["fault"].to_numpy(str)
+    pred, joint = joint_kind.predict(models.joint_kind, ds.test, ds.inputs)
+    labels = ["healthy"] + sorted((set(y) | set(pred)) - {"healthy"})
+    faulty_det = detected & (y != "healthy")
+    jm = joint_fault_rows(ds.test)
+    right_joint = joint == ds.test["fault_joint"].to_numpy(int)
+    return {
+        "accuracy": float((pred == y).mean()),
+        "balanced_accuracy": float(balanced_accuracy_score(y, pred)),
+        "balanced_accuracy_merged": float(balanced_accuracy_score(merge_kinds(y), merge_kinds(pred))),
+        "accuracy_detected_faulty": float((pred[faulty_det] == y[faulty_det]).mean()) if faulty_det.any()
+        else math.nan,
+        "joint_accuracy": float(right_joint[jm].mean()) if jm.any() else math.nan,
         "labels": labels,
         "confusion": confusion(y, pred, labels),
     }

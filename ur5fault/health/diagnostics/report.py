@@ -61,6 +61,18 @@ def markdown(m: dict[str, Any]) -> str:
         "(the same shape in every signal); on flagged "
         f"faulty runs {_f(kind.get('accuracy_detected_faulty'))}. Confusion matrices: `confusion.png`.",
         "",
+    ]
+    bj = kind.get("by_joint") or {}
+    if bj:
+        lines += [
+            "Fault kind by joint (one classifier shared by the joints, reading one joint's evidence at a time; "
+            f"`joint_kind.py`): accuracy **{_f(bj['accuracy'])}**, balanced {_f(bj['balanced_accuracy'])}, "
+            f"{_f(bj['balanced_accuracy_merged'])} with the pair merged; on flagged faulty runs "
+            f"{_f(bj['accuracy_detected_faulty'])}; its joint right on {_f(bj['joint_accuracy'])} of the single-joint "
+            "faults.",
+            "",
+        ]
+    lines += [
         "## Backlash: smallest alpha detected per joint",
         f"alpha_90: {bl['detection_probability']:.0%} of the runs with that backlash flagged at "
         f"{det['false_alarm_rate']:.0%} false alarms (logistic fit in log alpha, 90 % bootstrap interval; "
@@ -141,6 +153,10 @@ def comparison_lines(cmp: dict[str, Any]) -> list[str]:
     row("fault kind, balanced accuracy", lambda r: r["kind_balanced_accuracy"])
     row("fault kind, balanced accuracy, gain and torque constant merged",
         lambda r: r.get("kind_balanced_accuracy_merged"))
+    row("fault kind by joint, balanced accuracy", lambda r: r.get("kind_by_joint_balanced_accuracy"))
+    row("fault kind by joint, balanced accuracy, gain and torque constant merged",
+        lambda r: r.get("kind_by_joint_balanced_accuracy_merged"))
+    row("fault kind by joint, joint accuracy, all single-joint faults", lambda r: r.get("kind_by_joint_joint_accuracy"))
     for j in joints:
         row(f"backlash alpha_90 J{j} [deg]", lambda r, j=j: r["alpha_90_deg"][j], ".3g")
     return lines

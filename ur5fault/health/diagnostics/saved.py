@@ -2,7 +2,8 @@
 
 ``<out>/models/``:
 
-* ``classifiers.skops``: the detector, the localiser, the fault-kind classifier and the calibration map of
+* ``classifiers.skops``: the detector, the localiser, the fault-kind classifier, the fault-kind classifier by
+  joint (:mod:`.joint_kind`; absent from classifiers saved before it) and the calibration map of
   the detector's probability (:mod:`.calibration`; absent from classifiers saved before it: they still load,
   and ``ur5fault diagnose`` says that its p(fault) is not calibrated) - scikit-learn objects in skops' format:
   loading it runs no code from the file; :func:`load_models` refuses any type outside scikit-learn and numpy;
@@ -64,7 +65,8 @@ def save_models(models: Models, ds: Dataset, feature_set: str, threshold_score: 
 
     folder = Path(out) / MODELS_DIR
     folder.mkdir(parents=True, exist_ok=True)
-    objs = {"detector": models.detector, "localiser": models.localiser, "kind": models.kind}
+    objs = {"detector": models.detector, "localiser": models.localiser, "kind": models.kind,
+            "joint_kind": models.joint_kind}
     stored = {**objs, "calibrator": models.calibrator}
     write_bytes_atomic(folder / CLASSIFIERS_FILE, sio.dumps({k: v for k, v in stored.items() if v is not None}))
     units = column_units(ds.inputs)
@@ -123,7 +125,7 @@ def load_models(folder: str | Path) -> tuple[Models, dict[str, Any]]:
         raise ConfigFileError(f"{folder}: {CLASSIFIERS_FILE} and {SCHEMA_FILE} disagree on the calibration of "
                               "p(fault); the folder is mixed from two runs: run `ur5fault benchmark` again")
     return Models(objs.get("detector"), objs.get("localiser"), objs.get("kind"),
-                  bool(schema.get("shuffled_labels")), objs.get("calibrator")), schema
+                  bool(schema.get("shuffled_labels")), objs.get("calibrator"), objs.get("joint_kind")), schema
 
 
 def check_inputs(features: pd.DataFrame, schema: dict[str, Any], where: str) -> list[str]:
