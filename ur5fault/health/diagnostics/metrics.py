@@ -56,12 +56,22 @@ def size_edges(sizes: np.ndarray, n_bins: int = N_SIZE_BINS) -> np.ndarray:
     return np.geomspace(s.min(), s.max() * (1 + 1e-9), n_bins + 1)
 
 
-def detection(ds: Dataset, models: Models, threshold: float | None = None) -> dict[str, Any]:
+def joint_fault_scores(ds: Dataset, models: Models) -> np.ndarray:
+    """The fault-kind classifier by joint's probability of a fault on any joint, ``max_j (1 - p_j(none))``, for
+    every test run (:mod:`.joint_kind`)."""
+    p = joint_kind.probabilities(models.joint_kind, ds.test, ds.inputs)
+    none = [str(c) for c in models.joint_kind.classes_].index(joint_kind.NONE)
+    return (1.0 - p[:, :, none]).max(axis=1)
+
+
+def detection(ds: Dataset, models: Models, threshold: float | None = None,
+              score: np.ndarray | None = None) -> dict[str, Any]:
     """Detection AUC overall, per fault kind, per fault-size bin and over the upper half of each kind's size
     range (log scale, the range of the train and test runs); detection rate at 5 % false alarms (the
-    threshold on these test runs, or ``threshold``: a saved detector's operating point)."""
+    threshold on these test runs, or ``threshold``: a saved detector's operating point).  ``score``: the
+    test runs' scores of another detector (default: the detector's probability)."""
     te = ds.test
-    score = detector_scores(ds, models)
+    score = detector_scores(ds, models) if score is None else score
     healthy = (te["fault"] == "healthy").to_numpy()
     thr = alarm_threshold(score, healthy) if threshold is None else float(threshold)
     detected = score > thr

@@ -41,6 +41,17 @@ def markdown(m: dict[str, Any]) -> str:
                          for b in v["by_size"])
         lines.append(f"| {k} | {v['n_test']} | {_f(v['auc'])} ({_f(v['auc_se'], '.3f')}) | "
                      f"{_f(v['detection_rate'], '.2f')} | {bins} |")
+    bj = m.get("detection_by_joint") or {}
+    if bj:
+        lines += [
+            "",
+            "The fault-kind classifier by joint as a detector (its probability of a fault on any joint, "
+            f"`joint_kind.py`): ROC AUC **{_f(bj['auc_all'])}**; at {bj['false_alarm_rate']:.0%} false alarms "
+            f"(measured {_f(bj['false_alarm_rate_measured'])}) it flags {_f(bj['detection_rate_all'])} of the faulty "
+            "test runs; per kind (AUC / upper half of its sizes): "
+            + "; ".join(f"{k} {_f(v['auc'], '.2f')} / {_f(v['auc_upper_half'], '.2f')}"
+                        for k, v in bj["per_kind"].items()) + ".",
+        ]
     lines += [
         "",
         "## Localisation (which joint) and fault kind",
@@ -148,6 +159,12 @@ def comparison_lines(cmp: dict[str, Any]) -> list[str]:
     for k in kinds:
         row(f"AUC {k}", lambda r, k=k: r["auc_per_kind"][k])
         row(f"AUC {k}, upper half of its sizes", lambda r, k=k: r["auc_upper_half_per_kind"][k])
+    row("by joint: detection AUC, all faults", lambda r: r.get("auc_all_by_joint"))
+    row("by joint: flagged at 5 % false alarms", lambda r: r.get("detection_rate_all_by_joint"))
+    for k in kinds:
+        row(f"by joint: AUC {k}", lambda r, k=k: (r.get("auc_per_kind_by_joint") or {}).get(k))
+        row(f"by joint: AUC {k}, upper half of its sizes",
+            lambda r, k=k: (r.get("auc_upper_half_per_kind_by_joint") or {}).get(k))
     row("joint accuracy, all single-joint faults", lambda r: r["joint_accuracy"])
     row("joint accuracy, flagged runs", lambda r: r["joint_accuracy_flagged"])
     row("fault kind, balanced accuracy", lambda r: r["kind_balanced_accuracy"])

@@ -53,7 +53,7 @@ def training_hash(ds: Dataset) -> str:
 
 def save_models(models: Models, ds: Dataset, feature_set: str, threshold_score: float, out: Path,
                 window_s: float | None = None, log_period_s: float | None = None,
-                calibration: dict[str, Any] | None = None) -> Path:
+                calibration: dict[str, Any] | None = None, joint_kind_threshold: float | None = None) -> Path:
     """Write the classifiers and their schema into ``out/models``; return that folder (``window_s``,
     ``log_period_s``: the training runs' simulated duration and log period, from the campaign manifest;
     ``calibration``: how ``models.calibrator`` was fitted, recorded in the schema)."""
@@ -77,6 +77,8 @@ def save_models(models: Models, ds: Dataset, feature_set: str, threshold_score: 
         "classes": {k: [v.item() if hasattr(v, "item") else v for v in m.classes_] for k, m in objs.items()
                     if m is not None},
         "detector_threshold_5pct_false_alarms": float(threshold_score),
+        # the same operating point of the kind classifier by joint's p(fault on any joint); None without it
+        "joint_kind_threshold_5pct_false_alarms": None if joint_kind_threshold is None else float(joint_kind_threshold),
         "n_train": len(ds.train),
         "training_set_sha256": training_hash(ds),
         "shuffled_labels": models.shuffled_labels,
