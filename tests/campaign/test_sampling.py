@@ -226,7 +226,10 @@ def test_twin_residuals_add_features_and_change_the_identity(tmp_path):
     run_campaign(camp, tmp_path, jobs=1, progress=False)
     df = pd.read_parquet(tmp_path / "features.parquet")
     assert len(df) == len(camp.runs) and set(df["status"]) == {"ok"} and set(TWIN_UNITS) <= set(df.columns)
-    assert np.isfinite(df[[c for c in TWIN_UNITS if c.startswith("twin_est_")]].to_numpy()).all()
+    est = [c for c in TWIN_UNITS if c.startswith("twin_est_")]
+    values = [c for c in est if not c.endswith(("_se", "_t")) and not any(f"_{s}_j" in c for s in ("se", "t"))]
+    assert np.isfinite(df[values].to_numpy()).all()  # every size estimate (0 where its column is not identified)
+    assert not np.isinf(df[est].to_numpy()).any()  # standard errors and t values: a number or NaN (not identified)
 
 
 def test_twin_residuals_must_be_a_bool():
