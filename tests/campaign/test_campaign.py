@@ -521,7 +521,7 @@ def _cmdline(pid: int) -> bytes:
 
 
 def test_a_run_validates_its_faults_once_when_built():
-    from ur5fault.campaign.spec import CampaignRun
+    from ur5fault.campaign.runs import CampaignRun
 
     cond = (("seed", 0),)
     with pytest.raises(ParameterError, match=r"backlash.backlash_deg = 9 is out of range"):

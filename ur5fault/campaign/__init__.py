@@ -5,7 +5,8 @@ over processes (:mod:`.execute`), stored atomically and resumably (:mod:`.store`
 from .execute import plan_batches, run_batch, run_campaign
 from .lock import CampaignLockedError, Lock
 from .result import CampaignResult
-from .spec import Campaign, CampaignRun, build_campaign, load_campaign
+from .runs import CampaignRun
+from .spec import Campaign, build_campaign, load_campaign
 from .store import CampaignChangedError, consolidate
 from .summary import acceptable_backlash, tcp_table
 from .verify import status

@@ -16,7 +16,8 @@ import json
 from collections.abc import Sequence
 
 from ..sim.effects import EffectSpec, make_effect
-from .spec import Campaign, CampaignRun
+from .runs import CampaignRun
+from .spec import Campaign
 
 #: prefix of a digital twin's run id (it is never stored: its signals only feed its runs' features)
 TWIN_PREFIX = "twin-"

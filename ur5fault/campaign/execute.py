@@ -34,7 +34,8 @@ from .labels import assign_splits, refresh_splits, row_labels
 from .limits import check_limits, estimate
 from .lock import Lock
 from .manifest import build_manifest
-from .spec import Campaign, CampaignRun
+from .runs import CampaignRun
+from .spec import Campaign
 from .store import BadRunFilesError, CampaignChangedError, consolidate, run_path, write_run_file
 from .verify import scan
 from .workers import check_backend, dask_client, exit_with_parent, note_stderr, stop_loky_workers

@@ -29,7 +29,8 @@ from ..sim.effects import EffectSpec, effects_of_keys, make_effect
 from ..sim.params import load_params
 from ..util import provenance
 from ..util.checks import short
-from .spec import Campaign, CampaignRun
+from .runs import CampaignRun
+from .spec import Campaign
 
 IDENTITY_FORMAT = 1
 #: how inputs are compared, in this order, to name the first difference

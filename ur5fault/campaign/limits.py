@@ -15,7 +15,8 @@ from ..config import parse_trajectory
 from ..errors import ParameterError
 from ..sim.budget import check_memory, core_hours, fmt_bytes, sim_bytes
 from ..sim.params import load_params
-from .spec import Campaign, trajectory_specs
+from .runs import trajectory_specs
+from .spec import Campaign
 
 #: assumption: above a thousand runs or 2e9 physics steps (~2.4 core-hours at 4.3 us per
 #: run-step), a typo in a sweep list is more likely than intent, so the user confirms with --yes

@@ -57,12 +57,11 @@ from ..sim.axes import joint_index
 from ..sim.effects import REGISTRY, EffectKey, EffectParam, effects_of_keys, make_effect
 from .design import METHODS, SIGNIFICANT_DIGITS, Dist, parse_dist, unit_design
 from .labels import SIZE_PARAM
+from .runs import CONDITION_KEYS, MAX_RUNS
 
 SAMPLE_KEYS = ("n", "method", "seed", "twins", "joints", "faults", "conditions")
 DIRECTIONS = ("up", "down", "both")
 KIND_KEYS = ("weight", "size", "direction")
-BASE_CONDITIONS = ("seed", "payload_kg", "temperature_C", "trajectory")
-MAX_RUNS = 1_000_000
 
 
 @dataclasses.dataclass(frozen=True)
@@ -139,11 +138,11 @@ def _check_condition(key: str, dist: Dist, where: str) -> None:
 
 
 def _condition_key(key: str, where: str) -> None:
-    if key in BASE_CONDITIONS:
+    if key in CONDITION_KEYS:
         return
     ek = EffectKey.parse(key)
     if ek is None or ek.effect not in REGISTRY:
-        raise UnknownNameError("condition", key, list(BASE_CONDITIONS) + ["<whole-robot effect>.<param>"], where)
+        raise UnknownNameError("condition", key, list(CONDITION_KEYS) + ["<whole-robot effect>.<param>"], where)
     eff = REGISTRY[ek.effect]
     if eff.per_joint or ek.effect in ("payload", "temperature"):
         why = "is per joint: sample it as a fault kind" if eff.per_joint else "is set by payload_kg / temperature_C"
