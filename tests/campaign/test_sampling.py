@@ -255,7 +255,8 @@ def test_runs_logged_without_motor_encoders_have_no_mismatch_features(tmp_path):
     blind = [c for c in list(FEATURE_UNITS) + list(TWIN_UNITS) if "mismatch" in c or "backlash" in c
              or "compliance" in c]
     seen = [c for c in list(FEATURE_UNITS) + list(TWIN_UNITS) if c.startswith(("twin_est_current", "current_"))]
-    assert len(blind) == 6 * 3 + 6 * (8 + 3) and df[blind].isna().all().all()
+    # per joint: 3 paper features, 8 mismatch residual statistics, 3 mismatch-fit estimates with their SE and t
+    assert len(blind) == 6 * 3 + 6 * (8 + 3 * 3) and df[blind].isna().all().all()
     assert len(seen) > 18 and np.isfinite(df[seen].to_numpy()).all()
     assert json.loads((tmp_path / "manifest.json").read_text())["motor_encoders"] is False
     with pytest.raises(ParameterError, match="motor_encoders"):
