@@ -38,9 +38,10 @@ from ..sim.axes import N_JOINTS
 from ..sim.params import RobotParams
 from ..sim.trajectories.ik import model_path
 
-#: a direction of the (unit-norm) columns whose singular value is below this share of the largest is left
-#: out as not identified by the motion (numerical rank)
-RCOND = 1e-8
+#: the fit's columns (scaled to unit norm) are well enough apart when their smallest singular value is at least
+#: this share of the largest; below it the last column in the weakest direction is left out, and so on (at
+#: 1e-4 a coefficient's standard error is already inflated some 10^4 times: it says nothing)
+RCOND = 1e-4
 #: a column whose norm is below this share of the largest column's is zero up to rounding (e.g. the payload
 #: CoM shift along a tool axis that stays parallel to gravity: its torque is zero but for the last bits)
 ZERO_COLUMN = 1e-9
@@ -83,7 +84,8 @@ def noise_scale(r: NDArray) -> NDArray:
 def hac_fit(x: NDArray, y: NDArray) -> Fit:
     """Least squares of ``y`` ``(n, m)`` on ``x`` ``(n, m, p)``: ``n`` instants of ``m`` rows (e.g. joints)
     sharing ``p`` coefficients, with Newey-West standard errors over the instants (module docstring).
-    A row with a NaN is left out; a column that is zero or not identified gets coefficient 0 and SE NaN."""
+    A row with a NaN is left out; a column that is zero or not identified gets coefficient 0 and SE NaN (of
+    columns that the data mix, the last ones are left out first: put the nuisance columns last)."""
     n, m, p = x.shape
     ok = np.isfinite(y) & np.all(np.isfinite(x), axis=2)
     xz = np.where(ok[..., None], x, 0.0)
@@ -94,18 +96,17 @@ def hac_fit(x: NDArray, y: NDArray) -> Fit:
     live = scale > ZERO_COLUMN * scale.max(initial=0.0)
     if int(ok.sum()) <= int(live.sum()) or not live.any():
         return Fit(coef, se)
-    a = flat[:, live] / scale[live]
-    gram, rhs = a.T @ a, a.T @ yz.reshape(-1)
-    ev, vec = np.linalg.eigh(gram)  # the normal equations of unit-norm columns: cheap on long logs
-    keep = ev > RCOND**2 * ev.max()
-    if not keep.all():  # a column the motion mixes with the others: leave the dependent directions out
-        resolved = np.abs(vec[:, ~keep]).max(axis=1) < 1e-6
-        live[np.flatnonzero(live)[~resolved]] = False
-        if not live.any():
-            return Fit(coef, se)
+    while True:  # the normal equations of unit-norm columns: cheap on long logs
         a = flat[:, live] / scale[live]
         gram, rhs = a.T @ a, a.T @ yz.reshape(-1)
         ev, vec = np.linalg.eigh(gram)
+        if ev[0] > RCOND**2 * ev[-1]:
+            break
+        # the motion mixes columns: leave out the last one in the weakest direction (callers put nuisance last)
+        weak = np.abs(vec[:, 0]) > 1e-3 * np.abs(vec[:, 0]).max()
+        live[np.flatnonzero(live)[np.flatnonzero(weak)[-1]]] = False
+        if not live.any():
+            return Fit(coef, se)
     bread = (vec / ev) @ vec.T  # (A'A)^-1
     b_scaled = bread @ rhs
     resid = (yz.reshape(-1) - a @ b_scaled).reshape(n, m)

@@ -13,7 +13,9 @@ of that joint (the localiser is trained on single-joint faults, so the six sum t
 fault-kind classifier by joint's probabilities for that joint (:mod:`ur5fault.health.diagnostics.joint_kind`:
 each joint's own evidence), renormalised without ``none`` (the probability of each kind given a fault on that
 joint; not calibrated); classifiers saved without it give the run-level kind classifier's probabilities,
-renormalised without ``healthy`` and the same on every joint.
+renormalised without ``healthy`` and the same on every joint.  With it, each window also gets
+``p_fault_by_joint`` (its largest joint probability of a fault: the benchmark's "by joint" detector, not
+calibrated) and ``flagged_by_joint`` (against that detector's threshold at 5 % false alarms in the schema).
 
 Size estimates are the twin features' least-squares projections (:mod:`ur5fault.health.twin_features`),
 converted to the unit of the campaign's ``fault_size``; the interval is the range of the same estimate on the
@@ -175,7 +177,12 @@ def score_windows(models, schema: dict[str, Any], windows: list[Window], has_mot
                                   if ok and all(np.isfinite(halves)) else None,
                                   "cannot_tell": c in blind})
             joints.append({"joint": j + 1, "p_fault_joint": pj, "kinds": kinds, "cannot_tell": blind})
-        out.append({"start_s": w.start_s, "end_s": w.end_s, "p_fault": float(p[i]), "p_fault_detector": float(p_det[i]),
-                    "flagged": bool(p_det[i] >= thr),
-                    "joints": joints})
+        row = {"start_s": w.start_s, "end_s": w.end_s, "p_fault": float(p[i]), "p_fault_detector": float(p_det[i]),
+               "flagged": bool(p_det[i] >= thr)}
+        if by_joint is not None:  # the kind classifier by joint as a detector (not calibrated)
+            none = [str(c) for c in models.joint_kind.classes_].index(joint_kind.NONE)
+            pbj = float((1.0 - by_joint[i, :, none]).max())
+            jthr = schema.get("joint_kind_threshold_5pct_false_alarms")
+            row.update(p_fault_by_joint=pbj, flagged_by_joint=None if jthr is None else bool(pbj > float(jthr)))
+        out.append({**row, "joints": joints})
     return out
