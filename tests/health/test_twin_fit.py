@@ -15,7 +15,7 @@ import mujoco
 import numpy as np
 import pytest
 
-from ur5fault.health.twin_fit import bartlett_lag, com_columns, hac_fit, noise_scale
+from ur5fault.health.twin_fit import RCOND_NUISANCE, bartlett_lag, com_columns, hac_fit, noise_scale
 from ur5fault.sim.params import load_params
 from ur5fault.sim.trajectories.ik import model_path
 
@@ -111,3 +111,17 @@ def test_com_columns_match_mujocos_gravity_torque(q):
     assert cols @ delta == pytest.approx(expect_A, abs=1e-9)
     assert np.all(com_columns(np.array([q]), mass, params, held=np.array([False])) == 0)
     assert np.all(com_columns(np.array([q]), 0.0, params) == 0)
+
+
+def test_a_nuisance_column_mixed_with_the_others_is_left_out_not_the_fault_columns():
+    # a nuisance column that is the constant up to 1e-7 (a CoM torque that stays put in a window): with
+    # rcond 1e-4 it is left out (it comes last) and the constant keeps its size; without it the two would
+    # share an ill-determined split of the offset
+    rng = np.random.default_rng(4)
+    n = 2000
+    t = np.linspace(0, 4, n)
+    x = np.stack([np.ones(n), np.sin(2 * t), 1.0 + 1e-7 * rng.normal(size=n)], axis=1)
+    y = 0.3 + 0.5 * np.sin(2 * t) + 0.01 * rng.normal(size=n)
+    fit = hac_fit(x[:, None, :], y[:, None], RCOND_NUISANCE)
+    assert fit.coef[:2] == pytest.approx([0.3, 0.5], abs=2e-3)
+    assert fit.coef[2] == 0.0 and math.isnan(fit.se[2])

@@ -61,7 +61,7 @@ from ..sim.axes import N_JOINTS
 from ..sim.drive.friction import stribeck_level
 from ..sim.params import RobotParams
 from ..twin.residuals import motion_conditions
-from .twin_fit import com_columns, hac_fit, latency_column, noise_scale
+from .twin_fit import RCOND_NUISANCE, com_columns, hac_fit, latency_column, noise_scale
 
 #: motion conditions used, short name -> the key of :func:`ur5fault.twin.motion_conditions`
 CONDITIONS = {"rest": "at rest", "speed": "at speed", "reversal": "near velocity reversals", "accel": "accelerating"}
@@ -131,7 +131,8 @@ def current_fit(t_s: NDArray, q_set_rad: NDArray, residual_A: NDArray, twin: dic
         for k, col in enumerate(cols):
             per_joint[:, j, 3 * j + k] = col[:, j]
     w = 1.0 / noise_scale(residual_A)  # joints with noisier currents count less
-    fit = hac_fit(np.concatenate([per_joint, nuisance], axis=2) * w[None, :, None], residual_A * w[None, :])
+    fit = hac_fit(np.concatenate([per_joint, nuisance], axis=2) * w[None, :, None], residual_A * w[None, :],
+                  RCOND_NUISANCE)
     k = 3 * N_JOINTS
     return (fit.coef[:k].reshape(N_JOINTS, 3), fit.se[:k].reshape(N_JOINTS, 3),
             np.stack([fit.coef[k:], fit.se[k:]], axis=1))

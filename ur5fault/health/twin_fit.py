@@ -38,10 +38,13 @@ from ..sim.axes import N_JOINTS
 from ..sim.params import RobotParams
 from ..sim.trajectories.ik import model_path
 
-#: the fit's columns (scaled to unit norm) are well enough apart when their smallest singular value is at least
-#: this share of the largest; below it the last column in the weakest direction is left out, and so on (at
-#: 1e-4 a coefficient's standard error is already inflated some 10^4 times: it says nothing)
-RCOND = 1e-4
+#: a fit's columns (scaled to unit norm) are well enough apart when their smallest singular value is at least
+#: ``rcond`` of the largest; below it the last column in the weakest direction is left out, and so on.  The
+#: current fit, whose nuisance columns can mix with the joints' offsets (a CoM torque that stays constant in a
+#: window), uses this (at 1e-4 a coefficient's standard error is already inflated some 10^4 times: it says
+#: nothing); the mismatch fit keeps the default 1e-8, whose flank column may differ from a constant in a few
+#: samples only - the few reversals that show a backlash
+RCOND_NUISANCE = 1e-4
 #: a column whose norm is below this share of the largest column's is zero up to rounding (e.g. the payload
 #: CoM shift along a tool axis that stays parallel to gravity: its torque is zero but for the last bits)
 ZERO_COLUMN = 1e-9
@@ -81,7 +84,7 @@ def noise_scale(r: NDArray) -> NDArray:
     return out
 
 
-def hac_fit(x: NDArray, y: NDArray) -> Fit:
+def hac_fit(x: NDArray, y: NDArray, rcond: float = 1e-8) -> Fit:
     """Least squares of ``y`` ``(n, m)`` on ``x`` ``(n, m, p)``: ``n`` instants of ``m`` rows (e.g. joints)
     sharing ``p`` coefficients, with Newey-West standard errors over the instants (module docstring).
     A row with a NaN is left out; a column that is zero or not identified gets coefficient 0 and SE NaN (of
@@ -100,7 +103,7 @@ def hac_fit(x: NDArray, y: NDArray) -> Fit:
         a = flat[:, live] / scale[live]
         gram, rhs = a.T @ a, a.T @ yz.reshape(-1)
         ev, vec = np.linalg.eigh(gram)
-        if ev[0] > RCOND**2 * ev[-1]:
+        if ev[0] > rcond**2 * ev[-1]:
             break
         # the motion mixes columns: leave out the last one in the weakest direction (callers put nuisance last)
         weak = np.abs(vec[:, 0]) > 1e-3 * np.abs(vec[:, 0]).max()
@@ -160,4 +163,4 @@ def latency_column(i_twin_A: NDArray, dt_s: float) -> NDArray:
     return -np.gradient(i_twin_A, dt_s, axis=0)
 
 
-__all__ = ["Fit", "bartlett_lag", "com_columns", "hac_fit", "latency_column", "noise_scale"]
+__all__ = ["RCOND_NUISANCE", "Fit", "bartlett_lag", "com_columns", "hac_fit", "latency_column", "noise_scale"]
