@@ -487,10 +487,10 @@ def test_workers_exit_when_the_campaign_process_is_killed(tmp_path):
     try:
         deadline = time.time() + 120
         workers: list[int] = []
-        while time.time() < deadline and len(workers) < 2:
+        while time.time() < deadline and not workers:
             time.sleep(0.3)
             workers = [p for p in _children(proc.pid) if b"LokyProcess" in _cmdline(p)]
-        assert len(workers) == 2, "loky workers not seen"
+        assert len(workers) == 1, "loky worker not seen"  # --jobs 2: the campaign process and one worker
         time.sleep(3.0)  # both are simulating a batch
         os.kill(proc.pid, signal.SIGKILL)
         proc.wait()

@@ -46,6 +46,20 @@ def test_joint_axis_is_each_logs_own_replay(windows):
     assert mr.rows(0, "held_out").size == a.t_s.size - 1 - fa and mr.rows(2, "fit").size == 0
 
 
+def test_tasks_over_two_processes_equal_one_process(windows):
+    """``jobs=2``: the logs' tasks split between this process and a worker (util/parallel.py), bit for bit."""
+    from ur5fault.sim.effects import make_effect
+
+    a, b, c = _named(windows, ["a", "b", "c"])
+    sets = [(), (make_effect("coulomb_friction", 2, scale=1.5),)]
+    one = MultiReplay([a, b], [c], 0.6, seed=WORKFLOW_SEED).run(sets, 400)
+    two = MultiReplay([a, b], [c], 0.6, seed=WORKFLOW_SEED, jobs=2).run(sets, 400)
+    for x, y in zip(one, two):
+        assert x.status == y.status
+        np.testing.assert_array_equal(x.y, y.y)
+        np.testing.assert_array_equal(x.torque_gear_Nm, y.torque_gear_Nm)
+
+
 @pytest.mark.slow  # a whole (library-only) fit of three 5 s logs
 def test_per_log_summary_scores_each_log_on_its_own_rows(windows):
     a, b, c = _named(windows, ["a.csv", "b.csv", "c.csv"])

@@ -70,3 +70,15 @@ def test_several_logs_each_under_its_own_conditions():
     both = [LogReplay(g, seed=3).run([()])[0] for g in (light, heavy)]
     shoulder = [float(np.mean(np.abs(b.current_A[:, 1]))) for b in both]
     assert shoulder[1] > shoulder[0] + 0.1, shoulder
+
+
+def test_a_batch_split_over_processes_equals_one_process():
+    """``jobs=2``: a share of the batch in this process, the rest in a worker; the same replays bit for bit."""
+    log = _log()
+    sets = [(), (make_effect("coulomb_friction", 2, scale=1.5),), (make_effect("backlash", 3, backlash_deg=0.1),)]
+    one = LogReplay(log, seed=7).run(sets)
+    two = LogReplay(log, seed=7, jobs=2).run(sets)
+    for a, b in zip(one, two):
+        assert a.status == b.status
+        np.testing.assert_array_equal(a.y, b.y)
+        np.testing.assert_array_equal(a.torque_gear_Nm, b.torque_gear_Nm)

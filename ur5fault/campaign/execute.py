@@ -1,5 +1,6 @@
-"""Campaign execution: runs grouped into lockstep batches, spread over processes (joblib loky,
-or Dask for clusters), each finished run written atomically to the store as it arrives.
+"""Campaign execution: runs grouped into lockstep batches, spread over processes (this one and ``jobs - 1``
+loky workers, ``util/parallel.py``; or Dask for clusters), each finished run written atomically to the store as
+it arrives.
 
 Before anything is simulated the campaign's cost is checked (:mod:`.limits`) and the output folder
 must be writable.  On a rerun into an existing folder every stored run is verified
@@ -18,6 +19,7 @@ import os
 import time
 import warnings
 from collections.abc import Callable, Mapping, Sequence
+from contextlib import nullcontext
 from pathlib import Path
 from typing import Any
 
@@ -26,6 +28,7 @@ import numpy as np
 from ..config import parse_trajectory
 from ..sim.params import load_params
 from ..util.io import check_writable, write_json_atomic, write_parquet_atomic
+from ..util.parallel import iter_tasks
 from ..util.progress import campaign_progress
 from .digital_twin import twin_id, twin_runs
 from .identity import DRIVE, STEPPER, Identities
@@ -265,19 +268,19 @@ def _execute(camp: Campaign, batches: list[list[CampaignRun]], out: Path, ts_dir
         ts_dir.mkdir(exist_ok=True)
     by_id = {rc.run_id: rc for b in batches for rc in b}
     idents = {rid: ids.identity(rc) for rid, rc in by_id.items()}
-    if client is not None:
-        ctx = joblib.parallel_backend("dask", wait_for_workers_timeout=60)
-    else:
-        ctx = joblib.parallel_backend("loky")
+    args = [(camp, b, str(ts_dir) if ts_dir else None, {rc.run_id: idents[rc.run_id] for rc in b},
+             os.getpid() if client is None else None) for b in batches]
+    ctx = joblib.parallel_backend("dask", wait_for_workers_timeout=60) if client is not None else nullcontext()
     gen = None
     try:
         with ctx:
-            par = joblib.Parallel(n_jobs=jobs if client is None else -1, return_as="generator_unordered")
-            gen = par(joblib.delayed(run_batch)(camp, b, str(ts_dir) if ts_dir else None,
-                                                {rc.run_id: idents[rc.run_id] for rc in b},
-                                                os.getpid() if client is None else None)
-                      for b in batches)
-            for rows in gen:
+            if client is not None:
+                par = joblib.Parallel(n_jobs=-1, return_as="generator_unordered")
+                gen = results = par(joblib.delayed(run_batch)(*a) for a in args)
+            else:  # this process runs batches too, beside jobs - 1 loky workers (util/parallel.py)
+                gen = iter_tasks(run_batch, args, jobs, cost=[len(b) for b in batches])
+                results = (rows for _, rows in gen)
+            for rows in results:
                 for row in rows:
                     if row["run_id"] in todo:
                         write_run_file(out, row, ids.record(by_id[row["run_id"]]))

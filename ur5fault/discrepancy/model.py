@@ -31,6 +31,7 @@ from . import steps
 from .judging import Finding, SearchStep, final_verdicts
 from .multilog import MultiReplay, per_log
 from .refinement import FindingSet, Refined, polish
+from .rescreen import rescreen
 from .search import columns_of
 
 logger = logging.getLogger(__name__)
@@ -163,6 +164,12 @@ class DiscrepancyModel:
             f.tell_apart = disc.tell_apart.get(f.candidate, "")
         kept = [f for f in jr.findings if f.kept]
         after = self._polish(rp, kept, ref.first, ref.finding_set, prog, drift) if kept else ref.nominal
+        # a finding dropped on the held-out part or at the final check gives its joint's place back
+        again = rescreen(rp, lib.X, lib.drift, lib.candidates, jr.findings, after, n_scr, n_fit, drift,
+                         self.max_effects, prog)
+        jr.findings.extend(again.findings)
+        self.search_ += again.trace
+        after = again.after
         self._results(rp, ref.nominal, after, n_fit, n_all)
         timings["judging"] = time.perf_counter() - t
         logger.info("judged and polished in %.0f s: kept %s", timings["judging"],

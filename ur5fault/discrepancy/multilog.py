@@ -165,10 +165,10 @@ class MultiReplay:
             rp.n_simulated += len(effect_sets)
             rp.simulated_s += len(effect_sets) * m * rp.log.period_s
         if self.jobs > 1 and len(tasks) > 1:
-            import joblib
+            from ..util.parallel import map_tasks  # this process takes tasks too
 
-            parts = joblib.Parallel(n_jobs=self.jobs)(
-                joblib.delayed(_batch)(self.replays[k], sets, m) for k, _, sets, m in tasks)
+            parts = map_tasks(_batch, [(self.replays[k], sets, m) for k, _, sets, m in tasks], self.jobs,
+                              cost=[len(sets) * m for _, _, sets, m in tasks])
         else:
             parts = [_batch(self.replays[k], sets, m, progress) for k, _, sets, m in tasks]
         per_log: dict[int, list[Replayed]] = {}

@@ -164,13 +164,13 @@ class LogReplay:
         self.n_simulated += len(runs)
         self.simulated_s += len(runs) * n * self.log.period_s
         if self.jobs > 1 and len(runs) >= 2:
-            # a batch equals its single runs bit for bit, so splitting over processes changes nothing
-            import joblib
+            # a batch equals its single runs bit for bit, so splitting over processes changes nothing; this
+            # process simulates a share too (``util/parallel.py``)
+            from ..util.parallel import map_tasks
 
             size = -(-len(runs) // self.jobs)
-            parts = joblib.Parallel(n_jobs=self.jobs)(
-                joblib.delayed(_simulate)(self.params, self.traj, runs[i : i + size], self.log.period_s, n)
-                for i in range(0, len(runs), size))
+            parts = map_tasks(_simulate, [(self.params, self.traj, runs[i : i + size], self.log.period_s, n)
+                                          for i in range(0, len(runs), size)], self.jobs)
             res = [r for part in parts for r in part]
         else:
             res = _simulate(self.params, self.traj, runs, self.log.period_s, n, progress)

@@ -32,8 +32,6 @@ from collections.abc import Sequence
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.ndimage import median_filter
-from scipy.optimize import nnls
 
 from ...sim.axes import JOINT_NAMES, N_JOINTS
 from ...twin.residuals import REVERSAL_WINDOW_S
@@ -69,6 +67,8 @@ def smooth(x: NDArray, period_s: float, window_s: float = SMOOTH_S) -> NDArray:
 def transient(residual_A: NDArray, period_s: float) -> NDArray:
     """``h`` ``(n, 6)``: the smoothed residual minus its running median over :data:`LEVEL_S`."""
     w = max(1, int(round(LEVEL_S / period_s)) | 1)
+    from scipy.ndimage import median_filter  # imported here: every command builds the CLI, few monitor
+
     level = np.stack([median_filter(residual_A[:, j], size=w, mode="nearest") for j in range(residual_A.shape[1])],
                      axis=1)  # per column: far faster than one 2-D filter
     return smooth(residual_A, period_s) - level
@@ -104,6 +104,8 @@ def _nnls(F: NDArray, y: NDArray) -> NDArray:
     """``argmin |F c - y|, c >= 0`` through the QR factors of ``F`` (the same minimiser, a small problem)."""
     scale = np.maximum(np.abs(F).max(axis=0), 1e-12)  # columns of one magnitude for the solver
     q, r = np.linalg.qr(F / scale)
+    from scipy.optimize import nnls
+
     return nnls(r, q.T @ y)[0] / scale
 
 

@@ -1,0 +1,207 @@
+"""A dropped finding gives its joint's place back: the joint's library effects are screened again.
+
+The per-joint budget (``--max-effects``) is spent when a finding enters refinement.  A finding dropped later
+(on the held-out part, or at the final check once refined) leaves its joint with the residual it was chosen
+for but without a place for another effect: on the real NIST log with the base's Coulomb friction x 1.79 the
+library named the Coulomb scale, discovery put a Stribeck-like term (v_s = 0.2 rad/s) in its place, and the
+final check dropped the term as unstable across time blocks, so the joint ended with nothing although its
+held-out current residual was 0.37 A (docs/discrepancy.md, *Hidden effects in the real logs*).
+
+Here every joint left with a free place by a drop gets it back: its library effects other than those dropped
+are selected afresh on the screened part's linearised problem (the library's own columns, beside the drift),
+against the residual of the final model; each one chosen is simulated once over the whole log beside the kept
+findings (its secant is the column), sized on the whole fitting part beside the drift, judged there with the
+same tests as every finding and on the held-out part, and, when it passes, the model is simulated once more
+at the judged sizes.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable, Sequence
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..twin.replay import LogReplay, Replayed
+from .candidates import Candidate
+from .drift import Drift
+from .judging import Finding, SearchStep, channels
+from .search import backward, columns_of, forward, judge
+from .statistics import BlockGram, generalisation, rss_of, weighted
+
+#: a second simulation at the judged sizes is spared when every size is within this share of the simulated one
+SIZE_RTOL = 0.01
+
+
+@dataclasses.dataclass(frozen=True)
+class RescreenRecord:
+    """The findings named on freed joints (kept, or dropped with their reasons), the trace, and the final model
+    (``after``: unchanged when nothing was named)."""
+
+    findings: list[Finding]
+    trace: list[SearchStep]
+    after: Replayed
+
+
+def freed_joints(findings: Sequence[Finding], max_effects: int) -> list[int | None]:
+    """Joints (None: robot-wide) where a finding was dropped and fewer than ``max_effects`` library findings
+    are kept: each has a place for another library effect."""
+    out: list[int | None] = []
+    for f in findings:
+        j = f.candidate.joint
+        if f.kept or j in out:
+            continue
+        n_kept = sum(1 for g in findings if g.kept and g.candidate.source == "library" and g.candidate.joint == j)
+        if n_kept < max_effects:
+            out.append(j)
+    return out
+
+
+def offered(candidates: Sequence[Candidate], findings: Sequence[Finding], joint: int | None) -> list[int]:
+    """Indices of the library candidates on ``joint`` that are neither kept nor dropped findings."""
+    taken = {f.candidate.label for f in findings}
+    return [k for k, c in enumerate(candidates) if c.joint == joint and c.label not in taken]
+
+
+def select_on_freed(X: NDArray, e: NDArray, candidates: Sequence[Candidate], cols: list[list[int]],
+                    findings: Sequence[Finding], max_effects: int) -> tuple[list[tuple[int, NDArray]], list]:
+    """Forward selection, joint by joint, among the library candidates offered on each freed joint.
+
+    Args:
+        X: the library's linearised columns on the screened part ``(n_columns, n, n_channels)``.
+        e: the weighted residual of the final model there (both with the drift projected out).
+
+    Returns:
+        ``(k, theta)`` of each candidate chosen (indices into ``candidates``), and the verdicts of the trace.
+    """
+    chosen, trace = [], []
+    for j in freed_joints(findings, max_effects):
+        ks = offered(candidates, findings, j)
+        if not ks:
+            continue
+        sub = [candidates[k] for k in ks]
+        idx = [c for k in ks for c in cols[k]]
+        Xs = X[idx]
+        scols = columns_of(sub)
+        bg = BlockGram.build(Xs, e)
+        budget = max_effects - sum(1 for f in findings if f.kept and f.candidate.source == "library"
+                                   and f.candidate.joint == j)
+        sel = forward(bg, e, Xs, sub, scols, budget, per_joint=budget)
+        trace += sel.trace
+        G, g, ee = bg.total()
+        th = rss_of(G, g, ee, [c for k in sel.chosen for c in scols[k]])[1]
+        i = 0
+        for k in sel.chosen:
+            n = sub[k].n_coef
+            chosen.append((ks[k], th[i : i + n]))
+            i += n
+    return chosen, trace
+
+
+def rescreen(rp: LogReplay, lib_X: NDArray, lib_drift: Drift | None, candidates: Sequence[Candidate],
+             findings: Sequence[Finding], after: Replayed, n_scr: int, n_fit: int, drift: Drift | None,
+             max_effects: int, progress: Callable[[float], None] | None = None) -> RescreenRecord:
+    """Name library effects on the joints that dropped findings freed (module docstring).
+
+    Args:
+        lib_X: the library's columns on the screened part (drift removed); ``candidates`` their candidates.
+        findings: every finding so far, kept and dropped; ``after``: the replay of the kept ones.
+        drift: the drift of the fitting part (``n_fit`` samples).
+    """
+    cols = columns_of(candidates)
+    meas = rp.measured(rp.n_samples)
+    e_after = weighted(meas, after.y, rp.sigma)
+    e_scr = e_after[:n_scr] if lib_drift is None else lib_drift.remove(e_after[:n_scr])
+    chosen, lin_trace = select_on_freed(lib_X, e_scr, candidates, cols, findings, max_effects)
+    trace = [SearchStep.of("re-screened joint", v) for v in lin_trace]
+    if not chosen:
+        return RescreenRecord([], trace, after)
+    kept_specs = tuple(f.spec() for f in findings if f.kept)
+    new = [(candidates[k], th) for k, th in chosen]
+    sims = rp.run([kept_specs + (c.spec(th),) for c, th in new], rp.n_samples, progress)
+    # each one's secant beside the kept findings: the change of the weighted readings per unit multiple of its
+    # linearised size (a coefficient pair keeps its direction)
+    ok = [s.ok for s in sims]
+    J = np.stack([e_after - weighted(meas, s.y, rp.sigma) if s.ok else np.zeros_like(e_after) for s in sims])
+    J_fit, e_fit = J[:, :n_fit], e_after[:n_fit]
+    if drift is not None:
+        J_fit, e_fit = drift.remove(J_fit), drift.remove(e_fit)
+    names = [c for c, _ in new]
+    scaled = [_Scaled(c, th) for c, th in new]
+    one = [[i] for i in range(len(new))]
+    bg = BlockGram.build(J_fit, e_fit)
+    G, g, ee = bg.total()
+    keep, _, gone = backward(bg, e_fit, J_fit, scaled, one, [i for i in range(len(new)) if ok[i]])
+    out: list[Finding] = []
+    for v in gone:
+        i = next(i for i, c in enumerate(names) if c.label == v.label)
+        out.append(_finding(names[i], new[i][1], v.theta[0], v, kept=False,
+                            reason=f"explains nothing the kept findings do not ({v.reason})"))
+    e_held = e_after[n_fit:]
+    while keep:
+        a = rss_of(G, g, ee, keep)[1]
+        with_all = e_held - np.tensordot(a, J[keep, n_fit:], axes=1)
+        worst, gens = None, {}
+        for i, ai in zip(keep, a):
+            ch = channels(names[i], len(rp.signals))
+            gens[i] = gen = generalisation(with_all[:, ch], (with_all + ai * J[i, n_fit:])[:, ch])
+            why = names[i].range_problem(new[i][1] * ai)
+            if why or (not gen.passes and (worst is None or gen.ratio < gens[worst].ratio)):
+                worst = i
+                if why:
+                    break
+        if worst is None:
+            break
+        v = judge(bg, e_fit, J_fit, scaled, one, [o for o in keep if o != worst], worst)
+        ai = float(a[keep.index(worst)])
+        why = names[worst].range_problem(new[worst][1] * ai) or (
+            f"does not generalise: on the held-out part it removes {100 * gens[worst].ratio:.0f} % of the change it "
+            "makes")
+        out.append(_finding(names[worst], new[worst][1], ai, v, held_out=gens[worst], kept=False, reason=why))
+        keep.remove(worst)
+    if not keep:
+        trace += [SearchStep.of("re-screened joint, whole log", dataclasses.replace(f.verdict, accepted=False,
+                                                                                    reason=f.reason)) for f in out]
+        return RescreenRecord(out, trace, after)
+    a = rss_of(G, g, ee, keep)[1]
+    named = []
+    for i, ai in zip(keep, a):
+        v = judge(bg, e_fit, J_fit, scaled, one, [o for o in keep if o != i], i)
+        named.append(_finding(names[i], new[i][1], float(ai), v, held_out=gens[i]))
+    trace += [SearchStep.of("re-screened joint, whole log", dataclasses.replace(f.verdict, accepted=f.kept,
+                                                                                reason=f.reason))
+              for f in named + out]
+    if len(keep) == 1 and abs(float(a[0]) - 1.0) <= SIZE_RTOL:
+        final = sims[keep[0]]
+    else:
+        final = rp.run([kept_specs + tuple(f.spec() for f in named)], rp.n_samples, progress)[0]
+    return RescreenRecord(named + out, trace, final)
+
+
+def _finding(c: Candidate, theta: NDArray, a: float, v, **kw) -> Finding:
+    """The finding of ``c`` at ``a`` x its linearised size ``theta``, its verdict (judged in multiples of that
+    size) given in the candidate's own coefficients."""
+    th, se = np.asarray(theta, dtype=float) * a, np.abs(np.asarray(theta, dtype=float)) * v.se[0]
+    v = dataclasses.replace(v, theta=tuple(float(x) for x in th), se=tuple(float(x) for x in se))
+    return Finding(c, th, se, v, **kw)
+
+
+class _Scaled:
+    """A candidate judged in units of a multiple of its linearised size ``theta`` (one coefficient):
+    :func:`ur5fault.discrepancy.search.judge` asks each candidate for its label and valid bounds."""
+
+    def __init__(self, c: Candidate, theta: NDArray) -> None:
+        self.label, self.joint, self.n_coef = c.label, c.joint, 1
+        lo, hi = (np.broadcast_to(np.asarray(b, dtype=float), np.shape(theta)) for b in c.bounds())
+        th = np.asarray(theta, dtype=float)
+        a_lo, a_hi = -np.inf, np.inf
+        for t, low, high in zip(th.ravel(), lo.ravel(), hi.ravel()):
+            if t > 0:
+                a_lo, a_hi = max(a_lo, low / t), min(a_hi, high / t)
+            elif t < 0:
+                a_lo, a_hi = max(a_lo, high / t), min(a_hi, low / t)
+        self._bounds = (np.array([a_lo]), np.array([a_hi]))
+
+    def bounds(self) -> tuple[NDArray, NDArray]:
+        return self._bounds
