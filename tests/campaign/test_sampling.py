@@ -226,7 +226,10 @@ def test_twin_residuals_add_features_and_change_the_identity(tmp_path):
     run_campaign(camp, tmp_path, jobs=1, progress=False)
     df = pd.read_parquet(tmp_path / "features.parquet")
     assert len(df) == len(camp.runs) and set(df["status"]) == {"ok"} and set(TWIN_UNITS) <= set(df.columns)
-    assert np.isfinite(df[[c for c in TWIN_UNITS if c.startswith("twin_est_")]].to_numpy()).all()
+    est = [c for c in TWIN_UNITS if c.startswith("twin_est_")]
+    values = [c for c in est if not c.endswith(("_se", "_t")) and not any(f"_{s}_j" in c for s in ("se", "t"))]
+    assert np.isfinite(df[values].to_numpy()).all()  # every size estimate (0 where its column is not identified)
+    assert not np.isinf(df[est].to_numpy()).any()  # standard errors and t values: a number or NaN (not identified)
 
 
 def test_twin_residuals_must_be_a_bool():
@@ -252,7 +255,8 @@ def test_runs_logged_without_motor_encoders_have_no_mismatch_features(tmp_path):
     blind = [c for c in list(FEATURE_UNITS) + list(TWIN_UNITS) if "mismatch" in c or "backlash" in c
              or "compliance" in c]
     seen = [c for c in list(FEATURE_UNITS) + list(TWIN_UNITS) if c.startswith(("twin_est_current", "current_"))]
-    assert len(blind) == 6 * 3 + 6 * (8 + 3) and df[blind].isna().all().all()
+    # per joint: 3 paper features, 8 mismatch residual statistics, 3 mismatch-fit estimates with their SE and t
+    assert len(blind) == 6 * 3 + 6 * (8 + 3 * 3) and df[blind].isna().all().all()
     assert len(seen) > 18 and np.isfinite(df[seen].to_numpy()).all()
     assert json.loads((tmp_path / "manifest.json").read_text())["motor_encoders"] is False
     with pytest.raises(ParameterError, match="motor_encoders"):

@@ -353,3 +353,38 @@ def test_calibration_is_saved_loaded_and_reported(tmp_path):
     (tmp_path / "benchmark" / "models" / SCHEMA_FILE).write_text(json.dumps(s))
     with pytest.raises(ConfigFileError, match="disagree on the calibration"):
         load_models(tmp_path / "benchmark")
+
+
+def test_classifiers_saved_before_the_nuisance_fit_are_refused_in_one_line(tmp_path, capsys):
+    from ur5fault.health.diagnostics import run_benchmark
+    from ur5fault.health.diagnostics.saved import SCHEMA_FILE, load_models
+
+    with_twin(synthetic()).to_parquet(tmp_path / "features.parquet")
+    run_benchmark(tmp_path, compare=False)
+    path = tmp_path / "benchmark" / "models" / SCHEMA_FILE
+    s = json.loads(path.read_text())
+    assert s["schema_format"] == 2
+    s["schema_format"] = 1  # as saved before: its twin_est_* inputs were fitted without the payload CoM
+    path.write_text(json.dumps(s))
+    with pytest.raises(ConfigFileError, match="schema format 1"):
+        load_models(tmp_path / "benchmark")
+    assert main(["benchmark", str(tmp_path), "--test", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("ur5fault: error: ") and err.count("\n") == 1
+    # a format-1 detector of the paper's features alone never read a twin estimate: it still loads
+    s["inputs"] = [c for c in s["inputs"] if not c["name"].startswith("twin_est_")]
+    path.write_text(json.dumps(s))
+    load_models(tmp_path / "benchmark")
+
+
+def test_merged_kind_accuracy_counts_gain_for_torque_constant():
+    from sklearn.metrics import balanced_accuracy_score
+
+    from ur5fault.health.diagnostics.metrics import merge_kinds
+
+    y = np.array(["healthy", "current_sensor_gain", "torque_constant", "backlash"])
+    pred = np.array(["healthy", "torque_constant", "current_sensor_gain", "backlash"])
+    # unmerged: healthy and backlash right, the pair swapped -> (1 + 0 + 0 + 1) / 4; merged: all right
+    assert balanced_accuracy_score(y, pred) == pytest.approx(0.5)
+    assert balanced_accuracy_score(merge_kinds(y), merge_kinds(pred)) == pytest.approx(1.0)
+    assert list(merge_kinds(y)[[0, 3]]) == ["healthy", "backlash"]

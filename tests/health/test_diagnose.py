@@ -112,8 +112,13 @@ def test_current_offset_on_wrist_1_is_found_there_at_its_size(logs, detector, tm
         # projects there, e.g. a confounded gain or Coulomb share, cancels)
         kh = next(k for k in wh["joints"][3]["kinds"] if k["kind"] == "current_sensor_offset")
         assert k["size"] - kh["size"] == pytest.approx(OFFSET_A, abs=0.01)
+        assert 0.0 <= wh["p_fault_by_joint"] <= w["p_fault_by_joint"] <= 1.0
+        assert w["flagged_by_joint"] is None  # the stand-in was saved without its threshold
         if not k["confounded"]:
             assert k["size"] == pytest.approx(OFFSET_A, abs=0.03)
+            # the kind classifier by joint reads the same evidence: its p(fault) rises with the offset (in a
+            # confounded window another joint's spurious estimate may already hold it at the top)
+            assert wh["p_fault_by_joint"] < w["p_fault_by_joint"]
     assert told >= 1
 
 

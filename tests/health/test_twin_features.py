@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from ur5fault import RunSpec, Simulator, make_effect
-from ur5fault.health.twin_features import FEATURE_UNITS, twin_features
+from ur5fault.health.twin_features import FEATURE_UNITS, NUISANCE_UNITS, twin_features
 
 pytestmark = pytest.mark.slow
 
@@ -48,7 +48,9 @@ def batch():
 
 def test_schema_and_units(batch):
     assert list(batch["healthy"]) == list(FEATURE_UNITS)
-    assert all(name.endswith(tuple(f"_j{j}" for j in range(1, 7))) for name in FEATURE_UNITS)
+    per_joint = [n for n in FEATURE_UNITS if not n.startswith(tuple(f"twin_est_{k}" for k in NUISANCE_UNITS))]
+    assert all(name.endswith(tuple(f"_j{j}" for j in range(1, 7))) for name in per_joint)
+    assert len(FEATURE_UNITS) - len(per_joint) == 2 * len(NUISANCE_UNITS)
 
 
 def test_healthy_run_is_zero_mean_within_noise(batch):
@@ -77,3 +79,58 @@ def test_current_sensor_gain_projects_to_its_size(batch):
 
 def test_resolver_offset_lowers_the_mismatch_by_its_size(batch):
     assert math.degrees(batch["resolver"]["twin_est_mismatch_offset_rad_j4"]) == pytest.approx(-0.3, abs=0.005)
+
+
+#: a payload CoM shift and a current-sensor offset of about the same motor current on wrist 1: 3 kg shifted 3 cm
+#: sideways puts 3 * 9.82 * 0.03 = 0.88 N*m on the wrist while the tool points down, 0.88 / (K_t N) ~ 0.07 A
+COM_KG, COM_DX_M, OFFSET_A = 3.0, 0.03, 0.07
+#: the whole motion: the payload is picked up at 0.87 s and released at 5.21 s (the twin's current steps with the
+#: payload's weight at both, which is what tells a held payload's CoM from a constant offset)
+COM_DURATION_S = 6.3
+
+
+@pytest.fixture(scope="module")
+def com_batch():
+    from ur5fault.config import parse_trajectory
+
+    traj = parse_trajectory({"name": "random_pick_and_place", "seed": 3}, "trajectory")
+    load = (make_effect("payload", mass_kg=COM_KG), make_effect("temperature", temperature_C=30.0))
+    runs = [
+        RunSpec("com", 11, load + (make_effect("payload_com", dx_m=COM_DX_M),)),
+        RunSpec("offset", 11, load + (make_effect("current_sensor_offset", 4, offset_A=OFFSET_A),)),
+        RunSpec("twin", 12345, load),
+    ]
+    sim = Simulator()
+    res = sim.run(traj, runs, duration_s=COM_DURATION_S)
+    assert all(s == "ok" for s in res.status)
+    names = ("q_FB_rad", "q_M_FB_rad", "i_FB_A")
+    twin = {n: res[n][2] for n in (*names, "i_q_A", "T_gear_Nm")}
+    held = traj.gripped(res.t_s)
+    assert held.any() and not held.all()  # the payload is picked up within the simulated time
+    return {rid: twin_features(res.t_s, res.q_set_rad, {n: res[n][i] for n in names}, twin, sim.params, COM_KG, held)
+            for i, rid in enumerate(("com", "offset"))}
+
+
+def test_payload_com_is_not_reported_as_a_current_offset(com_batch):
+    com, off = com_batch["com"], com_batch["offset"]
+    assert off["twin_est_current_offset_A_j4"] == pytest.approx(OFFSET_A, abs=0.1 * OFFSET_A)
+    # the CoM shift: its own estimate, not a wrist-1 offset of its current size
+    # (within 20 %: the per-joint gain columns take a share of the CoM's step, the twin's current stepping with
+    # the payload's weight at the same instants)
+    assert com["twin_est_payload_com_x_m"] == pytest.approx(COM_DX_M, rel=0.2)
+    assert abs(com["twin_est_current_offset_A_j4"]) < 0.2 * OFFSET_A
+    assert abs(off["twin_est_payload_com_x_m"]) < 0.005
+    # and the offset stands out by many standard errors where the CoM's estimate of it does not
+    assert off["twin_est_current_offset_A_t_j4"] > 3 * abs(com["twin_est_current_offset_A_t_j4"])
+
+
+def test_standard_errors_and_t_values_are_consistent(com_batch):
+    f = com_batch["offset"]
+    for j in range(1, 7):
+        for name in ("current_offset_A", "current_gain_err", "coulomb_scale_err", "mismatch_offset_rad"):
+            v, se, t = (f[f"twin_est_{name}{s}_j{j}"] for s in ("", "_se", "_t"))
+            assert (se > 0 and t == pytest.approx(v / se)) or (math.isnan(se) and math.isnan(t) and v == 0.0), \
+                (name, j, v, se, t)
+        assert f[f"twin_est_current_offset_A_se_j{j}"] > 0  # the constant column is always identified
+    # the tool keeps pointing down: a CoM shift along it moves no joint torque, so it is not identified
+    assert math.isnan(f["twin_est_payload_com_z_m_t"]) and f["twin_est_payload_com_z_m"] == 0.0

@@ -129,16 +129,18 @@ def run_batch(camp: Campaign, batch: Sequence[CampaignRun], ts_dir: str | None,
         for key in FEATURE_UNITS:  # every file has the full schema (tcp_dev_* is NaN without a sound twin)
             row.setdefault(key, float("nan"))
         if camp.twin_residuals:
-            _add_twin_features(row, res, i, twin_index[twin_id(rc)], sim.params)
+            _add_twin_features(row, res, i, twin_index[twin_id(rc)], sim.params, float(rc.cond["payload_kg"]),
+                               traj.gripped(res.t_s))
         if not camp.motor_encoders:  # logged like a UR robot: what the motor encoder gives is unknown
             row.update({k: float("nan") for k in row if needs_motor_encoders(k)})
         rows.append(row)
     return rows
 
 
-def _add_twin_features(row: dict[str, Any], res, i: int, k: int, params) -> None:
+def _add_twin_features(row: dict[str, Any], res, i: int, k: int, params, payload_kg: float, held) -> None:
     """The twin residual features of run ``i`` against its digital twin ``k`` of the same batch (NaN, and the
-    run not ``ok``, when the twin failed)."""
+    run not ``ok``, when the twin failed); ``payload_kg``, ``held``: the configured payload mass and when the
+    gripper holds it (known to the robot: the centre-of-mass columns of the current fit)."""
     from ..health.twin_features import FEATURE_UNITS as TWIN_UNITS
     from ..health.twin_features import twin_features
 
@@ -149,7 +151,7 @@ def _add_twin_features(row: dict[str, Any], res, i: int, k: int, params) -> None
         return
     names = ("q_FB_rad", "q_M_FB_rad", "i_FB_A")
     row.update(twin_features(res.t_s, res.q_set_rad, {n: res[n][i] for n in names},
-                             {n: res[n][k] for n in (*names, "i_q_A", "T_gear_Nm")}, params))
+                             {n: res[n][k] for n in (*names, "i_q_A", "T_gear_Nm")}, params, payload_kg, held))
 
 
 def run_campaign(camp: Campaign, out: Path | None = None, *, jobs: int | None = None, backend: str = "loky",

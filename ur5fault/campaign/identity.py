@@ -38,7 +38,8 @@ INPUT_ORDER = ("identity_format", "ur5fault_version", "mujoco_version", "model_s
                "trajectory", "duration_s", "log_period_s", "seed", "effects", "params", "twin_residuals",
                "motor_encoders")
 #: version of the digital twin and its features (health/twin_features.py), recorded when a campaign has them
-TWIN_RESIDUALS_FORMAT = 1
+#: (2: the current fit over all joints with the payload CoM and latency held out, standard errors and t values)
+TWIN_RESIDUALS_FORMAT = 2
 #: the simulator configuration campaigns run with: passed to the engine by every campaign kind
 #: (campaign/execute.py, health/prognostics/fleet.py) and recorded here, so the identity names what ran
 DRIVE, STEPPER = "numba", "compiled"

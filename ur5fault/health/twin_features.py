@@ -36,6 +36,20 @@ Features per joint ``j`` (units in the names):
     mismatch falls by o: d = -o); ``twin_est_backlash_rad`` = e (a clearance alpha swaps flanks with
     the sign of the gear torque: the mismatch jumps by alpha); ``twin_est_compliance_err`` = f (a
     stiffness scale s makes the windup T/(s k): f = 1/s - 1).
+
+  The current fit is made over all six joints at once (:mod:`ur5fault.health.twin_fit`), each joint weighted
+  by its noise, with four more columns shared by the joints for the nuisance the robot does not know: the
+  payload's centre-of-mass shift along the flange's x, y, z (the gravity torque of that shift through the
+  twin's kinematics, while the payload is held) and the setpoint latency (``-di_twin/dt``).  An offset is
+  thus estimated with a CoM that puts a near-constant torque on the wrists held out: the CoM's torque is
+  the same on J2, J3 and J4, an offset sits on one joint.  Run-level estimates of the nuisance:
+  ``twin_est_payload_com_<x|y|z>_m`` [m] and ``twin_est_latency_s`` [s].
+
+* ``twin_est_<name>_se`` (the estimate's unit) and ``twin_est_<name>_t`` (-): every estimate's standard error
+  (Newey-West over the log's instants: the residual is correlated from sample to sample) and its
+  t-statistic, estimate / SE - how many standard errors the signature stands out of the residual, on the
+  same scale whatever the motion (standard normal on a healthy run with white noise).  SE and t are NaN
+  where the motion does not identify the estimate (e.g. the CoM columns without a payload).
 """
 
 from __future__ import annotations
@@ -47,6 +61,7 @@ from ..sim.axes import N_JOINTS
 from ..sim.drive.friction import stribeck_level
 from ..sim.params import RobotParams
 from ..twin.residuals import motion_conditions
+from .twin_fit import RCOND_NUISANCE, com_columns, hac_fit, latency_column, noise_scale
 
 #: motion conditions used, short name -> the key of :func:`ur5fault.twin.motion_conditions`
 CONDITIONS = {"rest": "at rest", "speed": "at speed", "reversal": "near velocity reversals", "accel": "accelerating"}
@@ -55,6 +70,8 @@ SIGNAL_UNITS = {"current": "A", "position": "rad", "mismatch": "rad"}
 #: projections, name -> unit (see the module docstring for what each measures)
 ESTIMATE_UNITS = {"current_offset_A": "A", "current_gain_err": "-", "coulomb_scale_err": "-",
                   "mismatch_offset_rad": "rad", "backlash_rad": "rad", "compliance_err": "-"}
+#: run-level estimates of the nuisance the robot does not know, name -> unit (the current fit's shared columns)
+NUISANCE_UNITS = {"payload_com_x_m": "m", "payload_com_y_m": "m", "payload_com_z_m": "m", "latency_s": "s"}
 #: smallest gear-torque magnitude whose sign counts as a flank, as a share of the joint's largest
 #: (assumption: a gear torque within 2 % of its peak may sit in the clearance either way)
 FLANK_SHARE = 0.02
@@ -70,26 +87,17 @@ def feature_units() -> dict[str, str]:
                     out[f"twin_{sig}_{stat}_{unit}_{cond}_j{j}"] = unit
         for name, unit in ESTIMATE_UNITS.items():
             out[f"twin_est_{name}_j{j}"] = unit
+    for j in range(1, N_JOINTS + 1):  # after the first format's columns, which keep their order
+        for name, unit in ESTIMATE_UNITS.items():
+            out[f"twin_est_{name}_se_j{j}"] = unit
+            out[f"twin_est_{name}_t_j{j}"] = "-"
+    for name, unit in NUISANCE_UNITS.items():
+        out[f"twin_est_{name}"] = unit
+        out[f"twin_est_{name}_t"] = "-"
     return out
 
 
 FEATURE_UNITS = feature_units()
-
-
-def _lstsq(y: NDArray, cols: list[NDArray]) -> NDArray:
-    """Least-squares coefficients of ``y`` on the columns (NaN samples left out; a column that is all
-    zero, or a problem without samples, gives 0 for its coefficient)."""
-    a = np.stack(cols, axis=1)
-    ok = np.isfinite(y) & np.all(np.isfinite(a), axis=1)
-    if ok.sum() < len(cols):
-        return np.zeros(len(cols))
-    scale = np.sqrt(np.mean(a[ok] ** 2, axis=0))
-    live = scale > 0
-    coef = np.zeros(len(cols))
-    if live.any():
-        sol = np.linalg.lstsq(a[ok][:, live] / scale[live], y[ok], rcond=1e-8)[0]
-        coef[live] = sol / scale[live]
-    return coef
 
 
 def projection_columns(t_s: NDArray, q_set_rad: NDArray, twin: dict[str, NDArray], params: RobotParams
@@ -108,8 +116,31 @@ def projection_columns(t_s: NDArray, q_set_rad: NDArray, twin: dict[str, NDArray
     return [ones, twin["i_q_A"], i_coulomb], [ones, 0.5 * np.nan_to_num(flank), windup]
 
 
+def current_fit(t_s: NDArray, q_set_rad: NDArray, residual_A: NDArray, twin: dict[str, NDArray], params: RobotParams,
+                payload_kg: float = 0.0, payload_held: NDArray | None = None) -> tuple[NDArray, NDArray, NDArray]:
+    """The current fit over all joints (module docstring): ``(coef, se)`` of the per-joint estimates, ``(6, 3)``
+    each (offset, gain error, Coulomb scale error), and the nuisance's ``(4, 2)`` (CoM x, y, z, latency; estimate
+    and SE)."""
+    dt = float(t_s[1] - t_s[0])
+    cols, _ = projection_columns(t_s, q_set_rad, twin, params)
+    n = residual_A.shape[0]
+    nuisance = np.concatenate([com_columns(q_set_rad, payload_kg, params, payload_held),
+                               latency_column(twin["i_q_A"], dt)[:, :, None]], axis=2)  # (n, 6, 4)
+    per_joint = np.zeros((n, N_JOINTS, 3 * N_JOINTS))
+    for j in range(N_JOINTS):
+        for k, col in enumerate(cols):
+            per_joint[:, j, 3 * j + k] = col[:, j]
+    w = 1.0 / noise_scale(residual_A)  # joints with noisier currents count less
+    fit = hac_fit(np.concatenate([per_joint, nuisance], axis=2) * w[None, :, None], residual_A * w[None, :],
+                  RCOND_NUISANCE)
+    k = 3 * N_JOINTS
+    return (fit.coef[:k].reshape(N_JOINTS, 3), fit.se[:k].reshape(N_JOINTS, 3),
+            np.stack([fit.coef[k:], fit.se[k:]], axis=1))
+
+
 def twin_features(t_s: NDArray, q_set_rad: NDArray, meas: dict[str, NDArray], twin: dict[str, NDArray],
-                  params: RobotParams) -> dict[str, float]:
+                  params: RobotParams, payload_kg: float = 0.0, payload_held: NDArray | None = None
+                  ) -> dict[str, float]:
     """Twin residual features of one run.
 
     Args:
@@ -120,6 +151,8 @@ def twin_features(t_s: NDArray, q_set_rad: NDArray, meas: dict[str, NDArray], tw
             of the projections are taken from the twin's noise-free signals: a noisy regressor would bias
             its coefficient towards -1 where the joint's current is mostly noise).
         params: the twin's model (gear ratio and stiffness, torque constant, friction levels).
+        payload_kg: the configured payload mass (the robot knows it) [kg]; 0: no centre-of-mass columns.
+        payload_held: ``(n_log,)`` whether the payload is held (the gripper commands); None: throughout.
     """
     dt = float(t_s[1] - t_s[0])
     ratio = np.asarray(params.gear.ratio)
@@ -130,8 +163,10 @@ def twin_features(t_s: NDArray, q_set_rad: NDArray, meas: dict[str, NDArray], tw
     qd = np.gradient(q_set_rad, dt, axis=0)
     qdd = np.gradient(qd, dt, axis=0)
     masks = motion_conditions(qd, qdd, twin["T_gear_Nm"], dt)
-    current_cols, mismatch_cols = projection_columns(t_s, q_set_rad, twin, params)
+    _, mismatch_cols = projection_columns(t_s, q_set_rad, twin, params)
+    cur_coef, cur_se, nuisance = current_fit(t_s, q_set_rad, res["current"], twin, params, payload_kg, payload_held)
     f: dict[str, float] = {}
+    estimates = []
     for j in range(N_JOINTS):
         s = f"_j{j + 1}"
         for sig, unit in SIGNAL_UNITS.items():
@@ -143,8 +178,20 @@ def twin_features(t_s: NDArray, q_set_rad: NDArray, meas: dict[str, NDArray], tw
                     if m.any():
                         v = float(np.nanmean(r[m])) if stat == "mean" else float(np.sqrt(np.nanmean(r[m] ** 2)))
                     f[f"twin_{sig}_{stat}_{unit}_{cond}{s}"] = v
-        a, b, c = _lstsq(res["current"][:, j], [col[:, j] for col in current_cols])
-        d, e, g = _lstsq(res["mismatch"][:, j], [col[:, j] for col in mismatch_cols])
-        for name, v in zip(ESTIMATE_UNITS, (a, b, c, d, e, g)):
+        mis = hac_fit(np.stack([col[:, j] for col in mismatch_cols], axis=1)[:, None, :], res["mismatch"][:, j:j + 1])
+        for name, v in zip(ESTIMATE_UNITS, (*cur_coef[j], *mis.coef)):
             f[f"twin_est_{name}{s}"] = float(v)
+        estimates.append((np.concatenate([cur_coef[j], mis.coef]), np.concatenate([cur_se[j], mis.se])))
+    for j, (coef, se) in enumerate(estimates):
+        for name, v, e in zip(ESTIMATE_UNITS, coef, se):
+            f[f"twin_est_{name}_se_j{j + 1}"] = float(e)
+            f[f"twin_est_{name}_t_j{j + 1}"] = _t(v, e)
+    for name, (v, e) in zip(NUISANCE_UNITS, nuisance):
+        f[f"twin_est_{name}"] = float(v)
+        f[f"twin_est_{name}_t"] = _t(v, e)
     return f
+
+
+def _t(value: float, se: float) -> float:
+    """estimate / SE; NaN where the SE is NaN or zero (the estimate not identified)."""
+    return float(value / se) if np.isfinite(se) and se > 0 else float("nan")

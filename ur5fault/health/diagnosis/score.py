@@ -9,9 +9,13 @@ runs the detector was not fitted on), or the detector's own when the classifiers
 threshold at 5 % false alarms on the training campaign's test split (the benchmark's operating point, saved in
 the schema; the map is monotonic, so this is the same as the calibrated one against the mapped threshold).
 Per joint, ``p_fault_joint`` = ``p_fault`` x the localiser's probability
-of that joint (the localiser is trained on single-joint faults, so the six sum to ``p_fault``). Kinds: the kind
-classifier's probabilities over the fault kinds, renormalised without ``healthy`` (the probability of each kind
-given a fault; not calibrated).
+of that joint (the localiser is trained on single-joint faults, so the six sum to ``p_fault``). Kinds: the
+fault-kind classifier by joint's probabilities for that joint (:mod:`ur5fault.health.diagnostics.joint_kind`:
+each joint's own evidence), renormalised without ``none`` (the probability of each kind given a fault on that
+joint; not calibrated); classifiers saved without it give the run-level kind classifier's probabilities,
+renormalised without ``healthy`` and the same on every joint.  With it, each window also gets
+``p_fault_by_joint`` (its largest joint probability of a fault: the benchmark's "by joint" detector, not
+calibrated) and ``flagged_by_joint`` (against that detector's threshold at 5 % false alarms in the schema).
 
 Size estimates are the twin features' least-squares projections (:mod:`ur5fault.health.twin_features`),
 converted to the unit of the campaign's ``fault_size``; the interval is the range of the same estimate on the
@@ -31,7 +35,7 @@ import pandas as pd
 
 from ...errors import ConfigFileError
 from ...sim.axes import N_JOINTS
-from ..diagnostics import calibration
+from ..diagnostics import calibration, joint_kind
 from ..diagnostics.data import CONTEXT_COLUMNS, SIM_ONLY_PREFIX
 from ..diagnostics.saved import SCHEMA_FORMAT
 from ..features import FEATURE_UNITS
@@ -141,6 +145,8 @@ def score_windows(models, schema: dict[str, Any], windows: list[Window], has_mot
         p = p_det if models.calibrator is None else calibration.apply(models.calibrator, p_det)
         loc = models.localiser.predict_proba(x) if models.localiser is not None else None
         kind = models.kind.predict_proba(x) if models.kind is not None else None
+        by_joint = None if models.joint_kind is None else joint_kind.probabilities(
+            models.joint_kind, pd.DataFrame(x, columns=names), tuple(names))
     out = []
     for i, w in enumerate(windows):
         joints = []
@@ -151,9 +157,13 @@ def score_windows(models, schema: dict[str, Any], windows: list[Window], has_mot
                 pj = float(p[i] * loc[i, cls.index(j + 1)]) if j + 1 in cls else 0.0
             blind = cannot_tell(w, j, has_motor_encoders)
             kinds = []
-            if kind is not None:
-                cls = [str(c) for c in models.kind.classes_]
-                faulty = [(c, kind[i, k]) for k, c in enumerate(cls) if c != "healthy"]
+            if kind is not None or by_joint is not None:
+                if by_joint is not None:  # this joint's own evidence
+                    cls = [str(c) for c in models.joint_kind.classes_]
+                    faulty = [(c, by_joint[i, j, k]) for k, c in enumerate(cls) if c != joint_kind.NONE]
+                else:
+                    cls = [str(c) for c in models.kind.classes_]
+                    faulty = [(c, kind[i, k]) for k, c in enumerate(cls) if c != "healthy"]
                 total = sum(v for _, v in faulty) or 1.0
                 for c, v in sorted(faulty, key=lambda cv: -cv[1])[:N_KINDS]:
                     size, unit = size_estimate(c, w.features, j + 1)
@@ -167,7 +177,12 @@ def score_windows(models, schema: dict[str, Any], windows: list[Window], has_mot
                                   if ok and all(np.isfinite(halves)) else None,
                                   "cannot_tell": c in blind})
             joints.append({"joint": j + 1, "p_fault_joint": pj, "kinds": kinds, "cannot_tell": blind})
-        out.append({"start_s": w.start_s, "end_s": w.end_s, "p_fault": float(p[i]), "p_fault_detector": float(p_det[i]),
-                    "flagged": bool(p_det[i] >= thr),
-                    "joints": joints})
+        row = {"start_s": w.start_s, "end_s": w.end_s, "p_fault": float(p[i]), "p_fault_detector": float(p_det[i]),
+               "flagged": bool(p_det[i] >= thr)}
+        if by_joint is not None:  # the kind classifier by joint as a detector (not calibrated)
+            none = [str(c) for c in models.joint_kind.classes_].index(joint_kind.NONE)
+            pbj = float((1.0 - by_joint[i, :, none]).max())
+            jthr = schema.get("joint_kind_threshold_5pct_false_alarms")
+            row.update(p_fault_by_joint=pbj, flagged_by_joint=None if jthr is None else bool(pbj > float(jthr)))
+        out.append({**row, "joints": joints})
     return out

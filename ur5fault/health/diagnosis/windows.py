@@ -115,6 +115,7 @@ def window_features(log: MeasuredLog, replay: LogReplay, rep: Replayed, window_s
     t = log.t_s[1 : n + 1] - log.t_s[1]
     q_set = log.q_target_rad[1 : n + 1]
     dt = period
+    payload = float(context.get("payload_kg", 0.0))  # held throughout: a log carries no gripper commands
     out = []
     for lo in range(0, n - n_win + 1, n_win):
         hi = lo + n_win
@@ -125,12 +126,13 @@ def window_features(log: MeasuredLog, replay: LogReplay, rep: Replayed, window_s
             f = {k: v for k, v in run_features(t[lo:hi], q_set[lo:hi], meas["q_FB_rad"], meas["q_M_FB_rad"],
                                                meas["i_FB_A"], ratio, zeros, zeros, None).items()
                  if not k.startswith("tcp_")}
-            f.update(twin_features(t[lo:hi], q_set[lo:hi], meas, twin, replay.params))
+            f.update(twin_features(t[lo:hi], q_set[lo:hi], meas, twin, replay.params, payload))
             mid = (hi - lo) // 2
             halves = tuple({k: v for k, v in twin_features(t[lo:hi][sl], q_set[lo:hi][sl],
                                                             {k2: v2[sl] for k2, v2 in meas.items()},
                                                             {k2: v2[sl] for k2, v2 in twin.items()},
-                                                            replay.params).items() if k.startswith("twin_est_")}
+                                                            replay.params, payload).items()
+                            if k.startswith("twin_est_")}
                            for sl in (slice(0, mid), slice(mid, None)))
         if log.q_motor_rad is None:
             f.update({k: float("nan") for k in f if needs_motor_encoders(k)})

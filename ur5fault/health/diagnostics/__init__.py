@@ -23,7 +23,15 @@ import pandas as pd
 from ...errors import ParameterError
 from .calibration import fit_calibration, test_reliability
 from .data import CONTEXT_COLUMNS, FEATURE_SETS, Dataset, has_twin_features, load_dataset, load_features
-from .metrics import alarm_threshold, detection, detector_scores, fault_kind, importance, localisation
+from .metrics import (
+    alarm_threshold,
+    detection,
+    detector_scores,
+    fault_kind,
+    importance,
+    joint_fault_scores,
+    localisation,
+)
 from .models import Models, fit_models
 from .report import write_report
 from .saved import check_inputs, load_models, save_models
@@ -87,6 +95,10 @@ def _evaluate(features: pd.DataFrame, seed: int, shuffle_labels: bool, threshold
     det = detection(ds, models, saved_thr)
     loc = localisation(ds, models, detected)
     kind = fault_kind(ds, models, detected)
+    by_joint = None
+    if models.joint_kind is not None:  # the kind classifier by joint as a detector: p(fault on any joint)
+        joint_thr = None if saved is None else saved[1].get("joint_kind_threshold_5pct_false_alarms")
+        by_joint = detection(ds, models, joint_thr, joint_fault_scores(ds, models))
     ok_rows = features[features["status"] == "ok"] if "status" in features else features
     bl = backlash_thresholds(te, detected, ok_rows, threshold_mm, seed)
     imp = importance(ds, models, seed) if with_importance else []
@@ -108,6 +120,7 @@ def _evaluate(features: pd.DataFrame, seed: int, shuffle_labels: bool, threshold
         "shuffled_labels": shuffle_labels,
         "seed": seed,
         "detection": det,
+        "detection_by_joint": by_joint,
         "localisation": loc,
         "kind": kind,
         "backlash": bl,
@@ -190,6 +203,7 @@ def run_benchmark(campaign_dir: str | Path, out: str | Path | None = None, *, se
     if not shuffle_labels:
         save_models(models, load_dataset(features, feature_set), feature_set,
                     metrics["detection"]["threshold_score"], out_dir, mean_run_duration_s(man), man.get("log_period_s"),
+                    joint_kind_threshold=(metrics["detection_by_joint"] or {}).get("threshold_score"),
                     calibration=None if metrics["calibration"] is None else {
                         k: v for k, v in metrics["calibration"].items() if k != "test"})
     metrics["out"] = str(out_dir)
@@ -221,6 +235,7 @@ def compare_feature_sets(features: pd.DataFrame, seed: int, threshold_mm: float,
 def summary(m: dict[str, Any]) -> dict[str, Any]:
     """The headline numbers of one evaluation."""
     det, loc, kind, bl = m["detection"], m["localisation"], m["kind"], m["backlash"]
+    bj = m.get("detection_by_joint") or {}
     return {
         "n_inputs": len(m["dataset"]["inputs"]),
         "auc_all": det["auc_all"], "detection_rate_all": det["detection_rate_all"],
@@ -228,6 +243,14 @@ def summary(m: dict[str, Any]) -> dict[str, Any]:
         "auc_upper_half_per_kind": {k: v["auc_upper_half"] for k, v in det["per_kind"].items()},
         "joint_accuracy": loc.get("accuracy"), "joint_accuracy_flagged": loc.get("accuracy_detected"),
         "kind_balanced_accuracy": kind.get("balanced_accuracy"),
+        "auc_all_by_joint": bj.get("auc_all"),
+        "detection_rate_all_by_joint": bj.get("detection_rate_all"),
+        "auc_per_kind_by_joint": {k: v["auc"] for k, v in bj.get("per_kind", {}).items()},
+        "auc_upper_half_per_kind_by_joint": {k: v["auc_upper_half"] for k, v in bj.get("per_kind", {}).items()},
+        "kind_balanced_accuracy_merged": kind.get("balanced_accuracy_merged"),
+        "kind_by_joint_balanced_accuracy": kind.get("by_joint", {}).get("balanced_accuracy"),
+        "kind_by_joint_balanced_accuracy_merged": kind.get("by_joint", {}).get("balanced_accuracy_merged"),
+        "kind_by_joint_joint_accuracy": kind.get("by_joint", {}).get("joint_accuracy"),
         "alpha_90_deg": {j: v.get("alpha_90_bound") or v["alpha_90_deg"] for j, v in bl["per_joint"].items()},
     }
 

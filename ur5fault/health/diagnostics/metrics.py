@@ -13,6 +13,7 @@ from typing import Any
 
 import numpy as np
 
+from . import joint_kind
 from .data import Dataset
 from .models import Models, joint_fault_rows
 
@@ -55,12 +56,22 @@ def size_edges(sizes: np.ndarray, n_bins: int = N_SIZE_BINS) -> np.ndarray:
     return np.geomspace(s.min(), s.max() * (1 + 1e-9), n_bins + 1)
 
 
-def detection(ds: Dataset, models: Models, threshold: float | None = None) -> dict[str, Any]:
+def joint_fault_scores(ds: Dataset, models: Models) -> np.ndarray:
+    """The fault-kind classifier by joint's probability of a fault on any joint, ``max_j (1 - p_j(none))``, for
+    every test run (:mod:`.joint_kind`)."""
+    p = joint_kind.probabilities(models.joint_kind, ds.test, ds.inputs)
+    none = [str(c) for c in models.joint_kind.classes_].index(joint_kind.NONE)
+    return (1.0 - p[:, :, none]).max(axis=1)
+
+
+def detection(ds: Dataset, models: Models, threshold: float | None = None,
+              score: np.ndarray | None = None) -> dict[str, Any]:
     """Detection AUC overall, per fault kind, per fault-size bin and over the upper half of each kind's size
     range (log scale, the range of the train and test runs); detection rate at 5 % false alarms (the
-    threshold on these test runs, or ``threshold``: a saved detector's operating point)."""
+    threshold on these test runs, or ``threshold``: a saved detector's operating point).  ``score``: the
+    test runs' scores of another detector (default: the detector's probability)."""
     te = ds.test
-    score = detector_scores(ds, models)
+    score = detector_scores(ds, models) if score is None else score
     healthy = (te["fault"] == "healthy").to_numpy()
     thr = alarm_threshold(score, healthy) if threshold is None else float(threshold)
     detected = score > thr
@@ -141,8 +152,22 @@ def localisation(ds: Dataset, models: Models, detected: np.ndarray) -> dict[str,
     }
 
 
+#: fault kinds whose signatures are the same shape in every signal the twin features read, merged for the second
+#: balanced accuracy: a current-sensor gain g reads g i, a torque-constant scale s needs i / s to hold the same
+#: torque - both a current residual proportional to the current, while the position and encoder signals of a
+#: healthy loop hold (docs/diagnostics.md)
+MERGED_KINDS = {"current_sensor_gain": "current_gain_or_torque_constant",
+                "torque_constant": "current_gain_or_torque_constant"}
+
+
+def merge_kinds(labels: np.ndarray) -> np.ndarray:
+    """``labels`` with the kinds of :data:`MERGED_KINDS` replaced by their common name."""
+    return np.array([MERGED_KINDS.get(str(v), str(v)) for v in labels])
+
+
 def fault_kind(ds: Dataset, models: Models, detected: np.ndarray) -> dict[str, Any]:
-    """Healthy or which kind, over every test run; accuracy, balanced accuracy, confusion matrix."""
+    """Healthy or which kind, over every test run; accuracy, balanced accuracy (also with the indistinguishable
+    kinds of :data:`MERGED_KINDS` merged: a prediction of either counts for both), confusion matrix."""
     from sklearn.metrics import balanced_accuracy_score
 
     y = ds.test["fault"].to_numpy(str)
@@ -155,9 +180,36 @@ def fault_kind(ds: Dataset, models: Models, detected: np.ndarray) -> dict[str, A
         "n_test": len(y),
         "accuracy": float((pred == y).mean()),
         "balanced_accuracy": float(balanced_accuracy_score(y, pred)),
+        "balanced_accuracy_merged": float(balanced_accuracy_score(merge_kinds(y), merge_kinds(pred))),
+        "merged_kinds": sorted(MERGED_KINDS),
         "accuracy_detected_faulty": float((pred[faulty_det] == y[faulty_det]).mean()) if faulty_det.any()
         else math.nan,
         "chance_balanced": 1.0 / len(set(y)),
+        "labels": labels,
+        "confusion": confusion(y, pred, labels),
+        "by_joint": _kind_by_joint(ds, models, detected),
+    }
+
+
+def _kind_by_joint(ds: Dataset, models: Models, detected: np.ndarray) -> dict[str, Any]:
+    """The fault-kind classifier by joint (:mod:`.joint_kind`): kind and joint of every test run."""
+    from sklearn.metrics import balanced_accuracy_score
+
+    if models.joint_kind is None:
+        return {}
+    y = ds.test["fault"].to_numpy(str)
+    pred, joint = joint_kind.predict(models.joint_kind, ds.test, ds.inputs)
+    labels = ["healthy"] + sorted((set(y) | set(pred)) - {"healthy"})
+    faulty_det = detected & (y != "healthy")
+    jm = joint_fault_rows(ds.test)
+    right_joint = joint == ds.test["fault_joint"].to_numpy(int)
+    return {
+        "accuracy": float((pred == y).mean()),
+        "balanced_accuracy": float(balanced_accuracy_score(y, pred)),
+        "balanced_accuracy_merged": float(balanced_accuracy_score(merge_kinds(y), merge_kinds(pred))),
+        "accuracy_detected_faulty": float((pred[faulty_det] == y[faulty_det]).mean()) if faulty_det.any()
+        else math.nan,
+        "joint_accuracy": float(right_joint[jm].mean()) if jm.any() else math.nan,
         "labels": labels,
         "confusion": confusion(y, pred, labels),
     }

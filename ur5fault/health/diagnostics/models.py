@@ -1,6 +1,6 @@
 """The baseline classifiers: one detector (healthy vs faulty), one localiser (which joint, among
-joint faults), one fault-kind classifier (healthy and every kind) - gradient-boosted trees on the
-benchmark inputs, trained on the train split only.
+joint faults), one fault-kind classifier (healthy and every kind) and the same by joint (:mod:`.joint_kind`)
+- gradient-boosted trees on the benchmark inputs, trained on the train split only.
 
 Gradient boosting (scikit-learn's ``HistGradientBoostingClassifier``) because the features differ
 in scale by orders of magnitude and interact with the operating conditions (a spike that means
@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 
+from . import joint_kind
 from .data import Dataset
 
 #: fixed hyper-parameters, not tuned on the test split: scikit-learn's defaults except a lower learning rate
@@ -67,6 +68,8 @@ class Models:
     shuffled_labels: bool
     #: the map from the detector's probability to a calibrated one (:mod:`.calibration`); None: not calibrated
     calibrator: Any = None
+    #: the fault-kind classifier by joint (:mod:`.joint_kind`); None: saved before it
+    joint_kind: Any = None
 
 
 def joint_fault_rows(df) -> np.ndarray:
@@ -96,4 +99,5 @@ def fit_models(ds: Dataset, seed: int = 0, shuffle_labels: bool = False) -> Mode
     jm = joint_fault_rows(tr)
     loc = _fit(x[jm], tr.loc[jm, "fault_joint"].to_numpy(int), seed, rng)
     kind = _fit(x, tr["fault"].to_numpy(str), seed, rng)
-    return Models(det, loc, kind, shuffle_labels)
+    by_joint = joint_kind.fit(tr, ds.inputs, seed, rng)
+    return Models(det, loc, kind, shuffle_labels, joint_kind=by_joint)

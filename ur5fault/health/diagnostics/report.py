@@ -41,6 +41,17 @@ def markdown(m: dict[str, Any]) -> str:
                          for b in v["by_size"])
         lines.append(f"| {k} | {v['n_test']} | {_f(v['auc'])} ({_f(v['auc_se'], '.3f')}) | "
                      f"{_f(v['detection_rate'], '.2f')} | {bins} |")
+    bj = m.get("detection_by_joint") or {}
+    if bj:
+        lines += [
+            "",
+            "The fault-kind classifier by joint as a detector (its probability of a fault on any joint, "
+            f"`joint_kind.py`): ROC AUC **{_f(bj['auc_all'])}**; at {bj['false_alarm_rate']:.0%} false alarms "
+            f"(measured {_f(bj['false_alarm_rate_measured'])}) it flags {_f(bj['detection_rate_all'])} of the faulty "
+            "test runs; per kind (AUC / upper half of its sizes): "
+            + "; ".join(f"{k} {_f(v['auc'], '.2f')} / {_f(v['auc_upper_half'], '.2f')}"
+                        for k, v in bj["per_kind"].items()) + ".",
+        ]
     lines += [
         "",
         "## Localisation (which joint) and fault kind",
@@ -56,9 +67,23 @@ def markdown(m: dict[str, Any]) -> str:
     lines += [
         "",
         f"Fault-kind accuracy ({len(kind.get('labels', []))} classes incl. healthy): **{_f(kind['accuracy'])}**, "
-        f"balanced {_f(kind.get('balanced_accuracy'))} (chance {_f(kind.get('chance_balanced'))}); on flagged "
+        f"balanced {_f(kind.get('balanced_accuracy'))} (chance {_f(kind.get('chance_balanced'))}), "
+        f"{_f(kind.get('balanced_accuracy_merged'))} with {' and '.join(kind.get('merged_kinds', []))} merged "
+        "(the same shape in every signal); on flagged "
         f"faulty runs {_f(kind.get('accuracy_detected_faulty'))}. Confusion matrices: `confusion.png`.",
         "",
+    ]
+    bj = kind.get("by_joint") or {}
+    if bj:
+        lines += [
+            "Fault kind by joint (one classifier shared by the joints, reading one joint's evidence at a time; "
+            f"`joint_kind.py`): accuracy **{_f(bj['accuracy'])}**, balanced {_f(bj['balanced_accuracy'])}, "
+            f"{_f(bj['balanced_accuracy_merged'])} with the pair merged; on flagged faulty runs "
+            f"{_f(bj['accuracy_detected_faulty'])}; its joint right on {_f(bj['joint_accuracy'])} of the single-joint "
+            "faults.",
+            "",
+        ]
+    lines += [
         "## Backlash: smallest alpha detected per joint",
         f"alpha_90: {bl['detection_probability']:.0%} of the runs with that backlash flagged at "
         f"{det['false_alarm_rate']:.0%} false alarms (logistic fit in log alpha, 90 % bootstrap interval; "
@@ -134,9 +159,21 @@ def comparison_lines(cmp: dict[str, Any]) -> list[str]:
     for k in kinds:
         row(f"AUC {k}", lambda r, k=k: r["auc_per_kind"][k])
         row(f"AUC {k}, upper half of its sizes", lambda r, k=k: r["auc_upper_half_per_kind"][k])
+    row("by joint: detection AUC, all faults", lambda r: r.get("auc_all_by_joint"))
+    row("by joint: flagged at 5 % false alarms", lambda r: r.get("detection_rate_all_by_joint"))
+    for k in kinds:
+        row(f"by joint: AUC {k}", lambda r, k=k: (r.get("auc_per_kind_by_joint") or {}).get(k))
+        row(f"by joint: AUC {k}, upper half of its sizes",
+            lambda r, k=k: (r.get("auc_upper_half_per_kind_by_joint") or {}).get(k))
     row("joint accuracy, all single-joint faults", lambda r: r["joint_accuracy"])
     row("joint accuracy, flagged runs", lambda r: r["joint_accuracy_flagged"])
     row("fault kind, balanced accuracy", lambda r: r["kind_balanced_accuracy"])
+    row("fault kind, balanced accuracy, gain and torque constant merged",
+        lambda r: r.get("kind_balanced_accuracy_merged"))
+    row("fault kind by joint, balanced accuracy", lambda r: r.get("kind_by_joint_balanced_accuracy"))
+    row("fault kind by joint, balanced accuracy, gain and torque constant merged",
+        lambda r: r.get("kind_by_joint_balanced_accuracy_merged"))
+    row("fault kind by joint, joint accuracy, all single-joint faults", lambda r: r.get("kind_by_joint_joint_accuracy"))
     for j in joints:
         row(f"backlash alpha_90 J{j} [deg]", lambda r, j=j: r["alpha_90_deg"][j], ".3g")
     return lines

@@ -2,7 +2,8 @@
 
 ``<out>/models/``:
 
-* ``classifiers.skops``: the detector, the localiser, the fault-kind classifier and the calibration map of
+* ``classifiers.skops``: the detector, the localiser, the fault-kind classifier, the fault-kind classifier by
+  joint (:mod:`.joint_kind`; absent from classifiers saved before it) and the calibration map of
   the detector's probability (:mod:`.calibration`; absent from classifiers saved before it: they still load,
   and ``ur5fault diagnose`` says that its p(fault) is not calibrated) - scikit-learn objects in skops' format:
   loading it runs no code from the file; :func:`load_models` refuses any type outside scikit-learn and numpy;
@@ -35,7 +36,9 @@ from .models import Models
 MODELS_DIR = "models"
 CLASSIFIERS_FILE = "classifiers.skops"
 SCHEMA_FILE = "schema.json"
-SCHEMA_FORMAT = 1
+#: 2: the twin features' current estimates are fitted with the payload CoM and latency held out and carry
+#: standard errors and t values (a format-1 detector with twin estimates among its inputs is refused)
+SCHEMA_FORMAT = 2
 #: module prefixes of the types a saved file may hold (anything else is refused on loading)
 TRUSTED_PREFIXES = ("sklearn.", "numpy.", "builtins.")
 
@@ -50,7 +53,7 @@ def training_hash(ds: Dataset) -> str:
 
 def save_models(models: Models, ds: Dataset, feature_set: str, threshold_score: float, out: Path,
                 window_s: float | None = None, log_period_s: float | None = None,
-                calibration: dict[str, Any] | None = None) -> Path:
+                calibration: dict[str, Any] | None = None, joint_kind_threshold: float | None = None) -> Path:
     """Write the classifiers and their schema into ``out/models``; return that folder (``window_s``,
     ``log_period_s``: the training runs' simulated duration and log period, from the campaign manifest;
     ``calibration``: how ``models.calibrator`` was fitted, recorded in the schema)."""
@@ -62,7 +65,8 @@ def save_models(models: Models, ds: Dataset, feature_set: str, threshold_score: 
 
     folder = Path(out) / MODELS_DIR
     folder.mkdir(parents=True, exist_ok=True)
-    objs = {"detector": models.detector, "localiser": models.localiser, "kind": models.kind}
+    objs = {"detector": models.detector, "localiser": models.localiser, "kind": models.kind,
+            "joint_kind": models.joint_kind}
     stored = {**objs, "calibrator": models.calibrator}
     write_bytes_atomic(folder / CLASSIFIERS_FILE, sio.dumps({k: v for k, v in stored.items() if v is not None}))
     units = column_units(ds.inputs)
@@ -73,6 +77,8 @@ def save_models(models: Models, ds: Dataset, feature_set: str, threshold_score: 
         "classes": {k: [v.item() if hasattr(v, "item") else v for v in m.classes_] for k, m in objs.items()
                     if m is not None},
         "detector_threshold_5pct_false_alarms": float(threshold_score),
+        # the same operating point of the kind classifier by joint's p(fault on any joint); None without it
+        "joint_kind_threshold_5pct_false_alarms": None if joint_kind_threshold is None else float(joint_kind_threshold),
         "n_train": len(ds.train),
         "training_set_sha256": training_hash(ds),
         "shuffled_labels": models.shuffled_labels,
@@ -110,11 +116,18 @@ def load_models(folder: str | Path) -> tuple[Models, dict[str, Any]]:
                               "not loaded")
     objs = sio.loads(data, trusted=sio.get_untrusted_types(data=data))
     schema = json.loads(schema_path.read_text())
+    fmt = schema.get("schema_format", 1)
+    if fmt < 2 and any(c["name"].startswith("twin_est_") for c in schema.get("inputs", [])):
+        raise ConfigFileError(f"{folder}: saved with schema format {fmt}, whose twin size estimates were fitted "
+                              "without the payload CoM and latency held out; run `ur5fault benchmark` again")
+    if fmt > SCHEMA_FORMAT:
+        raise ConfigFileError(f"{folder}: schema format {fmt} is newer than this version reads ({SCHEMA_FORMAT}); "
+                              "update ur5fault")
     if (objs.get("calibrator") is None) != (schema.get("calibration") is None):
         raise ConfigFileError(f"{folder}: {CLASSIFIERS_FILE} and {SCHEMA_FILE} disagree on the calibration of "
                               "p(fault); the folder is mixed from two runs: run `ur5fault benchmark` again")
     return Models(objs.get("detector"), objs.get("localiser"), objs.get("kind"),
-                  bool(schema.get("shuffled_labels")), objs.get("calibrator")), schema
+                  bool(schema.get("shuffled_labels")), objs.get("calibrator"), objs.get("joint_kind")), schema
 
 
 def check_inputs(features: pd.DataFrame, schema: dict[str, Any], where: str) -> list[str]:
