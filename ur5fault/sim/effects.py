@@ -16,9 +16,8 @@ import math
 from collections.abc import Iterable
 from typing import Any
 
-import numpy as np
-
 from ..errors import ParameterError, UnknownNameError
+from . import effect_appliers as ap
 from .axes import JOINT_NAMES, joint_index
 from .interfaces import EffectApplier
 
@@ -182,92 +181,6 @@ def make_effect(name: str, joint: int | str | None = None, where: str = "", **va
 
 
 # ----------------------------------------------------------------------------- appliers
-def _set(field: str, key: str, scale: float = 1.0):
-    def apply(a, row, j, v):
-        getattr(a, field)[row, j] = v[key] * scale
-
-    return apply
-
-
-def _mul(field: str, key: str):
-    def apply(a, row, j, v):
-        getattr(a, field)[row, j] *= v[key]
-
-    return apply
-
-
-def _add(field: str, key: str, scale: float = 1.0):
-    def apply(a, row, j, v):
-        getattr(a, field)[row, j] += v[key] * scale
-
-    return apply
-
-
-def _both(*fns):
-    def apply(a, row, j, v):
-        for f in fns:
-            f(a, row, j, v)
-
-    return apply
-
-
-def _temperature(a, row, j, v):
-    a.temperature_C[row, :] = v["temperature_C"]
-
-
-def _payload(a, row, j, v):
-    a.payload_kg[row] = v["mass_kg"]
-
-
-def _delay(a, row, j, v):
-    a.setpoint_delay_s[row] = v["delay_ms"] * 1e-3
-
-
-def _payload_com(a, row, j, v):
-    a.payload_com_m[row, :] = (v["dx_m"], v["dy_m"], v["dz_m"])
-
-
-DEG = math.pi / 180.0
-
-
-def _harmonic(field: str):
-    """Store a harmonic term in the joint's slot of the same period (added) or the first free one."""
-
-    def apply(a, row, j, v):
-        amp, per = getattr(a, f"{field}_Nm"), getattr(a, f"{field}_per_rev")
-        k = v["periods_per_rev"]
-        if v["sin_Nm"] == 0.0 and v["cos_Nm"] == 0.0:
-            return
-        slots = [i for i in range(per.shape[-1]) if per[row, j, i] == k or not np.any(amp[row, j, i])]
-        if not slots:
-            raise ParameterError(f"{field.removeprefix('term_')}: at most {per.shape[-1]} periods per joint "
-                                 f"in one run ({JOINT_NAMES[j]})")
-        i = slots[0]
-        per[row, j, i] = k
-        amp[row, j, i] += (v["sin_Nm"], v["cos_Nm"])
-
-    return apply
-
-
-def _motor_harmonic(a, row, j, v):
-    """Add to the joint's motor-angle harmonic of the same period, or set it if the joint has none; one period per
-    joint and run (a second one is refused rather than silently merged)."""
-    k = v["periods_per_rev"]
-    amp = a.motor_harmonic_Nm[row, j]
-    if v["sin_Nm"] == 0.0 and v["cos_Nm"] == 0.0:
-        return
-    if np.any(amp != 0.0) and a.motor_harmonic_per_rev[row, j] != k:
-        raise ParameterError(f"motor_harmonic: one period per joint in one run ({JOINT_NAMES[j]} already has "
-                             f"{a.motor_harmonic_per_rev[row, j]:g} per turn, not {k:g})")
-    a.motor_harmonic_per_rev[row, j] = k
-    amp += (v["sin_Nm"], v["cos_Nm"])
-
-
-def _link_mass(a, row, j, v):
-    a.link_mass_kg[row, j] += v["mass_kg"]
-    a.link_com_shift_m[row, j] += (v["com_dx_m"], v["com_dy_m"], v["com_dz_m"])
-
-
 def _harmonic_params(angle: str) -> tuple[EffectParam, ...]:
     return (EffectParam("sin_Nm", "N*m", -50.0, 50.0, 0.0, f"link torque amplitude of sin(k {angle})"),
             EffectParam("cos_Nm", "N*m", -50.0, 50.0, 0.0, f"link torque amplitude of cos(k {angle})"),
@@ -276,51 +189,54 @@ def _harmonic_params(angle: str) -> tuple[EffectParam, ...]:
 
 _TERM_EFFECTS = [
     Effect("torque_joint_harmonic", "link torque periodic in the joint angle (eccentric or worn gear; data-driven)",
-           _harmonic_params("joint angle"), True, _harmonic("term_joint_harmonic")),
+           _harmonic_params("joint angle"), True, ap.harmonic("term_joint_harmonic")),
     Effect("torque_coulomb", "Coulomb-like load torque tanh(w / width) (data-driven)",
            (EffectParam("torque_Nm", "N*m", -30.0, 30.0, 0.0, "level at speed"),
             EffectParam("width_rad_s", "rad/s", 1e-3, 1.0, 0.01, "speed of the smooth sign")),
-           True, _both(_add("term_coulomb_Nm", "torque_Nm"), _set("term_coulomb_width_rad_s", "width_rad_s"))),
+           True, ap.both(ap.add("term_coulomb_Nm", "torque_Nm"),
+                         ap.set_value("term_coulomb_width_rad_s", "width_rad_s"))),
     Effect("torque_stribeck", "Stribeck-like load torque at low speed, fading above v_s (data-driven)",
            (EffectParam("torque_Nm", "N*m", -30.0, 30.0, 0.0, "level at low speed"),
             EffectParam("speed_rad_s", "rad/s", 1e-3, 2.0, 0.05, "Stribeck speed v_s")),
-           True, _both(_add("term_stribeck_Nm", "torque_Nm"), _set("term_stribeck_speed_rad_s", "speed_rad_s"))),
+           True, ap.both(ap.add("term_stribeck_Nm", "torque_Nm"),
+                         ap.set_value("term_stribeck_speed_rad_s", "speed_rad_s"))),
     Effect("torque_viscous", "viscous load torque c w (data-driven)",
            (EffectParam("coeff_Nms_per_rad", "N*m*s/rad", -100.0, 100.0, 0.0, "c"),),
-           True, _add("term_viscous_Nms_per_rad", "coeff_Nms_per_rad")),
+           True, ap.add("term_viscous_Nms_per_rad", "coeff_Nms_per_rad")),
     Effect("torque_quadratic", "speed-squared load torque c w|w| (seal or fluid drag; data-driven)",
            (EffectParam("coeff_Nms2_per_rad2", "N*m*s^2/rad^2", -500.0, 500.0, 0.0, "c"),),
-           True, _add("term_quadratic_Nms2_per_rad2", "coeff_Nms2_per_rad2")),
+           True, ap.add("term_quadratic_Nms2_per_rad2", "coeff_Nms2_per_rad2")),
     Effect("torque_gravity_scale", "load torque proportional to the model's own gravity torque on the joint "
            "(gravity-model error; data-driven)",
            (EffectParam("scale", "-", -1.0, 1.0, 0.0, "share of the joint's gravity torque added"),),
-           True, _add("term_gravity_scale", "scale")),
+           True, ap.add("term_gravity_scale", "scale")),
     Effect("torque_holding", "torque held at rest in the direction of the last motion (friction that stays "
            "loaded when the joint stops; data-driven)",
            (EffectParam("torque_Nm", "N*m", -30.0, 30.0, 0.0, "level at rest"),
             EffectParam("speed_rad_s", "rad/s", 1e-3, 1.0, 0.02, "speed below which the joint is at rest")),
-           True, _both(_add("term_holding_Nm", "torque_Nm"), _set("term_holding_speed_rad_s", "speed_rad_s"))),
+           True, ap.both(ap.add("term_holding_Nm", "torque_Nm"),
+                         ap.set_value("term_holding_speed_rad_s", "speed_rad_s"))),
     Effect("inertia", "added rotational inertia on the joint (armature; missing inertia; data-driven)",
            (EffectParam("inertia_kgm2", "kg*m^2", 0.0, 10.0, 0.0, "added to the joint's inertia"),),
-           True, _add("armature_kgm2", "inertia_kgm2")),
+           True, ap.add("armature_kgm2", "inertia_kgm2")),
     Effect("link_mass", "mass and centre-of-mass error of the link the joint moves (data-driven)",
            (EffectParam("mass_kg", "kg", -10.0, 30.0, 0.0, "added at the link's centre of mass"),
             *(EffectParam(f"com_{k}_m", "m", -0.5, 0.5, 0.0, f"centre-of-mass shift along the link's {k[1]} axis")
               for k in ("dx", "dy", "dz"))),
-           True, _link_mass),
+           True, ap.link_mass),
     Effect("current_temperature_drift", "current-reading drift with joint temperature (sensor or thermal drift; "
            "data-driven)",
            (EffectParam("coeff_A_per_K", "A/K", -1.0, 1.0, 0.0, "c in c (T - T_ref)"),
             EffectParam("reference_C", "degC", -10.0, 90.0, 28.0, "T_ref")),
-           True, _both(_add("current_temp_drift_A_per_K", "coeff_A_per_K"),
-                       _set("current_temp_reference_C", "reference_C"))),
+           True, ap.both(ap.add("current_temp_drift_A_per_K", "coeff_A_per_K"),
+                       ap.set_value("current_temp_reference_C", "reference_C"))),
     Effect("current_time_shift", "logged current reading shifted in time (timestamp skew; data-driven)",
            (EffectParam("shift_ms", "ms", -50.0, 50.0, 0.0, "reading(t) = current(t - shift)"),),
-           True, _add("current_time_shift_s", "shift_ms", 1e-3)),
+           True, ap.add("current_time_shift_s", "shift_ms", 1e-3)),
     Effect("position_time_shift", "logged joint-position reading shifted in time (timestamp skew or lag; "
            "data-driven)",
            (EffectParam("shift_ms", "ms", -50.0, 50.0, 0.0, "reading(t) = position(t - shift)"),),
-           True, _add("position_time_shift_s", "shift_ms", 1e-3)),
+           True, ap.add("position_time_shift_s", "shift_ms", 1e-3)),
 ]
 
 REGISTRY: dict[str, Effect] = {
@@ -331,91 +247,91 @@ REGISTRY: dict[str, Effect] = {
             "gear backlash (clearance alpha of eq. (1))",
             (EffectParam("backlash_deg", "deg", 0.0, 5.0, 0.0, "clearance alpha"),),
             True,
-            _set("backlash_rad", "backlash_deg", DEG),
+            ap.set_value("backlash_rad", "backlash_deg", ap.DEG),
         ),
         Effect(
             "temperature",
             "joint temperature (viscous friction falls as the lubricant warms)",
             (EffectParam("temperature_C", "degC", -10.0, 90.0, 28.0, "all joints"),),
             False,
-            _temperature,
+            ap.temperature,
         ),
         Effect(
             "payload",
             "mass gripped during the pick-and-place",
             (EffectParam("mass_kg", "kg", 0.0, 5.0, None, "mass while gripped"),),
             False,
-            _payload,
+            ap.payload,
         ),
         Effect(
             "payload_com",
             "payload centre-of-mass offset from the TCP",
             tuple(EffectParam(k, "m", -0.3, 0.3, 0.0, "in the flange frame") for k in ("dx_m", "dy_m", "dz_m")),
             False,
-            _payload_com,
+            ap.payload_com,
         ),
         Effect(
             "coulomb_friction",
             "Coulomb and static friction scaled (wear, lubricant loss)",
             (EffectParam("scale", "-", 0.0, 10.0, 1.0, "factor on T_f,c and T_f,s"),),
             True,
-            _both(_mul("friction_coulomb_Nm", "scale"), _mul("friction_static_Nm", "scale")),
+            ap.both(ap.multiply("friction_coulomb_Nm", "scale"), ap.multiply("friction_static_Nm", "scale")),
         ),
         Effect(
             "viscous_friction",
             "viscous friction scaled at every temperature",
             (EffectParam("scale", "-", 0.0, 10.0, 1.0, "factor on f_v"),),
             True,
-            _mul("friction_viscous_Nms_per_rad", "scale"),
+            ap.multiply("friction_viscous_Nms_per_rad", "scale"),
         ),
         Effect(
             "viscous_temperature",
             "temperature sensitivity of viscous friction",
             (EffectParam("coeff_per_K", "1/K", 0.0, 0.2, None, "beta in f_v(T)"),),
             True,
-            _set("friction_temp_coeff_per_K", "coeff_per_K"),
+            ap.set_value("friction_temp_coeff_per_K", "coeff_per_K"),
         ),
         Effect(
             "gear_stiffness",
             "gear torsional stiffness scaled (cracked or worn flexspline)",
             (EffectParam("scale", "-", 0.01, 10.0, 1.0, "factor on k"),),
             True,
-            _mul("gear_stiffness_Nm_per_rad", "scale"),
+            ap.multiply("gear_stiffness_Nm_per_rad", "scale"),
         ),
         Effect(
             "torque_constant",
             "motor torque constant scaled (demagnetisation); the controller is not retuned",
             (EffectParam("scale", "-", 0.2, 2.0, 1.0, "factor on K_t and K_e"),),
             True,
-            _both(_mul("motor_kt_Nm_per_A", "scale"), _mul("motor_ke_V_s_per_rad", "scale")),
+            ap.both(ap.multiply("motor_kt_Nm_per_A", "scale"), ap.multiply("motor_ke_V_s_per_rad", "scale")),
         ),
         Effect(
             "resolver_offset",
             "joint-side encoder (resolver) zero offset",
             (EffectParam("offset_deg", "deg", -5.0, 5.0, 0.0, "added to the reading"),),
             True,
-            _add("resolver_offset_rad", "offset_deg", DEG),
+            ap.add("resolver_offset_rad", "offset_deg", ap.DEG),
         ),
         Effect(
             "current_sensor_gain",
             "current-sensor gain error",
             (EffectParam("gain", "-", 0.5, 2.0, 1.0, "factor on the reading"),),
             True,
-            _mul("current_gain", "gain"),
+            ap.multiply("current_gain", "gain"),
         ),
         Effect(
             "current_sensor_offset",
             "current-sensor offset",
             (EffectParam("offset_A", "A", -2.0, 2.0, 0.0, "added to the reading"),),
             True,
-            _add("current_offset_A", "offset_A"),
+            ap.add("current_offset_A", "offset_A"),
         ),
         Effect(
             "delay",
             "time delay between the logged setpoints and their execution (communication latency)",
             (EffectParam("delay_ms", "ms", 0.0, 50.0, 0.0, "in whole servo periods (0.1 ms)"),),
             False,
-            _delay,
+            ap.delay,
         ),
         Effect(
             "cogging",
@@ -425,7 +341,8 @@ REGISTRY: dict[str, Effect] = {
                 EffectParam("periods_per_rev", "1/rev", 1.0, 200.0, 6.0, "ripple periods per motor turn"),
             ),
             True,
-            _both(_set("cogging_Nm", "amplitude_Nm"), _set("cogging_periods_per_rev", "periods_per_rev")),
+            ap.both(ap.set_value("cogging_Nm", "amplitude_Nm"),
+                    ap.set_value("cogging_periods_per_rev", "periods_per_rev")),
         ),
         Effect(
             "motor_harmonic",
@@ -437,28 +354,28 @@ REGISTRY: dict[str, Effect] = {
                 EffectParam("periods_per_rev", "1/rev", 1.0, 200.0, 1.0, "k: periods per motor turn"),
             ),
             True,
-            _motor_harmonic,
+            ap.motor_harmonic,
         ),
         Effect(
             "breakaway_friction",
             "breakaway (static) friction scaled, Coulomb friction unchanged (stick-slip, lubricant loss at rest)",
             (EffectParam("scale", "-", 0.0, 10.0, 1.0, "factor on T_f,s"),),
             True,
-            _mul("friction_static_Nm", "scale"),
+            ap.multiply("friction_static_Nm", "scale"),
         ),
         Effect(
             "presliding_stiffness",
             "LuGre presliding (bristle) stiffness scaled: how far a stuck joint yields before it slides",
             (EffectParam("scale", "-", 0.01, 100.0, 1.0, "factor on sigma0"),),
             True,
-            _mul("friction_presliding_stiffness_Nm_per_rad", "scale"),
+            ap.multiply("friction_presliding_stiffness_Nm_per_rad", "scale"),
         ),
         Effect(
             "friction_share",
             "share of the joint friction acting on the motor side of the gear clearance (the rest on the link)",
             (EffectParam("motor_side_share", "-", 0.0, 1.0, None, "0: all on the link, 1: all on the rotor"),),
             True,
-            _set("friction_motor_side_share", "motor_side_share"),
+            ap.set_value("friction_motor_side_share", "motor_side_share"),
         ),
         # ---- data-driven terms (ur5fault/sim/terms.py): what the discrepancy workflow discovers outside the
         # entries above; the engine's term hook evaluates them (link torques, model terms, sensor terms)
