@@ -3,10 +3,11 @@
 from __future__ import annotations
 
 import os
+import time
 
 import pytest
 
-from ur5fault.util.parallel import map_tasks, own_share
+from ur5fault.util.parallel import iter_tasks, map_tasks, own_share
 
 
 def _task(k: int) -> tuple[int, int]:
@@ -46,3 +47,18 @@ def test_a_failing_task_raises_here():
     with pytest.raises(ValueError, match="task 1 fails"):  # a worker's task
         map_tasks(_fails, [(k,) for k in range(4)], jobs=2)
     assert map_tasks(_task, [(k,) for k in range(2)], jobs=2)[1][0] == 1  # the next call starts a new worker
+
+
+def _slow_here(k: int, pid: int) -> int:
+    if os.getpid() == pid:  # this process's share: slow enough for the worker to finish its task meanwhile
+        time.sleep(1.0)
+    return k
+
+
+def test_a_workers_result_comes_out_before_this_process_finishes_its_own_share():
+    # a caller that writes each result as it comes (a campaign) must not hold the workers' finished tasks
+    # until this process's share is done: a kill in between would lose them
+    tasks = [(k, os.getpid()) for k in range(4)]
+    order = [i for i, _ in iter_tasks(_slow_here, tasks, jobs=2, cost=[1, 1, 1, 1])]
+    assert sorted(order) == [0, 1, 2, 3]
+    assert order.index(0) < order.index(3)  # task 0 (worker) before this process's last task (3)

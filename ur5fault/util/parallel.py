@@ -48,7 +48,9 @@ def iter_tasks(fn: Callable[..., Any], tasks: Sequence[tuple], jobs: int, cost: 
     try:
         for i in range(k, len(tasks)):
             yield i, fn(*tasks[i])
-        for f in as_completed(futures):
+            for f in [f for f in futures if f.done()]:  # the workers' finished tasks now, not after this
+                yield futures.pop(f), f.result()          # process's whole share: a caller writing as it
+        for f in as_completed(futures):                   # goes keeps them if it is killed meanwhile
             yield futures[f], f.result()
         done = True
     finally:
