@@ -5,6 +5,7 @@ from __future__ import annotations
 import os
 import time
 
+import joblib
 import pytest
 
 from ur5fault.util.parallel import iter_tasks, map_tasks, own_share
@@ -62,3 +63,13 @@ def test_a_workers_result_comes_out_before_this_process_finishes_its_own_share()
     order = [i for i, _ in iter_tasks(_slow_here, tasks, jobs=2, cost=[1, 1, 1, 1])]
     assert sorted(order) == [0, 1, 2, 3]
     assert order.index(0) < order.index(3)  # task 0 (worker) before this process's last task (3)
+
+
+def test_joblib_parallel_after_the_tasks_in_the_same_process():
+    # both use loky's one process-wide executor: a joblib.Parallel after iter_tasks (a life campaign after a
+    # campaign in one session) failed on the executor iter_tasks had made without joblib's factory
+    assert [v for v, _ in map_tasks(_task, [(k,) for k in range(4)], jobs=2)] == [0, 1, 4, 9]
+    with joblib.parallel_backend("loky"):
+        out = joblib.Parallel(n_jobs=2)(joblib.delayed(_task)(k) for k in range(4))
+    assert [v for v, _ in out] == [0, 1, 4, 9]
+    assert [v for v, _ in map_tasks(_task, [(k,) for k in range(4)], jobs=2)] == [0, 1, 4, 9]  # and back

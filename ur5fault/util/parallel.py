@@ -39,10 +39,13 @@ def iter_tasks(fn: Callable[..., Any], tasks: Sequence[tuple], jobs: int, cost: 
         return
     from concurrent.futures import as_completed
 
-    from joblib.externals.loky import get_reusable_executor
+    from joblib.executor import get_memmapping_executor
 
     k = own_share([1.0] * len(tasks) if cost is None else [float(c) for c in cost], jobs)
-    executor = get_reusable_executor(max_workers=jobs - 1)
+    # joblib's own reusable executor, not loky's bare one: both are loky's one process-wide executor, and a
+    # ``joblib.Parallel`` called later in this process (a life campaign after a campaign) reuses it and needs the
+    # temporary-folder manager only joblib's factory gives it
+    executor = get_memmapping_executor(jobs - 1)
     futures = {executor.submit(fn, *t): i for i, t in enumerate(tasks[:k])}
     done = False
     try:
