@@ -3,7 +3,7 @@ the measured current of the NIST log and of Kufieta runs (``tests/real_hidden.py
 time on different joints; each log and its clean original fitted once.  Prints a Markdown table per case and
 the detection rate, size error and extra-finding rate per effect kind.  Usage::
 
-    .venv/bin/python bench/discrepancy_real_hidden.py [--jobs N] [--cases 0,2,5] [--baseline] > table.md
+    .venv/bin/python bench/discrepancy_real_hidden.py [--jobs N] [--cases 0,2,5] [--baseline 2,4|all] > table.md
 
 (``--cases``: indices into :data:`CASES`, to measure a few cases before the whole table.)
 
@@ -12,11 +12,11 @@ injected kind on the injected joint, and its estimate, less the clean log's own 
 (0 when the clean log has none), is within 25 % of the injected size.  An *extra finding* is a kept finding
 on another effect or joint that the clean log's fit does not have.
 
-``--baseline``: the engineer's way of asking what changed since the robot was healthy.  Each injected log is
-fitted *from the clean log's fitted model* (its kept findings as the starting model, what
-``ur5fault discrepancy --model`` does with the clean fit's model.yaml), so a finding is itself the change
-against the healthy robot: its estimate is compared with the injected size as it is, and every kept finding
-that is not the injected effect is an extra one.
+``--baseline CASES``: those cases are also fitted the engineer's way of asking what changed since the robot
+was healthy, and scored in a second table.  Each injected log is fitted *from the clean log's fitted model* (its
+kept findings as the starting model, what ``ur5fault discrepancy --model`` does with the clean fit's
+model.yaml), so a finding is itself the change against the healthy robot: its estimate is compared with the
+injected size as it is, and every kept finding that is not the injected effect is an extra one.
 """
 
 from __future__ import annotations
@@ -113,16 +113,20 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--jobs", type=int, default=JOBS, help=f"worker processes per fit (default {JOBS})")
     ap.add_argument("--cases", default=None, help="comma-separated indices into CASES (default: all)")
-    ap.add_argument("--baseline", action="store_true",
-                    help="fit each injected log from the clean log's fitted model (the change against it)")
+    ap.add_argument("--baseline", default=None, metavar="CASES",
+                    help="comma-separated indices into CASES (or 'all') also fitted from the clean log's fitted "
+                         "model (the change against it), scored in a second table; the clean fits are shared")
     args = ap.parse_args()
     jobs = args.jobs
-    cases = CASES if args.cases is None else [CASES[int(i)] for i in args.cases.split(",")]
+    chosen = range(len(CASES)) if args.cases is None else [int(i) for i in args.cases.split(",")]
+    from_clean = (set() if args.baseline is None else set(range(len(CASES))) if args.baseline == "all"
+                  else {int(i) for i in args.baseline.split(",")})
     clean: dict[str, DiscrepancyModel] = {}
-    rows, per_kind = [], {}
+    results = {False: ([], {}), True: ([], {})}
     print("| log | injected | named as | estimate - clean | truth | error | extra findings | unexplained | wall |")
     print("| --- | --- | --- | --- | --- | --- | --- | --- | --- |")
-    for name, effects in cases:
+    for ci in chosen:
+        name, effects = CASES[ci]
         base = read(name)
         if name not in clean:
             t = time.perf_counter()
@@ -134,49 +138,61 @@ def main() -> None:
             if kind == "local_friction" and "centre_deg" not in v:
                 v["centre_deg"] = busy_angle_deg(base, j)
             log = inject(log, kind, j, **v)
-        t = time.perf_counter()
-        start = baseline_of(clean[name]) if args.baseline else ()
-        m = DiscrepancyModel(jobs=jobs).fit(log, base_effects=start)
-        wall = time.perf_counter() - t
-        injected = {(NAMED_AS[k][0], j) for k, j, _ in effects if k in NAMED_AS}
-        before = set() if args.baseline else kept_keys(clean[name])
-        extra = kept_keys(m) - before - injected - {("torque_constant", j) for _, j in injected}
-        for kind, j, v in effects:
-            jn = JOINT_NAMES[j]
-            if kind == "local_friction":
-                hits = [u for u in m.unexplained_ if u["joint"] == jn and u["signal"] == "current_A"
-                        and u.get("angle_region")]
-                reg = hits[0]["angle_region"] if hits else None
-                ok = reg is not None and reg["from_deg"] <= v["centre_deg"] <= reg["to_deg"]
-                where = f"unexplained {reg['from_deg']:g}..{reg['to_deg']:g} deg" if reg else "-"
-                print(f"| {name} | {kind} {jn} {v['amplitude_A']} A at {v['centre_deg']:.0f} deg | {where} | | | "
-                      f"{'found' if ok else 'missed'} | {len(extra)} | {len(m.unexplained_)} | {wall:.0f} s |",
-                      flush=True)
-                per_kind.setdefault(kind, []).append((ok, float("nan"), bool(extra)))
-                continue
-            effect, par, to_size = NAMED_AS[kind]
-            truth = to_size(v[par])
-            est, alt = named_change(m, None if args.baseline else clean[name], effect, j)
-            err = float("nan") if est is None else (est - truth) / truth
-            ok = est is not None and abs(err) <= 0.25
-            how = ("alternative" if alt else "named") if est is not None else "not named"
-            shown = "-" if est is None else f"{est:.4g}"
-            extras = ", ".join(f"{e} {'robot' if k is None else JOINT_NAMES[k]}" for e, k in sorted(extra, key=str))
-            print(f"| {name} | {kind} {jn} {v[par]:g} | {how} | {shown} | {truth:.4g} | {100 * err:+.0f} % | "
-                  f"{extras or 0} | {len(m.unexplained_)} | {wall:.0f} s |", flush=True)
-            per_kind.setdefault(kind, []).append((ok, err, bool(extra)))
-        rows.append((name, effects, m, extra))
-    print("\n| effect kind | cases | named, joint and size within 25 % | median abs size error | cases with an extra "
+        for baseline in (False, True) if ci in from_clean else (False,):
+            score(name, effects, log, clean[name], baseline, jobs, *results[baseline])
+    for baseline, (rows, per_kind) in results.items():
+        if rows:
+            summarise(rows, per_kind, "fitted from the clean log's model" if baseline else "each log on its own")
+
+
+def score(name: str, effects, log, clean, baseline: bool, jobs: int, rows: list, per_kind: dict) -> None:
+    """Fit one injected log (from the clean fit's model when ``baseline``) and print its rows."""
+    t = time.perf_counter()
+    m = DiscrepancyModel(jobs=jobs).fit(log, base_effects=baseline_of(clean) if baseline else ())
+    wall = time.perf_counter() - t
+    label = f"{name} (from clean fit)" if baseline else name
+    injected = {(NAMED_AS[k][0], j) for k, j, _ in effects if k in NAMED_AS}
+    before = set() if baseline else kept_keys(clean)
+    extra = kept_keys(m) - before - injected - {("torque_constant", j) for _, j in injected}
+    for kind, j, v in effects:
+        jn = JOINT_NAMES[j]
+        if kind == "local_friction":
+            hits = [u for u in m.unexplained_ if u["joint"] == jn and u["signal"] == "current_A"
+                    and u.get("angle_region")]
+            reg = hits[0]["angle_region"] if hits else None
+            ok = reg is not None and reg["from_deg"] <= v["centre_deg"] <= reg["to_deg"]
+            where = f"unexplained {reg['from_deg']:g}..{reg['to_deg']:g} deg" if reg else "-"
+            print(f"| {label} | {kind} {jn} {v['amplitude_A']} A at {v['centre_deg']:.0f} deg | {where} | | | "
+                  f"{'found' if ok else 'missed'} | {len(extra)} | {len(m.unexplained_)} | {wall:.0f} s |",
+                  flush=True)
+            per_kind.setdefault(kind, []).append((ok, float("nan"), bool(extra)))
+            continue
+        effect, par, to_size = NAMED_AS[kind]
+        truth = to_size(v[par])
+        est, alt = named_change(m, None if baseline else clean, effect, j)
+        err = float("nan") if est is None else (est - truth) / truth
+        ok = est is not None and abs(err) <= 0.25
+        how = ("alternative" if alt else "named") if est is not None else "not named"
+        shown = "-" if est is None else f"{est:.4g}"
+        extras = ", ".join(f"{e} {'robot' if k is None else JOINT_NAMES[k]}" for e, k in sorted(extra, key=str))
+        print(f"| {label} | {kind} {jn} {v[par]:g} | {how} | {shown} | {truth:.4g} | {100 * err:+.0f} % | "
+              f"{extras or 0} | {len(m.unexplained_)} | {wall:.0f} s |", flush=True)
+        per_kind.setdefault(kind, []).append((ok, err, bool(extra)))
+    rows.append((name, effects, m, extra))
+
+
+def summarise(rows: list, per_kind: dict, how: str) -> None:
+    print(f"\n{how}:\n")
+    print("| effect kind | cases | named, joint and size within 25 % | median abs size error | cases with an extra "
           "finding |")
     print("| --- | --- | --- | --- | --- |")
     for kind, res in sorted(per_kind.items()):
         errs = [abs(e) for _, e, _ in res if np.isfinite(e)]
         print(f"| {kind} | {len(res)} | {sum(r[0] for r in res)} | "
               f"{'-' if not errs else f'{100 * float(np.median(errs)):.0f} %'} | {sum(r[2] for r in res)} |")
-    n_cases = len(rows)
     print(f"\nall effects: {sum(r[0] for res in per_kind.values() for r in res)} of "
           f"{sum(len(res) for res in per_kind.values())} named; cases with an extra finding: "
-          f"{sum(bool(r[3]) for r in rows)} of {n_cases}")
+          f"{sum(bool(r[3]) for r in rows)} of {len(rows)}")
 
 
 if __name__ == "__main__":
