@@ -7,9 +7,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ur5fault.discrepancy.candidates import LibraryCandidate, TermCandidate
+from ur5fault.discrepancy.candidates import LibraryCandidate
 from ur5fault.discrepancy.judging import Finding
-from ur5fault.discrepancy.rescreen import dropped_before_refinement, freed_joints, select_on_freed
+from ur5fault.discrepancy.rescreen import freed_joints, select_on_freed
 from ur5fault.discrepancy.search import columns_of
 
 N = 4000
@@ -65,32 +65,3 @@ def test_a_dropped_effect_is_not_offered_again():
     chosen, trace = select_on_freed(X, e, cands, columns_of(cands), findings, max_effects=1)
     assert all(k != 0 for k, _ in chosen)
     assert all(v.label != cands[0].label for v in trace)
-
-
-def test_a_library_effect_dropped_before_refinement_frees_its_joint():
-    """The screening chose a viscous scale on joint 0, which the linear joint check dropped beside a dictionary
-    term there (it never entered refinement); the joint's library place is unused, and its residual holds the
-    Coulomb shape, which the screening's budget of one never reached."""
-    cands, X, e = _problem()
-    viscous = LibraryCandidate("viscous_friction", 0, param="scale", x0=1.0, probe=1.5)
-    refined = [cands[2]]
-    findings = [_finding(cands[2], kept=True)]
-    # before: only findings judged after refinement free a joint
-    assert freed_joints(findings, 1) == []
-    early = dropped_before_refinement([viscous, cands[2]], refined)
-    assert [(f.candidate, f.kept) for f in early] == [(viscous, False)]
-    assert freed_joints(findings + early, 1) == [0]
-    chosen, trace = select_on_freed(X, e, cands, columns_of(cands), findings + early, max_effects=1)
-    assert [k for k, _ in chosen] == [0]
-    assert chosen[0][1][0] == pytest.approx(0.8, rel=0.05)
-    # the dropped effect itself is not offered again
-    assert all(v.label != viscous.label for v in trace)
-
-
-def test_only_library_effects_left_out_of_refinement_count_as_dropped_before_it():
-    cands, _, _ = _problem()
-    term = TermCandidate("torque_coulomb", 0, family="coulomb", keys=("torque_Nm",))
-    # a term the joint check dropped takes no place of the library's budget, and effects that entered refinement
-    # are judged there
-    assert dropped_before_refinement([cands[0], term, cands[2]], [cands[0], cands[2]]) == []
-    assert [f.candidate for f in dropped_before_refinement([cands[0], term, cands[2]], [term])] == [cands[0], cands[2]]

@@ -31,7 +31,7 @@ from . import steps
 from .judging import Finding, SearchStep, final_verdicts
 from .multilog import MultiReplay, per_log
 from .refinement import FindingSet, Refined, polish
-from .rescreen import dropped_before_refinement, rescreen
+from .rescreen import rescreen
 from .search import columns_of
 
 logger = logging.getLogger(__name__)
@@ -165,9 +165,7 @@ class DiscrepancyModel:
         kept = [f for f in jr.findings if f.kept]
         after = self._polish(rp, kept, ref.first, ref.finding_set, prog, drift) if kept else ref.nominal
         # a finding dropped on the held-out part or at the final check gives its joint's place back
-        # ... and so does a library effect dropped before refinement (by the linear joint check)
-        early = dropped_before_refinement([*lib.chosen, *disc.library], ref.found)
-        again = rescreen(rp, lib.X, lib.drift, lib.candidates, jr.findings + early, after, n_scr, n_fit, drift,
+        again = rescreen(rp, lib.X, lib.drift, lib.candidates, jr.findings, after, n_scr, n_fit, drift,
                          self.max_effects, prog)
         jr.findings.extend(again.findings)
         self.search_ += again.trace

@@ -13,13 +13,6 @@ against the residual of the final model; each one chosen is simulated once over 
 findings (its secant is the column), sized on the whole fitting part beside the drift, judged there with the
 same tests as every finding and on the held-out part, and, when it passes, the model is simulated once more
 at the judged sizes.
-
-The same holds for a library effect dropped *before* refinement, by the linear joint check beside a dictionary
-term on its joint (:func:`dropped_before_refinement`): the term is no library effect, so the joint's place in the
-library's budget is unused, and the library effects the screening did not reach there (it stops at the budget)
-never had their judgement.  On the Kufieta run Movement_No1 with shoulder_lift's current reading offset by
-+0.1 A, the screening's torque constant on shoulder_lift was dropped there beside a current time shift, and the
-joint's current residual (an offset of -0.53 A judged alone) was left to no library effect.
 """
 
 from __future__ import annotations
@@ -62,18 +55,6 @@ def freed_joints(findings: Sequence[Finding], max_effects: int) -> list[int | No
         n_kept = sum(1 for g in findings if g.kept and g.candidate.source == "library" and g.candidate.joint == j)
         if n_kept < max_effects:
             out.append(j)
-    return out
-
-
-def dropped_before_refinement(screened: Sequence[Candidate], refined: Sequence[Candidate]) -> list[Finding]:
-    """The library effects chosen by the screening (or named in place of a term) that did not enter refinement,
-    as dropped findings: each frees its joint (:func:`freed_joints`) and is not offered again (:func:`offered`).
-    They are not reported as findings: the search trace says where each was dropped."""
-    out: list[Finding] = []
-    for c in screened:
-        if c.source == "library" and c not in refined and all(f.candidate != c for f in out):
-            out.append(Finding(c, np.zeros(c.n_coef), np.zeros(c.n_coef), None, kept=False,
-                               reason="dropped before refinement"))
     return out
 
 
