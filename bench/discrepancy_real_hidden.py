@@ -116,11 +116,16 @@ def main() -> None:
     ap.add_argument("--baseline", default=None, metavar="CASES",
                     help="comma-separated indices into CASES (or 'all') also fitted from the clean log's fitted "
                          "model (the change against it), scored in a second table; the clean fits are shared")
+    ap.add_argument("--baseline-only", action="store_true",
+                    help="fit the --baseline cases only from the clean log's fitted model (their per-log rows known)")
     args = ap.parse_args()
     jobs = args.jobs
-    chosen = range(len(CASES)) if args.cases is None else [int(i) for i in args.cases.split(",")]
     from_clean = (set() if args.baseline is None else set(range(len(CASES))) if args.baseline == "all"
                   else {int(i) for i in args.baseline.split(",")})
+    if args.baseline_only and not from_clean:
+        ap.error("--baseline-only needs --baseline CASES")
+    chosen = (sorted(from_clean) if args.baseline_only else range(len(CASES)) if args.cases is None
+              else [int(i) for i in args.cases.split(",")])
     clean: dict[str, DiscrepancyModel] = {}
     results = {False: ([], {}), True: ([], {})}
     print("| log | injected | named as | estimate - clean | truth | error | extra findings | unexplained | wall |")
@@ -138,7 +143,8 @@ def main() -> None:
             if kind == "local_friction" and "centre_deg" not in v:
                 v["centre_deg"] = busy_angle_deg(base, j)
             log = inject(log, kind, j, **v)
-        for baseline in (False, True) if ci in from_clean else (False,):
+        ways = (True,) if args.baseline_only else (False, True)
+        for baseline in ways if ci in from_clean else (False,):
             score(name, effects, log, clean[name], baseline, jobs, *results[baseline])
     for baseline, (rows, per_kind) in results.items():
         if rows:
