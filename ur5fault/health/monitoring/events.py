@@ -57,6 +57,15 @@ FALSE_ALARM_PER_LOG = 0.01
 SETTLE_S = REVERSAL_WINDOW_S
 #: the features of the spread model, in order
 FEATURES = ("1", "moving", "|qd| [rad/s]", "|qdd| [rad/s^2]")
+#: the residuals events are judged on (measured - simulated): the motor current and the joint position reading
+#: (the measured tracking error minus the twin's); each has its own spread model, tail and limit
+CHANNELS = ("current", "position")
+#: the unit of each channel
+UNITS = {"current": "A", "position": "rad"}
+#: a position limit is never below this many quanta of the joint's reading: quantisation alone moves the
+#: transient by up to one quantum (a smoothed reading between two adjacent levels, less a median on one of them),
+#: and a baseline that happened to hold still on one level has no spread to show it
+QUANTUM_FLOOR = 2.0
 
 
 def smooth(x: NDArray, period_s: float, window_s: float = SMOOTH_S) -> NDArray:
@@ -158,10 +167,10 @@ def fit_tail(maxima: NDArray) -> NDArray:
     return out
 
 
-def multiplier(tail: NDArray, n_windows: int) -> NDArray:
+def multiplier(tail: NDArray, n_windows: int, p_log: float = FALSE_ALARM_PER_LOG) -> NDArray:
     """``(6,)``: the level of ``|h| / sigma`` the window maxima of a log of ``n_windows`` windows exceed on any
-    joint with probability :data:`FALSE_ALARM_PER_LOG`."""
-    p = FALSE_ALARM_PER_LOG / (max(n_windows, 1) * tail.shape[0])
+    joint with probability ``p_log`` (a channel's share of :data:`FALSE_ALARM_PER_LOG`)."""
+    p = p_log / (max(n_windows, 1) * tail.shape[0])
     u0, beta, p0 = tail.T
     return u0 + beta * np.log(np.maximum(p0 / p, 1.0))
 
@@ -170,11 +179,19 @@ def n_windows(judged: NDArray, period_s: float) -> int:
     return int(np.ceil(judged.sum() * period_s / WINDOW_S))
 
 
-def find_events(t_s: NDArray, h: NDArray, limit_A: NDArray, judged: NDArray) -> tuple[list[dict], NDArray]:
-    """Events of one log part: ``[{"t_start_s", "t_end_s", "joints", "peak_A"}]`` (``peak_A``: the largest
-    ``|h|`` above the limit in the event) and the exceedance mask ``(n, 6)``."""
-    dev = np.abs(h)
-    over = (dev > limit_A) & judged[:, None]
+def find_events(t_s: NDArray, h: dict[str, NDArray], limits: dict[str, NDArray], judged: NDArray
+                ) -> tuple[list[dict], NDArray]:
+    """Events of one log part: ``[{"t_start_s", "t_end_s", "joints", "channels", "peak_A", "peak_rad"}]`` and the
+    exceedance mask ``(n, 6)`` of all channels together.
+
+    ``h``: the transient of every channel (:data:`CHANNELS`); ``limits``: the limit of each channel judged.
+    An event's ``joints`` and ``channels`` are those that crossed their limit in it; ``peak_A`` / ``peak_rad``:
+    the largest ``|h|`` of the current / position channel on those joints over the event, whether or not that
+    channel crossed (what the other signal did meanwhile)."""
+    over_c = {c: (np.abs(h[c]) > lim) & judged[:, None] for c, lim in limits.items()}
+    over = np.zeros(judged.shape + (N_JOINTS,), bool)
+    for o in over_c.values():
+        over |= o
     rows = np.flatnonzero(over.any(axis=1))
     if not rows.size:
         return [], over
@@ -189,7 +206,10 @@ def find_events(t_s: NDArray, h: NDArray, limit_A: NDArray, judged: NDArray) -> 
     events = []
     for a, b in groups:
         sl = slice(a, b + 1)
-        joints = [JOINT_NAMES[j] for j in range(N_JOINTS) if over[sl, j].any()]
-        peak = float(np.max(np.where(over[sl], dev[sl], 0.0)))
-        events.append({"t_start_s": float(t_s[a]), "t_end_s": float(t_s[b]), "joints": joints, "peak_A": peak})
+        js = [j for j in range(N_JOINTS) if over[sl, j].any()]
+        ev = {"t_start_s": float(t_s[a]), "t_end_s": float(t_s[b]), "joints": [JOINT_NAMES[j] for j in js],
+              "channels": [c for c in CHANNELS if c in over_c and over_c[c][sl].any()]}
+        for c in CHANNELS:
+            ev[f"peak_{UNITS[c]}"] = float(np.abs(h[c][sl][:, js]).max())
+        events.append(ev)
     return events, over
