@@ -9,6 +9,7 @@ import pytest
 
 from tests.health.monitoring.test_monitoring import PERIOD, noise, part
 from ur5fault.health.monitoring import assess, fit_baseline
+from ur5fault.health.monitoring.events import CHANNELS
 
 #: a position quantum of the Kufieta CB2 wrists' readings [rad] (data/kufieta-ur5: steps of 16.2e-6 rad)
 QUANTUM_RAD = 16e-6
@@ -21,7 +22,8 @@ def test_a_position_pulse_is_an_event_of_the_position_channel_on_its_joint():
     b = fit_baseline(runs, "sha")
     pos = noise(60, sigma=5e-6)
     pos[1000:1038, 1] += 1e-3  # 0.304 s from 8.0 s
-    out = assess(b, part("pushed", noise(61), position=pos))
+    assert assess(b, part("pushed", noise(61), position=pos))["events"] == []  # the current alone, the default
+    out = assess(b, part("pushed", noise(61), position=pos), CHANNELS)
     assert out["verdict"] == "anomaly" and len(out["events"]) == 1, out
     ev = out["events"][0]
     assert ev["joints"] == ["shoulder_lift_joint"] and ev["channels"] == ["position"]
@@ -48,12 +50,12 @@ def test_quantised_positions_raise_no_event():
                  quantum_rad=QUANTUM_RAD) for k in range(3)]
     b = fit_baseline(runs, "sha")
     out = assess(b, part("flicker", noise(30, sigma=0.02), moving=False, position=flicker(31),
-                         quantum_rad=QUANTUM_RAD))
+                         quantum_rad=QUANTUM_RAD), CHANNELS)
     assert out["events"] == [] and out["verdict"] == "consistent", out
     unknown = fit_baseline([part(f"r{k}", noise(k, sigma=0.02), moving=False, position=rng.normal(0.0, 1e-6,
                                                                                                  (2000, 6)))
                             for k in range(3)], "sha")
-    out = assess(unknown, part("flicker", noise(30, sigma=0.02), moving=False, position=flicker(31)))
+    out = assess(unknown, part("flicker", noise(30, sigma=0.02), moving=False, position=flicker(31)), CHANNELS)
     assert out["verdict"] == "anomaly" and all(e["channels"] == ["position"] for e in out["events"]), out
 
 
@@ -93,8 +95,8 @@ def simulated_log(tmp_path, seed: int, push: bool):
 def test_a_simulated_push_is_a_position_event_on_its_joint_and_the_same_run_without_it_is_quiet(tmp_path):
     """Baseline: three simulated runs of the joint sweep (sensor noise of seeds 1-3) replayed under the packaged
     model. The same motion with seed 4 and a 15 N*m push on the elbow from 5.0 to 5.3 s: the position channel
-    alone finds it on the elbow, starting and ending within 0.5 s of the push; without the push (seed 4 again) no
-    event on either channel."""
+    alone finds it on the elbow, starting and ending within 0.5 s of the push; without the push (seed 4 again) it
+    raises none."""
     from ur5fault.health.monitoring import observe
 
     base = fit_baseline([observe(simulated_log(tmp_path, s, False), kinds=()) for s in (1, 2, 3)], "sha")
@@ -105,5 +107,5 @@ def test_a_simulated_push_is_a_position_event_on_its_joint_and_the_same_run_with
     assert len(ev) == 1, out
     assert abs(ev[0]["t_start_s"] - PUSH_S[0]) <= 0.5 and abs(ev[0]["t_end_s"] - PUSH_S[1]) <= 0.5, ev
     assert ev[0]["channels"] == ["position"]
-    quiet = assess(base, observe(simulated_log(tmp_path, 4, False), kinds=()))
+    quiet = assess(base, observe(simulated_log(tmp_path, 4, False), kinds=()), ("position",))
     assert quiet["events"] == [] and quiet["verdict"] == "consistent", quiet

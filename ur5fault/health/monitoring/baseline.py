@@ -34,6 +34,7 @@ from .events import (
     fit_scale,
     fit_tail,
     judged_rows,
+    quantum_sigma,
     sigma,
     transient,
     window_maxima,
@@ -122,7 +123,8 @@ def segment(obs: Observed) -> tuple[NDArray, NDArray, NDArray]:
             judged_rows(obs.logged, obs.period_s))
 
 
-def fit_events(segs: list[tuple[NDArray, NDArray, NDArray]], period_s: float) -> tuple[NDArray, NDArray]:
+def fit_events(segs: list[tuple[NDArray, NDArray, NDArray]], period_s: float, quantum_rad: NDArray
+               ) -> tuple[NDArray, NDArray]:
     """Per channel, spread coefficients ``(6, 4)`` on all segments and the tail ``(6, 3)`` of the normalised
     window maxima, stacked ``(2, 6, 4)``, ``(2, 6, 3)``. With two or more segments each segment is normalised by
     the spread fitted on the others (leave one out), so the tail holds how far a healthy run the model was not
@@ -130,11 +132,12 @@ def fit_events(segs: list[tuple[NDArray, NDArray, NDArray]], period_s: float) ->
     coefs, tails = [], []
     for i in range(len(CHANNELS)):
         one = [(h[i], f, ok) for h, f, ok in segs]
+        floor = quantum_sigma(quantum_rad) if CHANNELS[i] == "position" else 0.0
         coef = fit_scale(one)
         maxima = []
         for k, (h, f, ok) in enumerate(one):
             c = fit_scale(one[:k] + one[k + 1 :]) if len(one) >= 2 else coef
-            maxima.append(window_maxima(np.abs(h) / sigma(f, c), ok, period_s))
+            maxima.append(window_maxima(np.abs(h) / sigma(f, c, floor), ok, period_s))
         coefs.append(coef)
         tails.append(fit_tail(np.concatenate(maxima)))
     return np.stack(coefs), np.stack(tails)
@@ -153,7 +156,9 @@ def fit_baseline(healthy: Sequence[Observed], overlay_sha: str) -> Baseline:
     if sum(int(ok.sum()) for _, _, ok in segs) * period < 2 * WINDOW_S:
         raise ParameterError("the baseline logs hold too few judged samples (under 0.5 s after each replay's first "
                              "0.25 s) to fit the event limits")
-    scale, tail = fit_events(segs, period)
+    quantum = np.stack([o.position_quantum_rad for o in healthy])
+    quantum = np.where(np.isnan(quantum).all(axis=0), np.nan, np.nanmax(np.nan_to_num(quantum, nan=-np.inf), axis=0))
+    scale, tail = fit_events(segs, period, quantum)
     per: dict[str, tuple[list[float], list[float]]] = {}
     for o in healthy:
         for block in block_estimates(o):
@@ -162,6 +167,4 @@ def fit_baseline(healthy: Sequence[Observed], overlay_sha: str) -> Baseline:
                     per.setdefault(label, ([], []))[0].append(est.theta)
                     per[label][1].append(est.se)
     cands = {k: spread(th, se) for k, (th, se) in per.items()}
-    quantum = np.stack([o.position_quantum_rad for o in healthy])
-    quantum = np.where(np.isnan(quantum).all(axis=0), np.nan, np.nanmax(np.nan_to_num(quantum, nan=-np.inf), axis=0))
     return Baseline(overlay_sha, period, tuple(o.name for o in healthy), scale, tail, quantum, cands)

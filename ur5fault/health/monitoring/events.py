@@ -62,6 +62,11 @@ FEATURES = ("1", "moving", "|qd| [rad/s]", "|qdd| [rad/s^2]")
 CHANNELS = ("current", "position")
 #: the unit of each channel
 UNITS = {"current": "A", "position": "rad"}
+#: the channels judged unless asked otherwise: the current alone. On the Kufieta robot the position channel does
+#: not separate pushes from the twin's own position error (docs/monitoring.md): its healthy runs' transients
+#: (shoulder_lift at rest after motion, 0.1-0.16 mrad) cross its limit on 3 of 8 undisturbed runs, and the pushes
+#: during motion stay below it; it does separate the pushes on the standing arm
+DEFAULT_CHANNELS = ("current",)
 #: a position limit is never below this many quanta of the joint's reading: quantisation alone moves the
 #: transient by up to one quantum (a smoothed reading between two adjacent levels, less a median on one of them),
 #: and a baseline that happened to hold still on one level has no spread to show it
@@ -140,10 +145,19 @@ def fit_scale(segments: Sequence[tuple[NDArray, NDArray, NDArray]]) -> NDArray:
     return coef
 
 
-def sigma(feats: NDArray, coef: NDArray) -> NDArray:
-    """The transient's modelled spread ``(n, 6)`` [A] (floored at a thousandth of its largest value)."""
+def sigma(feats: NDArray, coef: NDArray, floor: NDArray | float = 0.0) -> NDArray:
+    """The transient's modelled spread ``(n, 6)`` (floored at a thousandth of its largest value, and at
+    ``floor`` ``(6,)``)."""
     s2 = np.einsum("njk,jk->nj", feats, coef)
-    return np.sqrt(np.maximum(s2, 1e-6 * np.max(s2, axis=0, keepdims=True) + 1e-18))
+    return np.maximum(np.sqrt(np.maximum(s2, 1e-6 * np.max(s2, axis=0, keepdims=True) + 1e-18)), floor)
+
+
+def quantum_sigma(quantum_rad: NDArray) -> NDArray:
+    """``(6,)``: the rounding error of a reading quantised by ``quantum_rad`` (``step / sqrt(12)``, uniform over
+    one step; 0 where the quantum is unknown): the position channel's spread is never below it. The twin's
+    residual weights take the same floor (:func:`ur5fault.twin.replay.residual_sigma`); without it the spread
+    fitted where the joints barely move is a fraction of a quantum, and the tail fitted on it turns heavy."""
+    return np.nan_to_num(np.asarray(quantum_rad, dtype=float), nan=0.0) / np.sqrt(12.0)
 
 
 def window_maxima(z: NDArray, judged: NDArray, period_s: float) -> NDArray:

@@ -113,7 +113,8 @@ def observe(log: MeasuredLog, params_overrides: dict | None = None, effects: Seq
     qd = np.abs(qd_all[1 : n_all + 1][lo:hi])
     return Observed(name, log.period_s, t[lo:hi], (meas[:, 0] - base.current_A[:hi])[lo:hi],
                     qd > CONDITION_REST_SPEED_RAD_S, log.logged_rows()[1 : n_all + 1][lo:hi],
-                    tuple(kept), X[:, lo : lo + m], e, qd, qdd, (meas[:, 1] - base.q_rad[:hi])[lo:hi],
+                    tuple(kept), X[:, lo : lo + m] if kept else np.zeros((0, *e.shape)), e, qd, qdd,
+                    (meas[:, 1] - base.q_rad[:hi])[lo:hi],
                     quanta(log.q_actual_rad))
 
 

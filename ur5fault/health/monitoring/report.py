@@ -19,11 +19,12 @@ from .observe import Observed
 from .verdict import limits
 
 
-def figure(baseline: Baseline, obs: Observed, entry: dict[str, Any]) -> Figure:
-    """Per joint and channel (current [A] left, position [mrad] right): the residual's transient ``|h|`` and its
-    limit (the baseline's spread at the log's motion times the multiplier for its length); the events shaded."""
+def figure(baseline: Baseline, obs: Observed, entry: dict[str, Any], channels: Sequence[str]) -> Figure:
+    """Per joint and channel (current [A] left, position [mrad] right): the residual's transient ``|h|`` and, for
+    the ``channels`` judged, its limit (the baseline's spread at the log's motion times the multiplier for its
+    length); the events shaded."""
     h, feats, judged = segment(obs)
-    thr = limits(baseline, obs, feats, judged)
+    thr = limits(baseline, obs, feats, judged, channels)
     fig = Figure(figsize=(13, 9), layout="constrained")
     axes = fig.subplots(N_JOINTS, len(CHANNELS), sharex=True)
     for i, c in enumerate(CHANNELS):
@@ -34,7 +35,8 @@ def figure(baseline: Baseline, obs: Observed, entry: dict[str, Any]) -> Figure:
             ax = axes[j, i]
             ax.plot(obs.t_s, dev[:, j], lw=0.7, color="tab:blue", label=f"|{c} transient| (residual - its running "
                                                                          "median)")
-            ax.plot(obs.t_s, thr[c][:, j] * k, lw=0.9, color="tab:red", label="limit")
+            if c in thr:
+                ax.plot(obs.t_s, thr[c][:, j] * k, lw=0.9, color="tab:red", label="limit")
             for ev in entry["events"]:
                 mine = JOINT_NAMES[j] in ev["joints"] and c in ev.get("channels", ())
                 ax.axvspan(ev["t_start_s"], ev["t_end_s"], color="orange", alpha=0.35 if mine else 0.1, lw=0)
@@ -45,17 +47,19 @@ def figure(baseline: Baseline, obs: Observed, entry: dict[str, Any]) -> Figure:
     return fig
 
 
-def markdown(baseline: Baseline, entries: Sequence[dict[str, Any]], figs: Sequence[str], model: str) -> str:
+def markdown(baseline: Baseline, entries: Sequence[dict[str, Any]], figs: Sequence[str], model: str,
+             channels: Sequence[str]) -> str:
     lines = ["# Monitoring report", "",
              f"Baseline: model overlay `{model}`, residual statistics of {len(baseline.segments)} healthy run(s): "
              + ", ".join(f"`{s}`" for s in baseline.segments) + ".", "",
-             "Spread of each residual's transient, sigma^2 = c . [" + ", ".join(FEATURES) + "] (current [A^2], "
-             f"position [rad^2]), and the multiplier on sigma for a 20 s log ({int(20 / WINDOW_S)} windows of "
-             f"{WINDOW_S:g} s, each channel at half the false-alarm probability):", "",
+             f"Events judged on the {' and '.join(channels)} residual. Spread of each residual's transient, "
+             "sigma^2 = c . [" + ", ".join(FEATURES) + "] (current [A^2], position [rad^2]), and the multiplier on "
+             f"sigma for a 20 s log ({int(20 / WINDOW_S)} windows of {WINDOW_S:g} s, the false-alarm probability "
+             "split between the channels judged):", "",
              "| channel | joint | " + " | ".join(f"c[{f}]" for f in FEATURES) + " | multiplier (20 s) |",
              "| --- | --- |" + " --- |" * (len(FEATURES) + 1)]
     for i, ch in enumerate(CHANNELS):
-        mult = multiplier(baseline.tail[i], int(20 / WINDOW_S), FALSE_ALARM_PER_LOG / len(CHANNELS))
+        mult = multiplier(baseline.tail[i], int(20 / WINDOW_S), FALSE_ALARM_PER_LOG / len(channels))
         for j in range(N_JOINTS):
             lines.append(f"| {ch} | {JOINT_NAMES[j]} | " + " | ".join(f"{c:.3g}" for c in baseline.scale[i, j])
                          + f" | {mult[j]:.2f} |")
@@ -75,7 +79,7 @@ def markdown(baseline: Baseline, entries: Sequence[dict[str, Any]], figs: Sequen
 
 
 def write(out: Path, baseline: Baseline, observed: Sequence[Observed], entries: Sequence[dict[str, Any]],
-          model: str) -> list[Path]:
+          model: str, channels: Sequence[str]) -> list[Path]:
     """Write every output into ``out`` (created), atomically; returns the paths, ``monitor.json`` first."""
     out.mkdir(parents=True, exist_ok=True)
     paths = [write_json_atomic(out / "monitor.json", {"logs": list(entries)}),
@@ -83,7 +87,7 @@ def write(out: Path, baseline: Baseline, observed: Sequence[Observed], entries: 
     figs = []
     for k, (obs, e) in enumerate(zip(observed, entries)):
         name = f"monitor_{k + 1}.png"
-        paths.append(write_figure_atomic(figure(baseline, obs, e), out / name))
+        paths.append(write_figure_atomic(figure(baseline, obs, e, channels), out / name))
         figs.append(name)
-    paths.append(write_text_atomic(out / "report.md", markdown(baseline, entries, figs, model)))
+    paths.append(write_text_atomic(out / "report.md", markdown(baseline, entries, figs, model, channels)))
     return paths
