@@ -63,9 +63,9 @@ CHANNELS = ("current", "position")
 #: the unit of each channel
 UNITS = {"current": "A", "position": "rad"}
 #: the channels judged unless asked otherwise: the current alone. On the Kufieta robot the position channel does
-#: not separate pushes from the twin's own position error (docs/monitoring.md): its healthy runs' transients
-#: (shoulder_lift at rest after motion, 0.1-0.16 mrad) cross its limit on 3 of 8 undisturbed runs, and the pushes
-#: during motion stay below it; it does separate the pushes on the standing arm
+#: not separate pushes from the twin's own position error (docs/monitoring.md): undisturbed runs' transients
+#: (shoulder_lift near rest, 0.1-0.16 mrad) cross its limit on 3 of 8 undisturbed runs, while the pushes stay below
+#: it but one (6.3 mrad on shoulder_pan)
 DEFAULT_CHANNELS = ("current",)
 #: a position limit is never below this many quanta of the joint's reading: quantisation alone moves the
 #: transient by up to one quantum (a smoothed reading between two adjacent levels, less a median on one of them),
