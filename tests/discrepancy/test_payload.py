@@ -1,0 +1,126 @@
+"""An unknown payload: its current columns against an independent Newton-Euler reference, recovered within its
+interval on a simulated log whose payload the test chooses, and said so by the command line (stderr, summary.json,
+report) without entering the model overlay."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from ur5fault.cli import main
+from ur5fault.discrepancy.model import WORKFLOW_SEED
+from ur5fault.discrepancy.payload import fit_payload, resolve_payloads
+from ur5fault.logs import read_nist
+from ur5fault.sim.params import load_params
+from ur5fault.twin import LogReplay
+from ur5fault.twin.payload import payload_current_columns
+
+from conftest import NIST_LOG
+from reference_ur5 import rnea
+
+#: the payload the simulated log holds: chosen here, a gripped part off the flange axis
+TRUE_MASS_KG = 1.5
+TRUE_COM_M = (0.03, -0.02, 0.10)
+#: the simulator's payload inertia: a solid cube of 0.06 m edge (ur5fault/sim/multibody.py's stated assumption),
+#: I = m a^2 / 6 about its centre
+CUBE_INERTIA_PER_KG = 0.06**2 / 6.0
+
+
+def test_columns_equal_newton_euler_of_a_point_mass():
+    """Per kg and per kg*m of first moment, the current the payload adds equals the DH Newton-Euler reference's
+    torque difference (tests/reference_ur5.py) over the torque constant and gear ratio."""
+    dt, n = 0.008, 300
+    t = np.arange(n) * dt
+    rng = np.random.default_rng(11)
+    q0, amp, w, ph = (rng.uniform(-2, 2, 6), rng.uniform(0.2, 0.6, 6), rng.uniform(1.0, 4.0, 6),
+                      rng.uniform(0, 2 * np.pi, 6))
+    q = q0 + amp * np.sin(w * t[:, None] + ph)
+    qd = amp * w * np.cos(w * t[:, None] + ph)
+    qdd = -amp * w**2 * np.sin(w * t[:, None] + ph)
+    params = load_params()
+    cols = payload_current_columns(params, q, dt)
+    per_amp = np.asarray(params.motor.torque_constant_Nm_per_A) * np.asarray(params.gear.ratio)
+    inertia = np.eye(3) * CUBE_INERTIA_PER_KG
+    h = 0.01
+    for k in (50, 150, 250):
+        empty = rnea(q[k], qd[k], qdd[k])
+        want = [rnea(q[k], qd[k], qdd[k], payload_mass_kg=1.0, payload_inertia_flange_kgm2=inertia) - empty]
+        for axis in range(3):
+            e = np.zeros(3)
+            e[axis] = h
+            up = rnea(q[k], qd[k], qdd[k], payload_mass_kg=1.0, payload_pos_flange_m=e,
+                      payload_inertia_flange_kgm2=inertia)
+            down = rnea(q[k], qd[k], qdd[k], payload_mass_kg=1.0, payload_pos_flange_m=-e,
+                        payload_inertia_flange_kgm2=inertia)
+            want.append((up - down) / (2 * h))
+        np.testing.assert_allclose(cols[:, k], np.array(want) / per_amp, rtol=2e-3, atol=2e-5)
+    assert np.abs(cols[0]).max() > 0.1  # a kilogram is a tenth of an ampere or more: the comparison tests something
+
+
+@pytest.fixture(scope="module")
+def simulated():
+    """12 s of the NIST log's motion, simulated with the chosen payload (its own noise seed); the payload then
+    forgotten (``None``), as an RTDE log would have it."""
+    log = read_nist(NIST_LOG).window(10.0, 22.0)
+    held = dataclasses.replace(log, payload_kg=TRUE_MASS_KG, tcp_offset_m=TRUE_COM_M)
+    sim = LogReplay(held, seed=5).run([()])[0]
+    return dataclasses.replace(
+        log, source="sim.csv", current_A=np.concatenate([log.current_A[:1], sim.current_A]),
+        q_actual_rad=np.concatenate([log.q_actual_rad[:1], sim.position_rad]), target_current_A=None,
+        target_torque_Nm=None, payload_kg=None, tcp_offset_m=None)
+
+
+def test_unknown_payload_recovered_within_its_interval(simulated):
+    n = simulated.t_s.size - 1
+    rec = fit_payload(simulated, n, "the whole log", seed=WORKFLOW_SEED)
+    lo, hi = rec.interval_kg
+    assert not rec.known and rec.com_fitted
+    assert lo <= TRUE_MASS_KG <= hi and hi - lo < 0.5, rec
+    for (a, b), truth in zip(rec.com_interval_m, TRUE_COM_M):
+        assert a <= truth <= b and b - a < 0.15, rec
+    assert rec.replayed_kg == rec.mass_kg and rec.replayed_com_m == rec.com_m
+    # the centre of mass stated: the mass alone, at it
+    at = fit_payload(dataclasses.replace(simulated, tcp_offset_m=TRUE_COM_M), n, "the whole log", seed=WORKFLOW_SEED)
+    assert at.interval_kg[0] <= TRUE_MASS_KG <= at.interval_kg[1] and at.com_m == TRUE_COM_M and not at.com_fitted
+    line = rec.line()
+    assert line.startswith("payload of sim.csv unknown: fitted ") and "95 %" in line
+
+
+def test_a_stated_payload_is_recorded_as_known_and_not_fitted():
+    log = read_nist(NIST_LOG)
+    fitted, held, recs = resolve_payloads([log], [], 0.6, seed=WORKFLOW_SEED)
+    assert fitted == [log] and held == []
+    assert recs[log.source].to_json() == {"known": True, "mass_kg": pytest.approx(0.726),
+                                          "com_m": log.tcp_offset_m}
+
+
+def _write_rtde(log, path):
+    cols = {"timestamp": log.t_s}
+    for name, arr in (("target_q", log.q_target_rad), ("actual_q", log.q_actual_rad),
+                      ("actual_current", log.current_A)):
+        cols.update({f"{name}_{j}": arr[:, j] for j in range(6)})
+    pd.DataFrame(cols).to_csv(path, index=False)
+
+
+@pytest.mark.slow  # one whole library-only discrepancy fit of a 12 s log
+def test_discrepancy_fits_an_unknown_payload_and_names_no_fault(simulated, tmp_path, capsys):
+    """An RTDE CSV of the simulated log, its payload not given: the payload is fitted (stderr, summary.json,
+    report), no fault of the library is named, and the overlay carries no payload."""
+    csv = tmp_path / "sim.csv"
+    _write_rtde(simulated, csv)
+    out = tmp_path / "fit"
+    rc = main(["discrepancy", str(csv), "--format", "rtde", "--max-terms", "0", "--jobs", "1", "--quiet",
+               "--out", str(out)])
+    err = capsys.readouterr().err
+    assert rc == 0, err
+    assert "payload of sim.csv unknown: fitted " in err
+    summ = json.loads((out / "summary.json").read_text())
+    p = summ["payload"]["sim.csv"]
+    assert p["known"] is False and p["interval_kg"][0] <= TRUE_MASS_KG <= p["interval_kg"][1]
+    assert summ["named"] == [], summ["named"]
+    assert "payload" not in (out / "model.yaml").read_text()
+    assert "payload of sim.csv unknown: fitted" in (out / "report.md").read_text()
