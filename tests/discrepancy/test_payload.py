@@ -13,7 +13,7 @@ import pytest
 
 from ur5fault.cli import main
 from ur5fault.discrepancy.model import WORKFLOW_SEED
-from ur5fault.discrepancy.payload import fit_payload, resolve_payloads
+from ur5fault.discrepancy.payload import PAYLOAD_KINDS, fit_payload, resolve_payloads
 from ur5fault.logs import read_nist
 from ur5fault.sim.params import load_params
 from ur5fault.twin import LogReplay
@@ -101,26 +101,40 @@ def test_a_stated_payload_is_recorded_as_known_and_not_fitted():
 def _write_rtde(log, path):
     cols = {"timestamp": log.t_s}
     for name, arr in (("target_q", log.q_target_rad), ("actual_q", log.q_actual_rad),
-                      ("actual_current", log.current_A)):
+                      ("actual_current", log.current_A), ("joint_temperatures", log.temperature_C)):
         cols.update({f"{name}_{j}": arr[:, j] for j in range(6)})
     pd.DataFrame(cols).to_csv(path, index=False)
 
 
-@pytest.mark.slow  # one whole library-only discrepancy fit of a 12 s log
-def test_discrepancy_fits_an_unknown_payload_and_names_no_fault(simulated, tmp_path, capsys):
-    """An RTDE CSV of the simulated log, its payload not given: the payload is fitted (stderr, summary.json,
-    report), no fault of the library is named, and the overlay carries no payload."""
+@pytest.mark.slow  # two whole library-only discrepancy fits of a 12 s log
+def test_discrepancy_fits_an_unknown_payload_and_names_nothing_the_stated_one_does_not(simulated, tmp_path, capsys):
+    """An RTDE CSV of the simulated log (with its joint temperatures, which the replays take), its payload not
+    given: the payload is fitted (stderr, summary.json, report), the overlay carries no payload, and the library
+    names exactly what it names with the true payload stated (on this log: a wrist_3 current-sensor gain below 1,
+    the replay's own sensor noise on a joint whose current is about its noise level; nothing on J1-J5), leaving
+    out the library's payload candidates, which a fitted payload replaces."""
     csv = tmp_path / "sim.csv"
     _write_rtde(simulated, csv)
-    out = tmp_path / "fit"
-    rc = main(["discrepancy", str(csv), "--format", "rtde", "--max-terms", "0", "--jobs", "1", "--quiet",
-               "--out", str(out)])
-    err = capsys.readouterr().err
-    assert rc == 0, err
-    assert "payload of sim.csv unknown: fitted " in err
-    summ = json.loads((out / "summary.json").read_text())
+    runs = {}
+    for name, extra in (("unknown", []), ("stated", ["--payload-kg", str(TRUE_MASS_KG), "--tcp-offset-m",
+                                                     *map(str, TRUE_COM_M)])):
+        out = tmp_path / name
+        rc = main(["discrepancy", str(csv), "--format", "rtde", *extra, "--max-terms", "0", "--jobs", "1", "--quiet",
+                   "--out", str(out)])
+        err = capsys.readouterr().err
+        assert rc == 0, err
+        runs[name] = (out, err, json.loads((out / "summary.json").read_text()))
+    out, err, summ = runs["unknown"]
+    assert "payload of sim.csv unknown: fitted " in err and "unknown" not in runs["stated"][1]
     p = summ["payload"]["sim.csv"]
     assert p["known"] is False and p["interval_kg"][0] <= TRUE_MASS_KG <= p["interval_kg"][1]
-    assert summ["named"] == [], summ["named"]
+    assert runs["stated"][2]["payload"]["sim.csv"] == {"known": True, "mass_kg": TRUE_MASS_KG,
+                                                        "com_m": list(TRUE_COM_M)}
     assert "payload" not in (out / "model.yaml").read_text()
     assert "payload of sim.csv unknown: fitted" in (out / "report.md").read_text()
+
+    def named(s):  # the library's payload candidates are left out where the payload is fitted (by design)
+        return sorted((f["name"], f["joint"]) for f in s["findings"] if f["kept"] and f["name"] not in PAYLOAD_KINDS)
+
+    assert named(summ) == named(runs["stated"][2])
+    assert all(j == "wrist_3_joint" for _, j in named(summ)), named(summ)
