@@ -8,8 +8,8 @@ packaged model, one replay per log (one process):
 
 * the nine Kufieta runs (data/kufieta-ur5: payload not stated, the tool centre point the flange): mass with the
   centre of mass unknown too, and mass at the flange (``--tcp-offset-m 0 0 0``);
-* the NIST log (data/nist-ur5: payload 0.726 kg at 0.15 m stated in its file) declared unknown: mass and centre
-  of mass, and mass at its stated tool offset. The physics says 0.726 kg at (0, 0, 0.15) m.
+* the NIST log (data/nist-ur5: payload 0.726 kg stated in its file name, 1.6 lb) declared unknown: mass and centre
+  of mass, and mass at the reader's tool offset. The physics says 0.726 kg.
 
 Prints one line per case and writes every record as JSON.
 """
@@ -56,7 +56,9 @@ def main() -> int:
         n = fit_samples(log.t_s.size - 1, FIT_FRACTION)
         rec = fit_payload(log, n, f"first {100 * FIT_FRACTION:.0f} %", seed=WORKFLOW_SEED)
         wall = time.perf_counter() - t
-        print(f"{log.source} [{what}] {rec.line()} (r^2 {rec.r2_nuisance:.4f}, {wall:.1f} s)", flush=True)
+        free = rec.gains_free_kg
+        print(f"{log.source} [{what}] {rec.line()} (r^2 {rec.r2_nuisance:.4f}; with current gains and offsets free "
+              f"{free[0]:.3g} kg, 95 % {free[1]:.3g}..{free[2]:.3g}; {wall:.1f} s)", flush=True)
         out.append({"log": log.source, "case": what, "wall_s": wall, **rec.to_json()})
     Path(args.out).parent.mkdir(parents=True, exist_ok=True)
     Path(args.out).write_text(json.dumps(out, indent=2, default=float))

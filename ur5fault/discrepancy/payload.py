@@ -129,6 +129,12 @@ def _design(r: NDArray, cols: NDArray, gain: NDArray, drift: list[NDArray], sigm
     return y[keep].reshape(-1), X[keep].reshape(-1, width), k, ends[0]
 
 
+def _com_in_range(c) -> bool:
+    """A centre of mass within the payload_com effect's range on every axis (the flange frame)."""
+    return all(REGISTRY["payload_com"].param(k).lo <= x <= REGISTRY["payload_com"].param(k).hi
+               for k, x in zip(("dx_m", "dy_m", "dz_m"), c))
+
+
 def _solve(G: NDArray, g: NDArray) -> NDArray:
     """Least squares from the normal equations (a minimum-norm solution where a nuisance is empty)."""
     return np.linalg.lstsq(G, g, rcond=None)[0]
@@ -184,7 +190,7 @@ def fit_payload(log: MeasuredLog, n: int, fitted_on: str, params_overrides: dict
         (delta, reps_a), (delta_free, reps_free) = fits
         theta, reps_a = at + delta, at + reps_a
         c = tuple(float(x) for x in (com_known or theta[1:] / theta[0])) if theta[0] > 0 else None
-        if not (mass.lo < theta[0] <= mass.hi) or c is None or any(abs(x) > 2.0 for x in c):
+        if not (mass.lo < theta[0] <= mass.hi) or c is None or not _com_in_range(c):
             break  # no payload the model can hold to linearise about
         at, at_com = theta, c  # type: ignore[assignment]
     B = JACKKNIFE_BLOCKS
@@ -218,10 +224,12 @@ def fit_payload(log: MeasuredLog, n: int, fitted_on: str, params_overrides: dict
         else:
             notes.append("centre of mass not determined (the mass's interval reaches 0 kg): the replays hold the "
                          "payload at the flange")
-    replay_com = com if com is not None and all(abs(x) <= 2.0 for x in com) else (0.0, 0.0, 0.0)
+    replay_com = com if com is not None and (com_known or _com_in_range(com)) else (0.0, 0.0, 0.0)
     if com is not None and replay_com != com:
-        notes.append("the fitted centre of mass is more than 2 m from the flange: the replays hold the payload at "
-                     "the flange")
+        p = REGISTRY["payload_com"].param("dx_m")
+        notes.append(f"the fitted centre of mass lies outside the range a payload's may take ([{p.lo:g}, {p.hi:g}] m "
+                     "per axis in the flange frame, the payload_com effect's): the replays hold the payload at the "
+                     "flange")
     return PayloadRecord(log.source, False, m, com, (lo, hi), com_iv, com_known is None and com is not None,
                          fitted_on, r2, separable, replay_kg, tuple(replay_com), tuple(notes), free)
 
