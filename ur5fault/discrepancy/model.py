@@ -118,11 +118,13 @@ class DiscrepancyModel:
         gets one line per such log."""
         t0 = time.perf_counter()
         logs = [log] if isinstance(log, MeasuredLog) else list(log)
+        t_payload = time.perf_counter()
         logs, hold_out, self.payload_ = resolve_payloads(logs, hold_out, self.fit_fraction, params_overrides,
                                                          base_effects, seed=WORKFLOW_SEED, say=on_payload)
         kinds = self.kinds
         if not all(r.known for r in self.payload_.values()):  # a fitted payload is a nuisance, not a finding
             kinds = [k for k in (kinds if kinds is not None else library_kinds()) if k not in PAYLOAD_KINDS]
+        t_payload = time.perf_counter() - t_payload
         rp: LogReplay | MultiReplay
         if len(logs) == 1 and not hold_out:
             rp = LogReplay(logs[0], params_overrides, base_effects, seed=WORKFLOW_SEED, jobs=self.jobs)
@@ -140,6 +142,8 @@ class DiscrepancyModel:
         self.n_fit_, self.n_all_, self.n_screen_ = n_fit, n_all, n_scr
         stages = _Stages(self.progress)
         timings: dict[str, float] = {}
+        if not all(r.known for r in self.payload_.values()):
+            timings["payload fit"] = t_payload
 
         t = time.perf_counter()
         lib = steps.screen_library(rp, n_scr, log.payload_kg, kinds, self.max_effects,
