@@ -60,7 +60,7 @@ OTHER_RUNS = (QUIET, "TEST", PUSHED, STANDSTILL)
 #: injected current-sensor gains (joint index, gain) on TEST and on the NIST log's rest
 GAINS = ((1, 1.2), (1, 1.5), (3, 1.2), (3, 1.5))
 #: the event channels of each design compared
-VARIANTS = {"both channels": ("current", "position"), "current only": ("current",), "position only": ("position",)}
+VARIANTS = {"current only": ("current",), "both channels": ("current", "position"), "position only": ("position",)}
 UNDISTURBED = 8  # 5 baseline runs (leave one out), the undisturbed No5 run, TEST, NIST's rest
 
 
@@ -230,7 +230,7 @@ def main(argv=None) -> int:
         print(f"\n{robot}: smallest separable change (lower bound), offset [A] / gain [-]: " + "; ".join(
             f"{j.split('_joint')[0]} {r.get('offset_A', float('nan')):.3f} / {r.get('gain', float('nan')):.3f}"
             for j, r in rows.items()))
-    out = {"overlay": params, **variants["both channels"], "variants": variants, "channel_reach": separation,
+    out = {"overlay": params, **variants["current only"], "variants": variants, "channel_reach": separation,
            "separable": sep, "identify_s": t_ident, "wall_s": time.perf_counter() - t0}
     from ur5fault.util.io import write_json_atomic
 

@@ -1,5 +1,5 @@
-"""Transient events: where a log's current residual leaves its own recent level by more than the baseline's
-model error does at the same motion.
+"""Transient events: where a log's current (or position) residual leaves its own recent level by more than the
+baseline's model error does at the same motion.
 
 *Transient, not drift.* The residual (measured - simulated current under the baseline model) is smoothed by a
 centred moving average of :data:`SMOOTH_S` (sensor noise averages out; a push keeps its peak) and its own recent
@@ -20,10 +20,18 @@ scale = mean excess). For a log of ``n_w`` windows the multiplier is the level t
 ``n_w x 6`` joint-windows exceed with probability :data:`FALSE_ALARM_PER_LOG` together: a longer log gets a
 higher bar, not more false alarms. Nothing is set on the runs being monitored.
 
-An event is a stretch where some joint's ``|h|`` exceeds ``multiplier x sigma``; stretches closer than
-:data:`MERGE_S` (on any joints) are one event, ``peak_A`` its largest ``|h|``. The first :data:`SETTLE_S` of a
-replay is not judged (it starts from the log's first sample with the model's own friction state).
-Shapes: ``(n, 6)`` per sample and joint; scale coefficients ``(6, 4)``; tail ``(6, 3)`` ``(u0, beta, p0)``.
+*Channels.* The same is done for the position residual (measured joint position - the twin's joint angle: the
+measured tracking error less the twin's), with its own spread, tail and limit (:data:`CHANNELS`); its spread is
+never below the readings' rounding error (:func:`quantum_sigma`) and its limit never below
+:data:`QUANTUM_FLOOR` quanta. The channels judged (:data:`DEFAULT_CHANNELS` unless asked) share the
+false-alarm probability evenly.
+
+An event is a stretch where some joint's ``|h|`` exceeds ``multiplier x sigma`` on a judged channel; stretches
+closer than :data:`MERGE_S` (on any joints and channels) are one event, ``peak_A`` / ``peak_rad`` the largest
+``|h|`` of each channel on its joints. The first :data:`SETTLE_S` of a replay is not judged (it starts from the
+log's first sample with the model's own friction state).
+Shapes: ``(n, 6)`` per sample and joint; scale coefficients ``(6, 4)``; tail ``(6, 3)`` ``(u0, beta, p0)`` per
+channel.
 """
 
 from __future__ import annotations
