@@ -9,7 +9,8 @@ Measures in one process, on the same model, physics step and number of steps:
   (c) the same in batches of 8, 32 and 128 runs on one thread;
   (t) a batch of 32 spread over all cores: numba threads in one process against one process per core;
   (d) optionally (--campaign), the default campaign end to end on all cores, Parquet included.
-(a), (a0), (a0d) and (b) are measured --repeat times, interleaved; their ratios are reported as min and median.
+(a), (a0), (a0d) and (b) are measured --repeat times, interleaved; their ratios are reported as min and median;
+each batch (c) is also reported against (a0d) measured right before and after it.
 Prints one JSON line: per-run-step cost of each in microseconds, ratios to (a) and (a0) per core,
 and peak memory per run.
 
@@ -171,8 +172,13 @@ def main(argv=None) -> int:
     out["ratio_b_to_a0d_median"] = float(np.median(np.array(b) / np.array(a0d)))
     best = None
     for n in (8, 32, 128):
+        # the floor (a0d) right before and after the batch as well: on a loaded machine the medians above may be
+        # minutes old when a batch runs
+        before = bare_compiled_us(sim, max(n_steps, 20000), clock, damping_Nms_per_rad=1.0)
         us = full_fidelity_us(sim, n, dur if n <= 32 or args.quick else dur / 4, clock=clock)
+        after = bare_compiled_us(sim, max(n_steps, 20000), clock, damping_Nms_per_rad=1.0)
         out[f"c_batch{n}_us_per_run_step"] = us
+        out[f"ratio_c_batch{n}_to_a0d_adjacent"] = 2.0 * us / (before + after)
         out[f"ratio_c_batch{n}_to_a"] = us / out["a_bare_mj_step_us"]
         out[f"ratio_c_batch{n}_to_a0"] = us / out["a0_bare_compiled_loop_us"]
         out[f"ratio_c_batch{n}_to_a0d"] = us / out["a0d_bare_compiled_damped_us"]
