@@ -111,7 +111,9 @@ def test_healthy_log_runs_and_writes_the_schema(logs, detector, tmp_path):
         for j in w["joints"]:
             for k in j["kinds"]:
                 assert set(k) == {"kind", "p_given_fault", "size", "unit", "interval", "cannot_tell",
-                                  "variance_inflation", "confounded"}
+                                  "variance_inflation", "confounded", "same_signature_as"}
+                assert k["same_signature_as"] == {"current_sensor_gain": ["torque_constant"],
+                                                  "torque_constant": ["current_sensor_gain"]}.get(k["kind"], [])
     # the simulated log has motor encoders: nothing is blind for want of them
     assert not any("motor encoders" in r for w in d["windows"] for j in w["joints"] for r in j["cannot_tell"].values())
 

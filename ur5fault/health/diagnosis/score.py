@@ -13,8 +13,10 @@ calibrated ``p_fault`` against the mapped threshold).  Per joint, ``p_fault_join
 of a fault through the same map (the largest of the six is ``p_fault``; each is a frequency only as far as the
 map fitted on the largest carries over).  Kinds: the classifier by joint's probabilities for that joint (each
 joint's own evidence), renormalised without ``none`` (the probability of each kind given a fault on that
-joint; not calibrated).  The run-level detector is kept as an auxiliary reading: ``p_fault_run_level`` (its own
-probability, not calibrated) and ``flagged_run_level`` (against its threshold at 5 % false alarms).
+joint; not calibrated); ``same_signature_as`` names the kinds it cannot be told from in any window (a
+current-sensor gain and a torque-constant loss).  The run-level detector is kept as an auxiliary reading:
+``p_fault_run_level`` (its own probability, not calibrated) and ``flagged_run_level`` (against its threshold at
+5 % false alarms).
 
 Size estimates are the twin features' least-squares projections (:mod:`ur5fault.health.twin_features`),
 converted to the unit of the campaign's ``fault_size``; the interval is the range of the same estimate on the
@@ -36,6 +38,7 @@ from ...errors import ConfigFileError
 from ...sim.axes import N_JOINTS
 from ..diagnostics import calibration, joint_kind
 from ..diagnostics.data import CONTEXT_COLUMNS, SIM_ONLY_PREFIX
+from ..diagnostics.metrics import MERGED_KINDS
 from ..diagnostics.saved import SCHEMA_FORMAT
 from ..features import FEATURE_UNITS
 from ..twin_features import FEATURE_UNITS as TWIN_FEATURE_UNITS
@@ -126,6 +129,15 @@ def cannot_tell(w: Window, j: int, has_motor_encoders: bool) -> dict[str, str]:
     return out
 
 
+def same_signature(kind: str) -> list[str]:
+    """The kinds whose signature is the same as ``kind``'s in every signal the features read (a current-sensor
+    gain and a torque-constant loss: both a current residual proportional to the current,
+    :data:`ur5fault.health.diagnostics.metrics.MERGED_KINDS`): a window cannot tell them apart, whatever the
+    classifier's split of the probability between them says."""
+    group = MERGED_KINDS.get(kind)
+    return sorted(k for k, g in MERGED_KINDS.items() if group is not None and g == group and k != kind)
+
+
 def _finite(v: float) -> float | None:
     return float(v) if np.isfinite(v) else None
 
@@ -166,7 +178,7 @@ def score_windows(models, schema: dict[str, Any], windows: list[Window], has_mot
                               "size": _finite(size) if ok else None, "unit": unit,
                               "interval": [_finite(min(halves)), _finite(max(halves))]
                               if ok and all(np.isfinite(halves)) else None,
-                              "cannot_tell": c in blind})
+                              "cannot_tell": c in blind, "same_signature_as": same_signature(c)})
             joints.append({"joint": j + 1, "p_fault_joint": float(p_joint[i, j]), "kinds": kinds,
                            "cannot_tell": blind})
         score = float(score_joint[i].max())
