@@ -18,14 +18,15 @@ injected on one joint (the logged current of that joint times :data:`GAINS`).
 first :data:`~ur5fault.twin.residuals.FIT_FRACTION` of log time, the rest monitored; and the rest with a gain
 injected.
 
-*Push labels* come from UR's own current model (``actual - target_current``), which knows nothing of ours:
-smoothed like the monitor's residual (0.1 s), its deviation from a reference level; a push is a stretch of at
-least :data:`MIN_PUSH_S` where that deviation exceeds the largest one of an undisturbed reference of the same
-motion: for the pushed moving run, the paired undisturbed run Movement_No5_Acc_slow_no_disturbance (whole run,
-deviation from its median); for the standstill run, the same undisturbed run's standing start (before its
-target first moves; the pushed standstill's deviation from its own median). A label is *found* when an event on
-one of
-its joints starts and ends within 0.5 s of it.
+*Push labels* (:mod:`monitor_labels`): the moving run's from UR's own current model against the paired
+undisturbed run; the standstill run's from the tool accelerometer (and, for comparison, the earlier labels from
+UR's model). A label is *found* when an event on one of its joints starts and ends within 0.5 s of it.
+
+*Channels compared*: the events judged on both residuals (current and position, each at half the false-alarm
+probability), on the current alone (the earlier monitor) and on the position alone; and per channel alone, how far
+the largest transient of each undisturbed run and of each labelled push reaches, as a multiple of that channel's
+limit (at the whole false-alarm probability): a channel separates the pushes from the model's error where the
+undisturbed runs stay below 1 and the pushes exceed it.
 """
 
 from __future__ import annotations
@@ -40,25 +41,45 @@ from pathlib import Path
 import numpy as np
 
 REPO = Path(__file__).resolve().parents[1]
-KUFIETA = REPO / "data" / "kufieta-ur5"
+sys.path.insert(0, str(REPO / "bench"))
+from monitor_labels import (  # noqa: E402  (the bench folder on the path first)
+    PUSHED,
+    QUIET,
+    STANDSTILL,
+    accel_labels,
+    found,
+    labels,
+    read,
+    standing_start,
+    ur_smoothed,
+)
+
 NIST_LOG = REPO / "data" / "nist-ur5" / "ur5testresult_halfspeed_payload1.6lb_1.csv.gz"
 BASE_RUNS = ("Movement_No1", "Movement_No2", "Movement_No3_Acc", "Movement_No4_Acc", "Movement_No8_Singularity_Free_1")
-QUIET, PUSHED, STANDSTILL = ("Movement_No5_Acc_slow_no_disturbance", "Movement_No5_Acc_slow_w_disturbance",
-                             "Movement_No10_Standstill_WDist")
 OTHER_RUNS = (QUIET, "TEST", PUSHED, STANDSTILL)
 #: injected current-sensor gains (joint index, gain) on TEST and on the NIST log's rest
 GAINS = ((1, 1.2), (1, 1.5), (3, 1.2), (3, 1.5))
-WINDOW_S = 0.5
-#: a push by hand lasts at least this long [s] (the monitor's smoothing assumes the same, events.SMOOTH_S)
-MIN_PUSH_S = 0.2
-#: a target this far from its start has begun to move [rad] (the CB2 targets jitter by up to 3e-4 rad at rest)
-START_MOVE_RAD = 1e-3
+#: the event channels of each design compared
+VARIANTS = {"current only": ("current",), "both channels": ("current", "position"), "position only": ("position",)}
+UNDISTURBED = 8  # 5 baseline runs (leave one out), the undisturbed No5 run, TEST, NIST's rest
 
 
-def read(name: str):
-    from ur5fault.logs import read_rtde
+def reach(baseline, obs, channel: str, t_window: tuple[float, float] | None = None,
+          joints: list[str] | None = None) -> float:
+    """The largest ``|h| / limit`` of one channel judged alone (at the whole false-alarm probability) on a log
+    part, within ``t_window`` [s] and on ``joints`` (default: everywhere): >= 1 would be an event."""
+    from ur5fault.health.monitoring.baseline import segment
+    from ur5fault.health.monitoring.events import CHANNELS
+    from ur5fault.health.monitoring.verdict import limits
+    from ur5fault.sim.axes import JOINT_NAMES
 
-    return read_rtde(KUFIETA / f"{name}.csv.gz", payload_kg=0.0, tcp_offset_m=(0.0, 0.0, 0.0))
+    h, feats, judged = segment(obs)
+    ratio = np.abs(h[CHANNELS.index(channel)]) / limits(baseline, obs, feats, judged, (channel,))[channel]
+    rows = judged.copy()
+    if t_window is not None:
+        rows &= (obs.t_s >= t_window[0]) & (obs.t_s <= t_window[1])
+    cols = [JOINT_NAMES.index(j) for j in joints] if joints else list(range(6))
+    return float(ratio[rows][:, cols].max()) if rows.any() else float("nan")
 
 
 def inject(log, joint: int, gain: float):
@@ -71,41 +92,6 @@ def _observe(log, params, part_s=None):
     from ur5fault.health.monitoring import observe
 
     return observe(log, params, part_s=part_s)
-
-
-def ur_smoothed(log):
-    from ur5fault.health.monitoring.events import smooth
-
-    return smooth((log.current_A - log.target_current_A)[1:], log.period_s)
-
-
-def standing_start(log) -> np.ndarray:
-    """``(n - 1,)``: the samples before the log's target first leaves its start by :data:`START_MOVE_RAD`."""
-    away = np.abs(log.q_target_rad - log.q_target_rad[0]).max(axis=1)[1:] > START_MOVE_RAD
-    return np.arange(away.size) < int(np.argmax(away))
-
-
-def labels(log, ref: np.ndarray) -> list[dict]:
-    """Push labels of ``log`` (module docstring): ``ref`` the smoothed UR residual of the undisturbed reference."""
-    from ur5fault.health.monitoring.events import MERGE_S
-    from ur5fault.sim.axes import JOINT_NAMES
-
-    limit = np.abs(ref - np.median(ref, axis=0)).max(axis=0)
-    r = ur_smoothed(log)
-    level = np.median(r, axis=0)
-    over = np.abs(r - level) > limit
-    t = log.t_s[1:] - log.t_s[0]
-    rows = np.flatnonzero(over.any(axis=1))
-    out, gap = [], int(round(MERGE_S / log.period_s))
-    for k, row in enumerate(rows):
-        if not out or row - rows[k - 1] > gap:
-            out.append({"t_start_s": float(t[row]), "rows": [row]})
-        out[-1]["rows"].append(row)
-        out[-1]["t_end_s"] = float(t[row])
-    for lab in out:
-        rs = lab.pop("rows")
-        lab["joints"] = [JOINT_NAMES[j] for j in range(6) if over[rs[0] : rs[-1] + 1, j].any()]
-    return [lab for lab in out if lab["t_end_s"] - lab["t_start_s"] >= MIN_PUSH_S]
 
 
 def separable(base) -> dict[str, dict[str, float]]:
@@ -126,11 +112,6 @@ def separable(base) -> dict[str, dict[str, float]]:
                 row[key] = float(limit * np.sqrt(var * inflate))
         out[j] = row
     return out
-
-
-def found(label: dict, events: list[dict]) -> bool:
-    return any(abs(e["t_start_s"] - label["t_start_s"]) <= WINDOW_S and abs(e["t_end_s"] - label["t_end_s"]) <= WINDOW_S
-               and set(e["joints"]) & set(label["joints"]) for e in events)
 
 
 def main(argv=None) -> int:
@@ -192,45 +173,65 @@ def main(argv=None) -> int:
     inj_obs = obs[k + len(OTHER_RUNS) : k + len(OTHER_RUNS) + len(GAINS)]
     nist_base, nist_rest, nist_inj_obs = obs[-len(GAINS) - 2], obs[-len(GAINS) - 1], obs[-len(GAINS):]
     sha = overlay_sha256(params, ())
-    results = []
-    for i, o in enumerate(base_obs):
-        results.append(("kufieta, leave one out", assess(fit_baseline(base_obs[:i] + base_obs[i + 1 :], sha), o)))
+    loo = [fit_baseline(base_obs[:i] + base_obs[i + 1 :], sha) for i in range(k)]
     full = fit_baseline(base_obs, sha)
-    for o in other_obs + inj_obs:
-        results.append(("kufieta", assess(full, o)))
     nb = fit_baseline([nist_base], overlay_sha256({}, ()))
-    for o in [nist_rest, *nist_inj_obs]:
-        results.append(("nist, first part vs rest", assess(nb, o)))
-
-    print("\n| robot | log | verdict | changes | events |\n| --- | --- | --- | --- | --- |")
-    for robot, e in results:
-        ch = "; ".join(f"{c['joint']}: {c['effect']}.{c['parameter']} = {c['value']:.3g} "
-                       f"({c['interval'][0]:.3g}..{c['interval'][1]:.3g})" for c in e["changes"]) or "-"
-        ev = "; ".join(f"{x['t_start_s']:.2f}-{x['t_end_s']:.2f} s "
-                       f"{','.join(j.split('_joint')[0] for j in x['joints'])} {x['peak_A']:.2f} A"
-                       for x in e["events"]) or "-"
-        print(f"| {robot} | {e['log']} | {e['verdict']} | {ch} | {ev} |")
+    judged = [("kufieta, leave one out", loo[i], o) for i, o in enumerate(base_obs)] + \
+        [("kufieta", full, o) for o in other_obs + inj_obs] + \
+        [("nist, first part vs rest", nb, o) for o in [nist_rest, *nist_inj_obs]]
+    quiet = ur_smoothed(logs[QUIET])
+    label_sets = {PUSHED: labels(logs[PUSHED], quiet),
+                  STANDSTILL: accel_labels(STANDSTILL),
+                  f"{STANDSTILL} (UR residual labels, earlier)": labels(logs[STANDSTILL],
+                                                                         quiet[standing_start(logs[QUIET])])}
+    by_name = {o.name: o for _, _, o in judged}
+    print("\nPer channel alone: the largest transient as a multiple of its limit (>= 1: an event)")
+    separation: dict = {}
+    for c in ("current", "position"):
+        healthy = {o.name: reach(b, o, c) for _, b, o in judged[: k + 2] + judged[-len(GAINS) - 1 : -len(GAINS)]}
+        pushed = {}
+        for name, labs in label_sets.items():
+            o = by_name[f"{name.split(' ')[0]}.csv.gz"]
+            pushed[name] = [reach(full, o, c, (lab["t_start_s"] - 0.5, lab["t_end_s"] + 0.5), lab["joints"])
+                            for lab in labs]
+        separation[c] = {"undisturbed": healthy, "labels": pushed}
+        print(f"  {c}: undisturbed runs " + ", ".join(f"{v:.2f}" for v in healthy.values()))
+        for name, v in pushed.items():
+            print(f"    labels of {name}: " + ", ".join(f"{x:.2f}" for x in v))
+    variants = {}
+    for variant, channels in VARIANTS.items():
+        results = [(robot, assess(b, o, channels)) for robot, b, o in judged]
+        by = {e["log"]: e for _, e in results}
+        pushes = {}
+        for name, labs in label_sets.items():
+            ev = by[f"{name.split(' ')[0]}.csv.gz"]["events"]
+            pushes[name] = [{**lab, "found": found(lab, ev)} for lab in labs]
+        variants[variant] = {"results": [{"robot": r, **e} for r, e in results], "pushes": pushes}
+        quiet_alarms = sum(e["verdict"] != "consistent" for _, e in results[: k + 2] + results[-len(GAINS) - 1 :
+                                                                                              -len(GAINS)])
+        print(f"\n## {variant}: {quiet_alarms} of {UNDISTURBED} undisturbed runs not consistent; labels found: "
+              + "; ".join(f"{n}: {sum(x['found'] for x in p)} of {len(p)}" for n, p in pushes.items()))
+        print("\n| robot | log | verdict | changes | events |\n| --- | --- | --- | --- | --- |")
+        for robot, e in results:
+            ch = "; ".join(f"{c['joint']}: {c['effect']}.{c['parameter']} = {c['value']:.3g} "
+                           f"({c['interval'][0]:.3g}..{c['interval'][1]:.3g})" for c in e["changes"]) or "-"
+            ev = "; ".join(f"{x['t_start_s']:.2f}-{x['t_end_s']:.2f} s "
+                           f"{','.join(j.split('_joint')[0] for j in x['joints'])} "
+                           f"({'+'.join(x['channels'])}) {x['peak_A']:.2f} A {x['peak_rad'] * 1e3:.3f} mrad"
+                           for x in e["events"]) or "-"
+            print(f"| {robot} | {e['log']} | {e['verdict']} | {ch} | {ev} |")
+        for name, labs in pushes.items():
+            print(f"\n{name}: {sum(lab['found'] for lab in labs)} of {len(labs)} labelled pushes found")
+            for lab in labs:
+                print(f"  {lab['t_start_s']:.2f}-{lab['t_end_s']:.2f} s {', '.join(lab['joints'])}: "
+                      f"{'found' if lab['found'] else 'missed'}")
     sep = {"kufieta": separable(full), "nist": separable(nb)}
     for robot, rows in sep.items():
         print(f"\n{robot}: smallest separable change (lower bound), offset [A] / gain [-]: " + "; ".join(
             f"{j.split('_joint')[0]} {r.get('offset_A', float('nan')):.3f} / {r.get('gain', float('nan')):.3f}"
             for j, r in rows.items()))
-    by = {e["log"]: e for _, e in results}
-    pushes = {}
-    quiet = ur_smoothed(logs[QUIET])
-    refs = {PUSHED: quiet, STANDSTILL: quiet[standing_start(logs[QUIET])]}
-    for name in (PUSHED, STANDSTILL):
-        labs = labels(logs[name], refs[name])
-        ev = by[f"{name}.csv.gz"]["events"]
-        for lab in labs:
-            lab["found"] = found(lab, ev)
-        pushes[name] = labs
-        print(f"\n{name}: {sum(lab['found'] for lab in labs)} of {len(labs)} labelled pushes found")
-        for lab in labs:
-            print(f"  {lab['t_start_s']:.2f}-{lab['t_end_s']:.2f} s {', '.join(lab['joints'])}: "
-                  f"{'found' if lab['found'] else 'missed'}")
-    out = {"overlay": params, "results": [{"robot": r, **e} for r, e in results], "pushes": pushes, "separable": sep,
-           "identify_s": t_ident, "wall_s": time.perf_counter() - t0}
+    out = {"overlay": params, **variants["current only"], "variants": variants, "channel_reach": separation,
+           "separable": sep, "identify_s": t_ident, "wall_s": time.perf_counter() - t0}
     from ur5fault.util.io import write_json_atomic
 
     Path(args.out).parent.mkdir(parents=True, exist_ok=True)

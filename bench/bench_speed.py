@@ -3,11 +3,14 @@
 Measures in one process, on the same model, physics step and number of steps:
   (a) bare mj_step of the UR5 model from a Python loop, no drive models;
   (a0) bare mj_step from a compiled (numba) loop calling libmujoco by address: the true floor;
+  (a0d) the same with a damping on every joint, as the drive's friction slope sets it in every run: MuJoCo's Euler
+      step then factorises M + h D once more per step (the floor of the model's physics);
   (b) the full-fidelity simulation of one run (batch of one), compiled step loop;
   (c) the same in batches of 8, 32 and 128 runs on one thread;
   (t) a batch of 32 spread over all cores: numba threads in one process against one process per core;
   (d) optionally (--campaign), the default campaign end to end on all cores, Parquet included.
-(a), (a0) and (b) are measured --repeat times, interleaved; their ratios are reported as min and median.
+(a), (a0), (a0d) and (b) are measured --repeat times, interleaved; their ratios are reported as min and median;
+each batch (c) is also reported against (a0d) measured right before and after it.
 Prints one JSON line: per-run-step cost of each in microseconds, ratios to (a) and (a0) per core,
 and peak memory per run.
 
@@ -44,8 +47,12 @@ def bare_mj_step_us(sim: Simulator, n_steps: int, clock=time.perf_counter) -> fl
     return (clock() - t) / n_steps * 1e6
 
 
-def bare_compiled_us(sim: Simulator, n_steps: int, clock=time.perf_counter) -> float:
-    """(a0) the same steps from a compiled loop (``sim/mjlib.py``: ``mj_step`` called by its address)."""
+def bare_compiled_us(sim: Simulator, n_steps: int, clock=time.perf_counter, damping_Nms_per_rad: float = 0.0) -> float:
+    """(a0) the same steps from a compiled loop (``sim/mjlib.py``: ``mj_step`` called by its address); with
+    ``damping_Nms_per_rad`` > 0 on every joint (a0d) Euler's implicit damping is on (its cost does not depend on
+    the value: MuJoCo factorises M + h D whenever any joint has damping)."""
+    import copy
+
     from numba import njit
 
     from ur5fault.sim.mjlib import MJ_STEP_ADDRESS, call_step
@@ -56,6 +63,9 @@ def bare_compiled_us(sim: Simulator, n_steps: int, clock=time.perf_counter) -> f
             call_step(fn, m, d)
 
     m = sim.model
+    if damping_Nms_per_rad:
+        m = copy.deepcopy(m)
+        m.dof_damping[:] = damping_Nms_per_rad
     d = mujoco.MjData(m)
     d.qpos[:] = pick_and_place().q_set_rad[0]
     mujoco.mj_forward(m, d)
@@ -142,13 +152,15 @@ def main(argv=None) -> int:
     }
     sim.run(pick_and_place(), runs_for(1), duration_s=0.01)  # compile / load the kernels once
     bare_compiled_us(sim, 1000)
-    a, a0, b = [], [], []
-    for _ in range(args.repeat):  # interleaved: a load change on the shared machine hits all three alike
+    a, a0, a0d, b = [], [], [], []
+    for _ in range(args.repeat):  # interleaved: a load change on the shared machine hits all four alike
         a.append(bare_mj_step_us(sim, max(n_steps, 20000), clock))
         a0.append(bare_compiled_us(sim, max(n_steps, 20000), clock))
+        a0d.append(bare_compiled_us(sim, max(n_steps, 20000), clock, damping_Nms_per_rad=1.0))
         b.append(full_fidelity_us(sim, 1, dur, clock=clock))
     out["a_bare_mj_step_us"] = float(np.median(a))
     out["a0_bare_compiled_loop_us"] = float(np.median(a0))
+    out["a0d_bare_compiled_damped_us"] = float(np.median(a0d))
     out["b_one_run_us_per_step"] = float(np.median(b))
     out["b_one_run_wall_s"] = out["b_one_run_us_per_step"] * n_steps / 1e6
     rb = np.array(b) / np.array(a)
@@ -156,12 +168,20 @@ def main(argv=None) -> int:
     out["ratio_b_to_a_min"], out["ratio_b_to_a_median"] = float(rb.min()), float(np.median(rb))
     out["ratio_b_to_a0_min"], out["ratio_b_to_a0_median"] = float(rb0.min()), float(np.median(rb0))
     out["ratio_a_to_a0_median"] = float(np.median(np.array(a) / np.array(a0)))
+    out["ratio_a0d_to_a0_median"] = float(np.median(np.array(a0d) / np.array(a0)))
+    out["ratio_b_to_a0d_median"] = float(np.median(np.array(b) / np.array(a0d)))
     best = None
     for n in (8, 32, 128):
+        # the floor (a0d) right before and after the batch as well: on a loaded machine the medians above may be
+        # minutes old when a batch runs
+        before = bare_compiled_us(sim, max(n_steps, 20000), clock, damping_Nms_per_rad=1.0)
         us = full_fidelity_us(sim, n, dur if n <= 32 or args.quick else dur / 4, clock=clock)
+        after = bare_compiled_us(sim, max(n_steps, 20000), clock, damping_Nms_per_rad=1.0)
         out[f"c_batch{n}_us_per_run_step"] = us
+        out[f"ratio_c_batch{n}_to_a0d_adjacent"] = 2.0 * us / (before + after)
         out[f"ratio_c_batch{n}_to_a"] = us / out["a_bare_mj_step_us"]
         out[f"ratio_c_batch{n}_to_a0"] = us / out["a0_bare_compiled_loop_us"]
+        out[f"ratio_c_batch{n}_to_a0d"] = us / out["a0d_bare_compiled_damped_us"]
         if best is None or us < best[1]:
             best = (n, us)
     cores = os.cpu_count() or 1

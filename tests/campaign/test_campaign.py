@@ -462,6 +462,30 @@ def test_schema_metadata_and_manifest(tiny_done):
     assert m["git_revision"] is None or len(m["git_revision"]["commit"]) == 40
 
 
+def test_manifest_takes_provenance_once_per_invocation(tmp_path, monkeypatch):
+    """The final manifest keeps the start's git revision and dependency versions: the package metadata is walked
+    and git asked once per run of the command, not again at the end."""
+    import json
+
+    from ur5fault.util import provenance
+
+    calls = {"dependency_versions": 0, "git_revision": 0}
+
+    def counted(name, real):
+        def f(*a, **k):
+            calls[name] += 1
+            return real(*a, **k)
+        return f
+
+    for name in calls:
+        monkeypatch.setattr(provenance, name, counted(name, getattr(provenance, name)))
+    out = tmp_path / "out"
+    run_quiet(load_campaign(tiny(tmp_path, dur=0.05, levels="0.1")), out)
+    assert calls == {"dependency_versions": 1, "git_revision": 1}
+    m = json.loads((out / "manifest.json").read_text())
+    assert m["state"] == "complete" and m["dependencies"].get("numpy") and "git_revision" in m
+
+
 def test_timeseries_asked_for_later_are_made(tmp_path, tiny_done):
     import json
 

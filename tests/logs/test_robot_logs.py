@@ -119,11 +119,18 @@ def test_payload_for_a_format_that_carries_its_own_is_refused(capsys, tmp_path):
     assert read_nist(NIST_LOG).payload_kg == pytest.approx(0.726)
 
 
-@pytest.mark.parametrize("extra, flag", [((), "--payload-kg"), (("--payload-kg", "0"), "--tcp-offset-m")])
-def test_rtde_without_payload_is_refused_not_defaulted(capsys, tmp_path, extra, flag):
-    rc = main(["discrepancy", str(KUFIETA_RUNS[0]), "--format", "rtde", *extra, "--out", str(tmp_path / "o")])
+@pytest.mark.parametrize("command, extra, text", [
+    ("identify", (), "payload unknown (no --payload-kg): this command needs the payload stated"),
+    ("identify", ("--payload-kg", "unknown"), "payload unknown (no --payload-kg): this command needs the payload"),
+    ("discrepancy", ("--payload-kg", "0"), "--tcp-offset-m (tcp_offset_m) missing: a stated payload needs"),
+])
+def test_rtde_without_payload_is_refused_not_defaulted(capsys, tmp_path, command, extra, text):
+    """identify cannot fit an unknown payload (discrepancy can: tests/discrepancy/test_payload.py); a stated mass
+    without its position is refused by every command."""
+    out = ["--out", str(tmp_path / ("p.yaml" if command == "identify" else "o"))]
+    rc = main([command, str(KUFIETA_RUNS[0]), "--format", "rtde", *extra, *out])
     err = capsys.readouterr().err.strip().splitlines()
-    assert rc == 2 and len(err) == 1 and f"{flag} (" in err[0] and "missing" in err[0], err
+    assert rc == 2 and len(err) == 1 and text in err[0], err
     log = read_rtde(KUFIETA_RUNS[0])
     assert log.payload_kg is None and not log.payload_known
     with pytest.raises(ParameterError, match="payload and tool offset unknown"):

@@ -210,7 +210,8 @@ def _run_locked(camp: Campaign, out: Path, jobs: int, backend: str, client, prog
             say(capped)
         say(f"campaign {camp.name}: {len(camp.runs)} runs (twins included), {len(todo)} to simulate -> {out}")
         t0 = time.perf_counter()
-        write_json_atomic(out / "manifest.json", build_manifest(camp, ids, None, "running", backend, jobs, save_ts, t0))
+        started = build_manifest(camp, ids, None, "running", backend, jobs, save_ts, t0)
+        write_json_atomic(out / "manifest.json", started)
         ts_dir = out / "timeseries" if save_ts else None
         batches = plan_batches(camp, todo, jobs)
         total, done = len(camp.runs), len(camp.runs) - len(todo)
@@ -242,7 +243,7 @@ def _run_locked(camp: Campaign, out: Path, jobs: int, backend: str, client, prog
             finally:
                 report.close()
             features = consolidate(out, records, relabel)
-        manifest = build_manifest(camp, ids, features, "complete", backend, jobs, save_ts, t0)
+        manifest = build_manifest(camp, ids, features, "complete", backend, jobs, save_ts, t0, earlier=started)
         manifest["runs_resimulated"] = {"missing": len(found.missing), "bad": len(found.bad),
                                         "changed": len(found.changed)}
         write_json_atomic(out / "manifest.json", manifest)

@@ -45,7 +45,7 @@ def cmd_discrepancy(args: argparse.Namespace) -> int:
                              max_terms=args.max_terms, jobs=jobs, progress=not args.quiet)
     check_writable(args.out, folder=True)
     check_files_length([e.path for e in log_entries(args)], "discrepancy")  # an hour-long log: refused in seconds
-    logs, held = read_log_options(args)
+    logs, held = read_log_options(args, allow_unknown=True)  # an unknown payload is fitted (and said so)
     check_logs_length([*logs, *held], "discrepancy")
     overlay = Overlay.load(args.model) if args.model else None
     if not logs:
@@ -55,7 +55,8 @@ def cmd_discrepancy(args: argparse.Namespace) -> int:
                                                ).joint_temperature_C):
             print(f"note: {line}", file=sys.stderr)
     model.fit(logs if len(logs) > 1 else logs[0], dict(overlay.params) if overlay else None,
-              overlay.effects if overlay else (), hold_out=held)
+              overlay.effects if overlay else (), hold_out=held,
+              on_payload=lambda line: print(line, file=sys.stderr, flush=True))
     log = model.replay_.log
     paths = write_report(model, Path(args.out))
     summ = summary(model)

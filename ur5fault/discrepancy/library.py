@@ -47,6 +47,11 @@ PAYLOAD_PROBE_KG = 0.5
 CONDITIONS = {"temperature"}
 
 
+def kinds() -> list[str]:
+    """The effect kinds the library screens, in order."""
+    return list(dict.fromkeys(name for name, _ in PROBES if name not in CONDITIONS))
+
+
 def candidates(payload_kg: float, joints: Sequence[int] = range(N_JOINTS),
                kinds: Sequence[str] | None = None, params: RobotParams | None = None) -> list[LibraryCandidate]:
     """Every candidate of the library (optionally only some effect kinds), per-joint ones on ``joints``.

@@ -17,7 +17,7 @@ from __future__ import annotations
 import dataclasses
 import logging
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 import numpy as np
 
@@ -29,7 +29,9 @@ from ..twin.replay import LogReplay, Replayed
 from ..twin.residuals import FIT_FRACTION, fit_samples, localise, rms_table, unexplained
 from . import steps
 from .judging import Finding, SearchStep, final_verdicts
+from .library import kinds as library_kinds
 from .multilog import MultiReplay, per_log
+from .payload import PAYLOAD_KINDS, resolve_payloads
 from .refinement import FindingSet, Refined, polish
 from .rescreen import rescreen
 from .search import columns_of
@@ -108,11 +110,21 @@ class DiscrepancyModel:
 
     # ------------------------------------------------------------------------------------------- fit
     def fit(self, log: MeasuredLog | Sequence[MeasuredLog], params_overrides: dict | None = None,
-            base_effects: Sequence[EffectSpec] = (), hold_out: Sequence[MeasuredLog] = ()) -> DiscrepancyModel:
+            base_effects: Sequence[EffectSpec] = (), hold_out: Sequence[MeasuredLog] = (),
+            on_payload: Callable[[str], None] | None = None) -> DiscrepancyModel:
         """Fit ``log`` (one log, or several runs of one robot fitted jointly), each split in time at
-        ``fit_fraction``; ``hold_out``: further runs held out whole (judged and scored, never fitted)."""
+        ``fit_fraction``; ``hold_out``: further runs held out whole (judged and scored, never fitted).
+        A log whose payload is unknown has it fitted first (:mod:`.payload`; ``payload_``), and ``on_payload``
+        gets one line per such log."""
         t0 = time.perf_counter()
         logs = [log] if isinstance(log, MeasuredLog) else list(log)
+        t_payload = time.perf_counter()
+        logs, hold_out, self.payload_ = resolve_payloads(logs, hold_out, self.fit_fraction, params_overrides,
+                                                         base_effects, seed=WORKFLOW_SEED, say=on_payload)
+        kinds = self.kinds
+        if not all(r.known for r in self.payload_.values()):  # a fitted payload is a nuisance, not a finding
+            kinds = [k for k in (kinds if kinds is not None else library_kinds()) if k not in PAYLOAD_KINDS]
+        t_payload = time.perf_counter() - t_payload
         rp: LogReplay | MultiReplay
         if len(logs) == 1 and not hold_out:
             rp = LogReplay(logs[0], params_overrides, base_effects, seed=WORKFLOW_SEED, jobs=self.jobs)
@@ -130,9 +142,11 @@ class DiscrepancyModel:
         self.n_fit_, self.n_all_, self.n_screen_ = n_fit, n_all, n_scr
         stages = _Stages(self.progress)
         timings: dict[str, float] = {}
+        if not all(r.known for r in self.payload_.values()):
+            timings["payload fit"] = t_payload
 
         t = time.perf_counter()
-        lib = steps.screen_library(rp, n_scr, log.payload_kg, self.kinds, self.max_effects,
+        lib = steps.screen_library(rp, n_scr, log.payload_kg, kinds, self.max_effects,
                                    stages.start("screening the library"))
         timings["library screening"] = time.perf_counter() - t
         logger.info("library screened in %.0f s: %s", timings["library screening"],

@@ -158,6 +158,7 @@ def summary(model: DiscrepancyModel, bare_step_us: float | None = None) -> dict[
         "rms_fit_after": model.rms_fit_after_,
         "rms_controller_model_current_A": model.rms_controller_model_,
         "per_log": model.per_log_,
+        "payload": {name: rec.to_json() for name, rec in model.payload_.items()},
         "unexplained": model.unexplained_,
         "localisation_before": model.localisation_,
         "search": [vars(s) for s in model.search_],
@@ -219,6 +220,8 @@ def _markdown(model: DiscrepancyModel, summ: dict[str, Any], figs: list[Path]) -
     for loc in summ["localisation_before"]:
         lines.append(f"| {loc['signal']} | {loc['joint']} | {loc['rms']:.4g} | {loc['rms_over_noise']:.1f} | "
                      f"{loc['largest_where']} ({loc['rms_by_condition'][loc['largest_where']]:.4g}) |")
+    lines += ["", "## Payload (the job's, not the robot's: not in model.yaml)", ""]
+    lines += [f"- {rec.line()}" for rec in model.payload_.values()]
     lib = [sentence(f) for f in model.effects_]
     terms = [sentence(f) for f in model.terms_]
     lines += ["", "## Effects of the library found", ""]

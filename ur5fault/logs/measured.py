@@ -10,13 +10,13 @@ from numpy.typing import NDArray
 from ..errors import LogFormatError, ParameterError
 from ..sim.trajectories import Trajectory
 
-#: why a log without its payload is refused. Measured on the NIST log (payload 0.726 kg known): a point-mass
-#: payload fitted to the motor currents of all joints, with each joint's torque constant free (a second robot's
-#: is not the packaged one), leaves the current residual flat in the mass (J2: 0.179 A at 0 kg, 0.181 A at
-#: 0.726 kg, 0.183 A at 1.5 kg) and landed at 0.02 kg; with the torque constants fixed it absorbs their error.
-UNKNOWN_PAYLOAD = ("the payload is not recorded in this format and the motor currents cannot separate it from the "
-                   "robot's own torque constants; give --payload-kg and --tcp-offset-m (0 and 0 0 0 for a bare "
-                   "flange)")
+#: why a command other than ``ur5fault discrepancy`` refuses a log without its payload. A payload on the flange
+#: and the robot's torque constants both scale the gravity current of the shoulder and elbow, so fitting it needs
+#: the per-log fit of :mod:`ur5fault.discrepancy.payload`, which reports how well the log separates them (the NIST
+#: log, 0.726 kg, declared unknown at its tool offset: 0.64 kg, 95 % -0.07..1.34; docs/validation.md).
+UNKNOWN_PAYLOAD = ("this command needs the payload stated: give --payload-kg and --tcp-offset-m (0 and 0 0 0 for a "
+                   "bare flange); `ur5fault discrepancy` fits an unknown payload and reports it (summary.json "
+                   "\"payload\")")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -26,8 +26,8 @@ class MeasuredLog:
     ``current_A`` is in joint-positive sense; optional arrays are ``None`` when absent. The rows are on the
     controller's tick grid; ``logged`` marks the ticks the robot wrote (``None``: all of them; see
     :mod:`.regular`). ``payload_kg`` / ``tcp_offset_m`` are ``None`` when the log does not say them and the
-    caller did not either: unknown, never a silent default (the workflows refuse such a log with one line,
-    :meth:`require_payload`).
+    caller did not either: unknown, never a silent default (``ur5fault discrepancy`` fits it and says so; the other
+    workflows refuse such a log with one line, :meth:`require_payload`).
     ``notes``: what the reader assumed or left out, one line each, for the user and the records.
     """
 

@@ -53,8 +53,9 @@ def test_monitor_json_schema(monitored):
         assert set(e) == {"log", "verdict", "changes", "events"}
         assert e["verdict"] in ("consistent", "changed", "anomaly")
         for ev in e["events"]:
-            assert set(ev) == {"t_start_s", "t_end_s", "joints", "peak_A"}
+            assert set(ev) == {"t_start_s", "t_end_s", "joints", "channels", "peak_A", "peak_rad"}
             assert ev["t_start_s"] <= ev["t_end_s"] and ev["peak_A"] > 0 and ev["joints"]
+            assert ev["channels"] == ["current"]  # the default: events on the current alone
     for f in ("report.md", "baseline.json", "monitor_1.png", "monitor_2.png"):
         assert (out / f).is_file()
 
@@ -94,6 +95,7 @@ def test_baseline_stats_reused_and_refused_under_another_overlay(monitored):
     (["--baseline-stats", "NOFILE"], "no such file"),
     (["--baseline-logs", "LOG"], "both monitored and a baseline log"),
     (["--baseline-logs", "LOG", "--jobs", "0"], "--jobs 0 must be at least 1"),
+    (["--baseline-logs", "LOG", "--event-channels", "torque"], "invalid choice: 'torque'"),
 ])
 def test_bad_input_one_line(tmp_path, extra, message):
     model = tmp_path / "model.yaml"

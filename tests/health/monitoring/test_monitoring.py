@@ -19,13 +19,15 @@ PERIOD = 0.008
 
 
 def part(name: str, residual: np.ndarray, moving: bool = True, speed: np.ndarray | None = None,
-         cands=(), X=None, e=None) -> Observed:
+         cands=(), X=None, e=None, position: np.ndarray | None = None, quantum_rad: float = np.nan) -> Observed:
+    """A replayed log part: ``residual`` the current residual, ``position`` the position residual (default 0)."""
     n = residual.shape[0]
     speed = np.full((n, 6), 0.5 if moving else 0.0) if speed is None else speed
     X = np.zeros((0, n, 12)) if X is None else X
     e = np.zeros((n, 12)) if e is None else e
+    position = np.zeros((n, 6)) if position is None else position
     return Observed(name, PERIOD, np.arange(n) * PERIOD, residual, speed > 1e-3, np.ones(n, bool), tuple(cands),
-                    X, e, speed, np.zeros((n, 6)))
+                    X, e, speed, np.zeros((n, 6)), position, np.full(6, quantum_rad))
 
 
 def noise(seed: int, n: int = 2000, sigma: float = 0.1) -> np.ndarray:
@@ -43,7 +45,7 @@ def test_spread_grows_with_speed_as_the_baseline_residual_did():
         runs.append(part(f"r{k}", rng.normal(0.0, 1.0, speed.shape) * np.sqrt(0.05**2 + 0.1**2 * speed),
                          speed=speed))
     b = fit_baseline(runs, "sha")
-    slow, fast = (b.scale[:, 0] + b.scale[:, 1] + b.scale[:, 2] * v for v in (0.1, 1.4))  # moving, no accel.
+    slow, fast = (b.scale[0, :, 0] + b.scale[0, :, 1] + b.scale[0, :, 2] * v for v in (0.1, 1.4))  # moving, no accel.
     np.testing.assert_allclose(np.sqrt(fast / slow), np.sqrt(0.0165 / 0.0035), rtol=0.2)  # 6 x 36 s of noise
 
 
@@ -83,7 +85,7 @@ def test_a_slow_drift_at_rest_is_not_an_event_and_a_push_of_its_size_is():
 
 def test_a_longer_log_gets_a_higher_bar_not_more_false_alarms():
     b = fit_baseline([part(f"r{k}", noise(k)) for k in range(3)], "sha")
-    assert np.all(multiplier(b.tail, 400) > multiplier(b.tail, 100))
+    assert np.all(multiplier(b.tail[0], 400) > multiplier(b.tail[0], 100))
     # 20 undisturbed logs of 64 s from the baseline's own noise: at 1 % per log, at most one may raise an event
     alarms = sum(assess(b, part(f"q{k}", noise(100 + k, n=8000)))["verdict"] != "consistent" for k in range(20))
     assert alarms <= 1
@@ -125,8 +127,13 @@ def test_baseline_round_trip_and_refusals(tmp_path):
     np.testing.assert_array_equal(back.scale, b.scale)
     np.testing.assert_array_equal(back.tail, b.tail)
     assert back.segments == ("a", "b") and back.overlay_sha256 == b.overlay_sha256
-    path.write_text(json.dumps({**b.to_json(), "tail": 3}))
+    np.testing.assert_array_equal(back.quantum_rad, b.quantum_rad)
+    path.write_text(json.dumps({**b.to_json(), "channels": 3}))
     with pytest.raises(ParameterError, match="not a valid monitor baseline"):
+        Baseline.load(path)
+    # the earlier format (current channel only, keys "scale" / "tail" at the top) is refused, not misread
+    path.write_text(json.dumps({**b.to_json(), "format": "ur5fault-monitor-baseline-2"}))
+    with pytest.raises(ParameterError, match="ur5fault-monitor-baseline-2.*expected 'ur5fault-monitor-baseline-3'"):
         Baseline.load(path)
     with pytest.raises(ParameterError, match="too few judged samples"):
         fit_baseline([part("short", noise(4, n=40))], "sha")  # 0.32 s

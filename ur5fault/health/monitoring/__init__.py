@@ -4,9 +4,10 @@ A baseline is a model overlay fitted to the robot (``ur5fault identify`` / ``dis
 residual statistics of healthy runs of that robot replayed under it (:mod:`.baseline`). A new log is
 replayed under the same overlay (:mod:`.observe`, through :class:`ur5fault.twin.LogReplay`) and judged:
 
-* *events* (:mod:`.events`): where the current residual leaves its own recent level (a running median) by more
-  than the baseline runs' model error does at the same motion, beyond a bar for the log's length: a push, a
-  collision, a transient, not a drift; ``{"t_start_s", "t_end_s", "joints", "peak_A"}`` each;
+* *events* (:mod:`.events`): where the current residual (optionally the position residual too) leaves its own
+  recent level (a running median) by more than the baseline runs' model error does at the same motion, beyond a
+  bar for the log's length: a push, a collision, a transient, not a drift;
+  ``{"t_start_s", "t_end_s", "joints", "channels", "peak_A", "peak_rad"}`` each;
 * *changes* (:mod:`.changes`): a library effect of the discrepancy workflow whose estimate on the new log
   (outside its events) lies outside the spread of its estimates over time blocks of the baseline runs (their
   drift within a run included): a persistent change, named with size and interval.

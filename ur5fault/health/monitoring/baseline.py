@@ -1,8 +1,9 @@
 """The baseline of a robot: its fitted model overlay and the residual statistics of healthy runs under it.
 
 :func:`fit_baseline` takes healthy runs of the robot replayed under the overlay (:func:`.observe.observe`) and
-keeps, per joint, the spread model of the current residual's transient and the tail of its normalised window
-maxima (:mod:`.events`), and per library candidate the mean and spread of its estimates over time blocks of the
+keeps, per channel (current and position residual) and joint, the spread model of the residual's transient and
+the tail of its normalised window maxima (:mod:`.events`), per joint the quantum of the measured positions, and
+per library candidate the mean and spread of its estimates over time blocks of the
 runs (:mod:`.changes`). It is written
 as ``baseline.json`` (:meth:`Baseline.to_json`) with the SHA-256 of the overlay it belongs to, so a later
 ``ur5fault monitor --baseline-stats`` reuses it only with that same overlay.
@@ -24,6 +25,7 @@ from ...errors import ParameterError
 from ...sim.axes import JOINT_NAMES, N_JOINTS
 from .changes import BLOCK_S, block_estimates, spread
 from .events import (
+    CHANNELS,
     FEATURES,
     LEVEL_S,
     SMOOTH_S,
@@ -32,13 +34,14 @@ from .events import (
     fit_scale,
     fit_tail,
     judged_rows,
+    quantum_sigma,
     sigma,
     transient,
     window_maxima,
 )
 from .observe import Observed
 
-FORMAT = "ur5fault-monitor-baseline-2"
+FORMAT = "ur5fault-monitor-baseline-3"
 
 
 def overlay_sha256(params: dict, effects: Sequence) -> str:
@@ -49,23 +52,29 @@ def overlay_sha256(params: dict, effects: Sequence) -> str:
 
 @dataclasses.dataclass(frozen=True)
 class Baseline:
-    """Residual statistics of healthy runs under one overlay (module docstring). ``scale`` ``(6, 4)``: the
-    transient's spread coefficients on :data:`~.events.FEATURES`; ``tail`` ``(6, 3)``: ``(u0, beta, p0)`` of
-    its normalised window maxima; ``candidates``: ``{label: (mean, variance, n_blocks)}`` of the coefficient."""
+    """Residual statistics of healthy runs under one overlay (module docstring). ``scale`` ``(2, 6, 4)``: per
+    channel (:data:`~.events.CHANNELS`) the transient's spread coefficients on :data:`~.events.FEATURES`;
+    ``tail`` ``(2, 6, 3)``: ``(u0, beta, p0)`` of its normalised window maxima; ``quantum_rad`` ``(6,)``: the
+    largest position quantum of any baseline run (NaN: the joint never moved); ``candidates``:
+    ``{label: (mean, variance, n_blocks)}`` of the coefficient."""
 
     overlay_sha256: str
     period_s: float
     segments: tuple[str, ...]
     scale: NDArray
     tail: NDArray
+    quantum_rad: NDArray
     candidates: dict[str, tuple[float, float, int]]
 
     def to_json(self) -> dict[str, Any]:
         return {"format": FORMAT, "overlay_sha256": self.overlay_sha256, "period_s": self.period_s,
                 "smooth_s": SMOOTH_S, "level_s": LEVEL_S, "block_s": BLOCK_S, "segments": list(self.segments),
-                "scale": {JOINT_NAMES[j]: dict(zip(FEATURES, map(float, self.scale[j]))) for j in range(N_JOINTS)},
-                "tail": {JOINT_NAMES[j]: dict(zip(("u0", "beta", "p0"), map(float, self.tail[j])))
-                         for j in range(N_JOINTS)},
+                "channels": {c: {"scale": {JOINT_NAMES[j]: dict(zip(FEATURES, map(float, self.scale[i, j])))
+                                           for j in range(N_JOINTS)},
+                                 "tail": {JOINT_NAMES[j]: dict(zip(("u0", "beta", "p0"), map(float, self.tail[i, j])))
+                                          for j in range(N_JOINTS)}} for i, c in enumerate(CHANNELS)},
+                "position_quantum_rad": {JOINT_NAMES[j]: None if np.isnan(q) else float(q)
+                                         for j, q in enumerate(self.quantum_rad)},
                 "candidates": {k: {"mean": m, "variance": v, "n_blocks": n}
                                for k, (m, v, n) in self.candidates.items()}}
 
@@ -81,10 +90,15 @@ class Baseline:
                 if data[key] != value:
                     raise ParameterError(f"{where}: written with {key} = {data[key]}, this version uses {value}; "
                                          f"rebuild it with --baseline-logs")
-            scale = np.array([[float(data["scale"][j][f]) for f in FEATURES] for j in JOINT_NAMES])
-            tail = np.array([[float(data["tail"][j][k]) for k in ("u0", "beta", "p0")] for j in JOINT_NAMES])
+            ch = data["channels"]
+            scale = np.array([[[float(ch[c]["scale"][j][f]) for f in FEATURES] for j in JOINT_NAMES]
+                              for c in CHANNELS])
+            tail = np.array([[[float(ch[c]["tail"][j][k]) for k in ("u0", "beta", "p0")] for j in JOINT_NAMES]
+                             for c in CHANNELS])
+            quantum = np.array([np.nan if data["position_quantum_rad"][j] is None
+                                else float(data["position_quantum_rad"][j]) for j in JOINT_NAMES])
             return cls(str(data["overlay_sha256"]), float(data["period_s"]), tuple(map(str, data["segments"])),
-                       scale, tail, {str(k): (float(v["mean"]), float(v["variance"]), int(v["n_blocks"]))
+                       scale, tail, quantum, {str(k): (float(v["mean"]), float(v["variance"]), int(v["n_blocks"]))
                                      for k, v in data["candidates"].items()})
         except (KeyError, TypeError, ValueError, AttributeError) as exc:
             raise ParameterError(f"{where}: not a valid monitor baseline ({type(exc).__name__}: {exc})") from None
@@ -102,22 +116,31 @@ class Baseline:
 
 
 def segment(obs: Observed) -> tuple[NDArray, NDArray, NDArray]:
-    """A log part's transient ``h`` ``(n, 6)``, spread features ``(n, 6, 4)`` and judged samples ``(n,)``."""
-    return (transient(obs.residual_A, obs.period_s),
+    """A log part's transients ``h`` ``(2, n, 6)`` (current [A], position [rad]: :data:`~.events.CHANNELS`),
+    spread features ``(n, 6, 4)`` and judged samples ``(n,)``."""
+    return (np.stack([transient(obs.residual_A, obs.period_s), transient(obs.position_residual_rad, obs.period_s)]),
             features(obs.moving, obs.speed_rad_s, obs.accel_rad_s2, obs.period_s),
             judged_rows(obs.logged, obs.period_s))
 
 
-def fit_events(segs: list[tuple[NDArray, NDArray, NDArray]], period_s: float) -> tuple[NDArray, NDArray]:
-    """Spread coefficients ``(6, 4)`` on all segments, and the tail ``(6, 3)`` of the normalised window maxima.
-    With two or more segments each segment is normalised by the spread fitted on the others (leave one out), so
-    the tail holds how far a healthy run the model was not fitted on strays, not how well it fits its own."""
-    coef = fit_scale(segs)
-    maxima = []
-    for k, (h, f, ok) in enumerate(segs):
-        c = fit_scale(segs[:k] + segs[k + 1 :]) if len(segs) >= 2 else coef
-        maxima.append(window_maxima(np.abs(h) / sigma(f, c), ok, period_s))
-    return coef, fit_tail(np.concatenate(maxima))
+def fit_events(segs: list[tuple[NDArray, NDArray, NDArray]], period_s: float, quantum_rad: NDArray
+               ) -> tuple[NDArray, NDArray]:
+    """Per channel, spread coefficients ``(6, 4)`` on all segments and the tail ``(6, 3)`` of the normalised
+    window maxima, stacked ``(2, 6, 4)``, ``(2, 6, 3)``. With two or more segments each segment is normalised by
+    the spread fitted on the others (leave one out), so the tail holds how far a healthy run the model was not
+    fitted on strays, not how well it fits its own."""
+    coefs, tails = [], []
+    for i in range(len(CHANNELS)):
+        one = [(h[i], f, ok) for h, f, ok in segs]
+        floor = quantum_sigma(quantum_rad) if CHANNELS[i] == "position" else 0.0
+        coef = fit_scale(one)
+        maxima = []
+        for k, (h, f, ok) in enumerate(one):
+            c = fit_scale(one[:k] + one[k + 1 :]) if len(one) >= 2 else coef
+            maxima.append(window_maxima(np.abs(h) / sigma(f, c, floor), ok, period_s))
+        coefs.append(coef)
+        tails.append(fit_tail(np.concatenate(maxima)))
+    return np.stack(coefs), np.stack(tails)
 
 
 def fit_baseline(healthy: Sequence[Observed], overlay_sha: str) -> Baseline:
@@ -133,7 +156,9 @@ def fit_baseline(healthy: Sequence[Observed], overlay_sha: str) -> Baseline:
     if sum(int(ok.sum()) for _, _, ok in segs) * period < 2 * WINDOW_S:
         raise ParameterError("the baseline logs hold too few judged samples (under 0.5 s after each replay's first "
                              "0.25 s) to fit the event limits")
-    scale, tail = fit_events(segs, period)
+    quantum = np.stack([o.position_quantum_rad for o in healthy])
+    quantum = np.where(np.isnan(quantum).all(axis=0), np.nan, np.nanmax(np.nan_to_num(quantum, nan=-np.inf), axis=0))
+    scale, tail = fit_events(segs, period, quantum)
     per: dict[str, tuple[list[float], list[float]]] = {}
     for o in healthy:
         for block in block_estimates(o):
@@ -142,4 +167,4 @@ def fit_baseline(healthy: Sequence[Observed], overlay_sha: str) -> Baseline:
                     per.setdefault(label, ([], []))[0].append(est.theta)
                     per[label][1].append(est.se)
     cands = {k: spread(th, se) for k, (th, se) in per.items()}
-    return Baseline(overlay_sha, period, tuple(o.name for o in healthy), scale, tail, cands)
+    return Baseline(overlay_sha, period, tuple(o.name for o in healthy), scale, tail, quantum, cands)

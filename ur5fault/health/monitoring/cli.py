@@ -27,6 +27,10 @@ def register(sub) -> None:
                      help="baseline.json written by an earlier ur5fault monitor with the same overlay; this or "
                           "--baseline-logs is required")
     p.add_argument("--out", required=True, help="output folder (monitor.json, baseline.json, report.md, figures)")
+    p.add_argument("--event-channels", nargs="+", choices=("current", "position"), default=["current"],
+                   metavar="CHANNEL",
+                   help="the residuals events are judged on: current (default) and/or position (the measured "
+                        "tracking error less the twin's; each at half the false-alarm probability when both)")
     p.add_argument("--jobs", type=int, help="worker processes for the simulation batches (default: all cores)")
     p.set_defaults(func=cmd_monitor)
 
@@ -74,8 +78,9 @@ def cmd_monitor(args: argparse.Namespace) -> int:
     if stats is None:
         stats = fit_baseline([observe(g, params, effects, jobs=jobs) for g in healthy], sha)
     observed = [observe(g, params, effects, jobs=jobs) for g in logs]
-    entries = [assess(stats, o) for o in observed]
-    paths = write(Path(args.out), stats, observed, entries, args.baseline)
+    channels = tuple(dict.fromkeys(args.event_channels))
+    entries = [assess(stats, o, channels) for o in observed]
+    paths = write(Path(args.out), stats, observed, entries, args.baseline, channels)
     for e in entries:
         print(f"{e['log']}: {e['verdict']} ({len(e['changes'])} changes, {len(e['events'])} events)")
     print(f"wrote {', '.join(str(p) for p in paths[:2])}, {paths[-1]}")

@@ -1,5 +1,5 @@
-"""Transient events: where a log's current residual leaves its own recent level by more than the baseline's
-model error does at the same motion.
+"""Transient events: where a log's current (or position) residual leaves its own recent level by more than the
+baseline's model error does at the same motion.
 
 *Transient, not drift.* The residual (measured - simulated current under the baseline model) is smoothed by a
 centred moving average of :data:`SMOOTH_S` (sensor noise averages out; a push keeps its peak) and its own recent
@@ -20,10 +20,18 @@ scale = mean excess). For a log of ``n_w`` windows the multiplier is the level t
 ``n_w x 6`` joint-windows exceed with probability :data:`FALSE_ALARM_PER_LOG` together: a longer log gets a
 higher bar, not more false alarms. Nothing is set on the runs being monitored.
 
-An event is a stretch where some joint's ``|h|`` exceeds ``multiplier x sigma``; stretches closer than
-:data:`MERGE_S` (on any joints) are one event, ``peak_A`` its largest ``|h|``. The first :data:`SETTLE_S` of a
-replay is not judged (it starts from the log's first sample with the model's own friction state).
-Shapes: ``(n, 6)`` per sample and joint; scale coefficients ``(6, 4)``; tail ``(6, 3)`` ``(u0, beta, p0)``.
+*Channels.* The same is done for the position residual (measured joint position - the twin's joint angle: the
+measured tracking error less the twin's), with its own spread, tail and limit (:data:`CHANNELS`); its spread is
+never below the readings' rounding error (:func:`quantum_sigma`) and its limit never below
+:data:`QUANTUM_FLOOR` quanta. The channels judged (:data:`DEFAULT_CHANNELS` unless asked) share the
+false-alarm probability evenly.
+
+An event is a stretch where some joint's ``|h|`` exceeds ``multiplier x sigma`` on a judged channel; stretches
+closer than :data:`MERGE_S` (on any joints and channels) are one event, ``peak_A`` / ``peak_rad`` the largest
+``|h|`` of each channel on its joints. The first :data:`SETTLE_S` of a replay is not judged (it starts from the
+log's first sample with the model's own friction state).
+Shapes: ``(n, 6)`` per sample and joint; scale coefficients ``(6, 4)``; tail ``(6, 3)`` ``(u0, beta, p0)`` per
+channel.
 """
 
 from __future__ import annotations
@@ -57,6 +65,20 @@ FALSE_ALARM_PER_LOG = 0.01
 SETTLE_S = REVERSAL_WINDOW_S
 #: the features of the spread model, in order
 FEATURES = ("1", "moving", "|qd| [rad/s]", "|qdd| [rad/s^2]")
+#: the residuals events are judged on (measured - simulated): the motor current and the joint position reading
+#: (the measured tracking error minus the twin's); each has its own spread model, tail and limit
+CHANNELS = ("current", "position")
+#: the unit of each channel
+UNITS = {"current": "A", "position": "rad"}
+#: the channels judged unless asked otherwise: the current alone. On the Kufieta robot the position channel does
+#: not separate pushes from the twin's own position error (docs/monitoring.md): undisturbed runs' transients
+#: (shoulder_lift near rest, 0.1-0.16 mrad) cross its limit on 3 of 8 undisturbed runs, while the pushes stay below
+#: it but one (6.3 mrad on shoulder_pan)
+DEFAULT_CHANNELS = ("current",)
+#: a position limit is never below this many quanta of the joint's reading: quantisation alone moves the
+#: transient by up to one quantum (a smoothed reading between two adjacent levels, less a median on one of them),
+#: and a baseline that happened to hold still on one level has no spread to show it
+QUANTUM_FLOOR = 2.0
 
 
 def smooth(x: NDArray, period_s: float, window_s: float = SMOOTH_S) -> NDArray:
@@ -131,10 +153,19 @@ def fit_scale(segments: Sequence[tuple[NDArray, NDArray, NDArray]]) -> NDArray:
     return coef
 
 
-def sigma(feats: NDArray, coef: NDArray) -> NDArray:
-    """The transient's modelled spread ``(n, 6)`` [A] (floored at a thousandth of its largest value)."""
+def sigma(feats: NDArray, coef: NDArray, floor: NDArray | float = 0.0) -> NDArray:
+    """The transient's modelled spread ``(n, 6)`` (floored at a thousandth of its largest value, and at
+    ``floor`` ``(6,)``)."""
     s2 = np.einsum("njk,jk->nj", feats, coef)
-    return np.sqrt(np.maximum(s2, 1e-6 * np.max(s2, axis=0, keepdims=True) + 1e-18))
+    return np.maximum(np.sqrt(np.maximum(s2, 1e-6 * np.max(s2, axis=0, keepdims=True) + 1e-18)), floor)
+
+
+def quantum_sigma(quantum_rad: NDArray) -> NDArray:
+    """``(6,)``: the rounding error of a reading quantised by ``quantum_rad`` (``step / sqrt(12)``, uniform over
+    one step; 0 where the quantum is unknown): the position channel's spread is never below it. The twin's
+    residual weights take the same floor (:func:`ur5fault.twin.replay.residual_sigma`); without it the spread
+    fitted where the joints barely move is a fraction of a quantum, and the tail fitted on it turns heavy."""
+    return np.nan_to_num(np.asarray(quantum_rad, dtype=float), nan=0.0) / np.sqrt(12.0)
 
 
 def window_maxima(z: NDArray, judged: NDArray, period_s: float) -> NDArray:
@@ -158,10 +189,10 @@ def fit_tail(maxima: NDArray) -> NDArray:
     return out
 
 
-def multiplier(tail: NDArray, n_windows: int) -> NDArray:
+def multiplier(tail: NDArray, n_windows: int, p_log: float = FALSE_ALARM_PER_LOG) -> NDArray:
     """``(6,)``: the level of ``|h| / sigma`` the window maxima of a log of ``n_windows`` windows exceed on any
-    joint with probability :data:`FALSE_ALARM_PER_LOG`."""
-    p = FALSE_ALARM_PER_LOG / (max(n_windows, 1) * tail.shape[0])
+    joint with probability ``p_log`` (a channel's share of :data:`FALSE_ALARM_PER_LOG`)."""
+    p = p_log / (max(n_windows, 1) * tail.shape[0])
     u0, beta, p0 = tail.T
     return u0 + beta * np.log(np.maximum(p0 / p, 1.0))
 
@@ -170,11 +201,19 @@ def n_windows(judged: NDArray, period_s: float) -> int:
     return int(np.ceil(judged.sum() * period_s / WINDOW_S))
 
 
-def find_events(t_s: NDArray, h: NDArray, limit_A: NDArray, judged: NDArray) -> tuple[list[dict], NDArray]:
-    """Events of one log part: ``[{"t_start_s", "t_end_s", "joints", "peak_A"}]`` (``peak_A``: the largest
-    ``|h|`` above the limit in the event) and the exceedance mask ``(n, 6)``."""
-    dev = np.abs(h)
-    over = (dev > limit_A) & judged[:, None]
+def find_events(t_s: NDArray, h: dict[str, NDArray], limits: dict[str, NDArray], judged: NDArray
+                ) -> tuple[list[dict], NDArray]:
+    """Events of one log part: ``[{"t_start_s", "t_end_s", "joints", "channels", "peak_A", "peak_rad"}]`` and the
+    exceedance mask ``(n, 6)`` of all channels together.
+
+    ``h``: the transient of every channel (:data:`CHANNELS`); ``limits``: the limit of each channel judged.
+    An event's ``joints`` and ``channels`` are those that crossed their limit in it; ``peak_A`` / ``peak_rad``:
+    the largest ``|h|`` of the current / position channel on those joints over the event, whether or not that
+    channel crossed (what the other signal did meanwhile)."""
+    over_c = {c: (np.abs(h[c]) > lim) & judged[:, None] for c, lim in limits.items()}
+    over = np.zeros(judged.shape + (N_JOINTS,), bool)
+    for o in over_c.values():
+        over |= o
     rows = np.flatnonzero(over.any(axis=1))
     if not rows.size:
         return [], over
@@ -189,7 +228,10 @@ def find_events(t_s: NDArray, h: NDArray, limit_A: NDArray, judged: NDArray) -> 
     events = []
     for a, b in groups:
         sl = slice(a, b + 1)
-        joints = [JOINT_NAMES[j] for j in range(N_JOINTS) if over[sl, j].any()]
-        peak = float(np.max(np.where(over[sl], dev[sl], 0.0)))
-        events.append({"t_start_s": float(t_s[a]), "t_end_s": float(t_s[b]), "joints": joints, "peak_A": peak})
+        js = [j for j in range(N_JOINTS) if over[sl, j].any()]
+        ev = {"t_start_s": float(t_s[a]), "t_end_s": float(t_s[b]), "joints": [JOINT_NAMES[j] for j in js],
+              "channels": [c for c in CHANNELS if c in over_c and over_c[c][sl].any()]}
+        for c in CHANNELS:
+            ev[f"peak_{UNITS[c]}"] = float(np.abs(h[c][sl][:, js]).max())
+        events.append(ev)
     return events, over

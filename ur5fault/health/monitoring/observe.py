@@ -22,6 +22,7 @@ from ...discrepancy.library import candidates, screen
 from ...discrepancy.model import SCREEN_S, WORKFLOW_SEED
 from ...discrepancy.statistics import weighted
 from ...errors import ParameterError
+from ...identify.sensors import position_quantum
 from ...logs import MeasuredLog
 from ...sim.effects import EffectSpec
 from ...twin.replay import LogReplay
@@ -49,6 +50,13 @@ class Observed:
             weighted residual ``(m, n_channels)`` on the part's first ``m`` samples.
         speed_rad_s, accel_rad_s2: the joint target's absolute speed and acceleration ``(n, 6)`` (the motion the
             event threshold scales with, :mod:`.events`).
+        position_residual_rad: measured joint position reading - the twin's joint angle ``(n, 6)`` [rad]: the
+            measured tracking error (actual - target) minus the twin's, from the same commands. The twin's
+            angle, not its simulated reading: the reading carries the model's simulated sensor noise (about
+            20 urad, ``sensors.resolver_noise_rad``), far above the measured readings' own at rest (one quantum
+            of 2-16 urad on the Kufieta robot), which would hide a push on a standing arm.
+        position_quantum_rad: the quantisation step of each joint's measured position ``(6,)`` [rad]
+            (:func:`ur5fault.identify.sensors.position_quantum`, per joint; NaN where the joint never moves).
     """
 
     name: str
@@ -62,6 +70,8 @@ class Observed:
     e: NDArray
     speed_rad_s: NDArray
     accel_rad_s2: NDArray
+    position_residual_rad: NDArray
+    position_quantum_rad: NDArray
 
     @property
     def n(self) -> int:
@@ -103,4 +113,17 @@ def observe(log: MeasuredLog, params_overrides: dict | None = None, effects: Seq
     qd = np.abs(qd_all[1 : n_all + 1][lo:hi])
     return Observed(name, log.period_s, t[lo:hi], (meas[:, 0] - base.current_A[:hi])[lo:hi],
                     qd > CONDITION_REST_SPEED_RAD_S, log.logged_rows()[1 : n_all + 1][lo:hi],
-                    tuple(kept), X[:, lo : lo + m], e, qd, qdd)
+                    tuple(kept), X[:, lo : lo + m] if kept else np.zeros((0, *e.shape)), e, qd, qdd,
+                    (meas[:, 1] - base.q_rad[:hi])[lo:hi],
+                    quanta(log.q_actual_rad))
+
+
+def quanta(q_rad: NDArray) -> NDArray:
+    """``(6,)``: each joint's position quantum [rad] (identify's estimate on that joint alone), NaN where its
+    reading never changes."""
+    out = np.full(q_rad.shape[1], np.nan)
+    for j in range(q_rad.shape[1]):
+        col = q_rad[:, j : j + 1]
+        if np.isfinite(col).all() and np.ptp(col) > 0:
+            out[j] = position_quantum(col)[0]
+    return out

@@ -1,5 +1,5 @@
 """What ``ur5fault monitor`` writes: ``monitor.json``, ``baseline.json``, ``report.md`` and one figure per log
-(the current residual's transient against its limit per joint, the events shaded)."""
+(each residual's transient against its limit per joint, current and position, the events shaded)."""
 
 from __future__ import annotations
 
@@ -14,52 +14,64 @@ from ...sim.axes import JOINT_NAMES, N_JOINTS
 from ...util.io import write_figure_atomic, write_json_atomic, write_text_atomic
 from .baseline import Baseline, segment
 from .changes import sentence
-from .events import FEATURES, WINDOW_S, multiplier
+from .events import CHANNELS, FALSE_ALARM_PER_LOG, FEATURES, UNITS, WINDOW_S, multiplier
 from .observe import Observed
-from .verdict import limit_A
+from .verdict import limits
 
 
-def figure(baseline: Baseline, obs: Observed, entry: dict[str, Any]) -> Figure:
-    """Per joint: the residual's transient ``|h|`` [A] and its limit (the baseline's spread at the log's motion
-    times the multiplier for its length); the log's events shaded."""
+def figure(baseline: Baseline, obs: Observed, entry: dict[str, Any], channels: Sequence[str]) -> Figure:
+    """Per joint and channel (current [A] left, position [mrad] right): the residual's transient ``|h|`` and, for
+    the ``channels`` judged, its limit (the baseline's spread at the log's motion times the multiplier for its
+    length); the events shaded."""
     h, feats, judged = segment(obs)
-    dev = np.where(judged[:, None], np.abs(h), np.nan)
-    thr = limit_A(baseline, feats, judged)
-    fig = Figure(figsize=(10, 9), layout="constrained")
-    axes = fig.subplots(N_JOINTS, 1, sharex=True)
-    for j, ax in enumerate(axes):
-        ax.plot(obs.t_s, dev[:, j], lw=0.7, color="tab:blue", label="|transient| (residual - its running median)")
-        ax.plot(obs.t_s, thr[:, j], lw=0.9, color="tab:red", label="limit")
-        for ev in entry["events"]:
-            ax.axvspan(ev["t_start_s"], ev["t_end_s"], color="orange", alpha=0.35 if JOINT_NAMES[j] in ev["joints"]
-                       else 0.1, lw=0)
-        ax.set_ylabel(f"J{j + 1} [A]")
-    axes[0].legend(loc="upper right", fontsize=7)
-    axes[0].set_title(f"{obs.name}: {entry['verdict']} (events shaded)")
-    axes[-1].set_xlabel("log time [s]")
+    thr = limits(baseline, obs, feats, judged, channels)
+    fig = Figure(figsize=(13, 9), layout="constrained")
+    axes = fig.subplots(N_JOINTS, len(CHANNELS), sharex=True)
+    for i, c in enumerate(CHANNELS):
+        k = 1e3 if c == "position" else 1.0  # rad -> mrad on the axis
+        unit = "mrad" if c == "position" else UNITS[c]
+        dev = np.where(judged[:, None], np.abs(h[i]), np.nan) * k
+        for j in range(N_JOINTS):
+            ax = axes[j, i]
+            ax.plot(obs.t_s, dev[:, j], lw=0.7, color="tab:blue", label=f"|{c} transient| (residual - its running "
+                                                                         "median)")
+            if c in thr:
+                ax.plot(obs.t_s, thr[c][:, j] * k, lw=0.9, color="tab:red", label="limit")
+            for ev in entry["events"]:
+                mine = JOINT_NAMES[j] in ev["joints"] and c in ev.get("channels", ())
+                ax.axvspan(ev["t_start_s"], ev["t_end_s"], color="orange", alpha=0.35 if mine else 0.1, lw=0)
+            ax.set_ylabel(f"J{j + 1} [{unit}]")
+        axes[0, i].legend(loc="upper right", fontsize=7)
+        axes[-1, i].set_xlabel("log time [s]")
+    fig.suptitle(f"{obs.name}: {entry['verdict']} (events shaded)")
     return fig
 
 
-def markdown(baseline: Baseline, entries: Sequence[dict[str, Any]], figs: Sequence[str], model: str) -> str:
+def markdown(baseline: Baseline, entries: Sequence[dict[str, Any]], figs: Sequence[str], model: str,
+             channels: Sequence[str]) -> str:
     lines = ["# Monitoring report", "",
              f"Baseline: model overlay `{model}`, residual statistics of {len(baseline.segments)} healthy run(s): "
              + ", ".join(f"`{s}`" for s in baseline.segments) + ".", "",
-             "Spread of the current residual's transient, sigma^2 = c . [" + ", ".join(FEATURES) + "], and the "
-             f"multiplier on sigma for a 20 s log ({int(20 / WINDOW_S)} windows of {WINDOW_S:g} s):", "",
-             "| joint | " + " | ".join(f"c[{f}]" for f in FEATURES) + " | multiplier (20 s) |",
-             "| --- |" + " --- |" * (len(FEATURES) + 1)]
-    mult = multiplier(baseline.tail, int(20 / WINDOW_S))
-    for j in range(N_JOINTS):
-        lines.append(f"| {JOINT_NAMES[j]} | " + " | ".join(f"{c:.3g}" for c in baseline.scale[j])
-                     + f" | {mult[j]:.2f} |")
+             f"Events judged on the {' and '.join(channels)} residual. Spread of each residual's transient, "
+             "sigma^2 = c . [" + ", ".join(FEATURES) + "] (current [A^2], position [rad^2]), and the multiplier on "
+             f"sigma for a 20 s log ({int(20 / WINDOW_S)} windows of {WINDOW_S:g} s, the false-alarm probability "
+             "split between the channels judged):", "",
+             "| channel | joint | " + " | ".join(f"c[{f}]" for f in FEATURES) + " | multiplier (20 s) |",
+             "| --- | --- |" + " --- |" * (len(FEATURES) + 1)]
+    for i, ch in enumerate(CHANNELS):
+        mult = multiplier(baseline.tail[i], int(20 / WINDOW_S), FALSE_ALARM_PER_LOG / len(channels))
+        for j in range(N_JOINTS):
+            lines.append(f"| {ch} | {JOINT_NAMES[j]} | " + " | ".join(f"{c:.3g}" for c in baseline.scale[i, j])
+                         + f" | {mult[j]:.2f} |")
     lines += ["", "| log | verdict | changes | events |", "| --- | --- | --- | --- |"]
     for e in entries:
         lines.append(f"| {e['log']} | {e['verdict']} | {len(e['changes'])} | {len(e['events'])} |")
     for e, fig in zip(entries, figs):
         lines += ["", f"## {e['log']}: {e['verdict']}", ""]
         lines += [f"- changed: {sentence(c)}" for c in e["changes"]]
-        lines += [f"- event {ev['t_start_s']:.2f}-{ev['t_end_s']:.2f} s on {', '.join(ev['joints'])}, peak "
-                  f"{ev['peak_A']:.2f} A" for ev in e["events"]]
+        lines += [f"- event {ev['t_start_s']:.2f}-{ev['t_end_s']:.2f} s on {', '.join(ev['joints'])} "
+                  f"({' and '.join(ev['channels'])}), peak {ev['peak_A']:.2f} A, {ev['peak_rad'] * 1e3:.3f} mrad"
+                  for ev in e["events"]]
         if not e["changes"] and not e["events"]:
             lines.append("- nothing beyond what the baseline runs showed")
         lines += ["", f"![{e['log']}]({fig})"]
@@ -67,7 +79,7 @@ def markdown(baseline: Baseline, entries: Sequence[dict[str, Any]], figs: Sequen
 
 
 def write(out: Path, baseline: Baseline, observed: Sequence[Observed], entries: Sequence[dict[str, Any]],
-          model: str) -> list[Path]:
+          model: str, channels: Sequence[str]) -> list[Path]:
     """Write every output into ``out`` (created), atomically; returns the paths, ``monitor.json`` first."""
     out.mkdir(parents=True, exist_ok=True)
     paths = [write_json_atomic(out / "monitor.json", {"logs": list(entries)}),
@@ -75,7 +87,7 @@ def write(out: Path, baseline: Baseline, observed: Sequence[Observed], entries: 
     figs = []
     for k, (obs, e) in enumerate(zip(observed, entries)):
         name = f"monitor_{k + 1}.png"
-        paths.append(write_figure_atomic(figure(baseline, obs, e), out / name))
+        paths.append(write_figure_atomic(figure(baseline, obs, e, channels), out / name))
         figs.append(name)
-    paths.append(write_text_atomic(out / "report.md", markdown(baseline, entries, figs, model)))
+    paths.append(write_text_atomic(out / "report.md", markdown(baseline, entries, figs, model, channels)))
     return paths
