@@ -311,17 +311,18 @@ def test_out_of_fold_predictions_never_see_their_own_motion():
     for g in range(16):
         share = 0.1 if rng.uniform() < 0.5 else 0.9
         for _ in range(20):
-            rows.append({"fingerprint": float(g), "noise": rng.normal(),
-                         "fault": "backlash" if rng.uniform() < share else "healthy", "split_group": f"m{g}"})
+            faulty = rng.uniform() < share
+            rows.append({"fingerprint": float(g), "noise": rng.normal(), "fault": "backlash" if faulty else "healthy",
+                         "fault_joint": 2 if faulty else 0, "split_group": f"m{g}"})
     tr = pd.DataFrame(rows)
     ds = Dataset(tr, tr.iloc[:0], ("fingerprint", "noise"), {})
-    p, y, k = out_of_fold(ds, seed=0)
+    p, y, k = out_of_fold(ds, seed=0)  # the score calibrated: the kind classifier by joint's
     from sklearn.metrics import roc_auc_score
 
     assert k == 5 and abs(roc_auc_score(y, p) - 0.5) < 0.15
-    from ur5fault.health.diagnostics.models import make_classifier
+    from ur5fault.health.diagnostics import joint_kind
 
-    seen = make_classifier(0).fit(ds.x("train"), y).predict_proba(ds.x("train"))[:, 1]
+    seen = joint_kind.fault_score(joint_kind.fit(tr, ds.inputs, 0, None), tr, ds.inputs)
     assert roc_auc_score(y, seen) > 0.8  # the same model fitted on the motions reads the share off them
 
 
@@ -334,12 +335,19 @@ def test_calibration_is_saved_loaded_and_reported(tmp_path):
     df.to_parquet(tmp_path / "features.parquet")
     m = run_benchmark(tmp_path, compare=False)
     cal = m["calibration"]
-    assert cal["method"] == "platt" and cal["n_folds"] == 5 and set(cal["test"]) == {"detector", "calibrated",
-                                                                                      "isotonic"}
+    assert cal["method"] == "platt" and cal["score"] == "by_joint" and cal["n_folds"] == 5
+    assert set(cal["test"]) == {"detector", "calibrated", "isotonic"}
+    oof = cal["test_at_threshold_out_of_fold"]  # the operating point read off the training runs alone
+    assert 0.0 <= oof["false_alarm_rate"] <= 1.0 and 0.0 <= oof["detection_rate"] <= 1.0
     models, schema = load_models(tmp_path / "benchmark")
     assert schema["calibration"]["method"] == "platt" and models.calibrator is not None
     ds = load_dataset(df, "both")
-    raw = models.detector.predict_proba(ds.x("test"))[:, 1]
+    # the score calibrated is p(fault) of `ur5fault diagnose`: the kind classifier by joint's largest joint
+    # probability of a fault, written out here from its per-joint class probabilities
+    from ur5fault.health.diagnostics import joint_kind
+
+    probs = joint_kind.probabilities(models.joint_kind, ds.test, ds.inputs)
+    raw = (1.0 - probs[:, :, list(models.joint_kind.classes_).index("none")]).max(axis=1)
     p = apply(models.calibrator, raw)
     y = (ds.test["fault"] != "healthy").to_numpy(int)
     assert cal["test"]["calibrated"]["brier"] == pytest.approx(np.mean((p - y) ** 2))
@@ -355,7 +363,7 @@ def test_calibration_is_saved_loaded_and_reported(tmp_path):
         load_models(tmp_path / "benchmark")
 
 
-def test_classifiers_saved_before_the_nuisance_fit_are_refused_in_one_line(tmp_path, capsys):
+def test_classifiers_of_an_older_format_are_refused_in_one_line(tmp_path, capsys):
     from ur5fault.health.diagnostics import run_benchmark
     from ur5fault.health.diagnostics.saved import SCHEMA_FILE, load_models
 
@@ -363,18 +371,24 @@ def test_classifiers_saved_before_the_nuisance_fit_are_refused_in_one_line(tmp_p
     run_benchmark(tmp_path, compare=False)
     path = tmp_path / "benchmark" / "models" / SCHEMA_FILE
     s = json.loads(path.read_text())
-    assert s["schema_format"] == 2
-    s["schema_format"] = 1  # as saved before: its twin_est_* inputs were fitted without the payload CoM
-    path.write_text(json.dumps(s))
-    with pytest.raises(ConfigFileError, match="schema format 1"):
-        load_models(tmp_path / "benchmark")
-    assert main(["benchmark", str(tmp_path), "--test", str(tmp_path)]) == 2
-    err = capsys.readouterr().err
-    assert err.startswith("ur5fault: error: ") and err.count("\n") == 1
-    # a format-1 detector of the paper's features alone never read a twin estimate: it still loads
-    s["inputs"] = [c for c in s["inputs"] if not c["name"].startswith("twin_est_")]
-    path.write_text(json.dumps(s))
+    assert s["schema_format"] == 3
     load_models(tmp_path / "benchmark")
+    # format 2: p(fault) and its calibration were the run-level detector's; format 1: the twin estimates were
+    # fitted without the payload CoM and latency held out - both refused, by the benchmark and by diagnose
+    for old in (2, 1):
+        s["schema_format"] = old
+        path.write_text(json.dumps(s))
+        with pytest.raises(ConfigFileError, match=f"schema format {old}, whose p.fault. is the run-level"):
+            load_models(tmp_path / "benchmark")
+        assert main(["benchmark", str(tmp_path), "--test", str(tmp_path)]) == 2
+        err = capsys.readouterr().err
+        assert err.startswith("ur5fault: error: ") and err.count("\n") == 1 and f"format {old}" in err
+    # a file without the kind classifier by joint's threshold (the source of p(fault)) is refused too
+    s["schema_format"] = 3
+    s["joint_kind_threshold_5pct_false_alarms"] = None
+    path.write_text(json.dumps(s))
+    with pytest.raises(ConfigFileError, match="no fault-kind classifier by joint"):
+        load_models(tmp_path / "benchmark")
 
 
 def test_merged_kind_accuracy_counts_gain_for_torque_constant():

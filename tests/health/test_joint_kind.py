@@ -90,3 +90,22 @@ def test_learns_kind_and_joint_from_one_column_per_joint_and_shuffled_is_chance(
     shuffled = joint_kind.fit(tr, inputs, 0, np.random.default_rng(0))
     kind_s, _ = joint_kind.predict(shuffled, te, inputs)
     assert balanced_accuracy_score(te["fault"], kind_s) < 0.55  # chance: 1/3
+
+
+def test_rule_at_an_operating_point_and_the_detector_score():
+    # runs read at an operating point below even odds: a run whose largest joint probability of a fault (the
+    # score) exceeds it is faulty, with its likeliest kind
+    df = pd.DataFrame({"a_j1": np.zeros(2)})
+    calm = [0.05, 0.9, 0.05]
+    run0 = [calm] * 6
+    run0[4] = [0.1, 0.6, 0.3]
+    run1 = [calm] * 6
+    run1[1] = [0.05, 0.7, 0.25]
+    model = _Fixed([run0, run1])
+    np.testing.assert_allclose(joint_kind.fault_score(model, df, ("a_j1",)), [0.4, 0.3])
+    kind, joint = joint_kind.predict(model, df, ("a_j1",), 0.35, strict=True)
+    assert kind.tolist() == ["resolver_offset", "healthy"] and joint.tolist() == [5, 2]
+    kind, _ = joint_kind.predict(model, df, ("a_j1",), 0.25)
+    assert kind.tolist() == ["resolver_offset", "resolver_offset"]
+    kind, _ = joint_kind.predict(model, df, ("a_j1",))  # even odds: neither
+    assert kind.tolist() == ["healthy", "healthy"]

@@ -63,11 +63,11 @@ def diagnose(log: MeasuredLog, detector_dir: str | Path, params_overrides: dict 
         notes.append(f"log sampled every {1e3 * log.period_s:g} ms, the training runs every {1e3 * trained:g} ms: "
                      "rate-dependent features (current spikes, kurtosis, crest factor, high-frequency energy, "
                      "residual RMS) are not on the scale the detector learned")
-    thr = float(schema["detector_threshold_5pct_false_alarms"])
+    thr = float(schema["joint_kind_threshold_5pct_false_alarms"])
     p_thr = thr
     if models.calibrator is None:
-        notes.append("these classifiers were saved without a calibration: p_fault is the detector's own "
-                     "probability, not a calibrated frequency (run `ur5fault benchmark` again to calibrate it)")
+        notes.append("these classifiers were saved without a calibration: p_fault is the fault-kind classifier by "
+                     "joint's own score, not a calibrated frequency (run `ur5fault benchmark` again to calibrate it)")
     else:
         from ..diagnostics.calibration import apply
 
@@ -79,9 +79,12 @@ def diagnose(log: MeasuredLog, detector_dir: str | Path, params_overrides: dict 
         "log_period_s": log.period_s,
         "detector": {"folder": str(detector_dir), "feature_set": schema.get("feature_set"),
                      "training_set_sha256": schema.get("training_set_sha256"),
+                     "p_fault_from": "fault-kind classifier by joint: largest joint probability of a fault",
                      "threshold_5pct_false_alarms": thr, "calibrated": models.calibrator is not None,
                      "calibration": schema.get("calibration", {}) and {
-                         k: v for k, v in schema["calibration"].items() if k in ("method", "n_folds", "grouped_by")},
+                         k: v for k, v in schema["calibration"].items()
+                         if k in ("method", "score", "n_folds", "grouped_by")},
+                     "run_level_threshold_5pct_false_alarms": float(schema["detector_threshold_5pct_false_alarms"]),
                      "p_fault_at_threshold": p_thr, "window_s": window_s,
                      "ur5fault_version": schema.get("ur5fault_version")},
         "conditions": context,

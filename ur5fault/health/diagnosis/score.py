@@ -2,20 +2,21 @@
 of a fault per window and joint, the likeliest fault kinds with their size estimates, and "cannot tell" where
 the window's motion does not exercise a kind.
 
-Probabilities: ``p_fault`` is the probability that the window's robot is faulty - the detector's probability
-through the calibration map saved with it (:mod:`ur5fault.health.diagnostics.calibration`: fitted on training
-runs the detector was not fitted on), or the detector's own when the classifiers were saved without one;
-``p_fault_detector`` is the detector's own.  ``flagged`` compares the detector's own probability with its
-threshold at 5 % false alarms on the training campaign's test split (the benchmark's operating point, saved in
-the schema; the map is monotonic, so this is the same as the calibrated one against the mapped threshold).
-Per joint, ``p_fault_joint`` = ``p_fault`` x the localiser's probability
-of that joint (the localiser is trained on single-joint faults, so the six sum to ``p_fault``). Kinds: the
-fault-kind classifier by joint's probabilities for that joint (:mod:`ur5fault.health.diagnostics.joint_kind`:
-each joint's own evidence), renormalised without ``none`` (the probability of each kind given a fault on that
-joint; not calibrated); classifiers saved without it give the run-level kind classifier's probabilities,
-renormalised without ``healthy`` and the same on every joint.  With it, each window also gets
-``p_fault_by_joint`` (its largest joint probability of a fault: the benchmark's "by joint" detector, not
-calibrated) and ``flagged_by_joint`` (against that detector's threshold at 5 % false alarms in the schema).
+Probabilities: ``p_fault`` is the probability that the window's robot is faulty - the fault-kind classifier by
+joint's largest joint probability of a fault (:func:`ur5fault.health.diagnostics.joint_kind.fault_score`, the
+benchmark's "by joint" detector) through the calibration map saved with it
+(:mod:`ur5fault.health.diagnostics.calibration`: Platt scaling fitted on out-of-fold scores of the training
+runs), or the score itself when the classifiers were saved without one; ``p_fault_score`` is the score itself.
+``flagged`` compares the score with its threshold at 5 % false alarms on the training campaign's test split
+(the benchmark's operating point, saved in the schema; the map is monotonic, so this is the same as the
+calibrated ``p_fault`` against the mapped threshold).  Per joint, ``p_fault_joint`` is that joint's probability
+of a fault through the same map (the largest of the six is ``p_fault``; each is a frequency only as far as the
+map fitted on the largest carries over).  Kinds: the classifier by joint's probabilities for that joint (each
+joint's own evidence), renormalised without ``none`` (the probability of each kind given a fault on that
+joint; not calibrated); ``same_signature_as`` names the kinds it cannot be told from in any window (a
+current-sensor gain and a torque-constant loss).  The run-level detector is kept as an auxiliary reading:
+``p_fault_run_level`` (its own probability, not calibrated) and ``flagged_run_level`` (against its threshold at
+5 % false alarms).
 
 Size estimates are the twin features' least-squares projections (:mod:`ur5fault.health.twin_features`),
 converted to the unit of the campaign's ``fault_size``; the interval is the range of the same estimate on the
@@ -37,6 +38,7 @@ from ...errors import ConfigFileError
 from ...sim.axes import N_JOINTS
 from ..diagnostics import calibration, joint_kind
 from ..diagnostics.data import CONTEXT_COLUMNS, SIM_ONLY_PREFIX
+from ..diagnostics.metrics import MERGED_KINDS
 from ..diagnostics.saved import SCHEMA_FORMAT
 from ..features import FEATURE_UNITS
 from ..twin_features import FEATURE_UNITS as TWIN_FEATURE_UNITS
@@ -127,62 +129,61 @@ def cannot_tell(w: Window, j: int, has_motor_encoders: bool) -> dict[str, str]:
     return out
 
 
+def same_signature(kind: str) -> list[str]:
+    """The kinds whose signature is the same as ``kind``'s in every signal the features read (a current-sensor
+    gain and a torque-constant loss: both a current residual proportional to the current,
+    :data:`ur5fault.health.diagnostics.metrics.MERGED_KINDS`): a window cannot tell them apart, whatever the
+    classifier's split of the probability between them says."""
+    group = MERGED_KINDS.get(kind)
+    return sorted(k for k, g in MERGED_KINDS.items() if group is not None and g == group and k != kind)
+
+
 def _finite(v: float) -> float | None:
     return float(v) if np.isfinite(v) else None
 
 
 def score_windows(models, schema: dict[str, Any], windows: list[Window], has_motor_encoders: bool
                   ) -> list[dict[str, Any]]:
-    """Per window: its times, ``p_fault``, ``flagged``, and per joint ``p_fault_joint``, the likeliest kinds
-    with size estimates and intervals, and the kinds it cannot tell."""
+    """Per window: its times, ``p_fault``, ``flagged``, the run-level detector's reading, and per joint
+    ``p_fault_joint``, the likeliest kinds with size estimates and intervals, and the kinds it cannot tell
+    (module docstring)."""
     from ..diagnostics.models import single_threaded
 
     names = [c["name"] for c in schema["inputs"]]
     x = pd.DataFrame([w.features for w in windows])[names].to_numpy(dtype=float)
-    thr = float(schema["detector_threshold_5pct_false_alarms"])
+    thr = float(schema["joint_kind_threshold_5pct_false_alarms"])
+    run_thr = float(schema["detector_threshold_5pct_false_alarms"])
     with single_threaded():
-        p_det = models.detector.predict_proba(x)[:, list(models.detector.classes_).index(1)]
-        p = p_det if models.calibrator is None else calibration.apply(models.calibrator, p_det)
-        loc = models.localiser.predict_proba(x) if models.localiser is not None else None
-        kind = models.kind.predict_proba(x) if models.kind is not None else None
-        by_joint = None if models.joint_kind is None else joint_kind.probabilities(
-            models.joint_kind, pd.DataFrame(x, columns=names), tuple(names))
+        p_run = models.detector.predict_proba(x)[:, list(models.detector.classes_).index(1)]
+        by_joint = joint_kind.probabilities(models.joint_kind, pd.DataFrame(x, columns=names), tuple(names))
+    cls = [str(c) for c in models.joint_kind.classes_]
+    score_joint = 1.0 - by_joint[:, :, cls.index(joint_kind.NONE)]  # (n_windows, 6)
+    p_joint = score_joint if models.calibrator is None else calibration.apply(
+        models.calibrator, score_joint.reshape(-1)).reshape(score_joint.shape)
     out = []
     for i, w in enumerate(windows):
         joints = []
         for j in range(N_JOINTS):
-            pj = None
-            if loc is not None:
-                cls = list(models.localiser.classes_)
-                pj = float(p[i] * loc[i, cls.index(j + 1)]) if j + 1 in cls else 0.0
             blind = cannot_tell(w, j, has_motor_encoders)
             kinds = []
-            if kind is not None or by_joint is not None:
-                if by_joint is not None:  # this joint's own evidence
-                    cls = [str(c) for c in models.joint_kind.classes_]
-                    faulty = [(c, by_joint[i, j, k]) for k, c in enumerate(cls) if c != joint_kind.NONE]
-                else:
-                    cls = [str(c) for c in models.kind.classes_]
-                    faulty = [(c, kind[i, k]) for k, c in enumerate(cls) if c != "healthy"]
-                total = sum(v for _, v in faulty) or 1.0
-                for c, v in sorted(faulty, key=lambda cv: -cv[1])[:N_KINDS]:
-                    size, unit = size_estimate(c, w.features, j + 1)
-                    halves = [size_estimate(c, h, j + 1)[0] for h in w.halves]
-                    ok = c not in blind and np.isfinite(size)
-                    vif = w.vif[j].get(ESTIMATE_OF.get(c, ""), float("nan")) if w.vif else float("nan")
-                    kinds.append({"kind": c, "p_given_fault": float(v / total),
-                                  "variance_inflation": _finite(vif), "confounded": bool(ok and vif > MAX_VIF),
-                                  "size": _finite(size) if ok else None, "unit": unit,
-                                  "interval": [_finite(min(halves)), _finite(max(halves))]
-                                  if ok and all(np.isfinite(halves)) else None,
-                                  "cannot_tell": c in blind})
-            joints.append({"joint": j + 1, "p_fault_joint": pj, "kinds": kinds, "cannot_tell": blind})
-        row = {"start_s": w.start_s, "end_s": w.end_s, "p_fault": float(p[i]), "p_fault_detector": float(p_det[i]),
-               "flagged": bool(p_det[i] >= thr)}
-        if by_joint is not None:  # the kind classifier by joint as a detector (not calibrated)
-            none = [str(c) for c in models.joint_kind.classes_].index(joint_kind.NONE)
-            pbj = float((1.0 - by_joint[i, :, none]).max())
-            jthr = schema.get("joint_kind_threshold_5pct_false_alarms")
-            row.update(p_fault_by_joint=pbj, flagged_by_joint=None if jthr is None else bool(pbj > float(jthr)))
-        out.append({**row, "joints": joints})
+            faulty = [(c, by_joint[i, j, k]) for k, c in enumerate(cls) if c != joint_kind.NONE]
+            total = sum(v for _, v in faulty) or 1.0
+            for c, v in sorted(faulty, key=lambda cv: -cv[1])[:N_KINDS]:
+                size, unit = size_estimate(c, w.features, j + 1)
+                halves = [size_estimate(c, h, j + 1)[0] for h in w.halves]
+                ok = c not in blind and np.isfinite(size)
+                vif = w.vif[j].get(ESTIMATE_OF.get(c, ""), float("nan")) if w.vif else float("nan")
+                kinds.append({"kind": c, "p_given_fault": float(v / total),
+                              "variance_inflation": _finite(vif), "confounded": bool(ok and vif > MAX_VIF),
+                              "size": _finite(size) if ok else None, "unit": unit,
+                              "interval": [_finite(min(halves)), _finite(max(halves))]
+                              if ok and all(np.isfinite(halves)) else None,
+                              "cannot_tell": c in blind, "same_signature_as": same_signature(c)})
+            joints.append({"joint": j + 1, "p_fault_joint": float(p_joint[i, j]), "kinds": kinds,
+                           "cannot_tell": blind})
+        score = float(score_joint[i].max())
+        out.append({"start_s": w.start_s, "end_s": w.end_s, "p_fault": float(p_joint[i].max()),
+                    "p_fault_score": score, "flagged": bool(score > thr),
+                    "p_fault_run_level": float(p_run[i]), "flagged_run_level": bool(p_run[i] > run_thr),
+                    "joints": joints})
     return out

@@ -85,20 +85,26 @@ def _evaluate(features: pd.DataFrame, seed: int, shuffle_labels: bool, threshold
     te = ds.test
     score = detector_scores(ds, models)
     healthy = (te["fault"] == "healthy").to_numpy()
-    calib = None
-    if models.calibrator is not None:
-        calib = {**(cal_fit.get("info") or saved[1].get("calibration") or {}),
-                 "test": test_reliability(score, ~healthy, models.calibrator, cal_fit.get("isotonic"))}
     saved_thr = None if saved is None else float(saved[1]["detector_threshold_5pct_false_alarms"])
     thr = alarm_threshold(score, healthy) if saved_thr is None else saved_thr
     detected = score > thr
     det = detection(ds, models, saved_thr)
     loc = localisation(ds, models, detected)
-    kind = fault_kind(ds, models, detected)
-    by_joint = None
+    by_joint, joint_score = None, None
     if models.joint_kind is not None:  # the kind classifier by joint as a detector: p(fault on any joint)
         joint_thr = None if saved is None else saved[1].get("joint_kind_threshold_5pct_false_alarms")
-        by_joint = detection(ds, models, joint_thr, joint_fault_scores(ds, models))
+        joint_score = joint_fault_scores(ds, models)
+        by_joint = detection(ds, models, joint_thr, joint_score)
+    kind = fault_kind(ds, models, detected, None if by_joint is None else by_joint["threshold_score"])
+    calib = None
+    if models.calibrator is not None and joint_score is not None:  # the by-joint score is p(fault): calibration.py
+        info = {**(cal_fit.get("info") or saved[1].get("calibration") or {})}
+        oof_thr = info.get("threshold_out_of_fold")
+        calib = {**info, "test": test_reliability(joint_score, ~healthy, models.calibrator, cal_fit.get("isotonic"))}
+        if oof_thr is not None:  # the operating point read off the training runs alone, on the test runs
+            calib["test_at_threshold_out_of_fold"] = {
+                "false_alarm_rate": float((joint_score[healthy] > oof_thr).mean()),
+                "detection_rate": float((joint_score[~healthy] > oof_thr).mean())}
     ok_rows = features[features["status"] == "ok"] if "status" in features else features
     bl = backlash_thresholds(te, detected, ok_rows, threshold_mm, seed)
     imp = importance(ds, models, seed) if with_importance else []

@@ -1,19 +1,25 @@
-"""The detector's probability of a fault, calibrated on training runs it was not fitted on, and how reliable a
+"""The probability of a fault, calibrated on training runs its classifier was not fitted on, and how reliable a
 probability is (Brier score, expected calibration error, reliability bins).
 
-Gradient-boosted trees give a probability that ranks runs well but need not be a frequency: of the runs given
-0.8, maybe 95 % are faulty.  The calibration maps the detector's probability ``p`` to one that is:
+The score calibrated is the one ``ur5fault diagnose`` reports as ``p_fault``: the fault-kind classifier by
+joint's largest joint probability of a fault (:func:`.joint_kind.fault_score`; schema format 3 - formats 1-2
+calibrated the run-level detector's probability).  Gradient-boosted trees give a probability that ranks runs
+well but need not be a frequency: of the runs given 0.8, maybe 95 % are faulty.  The calibration maps the score
+``p`` to one that is:
 
-* the detector is refitted on the train split :data:`N_FOLDS` times, each time without one group of motions
-  (``split_group``: a run's motion, so no motion is on both sides - scikit-learn's ``GroupKFold``), and predicts
-  the runs it left out: an out-of-fold probability for every training run;
-* a logistic regression of the label on ``logit(p)`` of those out-of-fold probabilities (Platt scaling) is the
-  calibration map saved with the classifiers.  Platt rather than isotonic regression because the campaigns
-  here train on a few hundred runs, and an isotonic map (a free step function) fitted on that few overfits;
-  both are fitted, and the benchmark reports both on the test split (``metrics.json`` ``calibration``).
+* the classifier by joint is refitted on the train split :data:`N_FOLDS` times, each time without one group of
+  motions (``split_group``: a run's motion, so no motion is on both sides - scikit-learn's ``GroupKFold``), and
+  scores the runs it left out: an out-of-fold score for every training run;
+* a logistic regression of the label (faulty or not) on ``logit(p)`` of those out-of-fold scores (Platt
+  scaling) is the calibration map saved with the classifiers.  Platt rather than isotonic regression because
+  the campaigns here train on a few hundred runs, and an isotonic map (a free step function) fitted on that
+  few overfits; both are fitted, and the benchmark reports both on the test split (``metrics.json``
+  ``calibration``).
 
 The map is monotonic, so it changes no ranking: the AUCs and the runs flagged at the 5 % false-alarm threshold
-are those of the detector's own probability; only the numbers a user reads as probabilities change.
+are those of the score itself; only the numbers a user reads as probabilities change.  The out-of-fold scores
+also give a second 5 % false-alarm threshold that no test run has seen (``threshold_out_of_fold``: the healthy
+training runs' 95th percentile), reported with the false alarms it gives on the test split.
 """
 
 from __future__ import annotations
@@ -33,6 +39,8 @@ EPS = 1e-6
 #: inverse regularisation of the Platt fit: large, i.e. the maximum-likelihood fit of its two numbers
 PLATT_C = 1e4
 METHOD = "platt"
+#: the score calibrated (schema format 3): the classifier by joint's largest joint probability of a fault
+SCORE = "by_joint"
 
 
 def _logit(p: np.ndarray) -> np.ndarray:
@@ -41,10 +49,11 @@ def _logit(p: np.ndarray) -> np.ndarray:
 
 
 def out_of_fold(ds: Dataset, seed: int) -> tuple[np.ndarray, np.ndarray, int]:
-    """Out-of-fold detector probabilities of the train runs, their labels (1 = faulty) and the number of folds."""
-    from sklearn.model_selection import GroupKFold, cross_val_predict
+    """Out-of-fold scores (:func:`.joint_kind.fault_score`) of the train runs, their labels (1 = faulty) and the
+    number of folds."""
+    from sklearn.model_selection import GroupKFold
 
-    from .models import make_classifier
+    from . import joint_kind
 
     tr = ds.train
     y = (tr["fault"] != "healthy").to_numpy(int)
@@ -52,8 +61,12 @@ def out_of_fold(ds: Dataset, seed: int) -> tuple[np.ndarray, np.ndarray, int]:
     k = min(N_FOLDS, len(np.unique(groups)))
     if k < 2:
         raise ValueError("calibration needs at least two motions in the train split")
-    p = cross_val_predict(make_classifier(seed), ds.x("train"), y, groups=groups, cv=GroupKFold(n_splits=k),
-                          method="predict_proba")[:, 1]
+    p = np.full(len(tr), np.nan)
+    for fit_rows, left_out in GroupKFold(n_splits=k).split(np.zeros(len(tr)), y, groups):
+        model = joint_kind.fit(tr.iloc[fit_rows], ds.inputs, seed, None)
+        if model is None or joint_kind.NONE not in [str(c) for c in model.classes_]:
+            raise ValueError("calibration: a fold of the train split holds a single label")
+        p[left_out] = joint_kind.fault_score(model, tr.iloc[left_out], ds.inputs)
     return p, y, k
 
 
@@ -97,20 +110,22 @@ def reliability(p: np.ndarray, y: np.ndarray, n_bins: int = N_BINS) -> dict[str,
 
 
 def fit_calibration(ds: Dataset, seed: int) -> tuple[Any, dict[str, Any]]:
-    """The Platt map fitted on out-of-fold predictions of the train split, the isotonic map of the same
-    predictions (for the comparison only), and what was done (JSON-able)."""
+    """The Platt map fitted on out-of-fold scores of the train split, the isotonic map of the same scores (for
+    the comparison only), and what was done (JSON-able)."""
+    from .metrics import alarm_threshold
+
     p, y, k = out_of_fold(ds, seed)
     platt, iso = fit_platt(p, y), fit_isotonic(p, y)
-    info = {"method": METHOD, "n_folds": k, "grouped_by": "split_group (the run's motion)",
-            "n_train": int(y.size), "train_out_of_fold": {"detector": reliability(p, y),
-                                                         "platt": reliability(apply(platt, p), y)}}
+    info = {"method": METHOD, "score": SCORE, "n_folds": k, "grouped_by": "split_group (the run's motion)",
+            "n_train": int(y.size), "threshold_out_of_fold": alarm_threshold(p, y == 0),
+            "train_out_of_fold": {"detector": reliability(p, y), "platt": reliability(apply(platt, p), y)}}
     return platt, {"info": info, "isotonic": iso}
 
 
 def test_reliability(score: np.ndarray, faulty: np.ndarray, calibrator: Any, isotonic: Any = None
                      ) -> dict[str, Any]:
-    """Reliability on the test runs of the detector's probability and of the calibrated one (and the isotonic
-    map's, when given)."""
+    """Reliability on the test runs of the score and of the calibrated one (and the isotonic map's, when
+    given)."""
     out = {"detector": reliability(score, faulty), "calibrated": reliability(apply(calibrator, score), faulty)}
     if isotonic is not None:
         out["isotonic"] = reliability(apply(isotonic, score), faulty)

@@ -129,10 +129,11 @@ def importance_bars(importance: list[dict[str, Any]], ax=None) -> Figure:
 
 def reliability_diagram(test: dict[str, Any], ax=None) -> Figure:
     """Reliability on the test split: per probability bin, the share of faulty runs against the mean
-    probability, for the detector's own probability and the calibrated one (``test``: :mod:`.calibration`'s
-    ``test_reliability``); the diagonal is a perfectly calibrated probability."""
+    probability, for the score (the classifier by joint's largest joint probability of a fault) and the
+    calibrated one (``test``: :mod:`.calibration`'s ``test_reliability``); the diagonal is a perfectly
+    calibrated probability."""
     fig, ax = _axes(ax, (5, 5))
-    styles = {"detector": ("0.45", "s", "detector's probability"), "calibrated": ("C0", "o", "calibrated (Platt)"),
+    styles = {"detector": ("0.45", "s", "by-joint score itself"), "calibrated": ("C0", "o", "calibrated (Platt)"),
               "isotonic": ("C2", "^", "isotonic (comparison)")}
     for key, rel in test.items():
         color, marker, label = styles.get(key, ("k", "x", key))

@@ -11,10 +11,12 @@ nuisance estimates) and the joint's number; its label is the run's fault kind on
 ``none`` on every other joint (and on every joint of a healthy run).  Six times the rows, the evidence of
 one kind pooled over the joints.
 
-A run's kind: ``healthy`` when no joint's probability of a fault (1 - p(none)) reaches one half; otherwise
-the kind with the largest probability on any joint.  Its location: the joint with the largest probability
-of a fault.  One half is the rule's
-own even odds, not a tuned threshold.
+A run's kind: ``healthy`` when no joint's probability of a fault (1 - p(none)) reaches the decision threshold;
+otherwise the kind with the largest probability on any joint.  Its location: the joint with the largest
+probability of a fault.  The threshold is one half (the rule's own even odds) unless a caller passes the
+detector's operating point: this classifier's largest joint probability of a fault, :func:`fault_score`, is
+the detector of ``ur5fault diagnose`` (its ``p_fault``, calibrated by :mod:`.calibration`), and a run flagged at
+its 5 % false-alarm threshold is called faulty with the likeliest kind, so that the kind and the flag agree.
 """
 
 from __future__ import annotations
@@ -89,10 +91,27 @@ def probabilities(model, df: pd.DataFrame, inputs: tuple[str, ...]) -> np.ndarra
     return model.predict_proba(x.reshape(-1, x.shape[2])).reshape(len(df), N_JOINTS, -1)
 
 
-def predict(model, df: pd.DataFrame, inputs: tuple[str, ...]) -> tuple[np.ndarray, np.ndarray]:
+def joint_fault_probabilities(model, df: pd.DataFrame, inputs: tuple[str, ...]) -> np.ndarray:
+    """``(n_runs, 6)``: each joint's probability of a fault of any kind, ``1 - p(none)``."""
+    p = probabilities(model, df, inputs)
+    return 1.0 - p[:, :, [str(c) for c in model.classes_].index(NONE)]
+
+
+def fault_score(model, df: pd.DataFrame, inputs: tuple[str, ...]) -> np.ndarray:
+    """``(n_runs,)``: the largest joint probability of a fault, ``max_j (1 - p_j(none))`` - the detector score."""
+    return joint_fault_probabilities(model, df, inputs).max(axis=1)
+
+
+#: the decision threshold of :func:`predict` without an operating point: even odds
+EVEN_ODDS = 0.5
+
+
+def predict(model, df: pd.DataFrame, inputs: tuple[str, ...], threshold: float = EVEN_ODDS,
+            strict: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """Each run's kind (``healthy`` or a fault kind: module docstring) and its likeliest faulty joint (1-6, the
     joint with the largest probability of a fault, whatever the kind call: as the localiser, it is read on
-    every single-joint fault)."""
+    every single-joint fault).  ``threshold``: the largest joint probability of a fault at which a run is
+    called faulty (reached: ``>=``; exceeded with ``strict``, as the detector's operating point is read)."""
     p = probabilities(model, df, inputs)
     cls = [str(c) for c in model.classes_]
     kinds = [k for k in cls if k != NONE]
@@ -100,8 +119,10 @@ def predict(model, df: pd.DataFrame, inputs: tuple[str, ...]) -> tuple[np.ndarra
         return np.full(len(df), "healthy"), np.ones(len(df), int)
     p_fault = 1.0 - p[:, :, cls.index(NONE)]
     pk = p[:, :, [cls.index(k) for k in kinds]].max(axis=1)  # each kind's largest probability on any joint
-    faulty = p_fault.max(axis=1) >= 0.5
+    score = p_fault.max(axis=1)
+    faulty = score > threshold if strict else score >= threshold
     return np.where(faulty, np.array(kinds)[pk.argmax(axis=1)], "healthy"), p_fault.argmax(axis=1) + 1
 
 
-__all__ = ["NONE", "fit", "joint_labels", "joint_rows", "layout", "predict", "probabilities"]
+__all__ = ["EVEN_ODDS", "NONE", "fault_score", "fit", "joint_fault_probabilities", "joint_labels", "joint_rows",
+           "layout", "predict", "probabilities"]

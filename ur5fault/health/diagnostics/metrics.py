@@ -59,9 +59,7 @@ def size_edges(sizes: np.ndarray, n_bins: int = N_SIZE_BINS) -> np.ndarray:
 def joint_fault_scores(ds: Dataset, models: Models) -> np.ndarray:
     """The fault-kind classifier by joint's probability of a fault on any joint, ``max_j (1 - p_j(none))``, for
     every test run (:mod:`.joint_kind`)."""
-    p = joint_kind.probabilities(models.joint_kind, ds.test, ds.inputs)
-    none = [str(c) for c in models.joint_kind.classes_].index(joint_kind.NONE)
-    return (1.0 - p[:, :, none]).max(axis=1)
+    return joint_kind.fault_score(models.joint_kind, ds.test, ds.inputs)
 
 
 def detection(ds: Dataset, models: Models, threshold: float | None = None,
@@ -165,9 +163,27 @@ def merge_kinds(labels: np.ndarray) -> np.ndarray:
     return np.array([MERGED_KINDS.get(str(v), str(v)) for v in labels])
 
 
-def fault_kind(ds: Dataset, models: Models, detected: np.ndarray) -> dict[str, Any]:
+def upper_half(ds: Dataset) -> np.ndarray:
+    """Mask of the test runs whose fault size lies in the upper half of its kind's size range (log scale, the
+    range of the train and test runs: :func:`detection`'s "upper half"); healthy runs are in it."""
+    te = ds.test
+    sizes = te["fault_size"].to_numpy(float)
+    kinds = te["fault"].to_numpy(str)
+    all_sizes = np.concatenate([ds.train["fault_size"].to_numpy(float), sizes])
+    all_kinds = np.concatenate([ds.train["fault"].to_numpy(str), kinds])
+    out = kinds == "healthy"
+    for kind in set(kinds) - {"healthy"}:
+        edges = size_edges(all_sizes[all_kinds == kind])
+        if edges.size:
+            out |= (kinds == kind) & (sizes >= math.sqrt(edges[0] * edges[-1]))
+    return out
+
+
+def fault_kind(ds: Dataset, models: Models, detected: np.ndarray, joint_threshold: float | None = None
+               ) -> dict[str, Any]:
     """Healthy or which kind, over every test run; accuracy, balanced accuracy (also with the indistinguishable
-    kinds of :data:`MERGED_KINDS` merged: a prediction of either counts for both), confusion matrix."""
+    kinds of :data:`MERGED_KINDS` merged: a prediction of either counts for both), confusion matrix.
+    ``joint_threshold``: the by-joint detector's operating point (:func:`_kind_by_joint`)."""
     from sklearn.metrics import balanced_accuracy_score
 
     y = ds.test["fault"].to_numpy(str)
@@ -187,29 +203,60 @@ def fault_kind(ds: Dataset, models: Models, detected: np.ndarray) -> dict[str, A
         "chance_balanced": 1.0 / len(set(y)),
         "labels": labels,
         "confusion": confusion(y, pred, labels),
-        "by_joint": _kind_by_joint(ds, models, detected),
+        "by_joint": _kind_by_joint(ds, models, detected, joint_threshold),
     }
 
 
-def _kind_by_joint(ds: Dataset, models: Models, detected: np.ndarray) -> dict[str, Any]:
-    """The fault-kind classifier by joint (:mod:`.joint_kind`): kind and joint of every test run."""
-    from sklearn.metrics import balanced_accuracy_score
-
+def _kind_by_joint(ds: Dataset, models: Models, detected: np.ndarray, threshold: float | None = None
+                   ) -> dict[str, Any]:
+    """The fault-kind classifier by joint (:mod:`.joint_kind`): kind and joint of every test run, a run called
+    faulty at even odds; with ``threshold`` (its score's 5 % false-alarm operating point) also the kind called
+    at that point (``at_operating_point``: a flagged run gets the likeliest kind, the rule ``ur5fault diagnose``
+    follows), there over all test runs, over the upper half of each kind's sizes, and on the flagged faulty
+    runs."""
     if models.joint_kind is None:
         return {}
     y = ds.test["fault"].to_numpy(str)
     pred, joint = joint_kind.predict(models.joint_kind, ds.test, ds.inputs)
-    labels = ["healthy"] + sorted((set(y) | set(pred)) - {"healthy"})
-    faulty_det = detected & (y != "healthy")
     jm = joint_fault_rows(ds.test)
     right_joint = joint == ds.test["fault_joint"].to_numpy(int)
+    out = {**_kind_scores(y, pred, detected & (y != "healthy")),
+           "joint_accuracy": float(right_joint[jm].mean()) if jm.any() else math.nan}
+    if threshold is not None:
+        at, _ = joint_kind.predict(models.joint_kind, ds.test, ds.inputs, float(threshold), strict=True)
+        flagged = joint_kind.fault_score(models.joint_kind, ds.test, ds.inputs) > float(threshold)
+        up = upper_half(ds)
+        out["at_operating_point"] = {
+            "threshold_score": float(threshold), **_kind_scores(y, at, flagged & (y != "healthy")),
+            "upper_half": {"n_test": int(up.sum()), **_kind_scores(y[up], at[up], (flagged & (y != "healthy"))[up])},
+        }
+    return out
+
+
+def _kind_scores(y: np.ndarray, pred: np.ndarray, faulty_flagged: np.ndarray) -> dict[str, Any]:
+    """Accuracy, balanced accuracy (also merged: :data:`MERGED_KINDS`), accuracy on the flagged faulty runs
+    (also balanced over their kinds) and the confusion matrix of kind calls ``pred`` against labels ``y``."""
+    import warnings
+
+    from sklearn.metrics import balanced_accuracy_score
+
+    labels = ["healthy"] + sorted((set(y) | set(pred)) - {"healthy"})
+    f = faulty_flagged
+    with warnings.catch_warnings():  # a subset may hold one kind, or calls of a kind it does not hold: still scored
+        warnings.simplefilter("ignore", UserWarning)
+        return _scores(y, pred, f, labels, balanced_accuracy_score)
+
+
+def _scores(y, pred, f, labels, balanced_accuracy_score) -> dict[str, Any]:
     return {
         "accuracy": float((pred == y).mean()),
         "balanced_accuracy": float(balanced_accuracy_score(y, pred)),
         "balanced_accuracy_merged": float(balanced_accuracy_score(merge_kinds(y), merge_kinds(pred))),
-        "accuracy_detected_faulty": float((pred[faulty_det] == y[faulty_det]).mean()) if faulty_det.any()
-        else math.nan,
-        "joint_accuracy": float(right_joint[jm].mean()) if jm.any() else math.nan,
+        "accuracy_detected_faulty": float((pred[f] == y[f]).mean()) if f.any() else math.nan,
+        "n_detected_faulty": int(f.sum()),
+        "balanced_accuracy_detected_faulty": float(balanced_accuracy_score(y[f], pred[f])) if f.any() else math.nan,
+        "balanced_accuracy_detected_faulty_merged": float(balanced_accuracy_score(
+            merge_kinds(y[f]), merge_kinds(pred[f]))) if f.any() else math.nan,
         "labels": labels,
         "confusion": confusion(y, pred, labels),
     }

@@ -83,6 +83,26 @@ def markdown(m: dict[str, Any]) -> str:
             "faults.",
             "",
         ]
+        op = bj.get("at_operating_point")
+        if op:
+            up = op["upper_half"]
+            lines += [
+                "The same, a run called faulty where the by-joint score passes its 5 % false-alarm threshold "
+                f"({_f(op['threshold_score'])}; the rule of `ur5fault diagnose`): balanced "
+                f"**{_f(op['balanced_accuracy'])}** "
+                f"({_f(op['balanced_accuracy_merged'])} merged); over the upper half of each kind's sizes "
+                f"({up['n_test']} runs with the healthy) {_f(up['balanced_accuracy'])} "
+                f"({_f(up['balanced_accuracy_merged'])} merged); on the {op['n_detected_faulty']} flagged faulty runs "
+                f"{_f(op['accuracy_detected_faulty'])}, "
+                f"balanced over their kinds {_f(op['balanced_accuracy_detected_faulty'])} "
+                f"({_f(op['balanced_accuracy_detected_faulty_merged'])} merged).",
+                "",
+                "| true \\ called | " + " | ".join(op["labels"]) + " |",
+                "| --- |" + " --- |" * len(op["labels"]),
+                *[f"| {lab} | " + " | ".join(str(v) for v in row) + " |"
+                  for lab, row in zip(op["labels"], op["confusion"])],
+                "",
+            ]
     lines += [
         "## Backlash: smallest alpha detected per joint",
         f"alpha_90: {bl['detection_probability']:.0%} of the runs with that backlash flagged at "
@@ -129,12 +149,21 @@ def markdown(m: dict[str, Any]) -> str:
 
 def calibration_lines(cal: dict[str, Any]) -> list[str]:
     """Reliability of p(fault) on the test runs, before and after the calibration."""
-    names = {"detector": "detector's probability", "calibrated": f"calibrated ({cal.get('method', '?')}, saved)",
+    names = {"detector": "the by-joint score itself", "calibrated": f"calibrated ({cal.get('method', '?')}, saved)",
              "isotonic": "isotonic (comparison, not saved)"}
-    lines = ["", f"## Calibration of p(fault) (fitted on out-of-fold predictions of the train split, "
-                 f"{cal.get('n_folds', '?')} folds grouped by motion; scored on {cal['test']['detector']['n']} "
-                 "test runs)", "", "| probability | Brier score | expected calibration error |", "| --- | --- | --- |"]
+    lines = ["", f"## Calibration of p(fault) (the fault-kind classifier by joint's score, fitted on out-of-fold "
+                 f"scores of the train split, {cal.get('n_folds', '?')} folds grouped by motion; scored on "
+                 f"{cal['test']['detector']['n']} test runs)", "",
+             "| probability | Brier score | expected calibration error |", "| --- | --- | --- |"]
     lines += [f"| {names.get(k, k)} | {_f(v['brier'])} | {_f(v['ece'])} |" for k, v in cal["test"].items()]
+    lines += ["", "Reliability (test runs, calibrated): " + "; ".join(
+        f"{b['lo']:.1f}-{b['hi']:.1f}: {b['n']} runs, mean p {b['mean_p']:.2f}, {b['share_faulty']:.0%} faulty"
+        for b in cal["test"]["calibrated"]["bins"]) + "."]
+    oof = cal.get("test_at_threshold_out_of_fold")
+    if oof:
+        lines += ["", f"The 5 % false-alarm threshold read off the training runs' out-of-fold scores alone "
+                      f"({_f(cal.get('threshold_out_of_fold'))}) gives {_f(oof['false_alarm_rate'], '.1%')} false "
+                      f"alarms and flags {_f(oof['detection_rate'], '.0%')} of the faulty test runs."]
     return lines
 
 

@@ -2,13 +2,15 @@
 
 ``<out>/models/``:
 
-* ``classifiers.skops``: the detector, the localiser, the fault-kind classifier, the fault-kind classifier by
-  joint (:mod:`.joint_kind`; absent from classifiers saved before it) and the calibration map of
-  the detector's probability (:mod:`.calibration`; absent from classifiers saved before it: they still load,
-  and ``ur5fault diagnose`` says that its p(fault) is not calibrated) - scikit-learn objects in skops' format:
-  loading it runs no code from the file; :func:`load_models` refuses any type outside scikit-learn and numpy;
+* ``classifiers.skops``: the run-level detector, the localiser, the fault-kind classifier, the fault-kind
+  classifier by joint (:mod:`.joint_kind`: its largest joint probability of a fault is the p(fault) of
+  ``ur5fault diagnose``) and the calibration map of that score (:mod:`.calibration`; absent when the benchmark
+  did not calibrate, e.g. on shuffled labels: ``ur5fault diagnose`` then says that its p(fault) is not
+  calibrated) - scikit-learn objects in skops' format: loading it runs no code from the file;
+  :func:`load_models` refuses any type outside scikit-learn and numpy;
 * ``schema.json``: the input columns in order with their units, the feature set, the classes of each
-  classifier, the detector threshold at 5 % false alarms (on the training campaign's test split), a
+  classifier, the thresholds at 5 % false alarms of the run-level detector and of the by-joint score (on the
+  training campaign's test split), a
   SHA-256 of the training rows (inputs and labels), the package, scikit-learn and skops versions, and the
   training runs' duration and log period (``window_s``, ``log_period_s``: ``ur5fault diagnose`` cuts a log
   into windows of that length, so that its features are taken over as long a stretch as the training
@@ -37,8 +39,9 @@ MODELS_DIR = "models"
 CLASSIFIERS_FILE = "classifiers.skops"
 SCHEMA_FILE = "schema.json"
 #: 2: the twin features' current estimates are fitted with the payload CoM and latency held out and carry
-#: standard errors and t values (a format-1 detector with twin estimates among its inputs is refused)
-SCHEMA_FORMAT = 2
+#: standard errors and t values; 3: p(fault) is the fault-kind classifier by joint's score, and the calibration
+#: map saved is that score's (formats 1-2 calibrated the run-level detector: refused in one line)
+SCHEMA_FORMAT = 3
 #: module prefixes of the types a saved file may hold (anything else is refused on loading)
 TRUSTED_PREFIXES = ("sklearn.", "numpy.", "builtins.")
 
@@ -117,12 +120,16 @@ def load_models(folder: str | Path) -> tuple[Models, dict[str, Any]]:
     objs = sio.loads(data, trusted=sio.get_untrusted_types(data=data))
     schema = json.loads(schema_path.read_text())
     fmt = schema.get("schema_format", 1)
-    if fmt < 2 and any(c["name"].startswith("twin_est_") for c in schema.get("inputs", [])):
-        raise ConfigFileError(f"{folder}: saved with schema format {fmt}, whose twin size estimates were fitted "
-                              "without the payload CoM and latency held out; run `ur5fault benchmark` again")
+    if not isinstance(fmt, int) or fmt < SCHEMA_FORMAT:
+        raise ConfigFileError(f"{folder}: saved with schema format {fmt}, whose p(fault) is the run-level detector's "
+                              f"(this version reads format {SCHEMA_FORMAT}: p(fault) from the fault-kind classifier "
+                              "by joint, calibrated); run `ur5fault benchmark` on the campaign again")
     if fmt > SCHEMA_FORMAT:
         raise ConfigFileError(f"{folder}: schema format {fmt} is newer than this version reads ({SCHEMA_FORMAT}); "
                               "update ur5fault")
+    if objs.get("joint_kind") is None or schema.get("joint_kind_threshold_5pct_false_alarms") is None:
+        raise ConfigFileError(f"{folder}: holds no fault-kind classifier by joint with its 5 % false-alarm "
+                              "threshold, the source of p(fault); run `ur5fault benchmark` on the campaign again")
     if (objs.get("calibrator") is None) != (schema.get("calibration") is None):
         raise ConfigFileError(f"{folder}: {CLASSIFIERS_FILE} and {SCHEMA_FILE} disagree on the calibration of "
                               "p(fault); the folder is mixed from two runs: run `ur5fault benchmark` again")
