@@ -61,13 +61,13 @@ def add_log_options(parser: argparse.ArgumentParser, formats: Sequence[str], *, 
     parser.add_argument("--format", choices=tuple(formats), dest="fmt",
                         help="log format: " + ", ".join(formats) + " (required unless a manifest names it)")
     parser.add_argument("--payload-kg", type=payload_kg_arg,
-                        help="payload held during the log(s) [kg], 0 for none, or 'unknown' (rtde: omitted = unknown; "
-                             "discrepancy fits an unknown payload and says so, other commands refuse it; nist and sim "
-                             "logs carry their own unless declared 'unknown')")
+                        help="payload held during the log(s) [kg], 0 for none, or 'unknown' (default: rtde: unknown, "
+                             "which discrepancy fits and says so and the other commands refuse; nist and sim: the "
+                             "log's own, unless declared 'unknown')")
     parser.add_argument("--tcp-offset-m", type=float, nargs=3,
-                        help="tool offset (payload position) in the flange frame [m], 0 0 0 for the flange (rtde: "
-                             "omitted with the payload unknown = centre of mass fitted too; nist and sim: only with "
-                             "--payload-kg unknown)")
+                        help="tool offset (payload position) in the flange frame [m], 0 0 0 for the flange (default: "
+                             "rtde: unknown, its centre of mass fitted with an unknown payload; nist and sim: the "
+                             "log's own, and given only with --payload-kg unknown)")
     if hold_out:
         parser.add_argument("--hold-out", nargs="+", default=[], metavar="LOG",
                             help="further runs of the robot held out whole: scored, never fitted (default: none)")
