@@ -18,8 +18,8 @@ from numpy.typing import NDArray
 
 from ..errors import ParameterError
 from ..logs import MeasuredLog
+from ..sim.inverse_dynamics import inverse_dynamics_Nm, payload_model
 from ..sim.params import RobotParams
-from .dynamics import inverse_dynamics_Nm, payload_model
 
 #: a target speed below this is a still target [rad/s]: the setpoints are exactly constant at rest, so
 #: only rounding passes (the residual conditions' looser "at rest" is ur5fault.twin.residuals')

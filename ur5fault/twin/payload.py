@@ -20,8 +20,7 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
-from ..sim.axes import N_JOINTS
-from ..sim.multibody import payload_inertia
+from ..sim.inverse_dynamics import inverse_dynamics_Nm, place_payload
 from ..sim.params import RobotParams
 
 #: names of the payload's linear unknowns, in column order (mass, then its first moments)
@@ -31,22 +30,10 @@ UNKNOWNS = ("mass_kg", "mass_x_kg_m", "mass_y_kg_m", "mass_z_kg_m")
 MOMENT_STEP_M = 0.05
 
 
-def _inverse(m: mujoco.MjModel, body: int, mass_kg: float, pos_m: NDArray, q: NDArray, qd: NDArray,
-             qdd: NDArray) -> NDArray:
+def _inverse(m: mujoco.MjModel, mass_kg: float, pos_m: NDArray, q: NDArray, qd: NDArray, qdd: NDArray) -> NDArray:
     """Joint torques ``(n, 6)`` of the motion with a payload of ``mass_kg`` at ``pos_m`` (flange frame)."""
-    m.body_pos[body] = pos_m
-    m.body_ipos[body] = 0.0
-    m.body_mass[body] = mass_kg
-    m.body_inertia[body] = payload_inertia(np.asarray(mass_kg))
-    d = mujoco.MjData(m)
-    out = np.empty((q.shape[0], N_JOINTS))
-    for k in range(q.shape[0]):
-        d.qpos[:N_JOINTS] = q[k]
-        d.qvel[:N_JOINTS] = qd[k]
-        d.qacc[:N_JOINTS] = qdd[k]
-        mujoco.mj_inverse(m, d)
-        out[k] = d.qfrc_inverse[:N_JOINTS]
-    return out
+    place_payload(m, mass_kg, pos_m)
+    return inverse_dynamics_Nm(m, q, qd, qdd)
 
 
 def payload_current_columns(params: RobotParams, q_target_rad: NDArray, period_s: float,
@@ -66,17 +53,15 @@ def payload_current_columns(params: RobotParams, q_target_rad: NDArray, period_s
     qd = np.gradient(q, period_s, axis=0)
     qdd = np.gradient(qd, period_s, axis=0)
     m = Simulator(params).model
-    body = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "payload")
-    m.body_sameframe[body] = 0
     c0 = np.zeros(3) if com_m is None else np.asarray(com_m, dtype=float)
-    empty = _inverse(m, body, 0.0, c0, q, qd, qdd)
-    cols = [_inverse(m, body, 1.0, c0, q, qd, qdd) - empty]
+    empty = _inverse(m, 0.0, c0, q, qd, qdd)
+    cols = [_inverse(m, 1.0, c0, q, qd, qdd) - empty]
     if com_m is None:
         for axis in range(3):
             step = np.zeros(3)
             step[axis] = MOMENT_STEP_M
-            up = _inverse(m, body, 1.0, c0 + step, q, qd, qdd)
-            down = _inverse(m, body, 1.0, c0 - step, q, qd, qdd)
+            up = _inverse(m, 1.0, c0 + step, q, qd, qdd)
+            down = _inverse(m, 1.0, c0 - step, q, qd, qdd)
             cols.append((up - down) / (2.0 * MOMENT_STEP_M))
     per_amp = np.asarray(params.motor.torque_constant_Nm_per_A, float) * np.asarray(params.gear.ratio, float)
     return np.array(cols) / per_amp

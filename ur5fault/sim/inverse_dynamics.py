@@ -16,21 +16,27 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
-from ..sim.multibody import payload_inertia
+from .multibody import payload_inertia
 
 
 def payload_model(model_path: str | Path, payload_kg: float, tcp_offset_m) -> mujoco.MjModel:
     """The MJCF with the tool offset and a payload of ``payload_kg`` at the TCP."""
     m = mujoco.MjModel.from_xml_path(str(model_path))
-    body = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "payload")
     site = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SITE, "tcp")
-    m.body_sameframe[body] = 0
     m.site_pos[site] = tcp_offset_m
-    m.body_pos[body] = tcp_offset_m
-    m.body_ipos[body] = 0.0
-    m.body_mass[body] = payload_kg
-    m.body_inertia[body] = payload_inertia(np.asarray(payload_kg))
+    place_payload(m, payload_kg, tcp_offset_m)
     return m
+
+
+def place_payload(m: mujoco.MjModel, mass_kg: float, pos_m) -> None:
+    """Set ``m``'s payload body as the simulator does: ``mass_kg`` at ``pos_m`` in the flange frame, a solid
+    cube's inertia (:func:`ur5fault.sim.multibody.payload_inertia`)."""
+    body = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "payload")
+    m.body_sameframe[body] = 0
+    m.body_pos[body] = pos_m
+    m.body_ipos[body] = 0.0
+    m.body_mass[body] = mass_kg
+    m.body_inertia[body] = payload_inertia(np.asarray(mass_kg))
 
 
 def inverse_dynamics_Nm(model: mujoco.MjModel, q_rad: NDArray, qd_rad_s: NDArray, qdd_rad_s2: NDArray) -> NDArray:
