@@ -176,6 +176,12 @@ def _step(log: MeasuredLog, n: int, at_kg: float, at_com: tuple[float, float, fl
     return out, _r2(X, k)
 
 
+def _jackknife_se(reps: NDArray) -> NDArray:
+    """Block-jackknife standard error from the leave-one-block-out replicates ``(B, ...)`` (about their mean)."""
+    B = reps.shape[0]
+    return np.sqrt((B - 1) / B * np.sum((reps - reps.mean(axis=0)) ** 2, axis=0))
+
+
 def fit_payload(log: MeasuredLog, n: int, fitted_on: str, params_overrides: dict | None = None,
                 base_effects: Sequence[EffectSpec] = (), *, seed: int) -> PayloadRecord:
     """Fit the unknown payload of ``log`` on its samples ``1..n`` (module docstring); ``log.tcp_offset_m``
@@ -194,12 +200,12 @@ def fit_payload(log: MeasuredLog, n: int, fitted_on: str, params_overrides: dict
             break  # no payload the model can hold to linearise about
         at, at_com = theta, c  # type: ignore[assignment]
     B = JACKKNIFE_BLOCKS
-    se = np.sqrt((B - 1) / B * np.sum((reps_a - reps_a.mean(axis=0)) ** 2, axis=0))
+    se = _jackknife_se(reps_a)
     tq = float(stats.t.ppf(0.975, B - 1))
     m, m_se = float(theta[0]), float(se[0])
     lo, hi = m - tq * m_se, m + tq * m_se
     m_free = float(at[0] + delta_free[0])
-    se_free = float(np.sqrt((B - 1) / B * np.sum((reps_free[:, 0] - reps_free[:, 0].mean()) ** 2)))
+    se_free = float(_jackknife_se(reps_free[:, 0]))
     free = (m_free, m_free - tq * se_free, m_free + tq * se_free)
     separable = r2 <= MAX_COLLINEARITY
     notes = []
@@ -218,7 +224,7 @@ def fit_payload(log: MeasuredLog, n: int, fitted_on: str, params_overrides: dict
         if lo > 0:
             ratio = reps_a[:, 1:] / reps_a[:, :1]
             c = theta[1:] / theta[0]
-            c_se = np.sqrt((B - 1) / B * np.sum((ratio - ratio.mean(axis=0)) ** 2, axis=0))
+            c_se = _jackknife_se(ratio)
             com = tuple(float(x) for x in c)  # type: ignore[assignment]
             com_iv = tuple((float(a - tq * s), float(a + tq * s)) for a, s in zip(c, c_se))
         else:
