@@ -457,3 +457,29 @@ def test_dask_scheduler_that_does_not_answer(support_files, capsys, monkeypatch)
                           "--scheduler", "tcp://127.0.0.1:9"], support_files, capsys)
     _assert_one_line(rc, err, peak, "--scheduler tcp://127.0.0.1:9: cannot connect to a Dask scheduler (timeout 1 s")
     assert time.perf_counter() - t0 < 8.0
+
+
+@pytest.mark.parametrize("args, message", [
+    (["simulate", "--seed", "1", "--seed", "2"], "--seed given twice; give it once"),
+    (["simulate", "--out", "a.parquet", "--out=b.parquet"], "--out given twice; give it once"),
+    (["simulate", "--dur", "1", "--duration-s", "2"], "--duration-s given twice; give it once"),
+    (["identify", "x.csv", "--format", "rtde", "--format", "nist", "--out", "p.yaml"], "--format given twice"),
+    (["campaign", "run", "paper", "--jobs", "1", "--jobs", "2"], "--jobs given twice; give it once"),
+    (["discrepancy", "x.csv", "--format", "rtde", "--tcp-offset-m", "0", "0", "0", "--tcp-offset-m", "0", "0", "1",
+      "--out", "d"], "--tcp-offset-m given twice"),
+], ids=["simulate-seed", "simulate-out-equals", "abbreviation", "identify-format", "campaign-jobs", "tcp-offset"])
+def test_option_given_twice_refused(args, message, tmp_path, capsys, monkeypatch):
+    """argparse keeps the last of two values silently; the first would be an option accepted and ignored."""
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(SystemExit) as exc:
+        main(args)
+    err = capsys.readouterr().err
+    assert exc.value.code == 2 and err.startswith("ur5fault: error: ") and len(err.strip().splitlines()) == 1, err
+    assert message in err and list(tmp_path.iterdir()) == []
+
+
+def test_repeatable_options_and_flags_still_repeat(tmp_path, capsys):
+    out = tmp_path / "r.parquet"
+    assert main(["-v", "simulate", "-v", "--backlash", "2:0.1", "--backlash", "3:0.1", "--quiet", "--quiet",
+                 "--duration-s", "0.01", "--out", str(out)]) == 0
+    assert "backlash on shoulder_lift_joint" in capsys.readouterr().err and out.is_file()

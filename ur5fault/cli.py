@@ -178,8 +178,40 @@ class _Parser(argparse.ArgumentParser):
         self.add_argument("-v", "--verbose", action="count", default=argparse.SUPPRESS,
                           help="log what the library does (-v: INFO, -vv: DEBUG)")
 
+    def add_argument(self, *args, **kwargs):
+        action = super().add_argument(*args, **kwargs)
+        if action.option_strings and not isinstance(action, _REPEATABLE):
+            action.__class__ = _once(type(action))  # a second --out, --seed, ... would silently win
+        return action
+
+    def parse_known_args(self, args=None, namespace=None):
+        self._given: dict[str, str] = {}  # dest -> the option string that set it, in this parse
+        return super().parse_known_args(args, namespace)
+
     def error(self, message: str):  # one line, exit 2
         self.exit(EXIT_USAGE, f"ur5fault: error: {message}\n")
+
+
+#: actions meant to be given several times (--backlash, --effect, -v), flags that take no value (--quiet twice
+#: loses nothing) and those that end the parse (--help, --version)
+_REPEATABLE = (argparse._AppendAction, argparse._CountAction, argparse._StoreConstAction, argparse._HelpAction,
+               argparse._VersionAction)
+
+
+def _once(cls: type) -> type:
+    """``cls`` refusing a second use of its option in one command line (argparse keeps the last value silently)."""
+
+    class Once(cls):  # type: ignore[valid-type, misc]
+        def __call__(self, parser, namespace, values, option_string=None):
+            given = getattr(parser, "_given", None)
+            if given is not None:
+                if self.dest in given:  # an abbreviation (--dur) arrives as the full option string
+                    parser.error(f"{option_string} given twice; give it once")
+                given[self.dest] = option_string
+            super().__call__(parser, namespace, values, option_string)
+
+    Once.__name__ = Once.__qualname__ = f"Once{cls.__name__}"
+    return Once
 
 
 def _version() -> str:
