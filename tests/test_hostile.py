@@ -483,3 +483,20 @@ def test_repeatable_options_and_flags_still_repeat(tmp_path, capsys):
     assert main(["-v", "simulate", "-v", "--backlash", "2:0.1", "--backlash", "3:0.1", "--quiet", "--quiet",
                  "--duration-s", "0.01", "--out", str(out)]) == 0
     assert "backlash on shoulder_lift_joint" in capsys.readouterr().err and out.is_file()
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--sweep-window-s", "nan"], "--sweep-window-s = nan must be a positive number of seconds"),
+    (["--out", "{tmp}"], "is a folder; give a file name for the output"),
+    (["--out", "{tmp}/afile/p.yaml"], "is a file and not a folder"),
+    (["--json", "{tmp}/afile/x.json"], "is a file and not a folder"),
+], ids=["sweep-window-nan", "out-folder", "out-under-a-file", "json-under-a-file"])
+def test_identify_arguments_refused_before_the_fit(args, message, tmp_path, capsys):
+    """identify checked its output only after the fit (seconds to minutes), and a NaN window crashed in it."""
+    log = _write(tmp_path, "log.csv", rtde_frame())
+    _write(tmp_path, "afile", "x")
+    args = [a.format(tmp=tmp_path) for a in args]
+    out = [] if "--out" in args else ["--out", str(tmp_path / "p.yaml")]
+    rc, err, peak = _run(["identify", str(log), "--format", "rtde", "--payload-kg", "0", "--tcp-offset-m", "0", "0",
+                          "0", *out, *args], tmp_path, capsys)
+    _assert_one_line(rc, err, peak, message)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 from pathlib import Path
 
@@ -31,13 +32,16 @@ def cmd_identify(args: argparse.Namespace) -> int:
     from ..logs.length import check_files_length, check_logs_length
     from ..logs.options import log_entries, read_log_options
     from ..sim.params import load_params
-    from ..util.io import write_json_atomic, write_text_atomic
+    from ..util.io import check_writable, write_json_atomic, write_text_atomic
     from . import identify
 
     if args.bootstrap < 20:
         raise ParameterError(f"--bootstrap = {args.bootstrap} must be at least 20")
-    if args.sweep_window_s <= 0:
+    if not math.isfinite(args.sweep_window_s) or args.sweep_window_s <= 0:
         raise ParameterError(f"--sweep-window-s = {args.sweep_window_s} must be a positive number of seconds")
+    check_writable(args.out)  # before the fit, not after it (a folder, or a file in the way, is refused now)
+    if args.json:
+        check_writable(args.json)
     check_files_length([e.path for e in log_entries(args)], "identify")  # an hour-long log: refused in seconds
     logs, _ = read_log_options(args)
     check_logs_length(logs, "identify")
