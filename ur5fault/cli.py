@@ -140,6 +140,12 @@ def cmd_show(args: argparse.Namespace) -> int:
     from .util.io import write_figure_atomic
 
     target = Path(args.target)
+    if args.out is not None:  # before reading or re-simulating anything
+        from .util.io import check_writable
+
+        check_writable(args.out)
+        if Path(args.out).suffix.lower() != ".png":
+            raise ConfigFileError(f"--out {args.out}: the figure is written as PNG; give a .png file name")
     if target.suffix.lower() in OUT_SUFFIXES or target.is_file():
         import pandas as pd
 

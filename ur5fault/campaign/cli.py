@@ -112,8 +112,11 @@ def cmd_status(args: argparse.Namespace) -> int:
 
 def cmd_plot(args: argparse.Namespace) -> int:
     from ..plotting import campaign_figures, save
+    from ..util.io import check_writable
     from .result import CampaignResult
 
+    if args.out is not None:
+        check_writable(args.out, folder=True)  # a file in the way is refused before the figures are drawn
     result = CampaignResult.load(Path(args.dir))
     figures, messages = campaign_figures(result, args.feature)
     for path in save(figures, Path(args.out) if args.out else result.out / "plots"):

@@ -52,7 +52,10 @@ def load_features(path: Path) -> pd.DataFrame:
     p = path / "features.parquet" if path.is_dir() else path
     if not p.exists():
         raise ConfigFileError(f"{p}: no such feature table (run `ur5fault campaign run` first)")
-    return pd.read_parquet(p)
+    try:
+        return pd.read_parquet(p)
+    except (OSError, ValueError) as exc:  # pyarrow's ArrowInvalid is a ValueError
+        raise ConfigFileError(f"{p}: not a campaign folder, and cannot read it as a feature table ({exc})") from None
 
 
 @dataclasses.dataclass(frozen=True)
