@@ -514,3 +514,10 @@ def test_figure_and_benchmark_paths(args, message, tmp_path, capsys):
     _write(tmp_path, "run.parquet", pd.DataFrame({"t_s": [0.0]}))
     rc, err, peak = _run([a.format(tmp=tmp_path) for a in args], tmp_path, capsys)
     _assert_one_line(rc, err, peak, message)
+
+
+def test_campaign_status_of_a_folder_that_holds_no_campaign(tmp_path, capsys):
+    """It printed an empty report with exit 0, as if a mistyped folder were a sound campaign."""
+    (tmp_path / "notes.txt").write_text("x")
+    rc, err, peak = _run(["campaign", "status", str(tmp_path)], tmp_path, capsys)
+    _assert_one_line(rc, err, peak, "not a campaign folder (no manifest.json, runs/ or feature table in it)")
