@@ -19,6 +19,7 @@ from numpy.typing import NDArray
 
 from ..sim.axes import N_JOINTS
 from ..sim.params import FrictionParams, RobotParams
+from ..twin.payload import PayloadRecord
 from .stats import Estimate
 
 #: stick-slip parameters of issue 10 part A: written as soon as the friction parameters have the field
@@ -50,12 +51,15 @@ class Identification:
         duration_s: the log's length.
         estimates: one :class:`Estimate` per quantity and joint.
         sweep: the bandwidth sweep (``None`` when skipped).
+        payloads: per log, its payload as stated or fitted (:class:`ur5fault.twin.payload.PayloadRecord`; empty
+            when every log stated it). The log's, not the robot's: never in the overlay.
     """
 
     source: str
     duration_s: float
     estimates: tuple[Estimate, ...]
     sweep: Any = None
+    payloads: tuple[PayloadRecord, ...] = ()
 
     def get(self, key: str, joint: int | None = None) -> Estimate:
         for e in self.estimates:
@@ -96,6 +100,11 @@ class Identification:
                 "# Intervals: 95 % bootstrap (time blocks, rest segments or starts).  Friction is identified in A",
                 "# and written in N*m with the identified torque constant.  Estimates:"]
         head += ["#   " + line for line in self.table().splitlines()]
+        fitted = [r for r in self.payloads if not r.known]
+        if fitted:
+            head += ["#", "# Payloads fitted as each log's own unknown (the logs', not the robot's: not in the "
+                     "overlay):"]
+            head += [f"#   {r.line()}" for r in fitted]
         head += ["#", "# Stick-slip and friction share:"]
         written = PRESLIDING_FIELD in {f.name for f in dataclasses.fields(FrictionParams)}
         head.append("#   presliding stiffness: " + (f"written as friction.{PRESLIDING_FIELD}" if written else
@@ -112,6 +121,8 @@ class Identification:
     def to_json(self) -> dict[str, Any]:
         out: dict[str, Any] = {"log": self.source, "duration_s": self.duration_s,
                                "estimates": [e.to_json() for e in self.estimates]}
+        if self.payloads:
+            out["payload"] = {r.log: r.to_json() for r in self.payloads}
         if self.sweep is not None:
             s = self.sweep
             out["sweep"] = {"bandwidths_Hz": s.bandwidths_Hz, "scores": s.scores, "best_Hz": s.best_Hz,
