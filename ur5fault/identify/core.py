@@ -102,7 +102,7 @@ def identify(log: MeasuredLog | Sequence[MeasuredLog], params: RobotParams | Non
     noise = sensors.noise_at_rest(sig, n_boot, seed, {"sensors.current_noise_A": p.sensors.current_noise_A,
                                                       "sensors.resolver_noise_rad": p.sensors.resolver_noise_rad})
     est += noise
-    est.append(sensors.resolver_resolution(sig, n_boot, seed, float(np.mean(p.sensors.resolver_counts_per_rev))))
+    est += sensors.resolver_resolution(sig, n_boot, seed, p.sensors.resolver_counts_per_rev)
 
     say("breakaway and presliding stiffness (starts from rest)")
     q_noise = np.array([e.value for e in noise if e.key == "sensors.resolver_noise_rad"])

@@ -36,6 +36,8 @@ NOT_IDENTIFIABLE = (
     "elastic mode (>100 Hz, above this log's 62.5 Hz Nyquist) or a backlash would tell",
 )
 SIGNIFICANT = 4
+#: a measured count per revolution this close to a power of two is written as that power of two
+POWER_OF_TWO_REL = 0.01
 
 
 def _round(x: float) -> float:
@@ -157,9 +159,8 @@ def overlay_params(ident: Identification, params: RobotParams) -> dict[str, Any]
     if ident.has("sensors.resolver_noise_rad"):
         sensors["resolver_noise_rad"] = vec(_measured(ident, "sensors.resolver_noise_rad", s.resolver_noise_rad))
     if ident.has("sensors.resolver_counts_per_rev"):
-        e = ident.get("sensors.resolver_counts_per_rev")
-        if e.identifiable:
-            sensors["resolver_counts_per_rev"] = int(2 ** round(np.log2(e.value)))  # encoders count in powers of 2
+        sensors["resolver_counts_per_rev"] = [_counts(ident.get("sensors.resolver_counts_per_rev", j),
+                                                      s.resolver_counts_per_rev[j]) for j in range(N_JOINTS)]
     if ident.has("sensors.current_noise_A"):
         sensors["current_noise_A"] = vec(_measured(ident, "sensors.current_noise_A", s.current_noise_A))
     out["sensors"] = sensors
@@ -172,6 +173,17 @@ def overlay_params(ident: Identification, params: RobotParams) -> dict[str, Any]
     if ctrl:
         out["controller"] = ctrl
     return out
+
+
+def _counts(e: Estimate, prior: float) -> int:
+    """Counts per revolution to write: the nearest power of two where the measured count lies within
+    :data:`POWER_OF_TWO_REL` of it (an encoder counting in powers of two, read through rounding), else the measured
+    count itself (a quantum set by the controller's own scaling: the second UR5's 9.5 and 16.3 urad are no
+    power of two); the model's value where the log cannot give it."""
+    if not e.identifiable:
+        return int(round(prior))
+    pow2 = 2.0 ** round(np.log2(e.value))
+    return int(pow2) if abs(e.value / pow2 - 1.0) <= POWER_OF_TWO_REL else int(round(e.value))
 
 
 def _measured(ident: Identification, key: str, prior, scale=None) -> NDArray:

@@ -50,6 +50,8 @@ class LogSignals:
     #: first row of each log when several logs are laid end to end (:func:`derive_all`); a rest or a start
     #: from rest never spans two logs
     log_starts: tuple[int, ...] = (0,)
+    #: ``(n,)`` the rows the robot wrote (``None``: all; the others were filled in a gap by the reader)
+    logged: NDArray | None = None
     #: ``(p, n, 6)`` joint torque per unit of each unknown of the unknown payloads [N*m per kg, per kg*m], zero
     #: outside its log's rows (``None``: every payload stated)
     payload_columns_Nm: NDArray | None = None
@@ -84,7 +86,7 @@ def derive(log: MeasuredLog, params: RobotParams, model_path: str | Path) -> Log
     temp = (log.temperature_C if log.temperature_C is not None
             else np.tile(np.asarray(params.joint_temperature_C, float), (log.t_s.size, 1)))
     return LogSignals(dt, log.q_target_rad, qd_t, qdd_t, log.q_actual_rad, qd_a, log.current_A, temp, tau,
-                      log.target_torque_Nm, log.target_current_A, payload_columns_Nm=cols,
+                      log.target_torque_Nm, log.target_current_A, logged=log.logged_rows(), payload_columns_Nm=cols,
                       payload_owner=() if cols is None else (0,) * cols.shape[0])
 
 
