@@ -377,9 +377,10 @@ def test_estimate_contains_and_json():
 
 
 def test_quantised_log_gets_a_consistent_noise_and_resolution_pair():
-    """The second UR5 (CB2) logs positions that are identical at rest and step by about 16 urad on its wrists
-    (read here from the CSV itself): identify writes a noise of exactly 0 with each joint's own counts per
-    revolution, whose step matches the log's, and the pair still weighs the position residual (by the step)."""
+    """The second UR5 (CB2) logs positions that are identical at rest and step by about 9.5 urad on J1-J3 and
+    16.3 urad on its wrists (read here from the CSV itself; no power of two): identify writes a noise of exactly 0
+    with each joint's own counts per revolution, whose step matches the log's, and the pair still weighs the
+    position residual (by the step)."""
     import pandas as pd
 
     from ur5fault.identify import identify
@@ -389,8 +390,10 @@ def test_quantised_log_gets_a_consistent_noise_and_resolution_pair():
     from conftest import KUFIETA_DIR
 
     raw = pd.read_csv(KUFIETA_DIR / "Movement_No1.csv.gz")[[f"actual_q_{j}" for j in range(6)]].to_numpy()
-    steps = np.abs(np.diff(raw[:, 4]))
-    wrist_step = float(np.median(steps[(steps > 12e-6) & (steps < 21e-6)]))  # one quantum of J5, as printed
+    steps = np.abs(np.diff(raw, axis=0))
+    # one quantum as printed (to 1 urad): J2 steps by 9 or 10 urad, J5 by 16 or 17 (and multiples)
+    shoulder_step = float(np.mean(steps[:, 1][(steps[:, 1] > 8.5e-6) & (steps[:, 1] < 10.5e-6)]))
+    wrist_step = float(np.mean(steps[:, 4][(steps[:, 4] > 15.5e-6) & (steps[:, 4] < 17.5e-6)]))
     logs = [read_rtde(KUFIETA_DIR / name, payload_kg=0.0, tcp_offset_m=(0.0, 0.0, 0.0))
             for name in ("Movement_No1.csv.gz", "Movement_No10_Standstill_WDist.csv.gz")]
     logs[1] = logs[1].window(12.0, 60.0)  # its only constant-target stretch, after the last push
@@ -398,6 +401,7 @@ def test_quantised_log_gets_a_consistent_noise_and_resolution_pair():
     sensors_out = identify(logs, p, sweep=False, n_boot=20).overlay(p)["params"]["sensors"]
     assert sensors_out["resolver_noise_rad"] == [0.0] * 6
     counts = np.asarray(sensors_out["resolver_counts_per_rev"], float)
+    assert 2 * np.pi / counts[1] == pytest.approx(shoulder_step, rel=0.05)  # printed to 1 urad: 10 % of it
     assert 2 * np.pi / counts[4] == pytest.approx(wrist_step, rel=0.05)
     sigma = residual_sigma(load_params(overrides={"sensors": sensors_out}), ["position_rad"])
-    assert np.all(sigma > 0) and np.all(sigma < wrist_step)
+    assert np.all(sigma > 0) and np.all(sigma < shoulder_step)

@@ -36,7 +36,10 @@ MIN_SEGMENTS_FOR_INTERVAL = 2
 MIN_COUNTS_PER_REV, MAX_COUNTS_PER_REV = 2.0, 2.0**32
 #: steps up to this many quanta are used to fit the quantum (larger ones may be motion)
 MAX_QUANTA = 5
-#: a step size seen fewer times than this (within 10 %) is not taken as the quantum's first guess
+#: a step cluster smaller than this share of the largest among its multiples is not the quantum's first guess
+#: (assumption: a moving joint steps by one quantum at least a tenth as often as by its most frequent multiple)
+MIN_CLUSTER_SHARE = 0.1
+#: ... nor one seen fewer times than this (a lone step)
 MIN_REPEATS = 3
 
 
@@ -113,16 +116,25 @@ def noise_at_rest(sig: LogSignals, n_boot: int, seed: int, prior: dict[str, NDAr
 def position_quantum(q_rad: NDArray) -> tuple[float, NDArray]:
     """The quantum [rad] of measured positions and the small steps it was fitted on.
 
-    First guess: the smallest step that occurs at least :data:`MIN_REPEATS` times (within 10 %): a lone odder
-    step (the second UR5 logs a few of 1-5 urad among thousands of 9-10 urad, e.g. at an irregular tick) is not
-    the quantum. Then the least-squares quantum over the steps of 1..:data:`MAX_QUANTA` quanta (steps below half
-    a quantum left out)."""
+    First guess: the smallest step whose cluster (steps within 10 % of it) holds at least :data:`MIN_REPEATS` steps
+    and :data:`MIN_CLUSTER_SHARE` of the largest cluster among the steps up to :data:`MAX_QUANTA` times it: a rare
+    odder step is not the quantum (the second UR5's J1-J3 log 10 steps of 4-5 urad against 1,000 of 9-10 urad
+    and their multiples, e.g. at an irregular tick; its odd multiples of 4.75 urad are as rare). Then the
+    least-squares quantum over the steps of 1..:data:`MAX_QUANTA` quanta (steps below half a quantum left out)."""
     steps = np.abs(np.diff(q_rad, axis=0)).ravel()
     steps = np.sort(steps[steps > 0])
     if steps.size == 0:
         raise ValueError("positions never change")
     near = np.searchsorted(steps, 1.1 * steps, side="right") - np.searchsorted(steps, 0.9 * steps, side="left")
-    quantum = float(steps[int(np.argmax(near >= MIN_REPEATS))] if np.any(near >= MIN_REPEATS) else steps[0])
+    i, quantum = 0, float(steps[0])
+    while i < steps.size:
+        top = int(np.searchsorted(steps, (MAX_QUANTA + 0.5) * steps[i], side="right"))
+        if near[i] >= MIN_REPEATS and near[i] >= MIN_CLUSTER_SHARE * near[i:top].max():
+            quantum = float(steps[i])
+            break
+        i = int(np.searchsorted(steps, 1.1 * steps[i], side="right"))  # the next cluster
+    else:
+        quantum = float(steps[0])  # no cluster qualifies (a few steps only): the smallest
     for _ in range(2):  # refine: the first guess may sit at the low edge of its cluster
         small = steps[(steps >= 0.5 * quantum) & (steps < (MAX_QUANTA + 0.5) * quantum)]
         quanta = np.maximum(np.round(small / quantum), 1.0)
