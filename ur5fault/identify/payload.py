@@ -75,6 +75,8 @@ class PayloadUnknowns:
     anchored: NDArray
     current_A: NDArray
     friction_cols: tuple[NDArray, ...]
+    #: some joint of the weighing motor size carries the torque constant on these logs
+    k_group: bool = True
 
     @classmethod
     def of(cls, fit: FrictionFit) -> PayloadUnknowns:
@@ -103,8 +105,10 @@ class PayloadUnknowns:
             r2[int(u)] = share_explained(a, N) if a.size else 1.0
         separable = {u for u, v in r2.items() if v <= MAX_COLLINEARITY}
         anchor_logs = [i for i in range(len(sig.log_starts)) if i not in r2 or i in separable]
+        # without a torque-constant group on J1-J3 every payload is fitted at the torque constants kept
+        anchored = np.isin(owner, list(separable)) if fit.k_groups[WEIGHING_SIZE] else np.zeros(owner.size, bool)
         return cls(cols, owner, log_of_row, tuple(joints), r2, np.isin(log_of_row, anchor_logs),  # type: ignore[arg-type]
-                   np.isin(owner, list(separable)), sig.current_A, tuple(fit.cols_k))
+                   anchored, sig.current_A, tuple(fit.cols_k), bool(fit.k_groups[WEIGHING_SIZE]))
 
     @property
     def n_unknowns(self) -> int:
@@ -159,10 +163,12 @@ def records(logs: list[MeasuredLog], pl: PayloadUnknowns, theta: NDArray, boot: 
         r2 = pl.r2[i]
         separable = r2 <= MAX_COLLINEARITY
         joints = ", ".join(f"J{j + 1}" for j in pl.joints)
-        if separable:
+        if pl.anchored[cu[0]]:
             how = f"the moving samples of {joints}, jointly with the torque constants and friction"
-        else:
+        elif pl.k_identifiable and pl.k_group:
             how = f"the moving samples of {joints}, at the torque constants of the other logs, with friction"
+        else:
+            how = f"the moving samples of {joints}, at the model's torque constants, with friction"
         notes = []
         if not separable:
             where = ("the torque constants come from the logs whose payload is stated or separable" if
@@ -171,6 +177,9 @@ def records(logs: list[MeasuredLog], pl: PayloadUnknowns, theta: NDArray, boot: 
             notes.append(f"this log cannot separate the payload from the torque constants: the torque constant, "
                          f"friction and constant current explain r^2 = {r2:.3f} of the mass column "
                          f"(> {MAX_COLLINEARITY:g}); {where}")
+        elif not pl.anchored[cu[0]]:
+            notes.append(f"no joint of {joints}'s motor size has the torque lever to carry a torque constant on these "
+                         "logs: the payload is fitted at the model's")
         replay_kg = float(np.clip(m, mass.lo, mass.hi))
         if replay_kg != m:
             notes.append(f"the estimate is outside the payload's range [{mass.lo:g}, {mass.hi:g}] kg: the replays hold "
