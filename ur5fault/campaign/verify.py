@@ -86,8 +86,10 @@ def status(out: Path) -> dict[str, Any]:
     out = Path(out)
     if not out.is_dir():
         raise ConfigFileError(f"{out}: no such campaign folder")
-    if not any((out / name).exists() for name in ("manifest.json", "features.parquet", "inspections.parquet")) \
-            and not runs_dir(out).is_dir() and lock_holder(out) is None:  # a wrong folder: not "all ok"
+    # a wrong folder (other files, no trace of a campaign) is not "all ok"; an empty one may be a campaign that
+    # failed before writing anything (a full disk), and is reported as such
+    if any(out.iterdir()) and not runs_dir(out).is_dir() and lock_holder(out) is None and not any(
+            (out / name).exists() for name in ("manifest.json", "features.parquet", "inspections.parquet")):
         raise ConfigFileError(f"{out}: not a campaign folder (no manifest.json, runs/ or feature table in it)")
     manifest = read_manifest(out)
     holder = lock_holder(out)
