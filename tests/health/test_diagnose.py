@@ -324,5 +324,8 @@ def test_real_nist_log_few_seconds_diagnosed_without_motor_encoders(detector, tm
         for j in w["joints"]:  # what lives in the encoder mismatch is "cannot tell" on every joint, and why
             for k in ("backlash", "resolver_offset", "gear_stiffness"):
                 assert "motor encoders" in j["cannot_tell"][k]
+            # each kind says its own physics (the position loop holds a resolver offset's reading on the setpoint)
+            assert len({j["cannot_tell"][k] for k in ("backlash", "resolver_offset", "gear_stiffness")}) == 3
+            assert "holds the offset reading on the setpoint" in j["cannot_tell"]["resolver_offset"]
             est = next(k for k in j["kinds"] if k["kind"] == "current_sensor_offset")
             assert est["size"] is None or abs(est["size"]) < 1.0  # A: within the sensor's plausible range
