@@ -329,7 +329,10 @@ def test_identify_cli_errors(tmp_path, capsys):
         main(["identify", "x.csv", "--format", "sim", "--out", "p.yaml"])
     assert exc.value.code == 2
     assert main(["identify", "x.csv", "--format", "nist", "--out", "p.yaml", "--bootstrap", "3"]) == 2
-    assert "--bootstrap = 3 must be at least 20" in capsys.readouterr().err
+    assert "--bootstrap = 3 must be 20..10000 resamples" in capsys.readouterr().err
+    # no bound was there: 10^8 resamples ran on until stopped by hand
+    assert main(["identify", "x.csv", "--format", "nist", "--out", "p.yaml", "--bootstrap", "100000000"]) == 2
+    assert "--bootstrap = 100000000 must be 20..10000 resamples" in capsys.readouterr().err
 
 
 def test_rtde_log_gives_the_same_estimates_as_its_nist_original(nist_path, tmp_path):

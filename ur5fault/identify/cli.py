@@ -9,7 +9,7 @@ from pathlib import Path
 
 from ..logs.options import add_log_options
 from .loop import SWEEP_WINDOW_S
-from .stats import N_BOOT
+from .stats import MAX_BOOT, N_BOOT
 
 
 def register(sub) -> None:
@@ -22,7 +22,8 @@ def register(sub) -> None:
                    help="skip the position-loop bandwidth sweep (it replays the log once per candidate)")
     d.add_argument("--sweep-window-s", type=float, default=SWEEP_WINDOW_S,
                    help=f"the part of the log the sweep replays, from its start (default {SWEEP_WINDOW_S:g})")
-    d.add_argument("--bootstrap", type=int, default=N_BOOT, help=f"resamples per interval (default {N_BOOT})")
+    d.add_argument("--bootstrap", type=int, default=N_BOOT,
+                   help=f"resamples per interval, 20..{MAX_BOOT} (default {N_BOOT})")
     d.add_argument("--quiet", action="store_true", help="no progress messages")
     d.set_defaults(func=cmd_identify)
 
@@ -35,8 +36,8 @@ def cmd_identify(args: argparse.Namespace) -> int:
     from ..util.io import check_writable, write_json_atomic, write_text_atomic
     from . import identify
 
-    if args.bootstrap < 20:
-        raise ParameterError(f"--bootstrap = {args.bootstrap} must be at least 20")
+    if not 20 <= args.bootstrap <= MAX_BOOT:
+        raise ParameterError(f"--bootstrap = {args.bootstrap} must be 20..{MAX_BOOT} resamples")
     if not math.isfinite(args.sweep_window_s) or args.sweep_window_s <= 0:
         raise ParameterError(f"--sweep-window-s = {args.sweep_window_s} must be a positive number of seconds")
     check_writable(args.out)  # before the fit, not after it (a folder, or a file in the way, is refused now)
