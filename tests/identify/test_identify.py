@@ -70,8 +70,8 @@ def test_noise_without_rest_keeps_the_model_value_and_one_segment_gives_no_inter
 
 def test_resolution_of_a_robot_that_did_not_move_is_the_model_value_marked():
     sig = _signals(1000, q_actual_rad=np.full((1000, 6), 0.3))
-    e = sensors.resolver_resolution(sig, n_boot=20, seed=0, prior_counts=2.0**19)
-    assert not e.identifiable and e.value == 2.0**19 and "never change" in e.note
+    est = sensors.resolver_resolution(sig, n_boot=20, seed=0, prior_counts=2.0**19)
+    assert len(est) == 6 and all(not e.identifiable and e.value == 2.0**19 and "never change" in e.note for e in est)
 
 
 def test_noise_at_rest_recovers_white_noise_sigma_and_ignores_a_creeping_trend():
@@ -195,7 +195,8 @@ def test_identify_recovers_the_parameters_of_a_simulated_replay(nist_path):
     for j in range(4):
         assert ident.get("friction.coulomb_A", j).value == pytest.approx(truth_A[j], rel=0.1), j
         assert ident.get("friction.viscous_A_s_per_rad", j).value == pytest.approx(visc_A[j], rel=0.1), j
-    assert ident.get("sensors.resolver_counts_per_rev").value == pytest.approx(2**19, rel=1e-3)
+    for j in range(6):
+        assert ident.get("sensors.resolver_counts_per_rev", j).value == pytest.approx(2**19, rel=1e-3), j
 
 
 # --------------------------------------------------------------------------------------------- the real NIST log
@@ -272,7 +273,7 @@ def test_yaml_nist_values_are_what_the_log_gives(nist_identified):
         values = np.atleast_1d(np.asarray(getattr(getattr(p, section), field), float))
         if est_key.startswith("friction."):
             values = values / k_joint  # friction is checked in current units, where it was measured
-        joints = [None] if est_key in ("sensors.resolver_counts_per_rev", "controller.position_bw_Hz") else range(6)
+        joints = [None] if est_key == "controller.position_bw_Hz" else range(6)
         for j, v in zip(joints, values):
             e = _estimate(summ, est_key, j)
             ref = e["value"]
@@ -373,3 +374,34 @@ def test_estimate_contains_and_json():
     e = stats.Estimate("k", 0, 1.0, 0.9, 1.1, "m")
     assert e.contains(1.14, rel_tol=0.05) and not e.contains(1.16, rel_tol=0.05)
     assert dataclasses.asdict(e) == e.to_json()
+
+
+def test_quantised_log_gets_a_consistent_noise_and_resolution_pair():
+    """The second UR5 (CB2) logs positions that are identical at rest and step by about 9.5 urad on J1-J3 and
+    16.3 urad on its wrists (read here from the CSV itself; no power of two): identify writes a noise of exactly 0
+    with each joint's own counts per revolution, whose step matches the log's, and the pair still weighs the
+    position residual (by the step)."""
+    import pandas as pd
+
+    from ur5fault.identify import identify
+    from ur5fault.logs import read_rtde
+    from ur5fault.twin.replay import residual_sigma
+
+    from conftest import KUFIETA_DIR
+
+    raw = pd.read_csv(KUFIETA_DIR / "Movement_No1.csv.gz")[[f"actual_q_{j}" for j in range(6)]].to_numpy()
+    steps = np.abs(np.diff(raw, axis=0))
+    # one quantum as printed (to 1 urad): J2 steps by 9 or 10 urad, J5 by 16 or 17 (and multiples)
+    shoulder_step = float(np.mean(steps[:, 1][(steps[:, 1] > 8.5e-6) & (steps[:, 1] < 10.5e-6)]))
+    wrist_step = float(np.mean(steps[:, 4][(steps[:, 4] > 15.5e-6) & (steps[:, 4] < 17.5e-6)]))
+    logs = [read_rtde(KUFIETA_DIR / name, payload_kg=0.0, tcp_offset_m=(0.0, 0.0, 0.0))
+            for name in ("Movement_No1.csv.gz", "Movement_No10_Standstill_WDist.csv.gz")]
+    logs[1] = logs[1].window(12.0, 60.0)  # its only constant-target stretch, after the last push
+    p = load_params()
+    sensors_out = identify(logs, p, sweep=False, n_boot=20).overlay(p)["params"]["sensors"]
+    assert sensors_out["resolver_noise_rad"] == [0.0] * 6
+    counts = np.asarray(sensors_out["resolver_counts_per_rev"], float)
+    assert 2 * np.pi / counts[1] == pytest.approx(shoulder_step, rel=0.05)  # printed to 1 urad: 10 % of it
+    assert 2 * np.pi / counts[4] == pytest.approx(wrist_step, rel=0.05)
+    sigma = residual_sigma(load_params(overrides={"sensors": sensors_out}), ["position_rad"])
+    assert np.all(sigma > 0) and np.all(sigma < shoulder_step)

@@ -123,10 +123,9 @@ def test_bad_manifest_payload_is_one_line(tmp_path, capsys):
         in err[0], err
 
 
-@pytest.mark.parametrize("command", ["identify", "monitor"])
+@pytest.mark.parametrize("command", ["monitor"])
 def test_commands_that_cannot_fit_it_refuse_an_unknown_payload(tmp_path, capsys, command):
-    extra = (["--out", str(tmp_path / "p.yaml")] if command == "identify"
-             else ["--baseline", str(tmp_path / "b.yaml"), "--baseline-logs", str(RUN2), "--out", str(tmp_path / "o")])
+    extra = ["--baseline", str(tmp_path / "b.yaml"), "--baseline-logs", str(RUN2), "--out", str(tmp_path / "o")]
     (tmp_path / "b.yaml").write_text("params: {}\n")
     rc = main([command, str(RUN1), "--format", "rtde", *extra])
     err = capsys.readouterr().err.strip().splitlines()

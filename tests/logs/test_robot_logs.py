@@ -120,13 +120,13 @@ def test_payload_for_a_format_that_carries_its_own_is_refused(capsys, tmp_path):
 
 
 @pytest.mark.parametrize("command, extra, text", [
-    ("identify", (), "payload unknown (no --payload-kg): this command needs the payload stated"),
-    ("identify", ("--payload-kg", "unknown"), "payload unknown (no --payload-kg): this command needs the payload"),
+    ("identify", ("--payload-kg", "0"), "--tcp-offset-m (tcp_offset_m) missing: a stated payload needs"),
     ("discrepancy", ("--payload-kg", "0"), "--tcp-offset-m (tcp_offset_m) missing: a stated payload needs"),
 ])
 def test_rtde_without_payload_is_refused_not_defaulted(capsys, tmp_path, command, extra, text):
-    """identify cannot fit an unknown payload (discrepancy can: tests/discrepancy/test_payload.py); a stated mass
-    without its position is refused by every command."""
+    """A stated mass without its position is refused by every command (an unknown payload is fitted by discrepancy
+    and identify: tests/discrepancy/test_payload.py, tests/identify/test_unknown_payload.py; refused by the others:
+    tests/logs/test_options.py)."""
     out = ["--out", str(tmp_path / ("p.yaml" if command == "identify" else "o"))]
     rc = main([command, str(KUFIETA_RUNS[0]), "--format", "rtde", *extra, *out])
     err = capsys.readouterr().err.strip().splitlines()

@@ -62,7 +62,7 @@ def test_backlash_in_degrees_becomes_radians():
 
 
 def test_effect_keys_parse_at_the_first_dot_only():
-    from ur5fault.sim.effects import EffectKey
+    from ur5fault.sim.effect_types import EffectKey
 
     k = EffectKey.parse("backlash.backlash_deg")
     assert (k.effect, k.param, str(k)) == ("backlash", "backlash_deg", "backlash.backlash_deg")

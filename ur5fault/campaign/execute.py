@@ -17,9 +17,8 @@ import json
 import logging
 import os
 import time
-import warnings
 from collections.abc import Callable, Mapping, Sequence
-from contextlib import nullcontext
+from contextlib import closing
 from pathlib import Path
 from typing import Any
 
@@ -28,7 +27,6 @@ import numpy as np
 from ..config import parse_trajectory
 from ..sim.params import load_params
 from ..util.io import check_writable, write_json_atomic, write_parquet_atomic
-from ..util.parallel import iter_tasks
 from ..util.progress import campaign_progress
 from .digital_twin import twin_id, twin_runs
 from .identity import DRIVE, STEPPER, Identities
@@ -41,7 +39,7 @@ from .runs import CampaignRun
 from .spec import Campaign
 from .store import BadRunFilesError, CampaignChangedError, consolidate, run_path, write_run_file
 from .verify import scan
-from .workers import check_backend, dask_client, exit_with_parent, note_stderr, stop_loky_workers
+from .workers import check_backend, dask_client, dispatch, exit_with_parent, note_stderr
 
 _log = logging.getLogger(__name__)
 
@@ -260,9 +258,8 @@ def _remove_stale_temporaries(out: Path) -> None:
 
 def _execute(camp: Campaign, batches: list[list[CampaignRun]], out: Path, ts_dir: Path | None, jobs: int,
              client, ids: Identities, todo: set[str], done: int, report, t0: float) -> None:
-    """Run the batches in parallel; write each run's row to the store as soon as its batch returns."""
-    import joblib
-
+    """Run the batches in parallel (``workers.dispatch``); write each run's row to the store as soon as its batch
+    returns."""
     if not batches:
         return
     if ts_dir is not None:
@@ -271,28 +268,11 @@ def _execute(camp: Campaign, batches: list[list[CampaignRun]], out: Path, ts_dir
     idents = {rid: ids.identity(rc) for rid, rc in by_id.items()}
     args = [(camp, b, str(ts_dir) if ts_dir else None, {rc.run_id: idents[rc.run_id] for rc in b},
              os.getpid() if client is None else None) for b in batches]
-    ctx = joblib.parallel_backend("dask", wait_for_workers_timeout=60) if client is not None else nullcontext()
-    gen = None
-    try:
-        with ctx:
-            if client is not None:
-                par = joblib.Parallel(n_jobs=-1, return_as="generator_unordered")
-                gen = results = par(joblib.delayed(run_batch)(*a) for a in args)
-            else:  # this process runs batches too, beside jobs - 1 loky workers (util/parallel.py)
-                gen = iter_tasks(run_batch, args, jobs, cost=[len(b) for b in batches])
-                results = (rows for _, rows in gen)
-            for rows in results:
-                for row in rows:
-                    if row["run_id"] in todo:
-                        write_run_file(out, row, ids.record(by_id[row["run_id"]]))
-                        todo.discard(row["run_id"])
-                        done += 1
-                report(done, time.perf_counter() - t0)
-    except BaseException:
-        if gen is not None:  # cancel the batches still out, without joblib's warning after our one-line error
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")
-                gen.close()
-        if client is None:
-            stop_loky_workers()
-        raise
+    with closing(dispatch(run_batch, args, jobs, client, cost=[len(b) for b in batches])) as results:
+        for rows in results:
+            for row in rows:
+                if row["run_id"] in todo:
+                    write_run_file(out, row, ids.record(by_id[row["run_id"]]))
+                    todo.discard(row["run_id"])
+                    done += 1
+            report(done, time.perf_counter() - t0)

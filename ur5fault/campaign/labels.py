@@ -34,7 +34,8 @@ from typing import Any
 import numpy as np
 
 from ..errors import ParameterError, UnknownNameError
-from ..sim.effects import REGISTRY, EffectKey, EffectSpec
+from ..sim.effect_types import EffectKey
+from ..sim.effects import REGISTRY, EffectSpec
 
 SPLIT_KEYS = ("by", "test_fraction", "seed")
 #: group keys of the split: the trajectory's seed option (runs on a fixed trajectory are grouped by its

@@ -16,7 +16,8 @@ from typing import Any
 from ..config import check_mapping, check_seed, parse_trajectory
 from ..errors import ParameterError, UnknownNameError
 from ..sim.axes import joint_index
-from ..sim.effects import REGISTRY, EffectKey, EffectSpec, effects_of_keys
+from ..sim.effect_types import EffectKey
+from ..sim.effects import REGISTRY, EffectSpec, effects_of_keys
 from ..util.checks import check_number, short
 
 CONDITION_KEYS = ("seed", "payload_kg", "temperature_C", "trajectory")

@@ -54,7 +54,8 @@ import numpy as np
 from ..config import parse_trajectory
 from ..errors import ParameterError, UnknownNameError, Ur5FaultError
 from ..sim.axes import joint_index
-from ..sim.effects import REGISTRY, EffectKey, EffectParam, effects_of_keys, make_effect
+from ..sim.effect_types import EffectKey, EffectParam
+from ..sim.effects import REGISTRY, effects_of_keys, make_effect
 from .design import METHODS, SIGNIFICANT_DIGITS, Dist, parse_dist, unit_design
 from .labels import SIZE_PARAM
 from .runs import CONDITION_KEYS, MAX_RUNS

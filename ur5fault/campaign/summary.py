@@ -18,7 +18,8 @@ import pandas as pd
 
 from ..errors import UnknownNameError
 from ..sim.axes import JOINT_NAMES, N_JOINTS
-from ..sim.effects import REGISTRY, EffectKey
+from ..sim.effect_types import EffectKey
+from ..sim.effects import REGISTRY
 
 HEALTHY = "healthy"
 

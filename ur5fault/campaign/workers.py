@@ -1,5 +1,6 @@
 """How campaign work reaches worker processes, shared by fault campaigns and life campaigns: the backend
-check, the Dask connection, the loky workers' watch on their parent and their shutdown after an interruption."""
+check, the Dask connection, the one dispatch of tasks (here beside loky workers, or on a Dask cluster), the loky
+workers' watch on their parent and their shutdown after an interruption."""
 
 from __future__ import annotations
 
@@ -8,8 +9,12 @@ import os
 import sys
 import threading
 import time
+import warnings
+from collections.abc import Callable, Iterator, Sequence
+from typing import Any
 
 from ..errors import ParameterError
+from ..util.parallel import iter_tasks
 from .limits import effective_jobs
 
 #: seconds to wait for a Dask scheduler to answer (distributed's own default is 30 s)
@@ -26,6 +31,36 @@ def check_backend(backend: str, scheduler: str | None, jobs: int | None) -> tupl
     if backend == "dask" and not scheduler:
         raise ParameterError("--backend dask needs --scheduler ADDRESS (e.g. tcp://127.0.0.1:8786)")
     return effective_jobs(jobs) if backend == "loky" else (jobs or 1, None)
+
+
+def dispatch(fn: Callable[..., Any], tasks: Sequence[tuple], jobs: int, client=None,
+             cost: Sequence[float] | None = None) -> Iterator[Any]:
+    """``fn(*t)`` for every task, each result as it finishes (not in the tasks' order): on the Dask cluster of
+    ``client`` (joblib's dask backend), else in this process beside ``jobs - 1`` loky workers
+    (:func:`~ur5fault.util.parallel.iter_tasks`, ``cost`` sets this process's share).  Use it closed
+    (``contextlib.closing``): closing it early, an exception or an interruption cancels what is still out and,
+    locally, kills the workers."""
+    if client is None:
+        local = iter_tasks(fn, tasks, jobs, cost)
+        try:
+            for _, result in local:
+                yield result
+        except BaseException:
+            local.close()
+            stop_loky_workers()
+            raise
+        return
+    import joblib
+
+    with joblib.parallel_backend("dask", wait_for_workers_timeout=60):
+        remote = joblib.Parallel(n_jobs=-1, return_as="generator_unordered")(joblib.delayed(fn)(*t) for t in tasks)
+        try:
+            yield from remote
+        except BaseException:  # cancel the tasks still out, without joblib's warning after our one-line error
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                remote.close()
+            raise
 
 
 def exit_with_parent(parent_pid: int | None) -> None:

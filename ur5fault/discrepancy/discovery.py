@@ -27,7 +27,7 @@ from numpy.typing import NDArray
 from ..sim.axes import N_JOINTS
 from ..sim.effects import REGISTRY
 from ..sim.engine import Simulator
-from ..sim.multibody import payload_inertia
+from ..sim.inverse_dynamics import place_payload
 from ..sim.terms import coulomb, harmonic, last_motion_sign, quadratic, rest_weight, stribeck
 from ..twin.replay import LogReplay, Replayed
 from .candidates import TermCandidate
@@ -69,12 +69,8 @@ def _gravity(rp: LogReplay, q: NDArray) -> tuple[NDArray, NDArray, NDArray, NDAr
     sim = Simulator(rp.params)
     m = sim.model
     tcp = np.asarray(rp.params.tcp_offset_m)
-    site = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SITE, "tcp")
-    pay = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "payload")
-    m.site_pos[site] = tcp
-    m.body_pos[pay] = tcp
-    m.body_mass[pay] = rp.log.payload_kg
-    m.body_inertia[pay] = payload_inertia(np.array(rp.log.payload_kg))
+    m.site_pos[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SITE, "tcp")] = tcp
+    place_payload(m, rp.log.payload_kg, tcp)
     d = mujoco.MjData(m)
     up = -np.asarray(m.opt.gravity)  # the force that holds 1 kg, per kg
     links = [int(m.jnt_bodyid[j]) for j in range(N_JOINTS)]

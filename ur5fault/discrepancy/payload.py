@@ -40,7 +40,7 @@ from scipy import stats
 
 from ..logs import MeasuredLog
 from ..sim.effects import REGISTRY, EffectSpec
-from ..twin.payload import payload_current_columns
+from ..twin.payload import PayloadRecord, com_in_range, payload_current_columns, share_explained
 from ..twin.replay import LogReplay
 from ..twin.residuals import fit_samples
 from .drift import basis
@@ -53,57 +53,6 @@ JACKKNIFE_BLOCKS = 10
 GAUSS_NEWTON_STEPS = 2
 #: the library's candidates that an unknown payload's fit replaces
 PAYLOAD_KINDS = ("payload", "payload_com")
-
-
-@dataclasses.dataclass(frozen=True)
-class PayloadRecord:
-    """What a log's payload was: stated (``known``) or fitted, with the values its replays use."""
-
-    log: str
-    known: bool
-    mass_kg: float
-    com_m: tuple[float, float, float] | None
-    interval_kg: tuple[float, float] | None = None
-    com_interval_m: tuple[tuple[float, float], ...] | None = None
-    com_fitted: bool = False
-    fitted_on: str = ""
-    r2_nuisance: float | None = None
-    separable: bool | None = None
-    replayed_kg: float = 0.0
-    replayed_com_m: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    notes: tuple[str, ...] = ()
-    #: the mass and its interval with every joint's current gain and offset fitted beside it [kg] (the test of
-    #: separability: how far the torque constants could move it)
-    gains_free_kg: tuple[float, float, float] | None = None
-
-    def to_json(self) -> dict:
-        out: dict = {"known": self.known, "mass_kg": self.mass_kg, "com_m": self.com_m}
-        if not self.known:
-            out.update({"interval_kg": self.interval_kg, "com_fitted": self.com_fitted,
-                        "com_interval_m": self.com_interval_m, "fitted_on": self.fitted_on,
-                        "r2_mass_vs_gain_offset_drift": self.r2_nuisance, "separable": self.separable,
-                        "gains_free_kg": None if self.gains_free_kg is None else {
-                            "mass_kg": self.gains_free_kg[0], "interval_kg": list(self.gains_free_kg[1:])},
-                        "replayed_kg": self.replayed_kg, "replayed_com_m": self.replayed_com_m,
-                        "notes": list(self.notes)})
-        return out
-
-    def line(self) -> str:
-        """One line for the user."""
-        if self.known:
-            return f"payload of {self.log}: {self.mass_kg:g} kg at {_vec(self.com_m)} m (stated)"
-        lo, hi = self.interval_kg or (np.nan, np.nan)
-        if self.com_m is None:
-            where = "centre of mass not determined"
-        else:
-            where = f"centre of mass {_vec(self.com_m)} m ({'fitted' if self.com_fitted else 'stated'})"
-        text = (f"payload of {self.log} unknown: fitted {self.mass_kg:.3g} kg (95 % {lo:.3g}..{hi:.3g}), {where}, "
-                f"on {self.fitted_on}")
-        return "; ".join([text, *self.notes])
-
-
-def _vec(v) -> str:
-    return "(" + ", ".join(f"{x:.3g}" for x in v) + ")"
 
 
 def _design(r: NDArray, cols: NDArray, gain: NDArray, drift: list[NDArray], sigma: NDArray, keep: NDArray
@@ -129,23 +78,9 @@ def _design(r: NDArray, cols: NDArray, gain: NDArray, drift: list[NDArray], sigm
     return y[keep].reshape(-1), X[keep].reshape(-1, width), k, ends[0]
 
 
-def _com_in_range(c) -> bool:
-    """A centre of mass within the payload_com effect's range on every axis (the flange frame)."""
-    return all(REGISTRY["payload_com"].param(k).lo <= x <= REGISTRY["payload_com"].param(k).hi
-               for k, x in zip(("dx_m", "dy_m", "dz_m"), c))
-
-
 def _solve(G: NDArray, g: NDArray) -> NDArray:
     """Least squares from the normal equations (a minimum-norm solution where a nuisance is empty)."""
     return np.linalg.lstsq(G, g, rcond=None)[0]
-
-
-def _r2(X: NDArray, k: int) -> float:
-    """Share of the mass column (column 0) that the nuisance columns (``k:``) explain."""
-    a, N = X[:, 0], X[:, k:]
-    fit = N @ np.linalg.lstsq(N, a, rcond=None)[0]
-    tot = float(a @ a)
-    return float(1.0 - np.sum((a - fit) ** 2) / tot) if tot > 0 else 1.0
 
 
 def _step(log: MeasuredLog, n: int, at_kg: float, at_com: tuple[float, float, float], com_known: bool,
@@ -173,7 +108,7 @@ def _step(log: MeasuredLog, n: int, at_kg: float, at_com: tuple[float, float, fl
         delta = _solve(G[:w, :w], g[:w])[:k]
         reps = np.array([_solve((G - Gs[b])[:w, :w], (g - gs[b])[:w])[:k] for b in range(JACKKNIFE_BLOCKS)])
         out.append((delta, reps))
-    return out, _r2(X, k)
+    return out, share_explained(X[:, 0], X[:, k:])
 
 
 def _jackknife_se(reps: NDArray) -> NDArray:
@@ -196,7 +131,7 @@ def fit_payload(log: MeasuredLog, n: int, fitted_on: str, params_overrides: dict
         (delta, reps_a), (delta_free, reps_free) = fits
         theta, reps_a = at + delta, at + reps_a
         c = tuple(float(x) for x in (com_known or theta[1:] / theta[0])) if theta[0] > 0 else None
-        if not (mass.lo < theta[0] <= mass.hi) or c is None or not _com_in_range(c):
+        if not (mass.lo < theta[0] <= mass.hi) or c is None or not com_in_range(c):
             break  # no payload the model can hold to linearise about
         at, at_com = theta, c  # type: ignore[assignment]
     B = JACKKNIFE_BLOCKS
@@ -230,7 +165,7 @@ def fit_payload(log: MeasuredLog, n: int, fitted_on: str, params_overrides: dict
         else:
             notes.append("centre of mass not determined (the mass's interval reaches 0 kg): the replays hold the "
                          "payload at the flange")
-    replay_com = com if com is not None and (com_known or _com_in_range(com)) else (0.0, 0.0, 0.0)
+    replay_com = com if com is not None and (com_known or com_in_range(com)) else (0.0, 0.0, 0.0)
     if com is not None and replay_com != com:
         p = REGISTRY["payload_com"].param("dx_m")
         notes.append(f"the fitted centre of mass lies outside the range a payload's may take ([{p.lo:g}, {p.hi:g}] m "

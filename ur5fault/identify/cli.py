@@ -39,7 +39,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
     if args.sweep_window_s <= 0:
         raise ParameterError(f"--sweep-window-s = {args.sweep_window_s} must be a positive number of seconds")
     check_files_length([e.path for e in log_entries(args)], "identify")  # an hour-long log: refused in seconds
-    logs, _ = read_log_options(args)
+    logs, _ = read_log_options(args, allow_unknown=True)
     check_logs_length(logs, "identify")
     log = logs[0]
     say = None if args.quiet else (lambda msg: print(f"identify: {msg}...", file=sys.stderr, flush=True))
@@ -50,6 +50,9 @@ def cmd_identify(args: argparse.Namespace) -> int:
     result = identify(logs if len(logs) > 1 else log, params, sweep=not args.no_sweep,
                       sweep_window_s=args.sweep_window_s,
                       n_boot=args.bootstrap, progress=say)
+    for rec in result.payloads:
+        if not rec.known:
+            print(rec.line(), file=sys.stderr)
     print(result.table())
     out = Path(args.out)
     write_text_atomic(out, result.to_yaml(params))

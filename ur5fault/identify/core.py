@@ -9,6 +9,7 @@ and says so (``identifiable=False``).
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
@@ -19,7 +20,7 @@ from ..errors import ParameterError
 from ..logs import MeasuredLog
 from ..sim.axes import N_JOINTS
 from ..sim.params import RobotParams, load_params
-from . import friction, loop, motor, ripple, sensors, stickslip, urmodel
+from . import friction, loop, motor, payload, ripple, sensors, stickslip, urmodel
 from .report import Identification, overlay_params
 from .signals import derive_all
 from .stats import BLOCK_S, N_BOOT, Estimate, block_indices, bootstrap, fallback, interval
@@ -35,7 +36,9 @@ def identify(log: MeasuredLog | Sequence[MeasuredLog], params: RobotParams | Non
     Args:
         log: a measured log (:func:`ur5fault.logs.read_log`) with its payload and tool offset, or several
             logs of one robot identified jointly (every regression over all their samples; a rest or a
-            start from rest never spans two logs; the bandwidth sweep replays the first).
+            start from rest never spans two logs; the bandwidth sweep replays the first). A log whose payload
+            is unknown (``payload_kg`` ``None``) has it fitted as its own nuisance (:mod:`.payload`), reported in
+            ``Identification.payloads``, never in the overlay.
         params: the model whose assumptions are kept (rotor inertia, gear ratio, viscous temperature
             law, the fallbacks); default the packaged ``ur5_drive.yaml``.
         model_path: MJCF for the inverse dynamics (default: the simulator's).
@@ -52,9 +55,6 @@ def identify(log: MeasuredLog | Sequence[MeasuredLog], params: RobotParams | Non
     logs = [log] if isinstance(log, MeasuredLog) else list(log)
     if not logs:
         raise ParameterError("identify needs at least one log")
-    for lg in logs:
-        lg.require_payload()
-    log = logs[0]  # the bandwidth sweep replays the first log
     p = params if params is not None else load_params()
     say = progress or (lambda _msg: None)
     say("inverse dynamics of the log's motion" if len(logs) == 1 else f"inverse dynamics of {len(logs)} logs")
@@ -63,18 +63,35 @@ def identify(log: MeasuredLog | Sequence[MeasuredLog], params: RobotParams | Non
     duration_s = float(sum(lg.t_s[-1] - lg.t_s[0] for lg in logs))
     est: list[Estimate] = []
 
-    say("torque constant and friction (moving samples)")
+    say("torque constant and friction (moving samples)" + ("" if sig.payload_columns_Nm is None else
+                                                           ", with each unknown payload"))
     fit = friction.FrictionFit(sig, p)
     blocks = block_indices(sig.n, int(round(BLOCK_S / sig.period_s)))
-    full = fit(np.arange(sig.n))
-    lo, hi = interval(bootstrap(fit, blocks, n_boot, seed))
+    payloads: tuple = ()
+    if fit.payload is None:
+        full = fit(np.arange(sig.n))
+        lo, hi = interval(bootstrap(fit, blocks, n_boot, seed))
+    else:
+        full, theta = fit.solve(np.arange(sig.n))
+        size = full.size
+        boot = bootstrap(lambda idx: np.concatenate([a.ravel() for a in fit.solve(idx)]), blocks, n_boot, seed)
+        lo, hi = interval(boot[:, :size].reshape(-1, *full.shape))
+        payloads = tuple(payload.records(logs, fit.payload, theta, boot[:, size:]))
+        # every later step sees the logs with the payload fitted: the torque it adds, and the replays hold it
+        sig = dataclasses.replace(sig, model_torque_Nm=sig.model_torque_Nm + np.tensordot(
+            theta, fit.payload.columns_Nm, axes=1), payload_columns_Nm=None, payload_owner=())
+        logs = [dataclasses.replace(lg, payload_kg=r.replayed_kg, tcp_offset_m=r.replayed_com_m)
+                for lg, r in zip(logs, payloads)]
+        log = logs[0]
     est += _torque_constant(fit, full, lo, hi, p)
+    fit_k = fit  # the joint fit decides which torque constants were identified
+    fit = friction.FrictionFit(sig, p) if payloads else fit_k  # the later steps: at the fitted payloads
     est += _k_check(friction.FrictionFit(sig, p, k_offset_term=True), None, blocks, n_boot, seed,
                     "check.torque_constant_with_offset_Nm_per_A", "with a constant current offset fitted too")
     if sig.target_torque_Nm is not None:
         est += _k_check(fit, sig.target_torque_Nm, blocks, n_boot, seed, "check.torque_constant_vs_UR_torque_Nm_per_A",
                         "with UR's target torque column in place of MuJoCo's inverse dynamics")
-    fric = _friction(fit, full, lo, hi, p)
+    fric = _friction(fit_k, full, lo, hi, p)
     est += fric
     est += urmodel.ur_model(fit)
     coulomb_A = np.array([e.value for e in fric if e.key == "friction.coulomb_A"])
@@ -85,7 +102,7 @@ def identify(log: MeasuredLog | Sequence[MeasuredLog], params: RobotParams | Non
     noise = sensors.noise_at_rest(sig, n_boot, seed, {"sensors.current_noise_A": p.sensors.current_noise_A,
                                                       "sensors.resolver_noise_rad": p.sensors.resolver_noise_rad})
     est += noise
-    est.append(sensors.resolver_resolution(sig, n_boot, seed, float(np.mean(p.sensors.resolver_counts_per_rev))))
+    est += sensors.resolver_resolution(sig, n_boot, seed, p.sensors.resolver_counts_per_rev)
 
     say("breakaway and presliding stiffness (starts from rest)")
     q_noise = np.array([e.value for e in noise if e.key == "sensors.resolver_noise_rad"])
@@ -110,7 +127,7 @@ def identify(log: MeasuredLog | Sequence[MeasuredLog], params: RobotParams | Non
                             "kept the model's value"))
         bw = bw_prior
     est += _feedforward(lags, lag_ok, bw, ff_prior)
-    return Identification(source, result.duration_s, tuple(est), sw)
+    return Identification(source, result.duration_s, tuple(est), sw, payloads)
 
 
 def _torque_constant(fit: friction.FrictionFit, full: NDArray, lo: NDArray, hi: NDArray,
@@ -126,6 +143,10 @@ def _torque_constant(fit: friction.FrictionFit, full: NDArray, lo: NDArray, hi: 
             out.append(Estimate(key, j, full[0, j] / ratio[j], lo[0, j] / ratio[j], hi[0, j] / ratio[j],
                                 f"slope of current on MuJoCo inverse-dynamics torque, moving samples of {src} "
                                 f"(shared by the size-{size} joints), fitted with their friction"))
+        elif fit.payload is not None and not fit.payload.k_identifiable:
+            out.append(fallback(key, j, p.motor.torque_constant_Nm_per_A[j], "kept the model's value",
+                                "every log's payload is unknown and none separates it from the torque constants "
+                                "(identify/payload.py): state the payload of one log"))
         else:
             spread = ", ".join(f"{fit.lever_Nm[g]:.2f}" for g in np.flatnonzero(np.asarray(motor.MOTOR_SIZE) == size))
             out.append(fallback(key, j, p.motor.torque_constant_Nm_per_A[j], "kept the model's value",

@@ -32,7 +32,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..sim.params import RobotParams
-from . import motor
+from . import motor, payload
 from .signals import LogSignals
 
 #: a sample is "moving" above this speed [rad/s]: ~2.5x the noise of the speed differentiated from
@@ -70,7 +70,8 @@ def design_columns(sig: LogSignals, params: RobotParams, offset_term: bool) -> l
 
 
 class FrictionFit:
-    """The joint fit of torque constants and friction, as a function of the samples used.
+    """The joint fit of torque constants and friction (and of the unknown payloads, :mod:`.payload`), as a
+    function of the samples used.
 
     Args:
         sig: the log's derived signals.
@@ -92,24 +93,47 @@ class FrictionFit:
         carries = self.ok & (lever >= motor.MIN_TORQUE_SPREAD_NM)
         self.k_groups = {int(s): [int(j) for j in np.flatnonzero((sizes == s) & carries)] for s in np.unique(sizes)}
         self.lever_Nm = lever
+        #: the unknown payloads (None: every payload stated), :class:`.payload.PayloadUnknowns`
+        self.payload = payload.PayloadUnknowns.of(self) if sig.payload_columns_Nm is not None else None
+        if self.payload is not None and not self.payload.k_identifiable:
+            self.k_groups = {s: [] for s in self.k_groups}  # no log can separate a torque constant: the model's kept
 
     def __call__(self, idx: NDArray, torque: NDArray | None = None) -> NDArray:
         """Fit on the samples ``idx`` (repeats allowed); returns ``(4, 6)`` in the order of :data:`FIELDS`.
 
-        ``torque`` replaces the model torque (e.g. UR's own target torque, as a cross-check).
+        ``torque`` replaces the model torque (e.g. UR's own target torque, as a cross-check; an unknown payload is
+        then not fitted).
         """
+        return self.solve(idx, torque)[0]
+
+    def solve(self, idx: NDArray, torque: NDArray | None = None) -> tuple[NDArray, NDArray]:
+        """:meth:`__call__` and the unknown payloads' sizes ``(p,)`` (:attr:`payload`; empty without)."""
         sig = self.sig
         tau = sig.model_torque_Nm if torque is None else torque
+        pl = self.payload if torque is None else None
         rows = [idx[self.moving[idx, j]] for j in range(self.moving.shape[1])]
+        sizes = np.asarray(motor.MOTOR_SIZE)
         k = self.k_prior.copy()
-        for s, joints in self.k_groups.items():
-            if joints:
-                beta = motor.pooled_inverse_gain(sig.current_A, tau, self.cols_k, rows, joints)
-                k[np.asarray(motor.MOTOR_SIZE) == s] = 1.0 / beta
+        theta = np.zeros(0 if pl is None else pl.n_unknowns)
+        k_rows = rows if pl is None else [r[pl.k_rows[r]] for r in rows]
+        for s in sorted(self.k_groups, key=lambda s: s != payload.WEIGHING_SIZE):  # the payload's joints first
+            joints = self.k_groups[s]
+            if not joints:
+                continue
+            shared = pl.anchored_Nm if pl is not None and s == payload.WEIGHING_SIZE else None
+            beta, phi = motor.pooled_inverse_gain(sig.current_A, tau, self.cols_k, k_rows, joints, shared)
+            k[sizes == s] = 1.0 / beta
+            if shared is not None:
+                theta[pl.anchored] = phi / beta  # type: ignore[union-attr]
+                tau = tau + np.tensordot(theta, pl.columns_Nm, axes=1)  # type: ignore[union-attr]
+        if pl is not None:
+            fixed = pl.fit_at_k(rows, tau, k)  # the payloads the torque constants were not fitted beside
+            theta = theta + fixed
+            tau = tau + np.tensordot(fixed, pl.columns_Nm, axes=1)
         out = np.full((len(FIELDS), k.size), np.nan)
         out[0] = k
         for j in np.flatnonzero(self.ok):
             r = rows[j]
             y = sig.current_A[r, j] - tau[r, j] / k[j]
             out[1:, j] = np.linalg.lstsq(self.cols[j][r], y, rcond=None)[0]
-        return out
+        return out, theta

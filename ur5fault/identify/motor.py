@@ -32,7 +32,8 @@ def torque_lever(torque_Nm: NDArray, moving: NDArray) -> NDArray:
 
 
 def pooled_inverse_gain(current_A: NDArray, torque_Nm: NDArray, friction_cols: Sequence[NDArray],
-                        rows: Sequence[NDArray], joints: Sequence[int]) -> float:
+                        rows: Sequence[NDArray], joints: Sequence[int],
+                        shared_Nm: NDArray | None = None) -> tuple[float, NDArray]:
     """Shared slope 1/K [A/(N*m)] of current on torque over ``joints``.
 
     Args:
@@ -40,18 +41,26 @@ def pooled_inverse_gain(current_A: NDArray, torque_Nm: NDArray, friction_cols: S
         friction_cols: per joint, the ``(n, m)`` friction design columns (see :mod:`.friction`).
         rows: per joint, the sample indices to use (moving samples).
         joints: the joints that share the constant.
+        shared_Nm: ``(p, n, 6)`` further torques with unknown sizes ``x`` (an unknown payload's columns,
+            :mod:`.payload`): the current is ``(torque + shared . x) / K``, fitted as the linear ``phi = x / K``.
+
+    Returns:
+        ``1/K`` and ``phi`` ``(p,)`` (``x = phi * K``; empty without ``shared_Nm``).
     """
     blocks, ys = [], []
+    p = 0 if shared_Nm is None else shared_Nm.shape[0]
     n_fric = sum(friction_cols[j].shape[1] for j in joints)
-    col = 1
+    col = 1 + p
     for j in joints:
         r = rows[j]
-        a = np.zeros((r.size, 1 + n_fric))
+        a = np.zeros((r.size, 1 + p + n_fric))
         a[:, 0] = torque_Nm[r, j]
+        if p:
+            a[:, 1 : 1 + p] = shared_Nm[:, r, j].T  # type: ignore[index]
         m = friction_cols[j].shape[1]
         a[:, col : col + m] = friction_cols[j][r]
         col += m
         blocks.append(a)
         ys.append(current_A[r, j])
     coef = np.linalg.lstsq(np.vstack(blocks), np.concatenate(ys), rcond=None)[0]
-    return float(coef[0])
+    return float(coef[0]), coef[1 : 1 + p]

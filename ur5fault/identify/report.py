@@ -19,6 +19,7 @@ from numpy.typing import NDArray
 
 from ..sim.axes import N_JOINTS
 from ..sim.params import FrictionParams, RobotParams
+from ..twin.payload import PayloadRecord
 from .stats import Estimate
 
 #: stick-slip parameters of issue 10 part A: written as soon as the friction parameters have the field
@@ -35,6 +36,8 @@ NOT_IDENTIFIABLE = (
     "elastic mode (>100 Hz, above this log's 62.5 Hz Nyquist) or a backlash would tell",
 )
 SIGNIFICANT = 4
+#: a measured count per revolution this close to a power of two is written as that power of two
+POWER_OF_TWO_REL = 0.01
 
 
 def _round(x: float) -> float:
@@ -50,12 +53,15 @@ class Identification:
         duration_s: the log's length.
         estimates: one :class:`Estimate` per quantity and joint.
         sweep: the bandwidth sweep (``None`` when skipped).
+        payloads: per log, its payload as stated or fitted (:class:`ur5fault.twin.payload.PayloadRecord`; empty
+            when every log stated it). The log's, not the robot's: never in the overlay.
     """
 
     source: str
     duration_s: float
     estimates: tuple[Estimate, ...]
     sweep: Any = None
+    payloads: tuple[PayloadRecord, ...] = ()
 
     def get(self, key: str, joint: int | None = None) -> Estimate:
         for e in self.estimates:
@@ -96,6 +102,11 @@ class Identification:
                 "# Intervals: 95 % bootstrap (time blocks, rest segments or starts).  Friction is identified in A",
                 "# and written in N*m with the identified torque constant.  Estimates:"]
         head += ["#   " + line for line in self.table().splitlines()]
+        fitted = [r for r in self.payloads if not r.known]
+        if fitted:
+            head += ["#", "# Payloads fitted as each log's own unknown (the logs', not the robot's: not in the "
+                     "overlay):"]
+            head += [f"#   {r.line()}" for r in fitted]
         head += ["#", "# Stick-slip and friction share:"]
         written = PRESLIDING_FIELD in {f.name for f in dataclasses.fields(FrictionParams)}
         head.append("#   presliding stiffness: " + (f"written as friction.{PRESLIDING_FIELD}" if written else
@@ -112,6 +123,8 @@ class Identification:
     def to_json(self) -> dict[str, Any]:
         out: dict[str, Any] = {"log": self.source, "duration_s": self.duration_s,
                                "estimates": [e.to_json() for e in self.estimates]}
+        if self.payloads:
+            out["payload"] = {r.log: r.to_json() for r in self.payloads}
         if self.sweep is not None:
             s = self.sweep
             out["sweep"] = {"bandwidths_Hz": s.bandwidths_Hz, "scores": s.scores, "best_Hz": s.best_Hz,
@@ -146,9 +159,8 @@ def overlay_params(ident: Identification, params: RobotParams) -> dict[str, Any]
     if ident.has("sensors.resolver_noise_rad"):
         sensors["resolver_noise_rad"] = vec(_measured(ident, "sensors.resolver_noise_rad", s.resolver_noise_rad))
     if ident.has("sensors.resolver_counts_per_rev"):
-        e = ident.get("sensors.resolver_counts_per_rev")
-        if e.identifiable:
-            sensors["resolver_counts_per_rev"] = int(2 ** round(np.log2(e.value)))  # encoders count in powers of 2
+        sensors["resolver_counts_per_rev"] = [_counts(ident.get("sensors.resolver_counts_per_rev", j),
+                                                      s.resolver_counts_per_rev[j]) for j in range(N_JOINTS)]
     if ident.has("sensors.current_noise_A"):
         sensors["current_noise_A"] = vec(_measured(ident, "sensors.current_noise_A", s.current_noise_A))
     out["sensors"] = sensors
@@ -161,6 +173,17 @@ def overlay_params(ident: Identification, params: RobotParams) -> dict[str, Any]
     if ctrl:
         out["controller"] = ctrl
     return out
+
+
+def _counts(e: Estimate, prior: float) -> int:
+    """Counts per revolution to write: the nearest power of two where the measured count lies within
+    :data:`POWER_OF_TWO_REL` of it (an encoder counting in powers of two, read through rounding), else the measured
+    count itself (a quantum set by the controller's own scaling: the second UR5's 9.5 and 16.3 urad are no
+    power of two); the model's value where the log cannot give it."""
+    if not e.identifiable:
+        return int(round(prior))
+    pow2 = 2.0 ** round(np.log2(e.value))
+    return int(pow2) if abs(e.value / pow2 - 1.0) <= POWER_OF_TWO_REL else int(round(e.value))
 
 
 def _measured(ident: Identification, key: str, prior, scale=None) -> NDArray:

@@ -6,9 +6,16 @@ dither).  Each rest segment's readings are detrended by a straight line (a holdi
 still creeping as an integrator winds up is not noise), and the noise sigma is the pooled
 RMS of the detrended readings; its interval comes from resampling whole rest segments.
 
-The resolver resolution is the quantum of the measured joint positions: the small non-zero
+The resolver resolution is the quantum of the measured joint positions, per joint: the small non-zero
 sample-to-sample steps are integer multiples of it, so it is the least-squares slope of the
-steps on their multiples (smallest step as a first guess).
+steps on their multiples (smallest step as a first guess). Only the rows the robot wrote count (a tick the
+reader filled in a gap is interpolated, and its half-steps are not the encoder's), and each joint has its own
+(the second UR5 logs steps of about 9.5 urad on J1-J3 and 16.3 urad on J4-J6: one quantum pooled over all
+joints fits neither).
+
+Readings identical throughout every rest segment have a noise of exactly 0 (the white noise is below the
+quantisation step, and the simulator's quantiser then reproduces identical readings); the weight of such a
+sensor is its step (:func:`ur5fault.twin.replay.residual_sigma`), never 0.
 """
 
 from __future__ import annotations
@@ -29,6 +36,11 @@ MIN_SEGMENTS_FOR_INTERVAL = 2
 MIN_COUNTS_PER_REV, MAX_COUNTS_PER_REV = 2.0, 2.0**32
 #: steps up to this many quanta are used to fit the quantum (larger ones may be motion)
 MAX_QUANTA = 5
+#: a step cluster smaller than this share of the largest among its multiples is not the quantum's first guess
+#: (assumption: a moving joint steps by one quantum at least a tenth as often as by its most frequent multiple)
+MIN_CLUSTER_SHARE = 0.1
+#: ... nor one seen fewer times than this (a lone step)
+MIN_REPEATS = 3
 
 
 def rest_segments(sig: LogSignals) -> list[NDArray]:
@@ -81,6 +93,8 @@ def noise_at_rest(sig: LogSignals, n_boot: int, seed: int, prior: dict[str, NDAr
             return np.sqrt(ss[idx].sum(axis=0) / counts[idx].sum())
 
         value = stat(np.arange(len(segs)))
+        identical = np.array([all(np.ptp(x[seg, j]) == 0.0 for seg in segs) for j in range(x.shape[1])])
+        value[identical] = 0.0  # not the detrending's rounding (1e-16)
         if len(segs) >= MIN_SEGMENTS_FOR_INTERVAL:
             lo, hi = interval(bootstrap(stat, [np.array([s]) for s in range(len(segs))], n_boot, seed))
             note = ""
@@ -88,6 +102,7 @@ def noise_at_rest(sig: LogSignals, n_boot: int, seed: int, prior: dict[str, NDAr
             lo = hi = np.full(x.shape[1], np.nan)
             note = (f"no interval: {len(segs)} rest segment(s), resampling needs at least "
                     f"{MIN_SEGMENTS_FOR_INTERVAL}")
+        lo[identical] = hi[identical] = np.where(np.isnan(lo[identical]), np.nan, 0.0)
         for j in range(x.shape[1]):
             quantised = value[j] == 0.0
             out.append(Estimate(key, j, float(value[j]), float(lo[j]), float(hi[j]),
@@ -99,27 +114,50 @@ def noise_at_rest(sig: LogSignals, n_boot: int, seed: int, prior: dict[str, NDAr
 
 
 def position_quantum(q_rad: NDArray) -> tuple[float, NDArray]:
-    """The quantum [rad] of measured positions and the small steps it was fitted on."""
+    """The quantum [rad] of measured positions and the small steps it was fitted on.
+
+    First guess: the smallest step whose cluster (steps within 10 % of it) holds at least :data:`MIN_REPEATS` steps
+    and :data:`MIN_CLUSTER_SHARE` of the largest cluster among the steps up to :data:`MAX_QUANTA` times it: a rare
+    odder step is not the quantum (the second UR5's J1-J3 log 10 steps of 4-5 urad against 1,000 of 9-10 urad
+    and their multiples, e.g. at an irregular tick; its odd multiples of 4.75 urad are as rare). Then the
+    least-squares quantum over the steps of 1..:data:`MAX_QUANTA` quanta (steps below half a quantum left out)."""
     steps = np.abs(np.diff(q_rad, axis=0)).ravel()
-    steps = steps[steps > 0]
+    steps = np.sort(steps[steps > 0])
     if steps.size == 0:
         raise ValueError("positions never change")
-    quantum = float(steps.min())
-    for _ in range(2):  # refine: the smallest step may sit at the low edge of its cluster
-        small = steps[steps < (MAX_QUANTA + 0.5) * quantum]
+    near = np.searchsorted(steps, 1.1 * steps, side="right") - np.searchsorted(steps, 0.9 * steps, side="left")
+    i, quantum = 0, float(steps[0])
+    while i < steps.size:
+        top = int(np.searchsorted(steps, (MAX_QUANTA + 0.5) * steps[i], side="right"))
+        if near[i] >= MIN_REPEATS and near[i] >= MIN_CLUSTER_SHARE * near[i:top].max():
+            quantum = float(steps[i])
+            break
+        i = int(np.searchsorted(steps, 1.1 * steps[i], side="right"))  # the next cluster
+    else:
+        quantum = float(steps[0])  # no cluster qualifies (a few steps only): the smallest
+    for _ in range(2):  # refine: the first guess may sit at the low edge of its cluster
+        small = steps[(steps >= 0.5 * quantum) & (steps < (MAX_QUANTA + 0.5) * quantum)]
         quanta = np.maximum(np.round(small / quantum), 1.0)
         quantum = float(small.sum() / quanta.sum())
     return quantum, small
 
 
-def resolver_resolution(sig: LogSignals, n_boot: int, seed: int, prior_counts: float) -> Estimate:
-    """Counts per revolution of the joint-side encoder (2 pi / quantum), with a bootstrap over steps;
-    the model's ``prior_counts``, marked not identifiable, when the positions never change."""
+def resolver_resolution(sig: LogSignals, n_boot: int, seed: int, prior_counts) -> list[Estimate]:
+    """Counts per revolution of each joint's encoder (2 pi / quantum of its logged positions), with a bootstrap
+    over steps; the model's ``prior_counts`` (per joint), marked not identifiable, where the positions never change
+    or show no quantisation step."""
+    q = sig.q_actual_rad if sig.logged is None else sig.q_actual_rad[sig.logged]
+    prior = np.broadcast_to(np.asarray(prior_counts, float), (q.shape[1],))
+    return [_joint_resolution(q[:, [j]], j, n_boot, seed, float(prior[j])) for j in range(q.shape[1])]
+
+
+def _joint_resolution(q: NDArray, j: int, n_boot: int, seed: int, prior_counts: float) -> Estimate:
+    key = "sensors.resolver_counts_per_rev"
     try:
-        quantum, small = position_quantum(sig.q_actual_rad)
+        quantum, small = position_quantum(q)
     except ValueError:
-        return fallback("sensors.resolver_counts_per_rev", None, prior_counts, "kept the model's value",
-                        "the measured positions never change (the robot did not move)")
+        return fallback(key, j, prior_counts, "kept the model's value",
+                        "the measured positions never change (the joint did not move)")
 
     def stat(idx: NDArray) -> NDArray:
         s = small[idx]
@@ -127,13 +165,12 @@ def resolver_resolution(sig: LogSignals, n_boot: int, seed: int, prior_counts: f
 
     counts = 2.0 * np.pi / quantum
     if not MIN_COUNTS_PER_REV <= counts <= MAX_COUNTS_PER_REV:  # no step at all: resampled or filtered positions
-        return fallback("sensors.resolver_counts_per_rev", None, prior_counts, "kept the model's value",
+        return fallback(key, j, prior_counts, "kept the model's value",
                         f"the measured positions show no quantisation step (smallest step {quantum:.3g} rad, "
                         f"{counts:.3g} counts/rev, outside {MIN_COUNTS_PER_REV:g}..2^32): interpolated or filtered")
     lo, hi = interval(_resample_steps(stat, small.size, n_boot, seed))
-    return Estimate("sensors.resolver_counts_per_rev", None, counts, float(lo), float(hi),
-                    f"2 pi / quantum of the measured positions ({small.size} steps of 1..{MAX_QUANTA} quanta; "
-                    f"nearest power of two 2^{round(np.log2(counts))})")
+    return Estimate(key, j, counts, float(lo), float(hi),
+                    f"2 pi / quantum of the logged positions ({small.size} steps of 1..{MAX_QUANTA} quanta)")
 
 
 def _resample_steps(stat, n_steps: int, n_boot: int, seed: int) -> NDArray:

@@ -10,13 +10,14 @@ from numpy.typing import NDArray
 from ..errors import LogFormatError, ParameterError
 from ..sim.trajectories import Trajectory
 
-#: why a command other than ``ur5fault discrepancy`` refuses a log without its payload. A payload on the flange
-#: and the robot's torque constants both scale the gravity current of the shoulder and elbow, so fitting it needs
-#: the per-log fit of :mod:`ur5fault.discrepancy.payload`, which reports how well the log separates them (the NIST
-#: log, 0.726 kg, declared unknown at its tool offset: 0.64 kg, 95 % -0.07..1.34; docs/validation.md).
+#: why a command other than ``ur5fault discrepancy`` and ``ur5fault identify`` refuses a log without its payload. A
+#: payload on the flange and the robot's torque constants both scale the gravity current of the shoulder and elbow,
+#: so fitting it needs a per-log fit (:mod:`ur5fault.discrepancy.payload`, :mod:`ur5fault.identify.payload`) that
+#: reports how well the log separates them (the NIST log, 0.726 kg, declared unknown at its tool offset: 0.64 kg,
+#: 95 % -0.07..1.34 by discrepancy; docs/validation.md).
 UNKNOWN_PAYLOAD = ("this command needs the payload stated: give --payload-kg and --tcp-offset-m (0 and 0 0 0 for a "
-                   "bare flange); `ur5fault discrepancy` fits an unknown payload and reports it (summary.json "
-                   "\"payload\")")
+                   "bare flange); `ur5fault discrepancy` and `ur5fault identify` fit an unknown payload and report it "
+                   "(summary.json / the --json file, \"payload\")")
 
 
 @dataclasses.dataclass(frozen=True)

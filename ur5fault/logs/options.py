@@ -10,12 +10,13 @@ per-log options; paths are relative to the manifest::
     logs:
       - path: Movement_No1.csv.gz
       - {path: Movement_No2.csv.gz, payload_kg: 0.5}
-      - {path: Movement_No3.csv.gz, payload_kg: unknown, tcp_offset_m: null}   # fitted (discrepancy)
+      - {path: Movement_No3.csv.gz, payload_kg: unknown, tcp_offset_m: null}   # fitted (discrepancy, identify)
       - {path: TEST.csv.gz, hold_out: true}     # held out whole (discrepancy)
 
 The payload of an rtde log with no ``payload_kg`` (here or on the command line), or with ``unknown``, is
-unknown: ``ur5fault discrepancy`` fits it (mass, and its centre of mass where ``tcp_offset_m`` is not given
-either; :mod:`ur5fault.discrepancy.payload`) and says so; the other commands refuse it with one line. A nist
+unknown: ``ur5fault discrepancy`` and ``ur5fault identify`` fit it (mass, and its centre of mass where
+``tcp_offset_m`` is not given either; :mod:`ur5fault.discrepancy.payload`, :mod:`ur5fault.identify.payload`) and
+say so; the other commands refuse it with one line. A nist
 or sim log carries its payload; ``unknown`` declares it unknown all the same (its tool offset too, unless
 ``tcp_offset_m`` is given).
 """
@@ -37,7 +38,8 @@ from .readers import read_log
 MANIFEST_SUFFIXES = (".yaml", ".yml")
 MANIFEST_KEYS = ("format", "payload_kg", "tcp_offset_m", "logs")
 LOG_KEYS = ("path", "format", "payload_kg", "tcp_offset_m", "hold_out")
-#: the value of ``--payload-kg`` / ``payload_kg`` that declares a log's payload unknown (fitted by discrepancy)
+#: the value of ``--payload-kg`` / ``payload_kg`` that declares a log's payload unknown (fitted by discrepancy
+#: and identify)
 UNKNOWN = "unknown"
 
 
@@ -62,7 +64,8 @@ def add_log_options(parser: argparse.ArgumentParser, formats: Sequence[str], *, 
                         help="log format: " + ", ".join(formats) + " (required unless a manifest names it)")
     parser.add_argument("--payload-kg", type=payload_kg_arg,
                         help="payload held during the log(s) [kg], 0 for none, or 'unknown' (default: rtde: unknown, "
-                             "which discrepancy fits and says so and the other commands refuse; nist and sim: the "
+                             "which discrepancy and identify fit and say so and the other commands refuse; nist and "
+                             "sim: the "
                              "log's own, unless declared 'unknown')")
     parser.add_argument("--tcp-offset-m", type=float, nargs=3,
                         help="tool offset (payload position) in the flange frame [m], 0 0 0 for the flange (default: "

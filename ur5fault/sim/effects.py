@@ -19,52 +19,7 @@ from typing import Any
 from ..errors import ParameterError, UnknownNameError
 from . import effect_appliers as ap
 from .axes import JOINT_NAMES, joint_index
-from .interfaces import EffectApplier
-
-
-@dataclasses.dataclass(frozen=True)
-class EffectParam:
-    """One parameter of an effect: ``name`` carries its unit (``backlash_deg``)."""
-
-    name: str
-    unit: str
-    lo: float
-    hi: float
-    absent: float | None  # the value meaning "no effect"; None: a value is required
-    doc: str
-
-
-@dataclasses.dataclass(frozen=True)
-class Effect:
-    """A registered effect.
-
-    Attributes:
-        name: registry key, e.g. ``"backlash"``.
-        doc: plain-words description used in reports.
-        params: its parameters.
-        per_joint: the effect sits on one joint (``joint`` required) or on the whole robot.
-        apply: ``apply(arrays, row, joint_index_or_None, values)`` changes the run's row
-            (:class:`ur5fault.sim.interfaces.EffectApplier`).
-    """
-
-    name: str
-    doc: str
-    params: tuple[EffectParam, ...]
-    per_joint: bool
-    apply: EffectApplier
-
-    def param(self, name: str, where: str = "") -> EffectParam:
-        for p in self.params:
-            if p.name == name:
-                return p
-        raise UnknownNameError(f"parameter of effect {self.name!r}", name, [p.name for p in self.params], where)
-
-    def absent(self, name: str) -> float:
-        """The value of parameter ``name`` that means "no effect" (the registry is its only source)."""
-        value = self.param(name).absent
-        if value is None:
-            raise ParameterError(f"effect {self.name!r}: parameter {name!r} has no absent value")
-        return value
+from .effect_types import Effect, EffectKey, EffectParam
 
 
 @dataclasses.dataclass(frozen=True)
@@ -104,27 +59,6 @@ class EffectSpec:
         where = f" on {JOINT_NAMES[self.joint]}" if self.joint is not None else ""
         vals = ", ".join(f"{k}={v:g}" for k, v in self.values)
         return f"{self.name}{where} ({vals})"
-
-
-@dataclasses.dataclass(frozen=True)
-class EffectKey:
-    """A ``<effect>.<param>`` key of a campaign sweep or condition (``backlash.backlash_deg``,
-    ``backlash.joint``): the effect's registry name and its parameter (or ``joint``)."""
-
-    effect: str
-    param: str
-
-    @classmethod
-    def parse(cls, key: object) -> EffectKey | None:
-        """The key split at its first dot; None for anything else (``seed``, ``payload_kg``, a non-string).
-        Whether the effect and parameter exist is the caller's check (with its own message)."""
-        if not isinstance(key, str):
-            return None
-        effect, dot, param = key.partition(".")
-        return cls(effect, param) if dot else None
-
-    def __str__(self) -> str:
-        return f"{self.effect}.{self.param}"
 
 
 def effects_of_keys(values: Iterable[tuple[str, Any]], where: str = "") -> tuple[EffectSpec, ...]:

@@ -26,7 +26,7 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
     from ...logs.length import check_files_length, check_logs_length
     from ...logs.options import log_entries, read_entry
     from ...util.io import check_writable
-    from ..diagnostics.models import require_sklearn
+    from ..diagnostics.classifier import require_sklearn
     from ..diagnostics.saved import load_models
     from . import diagnose
     from .report import write_diagnosis

@@ -147,7 +147,7 @@ def score_windows(models, schema: dict[str, Any], windows: list[Window], has_mot
     """Per window: its times, ``p_fault``, ``flagged``, the run-level detector's reading, and per joint
     ``p_fault_joint``, the likeliest kinds with size estimates and intervals, and the kinds it cannot tell
     (module docstring)."""
-    from ..diagnostics.models import single_threaded
+    from ..diagnostics.classifier import single_threaded
 
     names = [c["name"] for c in schema["inputs"]]
     x = pd.DataFrame([w.features for w in windows])[names].to_numpy(dtype=float)

@@ -60,7 +60,7 @@ def evaluate(features: pd.DataFrame, *, seed: int = 0, shuffle_labels: bool = Fa
     Returns:
         ``(metrics, figures)``: every number (JSON-able) and the matplotlib Figures by name.
     """
-    from .models import single_threaded
+    from .classifier import single_threaded
 
     with single_threaded():
         return _evaluate(features, seed, shuffle_labels, threshold_mm, source, with_figures, with_importance,

@@ -27,6 +27,7 @@ import numpy as np
 import pandas as pd
 
 from ...sim.axes import N_JOINTS
+from .classifier import make_classifier
 
 NONE = "none"
 _JOINT = re.compile(r"^(.*)_j([1-6])$")
@@ -74,8 +75,6 @@ def joint_labels(df: pd.DataFrame) -> np.ndarray:
 def fit(df: pd.DataFrame, inputs: tuple[str, ...], seed: int, rng: np.random.Generator | None):
     """The classifier trained on the joint rows of ``df`` (``rng``: permute the runs' labels first, the
     shuffled-label control); None when the rows carry fewer than two labels."""
-    from .models import make_classifier
-
     x = joint_rows(df, inputs)
     y = joint_labels(df)
     if rng is not None:

@@ -1,5 +1,6 @@
 """Running a life campaign: inspections in rounds, each round's units in lockstep batches over
-processes (joblib loky, or Dask), every inspection written atomically as it arrives.
+processes (this one beside loky workers, or Dask: campaign/workers.dispatch, as fault campaigns), every inspection
+written atomically as it arrives.
 
 Round r simulates the next inspection of every unit still running; the parent then carries each
 unit's wear forward (wear.py) and starts the next round.  A unit's next state is always computed
@@ -16,6 +17,7 @@ import logging
 import os
 import time
 from collections.abc import Callable, Mapping, Sequence
+from contextlib import closing
 from pathlib import Path
 from typing import Any
 
@@ -24,7 +26,7 @@ import numpy as np
 from ...campaign.identity import DRIVE, STEPPER
 from ...campaign.lock import Lock
 from ...campaign.store import CampaignChangedError
-from ...campaign.workers import check_backend, dask_client, exit_with_parent, note_stderr, stop_loky_workers
+from ...campaign.workers import check_backend, dask_client, dispatch, exit_with_parent, note_stderr
 from ...config import parse_trajectory
 from ...sim.axes import N_JOINTS
 from ...sim.effects import make_effect
@@ -200,8 +202,6 @@ def run_life(camp: LifeCampaign, out: Path | None = None, *, jobs: int | None = 
 
 def _run_locked(camp, out: Path, n_jobs: int, client, progress, say, max_rounds, backend,
                 replace_changed) -> dict[str, Any]:
-    import joblib
-
     t0 = time.perf_counter()
     for folder in (out, out / "runs", out / "reference"):
         for p in folder.glob(".*.tmp") if folder.is_dir() else ():
@@ -220,18 +220,16 @@ def _run_locked(camp, out: Path, n_jobs: int, client, progress, say, max_rounds,
     write_json_atomic(out / "manifest.json", _manifest(camp, ids, "running", backend, n_jobs, t0, None))
     report = campaign_progress(progress, len(camp.units))
     report(len(finished), 0.0)
-    ctx = joblib.parallel_backend("dask", wait_for_workers_timeout=60) if client else joblib.parallel_backend("loky")
     rounds = 0
     try:
-        with ctx:
-            par = joblib.Parallel(n_jobs=n_jobs if client is None else -1, return_as="generator_unordered")
-            while pending and (max_rounds is None or rounds < max_rounds):
-                batches = _batches(list(pending.values()), camp.batch_size, n_jobs)
-                gen = par(joblib.delayed(inspect_batch)(camp, b, {j.unit.unit_id: refs[j.unit.unit_id] for j in b},
-                                                        os.getpid() if client is None else None) for b in batches)
-                by_id = {j.unit.unit_id: j.unit for j in pending.values()}
-                for results in gen:
-                    for row, t_s, tcp in results:
+        while pending and (max_rounds is None or rounds < max_rounds):
+            batches = _batches(list(pending.values()), camp.batch_size, n_jobs)
+            args = [(camp, b, {j.unit.unit_id: refs[j.unit.unit_id] for j in b},
+                     os.getpid() if client is None else None) for b in batches]
+            by_id = {j.unit.unit_id: j.unit for j in pending.values()}
+            with closing(dispatch(inspect_batch, args, n_jobs, client, cost=[len(b) for b in batches])) as results:
+                for batch in results:
+                    for row, t_s, tcp in batch:
                         unit = by_id[row["unit_id"]]
                         if tcp is not None:
                             write_reference(out, ids, unit, t_s, tcp)
@@ -244,11 +242,7 @@ def _run_locked(camp, out: Path, n_jobs: int, client, progress, say, max_rounds,
                         else:
                             pending[unit] = job
                     report(len(finished), time.perf_counter() - t0)
-                rounds += 1
-    except BaseException:
-        if client is None:
-            stop_loky_workers()
-        raise
+            rounds += 1
     finally:
         report.close()
     if pending:

@@ -1,0 +1,76 @@
+"""What an effect is: its parameters with units, ranges and "absent" values (:class:`EffectParam`), the
+registered effect (:class:`Effect`) and the ``<effect>.<param>`` keys campaigns write (:class:`EffectKey`).
+The entries themselves are the one registry, :data:`ur5fault.sim.effects.REGISTRY`."""
+
+from __future__ import annotations
+
+import dataclasses
+
+from ..errors import ParameterError, UnknownNameError
+from .interfaces import EffectApplier
+
+
+@dataclasses.dataclass(frozen=True)
+class EffectParam:
+    """One parameter of an effect: ``name`` carries its unit (``backlash_deg``)."""
+
+    name: str
+    unit: str
+    lo: float
+    hi: float
+    absent: float | None  # the value meaning "no effect"; None: a value is required
+    doc: str
+
+
+@dataclasses.dataclass(frozen=True)
+class Effect:
+    """A registered effect.
+
+    Attributes:
+        name: registry key, e.g. ``"backlash"``.
+        doc: plain-words description used in reports.
+        params: its parameters.
+        per_joint: the effect sits on one joint (``joint`` required) or on the whole robot.
+        apply: ``apply(arrays, row, joint_index_or_None, values)`` changes the run's row
+            (:class:`ur5fault.sim.interfaces.EffectApplier`).
+    """
+
+    name: str
+    doc: str
+    params: tuple[EffectParam, ...]
+    per_joint: bool
+    apply: EffectApplier
+
+    def param(self, name: str, where: str = "") -> EffectParam:
+        for p in self.params:
+            if p.name == name:
+                return p
+        raise UnknownNameError(f"parameter of effect {self.name!r}", name, [p.name for p in self.params], where)
+
+    def absent(self, name: str) -> float:
+        """The value of parameter ``name`` that means "no effect" (the registry is its only source)."""
+        value = self.param(name).absent
+        if value is None:
+            raise ParameterError(f"effect {self.name!r}: parameter {name!r} has no absent value")
+        return value
+
+
+@dataclasses.dataclass(frozen=True)
+class EffectKey:
+    """A ``<effect>.<param>`` key of a campaign sweep or condition (``backlash.backlash_deg``,
+    ``backlash.joint``): the effect's registry name and its parameter (or ``joint``)."""
+
+    effect: str
+    param: str
+
+    @classmethod
+    def parse(cls, key: object) -> EffectKey | None:
+        """The key split at its first dot; None for anything else (``seed``, ``payload_kg``, a non-string).
+        Whether the effect and parameter exist is the caller's check (with its own message)."""
+        if not isinstance(key, str):
+            return None
+        effect, dot, param = key.partition(".")
+        return cls(effect, param) if dot else None
+
+    def __str__(self) -> str:
+        return f"{self.effect}.{self.param}"
