@@ -362,13 +362,25 @@ def test_identity_covers_the_package_version(tmp_path, tiny_done, monkeypatch):
         run_quiet(load_campaign(tiny(tmp_path)), out)
 
 
+def test_identity_covers_the_simulator_revision(tmp_path, tiny_done, monkeypatch):
+    """A run stored before a change of what the simulator computes is not mixed with new ones: the revision
+    (raised by hand with such a change) is named as the difference."""
+    from ur5fault.campaign import CampaignChangedError, identity
+
+    out = _copy_done(tiny_done, tmp_path)
+    monkeypatch.setattr(identity, "SIM_REVISION", 99)
+    with pytest.raises(CampaignChangedError, match="sim_revision: 2 in the file, 99 now"):
+        run_quiet(load_campaign(tiny(tmp_path)), out)
+
+
 def test_identity_inputs_cover_everything_that_decides_a_result():
     from ur5fault.campaign.identity import Identities
 
     camp = build_campaign({"duration_s": 0.3, "sweep": {"backlash.joint": [2], "backlash.backlash_deg": [0.1]}}, "t")
     rc = next(r for r in camp.runs if not r.is_healthy())
     inputs = Identities(camp).inputs(rc)
-    assert set(inputs) == {"identity_format", "ur5fault_version", "mujoco_version", "model_sha256", "drive", "stepper",
+    assert set(inputs) == {"identity_format", "ur5fault_version", "sim_revision", "mujoco_version", "model_sha256",
+                           "drive", "stepper",
                            "trajectory", "duration_s", "log_period_s", "seed", "effects", "params"}
     assert inputs["params"]["physics_dt_s"] == 5e-5 and inputs["params"]["gear"]["ratio"] == [101.0] * 6
     assert [e[0] for e in inputs["effects"]] == ["backlash", "payload", "temperature"]

@@ -9,8 +9,9 @@ import pytest
 
 from ur5fault.discrepancy.candidates import LibraryCandidate
 from ur5fault.discrepancy.judging import Finding
-from ur5fault.discrepancy.rescreen import freed_joints, select_on_freed
+from ur5fault.discrepancy.rescreen import freed_joints, indistinguishable_held_out, select_on_freed
 from ur5fault.discrepancy.search import columns_of
+from ur5fault.discrepancy.statistics import effective_n
 
 N = 4000
 
@@ -65,3 +66,30 @@ def test_a_dropped_effect_is_not_offered_again():
     chosen, trace = select_on_freed(X, e, cands, columns_of(cands), findings, max_effects=1)
     assert all(k != 0 for k, _ in chosen)
     assert all(v.label != cands[0].label for v in trace)
+
+
+def test_a_dropped_robot_wide_finding_frees_every_joint_with_a_place():
+    cands, _, _ = _problem()
+    payload = LibraryCandidate("payload", None, param="mass_kg", x0=0.0, probe=0.5)
+    # joint 1 keeps its offset (its budget of one is spent); the payload acted on every joint and is dropped
+    findings = [_finding(payload, kept=False), _finding(cands[2], kept=True)]
+    assert freed_joints(findings, 1) == [None, 0, 2, 3, 4, 5]
+
+
+def test_the_held_out_part_tells_a_rival_apart_only_beyond_the_naming_bar():
+    """Two held-out residuals of white unit noise (n_eff = n): a rival that leaves an extra constant c on the
+    joint's channel raises the residual sum by n c^2, i.e. n log(1 + c^2) in effective samples; the bar is 10."""
+    rng = np.random.default_rng(5)
+    n = 2000
+    e = rng.normal(size=(n, 1))
+    e -= e.mean()
+    e /= np.sqrt(np.mean(e**2))  # exactly unit RMS, zero mean: rss = n
+    # n log(1 + c^2) = 10 at c^2 = exp(10 / n) - 1; a little below and above it
+    c_bar = np.sqrt(np.exp(10.0 / n) - 1.0)
+    n_eff = effective_n(e)
+    assert n_eff == pytest.approx(n, rel=0.1)  # white noise: (nearly) no autocorrelation discount
+    below, above = 0.5 * c_bar * np.sqrt(n / n_eff), 2.0 * c_bar * np.sqrt(n / n_eff)
+    assert indistinguishable_held_out(e, e + below)
+    assert not indistinguishable_held_out(e, e + above)
+    # a rival that fits the held-out part better is never the worse one
+    assert indistinguishable_held_out(e + above, e)

@@ -363,6 +363,47 @@ def test_calibration_is_saved_loaded_and_reported(tmp_path):
         load_models(tmp_path / "benchmark")
 
 
+def test_the_operating_point_is_read_off_the_training_runs_and_the_test_split_one_is_the_oracle(tmp_path):
+    """One operating point: the by-joint detector flags at the 5 % false-alarm threshold of the training runs'
+    out-of-fold scores - the one saved for `ur5fault diagnose` - and the benchmark's headline false alarms and
+    detection are those of that threshold on the test runs; the test split's own 5 % threshold (which needs the
+    labels of the runs it scores) is reported beside it as the oracle."""
+    from ur5fault.health.diagnostics import joint_kind, run_benchmark
+    from ur5fault.health.diagnostics.metrics import FROM_OUT_OF_FOLD
+    from ur5fault.health.diagnostics.saved import SCHEMA_FILE, load_models
+
+    df = with_twin(synthetic(n_groups=16))
+    df.to_parquet(tmp_path / "features.parquet")
+    m = run_benchmark(tmp_path, compare=False)
+    oof = m["calibration"]["threshold_out_of_fold"]
+    bj = m["detection_by_joint"]
+    assert bj["threshold_score"] == oof and bj["threshold_from"] == FROM_OUT_OF_FOLD
+    models, schema = load_models(tmp_path / "benchmark")
+    assert schema["joint_kind_threshold_5pct_false_alarms"] == oof
+    assert schema["joint_kind_threshold_from"] == FROM_OUT_OF_FOLD
+    ds = load_dataset(df, "both")
+    score = joint_kind.fault_score(models.joint_kind, ds.test, ds.inputs)
+    healthy = (ds.test["fault"] == "healthy").to_numpy()
+    assert bj["false_alarm_rate_measured"] == pytest.approx(np.mean(score[healthy] > oof))
+    assert bj["detection_rate_all"] == pytest.approx(np.mean(score[~healthy] > oof))
+    oracle = np.sort(score[healthy])[int(np.ceil(0.95 * (healthy.sum() - 1)))]  # at most 5 % of healthy above
+    assert bj["oracle_test_split"]["threshold_score"] == pytest.approx(oracle)
+    assert bj["oracle_test_split"]["false_alarm_rate_measured"] <= 0.05
+    text = (tmp_path / "benchmark" / "report.md").read_text()
+    assert "training runs out of fold" in text and "oracle" in text
+    # classifiers saved before the schema said where the threshold came from held the test split's: they load
+    # with the out-of-fold threshold of their calibration record, the old one kept beside it
+    path = tmp_path / "benchmark" / "models" / SCHEMA_FILE
+    s = json.loads(path.read_text())
+    s.pop("joint_kind_threshold_from")
+    s["joint_kind_threshold_5pct_false_alarms"] = bj["oracle_test_split"]["threshold_score"]
+    path.write_text(json.dumps(s))
+    _, old = load_models(tmp_path / "benchmark")
+    assert old["joint_kind_threshold_5pct_false_alarms"] == oof
+    assert old["joint_kind_threshold_test_split"] == bj["oracle_test_split"]["threshold_score"]
+    assert old["joint_kind_threshold_from"].startswith(FROM_OUT_OF_FOLD)
+
+
 def test_classifiers_of_an_older_format_are_refused_in_one_line(tmp_path, capsys):
     from ur5fault.health.diagnostics import run_benchmark
     from ur5fault.health.diagnostics.saved import SCHEMA_FILE, load_models

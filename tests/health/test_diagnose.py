@@ -147,6 +147,59 @@ def test_current_offset_on_wrist_1_is_found_there_at_its_size(logs, detector, tm
     assert told >= 1 and clean >= 1
 
 
+#: largest current-offset estimate a healthy window may give [A]: under half the smallest offset of the upper half
+#: of the diagnostics campaigns' range (0.005-0.5 A log-uniform: upper half from 0.05 A), so that no healthy
+#: window reads as a fault of the sizes the benchmark's goals are set on
+HEALTHY_OFFSET_A = 0.02
+
+
+def _offsets(log_path: Path) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
+    """Per 2.5 s window: the current-offset estimates of the six joints, their standard errors and VIFs."""
+    from ur5fault.health.diagnosis import replay_twin
+    from ur5fault.health.diagnosis.windows import window_features, window_length
+    from ur5fault.logs import read_log
+
+    log = read_log(log_path, "sim", window_length(WINDOW_S))
+    ws = window_features(log, *replay_twin(log), WINDOW_S, {"payload_kg": float(log.payload_kg)})
+    return [tuple(np.array([w.features[f"twin_est_current_offset_A{x}_j{j}"] for j in range(1, 7)])
+                  for x in ("", "_se")) + (np.array([v["current_offset_A"] for v in w.vif]),) for w in ws]
+
+
+def test_healthy_window_gives_no_current_offset_and_an_injected_one_comes_out(logs):
+    # the simulated pick-and-place grips its 2 kg payload 1.7 s in; the twin used to hold it from the start, and
+    # the first 2.5 s window gave offsets of 1.07 A on the shoulder and 0.52 A on wrist 2 (the gravity torque of
+    # a payload the robot did not yet hold): the log now carries the gripper's schedule and the twin follows it
+    from ur5fault.health.diagnosis.score import MAX_VIF
+
+    healthy, small = _offsets(logs["healthy"]), _offsets(logs["small_offset"])
+    for est, _, vif in healthy:  # where the offset is told apart from the other columns of its fit
+        told = vif <= MAX_VIF
+        assert told.sum() >= 2 and np.all(np.abs(est[told]) < HEALTHY_OFFSET_A), (est, vif)
+    for (h, _, _), (s, _, vif) in zip(healthy, small):  # 0.1 A on wrist 1: there, and nowhere else
+        assert s[3] - h[3] == pytest.approx(SMALL_OFFSET_A, abs=0.002)
+        np.testing.assert_allclose(np.delete(s - h, 3), 0.0, atol=0.002)
+        if vif[3] <= MAX_VIF:
+            assert s[3] == pytest.approx(SMALL_OFFSET_A, abs=HEALTHY_OFFSET_A)
+
+
+@pytest.mark.xfail(strict=True, reason="not found yet: the shoulder's first-window offset is 0.010 A at 3.6 standard "
+                                       "errors (its fit confounded, VIF 43); every other estimate is within 3")
+def test_healthy_window_offsets_within_three_standard_errors_of_zero(logs):
+    for est, se, _ in _offsets(logs["healthy"]):
+        assert np.all(np.abs(est) <= 3.0 * se), (est, se)
+
+
+def test_a_simulated_log_carries_the_grippers_schedule(logs):
+    from ur5fault.logs import read_log
+    from ur5fault.sim.trajectories import pick_and_place
+
+    log = read_log(logs["healthy"], "sim")
+    np.testing.assert_array_equal(log.payload_held, pick_and_place().gripped(log.t_s))
+    assert log.payload_held.any() and not log.payload_held.all()  # the window holds a grip
+    traj = log.to_trajectory()
+    np.testing.assert_array_equal(traj.gripped(log.t_s - log.t_s[0]), log.payload_held)
+
+
 def test_p_fault_is_the_calibrated_by_joint_score_and_grows_with_the_offset(logs, calibrated_detector, tmp_path):
     from ur5fault.health.diagnostics.calibration import apply
     from ur5fault.health.diagnostics.saved import load_models
@@ -271,5 +324,8 @@ def test_real_nist_log_few_seconds_diagnosed_without_motor_encoders(detector, tm
         for j in w["joints"]:  # what lives in the encoder mismatch is "cannot tell" on every joint, and why
             for k in ("backlash", "resolver_offset", "gear_stiffness"):
                 assert "motor encoders" in j["cannot_tell"][k]
+            # each kind says its own physics (the position loop holds a resolver offset's reading on the setpoint)
+            assert len({j["cannot_tell"][k] for k in ("backlash", "resolver_offset", "gear_stiffness")}) == 3
+            assert "holds the offset reading on the setpoint" in j["cannot_tell"]["resolver_offset"]
             est = next(k for k in j["kinds"] if k["kind"] == "current_sensor_offset")
             assert est["size"] is None or abs(est["size"]) < 1.0  # A: within the sensor's plausible range

@@ -106,6 +106,21 @@ def test_start_is_at_rest_in_equilibrium():
     assert abs(last[1]) > 1.0  # the shoulder really holds the arm and payload against gravity
 
 
+def test_resolver_offset_starts_held_not_as_a_step():
+    """A resolver offset o has been in the reading since the robot was switched on: at rest the position loop
+    holds the reading on the setpoint, so the true link sits at setpoint - o from the first sample, and the
+    reading shows no step (starting the link at the setpoint made every such run move the link by -o at t = 0,
+    a transient at rest that a real log never shows and that the benchmark read as the fault's signature)."""
+    o_deg = 0.5
+    res = Simulator().run(hold(seconds=0.3, payload_kg=2.0), [
+        RunSpec("h", 0), RunSpec("o", 0, (make_effect("resolver_offset", "shoulder_lift_joint", offset_deg=o_deg),))])
+    q_true, q_fb = res["q_rad"], res["q_FB_rad"]
+    # the link is held o below the setpoint from the first sample to the last (within 1 % of o)
+    np.testing.assert_allclose(q_true[1, :, 1] - q_true[0, :, 1], -np.radians(o_deg), atol=0.01 * np.radians(o_deg))
+    # the reading equals the healthy robot's (same noise seed) up to the resolver's quantisation: no transient
+    assert np.max(np.abs(q_fb[1, :, 1] - q_fb[0, :, 1])) < 0.02 * np.radians(o_deg)
+
+
 def test_payload_and_its_centre_of_mass_match_independent_dynamics():
     """Gravity torques with a 2 kg payload whose CoM is moved 0.1 m along the tool axis equal the
     independent Newton-Euler reference (tests/reference_ur5.py)."""

@@ -1,6 +1,7 @@
 """Run identity: everything that decides a run's result, taken from *resolved* values and hashed.
 
-The identity of a campaign run covers the ur5fault and MuJoCo versions, the SHA-256 of the MJCF
+The identity of a campaign run covers the ur5fault and MuJoCo versions, the simulator's revision
+(``ur5fault.sim.SIM_REVISION``), the SHA-256 of the MJCF
 model file, the drive implementation and stepper, the trajectory (its options and a hash of the
 setpoints it produces), the simulated duration, the log period, the noise seed, the full list of
 effects the run carries (base effects, swept faults, payload, temperature; in the order applied)
@@ -25,6 +26,7 @@ from pathlib import Path
 from typing import Any
 
 from ..config import parse_trajectory
+from ..sim import SIM_REVISION
 from ..sim.effects import EffectSpec, effects_of_keys, make_effect
 from ..sim.params import load_params
 from ..util import provenance
@@ -34,8 +36,8 @@ from .spec import Campaign
 
 IDENTITY_FORMAT = 1
 #: how inputs are compared, in this order, to name the first difference
-INPUT_ORDER = ("identity_format", "ur5fault_version", "mujoco_version", "model_sha256", "drive", "stepper",
-               "trajectory", "duration_s", "log_period_s", "seed", "effects", "params", "twin_residuals",
+INPUT_ORDER = ("identity_format", "ur5fault_version", "sim_revision", "mujoco_version", "model_sha256", "drive",
+               "stepper", "trajectory", "duration_s", "log_period_s", "seed", "effects", "params", "twin_residuals",
                "motor_encoders")
 #: version of the digital twin and its features (health/twin_features.py), recorded when a campaign has them
 #: (2: the current fit over all joints with the payload CoM and latency held out, standard errors and t values)
@@ -82,6 +84,7 @@ class Identities:
         self.common = {
             "identity_format": IDENTITY_FORMAT,
             "ur5fault_version": provenance.package_version(),
+            "sim_revision": SIM_REVISION,
             "mujoco_version": mujoco.__version__,
             "model_sha256": file_sha256(model),
             "drive": DRIVE,

@@ -48,6 +48,9 @@ class MeasuredLog:
     target_torque_Nm: NDArray | None = None
     logged: NDArray | None = None
     notes: tuple[str, ...] = ()
+    #: ``(n_samples,)`` bool: whether the gripper holds the payload at each sample (ur5fault's own logs record
+    #: it); ``None``: the log does not say, and the payload is taken as held throughout
+    payload_held: NDArray | None = None
 
     @property
     def payload_known(self) -> bool:
@@ -79,10 +82,18 @@ class MeasuredLog:
         return float(np.median(np.diff(self.t_s)))
 
     def to_trajectory(self, name: str | None = None) -> Trajectory:
-        """The log's target positions as a setpoint stream (payload held throughout)."""
+        """The log's target positions as a setpoint stream, the payload held where :attr:`payload_held` says
+        (a grip or release between two samples placed half-way between them), else throughout."""
         self.require_payload()
-        return Trajectory(name or self.source, self.period_s, self.q_target_rad, (), self.payload_kg > 0,
-                          self.payload_kg)
+        if self.payload_held is None:
+            return Trajectory(name or self.source, self.period_s, self.q_target_rad, (), self.payload_kg > 0,
+                              self.payload_kg)
+        held = np.asarray(self.payload_held, bool)
+        t = self.t_s - self.t_s[0]
+        change = np.flatnonzero(held[1:] != held[:-1]) + 1
+        events = tuple((float(0.5 * (t[k - 1] + t[k])), bool(held[k])) for k in change)
+        return Trajectory(name or self.source, self.period_s, self.q_target_rad, events,
+                          bool(held[0]) and self.payload_kg > 0, self.payload_kg)
 
     def window(self, t0_s: float, t1_s: float) -> MeasuredLog:
         """The part of the log with ``t0 <= t < t1`` (times relative to the log start), time re-zeroed."""

@@ -218,12 +218,17 @@ def read_sim(path: str | Path, length: plausible.MinLength | None = None) -> Mea
         offset = tuple(float(x) for x in meta.get("tcp_offset_m", (0.0, 0.0, 0.15)))
         if len(offset) != 3 or not np.all(np.isfinite(offset)) or not np.isfinite(payload):
             raise ValueError("tcp_offset_m or payload_kg")
+        held = None  # files written before the schedule was recorded: held throughout, as any log
+        if "payload_events" in meta:
+            held = np.full(t.size, bool(meta.get("payload_gripped_at_start", False)))
+            for te, g in meta["payload_events"]:
+                held = np.where(t >= float(te), bool(g), held)
     except (TypeError, ValueError) as exc:
         raise LogFormatError(f"{src}: malformed ur5fault metadata ({exc})") from None
     return MeasuredLog(
         source=src, t_s=t, q_target_rad=arrays["q_set_rad"], q_actual_rad=arrays["q_FB_rad"],
         current_A=arrays["i_FB_A"], tcp_m=_stack(d, tcp), q_motor_rad=_stack(d, qm), temperature_C=temp_arr,
-        payload_kg=payload, tcp_offset_m=offset,  # type: ignore[arg-type]
+        payload_kg=payload, tcp_offset_m=offset, payload_held=held,  # type: ignore[arg-type]
     )
 
 

@@ -9,3 +9,8 @@ typed results a batch returns.
 - :mod:`.trajectories` the commanded motions, :mod:`.result` what a batch returns, :mod:`.budget` what a
   simulation will cost before it starts, :mod:`.axes` the joint names and axis conventions.
 """
+
+#: revision of what a run simulates, in every campaign run's identity: raised when a change of the simulator
+#: alters some run's result under the same inputs, so a folder made before it is re-simulated, not mixed (2: a
+#: resolver offset starts held, the link at setpoint - offset, instead of as a step at t = 0)
+SIM_REVISION = 2

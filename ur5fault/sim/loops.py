@@ -92,7 +92,10 @@ def prepare(sim, traj: Trajectory, runs: list, a: RunArrays, n_steps: int, log_e
     terms = TermHook.build(a)
     terms.prepare_model(mb)
     mb.set_payload(a.payload_kg * gripped_step[0])
-    q = np.tile(q_set_s[0], (a.n_runs, 1))
+    # the link where its resolver reads the first setpoint: a resolver offset has been there since the robot was
+    # switched on, so the position loop has long held the true link off by it (starting the link at the setpoint
+    # instead gave every run with a resolver offset a step of the offset at t = 0, a transient no robot shows)
+    q = np.tile(q_set_s[0], (a.n_runs, 1)) - a.resolver_offset_rad
     bias = mb.start(q)
     bias = bias + terms.static_load(q, mb, dt)  # the terms' static load is held from the start
     P = pack_params(p, sim.gains, a)

@@ -142,6 +142,9 @@ class SimResult:
             "log_period_s": float(t_log[1] - t_log[0]) if t_log.size > 1 else float(t_log[0]),
             "duration_s": float(t_log[-1]) if t_log.size else 0.0,
             "trajectory": traj.name,
+            # when the gripper held the payload (the log's reader gives its twin the same schedule)
+            "payload_gripped_at_start": bool(traj.payload_gripped_at_start),
+            "payload_events": [[float(t), bool(g)] for t, g in traj.payload_events],
             "gear_ratio": list(p.gear.ratio),
             "motor_kind": list(p.motor.kind),
             "tcp_offset_m": list(p.tcp_offset_m),

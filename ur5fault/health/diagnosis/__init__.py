@@ -80,7 +80,8 @@ def diagnose(log: MeasuredLog, detector_dir: str | Path, params_overrides: dict 
         "detector": {"folder": str(detector_dir), "feature_set": schema.get("feature_set"),
                      "training_set_sha256": schema.get("training_set_sha256"),
                      "p_fault_from": "fault-kind classifier by joint: largest joint probability of a fault",
-                     "threshold_5pct_false_alarms": thr, "calibrated": models.calibrator is not None,
+                     "threshold_5pct_false_alarms": thr, "threshold_from": schema.get("joint_kind_threshold_from"),
+                     "calibrated": models.calibrator is not None,
                      "calibration": schema.get("calibration", {}) and {
                          k: v for k, v in schema["calibration"].items()
                          if k in ("method", "score", "n_folds", "grouped_by")},

@@ -50,9 +50,24 @@ COMPUTABLE = frozenset([c for c in FEATURE_UNITS if not c.startswith(SIM_ONLY_PR
 #: the least share of a window's samples in which a joint must move for Coulomb friction to be judged
 #: (assumption: a tenth of the window gives the Coulomb projection a few hundred samples at 1 kHz)
 MIN_SHARE_MOVING = 0.1
-#: kinds a log without motor encoders cannot show: they live in the encoder mismatch (a clearance, a
-#: resolver offset that the position loop hides in the link reading, the gear windup)
-NEEDS_MOTOR_ENCODERS = ("backlash", "resolver_offset", "gear_stiffness")
+#: kinds a log without motor encoders (every UR log) cannot show, each with why.  The position loop closes on the
+#: link-side resolver and the speed loop on the motor encoder (ur5fault/sim/drive/kernel.py), so what these
+#: faults change lies between the motor and the link - the encoder mismatch - while the logged link position and
+#: current stay a healthy robot's within their noise.  Measured on the UR-log benchmark (8 ms, no motor encoders,
+#: docs/diagnostics.md "What a UR log can show"): detection by joint at chance for all three (AUC 0.42-0.51), the
+#: resolver offset's former 0.99 having come from a simulated start that stepped the link by the offset
+NEEDS_MOTOR_ENCODERS = {
+    "backlash": "a clearance lets the motor turn against the link when the gear torque reverses; the loop holds "
+                "the link reading, so the link and the current see only a short transient there (too small for "
+                "the features: UR-log benchmark AUC 0.51); the motor encoder sees the jump",
+    "resolver_offset": "the position loop holds the offset reading on the setpoint, so the logged link position "
+                       "tracks as a healthy robot's; the true link sits off by the offset, which only the motor "
+                       "encoder shows; the current changes only by the gravity torque's slope times the offset "
+                       "(nothing on the base, whose axis is vertical; UR-log benchmark AUC 0.46)",
+    "gear_stiffness": "a softer gear winds up more between motor and link at the same torque; the loop holds the "
+                      "link and the current carries the same torque, so only the motor encoder sees the windup "
+                      "(UR-log benchmark AUC 0.42)",
+}
 #: each kind's size estimate (name of :data:`ur5fault.health.twin_features.ESTIMATE_UNITS`)
 ESTIMATE_OF = {"current_sensor_offset": "current_offset_A", "current_sensor_gain": "current_gain_err",
                "torque_constant": "current_gain_err", "coulomb_friction": "coulomb_scale_err",
@@ -114,8 +129,8 @@ def cannot_tell(w: Window, j: int, has_motor_encoders: bool) -> dict[str, str]:
     """Kinds the window cannot show on joint ``j`` (0-based), with why."""
     out = {}
     if not has_motor_encoders:
-        for k in NEEDS_MOTOR_ENCODERS:
-            out[k] = "the log has no motor encoders, and this fault shows in the encoder mismatch"
+        for k, why in NEEDS_MOTOR_ENCODERS.items():
+            out[k] = f"the log has no motor encoders: {why}"
     if "backlash" not in out and w.torque_reversals[j] == 0:
         out["backlash"] = "no gear-torque reversal in this window: the clearance is never crossed"
     if w.share_moving[j] < MIN_SHARE_MOVING:

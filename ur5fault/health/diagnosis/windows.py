@@ -115,7 +115,9 @@ def window_features(log: MeasuredLog, replay: LogReplay, rep: Replayed, window_s
     t = log.t_s[1 : n + 1] - log.t_s[1]
     q_set = log.q_target_rad[1 : n + 1]
     dt = period
-    payload = float(context.get("payload_kg", 0.0))  # held throughout: a log carries no gripper commands
+    payload = float(context.get("payload_kg", 0.0))
+    # when the gripper holds it: ur5fault's own logs record it; a robot's log does not (held throughout)
+    held = None if log.payload_held is None else np.asarray(log.payload_held, bool)[1 : n + 1]
     out = []
     for lo in range(0, n - n_win + 1, n_win):
         hi = lo + n_win
@@ -126,12 +128,14 @@ def window_features(log: MeasuredLog, replay: LogReplay, rep: Replayed, window_s
             f = {k: v for k, v in run_features(t[lo:hi], q_set[lo:hi], meas["q_FB_rad"], meas["q_M_FB_rad"],
                                                meas["i_FB_A"], ratio, zeros, zeros, None).items()
                  if not k.startswith("tcp_")}
-            f.update(twin_features(t[lo:hi], q_set[lo:hi], meas, twin, replay.params, payload))
+            hw = None if held is None else held[lo:hi]
+            f.update(twin_features(t[lo:hi], q_set[lo:hi], meas, twin, replay.params, payload, hw))
             mid = (hi - lo) // 2
             halves = tuple({k: v for k, v in twin_features(t[lo:hi][sl], q_set[lo:hi][sl],
                                                             {k2: v2[sl] for k2, v2 in meas.items()},
                                                             {k2: v2[sl] for k2, v2 in twin.items()},
-                                                            replay.params, payload).items()
+                                                            replay.params, payload,
+                                                            None if hw is None else hw[sl]).items()
                             if k.startswith("twin_est_")}
                            for sl in (slice(0, mid), slice(mid, None)))
         if log.q_motor_rad is None:

@@ -62,16 +62,25 @@ def joint_fault_scores(ds: Dataset, models: Models) -> np.ndarray:
     return joint_kind.fault_score(models.joint_kind, ds.test, ds.inputs)
 
 
+#: where an operating point's threshold was read (``detection``'s ``threshold_from``)
+FROM_TEST_SPLIT = "test split (oracle: read off the scored runs' own healthy runs)"
+FROM_OUT_OF_FOLD = "training runs out of fold"
+
+
 def detection(ds: Dataset, models: Models, threshold: float | None = None,
-              score: np.ndarray | None = None) -> dict[str, Any]:
+              score: np.ndarray | None = None, threshold_from: str | None = None) -> dict[str, Any]:
     """Detection AUC overall, per fault kind, per fault-size bin and over the upper half of each kind's size
-    range (log scale, the range of the train and test runs); detection rate at 5 % false alarms (the
-    threshold on these test runs, or ``threshold``: a saved detector's operating point).  ``score``: the
-    test runs' scores of another detector (default: the detector's probability)."""
+    range (log scale, the range of the train and test runs); detection rate at 5 % false alarms: at
+    ``threshold`` (an operating point fixed before these runs were scored: read off the training runs out of
+    fold, or a saved detector's; ``threshold_from`` says which) or, without one, at the threshold read off these
+    test runs themselves.  The latter - an oracle no user has, since it needs the labels of the runs it scores -
+    is always given too, under ``oracle_test_split``.  ``score``: the test runs' scores of another detector
+    (default: the detector's probability)."""
     te = ds.test
     score = detector_scores(ds, models) if score is None else score
     healthy = (te["fault"] == "healthy").to_numpy()
-    thr = alarm_threshold(score, healthy) if threshold is None else float(threshold)
+    oracle = alarm_threshold(score, healthy)
+    thr = oracle if threshold is None else float(threshold)
     detected = score > thr
     all_sizes = np.concatenate([ds.train["fault_size"].to_numpy(float), te["fault_size"].to_numpy(float)])
     all_kinds = np.concatenate([ds.train["fault"].to_numpy(str), te["fault"].to_numpy(str)])
@@ -103,8 +112,12 @@ def detection(ds: Dataset, models: Models, threshold: float | None = None,
         "n_test_faulty": int((~healthy).sum()),
         "false_alarm_rate": FALSE_ALARM_RATE,
         "threshold_score": thr,
+        "threshold_from": FROM_TEST_SPLIT if threshold is None else (threshold_from or "given"),
         "false_alarm_rate_measured": float(detected[healthy].mean()),
         "detection_rate_all": float(detected[~healthy].mean()),
+        "oracle_test_split": {"threshold_score": oracle,
+                              "false_alarm_rate_measured": float((score[healthy] > oracle).mean()),
+                              "detection_rate_all": float((score[~healthy] > oracle).mean())},
         "per_kind": per_kind,
     }
 

@@ -33,6 +33,7 @@ from ...errors import ConfigFileError
 from ...util import provenance
 from ...util.io import write_bytes_atomic, write_json_atomic
 from .data import Dataset
+from .metrics import FROM_OUT_OF_FOLD, FROM_TEST_SPLIT
 from .models import Models
 
 MODELS_DIR = "models"
@@ -56,10 +57,12 @@ def training_hash(ds: Dataset) -> str:
 
 def save_models(models: Models, ds: Dataset, feature_set: str, threshold_score: float, out: Path,
                 window_s: float | None = None, log_period_s: float | None = None,
-                calibration: dict[str, Any] | None = None, joint_kind_threshold: float | None = None) -> Path:
+                calibration: dict[str, Any] | None = None, joint_kind_threshold: float | None = None,
+                joint_kind_threshold_from: str | None = None) -> Path:
     """Write the classifiers and their schema into ``out/models``; return that folder (``window_s``,
     ``log_period_s``: the training runs' simulated duration and log period, from the campaign manifest;
-    ``calibration``: how ``models.calibrator`` was fitted, recorded in the schema)."""
+    ``calibration``: how ``models.calibrator`` was fitted, recorded in the schema; ``joint_kind_threshold_from``:
+    where the by-joint operating point was read, :data:`.metrics.FROM_OUT_OF_FOLD` for ``ur5fault benchmark``)."""
     import sklearn
     import skops
     import skops.io as sio
@@ -82,6 +85,7 @@ def save_models(models: Models, ds: Dataset, feature_set: str, threshold_score: 
         "detector_threshold_5pct_false_alarms": float(threshold_score),
         # the same operating point of the kind classifier by joint's p(fault on any joint); None without it
         "joint_kind_threshold_5pct_false_alarms": None if joint_kind_threshold is None else float(joint_kind_threshold),
+        "joint_kind_threshold_from": joint_kind_threshold_from or FROM_TEST_SPLIT,
         "n_train": len(ds.train),
         "training_set_sha256": training_hash(ds),
         "shuffled_labels": models.shuffled_labels,
@@ -134,7 +138,24 @@ def load_models(folder: str | Path) -> tuple[Models, dict[str, Any]]:
         raise ConfigFileError(f"{folder}: {CLASSIFIERS_FILE} and {SCHEMA_FILE} disagree on the calibration of "
                               "p(fault); the folder is mixed from two runs: run `ur5fault benchmark` again")
     return Models(objs.get("detector"), objs.get("localiser"), objs.get("kind"),
-                  bool(schema.get("shuffled_labels")), objs.get("calibrator"), objs.get("joint_kind")), schema
+                  bool(schema.get("shuffled_labels")), objs.get("calibrator"), objs.get("joint_kind")), \
+        operating_point(schema)
+
+
+def operating_point(schema: dict[str, Any]) -> dict[str, Any]:
+    """``schema`` with the by-joint operating point one that no scored run has set.  Classifiers saved before the
+    schema said where it came from (``joint_kind_threshold_from``) saved the threshold read off the training
+    campaign's test split; their calibration records the training runs' out-of-fold 5 % threshold, which then
+    becomes the operating point (the test split's is kept as ``joint_kind_threshold_test_split``).  Without that
+    record the test split's stays, labelled as such."""
+    if "joint_kind_threshold_from" in schema:
+        return schema
+    oof = (schema.get("calibration") or {}).get("threshold_out_of_fold")
+    if oof is None:
+        return {**schema, "joint_kind_threshold_from": FROM_TEST_SPLIT}
+    return {**schema, "joint_kind_threshold_test_split": schema["joint_kind_threshold_5pct_false_alarms"],
+            "joint_kind_threshold_5pct_false_alarms": float(oof),
+            "joint_kind_threshold_from": FROM_OUT_OF_FOLD + " (from the calibration record)"}
 
 
 def check_inputs(features: pd.DataFrame, schema: dict[str, Any], where: str) -> list[str]:

@@ -26,6 +26,7 @@ import pandas as pd
 
 from ...campaign.identity import DRIVE, STEPPER, digest, file_sha256
 from ...campaign.store import FileCheck, check_run_file, check_timeseries_file, run_path, write_run_file
+from ...sim import SIM_REVISION
 from ...util import provenance
 from ...util.io import write_parquet_atomic
 from .spec import LifeCampaign, Unit
@@ -60,7 +61,7 @@ class LifeIdentities:
 
         self.common = {
             "identity_format": IDENTITY_FORMAT, "ur5fault_version": provenance.package_version(),
-            "mujoco_version": mujoco.__version__,
+            "sim_revision": SIM_REVISION, "mujoco_version": mujoco.__version__,
             "model_sha256": file_sha256(Path(DEFAULT_MODEL_PATH)), "drive": DRIVE, "stepper": STEPPER,
             "log_period_s": camp.log_period_s, "duration_s": camp.duration_s, "params": load_params().to_dict(),
             "fleet_seed": camp.seed,

@@ -86,7 +86,7 @@ def initial_state(P: NDArray, q: NDArray, bias: NDArray) -> NDArray:
     X[XI["y_res"]] = q
     X[XI["y_enc"]] = th_m
     X[XI["y_iq"]] = i_q
-    X[XI["q_fb"]] = q
+    X[XI["q_fb"]] = q + P[PI["res_off"]]  # the resolver's reading (offset included)
     X[XI["th_fb"]] = th_m
     X[XI["iq_fb"]] = i_q
     X[XI["i_ref"]] = i_q

@@ -1,0 +1,106 @@
+"""Trace one case of ``bench/discrepancy_real_hidden.py`` fitted from the clean log's fitted model (``--baseline``):
+the screening's estimate, z and delta BIC of each injected current offset on its joint (judged alone and beside
+the screening's other choices), the best library candidates on that joint judged alone, then every judgement of
+the search trace (library, dictionary, joint checks, held-out check, re-screen) and every finding with its
+held-out ratio and the reason it was dropped.  Usage::
+
+    PYTHONPATH=$PWD .venv/bin/python bench/discrepancy_trace_case.py CASE [--jobs N] [--clean-cache DIR]
+
+``--clean-cache DIR``: the clean fit's kept findings are stored there (``clean_LOG.pkl``) and reused, so that the
+cases of one log share one clean fit.  Delete the files when the workflow's code changes.
+"""
+
+from __future__ import annotations
+
+import argparse
+import pickle
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+REPO = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(REPO / "tests"))
+sys.path.insert(0, str(REPO / "bench"))
+
+import discrepancy_real_hidden as hidden  # noqa: E402
+from real_hidden import inject  # noqa: E402
+
+from ur5fault.discrepancy import DiscrepancyModel, steps  # noqa: E402
+from ur5fault.discrepancy.search import judge  # noqa: E402
+from ur5fault.discrepancy.statistics import BlockGram  # noqa: E402
+from ur5fault.sim.axes import JOINT_NAMES  # noqa: E402
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("case", type=int, help="index into discrepancy_real_hidden.CASES")
+    ap.add_argument("--jobs", type=int, default=2, help="worker processes per fit (default 2)")
+    ap.add_argument("--clean-cache", type=Path, default=None, help="directory for the clean fits' findings")
+    args = ap.parse_args()
+    if not 0 <= args.case < len(hidden.CASES):
+        ap.error(f"case must be in 0..{len(hidden.CASES) - 1}")
+    name, effects = hidden.CASES[args.case]
+    seen = {}
+    screen = steps.screen_library
+
+    def recorded(*a, **k):  # the library record of the injected fit, for the offset's screening statistics
+        seen["lib"] = screen(*a, **k)
+        return seen["lib"]
+
+    base = hidden.read(name)
+    cache = None if args.clean_cache is None else args.clean_cache / f"clean_{name}.pkl"
+    if cache is not None and cache.exists():
+        start = pickle.loads(cache.read_bytes())
+        print(f"clean fit's findings (stored): {[e.name for e in start]}")
+    else:
+        t = time.perf_counter()
+        clean = DiscrepancyModel(jobs=args.jobs).fit(base)
+        start = hidden.baseline_of(clean)
+        if cache is not None:
+            cache.parent.mkdir(parents=True, exist_ok=True)
+            cache.write_bytes(pickle.dumps(start))
+        kept = [f.candidate.label for f in clean.findings_ if f.kept]
+        print(f"clean fit, {time.perf_counter() - t:.0f} s: kept {kept}")
+        print(f"  dropped: {[(f.candidate.label, f.reason) for f in clean.findings_ if not f.kept]}")
+    log = base
+    for kind, j, v in effects:
+        log = inject(log, kind, j, **v)
+    steps.screen_library = recorded
+    try:
+        t = time.perf_counter()
+        m = DiscrepancyModel(jobs=args.jobs).fit(log, base_effects=start)
+    finally:
+        steps.screen_library = screen
+    print(f"case {args.case} {name} {effects}: wall {time.perf_counter() - t:.0f} s")
+    lib = seen["lib"]
+    bg = BlockGram.build(lib.X, lib.e0)
+    chosen = [lib.candidates.index(c) for c in lib.chosen]
+    for kind, j, _ in effects:
+        if kind != "current_sensor_offset":
+            continue
+        k = next(i for i, c in enumerate(lib.candidates) if c.effect == kind and c.joint == j)
+        for how, others in (("alone", []), ("beside the screening's choices", [o for o in chosen if o != k])):
+            v = judge(bg, lib.e0, lib.X, lib.candidates, lib.cols, others, k)
+            print(f"screening, offset on {JOINT_NAMES[j]} {how}: {v.theta[0]:+.4f} A, z {v.z:.1f}, "
+                  f"delta BIC {v.delta_bic:.1f} [{v.reason or 'passes'}]")
+        alone = [judge(bg, lib.e0, lib.X, lib.candidates, lib.cols, [], i) for i, c in enumerate(lib.candidates)
+                 if c.joint in (j, None)]
+        for v in sorted(alone, key=lambda v: v.delta_bic)[:6]:
+            print(f"  alone: {v.label} {np.round(v.theta, 4)} z {v.z:.1f} delta BIC {v.delta_bic:.1f} "
+                  f"[{v.reason or 'passes'}]")
+    print(f"library chose: {[c.label for c in lib.chosen]}")
+    for s in m.search_:
+        print(f"{s.stage:30s} {s.candidate:52s} {np.round(s.estimate, 4)} z {s.z:.1f} dBIC {s.delta_bic:.1f} "
+              f"{'accepted' if s.accepted else s.reason}")
+    for f in m.findings_:
+        ho = "-" if f.held_out is None else f"{100 * f.held_out.ratio:.0f} %"
+        print(f"finding {'kept' if f.kept else 'dropped'}: {f.candidate.label} {np.round(f.theta, 4)} held out {ho} "
+              f"{f.reason} {[(a.label, np.round(th, 4)) for a, th in f.alternatives]}")
+    for part, table in (("before", m.rms_before_), ("after", m.rms_after_)):
+        print(f"held-out current RMS {part} [A]: {({k: round(v, 4) for k, v in table['current_A'].items()})}")
+
+
+if __name__ == "__main__":
+    main()
