@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import logging
 
 import numpy as np
 import pandas as pd
@@ -184,3 +185,19 @@ def test_a_twin_model_with_wear_effects_is_one_line_exit_2(tmp_path, capsys):
     assert main(["prognose", str(fleet), "--out", str(tmp_path / "bench"), "--twin", "--model", str(ov)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith("ur5fault: error:") and "backlash" in err[0]
+
+
+def test_the_search_values_of_each_ray_are_logged_at_debug(monkeypatch, caplog):
+    # the elbow's cliff of the jump test: the log shows the criterion below (0.4 x) and above (0.7) the jump
+    _closed_form(monkeypatch, lambda ray, s: 4.0 * s if s < 0.1 else 0.7)
+    with caplog.at_level(logging.DEBUG, logger=TB.__name__):
+        r = failure_radii(SETUP, [_ray(1, 1, 0.1)])[0]
+    lines = [m for m in caplog.messages if m.startswith("twin ray direction")]
+    assert len(lines) == 1
+    pairs = [tuple(map(float, p.split(":"))) for p in lines[0].split("criterion ")[1].split(" -> ")[0].split()]
+    assert len(pairs) == len(TB.COARSE) + TB.REFINE
+    assert [s for s, _ in pairs] == sorted(s for s, _ in pairs)
+    # printed to 4 and 3 decimals: each value is the smooth growth at its radius or the cliff's 0.7
+    assert all(v == pytest.approx(4.0 * s, abs=2e-3) or v == pytest.approx(0.7) for s, v in pairs)
+    assert {v == pytest.approx(0.7) for _, v in pairs} == {True, False}
+    assert lines[0].endswith(f"radius {r:.4f}")

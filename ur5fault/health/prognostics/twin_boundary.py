@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import logging
 from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
@@ -46,6 +47,8 @@ ABOVE = (2.2, 3.0, 4.0)
 REFINE = 3
 #: runs per lockstep batch (as the fleet's default batch_size)
 BATCH = 32
+
+_log = logging.getLogger(__name__)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -199,4 +202,17 @@ class _TaskSearch:
             # linear inside the last bracket; a stopped run (inf) gives its middle
             frac = (self.setup.failure.threshold - lo_v) / (hi_v - lo_v) if np.isfinite(hi_v) and hi_v > lo_v else 0.5
             out[i] = lo_s + frac * (hi_s - lo_s)
+        if _log.isEnabledFor(logging.DEBUG):
+            for i in range(n):
+                self.log_search(i, out[i])
         return out
+
+    def log_search(self, i: int, radius: float) -> None:
+        """DEBUG: ray ``i``'s direction, the criterion at every radius searched (sorted) and the radius found;
+        where the criterion jumps across the threshold, the radius is set by the jump, not by smooth growth
+        (docs/prognostics.md, "The twin with a model error")."""
+        s, v = np.asarray(self.seen[i][0]), np.asarray(self.seen[i][1])
+        o = np.argsort(s)
+        pairs = " ".join(f"{a:.4f}:{b:.3f}" for a, b in zip(s[o], v[o], strict=True))
+        _log.debug("twin ray direction %s: radius [deg]:criterion %s -> radius %.4f",
+                   np.round(self.rays[i].direction, 3).tolist(), pairs, radius)
