@@ -3,6 +3,7 @@ Dask = local, feature table schema, and the paper's campaign."""
 
 from __future__ import annotations
 
+import json
 import os
 import signal
 import subprocess
@@ -175,6 +176,10 @@ def test_resume_after_sigkill_gives_identical_table(tmp_path, small_reference):
     n_before = len(list((out / "runs").glob("r*.parquet")))
     assert 2 <= n_before < len(ref), "the kill must land mid-way"
     assert (out / ".lock").exists()  # left behind by the killed process: stale
+    from ur5fault.campaign.verify import status
+
+    assert json.loads((out / "manifest.json").read_text())["state"] == "running"
+    assert status(out)["state"] == "interrupted" and status(out)["lock"] is None  # not "running": nothing runs
     r = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
     assert r.returncode == 0, r.stderr
     got = pd.read_parquet(out / "features.parquet")

@@ -93,8 +93,11 @@ def status(out: Path) -> dict[str, Any]:
         raise ConfigFileError(f"{out}: not a campaign folder (no manifest.json, runs/ or feature table in it)")
     manifest = read_manifest(out)
     holder = lock_holder(out)
+    state = manifest.get("state")
+    if state == "running" and holder is None:  # the manifest of a process that was stopped: nothing runs now
+        state = "interrupted"
     info: dict[str, Any] = {
-        "folder": str(out), "campaign": manifest.get("name"), "state": manifest.get("state"),
+        "folder": str(out), "campaign": manifest.get("name"), "state": state,
         # held by a running campaign, or None (a file left by a killed process is not a lock)
         "lock": (None if holder is None else {"held": True} if holder is True
                  else {"held": True, "host": holder[0], "pid": holder[1]}),

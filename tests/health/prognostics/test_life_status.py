@@ -24,7 +24,7 @@ def test_status_of_a_life_folder_interrupted_complete_and_damaged(tmp_path, caps
     camp = build_life({**TINY, "life": {**TINY["life"], "units": 2}}, "tiny")
     run_life(camp, tmp_path, jobs=1, progress=False, note=None, max_rounds=2)
     rc, info = _status(tmp_path, capsys)
-    assert rc == 0 and info["kind"] == "life" and info["state"] == "running"
+    assert rc == 0 and info["kind"] == "life" and info["state"] == "interrupted"  # "running" in the manifest
     assert info["units"] == {"expected": 2, "finished": 0, "running": 2}
     assert info["inspections"]["ok"] == 4 and info["inspections"]["bad"] == 0
     assert info["inspections_table"] == {"state": "not expected yet"}
