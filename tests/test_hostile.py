@@ -504,10 +504,11 @@ def test_identify_arguments_refused_before_the_fit(args, message, tmp_path, caps
 
 @pytest.mark.parametrize("args, message", [
     (["benchmark", "{tmp}/afile"], "afile: not a campaign folder, and cannot read it as a feature table"),
+    (["benchmark", "{tmp}", "--out", "{tmp}/afile"], "afile: exists and is not a folder"),
     (["plot", "{tmp}", "--out", "{tmp}/afile"], "afile: exists and is not a folder"),
     (["show", "{tmp}/run.parquet", "--out", "{tmp}/afile/x.png"], "is a file and not a folder"),
     (["show", "{tmp}/run.parquet", "--out", "{tmp}/fig.txt"], "the figure is written as PNG; give a .png file name"),
-], ids=["benchmark-dir-is-a-file", "plot-out-is-a-file", "show-out-under-a-file", "show-out-not-png"])
+], ids=["benchmark-dir-is-a-file", "benchmark-out-is-a-file", "plot-out-is-a-file", "show-out-under-a-file", "show-out-not-png"])
 def test_figure_and_benchmark_paths(args, message, tmp_path, capsys):
     """A file given for a folder: tracebacks from pyarrow and mkdir before; a .txt figure was a PNG under that name."""
     _write(tmp_path, "afile", "x")

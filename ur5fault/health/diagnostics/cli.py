@@ -29,12 +29,15 @@ def cmd_benchmark(args: argparse.Namespace) -> int:
     import time
 
     from ...errors import ParameterError
+    from ...util.io import check_writable
     from . import run_benchmark
 
     t0 = time.perf_counter()
     if args.test is not None and args.features is not None:
         raise ParameterError("--features chooses the inputs of new classifiers; --test scores saved ones with "
                              "their own inputs: use one of them")
+    if args.out is not None:  # before the data are read and the classifiers trained, not after
+        check_writable(args.out, folder=True)
     m = run_benchmark(args.dir, args.out, seed=args.seed, shuffle_labels=args.shuffle_labels,
                       feature_set=args.features, test_dir=args.test)
     det, loc, kind = m["detection"], m["localisation"], m["kind"]
