@@ -508,13 +508,22 @@ def test_identify_arguments_refused_before_the_fit(args, message, tmp_path, caps
     (["plot", "{tmp}", "--out", "{tmp}/afile"], "afile: exists and is not a folder"),
     (["show", "{tmp}/run.parquet", "--out", "{tmp}/afile/x.png"], "is a file and not a folder"),
     (["show", "{tmp}/run.parquet", "--out", "{tmp}/fig.txt"], "the figure is written as PNG; give a .png file name"),
-], ids=["benchmark-dir-is-a-file", "benchmark-out-is-a-file", "plot-out-is-a-file", "show-out-under-a-file", "show-out-not-png"])
+], ids=["benchmark-dir-is-a-file", "benchmark-out-is-a-file", "plot-out-is-a-file", "show-out-under-a-file",
+        "show-out-not-png"])
 def test_figure_and_benchmark_paths(args, message, tmp_path, capsys):
     """A file given for a folder: tracebacks from pyarrow and mkdir before; a .txt figure was a PNG under that name."""
     _write(tmp_path, "afile", "x")
     _write(tmp_path, "run.parquet", pd.DataFrame({"t_s": [0.0]}))
     rc, err, peak = _run([a.format(tmp=tmp_path) for a in args], tmp_path, capsys)
     _assert_one_line(rc, err, peak, message)
+
+
+def test_show_default_figure_path_with_a_folder_in_the_way(tmp_path, capsys):
+    """``show RUN.parquet`` writes RUN.png beside it; a folder of that name gave a traceback at the write."""
+    _write(tmp_path, "run.parquet", pd.DataFrame({"t_s": [0.0]}))
+    (tmp_path / "run.png").mkdir()
+    rc, err, peak = _run(["show", str(tmp_path / "run.parquet")], tmp_path, capsys)
+    _assert_one_line(rc, err, peak, "run.png: is a folder")
 
 
 def test_campaign_status_of_a_folder_that_holds_no_campaign(tmp_path, capsys):

@@ -137,12 +137,10 @@ def cmd_effects(args: argparse.Namespace) -> int:
 def cmd_show(args: argparse.Namespace) -> int:
     from .errors import ConfigFileError
     from .plotting import run_figure
-    from .util.io import write_figure_atomic
+    from .util.io import check_writable, write_figure_atomic
 
     target = Path(args.target)
     if args.out is not None:  # before reading or re-simulating anything
-        from .util.io import check_writable
-
         check_writable(args.out)
         if Path(args.out).suffix.lower() != ".png":
             raise ConfigFileError(f"--out {args.out}: the figure is written as PNG; give a .png file name")
@@ -151,13 +149,14 @@ def cmd_show(args: argparse.Namespace) -> int:
 
         if not target.is_file():
             raise ConfigFileError(f"{target}: no such file")
+        png = Path(args.out) if args.out else target.with_suffix(".png")
+        check_writable(png)  # the default place too: a folder in the way is one line, before reading
         csv = target.suffix.lower() == ".csv"
         try:
             series = pd.read_csv(target) if csv else pd.read_parquet(target)
         except (OSError, ValueError) as exc:
             raise ConfigFileError(f"{target}: cannot read as {'CSV' if csv else 'Parquet'} ({exc})") from None
         fig = run_figure(series)
-        png = Path(args.out) if args.out else target.with_suffix(".png")
     else:
         from .campaign.result import CampaignResult
 
@@ -170,6 +169,7 @@ def cmd_show(args: argparse.Namespace) -> int:
         series = result.time_series([row["run_id"], twin])
         fig = run_figure(series[row["run_id"]], twin=series[twin] if twin != row["run_id"] else None)
         png = Path(args.out) if args.out else result.out / "plots" / f"show_{row['run_id']}.png"
+        check_writable(png)
     png.parent.mkdir(parents=True, exist_ok=True)
     write_figure_atomic(fig, png)
     print(f"wrote {png}")

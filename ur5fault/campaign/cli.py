@@ -118,8 +118,10 @@ def cmd_plot(args: argparse.Namespace) -> int:
     if args.out is not None:
         check_writable(args.out, folder=True)  # a file in the way is refused before the figures are drawn
     result = CampaignResult.load(Path(args.dir))
+    plot_dir = Path(args.out) if args.out else result.out / "plots"
+    check_writable(plot_dir, folder=True)  # the default place too
     figures, messages = campaign_figures(result, args.feature)
-    for path in save(figures, Path(args.out) if args.out else result.out / "plots"):
+    for path in save(figures, plot_dir):
         print(f"wrote {path}")
     for message in messages:
         print(message)
