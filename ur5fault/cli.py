@@ -10,6 +10,7 @@ subcommand) shows the library's ``logging`` messages at INFO, ``-vv`` at DEBUG;
 from __future__ import annotations
 
 import argparse
+import functools
 import json
 import logging
 import signal
@@ -204,8 +205,10 @@ _REPEATABLE = (argparse._AppendAction, argparse._CountAction, argparse._StoreCon
                argparse._VersionAction)
 
 
+@functools.cache
 def _once(cls: type) -> type:
-    """``cls`` refusing a second use of its option in one command line (argparse keeps the last value silently)."""
+    """``cls`` refusing a second use of its option in one command line (argparse keeps the last value silently);
+    one such class per action class, not one per option."""
 
     class Once(cls):  # type: ignore[valid-type, misc]
         def __call__(self, parser, namespace, values, option_string=None):
