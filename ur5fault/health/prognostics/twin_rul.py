@@ -27,6 +27,11 @@ calibration units of nearby directions of growth, twin_calibration.direction_bia
 moves where along a direction its criterion jumps, so the twin's error depends on the task and the direction
 (docs/prognostics.md, "The twin with a model error").
 
+Friction (``friction``, twin_friction.py; ``prognose --twin-friction learned``, the default): each ray carries
+the unit's friction rise per degree of clearance and per 10^6 cycles learned from its inspections up to the
+ray's checkpoint, and the twin runs it in place of the wear law's two constants (the calibration units' rays
+theirs), so the boundary does not rest on a friction rise nobody measured to failure.
+
 Prediction: draws of the growth rate from the posterior, the speed along the direction ``r . d``, the
 crossing ``N* = rho_twin exp(bias + sd eps) / (r . d)``, the RUL rounded up to the inspection grid and at
 least one interval (median and 5-95 % interval).
