@@ -158,3 +158,39 @@ def test_learning_on_a_fleet_without_friction_columns_is_one_line_exit_2(tmp_pat
     assert exc.value.code == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith("ur5fault: error:") and "bogus" in err[0]
+
+
+def _fleet_dir(tmp_path):
+    fleet = tmp_path / "fleet"
+    fleet.mkdir()
+    df = _with_friction(linear_wear_fleet(24, 0, "a"), 0)
+    df = df.assign(split=np.where(df["unit_id"] < "a018", "train", "test"), failed=df["rul_cycles"] == 0,
+                   censored=False, tcp_dev_max_mm=0.5 * (df["backlash_deg_j2"] + 5 * df["backlash_deg_j3"]),
+                   payload_kg=1.0, temperature_C=25.0)
+    df.to_parquet(fleet / "inspections.parquet")
+    (fleet / "manifest.json").write_text(json.dumps({"wear": {"friction_per_deg": 8.0}, "identity_inputs": {},
+                                                     "failure": {"feature": "tcp_dev_max_mm", "threshold": 0.5}}))
+    return fleet
+
+
+@pytest.mark.parametrize("how", [None, "law"])
+def test_prognose_twin_learns_the_rise_by_default_and_runs_the_law_when_asked(monkeypatch, tmp_path, how):
+    ran: list[float] = []
+
+    def fake(setup, traj, pts):                # the synthetic fleet's boundary, b2 + 5 b3 = 1 deg
+        ran.extend(ray.law(setup.wear).friction_per_deg for ray, _ in pts)
+        return np.array([0.5 * s * (ray.direction[1] + 5 * ray.direction[2]) for ray, s in pts])
+
+    monkeypatch.setattr(TB, "_criteria", fake)
+    out = tmp_path / "bench"
+    assert main(["prognose", str(_fleet_dir(tmp_path)), "--out", str(out), "--twin",
+                 *(["--twin-friction", how] if how else [])]) == 0
+    fr = json.loads((out / "metrics.json").read_text())["fitted"]["twin"]["friction"]
+    report = (out / "report.md").read_text()
+    if how is None:                             # learned: the fleet's 3.7 /deg, not the manifest's 8
+        assert fr["source"] == "learned" and fr["learned"]["friction_per_deg_mean"] == pytest.approx(F_DEG, rel=0.05)
+        assert np.array(ran) == pytest.approx(F_DEG, rel=0.1)
+        assert "learned per unit" in report
+    else:
+        assert fr["source"] == "law" and fr["learned"] is None and set(ran) == {8.0}
+        assert "of the wear law" in report

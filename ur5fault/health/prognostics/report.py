@@ -271,6 +271,9 @@ def run_prognose(folder: Path, out: Path | None = None, *, seed: int = 0, twin: 
     return m
 
 
+_FRICTION_TEXT = {"learned": "learned per unit from the inspections", "law": "of the wear law"}
+
+
 def _f(v: Any, fmt: str = ".3g") -> str:
     return "-" if v is None or (isinstance(v, float) and not math.isfinite(v)) else format(v, fmt)
 
@@ -318,7 +321,9 @@ def markdown(m: dict[str, Any]) -> str:
               "kernel width by leave-one-unit-out). twin (with --twin): the same clearance estimates and growth "
               "line, the failure boundary simulated by the digital twin along the unit's direction of growth on "
               "its own duty cycle (task, payload, temperature), calibrated on training units"
-              + (f" ({tw['calibration']}: --twin-calibration)" if (tw := m["fitted"].get("twin")) else "")
+              + (f" ({tw['calibration']}: --twin-calibration; the friction rise with wear "
+                 f"{_FRICTION_TEXT[tw['friction']['source']]}: --twin-friction)"
+                 if (tw := m["fitted"].get("twin")) else "")
               + ". naive: mean "
               "residual life of the training units that outlived the unit's age.", "",
               "Figures: " + ", ".join(f"`{f}`" for f in m["figures"]) + f". Benchmark wall time "
