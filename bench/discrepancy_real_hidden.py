@@ -174,6 +174,15 @@ def kept_values(m) -> dict:
             if (v := library_value(m, e, j)[0]) is not None}
 
 
+def baseline_record(healthy: list, fit) -> dict:
+    """The baseline fitted on the ``healthy`` logs (jointly when several): its model, what it names, its wall."""
+    t = time.perf_counter()
+    m = fit(healthy if len(healthy) > 1 else healthy[0], ())
+    return {"effects": baseline_of(m), "labels": [f.candidate.label for f in m.findings_ if f.kept],
+            "wall_s": time.perf_counter() - t, "logs": [lg.source for lg in healthy],
+            "s": sum(float(lg.t_s[-1] - lg.t_s[0]) for lg in healthy)}
+
+
 def engineer_fits(name: str, cases, fit, cache: Path | None = None):
     """The engineer's baseline row of ``cases`` (``[(index, effects)]``, all on log ``name``): the baseline fitted
     on the healthy logs, the clean suspect run and each injected one fitted from it.  ``fit(logs, base_effects)``
@@ -181,14 +190,7 @@ def engineer_fits(name: str, cases, fit, cache: Path | None = None):
     info)``, ``("clean", info)`` and ``(index, model, wall_s)``."""
     healthy, suspect = engineer_plan(name)
 
-    def baseline():
-        t = time.perf_counter()
-        m = fit(healthy if len(healthy) > 1 else healthy[0], ())
-        return {"effects": baseline_of(m), "labels": [f.candidate.label for f in m.findings_ if f.kept],
-                "wall_s": time.perf_counter() - t, "logs": [lg.source for lg in healthy],
-                "s": sum(float(lg.t_s[-1] - lg.t_s[0]) for lg in healthy)}
-
-    base = _cached(cache, f"baseline_{name}", baseline)
+    base = _cached(cache, f"baseline_{name}", lambda: baseline_record(healthy, fit))
     yield "baseline", base
 
     def clean():
