@@ -174,6 +174,11 @@ def kept_values(m) -> dict:
             if (v := library_value(m, e, j)[0]) is not None}
 
 
+def baseline_key(name: str) -> str:
+    """The cache name of ``name``'s baseline: one per robot (the Kufieta runs share theirs)."""
+    return "baseline_nist" if name == "nist" else "baseline_kufieta"
+
+
 def baseline_record(healthy: list, fit) -> dict:
     """The baseline fitted on the ``healthy`` logs (jointly when several): its model, what it names, its wall."""
     t = time.perf_counter()
@@ -190,7 +195,7 @@ def engineer_fits(name: str, cases, fit, cache: Path | None = None):
     info)``, ``("clean", info)`` and ``(index, model, wall_s)``."""
     healthy, suspect = engineer_plan(name)
 
-    base = _cached(cache, f"baseline_{name}", lambda: baseline_record(healthy, fit))
+    base = _cached(cache, baseline_key(name), lambda: baseline_record(healthy, fit))
     yield "baseline", base
 
     def clean():

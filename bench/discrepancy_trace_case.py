@@ -11,7 +11,7 @@ cases of one log share one clean fit.  Delete the files when the workflow's code
 
 ``--engineer``: the case as ``discrepancy_real_hidden.py --engineer`` fits it: the suspect run fitted from the
 baseline fitted on the robot's healthy runs (with ``--clean-cache DIR``, the bench's ``--cache DIR``: its stored
-baseline ``baseline_LOG.pkl`` is used).
+baseline ``baseline_nist.pkl`` or ``baseline_kufieta.pkl`` is used).
 """
 
 from __future__ import annotations
@@ -59,7 +59,7 @@ def main() -> None:
     full = base
     if args.engineer:
         healthy, base = hidden.engineer_plan(name)
-        b = hidden._cached(args.clean_cache, f"baseline_{name}", lambda: hidden.baseline_record(
+        b = hidden._cached(args.clean_cache, hidden.baseline_key(name), lambda: hidden.baseline_record(
             healthy, lambda logs, st: DiscrepancyModel(jobs=args.jobs).fit(logs, base_effects=st)))
         start = b["effects"]
         print(f"baseline's findings (healthy runs {[lg.source for lg in healthy]}): {[e.name for e in start]}")
