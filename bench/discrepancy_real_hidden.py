@@ -29,7 +29,9 @@ part), and the suspect run is the rest of the log, with the fault injected there
 on samples the baseline never saw, 40 % of the log (25 s), of which the suspect fit again fits the first 60 %.
 A finding's size is read as it is (the change against the baseline); "clean" is the uninjected suspect run
 fitted from the same baseline (the baseline's own error on that run), whose kept findings are not counted as
-extra.  ``--cache DIR`` keeps the baselines and the clean suspect fits (they are shared by the cases of a log).
+extra.  ``--identify``: the baseline is first ``ur5fault identify`` on the healthy runs (this robot's drive
+parameters: torque constants, friction, ...), then the workflow from those parameters.  ``--cache DIR`` keeps the
+baselines and the clean suspect fits (they are shared by the cases of a log).
 """
 
 from __future__ import annotations
@@ -174,49 +176,68 @@ def kept_values(m) -> dict:
             if (v := library_value(m, e, j)[0]) is not None}
 
 
-def baseline_key(name: str) -> str:
+def baseline_key(name: str, identified: bool = False) -> str:
     """The cache name of ``name``'s baseline: one per robot (the Kufieta runs share theirs)."""
-    return "baseline_nist" if name == "nist" else "baseline_kufieta"
+    return ("baseline_nist" if name == "nist" else "baseline_kufieta") + ("_identified" if identified else "")
 
 
-def baseline_record(healthy: list, fit) -> dict:
-    """The baseline fitted on the ``healthy`` logs (jointly when several): its model, what it names, its wall."""
+def baseline_record(healthy: list, fit, identified: bool = False) -> dict:
+    """The baseline fitted on the ``healthy`` logs (jointly when several): its model (``params``: the drive
+    parameters ``identify`` gives on them first when ``identified``, else None), what it names, its wall."""
     t = time.perf_counter()
-    m = fit(healthy if len(healthy) > 1 else healthy[0], ())
-    return {"effects": baseline_of(m), "labels": [f.candidate.label for f in m.findings_ if f.kept],
+    params, start = None, ()
+    if identified:
+        from ur5fault.identify import identify
+        from ur5fault.sim.params import load_params
+
+        p = load_params()
+        ov = identify(healthy if len(healthy) > 1 else healthy[0], p, sweep=False).overlay(p)
+        params, start = ov["params"], effects_of(ov.get("effects"))
+    m = fit(healthy if len(healthy) > 1 else healthy[0], start, params)
+    return {"effects": baseline_of(m), "params": params, "labels": [f.candidate.label for f in m.findings_ if f.kept],
             "wall_s": time.perf_counter() - t, "logs": [lg.source for lg in healthy],
             "s": sum(float(lg.t_s[-1] - lg.t_s[0]) for lg in healthy)}
 
 
-def engineer_fits(name: str, cases, fit, cache: Path | None = None):
+def effects_of(overlay_effects) -> tuple:
+    """The ``effects`` entries of a model overlay as effect specs."""
+    from ur5fault.sim.effects import make_effect
+
+    skip = ("effect", "joint")
+    return tuple(make_effect(e["effect"], e.get("joint"), **{k: v for k, v in e.items() if k not in skip})
+                 for e in overlay_effects or ())
+
+
+def engineer_fits(name: str, cases, fit, cache: Path | None = None, identified: bool = False):
     """The engineer's baseline row of ``cases`` (``[(index, effects)]``, all on log ``name``): the baseline fitted
-    on the healthy logs, the clean suspect run and each injected one fitted from it.  ``fit(logs, base_effects)``
-    returns a fitted model (a :class:`DiscrepancyModel`'s ``fit``; a test's recorder).  Yields ``("baseline",
+    on the healthy logs (``identified``: ``identify``'s drive parameters first), the clean suspect run and each
+    injected one fitted from it.  ``fit(logs, base_effects, params_overrides)`` returns a fitted model (a
+    :class:`DiscrepancyModel`'s ``fit``; a test's recorder).  Yields ``("baseline",
     info)``, ``("clean", info)`` and ``(index, model, wall_s)``."""
     healthy, suspect = engineer_plan(name)
 
-    base = _cached(cache, baseline_key(name), lambda: baseline_record(healthy, fit))
+    base = _cached(cache, baseline_key(name, identified), lambda: baseline_record(healthy, fit, identified))
     yield "baseline", base
 
     def clean():
         t = time.perf_counter()
-        m = fit(suspect, base["effects"])
+        m = fit(suspect, base["effects"], base.get("params"))
         return {"kept": kept_keys(m), "values": kept_values(m), "labels": [f.candidate.label for f in m.findings_
                                                                              if f.kept],
                 "unexplained": len(m.unexplained_), "wall_s": time.perf_counter() - t}
 
-    yield "clean", _cached(cache, f"clean_{name}", clean)
+    yield "clean", _cached(cache, f"clean_{name}" + ("_identified" if identified else ""), clean)
     full = read(name) if name == "nist" else suspect
     for ci, effects in cases:
         t = time.perf_counter()
-        m = fit(injected(suspect, effects, centre_from=full), base["effects"])
+        m = fit(injected(suspect, effects, centre_from=full), base["effects"], base.get("params"))
         yield ci, m, time.perf_counter() - t
 
 
-def engineer_table(chosen: list[int], jobs: int, cache: Path | None) -> None:
+def engineer_table(chosen: list[int], jobs: int, cache: Path | None, identified: bool = False) -> None:
     """Fit and print the engineer's baseline row of the ``chosen`` cases (module docstring)."""
-    def fit(logs, start):
-        return DiscrepancyModel(jobs=jobs).fit(logs, base_effects=start)
+    def fit(logs, start, params=None):
+        return DiscrepancyModel(jobs=jobs).fit(logs, params, base_effects=start)
 
     rows, per_kind = [], {}
     print("| log | injected | named as | estimate (change against the baseline) | clean run from the baseline "
@@ -225,10 +246,11 @@ def engineer_table(chosen: list[int], jobs: int, cache: Path | None) -> None:
     for name in dict.fromkeys(CASES[ci][0] for ci in chosen):
         cases = [(ci, CASES[ci][1]) for ci in chosen if CASES[ci][0] == name]
         clean = None
-        for item in engineer_fits(name, cases, fit, cache):
+        for item in engineer_fits(name, cases, fit, cache, identified):
             if item[0] == "baseline":
                 b = item[1]
-                print(f"| {name} | baseline on {' + '.join(b['logs'])} ({b['s']:.0f} s) | "
+                how = "identify, then the workflow" if b.get("params") else "the workflow"
+                print(f"| {name} | baseline: {how} on {' + '.join(b['logs'])} ({b['s']:.0f} s) | "
                       f"{', '.join(b['labels']) or 'nothing'} | | | | | | | {b['wall_s']:.0f} s |", flush=True)
                 continue
             if item[0] == "clean":
@@ -237,13 +259,16 @@ def engineer_table(chosen: list[int], jobs: int, cache: Path | None) -> None:
                       f"| | | | | | {clean['unexplained']} | {clean['wall_s']:.0f} s |", flush=True)
                 continue
             ci, m, wall = item
-            score_engineer(name, CASES[ci][1], m, clean, wall, rows, per_kind)
+            score_engineer(name, CASES[ci][1], m, clean, wall, rows, per_kind, b.get("params"))
     summarise(rows, per_kind, "the engineer's baseline row (fitted from the robot's healthy runs)")
 
 
-def score_engineer(name: str, effects, m, clean: dict, wall: float, rows: list, per_kind: dict) -> None:
+def score_engineer(name: str, effects, m, clean: dict, wall: float, rows: list, per_kind: dict,
+                   params: dict | None = None) -> None:
     """One injected suspect run fitted from the baseline: its findings read as they are; extra ones counted
-    against the clean suspect run's findings from the same baseline."""
+    against the clean suspect run's findings from the same baseline.  ``params``: the baseline's identified
+    drive parameters, against whose Coulomb level a Coulomb scale is then read (the injected rise is the
+    packaged level times (scale - 1))."""
     injected_keys = {(NAMED_AS[k][0], j) for k, j, _ in effects if k in NAMED_AS}
     extra = kept_keys(m) - clean["kept"] - injected_keys - {("torque_constant", j) for _, j in injected_keys}
     extras = ", ".join(f"{e} {'robot' if k is None else JOINT_NAMES[k]}" for e, k in sorted(extra, key=str))
@@ -262,6 +287,10 @@ def score_engineer(name: str, effects, m, clean: dict, wall: float, rows: list, 
             continue
         effect, par, to_size = NAMED_AS[kind]
         truth = to_size(v[par])
+        if kind == "coulomb_friction" and params:
+            from ur5fault.sim.params import load_params
+
+            truth *= load_params().friction.coulomb_Nm[j] / load_params(overrides=params).friction.coulomb_Nm[j]
         est, alt = library_value(m, effect, j)
         there = clean["values"].get((effect, j))
         err = float("nan") if est is None else (est - truth) / truth
@@ -289,15 +318,18 @@ def main() -> None:
     ap.add_argument("--cache", type=Path, default=None,
                     help="with --engineer: folder keeping the baselines and clean suspect fits (delete it when "
                          "the workflow's code changes)")
+    ap.add_argument("--identify", action="store_true",
+                    help="with --engineer: the baseline is `ur5fault identify` on the healthy runs (the robot's drive "
+                         "parameters), then the workflow from them, and every fit starts from those parameters")
     args = ap.parse_args()
     jobs = args.jobs
-    if args.cache is not None and not args.engineer:
-        ap.error("--cache is used by --engineer only")
+    if (args.cache is not None or args.identify) and not args.engineer:
+        ap.error("--cache and --identify are used by --engineer only")
     if args.engineer:
         if args.baseline is not None or args.baseline_only:
             ap.error("--engineer is its own table; give it without --baseline")
         engineer_table(list(range(len(CASES))) if args.cases is None else [int(i) for i in args.cases.split(",")],
-                       jobs, args.cache)
+                       jobs, args.cache, args.identify)
         return
     from_clean = (set() if args.baseline is None else set(range(len(CASES))) if args.baseline == "all"
                   else {int(i) for i in args.baseline.split(",")})

@@ -56,12 +56,12 @@ def main() -> None:
 
     base = hidden.read(name)
     cache = None if args.clean_cache is None else args.clean_cache / f"clean_{name}.pkl"
-    full = base
+    full, params = base, None
     if args.engineer:
         healthy, base = hidden.engineer_plan(name)
         b = hidden._cached(args.clean_cache, hidden.baseline_key(name), lambda: hidden.baseline_record(
-            healthy, lambda logs, st: DiscrepancyModel(jobs=args.jobs).fit(logs, base_effects=st)))
-        start = b["effects"]
+            healthy, lambda logs, st, pr=None: DiscrepancyModel(jobs=args.jobs).fit(logs, pr, base_effects=st)))
+        start, params = b["effects"], b.get("params")
         print(f"baseline's findings (healthy runs {[lg.source for lg in healthy]}): {[e.name for e in start]}")
     elif cache is not None and cache.exists():
         start = pickle.loads(cache.read_bytes())
@@ -80,7 +80,7 @@ def main() -> None:
     steps.screen_library = recorded
     try:
         t = time.perf_counter()
-        m = DiscrepancyModel(jobs=args.jobs).fit(log, base_effects=start)
+        m = DiscrepancyModel(jobs=args.jobs).fit(log, params, base_effects=start)
     finally:
         steps.screen_library = screen
     print(f"case {args.case} {name} {effects}: wall {time.perf_counter() - t:.0f} s")

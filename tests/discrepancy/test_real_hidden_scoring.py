@@ -72,7 +72,7 @@ def test_the_engineers_baseline_is_never_fitted_on_the_run_the_fault_is_injected
     calls = []
     start = _model(_offset(3, 0.04))
 
-    def fit(logs, base_effects):
+    def fit(logs, base_effects, params=None):
         calls.append((list(logs) if isinstance(logs, list) else [logs], tuple(base_effects)))
         return start if len(calls) == 1 else _model()
 
