@@ -36,7 +36,9 @@ diagnosed one); the NIST log is one log, so its first half (:data:`NIST_SPLIT_S`
 half is diagnosed (under the packaged model, whose ``[nist]`` values were identified on the same robot's logs).
 Per case with the baseline: windows flagged, share of the injected fault's windows flagged, share where its
 joint is the likeliest, and the inputs still more than 3 robust SD from the healthy training runs after the
-mapping.
+mapping.  A Kufieta run is also diagnosed with a second baseline, all six other undisturbed runs (the other
+fold's were fitted by its overlay: the natural baseline of a user who fits the model on the robot's healthy runs
+and keeps them as its baseline; replayed under the run's own overlay, so still never the run diagnosed).
 
 Writes ``OUT/summary.json``, ``OUT/table_baseline.md`` and, under ``OUT/with_baseline/``, the diagnosis folders
 (diagnosis.json, report.md, figure) of the healthy logs diagnosed with their baseline.
@@ -76,6 +78,10 @@ INJECTIONS = (("healthy", None, None, {}),
 #: size the physics predicts for each injected kind, in the unit diagnose reports it
 EXPECTED_SIZE = {"current_sensor_offset": OFFSET_A, "current_sensor_gain": GAIN - 1.0}
 MAD_SCALE = 1.4826  # MAD -> standard deviation of a normal distribution
+#: a Kufieta run's baselines: the other runs of its fold (as unseen by the overlay as the run diagnosed), and all
+#: six other undisturbed runs (the other fold's were fitted by the overlay: a user's natural baseline is the
+#: healthy runs the model was fitted on)
+BASE_FOLD, BASE_ALL = "own fold", "all others"
 #: the NIST log's split: baseline before, diagnosed after [s] (the log is 63 s: six 5 s windows each side)
 NIST_SPLIT_S = 31.5
 
@@ -172,8 +178,9 @@ def twin_and_windows(log, overlay: dict | None, window_s: float):
 
 
 def run_pair(log, overlay: dict | None, detector: Path, spread: pd.DataFrame, out: Path, twin, windows,
-             baseline) -> list[dict]:
-    """The log diagnosed healthy and with each injected fault, without and with ``baseline``: one row per case."""
+             baselines: dict) -> list[dict]:
+    """The log diagnosed healthy and with each injected fault, without and with each of ``baselines`` (label ->
+    baseline map): one row per case and baseline."""
     from ur5fault.health.diagnosis import diagnose
     from ur5fault.health.diagnosis.report import write_diagnosis
 
@@ -182,47 +189,52 @@ def run_pair(log, overlay: dict | None, detector: Path, spread: pd.DataFrame, ou
     for _label, kind, joint, values in INJECTIONS:
         lg = log if kind is None else inject(log, kind, joint, **values)
         d0 = diagnose(lg, detector, overlay, twin=twin, windows=windows if kind is None else None)
-        d1 = diagnose(lg, detector, overlay, twin=twin, windows=d0["_windows"], baseline=baseline)
-        row = {"log": log.source, "injected": kind, "joint": None if joint is None else joint + 1,
-               "model": "packaged" if overlay is None else "identified on the other fold",
-               "baseline_logs": list(baseline.logs), "baseline_windows": baseline.n_windows,
-               "n_windows": d0["n_windows"], "without": summarise(d0, kind, joint), "with": summarise(d1, kind, joint)}
         if kind is None:
             healthy = d0
-            row["outliers_without"] = outliers(d0["_windows"], spread)
-            row["outliers_with"] = outliers(d0["_windows"], spread, baseline=baseline)
-            row["baseline_summary"] = d1["baseline"]
-            write_diagnosis(d1, out / "with_baseline" / Path(log.source).name.split(".")[0].replace("[", "_"))
-        else:
-            row["size_minus_healthy_median"] = size_delta(d0["_windows"], healthy["_windows"], kind, joint)
-            row["without"].update(flagged_on_joint(d0, joint))
-            row["with"].update(flagged_on_joint(d1, joint))
-        rows.append(row)
+        for name, baseline in baselines.items():
+            d1 = diagnose(lg, detector, overlay, twin=twin, windows=d0["_windows"], baseline=baseline)
+            row = {"log": log.source, "injected": kind, "joint": None if joint is None else joint + 1,
+                   "model": "packaged" if overlay is None else "identified on the other fold",
+                   "baseline": name, "baseline_logs": list(baseline.logs), "baseline_windows": baseline.n_windows,
+                   "n_windows": d0["n_windows"], "without": summarise(d0, kind, joint),
+                   "with": summarise(d1, kind, joint)}
+            if kind is None:
+                row["outliers_without"] = outliers(d0["_windows"], spread)
+                row["outliers_with"] = outliers(d0["_windows"], spread, baseline=baseline)
+                row["baseline_summary"] = d1["baseline"]
+                stem = Path(log.source).name.split(".")[0]
+                write_diagnosis(d1, out / "with_baseline" / f"{stem}+{name.replace(' ', '_')}")
+            else:
+                row["size_minus_healthy_median"] = size_delta(d0["_windows"], healthy["_windows"], kind, joint)
+                row["without"].update(flagged_on_joint(d0, joint))
+                row["with"].update(flagged_on_joint(d1, joint))
+            rows.append(row)
     print(f"{log.source}: {time.perf_counter() - t0:.0f} s", file=sys.stderr, flush=True)
     return rows
 
 
 def table_baseline(rows: list[dict]) -> str:
-    """Per diagnosed log: healthy windows flagged without / with the baseline; each injected fault: windows
-    flagged and its joint the likeliest (with the baseline; without in brackets); inputs beyond 3 robust SD."""
-    lines = ["| log (baseline: windows) | healthy windows flagged: without / **with** baseline | inputs beyond 3 "
-             "robust SD of the healthy training runs: without / with | + 0.1 A offset J4: flagged, J4 likeliest "
-             "(without) | + 10 % gain J2: flagged, J2 likeliest (without) |",
-             "| --- | --- | --- | --- | --- |"]
-    by_log: dict[str, dict] = {}
+    """Per diagnosed log and baseline: healthy windows flagged and inputs beyond 3 robust SD of the healthy
+    training runs, without -> with the baseline; each injected fault: share of windows flagged, and flagged with
+    its joint the likeliest, without -> with."""
+    lines = ["| log | baseline (windows) | healthy windows flagged | inputs beyond 3 robust SD | + 0.1 A offset J4: "
+             "flagged / flagged on J4 | + 10 % gain J2: flagged / flagged on J2 |",
+             "| --- | --- | --- | --- | --- | --- |"]
+    by: dict[tuple, dict] = {}
     for r in rows:
-        by_log.setdefault(r["log"], {})[r["injected"]] = r
-    for name, c in by_log.items():
+        by.setdefault((r["log"], r["baseline"]), {})[r["injected"]] = r
+    pct = "{:.0f} %".format
+    for (name, base), c in by.items():
         h = c[None]
         cells = []
         for kind in ("current_sensor_offset", "current_sensor_gain"):
-            a, b = c[kind]["with"], c[kind]["without"]
-            cells.append(f"{100 * a['share_flagged']:.0f} %, {100 * a['share_joint_likeliest']:.0f} % "
-                         f"({100 * b['share_flagged']:.0f} %, {100 * b['share_joint_likeliest']:.0f} %)")
-        lines.append(f"| {Path(name).name.split('.')[0]} ({h['baseline_windows']}) | {h['without']['n_flagged']} of "
-                     f"{h['n_windows']} / **{h['with']['n_flagged']} of {h['n_windows']}** | "
-                     f"{100 * h['outliers_without']['share_inputs_beyond_3']:.0f} % / "
-                     f"{100 * h['outliers_with']['share_inputs_beyond_3']:.0f} % | {cells[0]} | {cells[1]} |")
+            a, b = c[kind]["without"], c[kind]["with"]
+            cells.append(f"{pct(100 * a['share_flagged'])} / {pct(100 * a['share_flagged_on_joint'])} -> "
+                         f"**{pct(100 * b['share_flagged'])} / {pct(100 * b['share_flagged_on_joint'])}**")
+        lines.append(f"| {Path(name).name.split('.')[0]} | {base} ({h['baseline_windows']}) | "
+                     f"{h['without']['n_flagged']} of {h['n_windows']} -> **{h['with']['n_flagged']} of "
+                     f"{h['n_windows']}** | {pct(100 * h['outliers_without']['share_inputs_beyond_3'])} -> "
+                     f"{pct(100 * h['outliers_with']['share_inputs_beyond_3'])} | {cells[0]} | {cells[1]} |")
     return "\n".join(lines) + "\n"
 
 
@@ -250,7 +262,7 @@ def main(argv=None) -> int:
     base_tw = twin_and_windows(halves[0], None, window_s)
     diag_tw = twin_and_windows(halves[1], None, window_s)
     nist_base = robot_baseline([halves[0]], detector, windows=[base_tw[1]])
-    rows = run_pair(halves[1], None, detector, spread, out, *diag_tw, nist_base)
+    rows = run_pair(halves[1], None, detector, spread, out, *diag_tw, {"first half": nist_base})
     params = load_params()
     overlays = {}
     for k, fold in enumerate(FOLDS):
@@ -259,12 +271,15 @@ def main(argv=None) -> int:
         ident = identify([read_kufieta(n) for n in other] + [read_kufieta(REST_RUN).window(REST_FROM_S, 60.0)],
                          params, sweep=False, n_boot=args.n_boot)
         overlays[k] = ident.overlay(params)["params"]
-        logs = {n: read_kufieta(n) for n in fold}
+        # every undisturbed run replayed under this fold's overlay: the fold's own (unseen by the overlay) and
+        # the other fold's (the overlay was identified on them)
+        logs = {n: read_kufieta(n) for f in FOLDS for n in f}
         tw = {n: twin_and_windows(lg, overlays[k], window_s) for n, lg in logs.items()}
         for name in fold:
-            others = [n for n in fold if n != name]
-            base = robot_baseline([logs[n] for n in others], detector, overlays[k], windows=[tw[n][1] for n in others])
-            rows += run_pair(logs[name], overlays[k], detector, spread, out, *tw[name], base)
+            choice = {BASE_FOLD: [n for n in fold if n != name], BASE_ALL: [n for n in logs if n != name]}
+            bases = {label: robot_baseline([logs[n] for n in names], detector, overlays[k],
+                                           windows=[tw[n][1] for n in names]) for label, names in choice.items()}
+            rows += run_pair(logs[name], overlays[k], detector, spread, out, *tw[name], bases)
     summary = {"detector": str(detector), "feature_set": schema.get("feature_set"),
                "threshold_5pct_false_alarms": schema["joint_kind_threshold_5pct_false_alarms"],
                "threshold_from": schema.get("joint_kind_threshold_from"),
