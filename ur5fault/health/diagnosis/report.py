@@ -63,7 +63,7 @@ def _report(d: dict[str, Any]) -> str:
              f"{d['conditions']['payload_kg']:g} kg, temperature {d['conditions']['temperature_C']:.1f} degC. "
              f"Detector: {det['folder']} ({det['feature_set']} features, training set "
              f"{str(det['training_set_sha256'])[:12]}), windows of {det['window_s']:g} s, flagged at "
-             f"p(fault) > {det['p_fault_at_threshold']:.3f} (5 % false alarms on its test split; p(fault): the "
+             f"p(fault) > {det['p_fault_at_threshold']:.3f} (5 % false alarms, {det['threshold_from']}; p(fault): the "
              "fault-kind classifier by joint's largest joint probability of a fault, "
              f"{'calibrated' if det['calibrated'] else 'NOT calibrated: the detector saved no calibration'}; "
              "the run-level detector's reading is in diagnosis.json).", "",
