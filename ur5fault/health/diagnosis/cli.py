@@ -69,6 +69,12 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
     check_logs_length([log, *healthy], "diagnose")
     overlay = Overlay.load(args.model) if args.model else None
     params, effects = (dict(overlay.params), overlay.effects) if overlay else (None, ())
+    if healthy:  # what the baseline logs assume (the diagnosed log's notes come with its diagnosis)
+        from ...sim.params import load_params
+
+        temps = load_params(overrides=params).joint_temperature_C
+        for line in dict.fromkeys(n for g in healthy for n in g.assumptions(temps)):
+            print(f"note: baseline {line}", file=sys.stderr)
     baseline = robot_baseline(healthy, args.detector, params, effects) if healthy else None
     d = diagnose(log, args.detector, params, effects, baseline=baseline)
     for n in d["notes"]:
