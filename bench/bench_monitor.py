@@ -68,13 +68,11 @@ def reach(baseline, obs, channel: str, t_window: tuple[float, float] | None = No
           joints: list[str] | None = None) -> float:
     """The largest ``|h| / limit`` of one channel judged alone (at the whole false-alarm probability) on a log
     part, within ``t_window`` [s] and on ``joints`` (default: everywhere): >= 1 would be an event."""
-    from ur5fault.health.monitoring.baseline import segment
-    from ur5fault.health.monitoring.events import CHANNELS
-    from ur5fault.health.monitoring.verdict import limits
+    from ur5fault.health.monitoring.verdict import judged_transients
     from ur5fault.sim.axes import JOINT_NAMES
 
-    h, feats, judged = segment(obs)
-    ratio = np.abs(h[CHANNELS.index(channel)]) / limits(baseline, obs, feats, judged, (channel,))[channel]
+    hs, lims, judged, _ = judged_transients(baseline, obs, (channel,))
+    ratio = np.abs(hs[channel]) / lims[channel]
     rows = judged.copy()
     if t_window is not None:
         rows &= (obs.t_s >= t_window[0]) & (obs.t_s <= t_window[1])
