@@ -56,8 +56,9 @@ def judged_transients(baseline: Baseline, obs: Observed, channels: Sequence[str]
 
     Where the log repeats a baseline run's motion (:mod:`.task`; only when the baseline runs repeat each other,
     :attr:`Baseline.pairs`), the current's transient is that of the residual less the paired runs' residual at
-    the same point of the task, and its limit the spread fitted on the baseline runs against each other times
-    the multiplier of that fit's tail; elsewhere both are the motion's (:func:`limits`). Every window is judged
+    the same point of the task, and its limit the spread of the paired run's task (fitted on that run against
+    the others and its own repeats) times the multiplier of that fit's tail, the widest where several runs are
+    paired; elsewhere both are the motion's (:func:`limits`). Every window is judged
     once, by one of the two, each at the share of the false-alarm probability for the log's whole length: the
     probability of a false alarm anywhere stays at most that share."""
     h, feats, judged = segment(obs)
@@ -65,11 +66,15 @@ def judged_transients(baseline: Baseline, obs: Observed, channels: Sequence[str]
     lims = limits(baseline, obs, feats, judged, channels)
     paired = np.zeros(judged.shape, bool)
     if baseline.pairs and "current" in channels:
-        refs = list(zip(baseline.task_target_rad, baseline.task_residual_A))
-        h_task, paired = paired_transient(obs.target_rad, obs.residual_A, refs, obs.period_s)
-        mult = multiplier(baseline.task_tail, n_windows(judged, baseline.period_s),
-                          FALSE_ALARM_PER_LOG / len(channels))
-        lim_task = sigma(feats, baseline.task_scale) * mult
+        runs = baseline.task_runs
+        refs = [(baseline.task_target_rad[i], baseline.task_residual_A[i]) for i in runs]
+        h_task, paired, matched = paired_transient(obs.target_rad, obs.residual_A, refs, obs.period_s)
+        nw = n_windows(judged, baseline.period_s)
+        lim_task = np.zeros(hs["current"].shape)
+        for k, i in enumerate(runs):  # the widest limit of the runs paired with each sample
+            mult = multiplier(baseline.task_tail[i], nw, FALSE_ALARM_PER_LOG / len(channels))
+            lim_task = np.where(matched[k][:, None], np.maximum(lim_task, sigma(feats, baseline.task_scale[i]) * mult),
+                                lim_task)
         hs["current"] = np.where(paired[:, None], h_task, hs["current"])
         lims["current"] = np.where(paired[:, None], lim_task, lims["current"])
     return hs, lims, judged, paired
