@@ -1,6 +1,7 @@
 """Monitoring without false alarms (docs/monitoring.md): ``ur5fault monitor``'s verdicts on every real run.
 
     python bench/bench_monitor.py [--jobs N] [--no-identify] [--out results/bench_monitor.json] [--cache FILE]
+        [--no-pairing]
 
 ``--cache FILE``: keep the replayed log parts (and the identified overlay) in FILE, a pickle, and reuse them when
 it exists: the verdicts can then be recomputed in seconds after a change to the monitor's rules (not to its
@@ -9,18 +10,23 @@ replay, :mod:`ur5fault.health.monitoring.observe`, nor to identify: delete the f
 *Kufieta robot* (data/kufieta-ur5, payload 0 kg, TCP at the flange). The baseline overlay is ``ur5fault
 identify`` fitted jointly on the five undisturbed runs :data:`BASE_RUNS` (``--no-identify``: the packaged
 model). Each of those runs is monitored against the residual statistics of the other four (leave one out: a run
-never sets its own thresholds; the overlay was fitted with it, which the statistics do not use); every other
-run against all five: the undisturbed Movement_No5_Acc_slow_no_disturbance and TEST, the pushed
+never sets its own thresholds; the overlay was fitted with it, which the statistics do not use); the undisturbed
+Movement_No5_Acc_slow_no_disturbance against all five; every other run against all six undisturbed runs (the
+five and that one, which repeats the pushed run's task: the task pairing of the monitor): TEST, the pushed
 Movement_No5_Acc_slow_w_disturbance and Movement_No10_Standstill_WDist, and TEST with a current-sensor gain
-injected on one joint (the logged current of that joint times :data:`GAINS`).
+injected on one joint (the logged current of that joint times :data:`GAINS`). And, events only, the quiet No5
+run's and TEST's last part against their first part (:data:`SPLIT_S`) and the five. ``--no-pairing``: the same
+judged by the motion's spread alone (the monitor before the task pairing).
 
 *NIST robot* (data/nist-ur5, one log): the packaged model (fitted on this log), the baseline statistics from its
 first :data:`~ur5fault.twin.residuals.FIT_FRACTION` of log time, the rest monitored; and the rest with a gain
 injected.
 
 *Push labels* (:mod:`monitor_labels`): the moving run's from UR's own current model against the paired
-undisturbed run; the standstill run's from the tool accelerometer (and, for comparison, the earlier labels from
-UR's model). A label is *found* when an event on one of its joints starts and ends within 0.5 s of it.
+undisturbed run (sharing the reference run with the monitor, not the model) and against the run's own other
+cycles (sharing no reference); the standstill run's from the tool accelerometer (and, for comparison, the
+earlier labels from UR's model). A label is *found* when an event on one of its joints starts and ends within
+0.5 s of it.
 
 *Channels compared*: the events judged on both residuals (current and position, each at half the false-alarm
 probability), on the current alone (the earlier monitor) and on the position alone; and per channel alone, how far
