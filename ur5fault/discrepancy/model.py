@@ -152,6 +152,9 @@ class DiscrepancyModel:
         logger.info("library screened in %.0f s: %s", timings["library screening"],
                     [c.label for c in lib.chosen] or "nothing")
 
+        # the starting model over the whole log is the probe batch's first run whatever is found: a worker
+        # simulates it while this process selects the dictionary's terms (no Python runs in parallel otherwise)
+        rp.prefetch([()], n_all)
         t = time.perf_counter()
         stages.start("discovering terms")
         disc = steps.discover_terms(rp, lib, n_scr, self.max_terms)
