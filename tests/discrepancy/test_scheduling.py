@@ -53,7 +53,7 @@ def _found(s: dict) -> str:
 
 @pytest.mark.slow  # two whole fits of a 4 s log
 def test_a_fit_over_two_processes_finds_what_one_process_finds(short_log):
-    """``jobs=2`` (the starting model prefetched during discovery, batches balanced over both processes) against
+    """``jobs=2`` (the starting model prefetched before the screening, batches balanced over both processes) against
     ``jobs=1`` (each batch one lockstep batch here): the same summary apart from timings and counts, and the same
     model overlay."""
     one = DiscrepancyModel(jobs=1).fit(short_log)

@@ -145,6 +145,9 @@ class DiscrepancyModel:
         if not all(r.known for r in self.payload_.values()):
             timings["payload fit"] = t_payload
 
+        # the starting model over the whole log is the probe batch's first run whatever is found, and its first
+        # samples are the screening's baseline: a worker starts it now, and it is simulated once
+        rp.prefetch([()], n_all)
         t = time.perf_counter()
         lib = steps.screen_library(rp, n_scr, log.payload_kg, kinds, self.max_effects,
                                    stages.start("screening the library"))
@@ -152,9 +155,6 @@ class DiscrepancyModel:
         logger.info("library screened in %.0f s: %s", timings["library screening"],
                     [c.label for c in lib.chosen] or "nothing")
 
-        # the starting model over the whole log is the probe batch's first run whatever is found: a worker
-        # simulates it while this process selects the dictionary's terms (no Python runs in parallel otherwise)
-        rp.prefetch([()], n_all)
         t = time.perf_counter()
         stages.start("discovering terms")
         disc = steps.discover_terms(rp, lib, n_scr, self.max_terms)

@@ -202,12 +202,15 @@ class LogReplay:
     def _key(self, effects: tuple[EffectSpec, ...]) -> str:
         return repr(self.base + effects)  # by content; repr tells -0.0 from 0.0 and a numpy float from a float
 
-    def held(self, effects: tuple[EffectSpec, ...], n: int) -> Replayed | None:
-        """The prefetched replay of ``effects`` over samples ``1..n`` (all signals), or None."""
+    def holds(self, effects: tuple[EffectSpec, ...], n: int) -> bool:
+        """Whether a prefetched replay of ``effects`` reaches sample ``n`` (finished or not)."""
         got = self._held.get(self._key(effects))
-        if got is None or got[0] < n:
-            return None
-        m, r = got
+        return got is not None and got[0] >= n
+
+    def held(self, effects: tuple[EffectSpec, ...], n: int) -> Replayed:
+        """The prefetched replay of ``effects`` over samples ``1..n`` (all signals; :meth:`holds` must be true),
+        waiting for the worker if it is not finished."""
+        m, r = self._held[self._key(effects)]
         if not isinstance(r, Replayed):  # a future: wait for the worker
             r = r.result()[0]
             self._held[self._key(effects)] = (m, r)
@@ -254,8 +257,17 @@ def simulate_requests(reqs: Sequence[tuple[LogReplay, tuple[EffectSpec, ...], in
     replay and length, here; else one task per run over this process and ``jobs - 1`` workers, the longest first
     and the split decided as they go (:func:`ur5fault.util.parallel.map_balanced`).  A run's replay does not
     depend on the batch it is simulated in, nor on the process."""
-    out: list[Replayed | None] = [rp.held(e, n) for rp, e, n in reqs]
-    todo = [i for i, r in enumerate(out) if r is None]
+    out: list[Replayed | None] = [None] * len(reqs)
+    todo = [i for i, (rp, e, n) in enumerate(reqs) if not rp.holds(e, n)]
+    _simulate_todo(reqs, todo, out, jobs, progress)
+    for i, (rp, e, n) in enumerate(reqs):  # taken after this process's own share: a prefetch may be on a worker
+        if out[i] is None:
+            out[i] = rp.held(e, n)
+    return out
+
+
+def _simulate_todo(reqs, todo: list[int], out: list, jobs: int, progress) -> None:
+    """Simulate requests ``todo`` into ``out`` (:func:`simulate_requests`)."""
     for i in todo:
         rp, _, n = reqs[i]
         rp.n_simulated += 1
@@ -268,7 +280,7 @@ def simulate_requests(reqs: Sequence[tuple[LogReplay, tuple[EffectSpec, ...], in
         for i, (r,) in zip(todo, map_balanced(_simulate, tasks, jobs, cost=[reqs[i][2] * reqs[i][0].log.period_s
                                                                             for i in todo])):
             out[i] = r
-        return out
+        return
     groups: dict[tuple[int, int], list[int]] = {}
     for i in todo:
         groups.setdefault((id(reqs[i][0]), reqs[i][2]), []).append(i)
@@ -278,4 +290,3 @@ def simulate_requests(reqs: Sequence[tuple[LogReplay, tuple[EffectSpec, ...], in
         for i, r in zip(idx, _simulate(rp.params, rp.traj, runs, rp.log.period_s, n,
                                        progress if len(groups) == 1 else None)):
             out[i] = r
-    return out
