@@ -316,3 +316,16 @@ def test_wrong_feature_gets_a_did_you_mean(two, capsys):
 
     assert main(["plot", str(two.out), "--feature", "tcp_dev_max_m"]) == 2
     assert "unknown feature 'tcp_dev_max_m' (did you mean 'tcp_dev_max_mm'" in capsys.readouterr().err
+
+
+def test_plot_default_folder_with_a_file_in_the_way(tmp_path, two, capsys):
+    """``plot DIR`` writes into DIR/plots; a file of that name was a traceback at the first figure's write."""
+    from ur5fault.cli import main
+
+    copy = tmp_path / "c"
+    shutil.copytree(two.out, copy)
+    (copy / "plots").write_text("x")
+    assert main(["plot", str(copy)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("ur5fault: error: ") and len(err.strip().splitlines()) == 1, err
+    assert "plots: exists and is not a folder" in err

@@ -45,6 +45,22 @@ def test_every_kufieta_run_reads_as_written(path):
                for s in notes)
 
 
+def test_a_note_several_logs_share_is_said_once():
+    """Nine runs without temperatures printed nine identical notes; now one line naming the logs, while a
+    note only one log has keeps its own line."""
+    from ur5fault.logs.measured import assumption_notes
+
+    a, b = (read_rtde(KUFIETA_DIR / f"{n}.csv.gz", payload_kg=0.0, tcp_offset_m=(0.0, 0.0, 0.0))
+            for n in ("Movement_No1", "Movement_No4_Acc"))
+    lines = assumption_notes([a, b], [28.0] * 6)
+    shared = [s for s in lines if "no joint temperatures" in s]
+    assert shared == ["2 logs (Movement_No1.csv.gz, Movement_No4_Acc.csv.gz): no joint temperatures in the log; "
+                      "the model's 28, 28, 28, 28, 28, 28 degC assumed"]
+    assert any(s.startswith("Movement_No4_Acc.csv.gz: ") and "NaN there" in s for s in lines)
+    assert any(s.startswith("Movement_No1.csv.gz: ") and "missing in gaps" in s for s in lines)
+    assert assumption_notes([a], [28.0] * 6) == a.assumptions([28.0] * 6)
+
+
 def test_nan_tails_cut_and_named():
     log = read_rtde(KUFIETA_DIR / "Movement_No4_Acc.csv.gz", payload_kg=0.0, tcp_offset_m=(0.0, 0.0, 0.0))
     df = pd.read_csv(KUFIETA_DIR / "Movement_No4_Acc.csv.gz")

@@ -33,6 +33,7 @@ def cmd_discrepancy(args: argparse.Namespace) -> int:
     from ..config import Overlay
     from ..errors import ParameterError
     from ..logs.length import check_files_length, check_logs_length
+    from ..logs.measured import assumption_notes
     from ..logs.options import log_entries, read_log_options
     from ..sim.params import load_params
     from ..util.io import check_writable
@@ -50,10 +51,9 @@ def cmd_discrepancy(args: argparse.Namespace) -> int:
     overlay = Overlay.load(args.model) if args.model else None
     if not logs:
         raise ParameterError("every log given is held out; name at least one log to fit")
-    for lg in (*logs, *held):
-        for line in lg.assumptions(load_params(overrides=dict(overlay.params) if overlay else None
-                                               ).joint_temperature_C):
-            print(f"note: {line}", file=sys.stderr)
+    temps = load_params(overrides=dict(overlay.params) if overlay else None).joint_temperature_C
+    for line in assumption_notes([*logs, *held], temps):
+        print(f"note: {line}", file=sys.stderr)
     model.fit(logs if len(logs) > 1 else logs[0], dict(overlay.params) if overlay else None,
               overlay.effects if overlay else (), hold_out=held,
               on_payload=lambda line: print(line, file=sys.stderr, flush=True))

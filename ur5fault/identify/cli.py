@@ -31,6 +31,7 @@ def register(sub) -> None:
 def cmd_identify(args: argparse.Namespace) -> int:
     from ..errors import ParameterError
     from ..logs.length import check_files_length, check_logs_length
+    from ..logs.measured import assumption_notes
     from ..logs.options import log_entries, read_log_options
     from ..sim.params import load_params
     from ..util.io import check_writable, write_json_atomic, write_text_atomic
@@ -49,8 +50,8 @@ def cmd_identify(args: argparse.Namespace) -> int:
     log = logs[0]
     say = None if args.quiet else (lambda msg: print(f"identify: {msg}...", file=sys.stderr, flush=True))
     params = load_params()
-    notes = [line for lg in logs for line in lg.assumptions(params.joint_temperature_C)]
-    for line in notes:
+    notes = [line for lg in logs for line in lg.assumptions(params.joint_temperature_C)]  # per log, in --json
+    for line in assumption_notes(logs, params.joint_temperature_C):
         print(f"note: {line}", file=sys.stderr)
     result = identify(logs if len(logs) > 1 else log, params, sweep=not args.no_sweep,
                       sweep_window_s=args.sweep_window_s,

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Sequence
 
 import numpy as np
 from numpy.typing import NDArray
@@ -107,3 +108,24 @@ class MeasuredLog:
                 kw[key] = v[sel]
         kw["t_s"] = kw["t_s"] - kw["t_s"][0]
         return MeasuredLog(**kw)
+
+
+def assumption_notes(logs: Sequence[MeasuredLog], joint_temperature_C) -> list[str]:
+    """Every log's :meth:`MeasuredLog.assumptions`, a note several logs share said once with their names (nine
+    runs of a robot without temperatures: one line, not nine), in the logs' order."""
+    by_text: dict[str, list[str]] = {}
+    for lg in logs:
+        for line in lg.assumptions(joint_temperature_C):
+            source, sep, text = line.partition(": ")
+            key, name = (text, source) if sep and source == lg.source else (line, "")
+            by_text.setdefault(key, []).append(name)
+    out = []
+    for text, names in by_text.items():
+        named = [n for n in names if n]
+        if not named:
+            out.append(text)
+        elif len(named) == 1:
+            out.append(f"{named[0]}: {text}")
+        else:
+            out.append(f"{len(named)} logs ({', '.join(named)}): {text}")
+    return out
