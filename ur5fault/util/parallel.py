@@ -7,6 +7,10 @@ on its share at once.  Its share is fixed before anything starts: tasks from the
 of the tasks' total cost; the workers take the others in order.  (Taking unstarted tasks back from the workers by
 cancelling their futures would balance better, but loky's executor, shut down after an interruption, trips over
 cancelled futures it still holds.)  A task's result does not depend on where it ran.
+
+:func:`map_balanced` decides the split as it goes instead (the workers fed one task at a time from the costly end,
+this process taking from the cheap end), for batches whose tasks' costs are known but whose processes may start
+late or run slower (replays of logs: one task per run); :func:`submit` starts one task on a worker now.
 """
 
 from __future__ import annotations
