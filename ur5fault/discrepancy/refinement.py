@@ -52,7 +52,8 @@ class Refined:
     e0: NDArray
     steps: list[RefineStep]
     probe_e: list[NDArray | None] = dataclasses.field(default_factory=list)  # residual of theta0 + each probe
-    extra_e: list[NDArray | None] = dataclasses.field(default_factory=list)  # residual of each extra model
+    # residual of each extra model, over the rows the evaluator replays them (the workflow: the fitting part)
+    extra_e: list[NDArray | None] = dataclasses.field(default_factory=list)
 
 
 class _Evaluations:
