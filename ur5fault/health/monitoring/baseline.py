@@ -145,6 +145,8 @@ class Baseline:
                        scale, tail, quantum, {str(k): (float(v["mean"]), float(v["variance"]), int(v["n_blocks"]))
                                      for k, v in data["candidates"].items()},
                        tuple(t for t, _ in runs), tuple(r for _, r in runs), t_scale, t_tail)
+        except ParameterError:
+            raise  # already one line saying what to do (ParameterError is a ValueError)
         except (KeyError, TypeError, ValueError, AttributeError) as exc:
             raise ParameterError(f"{where}: not a valid monitor baseline ({type(exc).__name__}: {exc})") from None
 
