@@ -170,7 +170,7 @@ def alternatives(fs: FindingSet, kept: list[int], k: int, ref: Refined, J_fit: N
         if i != k or e_alt is None or e_without is None:
             continue
         size = float(np.linalg.norm(th0))
-        col = ((e_without - e_alt)[:n_fit] / size)[None]
+        col = ((e_without[:n_fit] - e_alt[:n_fit]) / size)[None]  # e_alt: the fitting part only (refinement.py)
         X = np.concatenate([J_fit[others], col])
         G, g, ee = BlockGram.build(X, e_without[:n_fit]).total()
         out.append((cand, rss_of(G, g, ee, list(range(X.shape[0])))[1][-1] * th0 / size))  # a pair keeps its phase

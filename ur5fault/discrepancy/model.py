@@ -148,6 +148,9 @@ class DiscrepancyModel:
         if not all(r.known for r in self.payload_.values()):
             timings["payload fit"] = t_payload
 
+        # the starting model over the whole log is the probe batch's first run whatever is found, and its first
+        # samples are the screening's baseline: a worker starts it now, and it is simulated once
+        rp.prefetch([()], n_all)
         t = time.perf_counter()
         lib = steps.screen_library(rp, n_scr, log.payload_kg, kinds, self.max_effects,
                                    stages.start("screening the library"))

@@ -299,7 +299,7 @@ def refine(rp: LogReplay, found: list[Candidate], X: NDArray, fixed: list[int], 
         return RefineRecord(found, None, rp.run([()], rp.n_samples, progress)[0], alts, fs)
     G, g, ee = BlockGram.build(X[fixed], e0).total()
     theta0 = rss_of(G, g, ee, list(range(len(fixed))))[1]
-    evaluate = fs.evaluator(rp, progress)
+    evaluate = fs.evaluator(rp, progress, extra_rows=n_fit)
     first = probe_batch(evaluate, theta0, fs.probes(theta0), fs.bounds(), n_fit, alts, evaluate)
     return RefineRecord(found, first, first.sim0, alts, fs)
 
