@@ -30,6 +30,8 @@ class Finding:
         held_out: what it does on the held-out part (None if it was dropped before that check).
         kept: False when it was dropped; ``reason`` says why.
         tell_apart: what motion would tell it from a dictionary term it stood in for ("" when none).
+        rivals: the library effects the held-out part cannot tell from it (``rivals.py``), each also among
+            ``alternatives``.
     """
 
     candidate: Candidate
@@ -41,6 +43,7 @@ class Finding:
     kept: bool = True
     reason: str = ""
     tell_apart: str = ""
+    rivals: list = dataclasses.field(default_factory=list)
 
     def spec(self) -> EffectSpec:
         return self.candidate.spec(self.theta)
