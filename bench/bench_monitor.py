@@ -1,6 +1,7 @@
 """Monitoring without false alarms (docs/monitoring.md): ``ur5fault monitor``'s verdicts on every real run.
 
     python bench/bench_monitor.py [--jobs N] [--no-identify] [--out results/bench_monitor.json] [--cache FILE]
+        [--no-pairing]
 
 ``--cache FILE``: keep the replayed log parts (and the identified overlay) in FILE, a pickle, and reuse them when
 it exists: the verdicts can then be recomputed in seconds after a change to the monitor's rules (not to its
@@ -9,18 +10,23 @@ replay, :mod:`ur5fault.health.monitoring.observe`, nor to identify: delete the f
 *Kufieta robot* (data/kufieta-ur5, payload 0 kg, TCP at the flange). The baseline overlay is ``ur5fault
 identify`` fitted jointly on the five undisturbed runs :data:`BASE_RUNS` (``--no-identify``: the packaged
 model). Each of those runs is monitored against the residual statistics of the other four (leave one out: a run
-never sets its own thresholds; the overlay was fitted with it, which the statistics do not use); every other
-run against all five: the undisturbed Movement_No5_Acc_slow_no_disturbance and TEST, the pushed
+never sets its own thresholds; the overlay was fitted with it, which the statistics do not use); the undisturbed
+Movement_No5_Acc_slow_no_disturbance against all five; every other run against all six undisturbed runs (the
+five and that one, which repeats the pushed run's task: the task pairing of the monitor): TEST, the pushed
 Movement_No5_Acc_slow_w_disturbance and Movement_No10_Standstill_WDist, and TEST with a current-sensor gain
-injected on one joint (the logged current of that joint times :data:`GAINS`).
+injected on one joint (the logged current of that joint times :data:`GAINS`). And, events only, the quiet No5
+run's and TEST's last part against their first part (:data:`SPLIT_S`) and the five. ``--no-pairing``: the same
+judged by the motion's spread alone (the monitor before the task pairing).
 
 *NIST robot* (data/nist-ur5, one log): the packaged model (fitted on this log), the baseline statistics from its
 first :data:`~ur5fault.twin.residuals.FIT_FRACTION` of log time, the rest monitored; and the rest with a gain
 injected.
 
 *Push labels* (:mod:`monitor_labels`): the moving run's from UR's own current model against the paired
-undisturbed run; the standstill run's from the tool accelerometer (and, for comparison, the earlier labels from
-UR's model). A label is *found* when an event on one of its joints starts and ends within 0.5 s of it.
+undisturbed run (sharing the reference run with the monitor, not the model) and against the run's own other
+cycles (sharing no reference); the standstill run's from the tool accelerometer (and, for comparison, the
+earlier labels from UR's model). A label is *found* when an event on one of its joints starts and ends within
+0.5 s of it.
 
 *Channels compared*: the events judged on both residuals (current and position, each at half the false-alarm
 probability), on the current alone (the earlier monitor) and on the position alone; and per channel alone, how far
@@ -47,6 +53,7 @@ from monitor_labels import (  # noqa: E402  (the bench folder on the path first)
     QUIET,
     STANDSTILL,
     accel_labels,
+    cycle_labels,
     found,
     labels,
     read,
@@ -62,19 +69,36 @@ GAINS = ((1, 1.2), (1, 1.5), (3, 1.2), (3, 1.5))
 #: the event channels of each design compared
 VARIANTS = {"current only": ("current",), "both channels": ("current", "position"), "position only": ("position",)}
 UNDISTURBED = 8  # 5 baseline runs (leave one out), the undisturbed No5 run, TEST, NIST's rest
+#: the undisturbed runs that repeat their own task, split: their first part [s] (three cycles of No5, two of
+#: TEST) joins the baseline, the rest is monitored (events only: a part's change estimates would need its own
+#: screening)
+SPLIT_S = {QUIET: 18.0, "TEST": 12.0}
+
+
+def part_of(obs, t0: float, t1: float):
+    """The samples ``t0 <= t < t1`` of a replayed log part, without its screened candidates (events only)."""
+    keep = (obs.t_s >= t0) & (obs.t_s < t1)
+    cut = {f: getattr(obs, f)[keep] for f in ("t_s", "residual_A", "moving", "logged", "speed_rad_s",
+                                              "accel_rad_s2", "position_residual_rad", "target_rad")}
+    return dataclasses.replace(obs, name=f"{obs.name}[{t0:g}-{min(t1, obs.t_s[-1]):g} s]", cands=(),
+                               X=np.zeros((0, 2, obs.e.shape[1])), e=obs.e[:2], **cut)
+
+
+def unpaired(baseline):
+    """``baseline`` without its task statistics: every log judged by the motion's spread (the earlier monitor)."""
+    return dataclasses.replace(baseline, task_scale=np.full_like(baseline.task_scale, np.nan),
+                               task_tail=np.full_like(baseline.task_tail, np.nan))
 
 
 def reach(baseline, obs, channel: str, t_window: tuple[float, float] | None = None,
           joints: list[str] | None = None) -> float:
     """The largest ``|h| / limit`` of one channel judged alone (at the whole false-alarm probability) on a log
     part, within ``t_window`` [s] and on ``joints`` (default: everywhere): >= 1 would be an event."""
-    from ur5fault.health.monitoring.baseline import segment
-    from ur5fault.health.monitoring.events import CHANNELS
-    from ur5fault.health.monitoring.verdict import limits
+    from ur5fault.health.monitoring.verdict import judged_transients
     from ur5fault.sim.axes import JOINT_NAMES
 
-    h, feats, judged = segment(obs)
-    ratio = np.abs(h[CHANNELS.index(channel)]) / limits(baseline, obs, feats, judged, (channel,))[channel]
+    hs, lims, judged, _ = judged_transients(baseline, obs, (channel,))
+    ratio = np.abs(hs[channel]) / lims[channel]
     rows = judged.copy()
     if t_window is not None:
         rows &= (obs.t_s >= t_window[0]) & (obs.t_s <= t_window[1])
@@ -119,6 +143,7 @@ def main(argv=None) -> int:
 
     from ur5fault.health.monitoring import assess, fit_baseline
     from ur5fault.health.monitoring.baseline import overlay_sha256
+    from ur5fault.health.monitoring.verdict import judged_transients
     from ur5fault.logs import read_nist
     from ur5fault.sim.params import load_params
     from ur5fault.twin.residuals import FIT_FRACTION
@@ -128,6 +153,8 @@ def main(argv=None) -> int:
     ap.add_argument("--no-identify", action="store_true", help="the packaged model as the Kufieta baseline overlay")
     ap.add_argument("--out", default=str(REPO / "results" / "bench_monitor.json"))
     ap.add_argument("--cache", help="pickle of the replayed parts: written if absent, reused if present")
+    ap.add_argument("--no-pairing", action="store_true",
+                    help="judge every log by the motion's spread alone (the monitor before the task pairing)")
     args = ap.parse_args(argv)
     t0 = time.perf_counter()
     cached = None
@@ -172,30 +199,41 @@ def main(argv=None) -> int:
     base_obs, other_obs = obs[:k], obs[k : k + len(OTHER_RUNS)]
     inj_obs = obs[k + len(OTHER_RUNS) : k + len(OTHER_RUNS) + len(GAINS)]
     nist_base, nist_rest, nist_inj_obs = obs[-len(GAINS) - 2], obs[-len(GAINS) - 1], obs[-len(GAINS):]
+    quiet_obs, test_obs = other_obs[OTHER_RUNS.index(QUIET)], other_obs[OTHER_RUNS.index("TEST")]
     sha = overlay_sha256(params, ())
-    loo = [fit_baseline(base_obs[:i] + base_obs[i + 1 :], sha) for i in range(k)]
-    full = fit_baseline(base_obs, sha)
-    nb = fit_baseline([nist_base], overlay_sha256({}, ()))
+    strip = unpaired if args.no_pairing else (lambda b: b)
+    loo = [strip(fit_baseline(base_obs[:i] + base_obs[i + 1 :], sha)) for i in range(k)]
+    full = strip(fit_baseline(base_obs, sha))
+    # every other Kufieta run against all six undisturbed runs of the robot (the five and the quiet No5 run, the
+    # one that repeats the pushed run's task)
+    full6 = strip(fit_baseline([*base_obs, quiet_obs], sha))
+    nb = strip(fit_baseline([nist_base], overlay_sha256({}, ())))
+    splits = [(o, SPLIT_S[name]) for o, name in ((quiet_obs, QUIET), (test_obs, "TEST"))]
     judged = [("kufieta, leave one out", loo[i], o) for i, o in enumerate(base_obs)] + \
-        [("kufieta", full, o) for o in other_obs + inj_obs] + \
-        [("nist, first part vs rest", nb, o) for o in [nist_rest, *nist_inj_obs]]
+        [("kufieta", full, quiet_obs)] + \
+        [("kufieta", full6, o) for o in other_obs + inj_obs if o is not quiet_obs] + \
+        [("nist, first part vs rest", nb, o) for o in [nist_rest, *nist_inj_obs]] + \
+        [("kufieta, own first part + the five vs its rest (events only)",
+          strip(fit_baseline([*base_obs, part_of(o, 0.0, t)], sha)), part_of(o, t, np.inf)) for o, t in splits]
+    undisturbed = {o.name for o in [*base_obs, quiet_obs, test_obs, nist_rest]}
     quiet = ur_smoothed(logs[QUIET])
     label_sets = {PUSHED: labels(logs[PUSHED], quiet),
+                  f"{PUSHED} (own cycles)": cycle_labels(logs[PUSHED], logs[QUIET]),
                   STANDSTILL: accel_labels(STANDSTILL),
                   f"{STANDSTILL} (UR residual labels, earlier)": labels(logs[STANDSTILL],
                                                                          quiet[standing_start(logs[QUIET])])}
-    by_name = {o.name: o for _, _, o in judged}
+    by_name = {o.name: (b, o) for _, b, o in judged}
     print("\nPer channel alone: the largest transient as a multiple of its limit (>= 1: an event)")
     separation: dict = {}
     for c in ("current", "position"):
-        healthy = {o.name: reach(b, o, c) for _, b, o in judged[: k + 2] + judged[-len(GAINS) - 1 : -len(GAINS)]}
+        healthy = {o.name: reach(b, o, c) for _, b, o in judged if o.name in undisturbed or "events only" in _}
         pushed = {}
         for name, labs in label_sets.items():
-            o = by_name[f"{name.split(' ')[0]}.csv.gz"]
-            pushed[name] = [reach(full, o, c, (lab["t_start_s"] - 0.5, lab["t_end_s"] + 0.5), lab["joints"])
+            b, o = by_name[f"{name.split(' ')[0]}.csv.gz"]
+            pushed[name] = [reach(b, o, c, (lab["t_start_s"] - 0.5, lab["t_end_s"] + 0.5), lab["joints"])
                             for lab in labs]
         separation[c] = {"undisturbed": healthy, "labels": pushed}
-        print(f"  {c}: undisturbed runs " + ", ".join(f"{v:.2f}" for v in healthy.values()))
+        print(f"  {c}: undisturbed runs " + ", ".join(f"{n}: {v:.2f}" for n, v in healthy.items()))
         for name, v in pushed.items():
             print(f"    labels of {name}: " + ", ".join(f"{x:.2f}" for x in v))
     variants = {}
@@ -207,9 +245,10 @@ def main(argv=None) -> int:
             ev = by[f"{name.split(' ')[0]}.csv.gz"]["events"]
             pushes[name] = [{**lab, "found": found(lab, ev)} for lab in labs]
         variants[variant] = {"results": [{"robot": r, **e} for r, e in results], "pushes": pushes}
-        quiet_alarms = sum(e["verdict"] != "consistent" for _, e in results[: k + 2] + results[-len(GAINS) - 1 :
-                                                                                              -len(GAINS)])
-        print(f"\n## {variant}: {quiet_alarms} of {UNDISTURBED} undisturbed runs not consistent; labels found: "
+        quiet_alarms = sum(e["verdict"] != "consistent" for _, e in results if e["log"] in undisturbed)
+        split_alarms = sum(e["verdict"] != "consistent" for r, e in results if "events only" in r)
+        print(f"\n## {variant}: {quiet_alarms} of {UNDISTURBED} undisturbed runs not consistent "
+              f"({split_alarms} of {len(splits)} split runs); labels found: "
               + "; ".join(f"{n}: {sum(x['found'] for x in p)} of {len(p)}" for n, p in pushes.items()))
         print("\n| robot | log | verdict | changes | events |\n| --- | --- | --- | --- | --- |")
         for robot, e in results:
@@ -226,11 +265,15 @@ def main(argv=None) -> int:
                 print(f"  {lab['t_start_s']:.2f}-{lab['t_end_s']:.2f} s {', '.join(lab['joints'])}: "
                       f"{'found' if lab['found'] else 'missed'}")
     sep = {"kufieta": separable(full), "nist": separable(nb)}
+    paired = {o.name: float((judged_transients(b, o)[3] & judged_transients(b, o)[2]).sum() * o.period_s)
+              for _, b, o in judged}
+    print("\nseconds judged against a paired baseline run: " + ", ".join(f"{n}: {v:.1f}" for n, v in paired.items()))
     for robot, rows in sep.items():
         print(f"\n{robot}: smallest separable change (lower bound), offset [A] / gain [-]: " + "; ".join(
             f"{j.split('_joint')[0]} {r.get('offset_A', float('nan')):.3f} / {r.get('gain', float('nan')):.3f}"
             for j, r in rows.items()))
     out = {"overlay": params, **variants["current only"], "variants": variants, "channel_reach": separation,
+           "paired_s": paired, "no_pairing": args.no_pairing,
            "separable": sep, "identify_s": t_ident, "wall_s": time.perf_counter() - t0}
     from ur5fault.util.io import write_json_atomic
 

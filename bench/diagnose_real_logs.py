@@ -28,8 +28,20 @@ Where a healthy log is flagged, its cause is looked for: every detector input of
 input over the campaign's healthy training runs (robust z-score, (x - median) / (1.4826 MAD)), and the model's
 own error on that robot (the current-residual RMS at speed against the healthy runs' spread).
 
-Writes ``OUT/summary.json``, ``OUT/table.md`` and the diagnosis folders (diagnosis.json, report.md, figure) of
-the healthy logs and of the NIST log's injected cases.
+Each diagnosis is made twice: as it is, and with the robot's own healthy baseline (``diagnose --baseline-logs``,
+ur5fault/health/diagnosis/baseline.py), never holding the diagnosed run: a Kufieta run's baseline is the other
+runs of its own fold (replayed under the same overlay, which was identified on the other fold, so neither the
+baseline nor the overlay saw the run diagnosed, and the baseline's runs are as unseen by the overlay as the
+diagnosed one); the NIST log is one log, so its first half (:data:`NIST_SPLIT_S`) is the baseline and its second
+half is diagnosed (under the packaged model, whose ``[nist]`` values were identified on the same robot's logs).
+Per case with the baseline: windows flagged, share of the injected fault's windows flagged, share where its
+joint is the likeliest, and the inputs still more than 3 robust SD from the healthy training runs after the
+mapping.  A Kufieta run is also diagnosed with a second baseline, all six other undisturbed runs (the other
+fold's were fitted by its overlay: the natural baseline of a user who fits the model on the robot's healthy runs
+and keeps them as its baseline; replayed under the run's own overlay, so still never the run diagnosed).
+
+Writes ``OUT/summary.json``, ``OUT/table_baseline.md`` and, under ``OUT/with_baseline/``, the diagnosis folders
+(diagnosis.json, report.md, figure) of the healthy logs diagnosed with their baseline.
 """
 
 from __future__ import annotations
@@ -66,6 +78,12 @@ INJECTIONS = (("healthy", None, None, {}),
 #: size the physics predicts for each injected kind, in the unit diagnose reports it
 EXPECTED_SIZE = {"current_sensor_offset": OFFSET_A, "current_sensor_gain": GAIN - 1.0}
 MAD_SCALE = 1.4826  # MAD -> standard deviation of a normal distribution
+#: a Kufieta run's baselines: the other runs of its fold (as unseen by the overlay as the run diagnosed), and all
+#: six other undisturbed runs (the other fold's were fitted by the overlay: a user's natural baseline is the
+#: healthy runs the model was fitted on)
+BASE_FOLD, BASE_ALL = "own fold", "all others"
+#: the NIST log's split: baseline before, diagnosed after [s] (the log is 63 s: six 5 s windows each side)
+NIST_SPLIT_S = 31.5
 
 
 def read_kufieta(name: str):
@@ -83,9 +101,12 @@ def healthy_spread(detector: Path, inputs: list[str]) -> pd.DataFrame:
     return pd.DataFrame({"median": med, "scale": MAD_SCALE * (h - med).abs().median(), "n": h.count()})
 
 
-def outliers(windows, spread: pd.DataFrame, top: int = 5) -> dict:
-    """Robust z-scores of a log's windows' inputs against the healthy training runs: share beyond 3, largest."""
+def outliers(windows, spread: pd.DataFrame, top: int = 5, baseline=None) -> dict:
+    """Robust z-scores of a log's windows' inputs against the healthy training runs: share beyond 3, largest
+    (``baseline``: of the inputs after they are referred to it, as the classifiers see them)."""
     x = pd.DataFrame([w.features for w in windows])[list(spread.index)].astype(float)
+    if baseline is not None:
+        x = pd.DataFrame(baseline.apply(x.to_numpy()), columns=x.columns)
     z = (x - spread["median"]) / spread["scale"].replace(0.0, np.nan)
     med = z.abs().median(axis=0).dropna().sort_values(ascending=False)
     return {"share_inputs_beyond_3": float((med > 3).mean()),
@@ -139,48 +160,86 @@ def size_delta(feats, healthy_feats, kind: str, joint: int) -> float:
     return float(np.nanmedian(d))
 
 
-def run_log(log, overlay: dict | None, detector: Path, spread: pd.DataFrame, out: Path, write_injected: bool
-            ) -> list[dict]:
-    from ur5fault.health.diagnosis import diagnose, replay_twin
+def flagged_on_joint(d: dict, joint: int) -> dict:
+    """Share of the windows flagged, and share where ``joint`` (0-based) is the likeliest faulty joint."""
+    w = d["windows"]
+    top = [max(x["joints"], key=lambda j: j["p_fault_joint"] or 0.0)["joint"] for x in w]
+    return {"share_flagged": float(np.mean([x["flagged"] for x in w])),
+            "share_joint_likeliest": float(np.mean([t == joint + 1 for t in top])),
+            "share_flagged_on_joint": float(np.mean([x["flagged"] and t == joint + 1 for x, t in zip(w, top)])),
+            "p_fault_joint_median": float(np.median([x["joints"][joint]["p_fault_joint"] or 0.0 for x in w]))}
+
+
+def twin_and_windows(log, overlay: dict | None, window_s: float):
+    from ur5fault.health.diagnosis import log_windows, replay_twin
+
+    twin = replay_twin(log, overlay)
+    return twin, log_windows(log, window_s, twin)
+
+
+def run_pair(log, overlay: dict | None, detector: Path, spread: pd.DataFrame, out: Path, twin, windows,
+             baselines: dict) -> list[dict]:
+    """The log diagnosed healthy and with each injected fault, without and with each of ``baselines`` (label ->
+    baseline map): one row per case and baseline."""
+    from ur5fault.health.diagnosis import diagnose
     from ur5fault.health.diagnosis.report import write_diagnosis
 
     t0 = time.perf_counter()
-    twin = replay_twin(log, overlay)
     rows, healthy = [], None
-    for label, kind, joint, values in INJECTIONS:
+    for _label, kind, joint, values in INJECTIONS:
         lg = log if kind is None else inject(log, kind, joint, **values)
-        d = diagnose(lg, detector, overlay, twin=twin)
-        row = summarise(d, kind, joint)
+        d0 = diagnose(lg, detector, overlay, twin=twin, windows=windows if kind is None else None)
         if kind is None:
-            healthy = d
-            row["outliers"] = outliers(d["_windows"], spread)
-            row["current_rms_at_speed"] = current_rms_at_speed(d["_windows"], spread)
-        else:
-            row["size_minus_healthy_median"] = size_delta(d["_windows"], healthy["_windows"], kind, joint)
-        if kind is None or write_injected:
-            name = Path(log.source).name.split(".")[0] + ("" if kind is None else f"+{label}")
-            write_diagnosis(d, out / name)
-        row["model"] = "packaged" if overlay is None else "identified on the other fold"
-        rows.append(row)
+            healthy = d0
+        for name, baseline in baselines.items():
+            d1 = diagnose(lg, detector, overlay, twin=twin, windows=d0["_windows"], baseline=baseline)
+            row = {"log": log.source, "injected": kind, "joint": None if joint is None else joint + 1,
+                   "model": "packaged" if overlay is None else "identified on the other fold",
+                   "baseline": name, "baseline_logs": list(baseline.logs), "baseline_windows": baseline.n_windows,
+                   "n_windows": d0["n_windows"], "without": summarise(d0, kind, joint),
+                   "with": summarise(d1, kind, joint)}
+            if kind is None:
+                row["outliers_without"] = outliers(d0["_windows"], spread)
+                row["outliers_with"] = outliers(d0["_windows"], spread, baseline=baseline)
+                row["baseline_summary"] = d1["baseline"]
+                stem = Path(log.source).name.split(".")[0]
+                write_diagnosis(d1, out / "with_baseline" / f"{stem}+{name.replace(' ', '_')}")
+            else:
+                row["size_minus_healthy_median"] = size_delta(d0["_windows"], healthy["_windows"], kind, joint)
+                row["without"].update(flagged_on_joint(d0, joint))
+                row["with"].update(flagged_on_joint(d1, joint))
+            rows.append(row)
     print(f"{log.source}: {time.perf_counter() - t0:.0f} s", file=sys.stderr, flush=True)
     return rows
 
 
-def table(rows: list[dict]) -> str:
-    lines = ["| log | model | injected | windows flagged (run-level detector) | p(fault) median / max | "
-             "flagged: likeliest joint, kind | size estimate - healthy (expected) |",
-             "| --- | --- | --- | --- | --- | --- | --- |"]
+def table_baseline(rows: list[dict]) -> str:
+    """Per diagnosed log and baseline: healthy windows flagged and inputs beyond 3 robust SD of the healthy
+    training runs, without -> with the baseline; each injected fault: share of windows flagged, and flagged with
+    its joint the likeliest, without -> with."""
+    lines = ["| log | baseline (windows) | healthy windows flagged | inputs beyond 3 robust SD | + 0.1 A offset J4: "
+             "flagged / flagged on J4 | + 10 % gain J2: flagged / flagged on J2 |",
+             "| --- | --- | --- | --- | --- | --- |"]
+    by: dict[tuple, dict] = {}
     for r in rows:
-        inj = "-" if r["injected"] is None else f"{r['injected']} J{r['joint']}"
-        where = "-" if r["flagged_joint_mode"] is None else f"J{r['flagged_joint_mode']}, {r['flagged_kind_mode']}"
-        size = "-" if r["injected"] is None else f"{r['size_minus_healthy_median']:.3g} ({r['expected_size']:g})"
-        lines.append(f"| {r['log']} | {r['model']} | {inj} | {r['n_flagged']} of {r['n_windows']} "
-                     f"({r['n_flagged_run_level']}) | {r['p_fault_median']:.2f} / {r['p_fault_max']:.2f} | "
-                     f"{where} | {size} |")
+        by.setdefault((r["log"], r["baseline"]), {})[r["injected"]] = r
+    pct = "{:.0f} %".format
+    for (name, base), c in by.items():
+        h = c[None]
+        cells = []
+        for kind in ("current_sensor_offset", "current_sensor_gain"):
+            a, b = c[kind]["without"], c[kind]["with"]
+            cells.append(f"{pct(100 * a['share_flagged'])} / {pct(100 * a['share_flagged_on_joint'])} -> "
+                         f"**{pct(100 * b['share_flagged'])} / {pct(100 * b['share_flagged_on_joint'])}**")
+        lines.append(f"| {Path(name).name.split('.')[0]} | {base} ({h['baseline_windows']}) | "
+                     f"{h['without']['n_flagged']} of {h['n_windows']} -> **{h['with']['n_flagged']} of "
+                     f"{h['n_windows']}** | {pct(100 * h['outliers_without']['share_inputs_beyond_3'])} -> "
+                     f"{pct(100 * h['outliers_with']['share_inputs_beyond_3'])} | {cells[0]} | {cells[1]} |")
     return "\n".join(lines) + "\n"
 
 
 def main(argv=None) -> int:
+    from ur5fault.health.diagnosis import robot_baseline
     from ur5fault.health.diagnostics.saved import load_models
     from ur5fault.identify import identify
     from ur5fault.logs import read_nist
@@ -195,8 +254,15 @@ def main(argv=None) -> int:
     detector, out = Path(args.detector), Path(args.out)
     t0 = time.perf_counter()
     _, schema = load_models(detector)
+    window_s = float(schema["window_s"])
     spread = healthy_spread(detector, [c["name"] for c in schema["inputs"]])
-    rows = run_log(read_nist(NIST_LOG), None, detector, spread, out, write_injected=True)
+    nist = read_nist(NIST_LOG)
+    halves = [dataclasses.replace(nist.window(a, b), source=f"{nist.source}[{a:g},{b:g})")
+              for a, b in ((0.0, NIST_SPLIT_S), (NIST_SPLIT_S, 1e9))]
+    base_tw = twin_and_windows(halves[0], None, window_s)
+    diag_tw = twin_and_windows(halves[1], None, window_s)
+    nist_base = robot_baseline([halves[0]], detector, windows=[base_tw[1]])
+    rows = run_pair(halves[1], None, detector, spread, out, *diag_tw, {"first half": nist_base})
     params = load_params()
     overlays = {}
     for k, fold in enumerate(FOLDS):
@@ -205,16 +271,25 @@ def main(argv=None) -> int:
         ident = identify([read_kufieta(n) for n in other] + [read_kufieta(REST_RUN).window(REST_FROM_S, 60.0)],
                          params, sweep=False, n_boot=args.n_boot)
         overlays[k] = ident.overlay(params)["params"]
+        # every undisturbed run replayed under this fold's overlay: the fold's own (unseen by the overlay) and
+        # the other fold's (the overlay was identified on them)
+        logs = {n: read_kufieta(n) for f in FOLDS for n in f}
+        tw = {n: twin_and_windows(lg, overlays[k], window_s) for n, lg in logs.items()}
         for name in fold:
-            rows += run_log(read_kufieta(name), overlays[k], detector, spread, out, write_injected=False)
+            choice = {BASE_FOLD: [n for n in fold if n != name], BASE_ALL: [n for n in logs if n != name]}
+            bases = {label: robot_baseline([logs[n] for n in names], detector, overlays[k],
+                                           windows=[tw[n][1] for n in names]) for label, names in choice.items()}
+            rows += run_pair(logs[name], overlays[k], detector, spread, out, *tw[name], bases)
     summary = {"detector": str(detector), "feature_set": schema.get("feature_set"),
                "threshold_5pct_false_alarms": schema["joint_kind_threshold_5pct_false_alarms"],
+               "threshold_from": schema.get("joint_kind_threshold_from"),
                "run_level_threshold_5pct_false_alarms": schema["detector_threshold_5pct_false_alarms"],
                "calibration": schema.get("calibration", {}) and schema["calibration"].get("method"),
-               "folds": FOLDS, "rows": rows, "overlays": overlays, "wall_s": time.perf_counter() - t0}
+               "folds": FOLDS, "nist_split_s": NIST_SPLIT_S, "rows": rows, "overlays": overlays,
+               "wall_s": time.perf_counter() - t0}
     write_json_atomic(out / "summary.json", json.loads(json.dumps(summary, default=_jsonable)))
-    md = table(rows)
-    write_text_atomic(out / "table.md", md)
+    md = table_baseline(rows)
+    write_text_atomic(out / "table_baseline.md", md)
     print(md)
     print(f"wall {summary['wall_s']:.0f} s; wrote {out}", file=sys.stderr)
     return 0

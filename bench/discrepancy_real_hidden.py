@@ -17,11 +17,27 @@ was healthy, and scored in a second table.  Each injected log is fitted *from th
 kept findings as the starting model, what ``ur5fault discrepancy --model`` does with the clean fit's
 model.yaml), so a finding is itself the change against the healthy robot: its estimate is compared with the
 injected size as it is, and every kept finding that is not the injected effect is an extra one.
+
+``--engineer``: the chosen cases fitted the way a maintenance engineer can (the *engineer's baseline row*): the
+robot's model is first fitted on its *healthy* runs, never on the run the fault is injected into
+(:func:`engineer_plan`), and the suspect run is then fitted from that model (``ur5fault discrepancy --model
+BASELINE.yaml``).  Kufieta: the baseline is ``ur5fault discrepancy`` on :data:`HEALTHY_RUNS` jointly (the same
+workflow and library as the suspect fit, so a baseline finding and a suspect finding are the same parameter);
+the suspect run is Movement_No1 or Movement_No3_Acc, neither of which the baseline saw.  NIST (one log): the
+baseline is the workflow's fit of the clean log's first ``FIT_FRACTION`` only (its own time split inside that
+part), and the suspect run is the rest of the log, with the fault injected there: the case is fitted and scored
+on samples the baseline never saw, 40 % of the log (25 s), of which the suspect fit again fits the first 60 %.
+A finding's size is read as it is (the change against the baseline); "clean" is the uninjected suspect run
+fitted from the same baseline (the baseline's own error on that run), whose kept findings are not counted as
+extra.  ``--identify``: the baseline is first ``ur5fault identify`` on the healthy runs (this robot's drive
+parameters: torque constants, friction, ...), then the workflow from those parameters.  ``--cache DIR`` keeps the
+baselines and the clean suspect fits (they are shared by the cases of a log).
 """
 
 from __future__ import annotations
 
 import argparse
+import pickle
 import sys
 import time
 from pathlib import Path
@@ -36,6 +52,7 @@ from real_hidden import busy_angle_deg, inject  # noqa: E402
 from ur5fault.discrepancy import DiscrepancyModel  # noqa: E402
 from ur5fault.logs.readers import read_log, read_rtde  # noqa: E402
 from ur5fault.sim.axes import JOINT_NAMES  # noqa: E402
+from ur5fault.twin.residuals import FIT_FRACTION, fit_samples  # noqa: E402
 
 JOBS = 2
 NIST = REPO / "data" / "nist-ur5" / "ur5testresult_halfspeed_payload1.6lb_1.csv.gz"
@@ -64,6 +81,12 @@ CASES = [
                           ("coulomb_friction", 2, {"scale": 1.6})]),
     ("Movement_No3_Acc", [("current_sensor_gain", 1, {"gain": 1.08})]),
 ]
+
+
+#: the Kufieta robot's healthy runs its baseline is fitted on: no hand on the arm (not ``_w_disturbance``,
+#: not the standstill run), neither of the runs faults are injected into; Movement_No2 is Movement_No1's
+#: program at the same speeds, Movement_No4_Acc the accelerated program of Movement_No3_Acc
+HEALTHY_RUNS = ("Movement_No2", "Movement_No4_Acc")
 
 
 def read(name: str):
@@ -109,6 +132,177 @@ def baseline_of(m) -> tuple:
     return tuple(m.base_effects_) + tuple(f.spec() for f in m.findings_ if f.kept)
 
 
+def nist_split_s(log) -> float:
+    """The time [s from the log start] where the workflow's time split of ``log`` falls: the first sample of its
+    held-out part (``fit_samples`` of the replayed samples, rows 1..n)."""
+    return float(log.t_s[fit_samples(log.t_s.size - 1, FIT_FRACTION) + 1] - log.t_s[0])
+
+
+def engineer_plan(name: str) -> tuple[list, object]:
+    """The healthy logs the baseline of ``name``'s cases is fitted on, and the clean suspect run the faults are
+    injected into (module docstring): they share no sample."""
+    if name == "nist":
+        log = read(name)
+        t = nist_split_s(log)
+        return [log.window(0.0, t)], log.window(t, np.inf)
+    return [read(n) for n in HEALTHY_RUNS if n != name], read(name)
+
+
+def injected(base, effects, centre_from=None):
+    """``base`` with ``effects`` injected (a worn region centred where ``centre_from`` moves most, default
+    ``base``)."""
+    log = base
+    for kind, j, v in effects:
+        if kind == "local_friction" and "centre_deg" not in v:
+            v["centre_deg"] = busy_angle_deg(base if centre_from is None else centre_from, j)
+        log = inject(log, kind, j, **v)
+    return log
+
+
+def _cached(cache: Path | None, key: str, make):
+    path = None if cache is None else cache / f"{key}.pkl"
+    if path is not None and path.exists():
+        return pickle.loads(path.read_bytes())
+    out = make()
+    if path is not None:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_bytes(pickle.dumps(out))
+    return out
+
+
+def kept_values(m) -> dict:
+    """``{(effect, joint): kept estimate as an injected size}`` of every library kind the bench scores."""
+    return {(e, j): v for e in NAMED_AS for j in range(len(JOINT_NAMES))
+            if (v := library_value(m, e, j)[0]) is not None}
+
+
+def baseline_key(name: str, identified: bool = False) -> str:
+    """The cache name of ``name``'s baseline: one per robot (the Kufieta runs share theirs)."""
+    return ("baseline_nist" if name == "nist" else "baseline_kufieta") + ("_identified" if identified else "")
+
+
+def baseline_record(healthy: list, fit, identified: bool = False) -> dict:
+    """The baseline fitted on the ``healthy`` logs (jointly when several): its model (``params``: the drive
+    parameters ``identify`` gives on them first when ``identified``, else None), what it names, its wall."""
+    t = time.perf_counter()
+    params, start = None, ()
+    if identified:
+        from ur5fault.identify import identify
+        from ur5fault.sim.params import load_params
+
+        p = load_params()
+        ov = identify(healthy if len(healthy) > 1 else healthy[0], p, sweep=False).overlay(p)
+        params, start = ov["params"], effects_of(ov.get("effects"))
+    m = fit(healthy if len(healthy) > 1 else healthy[0], start, params)
+    return {"effects": baseline_of(m), "params": params, "labels": [f.candidate.label for f in m.findings_ if f.kept],
+            "wall_s": time.perf_counter() - t, "logs": [lg.source for lg in healthy],
+            "s": sum(float(lg.t_s[-1] - lg.t_s[0]) for lg in healthy)}
+
+
+def effects_of(overlay_effects) -> tuple:
+    """The ``effects`` entries of a model overlay as effect specs."""
+    from ur5fault.sim.effects import make_effect
+
+    skip = ("effect", "joint")
+    return tuple(make_effect(e["effect"], e.get("joint"), **{k: v for k, v in e.items() if k not in skip})
+                 for e in overlay_effects or ())
+
+
+def engineer_fits(name: str, cases, fit, cache: Path | None = None, identified: bool = False):
+    """The engineer's baseline row of ``cases`` (``[(index, effects)]``, all on log ``name``): the baseline fitted
+    on the healthy logs (``identified``: ``identify``'s drive parameters first), the clean suspect run and each
+    injected one fitted from it.  ``fit(logs, base_effects, params_overrides)`` returns a fitted model (a
+    :class:`DiscrepancyModel`'s ``fit``; a test's recorder).  Yields ``("baseline",
+    info)``, ``("clean", info)`` and ``(index, model, wall_s)``."""
+    healthy, suspect = engineer_plan(name)
+
+    base = _cached(cache, baseline_key(name, identified), lambda: baseline_record(healthy, fit, identified))
+    yield "baseline", base
+
+    def clean():
+        t = time.perf_counter()
+        m = fit(suspect, base["effects"], base.get("params"))
+        return {"kept": kept_keys(m), "values": kept_values(m), "labels": [f.candidate.label for f in m.findings_
+                                                                             if f.kept],
+                "unexplained": len(m.unexplained_), "wall_s": time.perf_counter() - t}
+
+    yield "clean", _cached(cache, f"clean_{name}" + ("_identified" if identified else ""), clean)
+    full = read(name) if name == "nist" else suspect
+    for ci, effects in cases:
+        t = time.perf_counter()
+        m = fit(injected(suspect, effects, centre_from=full), base["effects"], base.get("params"))
+        yield ci, m, time.perf_counter() - t
+
+
+def engineer_table(chosen: list[int], jobs: int, cache: Path | None, identified: bool = False) -> None:
+    """Fit and print the engineer's baseline row of the ``chosen`` cases (module docstring)."""
+    def fit(logs, start, params=None):
+        return DiscrepancyModel(jobs=jobs).fit(logs, params, base_effects=start)
+
+    rows, per_kind = [], {}
+    print("| log | injected | named as | estimate (change against the baseline) | clean run from the baseline "
+          "there | truth | error | extra findings | unexplained | wall |")
+    print("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
+    for name in dict.fromkeys(CASES[ci][0] for ci in chosen):
+        cases = [(ci, CASES[ci][1]) for ci in chosen if CASES[ci][0] == name]
+        clean = None
+        for item in engineer_fits(name, cases, fit, cache, identified):
+            if item[0] == "baseline":
+                b = item[1]
+                how = "identify, then the workflow" if b.get("params") else "the workflow"
+                print(f"| {name} | baseline: {how} on {' + '.join(b['logs'])} ({b['s']:.0f} s) | "
+                      f"{', '.join(b['labels']) or 'nothing'} | | | | | | | {b['wall_s']:.0f} s |", flush=True)
+                continue
+            if item[0] == "clean":
+                clean = item[1]
+                print(f"| {name} | clean (suspect run from the baseline) | {', '.join(clean['labels']) or 'nothing'} "
+                      f"| | | | | | {clean['unexplained']} | {clean['wall_s']:.0f} s |", flush=True)
+                continue
+            ci, m, wall = item
+            score_engineer(name, CASES[ci][1], m, clean, wall, rows, per_kind, b.get("params"))
+    summarise(rows, per_kind, "the engineer's baseline row (fitted from the robot's healthy runs)")
+
+
+def score_engineer(name: str, effects, m, clean: dict, wall: float, rows: list, per_kind: dict,
+                   params: dict | None = None) -> None:
+    """One injected suspect run fitted from the baseline: its findings read as they are; extra ones counted
+    against the clean suspect run's findings from the same baseline.  ``params``: the baseline's identified
+    drive parameters, against whose Coulomb level a Coulomb scale is then read (the injected rise is the
+    packaged level times (scale - 1))."""
+    injected_keys = {(NAMED_AS[k][0], j) for k, j, _ in effects if k in NAMED_AS}
+    extra = kept_keys(m) - clean["kept"] - injected_keys - {("torque_constant", j) for _, j in injected_keys}
+    extras = ", ".join(f"{e} {'robot' if k is None else JOINT_NAMES[k]}" for e, k in sorted(extra, key=str))
+    for kind, j, v in effects:
+        jn = JOINT_NAMES[j]
+        if kind == "local_friction":
+            hits = [u for u in m.unexplained_ if u["joint"] == jn and u["signal"] == "current_A"
+                    and u.get("angle_region")]
+            reg = hits[0]["angle_region"] if hits else None
+            ok = reg is not None and reg["from_deg"] <= v["centre_deg"] <= reg["to_deg"]
+            where = f"unexplained {reg['from_deg']:g}..{reg['to_deg']:g} deg" if reg else "-"
+            print(f"| {name} | {kind} {jn} {v['amplitude_A']} A at {v['centre_deg']:.0f} deg | {where} | | | | "
+                  f"{'found' if ok else 'missed'} | {extras or 0} | {len(m.unexplained_)} | {wall:.0f} s |",
+                  flush=True)
+            per_kind.setdefault(kind, []).append((ok, float("nan"), bool(extra)))
+            continue
+        effect, par, to_size = NAMED_AS[kind]
+        truth = to_size(v[par])
+        if kind == "coulomb_friction" and params:
+            from ur5fault.sim.params import load_params
+
+            truth *= load_params().friction.coulomb_Nm[j] / load_params(overrides=params).friction.coulomb_Nm[j]
+        est, alt = library_value(m, effect, j)
+        there = clean["values"].get((effect, j))
+        err = float("nan") if est is None else (est - truth) / truth
+        ok = est is not None and abs(err) <= 0.25
+        how = ("alternative" if alt else "named") if est is not None else "not named"
+        print(f"| {name} | {kind} {jn} {v[par]:g} | {how} | {'-' if est is None else f'{est:.4g}'} | "
+              f"{'-' if there is None else f'{there:.4g}'} | {truth:.4g} | {100 * err:+.0f} % | {extras or 0} | "
+              f"{len(m.unexplained_)} | {wall:.0f} s |", flush=True)
+        per_kind.setdefault(kind, []).append((ok, err, bool(extra)))
+    rows.append((name, effects, m, extra))
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--jobs", type=int, default=JOBS, help=f"worker processes per fit (default {JOBS})")
@@ -118,8 +312,25 @@ def main() -> None:
                          "model (the change against it), scored in a second table; the clean fits are shared")
     ap.add_argument("--baseline-only", action="store_true",
                     help="fit the --baseline cases only from the clean log's fitted model (their per-log rows known)")
+    ap.add_argument("--engineer", action="store_true",
+                    help="the engineer's baseline row only: the --cases fitted from the robot's model fitted on "
+                         "its healthy runs (never the injected one), scored in their own table")
+    ap.add_argument("--cache", type=Path, default=None,
+                    help="with --engineer: folder keeping the baselines and clean suspect fits (delete it when "
+                         "the workflow's code changes)")
+    ap.add_argument("--identify", action="store_true",
+                    help="with --engineer: the baseline is `ur5fault identify` on the healthy runs (the robot's drive "
+                         "parameters), then the workflow from them, and every fit starts from those parameters")
     args = ap.parse_args()
     jobs = args.jobs
+    if (args.cache is not None or args.identify) and not args.engineer:
+        ap.error("--cache and --identify are used by --engineer only")
+    if args.engineer:
+        if args.baseline is not None or args.baseline_only:
+            ap.error("--engineer is its own table; give it without --baseline")
+        engineer_table(list(range(len(CASES))) if args.cases is None else [int(i) for i in args.cases.split(",")],
+                       jobs, args.cache, args.identify)
+        return
     from_clean = (set() if args.baseline is None else set(range(len(CASES))) if args.baseline == "all"
                   else {int(i) for i in args.baseline.split(",")})
     if args.baseline_only and not from_clean:

@@ -8,6 +8,10 @@ held-out ratio and the reason it was dropped.  Usage::
 
 ``--clean-cache DIR``: the clean fit's kept findings are stored there (``clean_LOG.pkl``) and reused, so that the
 cases of one log share one clean fit.  Delete the files when the workflow's code changes.
+
+``--engineer``: the case as ``discrepancy_real_hidden.py --engineer`` fits it: the suspect run fitted from the
+baseline fitted on the robot's healthy runs (with ``--clean-cache DIR``, the bench's ``--cache DIR``: its stored
+baseline ``baseline_nist.pkl`` or ``baseline_kufieta.pkl`` is used).
 """
 
 from __future__ import annotations
@@ -25,7 +29,6 @@ sys.path.insert(0, str(REPO / "tests"))
 sys.path.insert(0, str(REPO / "bench"))
 
 import discrepancy_real_hidden as hidden  # noqa: E402
-from real_hidden import inject  # noqa: E402
 
 from ur5fault.discrepancy import DiscrepancyModel, steps  # noqa: E402
 from ur5fault.discrepancy.search import judge  # noqa: E402
@@ -38,6 +41,8 @@ def main() -> None:
     ap.add_argument("case", type=int, help="index into discrepancy_real_hidden.CASES")
     ap.add_argument("--jobs", type=int, default=2, help="worker processes per fit (default 2)")
     ap.add_argument("--clean-cache", type=Path, default=None, help="directory for the clean fits' findings")
+    ap.add_argument("--engineer", action="store_true",
+                    help="fit the suspect run from the baseline fitted on the robot's healthy runs")
     args = ap.parse_args()
     if not 0 <= args.case < len(hidden.CASES):
         ap.error(f"case must be in 0..{len(hidden.CASES) - 1}")
@@ -51,7 +56,14 @@ def main() -> None:
 
     base = hidden.read(name)
     cache = None if args.clean_cache is None else args.clean_cache / f"clean_{name}.pkl"
-    if cache is not None and cache.exists():
+    full, params = base, None
+    if args.engineer:
+        healthy, base = hidden.engineer_plan(name)
+        b = hidden._cached(args.clean_cache, hidden.baseline_key(name), lambda: hidden.baseline_record(
+            healthy, lambda logs, st, pr=None: DiscrepancyModel(jobs=args.jobs).fit(logs, pr, base_effects=st)))
+        start, params = b["effects"], b.get("params")
+        print(f"baseline's findings (healthy runs {[lg.source for lg in healthy]}): {[e.name for e in start]}")
+    elif cache is not None and cache.exists():
         start = pickle.loads(cache.read_bytes())
         print(f"clean fit's findings (stored): {[e.name for e in start]}")
     else:
@@ -64,13 +76,11 @@ def main() -> None:
         kept = [f.candidate.label for f in clean.findings_ if f.kept]
         print(f"clean fit, {time.perf_counter() - t:.0f} s: kept {kept}")
         print(f"  dropped: {[(f.candidate.label, f.reason) for f in clean.findings_ if not f.kept]}")
-    log = base
-    for kind, j, v in effects:
-        log = inject(log, kind, j, **v)
+    log = hidden.injected(base, effects, centre_from=full)
     steps.screen_library = recorded
     try:
         t = time.perf_counter()
-        m = DiscrepancyModel(jobs=args.jobs).fit(log, base_effects=start)
+        m = DiscrepancyModel(jobs=args.jobs).fit(log, params, base_effects=start)
     finally:
         steps.screen_library = screen
     print(f"case {args.case} {name} {effects}: wall {time.perf_counter() - t:.0f} s")
@@ -98,6 +108,9 @@ def main() -> None:
         ho = "-" if f.held_out is None else f"{100 * f.held_out.ratio:.0f} %"
         print(f"finding {'kept' if f.kept else 'dropped'}: {f.candidate.label} {np.round(f.theta, 4)} held out {ho} "
               f"{f.reason} {[(a.label, np.round(th, 4)) for a, th in f.alternatives]}")
+        for r in f.rivals:
+            print(f"  rival: {r.candidate.label} {np.round(r.theta, 4)} held out {100 * r.held_out_ratio:.0f} %, "
+                  f"delta BIC {r.held_out_delta_bic:+.1f}; {r.tell_apart}")
     for part, table in (("before", m.rms_before_), ("after", m.rms_after_)):
         print(f"held-out current RMS {part} [A]: {({k: round(v, 4) for k, v in table['current_A'].items()})}")
 

@@ -20,6 +20,18 @@ at least :data:`MIN_PUSH_S` where that deviation exceeds the largest one of the 
   from its median against :data:`QUIET`'s standing start: that reference holds one constant reading, and the
   standstill's resting level moves by 1-4 steps of 25 counts after each push, so it marked the whole run.)
 
+*Moving run, second labelling* (``cycle_labels``): ``labels`` and the monitor now share the reference run
+(:data:`QUIET`: the monitor judges the pushed run against the quiet run's ur5fault residual at the same point of
+the task; ``labels`` takes its bar from the quiet run's UR residual, not aligned in time). This one shares no
+reference in time with the monitor: UR's residual of the pushed run against the median of *the same run's*
+other repeats of its cycle at the same point (the cycle's period found on the run's own targets, by the lag
+under :data:`MAX_PERIOD_S` at which they repeat best; a repeat counts where the targets agree within
+:data:`CYCLE_TOL_RAD`; a push in one cycle is outvoted by the others). A push is a stretch of at least
+:data:`MIN_PUSH_S` where that deviation exceeds its largest value on :data:`QUIET` computed the same way (the
+quiet run against its own repeats: the recording is shared, as a bar on UR's model, not as a reference). The
+tool accelerometer was checked for this and does not separate pushes in motion: axis 1 oscillates by about 1000
+counts within every move of both runs, axis 0 steps once (at the largest push) and axis 2 reads 0 throughout.
+
 A label is *found* when an event on one of its joints starts and ends within :data:`WINDOW_S` of it.
 """
 
@@ -45,6 +57,11 @@ PRE_PUSH_S = 0.25
 #: the standstill run's first seconds, before anyone touched the arm [s] (its accelerometer holds one level, up
 #: to one step of 25 counts, until 3.0 s; UR's residual moves first at 3.2 s)
 UNTOUCHED_S = 1.0
+#: a cyclic run's period is looked for up to this [s] (the Kufieta No5 runs repeat every 5.98 s)
+MAX_PERIOD_S = 10.0
+#: two samples are the same point of the cycle when their targets agree within this [rad] (the controller's
+#: jitter, 3e-4, plus a sample at the runs' largest speed, 1.05 rad/s x 8 ms)
+CYCLE_TOL_RAD = 3e-4 + 1.05 * 0.008
 
 
 def read(name: str):
@@ -137,3 +154,39 @@ def accel_labels(name: str) -> list[dict]:
 def found(label: dict, events: list[dict]) -> bool:
     return any(abs(e["t_start_s"] - label["t_start_s"]) <= WINDOW_S and abs(e["t_end_s"] - label["t_end_s"]) <= WINDOW_S
                and set(e["joints"]) & set(label["joints"]) for e in events)
+
+
+def cycle_period(q: np.ndarray, period_s: float) -> int:
+    """The lag [samples] at which the targets ``q`` ``(n, 6)`` repeat best (mean absolute difference over the
+    overlap), between 1 s and :data:`MAX_PERIOD_S`."""
+    lags = range(int(1.0 / period_s), min(int(MAX_PERIOD_S / period_s), q.shape[0] // 2))
+    return min(lags, key=lambda k: float(np.abs(q[k:] - q[:-k]).mean()))
+
+
+def own_cycle_deviation(log) -> np.ndarray:
+    """``(n - 1, 6)``: UR's smoothed residual less the median of the same run's other repeats of the point of its
+    cycle (NaN where no other repeat matches)."""
+    r = ur_smoothed(log)
+    q = log.q_target_rad[1:]
+    per = cycle_period(q, log.period_s)
+    n = r.shape[0]
+    out = np.full(r.shape, np.nan)
+    for i in range(n):
+        others = [i + k * per for k in range(-n // per - 1, n // per + 2) if k and 0 <= i + k * per < n]
+        others = [j for j in others if np.abs(q[j] - q[i]).max() <= CYCLE_TOL_RAD]
+        if others:
+            out[i] = r[i] - np.median(r[others], axis=0)
+    return out
+
+
+def cycle_labels(log, quiet) -> list[dict]:
+    """Push labels of a cyclic run from UR's residual against its own other cycles (module docstring)."""
+    from ur5fault.sim.axes import JOINT_NAMES
+
+    limit = np.nanmax(np.abs(own_cycle_deviation(quiet)), axis=0)
+    dev = np.abs(own_cycle_deviation(log))
+    over = np.nan_to_num(dev, nan=0.0) > limit
+    t = log.t_s[1:] - log.t_s[0]
+    return [{"t_start_s": float(t[a]), "t_end_s": float(t[b]),
+             "joints": [JOINT_NAMES[j] for j in range(6) if over[a : b + 1, j].any()]}
+            for a, b in stretches(over.any(axis=1), t, log.period_s)]

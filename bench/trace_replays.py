@@ -1,9 +1,12 @@
 """Every batch of replays a command simulates, timed: where a workflow's simulated seconds and serial stretches go.
 
 Runs a ``ur5fault`` command (``discrepancy``, ``identify``, ``monitor``, ...) in this process with
-``LogReplay.run`` and ``MultiReplay.run`` wrapped; each batch prints one line to stderr: its start and wall time
-since the command began [s], its runs, samples and simulated seconds.  The gaps between the lines are this
-process's own work (fitting, judging, the report) while no replay runs.
+``LogReplay.run_batches`` and ``MultiReplay.run_batches`` (which ``run`` calls) and their ``prefetch`` wrapped; each
+call prints one line to stderr: its start and wall time since the command began [s], the CPU time it took over
+this process and its worker processes (read from ``/proc``: on a loaded machine the wall time measures the other
+jobs too), its runs, samples and simulated seconds asked for (a prefetched replay is taken, not simulated again),
+and the replay's simulated seconds so far.  The gaps between the lines are this process's own work (fitting,
+judging, the report) while no replay runs.
 
     python bench/trace_replays.py discrepancy data/nist-ur5/ur5testresult_halfspeed_payload1.6lb_1.csv.gz \\
         --format nist --out /tmp/d --jobs 2 --quiet
@@ -11,8 +14,27 @@ process's own work (fitting, judging, the report) while no replay runs.
 
 from __future__ import annotations
 
+import os
 import sys
 import time
+
+
+def cpu_s() -> float:
+    """CPU seconds (user + system) of this process and of its live child processes (the workers)."""
+    tick = os.sysconf("SC_CLK_TCK")
+    total = time.process_time()
+    me = str(os.getpid())
+    for pid in os.listdir("/proc"):
+        if not pid.isdigit():
+            continue
+        try:
+            with open(f"/proc/{pid}/stat") as f:
+                fields = f.read().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        if fields[1] == me:  # ppid
+            total += (int(fields[11]) + int(fields[12])) / tick  # utime, stime
+    return total
 
 
 def main(argv: list[str]) -> int:
@@ -22,21 +44,36 @@ def main(argv: list[str]) -> int:
 
     t0 = time.perf_counter()
 
-    def traced(run):
-        def wrapper(self, effect_sets, n=None, progress=None):
-            t = time.perf_counter()
-            out = run(self, effect_sets, n, progress)
-            n_samples = out[0].y.shape[0] if out else 0
-            sim_s = len(effect_sets) * n_samples * self.log.period_s
-            print(f"replays: start {t - t0:7.2f} s, wall {time.perf_counter() - t:6.2f} s, {len(effect_sets)} runs x "
-                  f"{n_samples} samples = {sim_s:.1f} simulated s", file=sys.stderr, flush=True)
+    def traced(run_batches):
+        def wrapper(self, batches, progress=None):
+            t, c = time.perf_counter(), cpu_s()
+            out = run_batches(self, batches, progress)
+            parts = []
+            sim_s = 0.0
+            for (sets, _), res in zip(batches, out):
+                n_samples = res[0].y.shape[0] if res else 0
+                sim_s += len(sets) * n_samples * self.log.period_s
+                parts.append(f"{len(sets)} runs x {n_samples} samples")
+            print(f"replays: start {t - t0:7.2f} s, wall {time.perf_counter() - t:6.2f} s, CPU {cpu_s() - c:6.2f} s "
+                  f"(this process and its workers; at start {c:.2f} s), {' + '.join(parts)} = "
+                  f"{sim_s:.1f} simulated s (asked; simulated so far in all: {self.simulated_s:.1f} s)",
+                  file=sys.stderr, flush=True)
             return out
         return wrapper
 
-    LogReplay.run = traced(LogReplay.run)
-    MultiReplay.run = traced(MultiReplay.run)
+    def traced_prefetch(prefetch):
+        def wrapper(self, effect_sets, n=None):
+            print(f"prefetch: start {time.perf_counter() - t0:7.2f} s, {len(effect_sets)} runs on a worker",
+                  file=sys.stderr, flush=True)
+            return prefetch(self, effect_sets, n)
+        return wrapper
+
+    for cls in (LogReplay, MultiReplay):  # run() goes through run_batches()
+        cls.run_batches = traced(cls.run_batches)
+        cls.prefetch = traced_prefetch(cls.prefetch)
     rc = cli(argv)
-    print(f"command: {time.perf_counter() - t0:.2f} s wall after imports", file=sys.stderr)
+    print(f"command: {time.perf_counter() - t0:.2f} s wall after imports, {cpu_s():.2f} s CPU of this process and its "
+          "live workers", file=sys.stderr)
     return rc
 
 

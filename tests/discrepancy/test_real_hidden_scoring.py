@@ -33,7 +33,8 @@ def _offset(joint: int, amps: float, kept: bool = True) -> Finding:
 
 def _model(*findings: Finding, base=()):
     found = list(findings)
-    return types.SimpleNamespace(findings_=found, effects_=[f for f in found if f.kept], base_effects_=tuple(base))
+    return types.SimpleNamespace(findings_=found, effects_=[f for f in found if f.kept], base_effects_=tuple(base),
+                                 unexplained_=[])
 
 
 def test_per_log_score_is_the_change_against_the_clean_fit(bench):
@@ -58,3 +59,31 @@ def test_from_the_clean_model_a_finding_is_the_change_itself(bench):
     assert got == [("current_sensor_offset", 4, -0.057)]
     est, _ = bench.named_change(_model(_offset(4, 0.05), base=start), None, "current_sensor_offset", 4)
     assert est == pytest.approx(0.05)
+
+
+def _rows(log) -> set[bytes]:
+    return {r.tobytes() for r in np.hstack([log.q_actual_rad, log.q_target_rad])}
+
+
+@pytest.mark.parametrize("name", ["nist", "Movement_No1", "Movement_No3_Acc"])
+def test_the_engineers_baseline_is_never_fitted_on_the_run_the_fault_is_injected_into(bench, name):
+    # ``--engineer``: every fit the bench makes is recorded; the first (the baseline) must share no sample with the
+    # run the fault is then injected into, and the injected run must be fitted from the baseline's model
+    calls = []
+    start = _model(_offset(3, 0.04))
+
+    def fit(logs, base_effects, params=None):
+        calls.append((list(logs) if isinstance(logs, list) else [logs], tuple(base_effects)))
+        return start if len(calls) == 1 else _model()
+
+    cases = [(ci, effects) for ci, (n, effects) in enumerate(bench.CASES) if n == name][:1]
+    items = list(bench.engineer_fits(name, cases, fit))
+    assert [i[0] for i in items] == ["baseline", "clean", cases[0][0]] and len(calls) == 3
+    healthy, (clean_run,), (injected_run,) = calls[0][0], calls[1][0], calls[2][0]
+    suspect = _rows(injected_run)
+    assert suspect == _rows(clean_run) and suspect <= _rows(bench.read(name))  # the injected run is the suspect run
+    shared = suspect & set().union(*(_rows(lg) for lg in healthy))
+    # (q_actual, q_target) rows: a run begins or ends at a home pose another run may hold to the last bit
+    assert len(shared) < 0.01 * len(suspect)
+    assert calls[0][1] == () and calls[1][1] == calls[2][1] == bench.baseline_of(start)
+    assert all(lg.source != injected_run.source for lg in healthy) or name == "nist"

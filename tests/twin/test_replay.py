@@ -82,3 +82,42 @@ def test_a_batch_split_over_processes_equals_one_process():
         assert a.status == b.status
         np.testing.assert_array_equal(a.y, b.y)
         np.testing.assert_array_equal(a.torque_gear_Nm, b.torque_gear_Nm)
+
+
+def _equal(a, b) -> None:
+    assert a.status == b.status
+    for name in ("y", "q_rad", "q_motor_rad", "current_true_A", "torque_gear_Nm"):
+        np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
+
+
+@pytest.mark.parametrize("jobs", [1, 2])
+def test_batches_of_different_lengths_at_once_equal_each_batch_alone(jobs):
+    """``run_batches``: the runs of several batches spread over the processes together (longest first, the split
+    decided as they go) give each batch's own replays, bit for bit."""
+    log = _log()
+    sets = [(), (make_effect("coulomb_friction", 2, scale=1.5),), (make_effect("backlash", 3, backlash_deg=0.1),)]
+    alone = [LogReplay(log, seed=7).run(sets, N - 1), LogReplay(log, seed=7).run(sets[1:], 12)]
+    rp = LogReplay(log, seed=7, jobs=jobs)
+    together = rp.run_batches([(sets, N - 1), (sets[1:], 12)])
+    for want, got in zip(alone, together):
+        assert len(want) == len(got)
+        for a, b in zip(want, got):
+            _equal(a, b)
+    assert rp.n_simulated == 5 and rp.simulated_s == pytest.approx((3 * (N - 1) + 2 * 12) * PERIOD_S)
+
+
+@pytest.mark.parametrize("jobs", [1, 2])
+def test_a_prefetched_replay_equals_the_replay_it_stands_for(jobs):
+    """``prefetch``: a replay started early (on a worker with ``jobs=2``) and taken by a later run, whole or its
+    first samples, equals that run simulated there and then; it is simulated once."""
+    log = _log()
+    eff = (make_effect("coulomb_friction", 2, scale=1.5),)
+    plain = LogReplay(log, seed=7).run([(), eff], N - 1)
+    rp = LogReplay(log, seed=7, jobs=jobs)
+    rp.prefetch([()], N - 1)
+    got = rp.run([(), eff], N - 1)
+    for a, b in zip(plain, got):
+        _equal(a, b)
+    _equal(LogReplay(log, seed=7).run([()], 10)[0], rp.run([()], 10)[0])  # a shorter run: the first samples
+    simulated = 3 if jobs == 1 else 2  # one job: nothing was started early, both runs of () are simulated
+    assert rp.n_simulated == simulated

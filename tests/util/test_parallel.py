@@ -8,7 +8,7 @@ import time
 import joblib
 import pytest
 
-from ur5fault.util.parallel import iter_tasks, map_tasks, own_share
+from ur5fault.util.parallel import iter_tasks, map_balanced, map_tasks, own_share, submit
 
 
 def _task(k: int) -> tuple[int, int]:
@@ -73,3 +73,42 @@ def test_joblib_parallel_after_the_tasks_in_the_same_process():
         out = joblib.Parallel(n_jobs=2)(joblib.delayed(_task)(k) for k in range(4))
     assert [v for v, _ in out] == [0, 1, 4, 9]
     assert [v for v, _ in map_tasks(_task, [(k,) for k in range(4)], jobs=2)] == [0, 1, 4, 9]  # and back
+
+
+def test_balanced_results_in_task_order_equal_the_plain_map():
+    tasks = [(k,) for k in range(7)]
+    cost = [1, 5, 2, 2, 9, 1, 3]
+    out = map_balanced(_task, tasks, 2, cost)
+    assert [v for v, _ in out] == [k * k for k in range(7)]
+    assert len({pid for _, pid in out}) == 2  # both processes worked
+    assert map_balanced(_task, tasks, 1, cost) == [(k * k, os.getpid()) for k in range(7)]
+    with pytest.raises(ValueError, match="3 costs for 2 tasks"):
+        map_balanced(_task, tasks[:2], 2, [1, 1, 1])
+
+
+def _slow_here_fast_there(k: int, pid: int) -> tuple[int, int]:
+    if os.getpid() == pid:
+        time.sleep(2.0)
+    return k, os.getpid()
+
+
+def test_balanced_a_slow_process_takes_fewer_tasks():
+    """The split is decided as the tasks finish: while this process spends 2 s on its first task (the cheapest),
+    the warm worker takes every other one, from the most costly down."""
+    map_balanced(_task, [(k,) for k in range(2)], 2, [1, 1])  # the worker started and warm
+    tasks = [(k, os.getpid()) for k in range(6)]
+    out = map_balanced(_slow_here_fast_there, tasks, 2, cost=[6, 5, 4, 3, 2, 1])
+    assert [k for k, _ in out] == list(range(6))
+    assert [k for k, pid in out if pid == os.getpid()] == [5]
+
+
+def test_balanced_a_failing_task_raises_here_and_the_next_call_works():
+    with pytest.raises(ValueError, match="task 1 fails"):
+        map_balanced(_fails, [(k,) for k in range(4)], 2, [4, 3, 2, 1])  # task 1: a worker's
+    assert [v for v, _ in map_balanced(_task, [(k,) for k in range(3)], 2, [1, 1, 1])] == [0, 1, 4]
+
+
+def test_submit_runs_on_a_worker_or_not_at_all():
+    assert submit(_task, (3,), 1) is None
+    v, pid = submit(_task, (3,), 2).result()
+    assert v == 9 and pid != os.getpid()

@@ -30,6 +30,8 @@ class Finding:
         held_out: what it does on the held-out part (None if it was dropped before that check).
         kept: False when it was dropped; ``reason`` says why.
         tell_apart: what motion would tell it from a dictionary term it stood in for ("" when none).
+        rivals: the library effects the held-out part cannot tell from it (``rivals.py``), each also among
+            ``alternatives``.
     """
 
     candidate: Candidate
@@ -41,6 +43,7 @@ class Finding:
     kept: bool = True
     reason: str = ""
     tell_apart: str = ""
+    rivals: list = dataclasses.field(default_factory=list)
 
     def spec(self) -> EffectSpec:
         return self.candidate.spec(self.theta)
@@ -167,7 +170,7 @@ def alternatives(fs: FindingSet, kept: list[int], k: int, ref: Refined, J_fit: N
         if i != k or e_alt is None or e_without is None:
             continue
         size = float(np.linalg.norm(th0))
-        col = ((e_without - e_alt)[:n_fit] / size)[None]
+        col = ((e_without[:n_fit] - e_alt[:n_fit]) / size)[None]  # e_alt: the fitting part only (refinement.py)
         X = np.concatenate([J_fit[others], col])
         G, g, ee = BlockGram.build(X, e_without[:n_fit]).total()
         out.append((cand, rss_of(G, g, ee, list(range(X.shape[0])))[1][-1] * th0 / size))  # a pair keeps its phase

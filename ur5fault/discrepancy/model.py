@@ -8,7 +8,9 @@
    the replayed states (``discovery.py``).
 4. *Refine and judge*: one batch of probes over the whole log gives the simulated Jacobian
    (``refinement.py``); every finding is judged against all the others and on the held-out part
-   (``judging.py``): one that does not generalise is dropped and reported; the kept ones are polished.
+   (``judging.py``): one that does not generalise is dropped and reported; the kept ones are polished;
+   every kept finding gets its rivals, the library effects the held-out part cannot tell from it
+   (``rivals.py``).
 5. *Show*: before/after RMS per signal and joint on the held-out part; what stays unexplained.
 """
 
@@ -34,6 +36,7 @@ from .multilog import MultiReplay, per_log
 from .payload import PAYLOAD_KINDS, resolve_payloads
 from .refinement import FindingSet, Refined, polish
 from .rescreen import rescreen
+from .rivals import list_rivals
 from .search import columns_of
 
 logger = logging.getLogger(__name__)
@@ -145,6 +148,9 @@ class DiscrepancyModel:
         if not all(r.known for r in self.payload_.values()):
             timings["payload fit"] = t_payload
 
+        # the starting model over the whole log is the probe batch's first run whatever is found, and its first
+        # samples are the screening's baseline: a worker starts it now, and it is simulated once
+        rp.prefetch([()], n_all)
         t = time.perf_counter()
         lib = steps.screen_library(rp, n_scr, log.payload_kg, kinds, self.max_effects,
                                    stages.start("screening the library"))
@@ -184,6 +190,9 @@ class DiscrepancyModel:
         jr.findings.extend(again.findings)
         self.search_ += again.trace
         after = again.after
+        # every finding of the final model with the library effects the held-out part cannot tell from it
+        list_rivals(rp, lib.X, lib.drift, lib.candidates, jr.findings, ref.first.J if ref.first else None,
+                    ref.found, after, n_scr, n_fit, drift, skip=again.findings, progress=prog)
         self._results(rp, ref.nominal, after, n_fit, n_all)
         timings["judging"] = time.perf_counter() - t
         logger.info("judged and polished in %.0f s: kept %s", timings["judging"],

@@ -29,7 +29,7 @@ from numpy.typing import NDArray
 from ..errors import ParameterError
 from ..logs import MeasuredLog
 from ..sim.effects import EffectSpec
-from ..twin.replay import LogReplay, Replayed, _simulate
+from ..twin.replay import LogReplay, Replayed, simulate_requests
 from ..twin.residuals import fit_samples
 
 ROLES = ("fit", "held_out")
@@ -70,9 +70,9 @@ class MultiReplay:
             raise ParameterError("a joint fit needs at least one log to fit (every log given is held out)")
         self.names = _names([*logs, *hold_out])
         self.roles = ["fit"] * len(logs) + ["held_out"] * len(hold_out)
-        self.replays = [LogReplay(log, params_overrides, base_effects, seed=seed, jobs=1)
-                        for log in (*logs, *hold_out)]
         self.jobs = max(1, int(jobs))
+        self.replays = [LogReplay(log, params_overrides, base_effects, seed=seed, jobs=self.jobs)
+                        for log in (*logs, *hold_out)]
         first = self.replays[0]
         for r in self.replays[1:]:
             if r.signals != first.signals:
@@ -145,53 +145,59 @@ class MultiReplay:
     def simulated_s(self) -> float:
         return sum(r.simulated_s for r in self.replays)
 
-    def run(self, effect_sets: Sequence[Sequence[EffectSpec]], n: int, progress=None) -> list[Replayed]:
-        """Replay axis samples ``1..n`` once per effect set; each log simulated as far as those samples reach,
-        the (log, effect sets) batches spread over ``jobs`` processes."""
+    def _need(self, n: int) -> list[int]:
+        """Per log, how many of its samples the axis samples ``1..n`` reach (0: none)."""
         need = [0] * len(self.replays)
         for s in self.segments:
             if s.at < n:
                 need[s.log] = max(need[s.log], min(s.stop - 1, s.start - 1 + n - s.at))
-        tasks = []
-        active = sum(m > 0 for m in need)
-        chunks = max(1, self.jobs // max(1, active))  # every process busy: split a log's batch when logs are few
-        size = -(-len(effect_sets) // chunks)
-        for k, m in enumerate(need):
-            if m == 0:
-                continue
-            rp = self.replays[k]
-            for i in range(0, len(effect_sets), size):
-                tasks.append((k, i, effect_sets[i : i + size], m))
-            rp.n_simulated += len(effect_sets)
-            rp.simulated_s += len(effect_sets) * m * rp.log.period_s
-        if self.jobs > 1 and len(tasks) > 1:
-            from ..util.parallel import map_tasks  # this process takes tasks too
+        return need
 
-            parts = map_tasks(_batch, [(self.replays[k], sets, m) for k, _, sets, m in tasks], self.jobs,
-                              cost=[len(sets) * m for _, _, sets, m in tasks])
-        else:
-            parts = [_batch(self.replays[k], sets, m, progress) for k, _, sets, m in tasks]
-        per_log: dict[int, list[Replayed]] = {}
-        for (k, _, sets, _), res in zip(tasks, parts):
-            per_log.setdefault(k, []).extend(self.replays[k]._with_log_temperature(r, e) for r, e in zip(res, sets))
+    def run(self, effect_sets: Sequence[Sequence[EffectSpec]], n: int, progress=None) -> list[Replayed]:
+        """Replay axis samples ``1..n`` once per effect set; each log simulated as far as those samples reach."""
+        return self.run_batches([(effect_sets, n)], progress)[0]
+
+    def run_batches(self, batches: Sequence[tuple[Sequence[Sequence[EffectSpec]], int]], progress=None
+                    ) -> list[list[Replayed]]:
+        """Several batches ``(effect sets, n)`` at once, each equal to :meth:`run`'s; every (log, effect set) is one
+        run, all of them spread over ``jobs`` processes together, balanced by simulated seconds
+        (:func:`~ur5fault.twin.replay.simulate_requests`)."""
+        reqs: list[tuple[LogReplay, tuple[EffectSpec, ...], int]] = []
+        where: list[list[dict[int, int]]] = []  # per batch and effect set: log -> its request's position
+        for sets, n in batches:
+            need = self._need(n)
+            where.append([])
+            for e in sets:
+                where[-1].append({})
+                for k, m in enumerate(need):
+                    if m:
+                        where[-1][-1][k] = len(reqs)
+                        reqs.append((self.replays[k], tuple(e), m))
+        flat = simulate_requests(reqs, self.jobs, progress)
         out = []
-        for c in range(len(effect_sets)):
-            pieces = [(s, per_log[s.log][c]) for s in self.segments if s.at < n]
-            status = next((r.status for _, r in pieces if not r.ok), "ok")
-            fields = {}
-            for name in ("y", "q_rad", "q_motor_rad", "current_true_A", "torque_gear_Nm"):
-                fields[name] = np.concatenate([getattr(r, name)[s.start - 1 : s.stop - 1] for s, r in pieces])[:n]
-            out.append(Replayed(status, **fields))
+        for (sets, n), at in zip(batches, where):
+            res = []
+            for e, idx in zip(sets, at):
+                per = {k: self.replays[k]._with_log_temperature(
+                    dataclasses.replace(flat[i], y=flat[i].y[:, : len(self.signals)]), e) for k, i in idx.items()}
+                res.append(self._joined(per, n))
+            out.append(res)
         return out
 
+    def _joined(self, per: dict[int, Replayed], n: int) -> Replayed:
+        """One replay on the axis from each log's replay."""
+        pieces = [(s, per[s.log]) for s in self.segments if s.at < n]
+        status = next((r.status for _, r in pieces if not r.ok), "ok")
+        fields = {}
+        for name in ("y", "q_rad", "q_motor_rad", "current_true_A", "torque_gear_Nm"):
+            fields[name] = np.concatenate([getattr(r, name)[s.start - 1 : s.stop - 1] for s, r in pieces])[:n]
+        return Replayed(status, **fields)
 
-def _batch(rp: LogReplay, sets, m: int, progress=None) -> list[Replayed]:
-    from ..sim.engine import RunSpec
-
-    runs = [RunSpec(f"c{i}", rp.seed, rp.base + tuple(e)) for i, e in enumerate(sets)]
-    k = len(rp.signals)
-    return [dataclasses.replace(r, y=r.y[:, :k]) for r in _simulate(rp.params, rp.traj, runs, rp.log.period_s, m,
-                                                                        progress)]
+    def prefetch(self, effect_sets: Sequence[Sequence[EffectSpec]], n: int) -> None:
+        """:meth:`LogReplay.prefetch` of every log as far as axis samples ``1..n`` reach."""
+        for k, m in enumerate(self._need(n)):
+            if m:
+                self.replays[k].prefetch(effect_sets, m)
 
 
 def per_log(rp: LogReplay | MultiReplay, scored: NDArray, before: NDArray, after: NDArray, n_fit: int, n_all: int

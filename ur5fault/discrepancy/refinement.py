@@ -52,7 +52,8 @@ class Refined:
     e0: NDArray
     steps: list[RefineStep]
     probe_e: list[NDArray | None] = dataclasses.field(default_factory=list)  # residual of theta0 + each probe
-    extra_e: list[NDArray | None] = dataclasses.field(default_factory=list)  # residual of each extra model
+    # residual of each extra model, over the rows the evaluator replays them (the workflow: the fitting part)
+    extra_e: list[NDArray | None] = dataclasses.field(default_factory=list)
 
 
 class _Evaluations:
@@ -245,20 +246,25 @@ class FindingSet:
         """Index among :meth:`probes` of the one that removes finding ``k``."""
         return sum(c.n_coef for c in self.found[:k])
 
-    def evaluator(self, rp: LogReplay, progress=None):
+    def evaluator(self, rp: LogReplay, progress=None, extra_rows: int | None = None):
         """``evaluate(thetas, extra=())``: replays of the whole log at each ``theta`` (and, for each extra
         ``(i, alternative, its coefficients)``, the alternative in place of finding ``i``, the others at
-        ``thetas[1]``), with their weighted residuals."""
+        ``thetas[1]``), with their weighted residuals.  ``extra_rows``: the extra models are replayed over the
+        first ``extra_rows`` samples only (an alternative is sized on the fitting part alone,
+        :func:`ur5fault.discrepancy.judging.alternatives`), in the same batch as the rest."""
         n_all = rp.n_samples
+        n_extra = n_all if extra_rows is None else int(extra_rows)
         meas = rp.measured(n_all)
 
         def evaluate(thetas: list[NDArray], extra=()) -> list[tuple[Replayed, NDArray]]:
             sets = [self.specs(theta) for theta in thetas]
+            alt_sets = []
             for i, alt, alt_theta in extra:
                 th = self.split(thetas[1])
                 th[i] = np.zeros_like(th[i])
-                sets.append(self.specs(np.concatenate(th)) + (alt.spec(alt_theta),))
-            sims = rp.run(sets, n_all, progress)
-            return [(s, weighted(meas, s.y, rp.sigma)) for s in sims]
+                alt_sets.append(self.specs(np.concatenate(th)) + (alt.spec(alt_theta),))
+            sims, alt_sims = rp.run_batches([(sets, n_all), (alt_sets, n_extra)], progress)
+            return ([(s, weighted(meas, s.y, rp.sigma)) for s in sims]
+                    + [(s, weighted(meas[:n_extra], s.y, rp.sigma)) for s in alt_sims])
 
         return evaluate

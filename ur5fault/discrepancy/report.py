@@ -71,6 +71,9 @@ def sentence(f: Finding) -> str:
             f"{a.label} {_coef_text(a, th)}" for a, th in f.alternatives)
     if f.tell_apart:
         alt += f" ({f.tell_apart})"
+    for r in f.rivals:
+        if r.tell_apart:
+            alt += f" ({r.candidate.label}: {r.tell_apart})"
     return f"{text} [{tests}]{alt}"
 
 
@@ -119,6 +122,16 @@ def _term_text(c: TermCandidate, amp: float, lo: float, hi: float) -> str:
             f"(95 % {1e3 * lo:.3g}..{1e3 * hi:.3g} ms)")
 
 
+def rival_json(r) -> dict[str, Any]:
+    c = r.candidate
+    out = {"candidate": c.label, "name": c.effect, "joint": JOINT_NAMES[c.joint] if c.joint is not None else None,
+           "coefficients": list(map(float, np.ravel(r.theta))), "held_out_ratio": r.held_out_ratio,
+           "held_out_delta_bic": r.held_out_delta_bic, "tell_apart": r.tell_apart}
+    if isinstance(c, LibraryCandidate):
+        out["size"] = float(c.value(r.theta))
+    return out
+
+
 def finding_json(f: Finding) -> dict[str, Any]:
     c = f.candidate
     lo, hi = f.interval()
@@ -132,7 +145,9 @@ def finding_json(f: Finding) -> dict[str, Any]:
                                                        "energy": f.held_out.energy},
            "indistinguishable_from": [{"candidate": a.label, "coefficients": list(map(float, np.ravel(th)))}
                                       for a, th in f.alternatives],
-           "tell_apart": f.tell_apart}
+           "tell_apart": f.tell_apart,
+           # the alternatives judged on the held-out part (rivals.py), also among indistinguishable_from
+           "rivals": [rival_json(r) for r in f.rivals]}
     if isinstance(c, LibraryCandidate):
         a, b = sorted((c.value(lo), c.value(hi)))
         out["interval"] = {c.param: [a, b]}

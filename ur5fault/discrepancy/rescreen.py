@@ -21,13 +21,13 @@ the held-out part, and the elbow was never offered again).  On such a joint a cu
 and an offset are nearly one shape on the fitting part, and which one the selection takes is decided by the
 model's own error; so the best MAX_RIVALS other effects that pass every test in the chosen one's place are
 simulated too, and each that passes the held-out check and leaves the joint's held-out residual no worse by
-MIN_DELTA_BIC is listed as an indistinguishable alternative (:func:`indistinguishable_held_out`).
+MIN_DELTA_BIC is listed as an indistinguishable alternative (``rivals.py``, the same rule every named finding's
+rivals are judged by).
 """
 
 from __future__ import annotations
 
 import dataclasses
-import math
 from collections.abc import Callable, Sequence
 
 import numpy as np
@@ -38,13 +38,14 @@ from ..twin.replay import LogReplay, Replayed
 from .candidates import Candidate
 from .drift import Drift
 from .judging import Finding, SearchStep, channels
+from .rivals import MAX_RIVALS, Rival, current_channel, differ_most, in_place, indistinguishable_held_out, judge_rival
 from .search import backward, columns_of, forward, judge
-from .statistics import MIN_DELTA_BIC, BlockGram, effective_n, generalisation, rss_of, weighted
+from .statistics import BlockGram, generalisation, rss_of, weighted
+
+__all__ = ["MAX_RIVALS", "freed_joints", "indistinguishable_held_out", "rescreen", "rivals_of", "select_on_freed"]
 
 #: a second simulation at the judged sizes is spared when every size is within this share of the simulated one
 SIZE_RTOL = 0.01
-#: rivals of a re-screened effect on its joint simulated (each one run of the whole log) at most
-MAX_RIVALS = 2
 
 
 @dataclasses.dataclass(frozen=True)
@@ -72,41 +73,15 @@ def freed_joints(findings: Sequence[Finding], max_effects: int) -> list[int | No
     return out
 
 
-def indistinguishable_held_out(e_named: NDArray, e_rival: NDArray) -> bool:
-    """Whether the held-out part cannot tell a rival from the named finding: its weighted residual there
-    ``e_rival`` (the joint's channels, ``(n, n_channels)``) is worse than the named finding's ``e_named`` by less
-    than MIN_DELTA_BIC in effective (autocorrelation-discounted) samples, the bar a finding must clear to be
-    named at all."""
-    rss_n, rss_r = float(np.sum(e_named**2)), float(np.sum(e_rival**2))
-    if rss_n <= 0.0:
-        return rss_r <= 0.0
-    return effective_n(e_named) * math.log(max(rss_r, 1e-300) / rss_n) < MIN_DELTA_BIC
-
-
 def rivals_of(X: NDArray, e: NDArray, candidates: Sequence[Candidate], cols: list[list[int]],
               findings: Sequence[Finding], chosen: Sequence[tuple[int, NDArray]]) -> list[tuple[int, int, NDArray]]:
     """For each candidate chosen on a freed joint, the other offered candidates on that joint that pass every
     test in its place (at most MAX_RIVALS, by improvement): ``(position in chosen, k, theta)``."""
     out = []
+    taken = {f.candidate.label for f in findings} | {candidates[k].label for k, _ in chosen}
     for pos, (k, _) in enumerate(chosen):
-        j = candidates[k].joint
-        ks = [o for o in offered(candidates, findings, j) if o != k and o not in {c for c, _ in chosen}]
-        if not ks:
-            continue
-        sub = [candidates[o] for o in ks]
-        scols = columns_of(sub)
-        Xs = X[[c for o in ks for c in cols[o]]]
-        bg = BlockGram.build(Xs, e)
-        G, g, ee = bg.total()
-        ranked = sorted(range(len(ks)), key=lambda i: rss_of(G, g, ee, scols[i])[0])
-        n = 0
-        for i in ranked:
-            v = judge(bg, e, Xs, sub, scols, [], i)
-            if v.accepted:
-                out.append((pos, ks[i], np.asarray(v.theta)))
-                n += 1
-                if n == MAX_RIVALS:
-                    break
+        out += [(pos, r, th) for r, th in in_place(X, e, e, candidates, cols, taken, candidates[k].joint,
+                                                   share=0.0, robot_wide=False)]
     return out
 
 
@@ -224,9 +199,11 @@ def rescreen(rp: LogReplay, lib_X: NDArray, lib_drift: Drift | None, candidates:
     for i, ai in zip(keep, a):
         v = judge(bg, e_fit, J_fit, scaled, one, [o for o in keep if o != i], i)
         named.append(_finding(names[i], new[i][1], float(ai), v, held_out=gens[i]))
-        named[-1].alternatives = _rivals_held_out(rp, e_after, J, keep, a, i, n_fit, drift,
-                                                  [(candidates[k], th, s) for (pos, k, th), s
-                                                   in zip(rivals, rival_sims) if pos == i and s.ok])
+        named[-1].rivals = _rivals_held_out(rp, e_after, J, keep, a, i, n_fit, drift,
+                                            [(candidates[k], th, s) for (pos, k, th), s
+                                             in zip(rivals, rival_sims) if pos == i and s.ok],
+                                            after.torque_gear_Nm, names[i])
+        named[-1].alternatives = [(r.candidate, r.theta) for r in named[-1].rivals]
     trace += [SearchStep.of("re-screened joint, whole log", dataclasses.replace(f.verdict, accepted=f.kept,
                                                                                 reason=f.reason))
               for f in named + out]
@@ -238,32 +215,31 @@ def rescreen(rp: LogReplay, lib_X: NDArray, lib_drift: Drift | None, candidates:
 
 
 def _rivals_held_out(rp: LogReplay, e_after: NDArray, J: NDArray, keep: list[int], a: NDArray, i: int, n_fit: int,
-                     drift: Drift | None, rivals: list[tuple[Candidate, NDArray, Replayed]]
-                     ) -> list[tuple[Candidate, NDArray]]:
+                     drift: Drift | None, rivals: list[tuple[Candidate, NDArray, Replayed]], torque: NDArray,
+                     finding: Candidate) -> list[Rival]:
     """The rivals of re-screened finding ``i`` that the held-out part cannot tell from it: each sized on the
     fitting part in its place beside the other kept re-screened findings (its secant is its column), it must
     pass the held-out check itself and leave the joint's held-out residual no worse than ``i`` does by
-    MIN_DELTA_BIC (:func:`indistinguishable_held_out`).  On a joint whose current is gravity of one sign a
-    current gain, a torque constant and an offset are nearly one shape on the fitting part, and which of them
-    the selection takes there is decided by the model's own error; the report must then name them all."""
+    MIN_DELTA_BIC (:func:`ur5fault.discrepancy.rivals.judge_rival`).  On a joint whose current is gravity of one
+    sign a current gain, a torque constant and an offset are nearly one shape on the fitting part, and which of
+    them the selection takes there is decided by the model's own error; the report must then name them all."""
     meas = rp.measured(rp.n_samples)
     others = [o for o in keep if o != i]
+    named = e_after - np.tensordot(a, J[keep], axes=1)
+    e_place = named + a[keep.index(i)] * J[i]
     out = []
-    named_held = e_after[n_fit:] - np.tensordot(a, J[keep, n_fit:], axes=1)
     for cand, th, sim in rivals:
         ch = channels(cand, len(rp.signals))
         col = e_after - weighted(meas, sim.y, rp.sigma)
-        X = np.concatenate([J[others], col[None]])
-        X_fit, e_fit = X[:, :n_fit], e_after[:n_fit]
-        if drift is not None:
-            X_fit, e_fit = drift.remove(X_fit), drift.remove(e_fit)
-        G, g, ee = BlockGram.build(X_fit, e_fit).total()
-        b = rss_of(G, g, ee, list(range(X.shape[0])))[1]
-        rival_held = e_after[n_fit:] - np.tensordot(b, X[:, n_fit:], axes=1)
-        gen = generalisation(rival_held[:, ch], (rival_held + b[-1] * col[n_fit:])[:, ch])
-        if gen.passes and not cand.range_problem(th * b[-1]) and indistinguishable_held_out(
-                named_held[:, ch], rival_held[:, ch]):
-            out.append((cand, np.asarray(th, dtype=float) * float(b[-1])))
+        got = judge_rival(e_after, col, named, n_fit, ch, drift, J[others])
+        if got is None or cand.range_problem(th * got[0]):
+            continue
+        b, ratio, dbic = got
+        j = finding.joint
+        hint = "" if j is None else differ_most(rp.log, rp.n_samples, torque,
+                                                (e_place - named)[:, current_channel(rp.signals, j)],
+                                                b * col[:, current_channel(rp.signals, j)], j)
+        out.append(Rival(cand, np.asarray(th, dtype=float) * b, ratio, dbic, hint))
     return out
 
 

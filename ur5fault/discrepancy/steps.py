@@ -21,12 +21,12 @@ from numpy.typing import NDArray
 
 from ..sim.axes import N_JOINTS
 from ..twin.replay import LogReplay, Replayed
-from ..twin.residuals import conditions
 from . import discovery, library
 from .candidates import Candidate, TermCandidate
 from .drift import Drift
 from .judging import Finding, SearchStep, judge_findings
 from .refinement import FindingSet, Refined, probe_batch
+from .rivals import current_channel, differ_most
 from .search import backward, columns_of, forward
 from .search import judge as judge_one
 from .statistics import MIN_DELTA_BIC, BlockGram, effective_n, rss_of, weighted
@@ -215,17 +215,10 @@ def tell_apart(rp: LogReplay, lib: LibraryRecord, X_a: NDArray, th_a, X_b: NDArr
     if joint is None:
         return ""
     n = lib.e0.shape[0]
-    ch = rp.signals.index("current_A") * N_JOINTS + joint if "current_A" in rp.signals else joint
+    ch = current_channel(rp.signals, joint)
     a = np.tensordot(np.asarray(th_a), X_a, axes=1)[:, ch]
     b = np.tensordot(np.asarray(th_b), X_b, axes=1)[:, ch]
-    masks = conditions(rp.log, n, lib.base.torque_gear_Nm)
-    scale = max(float(np.sqrt(np.mean(a**2))), 1e-12)
-    by = {k: float(np.sqrt(np.mean((a - b)[m[:, joint]] ** 2))) / scale for k, m in masks.items() if m[:, joint].any()}
-    if not by:
-        return ""
-    where = max(by, key=by.__getitem__)
-    return (f"on this log they differ most {where} ({100 * by[where]:.0f} % of the effect); a motion with more "
-            f"time {where} on this joint would tell them apart")
+    return differ_most(rp.log, n, lib.base.torque_gear_Nm, a, b, joint)
 
 
 def joint_check(found: list[Candidate], X: NDArray, fixed: list[int], e0: NDArray,
@@ -306,7 +299,7 @@ def refine(rp: LogReplay, found: list[Candidate], X: NDArray, fixed: list[int], 
         return RefineRecord(found, None, rp.run([()], rp.n_samples, progress)[0], alts, fs)
     G, g, ee = BlockGram.build(X[fixed], e0).total()
     theta0 = rss_of(G, g, ee, list(range(len(fixed))))[1]
-    evaluate = fs.evaluator(rp, progress)
+    evaluate = fs.evaluator(rp, progress, extra_rows=n_fit)
     first = probe_batch(evaluate, theta0, fs.probes(theta0), fs.bounds(), n_fit, alts, evaluate)
     return RefineRecord(found, first, first.sim0, alts, fs)
 

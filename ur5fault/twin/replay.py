@@ -132,6 +132,8 @@ class LogReplay:
         self.gear_ratio = np.asarray(self.params.gear.ratio, dtype=float)
         self.n_simulated = 0  # replays run so far
         self.simulated_s = 0.0  # simulated seconds so far, summed over replays
+        #: prefetched replays by content (:meth:`prefetch`): samples, and the replay or its future
+        self._held: dict[str, tuple[int, object]] = {}
 
     @property
     def n_samples(self) -> int:
@@ -157,26 +159,62 @@ class LogReplay:
 
     def run(self, effect_sets: Sequence[Sequence[EffectSpec]], n: int | None = None, progress=None
             ) -> list[Replayed]:
-        """Replay samples ``1..n`` (default: all) once per effect set: one lockstep batch, split over
-        ``jobs`` processes, in the order of ``effect_sets``."""
-        n = self._n(n)
-        runs = [RunSpec(f"c{i}", self.seed, self.base + tuple(e)) for i, e in enumerate(effect_sets)]
-        self.n_simulated += len(runs)
-        self.simulated_s += len(runs) * n * self.log.period_s
-        if self.jobs > 1 and len(runs) >= 2:
-            # a batch equals its single runs bit for bit, so splitting over processes changes nothing; this
-            # process simulates a share too (``util/parallel.py``)
-            from ..util.parallel import map_tasks
+        """Replay samples ``1..n`` (default: all) once per effect set, in the order of ``effect_sets``: one
+        lockstep batch, or with ``jobs > 1`` one task per run spread over ``jobs`` processes
+        (:func:`simulate_requests`)."""
+        return self.run_batches([(effect_sets, n)], progress)[0]
 
-            size = -(-len(runs) // self.jobs)
-            parts = map_tasks(_simulate, [(self.params, self.traj, runs[i : i + size], self.log.period_s, n)
-                                          for i in range(0, len(runs), size)], self.jobs)
-            res = [r for part in parts for r in part]
-        else:
-            res = _simulate(self.params, self.traj, runs, self.log.period_s, n, progress)
+    def run_batches(self, batches: Sequence[tuple[Sequence[Sequence[EffectSpec]], int | None]], progress=None
+                    ) -> list[list[Replayed]]:
+        """Several batches ``(effect sets, n)`` of different lengths at once, each replay equal to :meth:`run`'s:
+        with ``jobs > 1`` their runs are spread over the processes together, balanced by simulated seconds, so
+        that a short batch fills a core a long one would leave idle."""
+        reqs = [[(self, tuple(e), self._n(n)) for e in sets] for sets, n in batches]
+        flat = simulate_requests([r for rs in reqs for r in rs], self.jobs, progress)
         k = len(self.signals)  # _simulate returns every signal of SIGNALS: keep those the log has
-        return [self._with_log_temperature(dataclasses.replace(r, y=r.y[:, :k]), effs)
-                for r, effs in zip(res, effect_sets)]
+        out, i = [], 0
+        for (sets, _), rs in zip(batches, reqs):
+            out.append([self._with_log_temperature(dataclasses.replace(r, y=r.y[:, :k]), e)
+                        for r, e in zip(flat[i : i + len(rs)], sets)])
+            i += len(rs)
+        return out
+
+    def prefetch(self, effect_sets: Sequence[Sequence[EffectSpec]], n: int | None = None) -> None:
+        """Start replays that a later :meth:`run` will ask for on a worker process now (``jobs > 1``), so that
+        they are simulated while this process does other work; a later run of the same effects over at most
+        ``n`` samples takes them from here instead of simulating them again (the first samples of a replay do not
+        depend on how far it goes on).  With ``jobs = 1`` nothing is started and the later run simulates them."""
+        if self.jobs <= 1:
+            return
+        from ..util.parallel import submit
+
+        n = self._n(n)
+        for e in effect_sets:
+            key = self._key(tuple(e))
+            if key in self._held and self._held[key][0] >= n:
+                continue
+            fut = submit(_simulate, (self.params, self.traj, [RunSpec("c0", self.seed, self.base + tuple(e))],
+                                     self.log.period_s, n), self.jobs)
+            self._held[key] = (n, fut)
+            self.n_simulated += 1
+            self.simulated_s += n * self.log.period_s
+
+    def _key(self, effects: tuple[EffectSpec, ...]) -> str:
+        return repr(self.base + effects)  # by content; repr tells -0.0 from 0.0 and a numpy float from a float
+
+    def holds(self, effects: tuple[EffectSpec, ...], n: int) -> bool:
+        """Whether a prefetched replay of ``effects`` reaches sample ``n`` (finished or not)."""
+        got = self._held.get(self._key(effects))
+        return got is not None and got[0] >= n
+
+    def held(self, effects: tuple[EffectSpec, ...], n: int) -> Replayed:
+        """The prefetched replay of ``effects`` over samples ``1..n`` (all signals; :meth:`holds` must be true),
+        waiting for the worker if it is not finished."""
+        m, r = self._held[self._key(effects)]
+        if not isinstance(r, Replayed):  # a future: wait for the worker
+            r = r.result()[0]
+            self._held[self._key(effects)] = (m, r)
+        return _prefix(r, n)
 
     def _with_log_temperature(self, r: Replayed, effects: Sequence[EffectSpec]) -> Replayed:
         """A temperature term was evaluated at the run's constant temperature (the log's mean);
@@ -205,3 +243,50 @@ def _simulate(params: RobotParams, traj, runs: list[RunSpec], period_s: float, n
         out.append(Replayed(res.status[i], np.stack(y, axis=1), res["q_rad"][i], res["q_M_rad"][i], res["i_q_A"][i],
                             res["T_gear_Nm"][i]))
     return out
+
+
+def _prefix(r: Replayed, n: int) -> Replayed:
+    """Samples ``1..n`` of a longer replay."""
+    return Replayed(r.status, r.y[:n], r.q_rad[:n], r.q_motor_rad[:n], r.current_true_A[:n], r.torque_gear_Nm[:n])
+
+
+def simulate_requests(reqs: Sequence[tuple[LogReplay, tuple[EffectSpec, ...], int]], jobs: int, progress=None
+                      ) -> list[Replayed]:
+    """Replays ``(log replay, effects, n)`` with every signal of :data:`SIGNALS`, in order: those prefetched taken
+    from their log replay (:meth:`LogReplay.held`), the rest simulated.  ``jobs = 1``: one lockstep batch per log
+    replay and length, here; else one task per run over this process and ``jobs - 1`` workers, the longest first
+    and the split decided as they go (:func:`ur5fault.util.parallel.map_balanced`).  A run's replay does not
+    depend on the batch it is simulated in, nor on the process."""
+    out: list[Replayed | None] = [None] * len(reqs)
+    todo = [i for i, (rp, e, n) in enumerate(reqs) if not rp.holds(e, n)]
+    _simulate_todo(reqs, todo, out, jobs, progress)
+    for i, (rp, e, n) in enumerate(reqs):  # taken after this process's own share: a prefetch may be on a worker
+        if out[i] is None:
+            out[i] = rp.held(e, n)
+    return out
+
+
+def _simulate_todo(reqs, todo: list[int], out: list, jobs: int, progress) -> None:
+    """Simulate requests ``todo`` into ``out`` (:func:`simulate_requests`)."""
+    for i in todo:
+        rp, _, n = reqs[i]
+        rp.n_simulated += 1
+        rp.simulated_s += n * rp.log.period_s
+    if jobs > 1 and len(todo) > 1:
+        from ..util.parallel import map_balanced
+
+        tasks = [(rp.params, rp.traj, [RunSpec(f"c{i}", rp.seed, rp.base + e)], rp.log.period_s, n)
+                 for rp, e, n in (reqs[i] for i in todo)]
+        for i, (r,) in zip(todo, map_balanced(_simulate, tasks, jobs, cost=[reqs[i][2] * reqs[i][0].log.period_s
+                                                                            for i in todo])):
+            out[i] = r
+        return
+    groups: dict[tuple[int, int], list[int]] = {}
+    for i in todo:
+        groups.setdefault((id(reqs[i][0]), reqs[i][2]), []).append(i)
+    for idx in groups.values():
+        rp, _, n = reqs[idx[0]]
+        runs = [RunSpec(f"c{i}", rp.seed, rp.base + reqs[i][1]) for i in idx]
+        for i, r in zip(idx, _simulate(rp.params, rp.traj, runs, rp.log.period_s, n,
+                                       progress if len(groups) == 1 else None)):
+            out[i] = r

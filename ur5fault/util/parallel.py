@@ -7,6 +7,10 @@ on its share at once.  Its share is fixed before anything starts: tasks from the
 of the tasks' total cost; the workers take the others in order.  (Taking unstarted tasks back from the workers by
 cancelling their futures would balance better, but loky's executor, shut down after an interruption, trips over
 cancelled futures it still holds.)  A task's result does not depend on where it ran.
+
+:func:`map_balanced` decides the split as it goes instead (the workers fed one task at a time from the costly end,
+this process taking from the cheap end), for batches whose tasks' costs are known but whose processes may start
+late or run slower (replays of logs: one task per run); :func:`submit` starts one task on a worker now.
 """
 
 from __future__ import annotations
@@ -68,3 +72,94 @@ def map_tasks(fn: Callable[..., Any], tasks: Sequence[tuple], jobs: int, cost: S
     for i, r in iter_tasks(fn, tasks, jobs, cost):
         out[i] = r
     return out
+
+
+def map_balanced(fn: Callable[..., Any], tasks: Sequence[tuple], jobs: int, cost: Sequence[float]) -> list[Any]:
+    """``[fn(*t) for t in tasks]``, in the order of the tasks, over this process and ``jobs - 1`` workers with the
+    split decided as they go, not fixed before anything starts: the tasks are taken in order of decreasing
+    ``cost`` (e.g. simulated seconds), the workers from the front of that order (each kept one task ahead, fed as
+    soon as one finishes) and this process from the back, until they meet.  A worker that starts late (its
+    start-up, or a task :func:`submit` gave it before) or a process slowed by other jobs on the machine then takes
+    fewer tasks instead of leaving the other core idle at the end.  A task's result does not depend on where it
+    ran.  Tasks are not cancelled once given to a worker (see the module docstring), so an exception here waits
+    for nothing: the workers are stopped."""
+    if len(cost) != len(tasks):
+        raise ValueError(f"{len(cost)} costs for {len(tasks)} tasks")
+    if jobs <= 1 or len(tasks) <= 1:
+        return [fn(*t) for t in tasks]
+    import queue
+    import threading
+
+    from joblib.executor import get_memmapping_executor
+
+    order = sorted(range(len(tasks)), key=lambda i: -float(cost[i]))
+    executor = get_memmapping_executor(jobs - 1)
+    lock = threading.Lock()
+    ends = [0, len(order)]  # the tasks not yet taken: order[ends[0]:ends[1]]
+    finished: queue.SimpleQueue = queue.SimpleQueue()  # (task index, future) of the workers, as they finish
+    stop = threading.Event()
+
+    def take(front: bool) -> int | None:
+        with lock:
+            if ends[0] >= ends[1]:
+                return None
+            if front:
+                ends[0] += 1
+                return order[ends[0] - 1]
+            ends[1] -= 1
+            return order[ends[1]]
+
+    def give(i: int) -> None:
+        executor.submit(fn, *tasks[i]).add_done_callback(lambda f, i=i: finished.put((i, f)))
+
+    results: queue.SimpleQueue = queue.SimpleQueue()
+
+    def feed() -> None:  # a worker's task finished: hand its result on and give it the next task
+        while True:
+            item = finished.get()
+            if item is None:
+                return
+            results.put(item)
+            i = take(front=True)
+            if i is not None and not stop.is_set():
+                give(i)
+
+    out: list[Any] = [None] * len(tasks)
+    n_out = 0
+    for _ in range(min(jobs - 1, len(tasks) - 1)):  # one task per worker; this process keeps at least one
+        i = take(front=True)
+        if i is None:
+            break
+        give(i)
+    feeder = threading.Thread(target=feed, name="ur5fault-task-feeder", daemon=True)
+    feeder.start()
+    done = False
+    try:
+        while (i := take(front=False)) is not None:
+            out[i] = fn(*tasks[i])
+            n_out += 1
+        with lock:
+            n_given = len(tasks) - n_out
+        for _ in range(n_given):
+            i, f = results.get()
+            out[i] = f.result()
+        done = True
+    finally:
+        stop.set()
+        finished.put(None)
+        feeder.join()
+        if not done:
+            executor.shutdown(wait=False, kill_workers=True)
+    return out
+
+
+def submit(fn: Callable[..., Any], args: tuple, jobs: int):
+    """``fn(*args)`` started now on a worker process (of the ``jobs - 1`` that :func:`map_balanced` uses), its
+    future returned; None when ``jobs <= 1`` (the caller computes it when it needs it).  For work whose inputs are
+    known before this process needs its result, so that a worker does it while this process does something
+    else."""
+    if jobs <= 1:
+        return None
+    from joblib.executor import get_memmapping_executor
+
+    return get_memmapping_executor(jobs - 1).submit(fn, *args)

@@ -5,6 +5,7 @@ undisturbed rest consistent with its first part."""
 
 import dataclasses
 import json
+import zlib
 
 import numpy as np
 import pytest
@@ -19,15 +20,21 @@ PERIOD = 0.008
 
 
 def part(name: str, residual: np.ndarray, moving: bool = True, speed: np.ndarray | None = None,
-         cands=(), X=None, e=None, position: np.ndarray | None = None, quantum_rad: float = np.nan) -> Observed:
-    """A replayed log part: ``residual`` the current residual, ``position`` the position residual (default 0)."""
+         cands=(), X=None, e=None, position: np.ndarray | None = None, quantum_rad: float = np.nan,
+         target: np.ndarray | None = None) -> Observed:
+    """A replayed log part: ``residual`` the current residual, ``position`` the position residual (default 0);
+    ``target`` the joint targets (default: a ramp at speeds drawn from the name, a motion no other part repeats,
+    and that never repeats itself)."""
     n = residual.shape[0]
+    if target is None:
+        rate = np.random.default_rng(zlib.crc32(name.encode())).uniform(0.1, 1.0, 6)
+        target = np.arange(n)[:, None] * PERIOD * rate
     speed = np.full((n, 6), 0.5 if moving else 0.0) if speed is None else speed
     X = np.zeros((0, n, 12)) if X is None else X
     e = np.zeros((n, 12)) if e is None else e
     position = np.zeros((n, 6)) if position is None else position
     return Observed(name, PERIOD, np.arange(n) * PERIOD, residual, speed > 1e-3, np.ones(n, bool), tuple(cands),
-                    X, e, speed, np.zeros((n, 6)), position, np.full(6, quantum_rad))
+                    X, e, speed, np.zeros((n, 6)), position, np.full(6, quantum_rad), target)
 
 
 def noise(seed: int, n: int = 2000, sigma: float = 0.1) -> np.ndarray:
@@ -133,8 +140,14 @@ def test_baseline_round_trip_and_refusals(tmp_path):
         Baseline.load(path)
     # the earlier format (current channel only, keys "scale" / "tail" at the top) is refused, not misread
     path.write_text(json.dumps({**b.to_json(), "format": "ur5fault-monitor-baseline-2"}))
-    with pytest.raises(ParameterError, match="ur5fault-monitor-baseline-2.*expected 'ur5fault-monitor-baseline-3'"):
+    with pytest.raises(ParameterError, match="ur5fault-monitor-baseline-2.*expected 'ur5fault-monitor-baseline-4'"):
         Baseline.load(path)
+    # the last format (no task runs) likewise: rebuilt, not read without its pairing
+    path.write_text(json.dumps({**b.to_json(), "format": "ur5fault-monitor-baseline-3"}))
+    old = "ur5fault-monitor-baseline-3.*rebuild|ur5fault-monitor-baseline-3.*write"
+    with pytest.raises(ParameterError, match=old) as e:
+        Baseline.load(path)
+    assert "not a valid monitor baseline" not in str(e.value)  # its own line, not wrapped in the generic one
     with pytest.raises(ParameterError, match="too few judged samples"):
         fit_baseline([part("short", noise(4, n=40))], "sha")  # 0.32 s
     with pytest.raises(ParameterError, match="sample period"):

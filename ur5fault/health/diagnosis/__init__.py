@@ -3,8 +3,9 @@
 The log's commands are replayed through its digital twin (:class:`ur5fault.twin.LogReplay`, under the model
 overlay a user fitted to the robot, with the log's payload, tool and temperatures), the same features a
 campaign computes for a run are taken over consecutive windows as long as the training runs
-(:mod:`.windows`), and every window is scored (:mod:`.score`). Written: ``diagnosis.json``, ``report.md`` and
-``diagnosis.png`` (:mod:`.report`).
+(:mod:`.windows`), and every window is scored (:mod:`.score`), its inputs first referred to the robot's own
+healthy baseline when one is given (:func:`robot_baseline`, :mod:`.baseline`). Written: ``diagnosis.json``,
+``report.md`` and ``diagnosis.png`` (:mod:`.report`).
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ from ...errors import ParameterError
 from ...logs import MeasuredLog
 from ...sim.effects import EffectSpec
 from ...twin import LogReplay, Replayed
+from .baseline import MIN_SPREAD_WINDOWS, BaselineMap, fit_map, training_reference
 from .score import check_schema, score_windows
 from .windows import Window, window_features
 
@@ -37,24 +39,78 @@ def replay_twin(log: MeasuredLog, params_overrides: dict | None = None, base_eff
     return replay, rep
 
 
+def log_windows(log: MeasuredLog, window_s: float, twin: tuple[LogReplay, Replayed]) -> list[Window]:
+    """The classifier inputs of every whole window of ``log`` (:func:`.windows.window_features`), with its
+    operating conditions (payload, mean temperature: the log's, else the model's)."""
+    replay, rep = twin
+    temp = (np.mean(log.temperature_C) if log.temperature_C is not None
+            else float(np.mean(replay.params.joint_temperature_C)))
+    context = {"payload_kg": float(log.payload_kg), "temperature_C": float(temp)}
+    return window_features(log, replay, rep, window_s, context)
+
+
+def robot_baseline(healthy: Sequence[MeasuredLog], detector_dir: str | Path, params_overrides: dict | None = None,
+                   base_effects: Sequence[EffectSpec] = (), *, seed: int = TWIN_SEED,
+                   windows: Sequence[Sequence[Window]] | None = None) -> BaselineMap:
+    """The robot's own healthy baseline (:mod:`.baseline`): ``healthy`` logs of the robot replayed through the
+    same twin (model overlay) and windowed as a diagnosed log is; ``windows``: their windows, when already
+    computed (one sequence per log, in order)."""
+    from ..diagnostics.saved import load_models
+
+    schema = load_models(detector_dir)[1]
+    window_s = check_schema(schema, str(detector_dir))
+    if not healthy:
+        raise ParameterError("a baseline needs at least one healthy log of the robot")
+    odd = [g.source for g in healthy if abs(g.period_s - healthy[0].period_s) > 1e-9]
+    if odd:
+        raise ParameterError(f"{odd[0]}: sampled every {1e3 * healthy[0].period_s:g} ms in {healthy[0].source}, "
+                             "otherwise here; a baseline's logs must share one sample period")
+    if windows is None:
+        windows = [log_windows(g, window_s, replay_twin(g, params_overrides, base_effects, seed=seed))
+                   for g in healthy]
+    return fit_map(training_reference(detector_dir, schema), [(g.source, w) for g, w in zip(healthy, windows)],
+                   healthy[0].period_s)
+
+
 def diagnose(log: MeasuredLog, detector_dir: str | Path, params_overrides: dict | None = None,
              base_effects: Sequence[EffectSpec] = (), *, seed: int = TWIN_SEED,
-             twin: tuple[LogReplay, Replayed] | None = None) -> dict[str, Any]:
+             twin: tuple[LogReplay, Replayed] | None = None, baseline: BaselineMap | None = None,
+             windows: list[Window] | None = None) -> dict[str, Any]:
     """Diagnose ``log`` with the classifiers saved in ``detector_dir``; return the diagnosis (``diagnosis.json``'s
     content) with the windows' features under ``"_windows"``.  ``twin``: the :func:`replay_twin` of a log with
     the same commands, conditions and model (e.g. the same log before a fault was written into its measured
-    signals), reused instead of replayed again."""
+    signals), reused instead of replayed again; ``windows``: the log's :func:`log_windows` under that twin,
+    reused likewise; ``baseline``: the robot's own healthy baseline (:func:`robot_baseline`), which every input
+    is referred to before it is scored (None: the inputs are scored as they are)."""
     from ..diagnostics.saved import load_models
 
     models, schema = load_models(detector_dir)
     window_s = check_schema(schema, str(detector_dir))
     replay, rep = twin if twin is not None else replay_twin(log, params_overrides, base_effects, seed=seed)
-    temp = (np.mean(log.temperature_C) if log.temperature_C is not None
-            else float(np.mean(replay.params.joint_temperature_C)))
-    context = {"payload_kg": float(log.payload_kg), "temperature_C": float(temp)}
-    windows: list[Window] = window_features(log, replay, rep, window_s, context)
-    scored = score_windows(models, schema, windows, log.q_motor_rad is not None)
+    if windows is None:
+        windows = log_windows(log, window_s, (replay, rep))
+    context = {k: windows[0].features[k] for k in ("payload_kg", "temperature_C")}
+    if baseline is not None:
+        if log.source in baseline.logs:
+            raise ParameterError(f"{log.source} is both diagnosed and a baseline log; a run cannot judge itself")
+        if baseline.reference.names != tuple(c["name"] for c in schema["inputs"]):
+            raise ParameterError("the baseline was built for another detector's inputs")
+        if abs(baseline.period_s - log.period_s) > 1e-9:
+            raise ParameterError(f"{log.source}: sampled every {1e3 * log.period_s:g} ms, its baseline logs every "
+                                 f"{1e3 * baseline.period_s:g} ms; the features depend on the rate: give a baseline "
+                                 "logged like the diagnosed log")
+    scored = score_windows(models, schema, windows, log.q_motor_rad is not None,
+                           None if baseline is None else baseline.apply)
     notes = list(log.assumptions(replay.params.joint_temperature_C))
+    if baseline is not None:
+        n = {r: v["n_inputs"] for r, v in baseline.summary()["rules"].items()}
+        few = n["shifted_few_windows"]
+        notes.append(f"inputs referred to the robot's healthy baseline ({baseline.n_windows} windows of "
+                     f"{len(baseline.logs)} log(s)): {n['scaled']} scaled by the baseline's larger spread, "
+                     f"{n['shifted'] + n['shifted_zero_spread']} shifted by its median"
+                     + (f", {few} shifted only (fewer than {MIN_SPREAD_WINDOWS} baseline values)" if few else "")
+                     + f", {n['left_as_measured']} left as measured (no baseline or training "
+                     "value); p(fault) is calibrated on simulated runs, not on this robot's baseline")
     if log.q_motor_rad is None:
         notes.append("no motor encoders in the log: every encoder-mismatch feature is missing (NaN) and the "
                      "detector scores without them; backlash, resolver offset and gear stiffness cannot be told")
@@ -89,6 +145,8 @@ def diagnose(log: MeasuredLog, detector_dir: str | Path, params_overrides: dict 
                      "p_fault_at_threshold": p_thr, "window_s": window_s,
                      "ur5fault_version": schema.get("ur5fault_version")},
         "conditions": context,
+        # None: the inputs were scored as they are, against the simulated healthy runs only
+        "baseline": None if baseline is None else baseline.summary(),
         "n_windows": len(scored),
         "n_flagged": len(flagged),
         "windows": scored,
@@ -97,4 +155,4 @@ def diagnose(log: MeasuredLog, detector_dir: str | Path, params_overrides: dict 
     }
 
 
-__all__ = ["diagnose", "replay_twin"]
+__all__ = ["diagnose", "log_windows", "replay_twin", "robot_baseline"]

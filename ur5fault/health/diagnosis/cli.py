@@ -1,8 +1,10 @@
-"""``ur5fault diagnose LOG --format rtde|nist|sim [--model OVERLAY] --detector DIR --out DIR``."""
+"""``ur5fault diagnose LOG --format rtde|nist|sim [--model OVERLAY] [--baseline-logs LOG ...] --detector DIR
+--out DIR``."""
 
 from __future__ import annotations
 
 import argparse
+import copy
 
 from ...logs.options import add_log_options
 
@@ -13,6 +15,11 @@ def register(sub) -> None:
     add_log_options(d, ("rtde", "nist", "sim"), several=False)
     d.add_argument("--model", help="model overlay YAML of the robot (e.g. model.yaml of `ur5fault discrepancy`; "
                                    "default: none, the nominal model)")
+    d.add_argument("--baseline-logs", nargs="+", metavar="LOG",
+                   help="healthy logs of the same robot (never the diagnosed one; same --format / payload options "
+                        "as the log, or one manifest), replayed under the same model and windowed the same way: "
+                        "every input is referred to this robot's healthy spread instead of the simulated one "
+                        "(default: none, the inputs are scored as they are)")
     d.add_argument("--detector", required=True,
                    help="folder of the saved classifiers (a benchmark folder with models/, or models/ itself)")
     d.add_argument("--out", required=True, help="output folder (diagnosis.json, report.md, diagnosis.png)")
@@ -23,34 +30,60 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
     import sys
 
     from ...config import Overlay
+    from ...errors import ParameterError
     from ...logs.length import check_files_length, check_logs_length
     from ...logs.options import log_entries, read_entry
     from ...util.io import check_writable
     from ..diagnostics.classifier import require_sklearn
     from ..diagnostics.saved import load_models
-    from . import diagnose
+    from . import diagnose, robot_baseline
     from .report import write_diagnosis
     from .score import check_schema
     from .windows import window_length
 
     entries = log_entries(args)
     if len(entries) != 1:
-        from ...errors import ParameterError
-
         raise ParameterError(f"diagnose reads one log; the manifest names {len(entries)}")
+    base = []
+    if args.baseline_logs:
+        base_args = copy.copy(args)
+        base_args.log = args.baseline_logs
+        base = log_entries(base_args)
+        held = [e.path.name for e in base if e.hold_out]
+        if held:
+            raise ParameterError(f"{held[0]}: hold_out has no meaning in a diagnose baseline (every baseline log is "
+                                 "used); remove it from the manifest")
+        names = [e.path.resolve() for e in base]
+        dup = sorted({str(n) for n in names if names.count(n) > 1})
+        if dup:
+            raise ParameterError(f"baseline log {dup[0]!r} given twice")
+        if entries[0].path.resolve() in names:
+            raise ParameterError(f"{entries[0].path} is both diagnosed and a baseline log; a run cannot judge "
+                                 "itself: give other healthy logs of the robot")
     require_sklearn()
     check_writable(args.out, folder=True)
     window_s = check_schema(load_models(args.detector)[1], args.detector)  # refused before the replay
-    check_files_length([e.path for e in entries], "diagnose")
+    check_files_length([e.path for e in (*entries, *base)], "diagnose")
     log = read_entry(entries[0], window_length(window_s))
-    check_logs_length([log], "diagnose")
+    healthy = [read_entry(e, window_length(window_s)) for e in base]
+    check_logs_length([log, *healthy], "diagnose")
     overlay = Overlay.load(args.model) if args.model else None
-    d = diagnose(log, args.detector, dict(overlay.params) if overlay else None, overlay.effects if overlay else ())
+    params, effects = (dict(overlay.params), overlay.effects) if overlay else (None, ())
+    if healthy:  # what the baseline logs assume (the diagnosed log's notes come with its diagnosis)
+        from ...sim.params import load_params
+
+        temps = load_params(overrides=params).joint_temperature_C
+        for line in dict.fromkeys(n for g in healthy for n in g.assumptions(temps)):
+            print(f"note: baseline {line}", file=sys.stderr)
+    baseline = robot_baseline(healthy, args.detector, params, effects) if healthy else None
+    d = diagnose(log, args.detector, params, effects, baseline=baseline)
     for n in d["notes"]:
         print(f"note: {n}", file=sys.stderr)
     paths = write_diagnosis(d, args.out)
     print(f"{d['log']}: {d['n_flagged']} of {d['n_windows']} windows of {d['detector']['window_s']:g} s flagged "
           f"(p(fault) > {d['detector']['p_fault_at_threshold']:.3f}); largest p(fault) "
           f"{max(w['p_fault'] for w in d['windows']):.3f}")
+    if baseline is not None:
+        print(f"baseline: {baseline.n_windows} windows of {len(baseline.logs)} healthy log(s)")
     print(f"wrote {', '.join(str(p) for p in paths)}")
     return 0

@@ -43,6 +43,19 @@ def _fmt(v: float | None, unit: str) -> str:
     return "-" if v is None else f"{v:.3g} {unit}"
 
 
+def _baseline(b: dict[str, Any] | None) -> str:
+    """The sentence saying which baseline the inputs were referred to (or that there was none)."""
+    if b is None:
+        return ("No baseline of this robot: the inputs are scored as they are, against the simulated healthy "
+                "training runs only (a real robot's model error then reads as a fault: `--baseline-logs`).")
+    n = {r: v["n_inputs"] for r, v in b["rules"].items()}
+    return (f"Baseline: {b['n_windows']} windows of {len(b['logs'])} healthy log(s) of the robot "
+            f"({', '.join(b['logs'])}); every input referred to it ({b['mapping']}): {n['scaled']} scaled, "
+            f"{n['shifted']} shifted, {n['shifted_zero_spread']} shifted (zero spread in the baseline), "
+            f"{n['shifted_few_windows']} shifted (too few baseline values), {n['left_as_measured']} left as measured "
+            f"(no value), {n['condition']} operating conditions left as they are; reference: {b['reference']}.")
+
+
 def _report(d: dict[str, Any]) -> str:
     det = d["detector"]
     lines = [f"# Diagnosis of {d['log']}", "",
@@ -50,10 +63,11 @@ def _report(d: dict[str, Any]) -> str:
              f"{d['conditions']['payload_kg']:g} kg, temperature {d['conditions']['temperature_C']:.1f} degC. "
              f"Detector: {det['folder']} ({det['feature_set']} features, training set "
              f"{str(det['training_set_sha256'])[:12]}), windows of {det['window_s']:g} s, flagged at "
-             f"p(fault) > {det['p_fault_at_threshold']:.3f} (5 % false alarms on its test split; p(fault): the "
+             f"p(fault) > {det['p_fault_at_threshold']:.3f} (5 % false alarms, {det['threshold_from']}; p(fault): the "
              "fault-kind classifier by joint's largest joint probability of a fault, "
              f"{'calibrated' if det['calibrated'] else 'NOT calibrated: the detector saved no calibration'}; "
              "the run-level detector's reading is in diagnosis.json).", "",
+             _baseline(d.get("baseline")), "",
              f"**{d['n_flagged']} of {d['n_windows']} windows flagged.**", "",
              "| window [s] | p(fault) | flagged | likeliest joint | likeliest kinds there (size, interval) |",
              "| --- | --- | --- | --- | --- |"]

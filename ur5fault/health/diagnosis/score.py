@@ -29,6 +29,7 @@ turns one way only, a current offset and a Coulomb-friction change look alike).
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -157,15 +158,18 @@ def _finite(v: float) -> float | None:
     return float(v) if np.isfinite(v) else None
 
 
-def score_windows(models, schema: dict[str, Any], windows: list[Window], has_motor_encoders: bool
-                  ) -> list[dict[str, Any]]:
+def score_windows(models, schema: dict[str, Any], windows: list[Window], has_motor_encoders: bool,
+                  inputs_map: Callable[[np.ndarray], np.ndarray] | None = None) -> list[dict[str, Any]]:
     """Per window: its times, ``p_fault``, ``flagged``, the run-level detector's reading, and per joint
     ``p_fault_joint``, the likeliest kinds with size estimates and intervals, and the kinds it cannot tell
-    (module docstring)."""
+    (module docstring).  ``inputs_map``: applied to the classifier inputs ``(n_windows, n_inputs)`` before they
+    are scored (a robot's baseline, :mod:`.baseline`); the size estimates stay the window's own."""
     from ..diagnostics.classifier import single_threaded
 
     names = [c["name"] for c in schema["inputs"]]
     x = pd.DataFrame([w.features for w in windows])[names].to_numpy(dtype=float)
+    if inputs_map is not None:
+        x = inputs_map(x)
     thr = float(schema["joint_kind_threshold_5pct_false_alarms"])
     run_thr = float(schema["detector_threshold_5pct_false_alarms"])
     with single_threaded():

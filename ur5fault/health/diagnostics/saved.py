@@ -14,7 +14,10 @@
   SHA-256 of the training rows (inputs and labels), the package, scikit-learn and skops versions, and the
   training runs' duration and log period (``window_s``, ``log_period_s``: ``ur5fault diagnose`` cuts a log
   into windows of that length, so that its features are taken over as long a stretch as the training
-  runs'; ``None`` when the campaign's manifest does not say them).
+  runs'; ``None`` when the campaign's manifest does not say them), and the healthy training runs' median and
+  robust spread of every input (``healthy_training_inputs``, :func:`healthy_reference`: ``ur5fault diagnose
+  --baseline-logs`` refers a robot's windows to it; absent from classifiers saved before it, which then read it
+  from the campaign's feature table beside the benchmark folder).
 
 Scoring another campaign with them (``ur5fault benchmark TRAIN_DIR --test OTHER_DIR``) needs its
 table to hold every input column; a missing one is named.
@@ -27,6 +30,7 @@ import json
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pandas as pd
 
 from ...errors import ConfigFileError
@@ -43,6 +47,8 @@ SCHEMA_FILE = "schema.json"
 #: standard errors and t values; 3: p(fault) is the fault-kind classifier by joint's score, and the calibration
 #: map saved is that score's (formats 1-2 calibrated the run-level detector: refused in one line)
 SCHEMA_FORMAT = 3
+#: median absolute deviation -> standard deviation of a normal distribution
+MAD_SCALE = 1.4826
 #: module prefixes of the types a saved file may hold (anything else is refused on loading)
 TRUSTED_PREFIXES = ("sklearn.", "numpy.", "builtins.")
 
@@ -53,6 +59,20 @@ def training_hash(ds: Dataset) -> str:
     h = hashlib.sha256(json.dumps(cols).encode())
     h.update(pd.util.hash_pandas_object(ds.train[cols].astype(str), index=False).to_numpy().tobytes())
     return h.hexdigest()
+
+
+def healthy_reference(train: pd.DataFrame, inputs: list[str] | tuple[str, ...]) -> dict[str, list]:
+    """Per input (in ``inputs``' order), over the healthy rows of ``train`` (``fault == "healthy"``): the median,
+    the robust spread (:data:`MAD_SCALE` x the median absolute deviation) and the number of finite values
+    (NaN where there is none)."""
+    h = train.loc[train["fault"] == "healthy", list(inputs)].apply(pd.to_numeric, errors="coerce").to_numpy(float)
+    n = np.isfinite(h).sum(axis=0)
+    with np.errstate(all="ignore"):
+        med = np.array([np.median(c[np.isfinite(c)]) if k else np.nan for c, k in zip(h.T, n)])
+        scale = np.array([MAD_SCALE * np.median(np.abs(c[np.isfinite(c)] - m)) if k else np.nan
+                          for c, k, m in zip(h.T, n, med)])
+    return {"median": [None if not np.isfinite(v) else float(v) for v in med],
+            "scale": [None if not np.isfinite(v) else float(v) for v in scale], "n": [int(v) for v in n]}
 
 
 def save_models(models: Models, ds: Dataset, feature_set: str, threshold_score: float, out: Path,
@@ -96,6 +116,8 @@ def save_models(models: Models, ds: Dataset, feature_set: str, threshold_score: 
         "log_period_s": None if log_period_s is None else float(log_period_s),
         # None: p(fault) is the detector's own probability, not calibrated (classifiers saved before calibration)
         "calibration": None if models.calibrator is None else (calibration or {"method": "unrecorded"}),
+        # the reference a robot's own healthy baseline is referred to (ur5fault diagnose --baseline-logs)
+        "healthy_training_inputs": healthy_reference(ds.train, ds.inputs),
     }
     write_json_atomic(folder / SCHEMA_FILE, schema)
     return folder

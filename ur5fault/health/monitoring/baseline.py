@@ -4,7 +4,9 @@
 keeps, per channel (current and position residual) and joint, the spread model of the residual's transient and
 the tail of its normalised window maxima (:mod:`.events`), per joint the quantum of the measured positions, and
 per library candidate the mean and spread of its estimates over time blocks of the
-runs (:mod:`.changes`). It is written
+runs (:mod:`.changes`), and for a robot that repeats its task (:mod:`.task`) every baseline run's targets and
+current residual (the reference a log that repeats them is judged against) with the spread and tail of the
+current's transient against that reference, measured where the baseline runs repeat each other. It is written
 as ``baseline.json`` (:meth:`Baseline.to_json`) with the SHA-256 of the overlay it belongs to, so a later
 ``ur5fault monitor --baseline-stats`` reuses it only with that same overlay.
 """
@@ -40,8 +42,13 @@ from .events import (
     window_maxima,
 )
 from .observe import Observed
+from .task import paired_transient
 
-FORMAT = "ur5fault-monitor-baseline-3"
+FORMAT = "ur5fault-monitor-baseline-4"
+#: a baseline run's task statistics are fitted only on at least this much of it paired with the other runs or its
+#: own repeats [s] (40 windows of WINDOW_S: 4 above the tail's 90 % quantile); with less, no log is judged
+#: against that run
+MIN_TASK_S = 10.0
 
 
 def overlay_sha256(params: dict, effects: Sequence) -> str:
@@ -56,7 +63,11 @@ class Baseline:
     channel (:data:`~.events.CHANNELS`) the transient's spread coefficients on :data:`~.events.FEATURES`;
     ``tail`` ``(2, 6, 3)``: ``(u0, beta, p0)`` of its normalised window maxima; ``quantum_rad`` ``(6,)``: the
     largest position quantum of any baseline run (NaN: the joint never moved); ``candidates``:
-    ``{label: (mean, variance, n_blocks)}`` of the coefficient."""
+    ``{label: (mean, variance, n_blocks)}`` of the coefficient; ``task_target_rad`` / ``task_residual_A``: each
+    baseline run's joint targets and current residual ``(m, 6)`` (NaN where the tick was not logged;
+    :mod:`.task`); ``task_scale`` ``(k, 6, 4)``, ``task_tail`` ``(k, 6, 3)``: per baseline run, the spread and
+    tail of its current's transient against the other runs and its own repeats where they repeat its task (NaN:
+    they do not, over :data:`MIN_TASK_S`; no log is then paired with that run): the spread of *that task*."""
 
     overlay_sha256: str
     period_s: float
@@ -65,6 +76,20 @@ class Baseline:
     tail: NDArray
     quantum_rad: NDArray
     candidates: dict[str, tuple[float, float, int]]
+    task_target_rad: tuple[NDArray, ...]
+    task_residual_A: tuple[NDArray, ...]
+    task_scale: NDArray
+    task_tail: NDArray
+
+    @property
+    def task_runs(self) -> list[int]:
+        """The baseline runs a log can be paired with: those with task statistics."""
+        return [i for i in range(len(self.task_target_rad)) if np.isfinite(self.task_scale[i]).all()]
+
+    @property
+    def pairs(self) -> bool:
+        """Logs that repeat one of :attr:`task_runs` are judged against it."""
+        return bool(self.task_runs)
 
     def to_json(self) -> dict[str, Any]:
         return {"format": FORMAT, "overlay_sha256": self.overlay_sha256, "period_s": self.period_s,
@@ -76,7 +101,15 @@ class Baseline:
                 "position_quantum_rad": {JOINT_NAMES[j]: None if np.isnan(q) else float(q)
                                          for j, q in enumerate(self.quantum_rad)},
                 "candidates": {k: {"mean": m, "variance": v, "n_blocks": n}
-                               for k, (m, v, n) in self.candidates.items()}}
+                               for k, (m, v, n) in self.candidates.items()},
+                "task_runs": [{"target_rad": np.round(t, 7).tolist(), "residual_A": _nulls(np.round(r, 6)),
+                               "scale": None if i not in self.task_runs else
+                               {JOINT_NAMES[j]: dict(zip(FEATURES, map(float, self.task_scale[i, j])))
+                                for j in range(N_JOINTS)},
+                               "tail": None if i not in self.task_runs else
+                               {JOINT_NAMES[j]: dict(zip(("u0", "beta", "p0"), map(float, self.task_tail[i, j])))
+                                for j in range(N_JOINTS)}}
+                              for i, (t, r) in enumerate(zip(self.task_target_rad, self.task_residual_A))]}
 
     @classmethod
     def from_json(cls, data: Any, where: str) -> Baseline:
@@ -97,9 +130,23 @@ class Baseline:
                              for c in CHANNELS])
             quantum = np.array([np.nan if data["position_quantum_rad"][j] is None
                                 else float(data["position_quantum_rad"][j]) for j in JOINT_NAMES])
+            task = data["task_runs"]
+            t_scale = np.array([np.full((N_JOINTS, len(FEATURES)), np.nan) if r["scale"] is None else
+                                [[float(r["scale"][j][f]) for f in FEATURES] for j in JOINT_NAMES] for r in task])
+            t_tail = np.array([np.full((N_JOINTS, 3), np.nan) if r["tail"] is None else
+                               [[float(r["tail"][j][k]) for k in ("u0", "beta", "p0")] for j in JOINT_NAMES]
+                               for r in task])
+            runs = [(np.array(r["target_rad"], float).reshape(-1, N_JOINTS),
+                     np.array(r["residual_A"], float).reshape(-1, N_JOINTS)) for r in task]
+            if any(t.shape != r.shape for t, r in runs) or len(runs) != len(data["segments"]):
+                raise ValueError("the task runs do not match the segments, or their targets and residuals differ "
+                                 "in length")
             return cls(str(data["overlay_sha256"]), float(data["period_s"]), tuple(map(str, data["segments"])),
                        scale, tail, quantum, {str(k): (float(v["mean"]), float(v["variance"]), int(v["n_blocks"]))
-                                     for k, v in data["candidates"].items()})
+                                     for k, v in data["candidates"].items()},
+                       tuple(t for t, _ in runs), tuple(r for _, r in runs), t_scale, t_tail)
+        except ParameterError:
+            raise  # already one line saying what to do (ParameterError is a ValueError)
         except (KeyError, TypeError, ValueError, AttributeError) as exc:
             raise ParameterError(f"{where}: not a valid monitor baseline ({type(exc).__name__}: {exc})") from None
 
@@ -131,16 +178,51 @@ def fit_events(segs: list[tuple[NDArray, NDArray, NDArray]], period_s: float, qu
     fitted on strays, not how well it fits its own."""
     coefs, tails = [], []
     for i in range(len(CHANNELS)):
-        one = [(h[i], f, ok) for h, f, ok in segs]
         floor = quantum_sigma(quantum_rad) if CHANNELS[i] == "position" else 0.0
-        coef = fit_scale(one)
-        maxima = []
-        for k, (h, f, ok) in enumerate(one):
-            c = fit_scale(one[:k] + one[k + 1 :]) if len(one) >= 2 else coef
-            maxima.append(window_maxima(np.abs(h) / sigma(f, c, floor), ok, period_s))
+        coef, tail = fit_channel([(h[i], f, ok) for h, f, ok in segs], period_s, floor)
         coefs.append(coef)
-        tails.append(fit_tail(np.concatenate(maxima)))
+        tails.append(tail)
     return np.stack(coefs), np.stack(tails)
+
+
+def fit_channel(one: list[tuple[NDArray, NDArray, NDArray]], period_s: float, floor: NDArray | float = 0.0
+                ) -> tuple[NDArray, NDArray]:
+    """One channel's spread coefficients ``(6, 4)`` and tail ``(6, 3)`` from segments ``(h, features, judged)``
+    (:func:`fit_events`; a segment without judged samples only adds nothing)."""
+    one = [s for s in one if s[2].any()]
+    coef = fit_scale(one)
+    maxima = []
+    for k, (h, f, ok) in enumerate(one):
+        c = fit_scale(one[:k] + one[k + 1 :]) if len(one) >= 2 else coef
+        maxima.append(window_maxima(np.abs(h) / sigma(f, c, floor), ok, period_s))
+    return coef, fit_tail(np.concatenate(maxima))
+
+
+def _nulls(x: NDArray) -> list:
+    """``x`` as nested lists, NaN as ``None`` (JSON's null)."""
+    return [[None if not np.isfinite(v) else float(v) for v in row] for row in x]
+
+
+def task_residual(obs: Observed) -> NDArray:
+    """A baseline run's current residual as a reference ``(n, 6)``: NaN where the tick was not logged."""
+    return np.where(obs.logged[:, None], obs.residual_A, np.nan)
+
+
+def fit_task(healthy: Sequence[Observed], segs: list[tuple[NDArray, NDArray, NDArray]], period_s: float
+             ) -> tuple[NDArray, NDArray]:
+    """Per baseline run, its current transient's spread ``(k, 6, 4)`` and tail ``(k, 6, 3)`` against the other
+    runs and its own repeats (never its own samples) where they repeat its task; NaN for a run paired over less
+    than :data:`MIN_TASK_S`. Per run, not pooled: a log paired with a run is judged by the spread of that run's
+    task (a fast task's repeats differ more than a slow one's). A single run's tail is fitted on the spread
+    fitted on itself (no run left out)."""
+    refs = [(o.target_rad, task_residual(o)) for o in healthy]
+    scale = np.full((len(healthy), N_JOINTS, len(FEATURES)), np.nan)
+    tail = np.full((len(healthy), N_JOINTS, 3), np.nan)
+    for k, (o, (_, f, ok)) in enumerate(zip(healthy, segs)):
+        h, paired, _ = paired_transient(o.target_rad, o.residual_A, refs, period_s, self_index=k)
+        if int((ok & paired).sum()) * period_s >= MIN_TASK_S:
+            scale[k], tail[k] = fit_channel([(h, f, ok & paired)], period_s)
+    return scale, tail
 
 
 def fit_baseline(healthy: Sequence[Observed], overlay_sha: str) -> Baseline:
@@ -167,4 +249,6 @@ def fit_baseline(healthy: Sequence[Observed], overlay_sha: str) -> Baseline:
                     per.setdefault(label, ([], []))[0].append(est.theta)
                     per[label][1].append(est.se)
     cands = {k: spread(th, se) for k, (th, se) in per.items()}
-    return Baseline(overlay_sha, period, tuple(o.name for o in healthy), scale, tail, quantum, cands)
+    t_scale, t_tail = fit_task(healthy, segs, period)
+    return Baseline(overlay_sha, period, tuple(o.name for o in healthy), scale, tail, quantum, cands,
+                    tuple(o.target_rad for o in healthy), tuple(task_residual(o) for o in healthy), t_scale, t_tail)

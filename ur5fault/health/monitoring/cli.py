@@ -39,6 +39,7 @@ def cmd_monitor(args: argparse.Namespace) -> int:
     from ...config import Overlay
     from ...errors import ParameterError
     from ...logs.length import check_files_length, check_logs_length
+    from ...logs.measured import assumption_notes
     from ...logs.options import log_entries, read_log_options
     from ...sim.params import load_params
     from ...util.io import check_writable
@@ -71,9 +72,8 @@ def cmd_monitor(args: argparse.Namespace) -> int:
     if clash:
         raise ParameterError(f"log {clash[0]!r} is both monitored and a baseline log; a run cannot judge itself")
     temps = load_params(overrides=dict(overlay.params)).joint_temperature_C
-    for lg in (*healthy, *logs):
-        for line in lg.assumptions(temps):
-            print(f"note: {line}", file=sys.stderr)
+    for line in assumption_notes([*healthy, *logs], temps):
+        print(f"note: {line}", file=sys.stderr)
     params, effects = dict(overlay.params), overlay.effects
     if stats is None:
         stats = fit_baseline([observe(g, params, effects, jobs=jobs) for g in healthy], sha)

@@ -57,6 +57,8 @@ class Observed:
             of 2-16 urad on the Kufieta robot), which would hide a push on a standing arm.
         position_quantum_rad: the quantisation step of each joint's measured position ``(6,)`` [rad]
             (:func:`ur5fault.identify.sensors.position_quantum`, per joint; NaN where the joint never moves).
+        target_rad: the commanded joint positions ``(n, 6)`` [rad] (the task: :mod:`.task` pairs a log with a
+            baseline run that repeats it).
     """
 
     name: str
@@ -72,6 +74,7 @@ class Observed:
     accel_rad_s2: NDArray
     position_residual_rad: NDArray
     position_quantum_rad: NDArray
+    target_rad: NDArray
 
     @property
     def n(self) -> int:
@@ -115,7 +118,7 @@ def observe(log: MeasuredLog, params_overrides: dict | None = None, effects: Seq
                     qd > CONDITION_REST_SPEED_RAD_S, log.logged_rows()[1 : n_all + 1][lo:hi],
                     tuple(kept), X[:, lo : lo + m] if kept else np.zeros((0, *e.shape)), e, qd, qdd,
                     (meas[:, 1] - base.q_rad[:hi])[lo:hi],
-                    quanta(log.q_actual_rad))
+                    quanta(log.q_actual_rad), log.q_target_rad[1 : n_all + 1][lo:hi].copy())
 
 
 def quanta(q_rad: NDArray) -> NDArray:

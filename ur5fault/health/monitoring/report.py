@@ -1,5 +1,6 @@
 """What ``ur5fault monitor`` writes: ``monitor.json``, ``baseline.json``, ``report.md`` and one figure per log
-(each residual's transient against its limit per joint, current and position, the events shaded)."""
+(each residual's transient against its limit per joint, current and position, the events shaded, the stretches
+judged against a baseline run that repeats the task tinted)."""
 
 from __future__ import annotations
 
@@ -12,19 +13,20 @@ from matplotlib.figure import Figure
 
 from ...sim.axes import JOINT_NAMES, N_JOINTS
 from ...util.io import write_figure_atomic, write_json_atomic, write_text_atomic
-from .baseline import Baseline, segment
+from .baseline import Baseline
 from .changes import sentence
 from .events import CHANNELS, FALSE_ALARM_PER_LOG, FEATURES, UNITS, WINDOW_S, multiplier
 from .observe import Observed
-from .verdict import limits
+from .verdict import judged_transients
 
 
-def figure(baseline: Baseline, obs: Observed, entry: dict[str, Any], channels: Sequence[str]) -> Figure:
+def figure(baseline: Baseline, obs: Observed, entry: dict[str, Any], channels: Sequence[str],
+           judged_as: tuple | None = None) -> Figure:
     """Per joint and channel (current [A] left, position [mrad] right): the residual's transient ``|h|`` and, for
     the ``channels`` judged, its limit (the baseline's spread at the log's motion times the multiplier for its
     length); the events shaded."""
-    h, feats, judged = segment(obs)
-    thr = limits(baseline, obs, feats, judged, channels)
+    hs, thr, judged, paired = judged_as or judged_transients(baseline, obs, channels)
+    h = [hs[c] for c in CHANNELS]
     fig = Figure(figsize=(13, 9), layout="constrained")
     axes = fig.subplots(N_JOINTS, len(CHANNELS), sharex=True)
     for i, c in enumerate(CHANNELS):
@@ -37,6 +39,9 @@ def figure(baseline: Baseline, obs: Observed, entry: dict[str, Any], channels: S
                                                                          "median)")
             if c in thr:
                 ax.plot(obs.t_s, thr[c][:, j] * k, lw=0.9, color="tab:red", label="limit")
+            if c == "current" and paired.any():
+                ax.fill_between(obs.t_s, 0, 1, where=paired, transform=ax.get_xaxis_transform(), color="tab:green",
+                                alpha=0.08, lw=0, label="against a baseline run repeating the task")
             for ev in entry["events"]:
                 mine = JOINT_NAMES[j] in ev["joints"] and c in ev.get("channels", ())
                 ax.axvspan(ev["t_start_s"], ev["t_end_s"], color="orange", alpha=0.35 if mine else 0.1, lw=0)
@@ -48,7 +53,9 @@ def figure(baseline: Baseline, obs: Observed, entry: dict[str, Any], channels: S
 
 
 def markdown(baseline: Baseline, entries: Sequence[dict[str, Any]], figs: Sequence[str], model: str,
-             channels: Sequence[str]) -> str:
+             channels: Sequence[str], paired_s: Sequence[tuple[float, float]] = ()) -> str:
+    """``paired_s``: per log, the seconds judged against a baseline run repeating its task, and its judged
+    seconds."""
     lines = ["# Monitoring report", "",
              f"Baseline: model overlay `{model}`, residual statistics of {len(baseline.segments)} healthy run(s): "
              + ", ".join(f"`{s}`" for s in baseline.segments) + ".", "",
@@ -66,7 +73,7 @@ def markdown(baseline: Baseline, entries: Sequence[dict[str, Any]], figs: Sequen
     lines += ["", "| log | verdict | changes | events |", "| --- | --- | --- | --- |"]
     for e in entries:
         lines.append(f"| {e['log']} | {e['verdict']} | {len(e['changes'])} | {len(e['events'])} |")
-    for e, fig in zip(entries, figs):
+    for k, (e, fig) in enumerate(zip(entries, figs)):
         lines += ["", f"## {e['log']}: {e['verdict']}", ""]
         lines += [f"- changed: {sentence(c)}" for c in e["changes"]]
         lines += [f"- event {ev['t_start_s']:.2f}-{ev['t_end_s']:.2f} s on {', '.join(ev['joints'])} "
@@ -74,6 +81,9 @@ def markdown(baseline: Baseline, entries: Sequence[dict[str, Any]], figs: Sequen
                   for ev in e["events"]]
         if not e["changes"] and not e["events"]:
             lines.append("- nothing beyond what the baseline runs showed")
+        if paired_s:
+            lines.append(f"- current judged against a baseline run repeating its task on {paired_s[k][0]:.1f} of "
+                         f"{paired_s[k][1]:.1f} s (elsewhere against the baseline's spread at its motion)")
         lines += ["", f"![{e['log']}]({fig})"]
     return "\n".join(lines) + "\n"
 
@@ -84,10 +94,14 @@ def write(out: Path, baseline: Baseline, observed: Sequence[Observed], entries: 
     out.mkdir(parents=True, exist_ok=True)
     paths = [write_json_atomic(out / "monitor.json", {"logs": list(entries)}),
              write_json_atomic(out / "baseline.json", baseline.to_json())]
-    figs = []
+    figs, paired_s = [], []
     for k, (obs, e) in enumerate(zip(observed, entries)):
         name = f"monitor_{k + 1}.png"
-        paths.append(write_figure_atomic(figure(baseline, obs, e, channels), out / name))
+        judged_as = judged_transients(baseline, obs, channels)
+        paired_s.append((float((judged_as[3] & judged_as[2]).sum() * obs.period_s),
+                         float(judged_as[2].sum() * obs.period_s)))
+        paths.append(write_figure_atomic(figure(baseline, obs, e, channels, judged_as), out / name))
         figs.append(name)
-    paths.append(write_text_atomic(out / "report.md", markdown(baseline, entries, figs, model, channels)))
+    paths.append(write_text_atomic(out / "report.md", markdown(baseline, entries, figs, model, channels,
+                                                               paired_s)))
     return paths

@@ -23,6 +23,7 @@ from .events import (
     sigma,
 )
 from .observe import Observed
+from .task import paired_transient
 
 VERDICTS = ("consistent", "changed", "anomaly")
 
@@ -48,6 +49,37 @@ def limits(baseline: Baseline, obs: Observed, feats: NDArray, judged: NDArray,
     return out
 
 
+def judged_transients(baseline: Baseline, obs: Observed, channels: Sequence[str] = DEFAULT_CHANNELS
+                      ) -> tuple[dict[str, NDArray], dict[str, NDArray], NDArray, NDArray]:
+    """What a log part's events are found in: per channel the transient ``(n, 6)``, per judged channel its limit
+    ``(n, 6)``, the judged samples ``(n,)`` and the samples judged against a paired baseline run ``(n,)``.
+
+    Where the log repeats a baseline run's motion (:mod:`.task`; only when the baseline runs repeat each other,
+    :attr:`Baseline.pairs`), the current's transient is that of the residual less the paired runs' residual at
+    the same point of the task, and its limit the spread of the paired run's task (fitted on that run against
+    the others and its own repeats) times the multiplier of that fit's tail, the widest where several runs are
+    paired; elsewhere both are the motion's (:func:`limits`). Every window is judged
+    once, by one of the two, each at the share of the false-alarm probability for the log's whole length: the
+    probability of a false alarm anywhere stays at most that share."""
+    h, feats, judged = segment(obs)
+    hs = dict(zip(CHANNELS, h))
+    lims = limits(baseline, obs, feats, judged, channels)
+    paired = np.zeros(judged.shape, bool)
+    if baseline.pairs and "current" in channels:
+        runs = baseline.task_runs
+        refs = [(baseline.task_target_rad[i], baseline.task_residual_A[i]) for i in runs]
+        h_task, paired, matched = paired_transient(obs.target_rad, obs.residual_A, refs, obs.period_s)
+        nw = n_windows(judged, baseline.period_s)
+        lim_task = np.zeros(hs["current"].shape)
+        for k, i in enumerate(runs):  # the widest limit of the runs paired with each sample
+            mult = multiplier(baseline.task_tail[i], nw, FALSE_ALARM_PER_LOG / len(channels))
+            lim_task = np.where(matched[k][:, None], np.maximum(lim_task, sigma(feats, baseline.task_scale[i]) * mult),
+                                lim_task)
+        hs["current"] = np.where(paired[:, None], h_task, hs["current"])
+        lims["current"] = np.where(paired[:, None], lim_task, lims["current"])
+    return hs, lims, judged, paired
+
+
 def assess(baseline: Baseline, obs: Observed, channels: Sequence[str] = DEFAULT_CHANNELS) -> dict[str, Any]:
     """``{"log", "verdict", "changes", "events"}`` for one log part (``monitor.json``'s entry): ``"changed"`` when
     a persistent change is found (even if events are too: a change needs maintenance, an event may not), else
@@ -59,9 +91,8 @@ def assess(baseline: Baseline, obs: Observed, channels: Sequence[str] = DEFAULT_
     unknown = sorted(set(channels) - set(CHANNELS))
     if unknown or not channels:
         raise ParameterError(f"event channels {list(channels)}: choose from {list(CHANNELS)}")
-    h, feats, judged = segment(obs)
-    events, over = find_events(obs.t_s, dict(zip(CHANNELS, h)), limits(baseline, obs, feats, judged, channels),
-                               judged)
+    hs, lims, judged, _ = judged_transients(baseline, obs, channels)
+    events, over = find_events(obs.t_s, hs, lims, judged)
     every = estimates(obs, obs.logged[: obs.e.shape[0]])
     outside = estimates(obs, keep_mask(obs, over)) if over.any() else every
     changes = find_changes(obs, every, outside, baseline.candidates)

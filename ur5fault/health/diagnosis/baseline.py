@@ -1,0 +1,195 @@
+"""A robot's own healthy baseline for ``ur5fault diagnose --baseline-logs``: each detector input of a diagnosed
+window referred to the robot's healthy distribution instead of the simulated one.
+
+Why: the classifiers learned "healthy" from simulated runs whose twin is the same model as the robot, so their
+residuals hold sensor noise only; a real robot's residuals also hold the model's error on that robot (a
+current residual at speed of 0.1-3 A against the simulation's 0.02 A, docs/diagnostics.md "Real logs"), and
+every window of a healthy real log lies far outside what the classifiers saw.  Healthy logs of the same robot,
+replayed through the same twin and windowed the same way, measure that error; per input ``k``::
+
+    x'_k = m_k + (x_k - b_k) * s_k / max(r_k, s_k)
+
+with ``b_k``, ``r_k`` the baseline windows' median and robust spread (1.4826 MAD) and ``m_k``, ``s_k`` the
+healthy training runs' (:func:`ur5fault.health.diagnostics.saved.healthy_reference`).  A healthy window of the
+robot thus lands where the healthy training runs lie, and a fault moves it from there by its own signature,
+divided by how much more the robot's healthy windows vary than the simulated runs do.  The baseline's spread is
+floored at the training runs' (the factor is never above 1): a spread from a handful of windows is uncertain
+(the MAD of 5-20 normal values scatters by 58-26 % of its size: standard deviation over mean, simulated
+with numpy), an underestimate would magnify healthy
+scatter into alarms, and a robot that varies less than the simulation gives no reason to magnify a fault beyond
+its size in the input's own unit.  Handled explicitly, each named in the diagnosis:
+
+* fewer than :data:`MIN_SPREAD_WINDOWS` baseline values of an input: its spread is not estimated, the input is
+  shifted only (factor 1);
+* zero spread in the baseline (e.g. a spike count that is always 0): shifted only (factor 1 by the floor);
+* no baseline value (e.g. an encoder-mismatch input of a log without motor encoders) or no training value:
+  left as measured;
+* the operating conditions (:data:`~ur5fault.health.diagnostics.data.CONTEXT_COLUMNS`: payload, temperature):
+  known for every log, not residuals, left as measured.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ...errors import ConfigFileError, ParameterError
+from ..diagnostics.data import CONTEXT_COLUMNS
+from ..diagnostics.saved import MAD_SCALE, healthy_reference
+from .windows import Window
+
+#: the fewest baseline values of an input whose spread is estimated (a choice: the MAD of 5 normal values scatters
+#: by 58 % of its size, of 4 by 57 %, of 20 by 26 %; with fewer values a spread says little, and below it the
+#: input is shifted only)
+MIN_SPREAD_WINDOWS = 5
+#: how each input is mapped (:class:`BaselineMap`'s ``rule``)
+SCALED, SHIFTED, SHIFTED_FEW, SHIFTED_ZERO, UNMAPPED, CONDITION = (
+    "scaled", "shifted", "shifted_few_windows", "shifted_zero_spread", "left_as_measured", "condition")
+RULES = {SCALED: "baseline spread above the training runs': z against the baseline, mapped onto the training runs",
+         SHIFTED: "baseline spread within the training runs': shifted by the baseline median (factor 1)",
+         SHIFTED_FEW: f"fewer than {MIN_SPREAD_WINDOWS} baseline values: spread not estimated, shifted only",
+         SHIFTED_ZERO: "zero spread in the baseline: shifted only",
+         UNMAPPED: "no value in the baseline or the training runs: left as measured",
+         CONDITION: "an operating condition, known for every log: left as measured"}
+
+
+def robust_spread(x: NDArray) -> tuple[NDArray, NDArray, NDArray]:
+    """Per column of ``x`` ``(n_rows, n_inputs)``: median, robust spread (:data:`MAD_SCALE` x MAD) and number of
+    finite values (NaN median and spread where there is none)."""
+    x = np.asarray(x, float)
+    n = np.isfinite(x).sum(axis=0)
+    med = np.full(x.shape[1], np.nan)
+    scale = np.full(x.shape[1], np.nan)
+    for k in np.flatnonzero(n):
+        c = x[np.isfinite(x[:, k]), k]
+        med[k] = np.median(c)
+        scale[k] = MAD_SCALE * np.median(np.abs(c - med[k]))
+    return med, scale, n
+
+
+@dataclasses.dataclass(frozen=True)
+class Reference:
+    """The healthy training runs' median and robust spread per input, and where they were read."""
+
+    names: tuple[str, ...]
+    median: NDArray
+    scale: NDArray
+    source: str
+
+
+def training_reference(detector_dir: str | Path, schema: dict[str, Any]) -> Reference:
+    """The detector's healthy training runs' reference: saved in its schema, or (classifiers saved before it was)
+    computed from the campaign's ``features.parquet`` beside the benchmark folder, checked against the schema's
+    training-set hash.  Neither: refused in one line."""
+    names = tuple(c["name"] for c in schema["inputs"])
+    ref = schema.get("healthy_training_inputs")
+    if ref is not None:
+        try:
+            med, scale = (np.array([np.nan if v is None else float(v) for v in ref[k]]) for k in ("median", "scale"))
+        except (KeyError, TypeError, ValueError) as exc:
+            raise ConfigFileError(f"{detector_dir}: its healthy_training_inputs are not readable ({exc})") from None
+        if med.size != len(names) or scale.size != len(names):
+            raise ConfigFileError(f"{detector_dir}: its healthy_training_inputs do not match its inputs")
+        return Reference(names, med, scale, "the detector's schema (healthy training runs)")
+    from ..diagnostics.data import load_dataset
+    from ..diagnostics.saved import MODELS_DIR, training_hash
+
+    folder = Path(detector_dir)
+    bench = folder.parent if folder.name == MODELS_DIR else folder
+    table = bench.parent / "features.parquet"
+    if not table.is_file():
+        raise ConfigFileError(f"{detector_dir}: saved without the healthy training runs' spread and no campaign "
+                              f"feature table at {table}; run `ur5fault benchmark` on the campaign again")
+    ds = load_dataset(table, schema.get("feature_set") or "paper")
+    if training_hash(ds) != schema.get("training_set_sha256") or tuple(ds.inputs) != names:
+        raise ConfigFileError(f"{table}: not the training set of {detector_dir} (its hash differs); run `ur5fault "
+                              "benchmark` on the campaign again")
+    ref = healthy_reference(ds.train, names)
+    return Reference(names, np.array([np.nan if v is None else v for v in ref["median"]], float),
+                     np.array([np.nan if v is None else v for v in ref["scale"]], float),
+                     f"the campaign's feature table {table} (healthy training runs)")
+
+
+@dataclasses.dataclass(frozen=True)
+class BaselineMap:
+    """Per input: the robot's healthy median ``robot_median``, spread ``robot_scale`` and number of baseline
+    values ``robot_n``, the training reference, and the rule (:data:`RULES`) and factor it is mapped with."""
+
+    logs: tuple[str, ...]
+    period_s: float
+    n_windows_per_log: tuple[int, ...]
+    reference: Reference
+    robot_median: NDArray
+    robot_scale: NDArray
+    robot_n: NDArray
+    rule: tuple[str, ...]
+    factor: NDArray
+
+    @property
+    def n_windows(self) -> int:
+        return int(sum(self.n_windows_per_log))
+
+    def apply(self, x: NDArray) -> NDArray:
+        """The inputs ``x`` ``(n_windows, n_inputs)`` (in the reference's order) referred to the training runs."""
+        x = np.asarray(x, float)
+        mapped = self.reference.median + (x - self.robot_median) * self.factor
+        keep = np.array([r in (UNMAPPED, CONDITION) for r in self.rule])
+        return np.where(keep, x, mapped)
+
+    def summary(self, top: int = 5) -> dict[str, Any]:
+        """What ``diagnosis.json`` says of the baseline: its logs and windows, how many inputs each rule took
+        (with the names of the not scaled ones), and the inputs whose robot spread is the most times the
+        training runs'."""
+        names = self.reference.names
+        with np.errstate(all="ignore"):
+            ratio = self.robot_scale / self.reference.scale
+        order = [k for k in np.argsort(-np.nan_to_num(ratio, nan=-1.0, posinf=np.inf)) if self.rule[k] == SCALED][:top]
+        by_rule = {r: [n for n, q in zip(names, self.rule) if q == r] for r in RULES}
+        return {"logs": list(self.logs), "log_period_s": self.period_s, "n_windows": self.n_windows,
+                "n_windows_per_log": list(self.n_windows_per_log),
+                "reference": self.reference.source,
+                "mapping": "x' = training median + (x - baseline median) * training spread / max(baseline spread, "
+                           "training spread); spread = 1.4826 MAD",
+                "rules": {r: {"meaning": RULES[r], "n_inputs": len(v), **({"inputs": v} if r != SCALED else {})}
+                          for r, v in by_rule.items()},
+                # None: the training runs do not vary at all on that input (factor 0: the input is set to their
+                # median whatever the robot shows)
+                "largest_spread_ratio": [{"input": names[k], "baseline_over_training":
+                                          float(ratio[k]) if np.isfinite(ratio[k]) else None} for k in order]}
+
+
+def fit_map(reference: Reference, windows_by_log: Sequence[tuple[str, Sequence[Window]]], period_s: float
+            ) -> BaselineMap:
+    """The map from the healthy windows of each baseline log (``(source, windows)``, windowed as the diagnosed
+    log is, sampled every ``period_s``).  A baseline without a single window is refused in one line."""
+    names = reference.names
+    counts = tuple(len(w) for _, w in windows_by_log)
+    if not windows_by_log or sum(counts) == 0:
+        raise ParameterError("the baseline logs give no whole window: each must be at least one window long")
+    x = np.array([[w.features.get(c, np.nan) for c in names] for _, ws in windows_by_log for w in ws], float)
+    med, scale, n = robust_spread(x)
+    rule, factor = [], np.ones(len(names))
+    for k, c in enumerate(names):
+        if c in CONTEXT_COLUMNS:
+            rule.append(CONDITION)
+        elif n[k] == 0 or not np.isfinite(reference.median[k]):
+            rule.append(UNMAPPED)
+        elif n[k] < MIN_SPREAD_WINDOWS:
+            rule.append(SHIFTED_FEW)
+        elif scale[k] == 0:
+            rule.append(SHIFTED_ZERO)
+        elif np.isfinite(reference.scale[k]) and scale[k] > reference.scale[k]:
+            rule.append(SCALED)
+            factor[k] = reference.scale[k] / scale[k]
+        else:
+            rule.append(SHIFTED)
+    return BaselineMap(tuple(s for s, _ in windows_by_log), float(period_s), counts, reference, med, scale, n,
+                       tuple(rule), factor)
+
+
+__all__ = ["BaselineMap", "MIN_SPREAD_WINDOWS", "Reference", "fit_map", "robust_spread", "training_reference"]
