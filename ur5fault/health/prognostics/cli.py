@@ -30,6 +30,10 @@ def register(sub) -> None:
                         "duty cycle, shrunk towards all tasks' (task), that corrected by the units of nearby "
                         "directions of growth (direction; the one to use when the twin's model may be off, "
                         "docs/prognostics.md), or on 16 units of all tasks at once (pooled, the default)")
+    p.add_argument("--twin-friction", choices=("learned", "law"),
+                   help="with --twin: the friction rise per degree of clearance and per 10^6 cycles the twin gives a "
+                        "worn joint: learned per unit from its inspections (learned, the default: maps fitted on the "
+                        "training units' measured friction) or the wear law's constants in the fleet's manifest (law)")
     p.add_argument("--twin-cache", metavar="FILE",
                    help="with --twin: file of the twin's simulated failure radii, keyed by model, setup and ray, "
                         "read and extended (default: OUT/twin_radii.json)")
@@ -68,13 +72,14 @@ def cmd_prognose(args: argparse.Namespace) -> int:
 
     t0 = time.perf_counter()
     for flag, value in (("--model", args.model), ("--twin-calibration", args.twin_calibration),
-                        ("--twin-cache", args.twin_cache)):
+                        ("--twin-cache", args.twin_cache), ("--twin-friction", args.twin_friction)):
         if value and not args.twin:
             raise ParameterError(f"{flag} sets up the twin estimator: it needs --twin")
     model = Overlay.load(args.model) if args.model else None
     m = run_prognose(Path(args.dir), Path(args.out) if args.out else None, seed=args.seed, twin=args.twin,
                      twin_model=model, twin_calibration=args.twin_calibration or "pooled",
-                     twin_cache=Path(args.twin_cache) if args.twin_cache else None)
+                     twin_cache=Path(args.twin_cache) if args.twin_cache else None,
+                     twin_friction=args.twin_friction or "learned")
     print(f"{m['dataset']['n_train_units']} train / {m['dataset']['n_test_units']} test units")
     for name in m["estimators"]:
         r = m["estimators"][name]

@@ -43,9 +43,11 @@ def joint_features(columns, j: int) -> list[str]:
 ClearanceMap = tuple[list[str], NDArray, NDArray, NDArray]
 
 
-def fit_clearance_maps(df: pd.DataFrame, ridge: float = JOINT_RIDGE) -> dict[int, ClearanceMap]:
+def fit_clearance_maps(df: pd.DataFrame, ridge: float = JOINT_RIDGE, target: str = "backlash_deg"
+                       ) -> dict[int, ClearanceMap]:
     """Stage 1 on training inspections: per joint, ridge from the change of its own features since the
-    unit's inspection 0 onto the change of its clearance (the training units' truth is the target)."""
+    unit's inspection 0 onto the change of its clearance (the training units' truth is the target);
+    ``target``: the per-joint column prefix (``friction_scale``: the friction's rise, twin_friction.py)."""
     maps: dict[int, ClearanceMap] = {}
     for j in JOINTS:
         cols = joint_features(df.columns, j)
@@ -53,7 +55,7 @@ def fit_clearance_maps(df: pd.DataFrame, ridge: float = JOINT_RIDGE) -> dict[int
         mu, sd = x.mean(0), x.std(0)
         sd[sd == 0] = 1.0
         z = np.column_stack([(x - mu) / sd, np.ones(len(x))])
-        b = df[f"backlash_deg_j{j}"].astype(float)
+        b = df[f"{target}_j{j}"].astype(float)
         y = (b - b.groupby(df["unit_id"]).transform("first")).to_numpy()
         reg = ridge * len(x) * np.eye(z.shape[1])
         reg[-1, -1] = 0.0

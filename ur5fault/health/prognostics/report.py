@@ -25,6 +25,7 @@ from .rul import LinearRUL, PopulationRUL, TaskHealthIndex, WienerRUL
 from .spec import Failure
 from .twin_boundary import TwinSetup
 from .twin_cache import RadiusCache
+from .twin_friction import FrictionRise
 from .twin_rul import CALIBRATION_UNITS_PER_TASK, TwinRUL
 from .wear import WEAR_KINDS
 
@@ -57,11 +58,17 @@ def load_inspections(folder: Path) -> tuple[pd.DataFrame, dict[str, Any]]:
     return df, manifest
 
 
+#: where the twin's friction rise per degree of clearance and per 10^6 cycles comes from: "learned" from the
+#: inspections (twin_friction.py), or the fleet's wear "law" as the manifest states it
+TWIN_FRICTION = ("learned", "law")
+
+
 def predict(df: pd.DataFrame, failure: Failure, seed: int = 0, twin: TwinSetup | None = None,
-            twin_calibration: str = "pooled", twin_cache: RadiusCache | None = None
+            twin_calibration: str = "pooled", twin_cache: RadiusCache | None = None, twin_friction: str = "learned"
             ) -> tuple[dict[str, pd.DataFrame], dict[str, Any], np.ndarray]:
     """Fit on the failed training units; predict at every pre-failure inspection of the failed test units.
-    ``twin``: also the estimator whose failure boundary the digital twin simulates (twin_rul.py; minutes).
+    ``twin``: also the estimator whose failure boundary the digital twin simulates (twin_rul.py; minutes);
+    ``twin_friction``: one of :data:`TWIN_FRICTION`.
 
     Returns the prediction tables per estimator, the fitted constants, and the health index of every row.
     """
@@ -97,19 +104,24 @@ def predict(df: pd.DataFrame, failure: Failure, seed: int = 0, twin: TwinSetup |
         wiener_j = WienerRUL(seed).fit([hist_j[u][0] for u in train_ids], [hist_j[u][1] for u in train_ids],
                                        joint_model.failure_level_, joint_model.residual_sd_)
     naive = PopulationRUL().fit(train.groupby("unit_id")["eol_cycles"].first().to_numpy())
-    twin_rul, twin_pred = None, {}
+    twin_rul, twin_pred, friction, rises = None, {}, None, None
     if twin is not None and clear is not None:
         cond = {str(uid): (str(g["trajectory"].iloc[0]), float(g["payload_kg"].iloc[0]),
                            float(g["temperature_C"].iloc[0])) for uid, g in df.groupby("unit_id")}
         try:
+            if twin_friction == "learned":
+                friction = FrictionRise().fit(train, clear)
+                y_of = friction.rises(df)
+                rises = {str(uid): y_of[df.index.get_indexer(g.index)]
+                         for uid, g in df.sort_values("cycles").groupby("unit_id")}
             per_task = 0 if twin_calibration == "pooled" else CALIBRATION_UNITS_PER_TASK
-            twin_rul = TwinRUL(twin, clear, seed, twin_calibration, twin_cache, per_task).calibrate(
+            twin_rul = TwinRUL(twin, clear, seed, twin_calibration, twin_cache, per_task, friction).calibrate(
                 {u: cond[u] for u in map(str, train_ids)})
         except ValueError as exc:
             raise ConfigFileError(f"--twin: {exc}") from None
         sound = test[test["rul_cycles"] > 0].groupby("unit_id").size()   # a unit's inspections before failure
         twin_pred = twin_rul.predict_units({str(uid): (cond[str(uid)], hist_a[uid][0][:k], hist_a[uid][1][:k])
-                                            for uid, k in sound.items()})
+                                            for uid, k in sound.items()}, rises)
     rows: dict[str, list] = {name: [] for name in ESTIMATORS}
     for uid, g in test.sort_values("cycles").groupby("unit_id"):
         n_all, h_all = hist[uid]
@@ -162,6 +174,14 @@ def predict(df: pd.DataFrame, failure: Failure, seed: int = 0, twin: TwinSetup |
                                                              "simulated": twin_cache.misses},
             "n_calibration_units": twin_rul.n_calibration_units_, "n_calibration_rays": twin_rul.n_calibration_rays_,
             "n_twin_rays_test": twin_rul.n_twin_rays_,
+            "friction": {"source": twin_friction,
+                         "law": {"friction_per_deg": twin.wear.friction_per_deg,
+                                 "friction_per_Mcycle": twin.wear.friction_per_Mcycle},
+                         "learned": None if friction is None else {
+                             **friction.summary(),
+                             "test_rays_friction_per_deg_mean_sd_per_Mcycle_mean_sd": twin_rul.friction_rays_,
+                             "calibration_rays_friction_per_deg_mean_sd_per_Mcycle_mean_sd":
+                                 twin_rul.calibration_friction_}},
             "model": None if twin.model is None else {"params": dict(twin.model.params),
                                                       "effects": [e.describe() for e in twin.model.effects]}},
         "naive": {"train_eol_cycles": naive.eol_.tolist()},
@@ -172,11 +192,13 @@ def predict(df: pd.DataFrame, failure: Failure, seed: int = 0, twin: TwinSetup |
 
 def run_prognose(folder: Path, out: Path | None = None, *, seed: int = 0, twin: bool = False,
                  twin_model: Overlay | None = None, twin_calibration: str = "pooled",
-                 twin_cache: Path | None = None) -> dict[str, Any]:
+                 twin_cache: Path | None = None, twin_friction: str = "learned") -> dict[str, Any]:
     """The benchmark on a life-campaign folder; returns the metrics written to ``out/metrics.json``.
     ``twin_model``: the overlay the twin runs instead of the packaged model (a model error the twin carries);
     ``twin_calibration``: one of twin_rul.CALIBRATIONS; ``twin_cache``: the file of the twin's
-    radii (twin_cache.py), default ``out/twin_radii.json``."""
+    radii (twin_cache.py), default ``out/twin_radii.json``; ``twin_friction``: one of :data:`TWIN_FRICTION`."""
+    if twin_friction not in TWIN_FRICTION:
+        raise ConfigFileError(f"twin friction must be one of {', '.join(TWIN_FRICTION)}, not {twin_friction!r}")
     t0 = time.perf_counter()
     folder = Path(folder)
     out = Path(out) if out is not None else folder.parent / "benchmark"
@@ -193,7 +215,7 @@ def run_prognose(folder: Path, out: Path | None = None, *, seed: int = 0, twin: 
                                   "effects itself; give them as params instead")
         setup = TwinSetup.from_manifest(manifest, seed, twin_model)
     cache = RadiusCache(twin_cache if twin_cache is not None else out / "twin_radii.json") if twin else None
-    pred, fitted, hi = predict(df, failure, seed, setup, twin_calibration, cache)
+    pred, fitted, hi = predict(df, failure, seed, setup, twin_calibration, cache, twin_friction)
     per_unit = df.groupby("unit_id").agg(split=("split", "first"), n=("inspection", "size"),
                                          eol=("eol_cycles", "first"))
     if set(per_unit[per_unit["split"] == "train"].index) & set(per_unit[per_unit["split"] == "test"].index):
@@ -249,6 +271,9 @@ def run_prognose(folder: Path, out: Path | None = None, *, seed: int = 0, twin: 
     return m
 
 
+_FRICTION_TEXT = {"learned": "learned per unit from the inspections", "law": "of the wear law"}
+
+
 def _f(v: Any, fmt: str = ".3g") -> str:
     return "-" if v is None or (isinstance(v, float) and not math.isfinite(v)) else format(v, fmt)
 
@@ -296,7 +321,9 @@ def markdown(m: dict[str, Any]) -> str:
               "kernel width by leave-one-unit-out). twin (with --twin): the same clearance estimates and growth "
               "line, the failure boundary simulated by the digital twin along the unit's direction of growth on "
               "its own duty cycle (task, payload, temperature), calibrated on training units"
-              + (f" ({tw['calibration']}: --twin-calibration)" if (tw := m["fitted"].get("twin")) else "")
+              + (f" ({tw['calibration']}: --twin-calibration; the friction rise with wear "
+                 f"{_FRICTION_TEXT[tw['friction']['source']]}: --twin-friction)"
+                 if (tw := m["fitted"].get("twin")) else "")
               + ". naive: mean "
               "residual life of the training units that outlived the unit's age.", "",
               "Figures: " + ", ".join(f"`{f}`" for f in m["figures"]) + f". Benchmark wall time "

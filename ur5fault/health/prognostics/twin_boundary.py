@@ -74,8 +74,8 @@ class TwinSetup:
 @dataclasses.dataclass(frozen=True)
 class Ray:
     """One unit's direction of clearance growth: its task (trajectory JSON), payload and cell
-    temperature, the unit vector ``direction`` (6,), its growth ``speed`` [deg per cycle] and a guess of
-    the failure radius [deg]."""
+    temperature, the unit vector ``direction`` (6,), its growth ``speed`` [deg per cycle], a guess of
+    the failure radius [deg] and, where learned, the unit's friction rise."""
 
     trajectory: str
     payload_kg: float
@@ -83,6 +83,16 @@ class Ray:
     direction: tuple[float, ...]
     speed: float
     guess: float
+    #: the unit's own friction rise per degree of clearance and per 10^6 cycles (twin_friction.py), in place
+    #: of the wear law's; ``None``: the law's
+    friction_per_deg: float | None = None
+    friction_per_Mcycle: float | None = None
+
+    def law(self, wear: WearLaw) -> WearLaw:
+        """The wear law along this ray: ``wear`` with the ray's own friction rise where it has one."""
+        own = {k: v for k, v in (("friction_per_deg", self.friction_per_deg),
+                                 ("friction_per_Mcycle", self.friction_per_Mcycle)) if v is not None}
+        return dataclasses.replace(wear, **own) if own else wear
 
 
 def _criteria(setup: TwinSetup, trajectory: str, points: Sequence[tuple[Ray, float]]) -> NDArray:
@@ -118,7 +128,7 @@ def _criteria(setup: TwinSetup, trajectory: str, points: Sequence[tuple[Ray, flo
                 specs.append(RunSpec(f"ref{len(specs)}", setup.seed, cond))
             at_point[i] = len(specs)
             a = s * np.asarray(ray.direction)
-            specs.append(RunSpec(f"p{i}", setup.seed, wear_effects(setup.wear, a, s / ray.speed) + cond))
+            specs.append(RunSpec(f"p{i}", setup.seed, wear_effects(ray.law(setup.wear), a, s / ray.speed) + cond))
         res = sim.run(traj, specs, log_period_s=setup.log_period_s, duration_s=setup.duration_s)
         for key, k in at_ref.items():
             refs[key] = res.tcp_m[k]

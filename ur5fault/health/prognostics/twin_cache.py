@@ -42,6 +42,7 @@ def setup_key(setup: tb.TwinSetup) -> str:
 
 
 def ray_key(setup_sha: str, ray: tb.Ray) -> str:
+    """Key of a plain ray (no friction rise of its own: that is in the setup's law, :meth:`RadiusCache.radii`)."""
     text = repr((setup_sha, ray.trajectory, ray.payload_kg, ray.temperature_C, ray.direction, ray.speed, ray.guess))
     return hashlib.sha256(text.encode()).hexdigest()
 
@@ -63,8 +64,16 @@ class RadiusCache:
         self.hits = self.misses = 0
 
     def radii(self, setup: tb.TwinSetup, rays: Sequence[tb.Ray]) -> NDArray:
-        sha = setup_key(setup)
-        keys = [ray_key(sha, r) for r in rays]
+        # a ray with its own friction rise is keyed as a plain ray under the law it runs (so the radius depends
+        # on the law simulated, not on the constants the twin was told and did not use)
+        shas: dict[tuple, str] = {}
+        keys = []
+        for r in rays:
+            law = r.law(setup.wear)
+            ident = dataclasses.astuple(law)
+            if ident not in shas:
+                shas[ident] = setup_key(dataclasses.replace(setup, wear=law))
+            keys.append(ray_key(shas[ident], dataclasses.replace(r, friction_per_deg=None, friction_per_Mcycle=None)))
         todo = [i for i, k in enumerate(keys) if k not in self.entries]
         self.hits += len(rays) - len(todo)
         self.misses += len(todo)

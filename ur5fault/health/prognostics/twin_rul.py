@@ -27,6 +27,11 @@ calibration units of nearby directions of growth, twin_calibration.direction_bia
 moves where along a direction its criterion jumps, so the twin's error depends on the task and the direction
 (docs/prognostics.md, "The twin with a model error").
 
+Friction (``friction``, twin_friction.py; ``prognose --twin-friction learned``, the default): each ray carries
+the unit's friction rise per degree of clearance and per 10^6 cycles learned from its inspections up to the
+ray's checkpoint, and the twin runs it in place of the wear law's two constants (the calibration units' rays
+theirs), so the boundary does not rest on a friction rise nobody measured to failure.
+
 Prediction: draws of the growth rate from the posterior, the speed along the direction ``r . d``, the
 crossing ``N* = rho_twin exp(bias + sd eps) / (r . d)``, the RUL rounded up to the inspection grid and at
 least one interval (median and 5-95 % interval).
@@ -48,6 +53,7 @@ from .twin_calibration import TaskCalibration, direction_bias, task_calibration
 
 if TYPE_CHECKING:
     from .twin_cache import RadiusCache
+    from .twin_friction import FrictionRise
 
 #: inspections at which a unit's boundary is simulated along its current direction estimate (assumption:
 #: powers of 4, so at most 4-5 searches per unit; measured on the default fleet: the task-0 training units'
@@ -90,6 +96,8 @@ class TwinRUL:
     #: calibration units per task (every m-th of the task's failed training units); 0: :data:`CALIBRATION_UNITS`
     #: of all tasks together (every m-th by name)
     units_per_task: int = 0
+    #: the friction rise learned per unit (twin_friction.py), used in place of the wear law's; ``None``: the law's
+    friction: FrictionRise | None = None
 
     def __post_init__(self) -> None:
         if self.calibration not in CALIBRATIONS:
@@ -97,6 +105,20 @@ class TwinRUL:
 
     def _radii(self, rays: Sequence[Ray]) -> NDArray:
         return self.cache.radii(self.setup, rays) if self.cache is not None else failure_radii(self.setup, rays)
+
+    def _ray(self, cond: Conditions, d: NDArray, speed: float, task: str, n: NDArray, a: NDArray,
+             rises: NDArray | None) -> Ray:
+        """The ray of a unit seen at cycles ``n`` with clearance estimates ``a`` (and friction-rise estimates
+        ``rises``, with :attr:`friction`) along ``d``; the unit's learned friction rise, its posterior mean
+        (never negative: friction does not fall with wear), rides on the ray."""
+        traj, payload, temp = cond
+        ray = Ray(traj, payload, temp, tuple(d), speed, self.clearance.radius(task, d))
+        if self.friction is None or rises is None:
+            return ray
+        mean, cov = self.friction.unit(n, a, rises)
+        self.friction_rays_.append((float(mean[0]), float(cov[0, 0]) ** 0.5, float(mean[1]), float(cov[1, 1]) ** 0.5))
+        return dataclasses.replace(ray, friction_per_deg=max(float(mean[0]), 0.0),
+                                   friction_per_Mcycle=max(float(mean[1]), 0.0))
 
     def calibrate(self, conditions: Mapping[str, Conditions]) -> TwinRUL:
         """Simulate the boundary along the directions the failed training units' histories gave at each
@@ -111,17 +133,20 @@ class TwinRUL:
         else:
             units = units[:: max(1, -(-len(units) // CALIBRATION_UNITS))]
         rays, log_reached, at, tasks = [], [], [], []
+        self.friction_rays_: list[tuple[float, float, float, float]] = []
         for uid, (task, r, n_f) in units:
             if np.linalg.norm(r) <= 0 or uid not in conditions:
                 continue
             n, a = self.clearance.train_history_[uid]
-            traj, payload, temp = conditions[uid]
+            traj = conditions[uid][0]
+            y = self.friction.train_rises_[uid] if self.friction is not None else None
             prior = self.clearance.prior_[self.clearance.task_key(task)][0]
             for c in CHECKPOINTS:
                 if c > len(n) - 2:       # the unit failed before this inspection could be a sound one
                     break
                 d, speed = _unit_direction(self.clearance.posterior(task, n[: c + 1], a[: c + 1])[0], prior)
-                rays.append(Ray(traj, payload, temp, tuple(d), speed, self.clearance.radius(task, d)))
+                rays.append(self._ray(conditions[uid], d, speed, task, n[: c + 1], a[: c + 1],
+                                      None if y is None else y[: c + 1]))
                 log_reached.append(np.log(max(float(np.maximum(r, 0.0) @ d), 1e-12) * n_f))
                 at.append(c)
                 tasks.append(self.clearance.task_key(traj))
@@ -143,6 +168,7 @@ class TwinRUL:
         if not self.calibration_:  # no checkpoint with two units: one calibration for all
             self.calibration_[CHECKPOINTS[0]] = (float(np.mean(resid)), float(np.std(resid, ddof=1)), len(resid))
             self.task_calibration_[CHECKPOINTS[0]] = task_calibration(resid, task_arr)
+        self.calibration_friction_ = self.friction_rays_
         self.n_calibration_units_ = len({u for u, _ in units})
         self.n_calibration_rays_ = len(rays)
         return self
@@ -162,12 +188,17 @@ class TwinRUL:
                                   self.clearance.kappa_)
         return bias, sd
 
-    def predict_units(self, units: Mapping[str, tuple[Conditions, NDArray, NDArray]]) -> dict[str, list[tuple]]:
+    def predict_units(self, units: Mapping[str, tuple[Conditions, NDArray, NDArray]],
+                      rises: Mapping[str, NDArray] | None = None) -> dict[str, list[tuple]]:
         """Per unit (``units``: its conditions, cycles ``n`` and clearance estimates ``a`` of its inspections
-        so far), the (median, 5 %, 95 %) RUL [cycles] after each inspection k >= 1 (list index k - 1)."""
+        so far; ``rises``: its friction-rise estimates, needed with :attr:`friction`), the (median, 5 %, 95 %)
+        RUL [cycles] after each inspection k >= 1 (list index k - 1)."""
+        if self.friction is not None and rises is None:
+            raise ValueError("a twin with a learned friction rise needs each unit's friction-rise estimates")
         plan: dict[str, list[tuple[int, int, NDArray, NDArray]]] = {}
         rays: list[Ray] = []
         ray_checkpoint: list[int] = []
+        self.friction_rays_ = []
         for uid, ((traj, payload, temp), n, a) in units.items():
             plan[uid], current = [], None
             prior = self.clearance.prior_[self.clearance.task_key(traj)][0]
@@ -175,7 +206,8 @@ class TwinRUL:
                 mean, cov = self.clearance.posterior(traj, n[: k + 1], a[: k + 1])
                 d, speed = _unit_direction(mean, prior)
                 if current is None or k in CHECKPOINTS:
-                    rays.append(Ray(traj, payload, temp, tuple(d), speed, self.clearance.radius(traj, d)))
+                    rays.append(self._ray((traj, payload, temp), d, speed, traj, n[: k + 1], a[: k + 1],
+                                          None if rises is None else rises[uid][: k + 1]))
                     ray_checkpoint.append(k)
                     current = len(rays) - 1
                 plan[uid].append((k, current, mean, cov))
