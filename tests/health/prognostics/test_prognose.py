@@ -66,3 +66,4 @@ def test_benchmark_is_deterministic_under_its_seed(tmp_path):
     a = run_prognose(fleet, tmp_path / "a", seed=3)
     b = run_prognose(fleet, tmp_path / "b", seed=3)
     assert a["estimators"] == b["estimators"]
+    assert a["goals"]["baseline"] == "wiener"  # without the twin, the feature-only baseline is judged

@@ -185,7 +185,9 @@ def test_prognose_twin_learns_the_rise_by_default_and_runs_the_law_when_asked(mo
     out = tmp_path / "bench"
     assert main(["prognose", str(_fleet_dir(tmp_path)), "--out", str(out), "--twin",
                  *(["--twin-friction", how] if how else [])]) == 0
-    fr = json.loads((out / "metrics.json").read_text())["fitted"]["twin"]["friction"]
+    metrics = json.loads((out / "metrics.json").read_text())
+    fr = metrics["fitted"]["twin"]["friction"]
+    assert metrics["goals"]["baseline"] == "twin"  # the goals are judged on the twin where it ran
     report = (out / "report.md").read_text()
     if how is None:                             # learned: the fleet's 3.7 /deg, not the manifest's 8
         assert fr["source"] == "learned" and fr["learned"]["friction_per_deg_mean"] == pytest.approx(F_DEG, rel=0.05)
