@@ -115,12 +115,25 @@ def chunks(n: int, period_s: float) -> list[tuple[int, int]]:
     return [(a, starts[i + 1] if i + 1 < len(starts) else n) for i, a in enumerate(starts)]
 
 
+def _ranked(cand: NDArray, primary: NDArray, secondary: NDArray):
+    """``cand`` in the order of ``(primary, secondary)``, in two parts: the :data:`CHECK_BATCH` ``* 16`` of the
+    smallest primary key (with all that tie with the last) sorted at once, the rest only if they are needed (a
+    full sort of every lag costs more than the checks a chunk needs)."""
+    first = CHECK_BATCH * 16
+    if cand.size > first:
+        cut = np.partition(primary, first - 1)[first - 1]
+        head = primary <= cut
+        yield cand[head][np.lexsort((secondary[head], primary[head]))]
+        cand, primary, secondary = cand[~head], primary[~head], secondary[~head]
+    yield cand[np.lexsort((secondary, primary))]
+
+
 def _agreeing(ch: NDArray, ref_target: NDArray, ssd: NDArray, ok: NDArray, tol: float, half: int, own: int,
               counter: Counter | None) -> list[int]:
     """The lags ``k`` (up to :data:`MAX_MATCHES`) at which ``ref_target[k : k + len(ch)]`` agrees with ``ch``
-    within ``tol`` on every sample and joint: the candidates ``ok`` in order of ``ssd`` (ties: nearest to
-    ``own``, the chunk's own start), a candidate closer than
-    ``half`` to a lag already kept skipped, the rest checked in batches (:data:`CHECK_BATCH`, vectorised) until
+    within ``tol`` on every sample and joint: the candidates ``ok`` in order of ``ssd`` (equal to
+    :data:`SSD_RESOLUTION`: the nearest to ``own``, the chunk's own start, first), a candidate closer than ``half``
+    to a lag already kept skipped, the rest checked in batches (:data:`CHECK_BATCH`, vectorised) until
     :data:`MAX_MATCHES` are kept or :data:`MAX_FAILED` failed the check. ``counter``: ``checked`` and ``kept``
     are added to it."""
     L = ch.shape[0]
@@ -130,32 +143,34 @@ def _agreeing(ch: NDArray, ref_target: NDArray, ssd: NDArray, ok: NDArray, tol: 
     # logged without jitter (NIST's targets at rest are identical) matches every rest there with an SSD of 0 but
     # for the FFT's rounding, which would otherwise choose
     resolution = max(SSD_RESOLUTION * float((ch**2).sum()), np.finfo(float).tiny)
-    cand = cand[np.lexsort((np.abs(cand - own), np.floor(ssd[cand] / resolution)))]
     blocked = np.zeros(ssd.size, bool)  # within half of a kept lag
     found: list[int] = []
     failed = checked = 0
-    pos = 0  # the candidates before pos are checked or skipped
-    while pos < cand.size and len(found) < MAX_MATCHES and failed < MAX_FAILED:
-        rest = cand[pos:]
-        free = np.flatnonzero(~blocked[rest])[:CHECK_BATCH]
-        if free.size == 0:
+    for tier in _ranked(cand, np.floor(ssd[cand] / resolution), np.abs(cand - own)):
+        pos = 0  # the candidates before pos are checked or skipped
+        while pos < tier.size and len(found) < MAX_MATCHES and failed < MAX_FAILED:
+            rest = tier[pos:]
+            free = np.flatnonzero(~blocked[rest])[:CHECK_BATCH]
+            if free.size == 0:
+                break
+            batch = rest[free]
+            pos += int(free[-1]) + 1
+            agree = np.abs(windows[batch] - ch.T[None]).max(axis=(1, 2)) <= tol
+            for k, good in zip(batch, agree):
+                if blocked[k]:  # a lag kept earlier in this batch is within half
+                    continue
+                checked += 1
+                if good:
+                    found.append(int(k))
+                    blocked[max(k - half + 1, 0) : k + half] = True
+                    if len(found) == MAX_MATCHES:
+                        break
+                else:
+                    failed += 1
+                    if failed == MAX_FAILED:
+                        break
+        if len(found) == MAX_MATCHES or failed == MAX_FAILED:
             break
-        batch = rest[free]
-        pos += int(free[-1]) + 1
-        agree = np.abs(windows[batch] - ch.T[None]).max(axis=(1, 2)) <= tol
-        for k, good in zip(batch, agree):
-            if blocked[k]:  # a lag kept earlier in this batch is within half
-                continue
-            checked += 1
-            if good:
-                found.append(int(k))
-                blocked[max(k - half + 1, 0) : k + half] = True
-                if len(found) == MAX_MATCHES:
-                    break
-            else:
-                failed += 1
-                if failed == MAX_FAILED:
-                    break
     if counter is not None:
         counter["checked"] += checked
         counter["kept"] += len(found)
