@@ -187,3 +187,15 @@ def submit(fn: Callable[..., Any], args: tuple, jobs: int):
     from joblib.executor import get_memmapping_executor
 
     return get_memmapping_executor(jobs - 1).submit(fn, *args)
+
+
+def stop_workers(jobs: int) -> None:
+    """Kill the ``jobs - 1`` worker processes of :func:`submit` and :func:`map_balanced` (loky's one process-wide
+    executor) with whatever they are running: for futures of :func:`submit` that no one will read.  Cancelling
+    them instead would not stop a task that has started (and see the module docstring).  The next call starts new
+    workers."""
+    if jobs <= 1:
+        return
+    from joblib.executor import get_memmapping_executor
+
+    get_memmapping_executor(jobs - 1).shutdown(wait=False, kill_workers=True)
