@@ -6,11 +6,12 @@ alternative over the whole log)."""
 from __future__ import annotations
 
 import json
+from concurrent.futures import wait
 
 import numpy as np
 import pytest
 
-from ur5fault.discrepancy import DiscrepancyModel
+from ur5fault.discrepancy import DiscrepancyModel, steps
 from ur5fault.discrepancy.library import candidates
 from ur5fault.discrepancy.model import WORKFLOW_SEED
 from ur5fault.discrepancy.refinement import FindingSet
@@ -64,3 +65,25 @@ def test_a_fit_over_two_processes_finds_what_one_process_finds(short_log):
     # screening (its baseline: the first n_screen_ samples) and the probe batch: one replay of the screened part less
     assert two.n_simulated_runs_ == one.n_simulated_runs_ - 1
     assert two.simulated_s_ == pytest.approx(one.simulated_s_ - one.n_screen_ * short_log.period_s)
+
+
+def test_an_exception_in_the_fit_stops_its_prefetched_replay(nist_path, monkeypatch):
+    """The whole log's starting model (63 s of log), prefetched on a worker, is still being replayed when the
+    screening is interrupted: the fit leaves with the exception, holding no prefetched replay, and the worker has
+    been stopped -- its future ends with an error instead of a result once the whole log is replayed, so an exiting
+    interpreter has nothing to wait for."""
+    seen: dict = {}
+
+    def interrupted(rp, *args, **kwargs):
+        seen["futures"] = [r for _, r in rp._held.values()]
+        seen["running"] = [not f.done() for f in seen["futures"]]
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(steps, "screen_library", interrupted)
+    model = DiscrepancyModel(jobs=2)
+    with pytest.raises(KeyboardInterrupt):
+        model.fit(read_nist(nist_path))
+    assert seen["running"] == [True]  # the worker was on it when the fit left
+    assert not model.replay_.holds((), 1)
+    done, _ = wait(seen["futures"], timeout=60)  # a guard against a hang, not a speed test
+    assert len(done) == 1 and seen["futures"][0].exception() is not None  # stopped, not finished

@@ -95,6 +95,16 @@ def test_the_summary_names_the_baseline_and_each_rule(bmap):
     json.dumps(s)  # written into diagnosis.json as it is
 
 
+def test_an_input_the_healthy_training_runs_never_vary_on_is_shifted_not_erased():
+    """A spike count the simulated healthy runs always show as 0 (training spread 0): a factor 0 set every window
+    to the training median, a backlash's 50 spikes included; now shifted by the robot's healthy median only."""
+    ref = Reference(("spikes",), np.array([0.0]), np.array([0.0]), "by hand")
+    healthy = [_window({"spikes": v}) for v in (0.0, 1.0, 2.0, 0.0, 3.0, 1.0, 0.0, 2.0)]  # median 1
+    m = fit_map(ref, [("robot", healthy)], 0.008)
+    np.testing.assert_allclose(m.apply(np.array([[50.0], [1.0]]))[:, 0], [49.0, 0.0], atol=1e-12)
+    assert m.summary()["rules"]["shifted_training_zero_spread"]["inputs"] == ["spikes"]
+
+
 def test_a_baseline_without_a_window_is_refused():
     ref = Reference(NAMES, TRAIN_MEDIAN, TRAIN_SCALE, "by hand")
     with pytest.raises(ParameterError, match="no whole window"):
@@ -190,7 +200,10 @@ def test_bad_baselines_are_one_line(logs, detector, tmp_path, capsys):
     manifest = tmp_path / "base.yaml"
     shutil.copy(logs["healthy_a"], tmp_path / "healthy_a.parquet")
     manifest.write_text("format: sim\nlogs:\n  - {path: healthy_a.parquet, hold_out: true}\n")
+    copy = tmp_path / "renamed_copy_of_the_diagnosed.parquet"  # another name, the same recording
+    shutil.copy(logs["diagnosed"], copy)
     for extra, words in (([str(logs["diagnosed"])], "is both diagnosed and a baseline log"),
+                         ([str(copy)], "is both diagnosed and a baseline log"),
                          ([str(tmp_path / "missing.parquet")], "missing.parquet"),
                          ([str(garbage)], "garbage.parquet"),
                          ([str(logs["short"])], f"one window of {WINDOW_S:g} s"),

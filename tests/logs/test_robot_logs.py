@@ -61,6 +61,15 @@ def test_a_note_several_logs_share_is_said_once():
     assert assumption_notes([a], [28.0] * 6) == a.assumptions([28.0] * 6)
 
 
+def test_a_logs_content_hash_follows_its_samples_not_its_name():
+    import dataclasses
+
+    a = read_rtde(KUFIETA_DIR / "Movement_No1.csv.gz", payload_kg=0.0, tcp_offset_m=(0.0, 0.0, 0.0))
+    renamed = dataclasses.replace(a, source="elsewhere/Movement_No1.csv.gz")
+    changed = dataclasses.replace(a, current_A=a.current_A + np.eye(1, a.current_A.size).reshape(a.current_A.shape))
+    assert renamed.content_sha256() == a.content_sha256() != changed.content_sha256()
+
+
 def test_nan_tails_cut_and_named():
     log = read_rtde(KUFIETA_DIR / "Movement_No4_Acc.csv.gz", payload_kg=0.0, tcp_offset_m=(0.0, 0.0, 0.0))
     df = pd.read_csv(KUFIETA_DIR / "Movement_No4_Acc.csv.gz")

@@ -4,6 +4,9 @@ replays several logs of one robot each under its own conditions."""
 
 from __future__ import annotations
 
+import dataclasses
+from concurrent.futures import Future
+
 import numpy as np
 import pytest
 
@@ -13,6 +16,7 @@ from ur5fault.logs import MeasuredLog
 from ur5fault.sim.effects import make_effect
 from ur5fault.sim.params import load_params
 from ur5fault.twin.replay import LogReplay, log_overrides, replay_params
+from ur5fault.util import parallel
 
 PERIOD_S = 0.008  # the NIST log's 125 Hz
 N = 40  # samples: 0.32 s
@@ -121,3 +125,46 @@ def test_a_prefetched_replay_equals_the_replay_it_stands_for(jobs):
     _equal(LogReplay(log, seed=7).run([()], 10)[0], rp.run([()], 10)[0])  # a shorter run: the first samples
     simulated = 3 if jobs == 1 else 2  # one job: nothing was started early, both runs of () are simulated
     assert rp.n_simulated == simulated
+
+
+def _held_as_if_prefetched(rp: LogReplay, effects: tuple, r) -> None:
+    """``r`` held by ``rp`` as :meth:`LogReplay.prefetch` holds it: a finished worker's future."""
+    fut: Future = Future()
+    fut.set_result([r])
+    rp._held[rp._key(effects)] = (r.y.shape[0], fut)
+
+
+def test_a_prefetched_run_that_is_not_ok_does_not_stand_for_a_shorter_run():
+    """A whole-log run that diverged after sample 20 held (as with ``jobs=2``): the 10-sample run is ok there, so a
+    run of 10 samples is simulated and equals the plain one, status included -- what ``jobs=1`` gives; a run as long
+    as the held one is the held one, diverged; an ok held run gives its first samples without simulating."""
+    log = _log()
+    whole = LogReplay(log, seed=7).run([()], N - 1)[0]
+    y = whole.y.copy()
+    y[20:] = np.nan  # what a run stopped at its divergence logs
+    diverged = dataclasses.replace(whole, status="diverged", y=y)
+    rp = LogReplay(log, seed=7, jobs=2)
+    _held_as_if_prefetched(rp, (), diverged)
+    _equal(rp.run([()], 10)[0], LogReplay(log, seed=7).run([()], 10)[0])
+    assert rp.n_simulated == 1
+    got = rp.run([()], N - 1)[0]
+    assert got.status == "diverged" and rp.n_simulated == 1
+    np.testing.assert_array_equal(got.y, y)
+    ok = LogReplay(log, seed=7, jobs=2)
+    _held_as_if_prefetched(ok, (), whole)
+    _equal(ok.run([()], 10)[0], LogReplay(log, seed=7).run([()], 10)[0])
+    assert ok.n_simulated == 0
+
+
+def test_close_drops_the_prefetched_runs_and_stops_a_worker_still_on_one(monkeypatch):
+    stopped: list[int] = []
+    monkeypatch.setattr(parallel, "stop_workers", stopped.append)
+    log = _log()
+    rp = LogReplay(log, seed=7, jobs=2)
+    _held_as_if_prefetched(rp, (), LogReplay(log, seed=7).run([()], N - 1)[0])
+    rp.close()  # a finished one: nothing runs, nothing is stopped
+    assert not rp.holds((), 1) and stopped == []
+    rp._held[rp._key(())] = (N - 1, Future())  # a worker still on it
+    rp.close()
+    assert not rp.holds((), 1) and stopped == [2]
+    assert rp.run([()], 10)[0].ok  # and later runs simulate what they need

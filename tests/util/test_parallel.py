@@ -3,9 +3,14 @@
 from __future__ import annotations
 
 import os
+import threading
 import time
+from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures.process import BrokenProcessPool
+from pathlib import Path
 
 import joblib
+import joblib.executor
 import pytest
 
 from ur5fault.util.parallel import iter_tasks, map_balanced, map_tasks, own_share, submit
@@ -112,3 +117,99 @@ def test_submit_runs_on_a_worker_or_not_at_all():
     assert submit(_task, (3,), 1) is None
     v, pid = submit(_task, (3,), 2).result()
     assert v == 9 and pid != os.getpid()
+
+
+def _outcome_within(seconds: float, call) -> dict:
+    """``call()`` on a thread: its value or exception, failing the test (instead of hanging it) when it has neither
+    after ``seconds`` -- a guard against a hang, far above the time the call takes."""
+    box: dict = {}
+
+    def run() -> None:
+        try:
+            box["value"] = call()
+        except BaseException as e:  # noqa: BLE001 -- handed to the test
+            box["error"] = e
+
+    t = threading.Thread(target=run, daemon=True)
+    t.start()
+    t.join(seconds)
+    assert not t.is_alive(), f"no result and no exception after {seconds} s: the call hangs"
+    return box
+
+
+def _fails_there(k: int, pid: int, marker: str, how: str, ran: list) -> int:
+    """Task 0 fails on the worker (raises, or its process dies) after leaving ``marker``; every task of this
+    process waits for the marker, then takes 0.5 s (time for the failure to reach this process)."""
+    if os.getpid() != pid:
+        if k == 0:
+            Path(marker).touch()
+            if how == "exit":
+                os._exit(3)
+            raise ValueError("task 0 fails on the worker")
+        time.sleep(0.5)
+        return k
+    for _ in range(600):  # at most 60 s: the guard below fails first
+        if Path(marker).exists():
+            break
+        time.sleep(0.1)
+    ran.append(k)
+    time.sleep(0.5)
+    return k
+
+
+@pytest.fixture
+def thread_errors(monkeypatch):
+    """Exceptions that escape a thread (the task feeder) during the test."""
+    caught: list = []
+    monkeypatch.setattr(threading, "excepthook", lambda args: caught.append(args.exc_value))
+    return caught
+
+
+@pytest.mark.parametrize("how, error", [("raise", ValueError), ("exit", BrokenProcessPool)])
+def test_balanced_a_workers_failure_is_raised_before_this_processes_next_task(tmp_path, thread_errors, how, error):
+    """A worker's task that raises, or kills its process: the exception reaches the caller after at most this
+    process's current task (one, or two on a slow machine), not after its whole share (20 of the 40 tasks); no
+    feeder thread is left and none died; the next call starts a new worker."""
+    ran: list[int] = []
+    tasks = [(k, os.getpid(), str(tmp_path / "failed"), how, ran) for k in range(40)]
+    got = _outcome_within(60, lambda: map_balanced(_fails_there, tasks, 2, cost=[40 - k for k in range(40)]))
+    assert isinstance(got.get("error"), error), got
+    assert 1 <= len(ran) <= 2, ran
+    assert not [t for t in threading.enumerate() if t.name == "ur5fault-task-feeder"]
+    assert thread_errors == []
+    assert [v for v, _ in map_balanced(_task, [(k,) for k in range(3)], 2, [1, 1, 1])] == [0, 1, 4]
+
+
+class _PoolThatBreaks:
+    """An executor whose first task runs (on a thread) and whose next submit raises, as loky's does once a worker
+    has died: the feeder thread meets the failure, not the caller."""
+
+    def __init__(self) -> None:
+        self.pool = ThreadPoolExecutor(1)
+        self.n_submitted = 0
+
+    def submit(self, fn, *args):
+        self.n_submitted += 1
+        if self.n_submitted > 1:
+            raise BrokenProcessPool("a worker process died")
+        return self.pool.submit(fn, *args)
+
+    def shutdown(self, wait: bool = True, kill_workers: bool = False) -> None:
+        self.pool.shutdown(wait=wait)
+
+
+def _slow_square(k: int) -> int:
+    time.sleep(0.2)
+    return k * k
+
+
+def test_balanced_a_task_the_pool_refuses_fails_the_call_instead_of_hanging_it(monkeypatch, thread_errors):
+    """The feeder gives the worker its next task and ``submit`` raises: that task fails the call (the feeder used
+    to die there, and the caller waited forever for the task it had taken)."""
+    pool = _PoolThatBreaks()
+    monkeypatch.setattr(joblib.executor, "get_memmapping_executor", lambda n_workers: pool)
+    got = _outcome_within(60, lambda: map_balanced(_slow_square, [(k,) for k in range(6)], 2, [6, 5, 4, 3, 2, 1]))
+    assert isinstance(got.get("error"), BrokenProcessPool), got
+    assert pool.n_submitted == 2  # the failure stopped the feeding
+    assert not [t for t in threading.enumerate() if t.name == "ur5fault-task-feeder"]
+    assert thread_errors == []

@@ -148,52 +148,55 @@ class DiscrepancyModel:
         if not all(r.known for r in self.payload_.values()):
             timings["payload fit"] = t_payload
 
-        # the starting model over the whole log is the probe batch's first run whatever is found, and its first
-        # samples are the screening's baseline: a worker starts it now, and it is simulated once
-        rp.prefetch([()], n_all)
-        t = time.perf_counter()
-        lib = steps.screen_library(rp, n_scr, log.payload_kg, kinds, self.max_effects,
-                                   stages.start("screening the library"))
-        timings["library screening"] = time.perf_counter() - t
-        logger.info("library screened in %.0f s: %s", timings["library screening"],
-                    [c.label for c in lib.chosen] or "nothing")
+        try:
+            # the starting model over the whole log is the probe batch's first run whatever is found, and its first
+            # samples are the screening's baseline: a worker starts it now, and it is simulated once
+            rp.prefetch([()], n_all)
+            t = time.perf_counter()
+            lib = steps.screen_library(rp, n_scr, log.payload_kg, kinds, self.max_effects,
+                                       stages.start("screening the library"))
+            timings["library screening"] = time.perf_counter() - t
+            logger.info("library screened in %.0f s: %s", timings["library screening"],
+                        [c.label for c in lib.chosen] or "nothing")
 
-        t = time.perf_counter()
-        stages.start("discovering terms")
-        disc = steps.discover_terms(rp, lib, n_scr, self.max_terms)
-        timings["discovery"] = time.perf_counter() - t
-        logger.info("dictionary selected in %.0f s: %s", timings["discovery"],
-                    [c.label for c in disc.terms] or "nothing")
+            t = time.perf_counter()
+            stages.start("discovering terms")
+            disc = steps.discover_terms(rp, lib, n_scr, self.max_terms)
+            timings["discovery"] = time.perf_counter() - t
+            logger.info("dictionary selected in %.0f s: %s", timings["discovery"],
+                        [c.label for c in disc.terms] or "nothing")
 
-        t = time.perf_counter()
-        check = steps.joint_check(disc.library + disc.terms, disc.X, disc.fixed, lib.e0, list(disc.tell_apart))
-        ref = steps.refine(rp, check.found, disc.X, check.fixed, lib.e0, {**lib.alternatives, **disc.alternatives},
-                           n_fit, stages.start("refining the findings"))
-        timings["refinement"] = time.perf_counter() - t
-        logger.info("probe batch over the whole log in %.0f s (%d findings)", timings["refinement"], len(ref.found))
+            t = time.perf_counter()
+            check = steps.joint_check(disc.library + disc.terms, disc.X, disc.fixed, lib.e0, list(disc.tell_apart))
+            ref = steps.refine(rp, check.found, disc.X, check.fixed, lib.e0, {**lib.alternatives, **disc.alternatives},
+                               n_fit, stages.start("refining the findings"))
+            timings["refinement"] = time.perf_counter() - t
+            logger.info("probe batch over the whole log in %.0f s (%d findings)", timings["refinement"], len(ref.found))
 
-        # judged on the fitting and the held-out part; the kept ones polished by Gauss-Newton (the first
-        # simulation of which is the final model when the estimate has converged)
-        t = time.perf_counter()
-        prog = stages.start("judging")
-        drift = steps.drift_of(rp, n_fit)
-        jr = steps.judge(ref, n_fit, len(rp.signals), drift)
-        self.search_: list[SearchStep] = lib.trace + disc.trace + check.trace + jr.trace
-        self.refinement_ = list(ref.first.steps) if ref.first is not None else []
-        for f in jr.findings:
-            f.tell_apart = disc.tell_apart.get(f.candidate, "")
-        kept = [f for f in jr.findings if f.kept]
-        after = self._polish(rp, kept, ref.first, ref.finding_set, prog, drift) if kept else ref.nominal
-        # a finding dropped on the held-out part or at the final check gives its joint's place back
-        again = rescreen(rp, lib.X, lib.drift, lib.candidates, jr.findings, after, n_scr, n_fit, drift,
-                         self.max_effects, prog)
-        jr.findings.extend(again.findings)
-        self.search_ += again.trace
-        after = again.after
-        # every finding of the final model with the library effects the held-out part cannot tell from it
-        list_rivals(rp, lib.X, lib.drift, lib.candidates, jr.findings, ref.first.J if ref.first else None,
-                    ref.found, after, n_scr, n_fit, drift, skip=again.findings, progress=prog)
-        self._results(rp, ref.nominal, after, n_fit, n_all)
+            # judged on the fitting and the held-out part; the kept ones polished by Gauss-Newton (the first
+            # simulation of which is the final model when the estimate has converged)
+            t = time.perf_counter()
+            prog = stages.start("judging")
+            drift = steps.drift_of(rp, n_fit)
+            jr = steps.judge(ref, n_fit, len(rp.signals), drift)
+            self.search_: list[SearchStep] = lib.trace + disc.trace + check.trace + jr.trace
+            self.refinement_ = list(ref.first.steps) if ref.first is not None else []
+            for f in jr.findings:
+                f.tell_apart = disc.tell_apart.get(f.candidate, "")
+            kept = [f for f in jr.findings if f.kept]
+            after = self._polish(rp, kept, ref.first, ref.finding_set, prog, drift) if kept else ref.nominal
+            # a finding dropped on the held-out part or at the final check gives its joint's place back
+            again = rescreen(rp, lib.X, lib.drift, lib.candidates, jr.findings, after, n_scr, n_fit, drift,
+                             self.max_effects, prog)
+            jr.findings.extend(again.findings)
+            self.search_ += again.trace
+            after = again.after
+            # every finding of the final model with the library effects the held-out part cannot tell from it
+            list_rivals(rp, lib.X, lib.drift, lib.candidates, jr.findings, ref.first.J if ref.first else None,
+                        ref.found, after, n_scr, n_fit, drift, skip=again.findings, progress=prog)
+            self._results(rp, ref.nominal, after, n_fit, n_all)
+        finally:  # an exception or an interruption: the prefetched replays' worker stops with the fit
+            rp.close()
         timings["judging"] = time.perf_counter() - t
         logger.info("judged and polished in %.0f s: kept %s", timings["judging"],
                     [f.candidate.label for f in jr.findings if f.kept] or "nothing")

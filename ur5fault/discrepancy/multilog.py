@@ -199,6 +199,11 @@ class MultiReplay:
             if m:
                 self.replays[k].prefetch(effect_sets, m)
 
+    def close(self) -> None:
+        """:meth:`LogReplay.close` of every log."""
+        for r in self.replays:
+            r.close()
+
 
 def per_log(rp: LogReplay | MultiReplay, scored: NDArray, before: NDArray, after: NDArray, n_fit: int, n_all: int
             ) -> dict[str, dict]:

@@ -74,6 +74,16 @@ class MeasuredLog:
             out.append(f"{self.source}: no joint temperatures in the log; the model's {temps} degC assumed")
         return out
 
+    def content_sha256(self) -> str:
+        """SHA-256 of the log's measured samples (times, targets, positions, currents): the same recording under
+        two file names is one log, two recordings under one file name in two folders are two."""
+        import hashlib
+
+        h = hashlib.sha256()
+        for a in (self.t_s, self.q_target_rad, self.q_actual_rad, self.current_A):
+            h.update(np.ascontiguousarray(a, dtype=np.float64).tobytes())
+        return h.hexdigest()
+
     def logged_rows(self) -> NDArray:
         """``(n,)`` bool: the rows the robot wrote (all but the ticks filled in by :mod:`.regular`)."""
         return np.ones(self.t_s.size, dtype=bool) if self.logged is None else self.logged

@@ -183,7 +183,8 @@ class LogReplay:
         """Start replays that a later :meth:`run` will ask for on a worker process now (``jobs > 1``), so that
         they are simulated while this process does other work; a later run of the same effects over at most
         ``n`` samples takes them from here instead of simulating them again (the first samples of a replay do not
-        depend on how far it goes on).  With ``jobs = 1`` nothing is started and the later run simulates them."""
+        depend on how far it goes on; its status does: see :meth:`held`).  With ``jobs = 1`` nothing is started and
+        the later run simulates them.  :meth:`close` drops them."""
         if self.jobs <= 1:
             return
         from ..util.parallel import submit
@@ -207,14 +208,28 @@ class LogReplay:
         got = self._held.get(self._key(effects))
         return got is not None and got[0] >= n
 
-    def held(self, effects: tuple[EffectSpec, ...], n: int) -> Replayed:
+    def held(self, effects: tuple[EffectSpec, ...], n: int) -> Replayed | None:
         """The prefetched replay of ``effects`` over samples ``1..n`` (all signals; :meth:`holds` must be true),
-        waiting for the worker if it is not finished."""
+        waiting for the worker if it is not finished; None when it is longer than ``n`` samples and not ok: its
+        status is the whole run's (it may have diverged after sample ``n``, where the ``n``-sample run is ok),
+        so the caller simulates the ``n``-sample run, as it would without the prefetch."""
         m, r = self._held[self._key(effects)]
         if not isinstance(r, Replayed):  # a future: wait for the worker
             r = r.result()[0]
             self._held[self._key(effects)] = (m, r)
-        return _prefix(r, n)
+        return _prefix(r, n) if n == m or r.ok else None
+
+    def close(self) -> None:
+        """Drop the prefetched replays (later runs simulate what they need).  One still on a worker has the
+        workers stopped (:func:`ur5fault.util.parallel.stop_workers`): nothing goes on replaying a log that no one
+        will read, and an exiting interpreter does not wait for it.  For a caller that leaves early (an
+        exception, an interruption) and at the end of a workflow."""
+        from ..util.parallel import stop_workers
+
+        running = [r for _, r in self._held.values() if not isinstance(r, Replayed) and not r.done()]
+        self._held.clear()
+        if running:
+            stop_workers(self.jobs)
 
     def _with_log_temperature(self, r: Replayed, effects: Sequence[EffectSpec]) -> Replayed:
         """A temperature term was evaluated at the run's constant temperature (the log's mean);
@@ -246,7 +261,7 @@ def _simulate(params: RobotParams, traj, runs: list[RunSpec], period_s: float, n
 
 
 def _prefix(r: Replayed, n: int) -> Replayed:
-    """Samples ``1..n`` of a longer replay."""
+    """Samples ``1..n`` of a longer replay that is ok (an ok run is ok over its first samples too)."""
     return Replayed(r.status, r.y[:n], r.q_rad[:n], r.q_motor_rad[:n], r.current_true_A[:n], r.torque_gear_Nm[:n])
 
 
@@ -256,13 +271,15 @@ def simulate_requests(reqs: Sequence[tuple[LogReplay, tuple[EffectSpec, ...], in
     from their log replay (:meth:`LogReplay.held`), the rest simulated.  ``jobs = 1``: one lockstep batch per log
     replay and length, here; else one task per run over this process and ``jobs - 1`` workers, the longest first
     and the split decided as they go (:func:`ur5fault.util.parallel.map_balanced`).  A run's replay does not
-    depend on the batch it is simulated in, nor on the process."""
+    depend on the batch it is simulated in, nor on the process, nor on whether it was prefetched."""
     out: list[Replayed | None] = [None] * len(reqs)
     todo = [i for i, (rp, e, n) in enumerate(reqs) if not rp.holds(e, n)]
     _simulate_todo(reqs, todo, out, jobs, progress)
     for i, (rp, e, n) in enumerate(reqs):  # taken after this process's own share: a prefetch may be on a worker
         if out[i] is None:
             out[i] = rp.held(e, n)
+    # a longer prefetched run that is not ok cannot stand for the shorter run: simulated now
+    _simulate_todo(reqs, [i for i, r in enumerate(out) if r is None], out, jobs, None)
     return out
 
 

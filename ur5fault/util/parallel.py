@@ -18,6 +18,10 @@ from __future__ import annotations
 from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
+#: how often :func:`map_balanced` checks that its feeder thread is alive while it waits for the workers [s]
+#: (a liveness check, not a deadline: any value well under a task's length)
+_POLL_S = 1.0
+
 
 def own_share(cost: Sequence[float], jobs: int) -> int:
     """Index of the first task this process runs: tasks from the end whose cost fits ``1 / jobs`` of the total
@@ -82,13 +86,15 @@ def map_balanced(fn: Callable[..., Any], tasks: Sequence[tuple], jobs: int, cost
     start-up, or a task :func:`submit` gave it before) or a process slowed by other jobs on the machine then takes
     fewer tasks instead of leaving the other core idle at the end.  A task's result does not depend on where it
     ran.  Tasks are not cancelled once given to a worker (see the module docstring), so an exception here waits
-    for nothing: the workers are stopped."""
+    for nothing: the workers are stopped.  A worker's failure (its task raised, its process died, the pool could
+    not take a task) is raised here before this process starts its next task, not after its whole share."""
     if len(cost) != len(tasks):
         raise ValueError(f"{len(cost)} costs for {len(tasks)} tasks")
     if jobs <= 1 or len(tasks) <= 1:
         return [fn(*t) for t in tasks]
     import queue
     import threading
+    from concurrent.futures import Future
 
     from joblib.executor import get_memmapping_executor
 
@@ -97,6 +103,7 @@ def map_balanced(fn: Callable[..., Any], tasks: Sequence[tuple], jobs: int, cost
     lock = threading.Lock()
     ends = [0, len(order)]  # the tasks not yet taken: order[ends[0]:ends[1]]
     finished: queue.SimpleQueue = queue.SimpleQueue()  # (task index, future) of the workers, as they finish
+    results: queue.SimpleQueue = queue.SimpleQueue()  # the same, passed on by the feeder
     stop = threading.Event()
 
     def take(front: bool) -> int | None:
@@ -110,39 +117,56 @@ def map_balanced(fn: Callable[..., Any], tasks: Sequence[tuple], jobs: int, cost
             return order[ends[1]]
 
     def give(i: int) -> None:
-        executor.submit(fn, *tasks[i]).add_done_callback(lambda f, i=i: finished.put((i, f)))
-
-    results: queue.SimpleQueue = queue.SimpleQueue()
+        try:
+            executor.submit(fn, *tasks[i]).add_done_callback(lambda f, i=i: finished.put((i, f)))
+        except Exception as e:  # e.g. the pool broken by a worker that died: task i fails, here
+            stop.set()
+            failed: Future = Future()
+            failed.set_exception(e)
+            results.put((i, failed))
 
     def feed() -> None:  # a worker's task finished: hand its result on and give it the next task
-        while True:
-            item = finished.get()
-            if item is None:
-                return
+        while (item := finished.get()) is not None:  # never dies on a task: a failure is passed on
             results.put(item)
-            i = take(front=True)
-            if i is not None and not stop.is_set():
+            if item[1].cancelled() or item[1].exception() is not None:  # nothing more after a failure
+                stop.set()
+            if not stop.is_set() and (i := take(front=True)) is not None:
                 give(i)
 
+    def collect(block: bool) -> bool:
+        """Take one worker result into ``out`` (its exception raised here); False if none came."""
+        while True:
+            try:
+                i, f = results.get(timeout=_POLL_S) if block else results.get_nowait()
+            except queue.Empty:
+                if not block:
+                    return False
+                if not feeder.is_alive():  # cannot happen (feed catches), but never wait forever on it
+                    raise RuntimeError("the task feeder stopped with tasks still on the workers") from None
+                continue
+            out[i] = f.result()
+            return True
+
     out: list[Any] = [None] * len(tasks)
-    n_out = 0
-    for _ in range(min(jobs - 1, len(tasks) - 1)):  # one task per worker; this process keeps at least one
-        i = take(front=True)
-        if i is None:
-            break
-        give(i)
+    n_here = n_got = 0
     feeder = threading.Thread(target=feed, name="ur5fault-task-feeder", daemon=True)
     feeder.start()
     done = False
     try:
-        while (i := take(front=False)) is not None:
+        for _ in range(min(jobs - 1, len(tasks) - 1)):  # one task per worker; this process keeps at least one
+            i = take(front=True)
+            if i is None:
+                break
+            give(i)
+        while True:
+            while collect(block=False):  # a worker's failure raised before each task here, not after them all
+                n_got += 1
+            if (i := take(front=False)) is None:
+                break
             out[i] = fn(*tasks[i])
-            n_out += 1
-        with lock:
-            n_given = len(tasks) - n_out
-        for _ in range(n_given):
-            i, f = results.get()
-            out[i] = f.result()
+            n_here += 1
+        for _ in range(len(tasks) - n_here - n_got):  # every task is taken now: the rest are the workers'
+            collect(block=True)
         done = True
     finally:
         stop.set()
@@ -163,3 +187,15 @@ def submit(fn: Callable[..., Any], args: tuple, jobs: int):
     from joblib.executor import get_memmapping_executor
 
     return get_memmapping_executor(jobs - 1).submit(fn, *args)
+
+
+def stop_workers(jobs: int) -> None:
+    """Kill the ``jobs - 1`` worker processes of :func:`submit` and :func:`map_balanced` (loky's one process-wide
+    executor) with whatever they are running: for futures of :func:`submit` that no one will read.  Cancelling
+    them instead would not stop a task that has started (and see the module docstring).  The next call starts new
+    workers."""
+    if jobs <= 1:
+        return
+    from joblib.executor import get_memmapping_executor
+
+    get_memmapping_executor(jobs - 1).shutdown(wait=False, kill_workers=True)

@@ -79,6 +79,24 @@ def test_the_friction_rise_is_learned_from_the_features_of_a_constructed_fleet()
         assert abs(mean[0] - F_DEG) < 3 * sd[0] + 0.05 * F_DEG, uid
 
 
+def test_a_fleet_whose_friction_never_rises_learns_zero_not_nan():
+    """A wear law with both friction rises 0 (valid): every training residual is exactly 0; the residual variance
+    was 0 and each unit's posterior 0/0 = NaN, which the wear law then refused as out of range."""
+    train = linear_wear_fleet(30, 0, "a")
+    for j in range(1, 7):
+        train[f"friction_scale_j{j}"] = 1.0
+        train[f"current_hf_energy_A2s_j{j}"] = 0.01 * np.random.default_rng(j).standard_normal(len(train))
+    clear = ClearanceRUL().fit(train)
+    fr = FrictionRise().fit(train, clear)
+    uid = train["unit_id"].iloc[0]
+    rows = (train["unit_id"] == uid).to_numpy()
+    mean, _ = fr.unit(train["cycles"].to_numpy(float)[rows], clear.clearances(train)[rows], fr.rises(train)[rows])
+    assert np.all(np.isfinite(mean)) and np.allclose(mean, 0.0, atol=1e-6)
+    from ur5fault.health.prognostics.twin_rul import _in_range
+
+    assert _in_range("friction_per_deg", -0.3) == 0.0 and _in_range("friction_per_deg", 250.0) == 100.0
+
+
 def test_a_fleet_without_measured_friction_cannot_learn_it():
     train = linear_wear_fleet(10, 0, "a")
     with pytest.raises(ValueError, match="--twin-friction law"):

@@ -69,7 +69,7 @@ def robot_baseline(healthy: Sequence[MeasuredLog], detector_dir: str | Path, par
         windows = [log_windows(g, window_s, replay_twin(g, params_overrides, base_effects, seed=seed))
                    for g in healthy]
     return fit_map(training_reference(detector_dir, schema), [(g.source, w) for g, w in zip(healthy, windows)],
-                   healthy[0].period_s)
+                   healthy[0].period_s, [g.content_sha256() for g in healthy])
 
 
 def diagnose(log: MeasuredLog, detector_dir: str | Path, params_overrides: dict | None = None,
@@ -91,7 +91,9 @@ def diagnose(log: MeasuredLog, detector_dir: str | Path, params_overrides: dict 
         windows = log_windows(log, window_s, (replay, rep))
     context = {k: windows[0].features[k] for k in ("payload_kg", "temperature_C")}
     if baseline is not None:
-        if log.source in baseline.logs:
+        same = (log.content_sha256() in baseline.log_sha256 if baseline.log_sha256  # by content: a file name
+                else log.source in baseline.logs)                                # says nothing across folders
+        if same:
             raise ParameterError(f"{log.source} is both diagnosed and a baseline log; a run cannot judge itself")
         if baseline.reference.names != tuple(c["name"] for c in schema["inputs"]):
             raise ParameterError("the baseline was built for another detector's inputs")
@@ -107,7 +109,8 @@ def diagnose(log: MeasuredLog, detector_dir: str | Path, params_overrides: dict 
         few = n["shifted_few_windows"]
         notes.append(f"inputs referred to the robot's healthy baseline ({baseline.n_windows} windows of "
                      f"{len(baseline.logs)} log(s)): {n['scaled']} scaled by the baseline's larger spread, "
-                     f"{n['shifted'] + n['shifted_zero_spread']} shifted by its median"
+                     f"{n['shifted'] + n['shifted_zero_spread'] + n['shifted_training_zero_spread']} shifted by "
+                     "its median"
                      + (f", {few} shifted only (fewer than {MIN_SPREAD_WINDOWS} baseline values)" if few else "")
                      + f", {n['left_as_measured']} left as measured (no baseline or training "
                      "value); p(fault) is calibrated on simulated runs, not on this robot's baseline")

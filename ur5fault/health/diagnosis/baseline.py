@@ -22,6 +22,9 @@ its size in the input's own unit.  Handled explicitly, each named in the diagnos
 * fewer than :data:`MIN_SPREAD_WINDOWS` baseline values of an input: its spread is not estimated, the input is
   shifted only (factor 1);
 * zero spread in the baseline (e.g. a spike count that is always 0): shifted only (factor 1 by the floor);
+* zero spread in the healthy training runs (a spike count the simulated healthy runs never show): there is no
+  training spread to map a z onto (a factor 0 would set the input to the training median whatever the window
+  shows, hiding e.g. a backlash's spikes), so the input is shifted only;
 * no baseline value (e.g. an encoder-mismatch input of a log without motor encoders) or no training value:
   left as measured;
 * the operating conditions (:data:`~ur5fault.health.diagnostics.data.CONTEXT_COLUMNS`: payload, temperature):
@@ -48,12 +51,15 @@ from .windows import Window
 #: input is shifted only)
 MIN_SPREAD_WINDOWS = 5
 #: how each input is mapped (:class:`BaselineMap`'s ``rule``)
-SCALED, SHIFTED, SHIFTED_FEW, SHIFTED_ZERO, UNMAPPED, CONDITION = (
-    "scaled", "shifted", "shifted_few_windows", "shifted_zero_spread", "left_as_measured", "condition")
+SCALED, SHIFTED, SHIFTED_FEW, SHIFTED_ZERO, SHIFTED_TRAINING_ZERO, UNMAPPED, CONDITION = (
+    "scaled", "shifted", "shifted_few_windows", "shifted_zero_spread", "shifted_training_zero_spread",
+    "left_as_measured", "condition")
 RULES = {SCALED: "baseline spread above the training runs': z against the baseline, mapped onto the training runs",
          SHIFTED: "baseline spread within the training runs': shifted by the baseline median (factor 1)",
          SHIFTED_FEW: f"fewer than {MIN_SPREAD_WINDOWS} baseline values: spread not estimated, shifted only",
          SHIFTED_ZERO: "zero spread in the baseline: shifted only",
+         SHIFTED_TRAINING_ZERO: "the healthy training runs do not vary on this input (a spike count that is always "
+                                "0 there): no training spread to map onto, shifted only (a fault keeps its size)",
          UNMAPPED: "no value in the baseline or the training runs: left as measured",
          CONDITION: "an operating condition, known for every log: left as measured"}
 
@@ -129,6 +135,8 @@ class BaselineMap:
     robot_n: NDArray
     rule: tuple[str, ...]
     factor: NDArray
+    #: :meth:`~ur5fault.logs.measured.MeasuredLog.content_sha256` of each baseline log (empty: not recorded)
+    log_sha256: tuple[str, ...] = ()
 
     @property
     def n_windows(self) -> int:
@@ -157,14 +165,13 @@ class BaselineMap:
                            "training spread); spread = 1.4826 MAD",
                 "rules": {r: {"meaning": RULES[r], "n_inputs": len(v), **({"inputs": v} if r != SCALED else {})}
                           for r, v in by_rule.items()},
-                # None: the training runs do not vary at all on that input (factor 0: the input is set to their
-                # median whatever the robot shows)
+                # None: not a finite ratio (such inputs are shifted only, never scaled)
                 "largest_spread_ratio": [{"input": names[k], "baseline_over_training":
                                           float(ratio[k]) if np.isfinite(ratio[k]) else None} for k in order]}
 
 
-def fit_map(reference: Reference, windows_by_log: Sequence[tuple[str, Sequence[Window]]], period_s: float
-            ) -> BaselineMap:
+def fit_map(reference: Reference, windows_by_log: Sequence[tuple[str, Sequence[Window]]], period_s: float,
+            log_sha256: Sequence[str] = ()) -> BaselineMap:
     """The map from the healthy windows of each baseline log (``(source, windows)``, windowed as the diagnosed
     log is, sampled every ``period_s``).  A baseline without a single window is refused in one line."""
     names = reference.names
@@ -183,13 +190,15 @@ def fit_map(reference: Reference, windows_by_log: Sequence[tuple[str, Sequence[W
             rule.append(SHIFTED_FEW)
         elif scale[k] == 0:
             rule.append(SHIFTED_ZERO)
+        elif not reference.scale[k] > 0:  # a factor 0 would set the input to the training median whatever it is
+            rule.append(SHIFTED_TRAINING_ZERO)
         elif np.isfinite(reference.scale[k]) and scale[k] > reference.scale[k]:
             rule.append(SCALED)
             factor[k] = reference.scale[k] / scale[k]
         else:
             rule.append(SHIFTED)
     return BaselineMap(tuple(s for s, _ in windows_by_log), float(period_s), counts, reference, med, scale, n,
-                       tuple(rule), factor)
+                       tuple(rule), factor, tuple(log_sha256))
 
 
 __all__ = ["BaselineMap", "MIN_SPREAD_WINDOWS", "Reference", "fit_map", "robust_spread", "training_reference"]

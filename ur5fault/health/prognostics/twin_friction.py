@@ -47,6 +47,9 @@ from .rul import MIN_TASK_UNITS
 FRICTION_RIDGE = 1e-4
 #: the columns the training units must carry (their measured friction factor per joint)
 TARGET = "friction_scale"
+#: the least residual variance of the rise regression [-^2] (a friction factor's sd of 1e-6: far below any
+#: measurement; only a fleet whose friction never changes fits tighter, and then the posterior is the prior)
+RESID_VAR_FLOOR = 1e-12
 
 
 def rise_design(n: NDArray, a: NDArray) -> NDArray:
@@ -130,7 +133,9 @@ class FrictionRise:
         e = np.array(est)
         self.prior_mean_ = e.mean(0)
         self.prior_cov_ = np.cov(e.T, ddof=1) + np.diag([1e-8, 1e-8])   # never singular
-        self.resid_var_ = float(np.mean(np.concatenate(resid) ** 2))
+        # floored: a fleet whose friction never rises (a wear law with both rises 0) fits with zero residuals,
+        # and a zero variance made every unit's posterior 0/0
+        self.resid_var_ = max(float(np.mean(np.concatenate(resid) ** 2)), RESID_VAR_FLOOR)
         self.train_estimates_ = e
         return self
 

@@ -50,6 +50,7 @@ from .clearance_rul import ClearanceRUL
 from .rul import N_DRAWS, Q_HI, Q_LO, grid_rul
 from .twin_boundary import Ray, TwinSetup, failure_radii
 from .twin_calibration import TaskCalibration, direction_bias, task_calibration
+from .wear import WearLaw
 
 if TYPE_CHECKING:
     from .twin_cache import RadiusCache
@@ -73,6 +74,13 @@ CALIBRATIONS = ("direction", "task", "pooled")
 
 #: (trajectory JSON, payload [kg], cell temperature [degC]) of a unit
 Conditions = tuple[str, float, float]
+
+
+def _in_range(name: str, value: float) -> float:
+    """A learned wear-law constant clipped into the law's valid range (a unit's posterior mean can fall below 0
+    or, far from its data, above the range the law accepts)."""
+    lo, hi, _ = WearLaw.RANGES[name]
+    return float(np.clip(float(value), lo, hi))
 
 
 def _unit_direction(v: NDArray, fallback: NDArray) -> tuple[NDArray, float]:
@@ -117,8 +125,8 @@ class TwinRUL:
             return ray
         mean, cov = self.friction.unit(n, a, rises)
         self.friction_rays_.append((float(mean[0]), float(cov[0, 0]) ** 0.5, float(mean[1]), float(cov[1, 1]) ** 0.5))
-        return dataclasses.replace(ray, friction_per_deg=max(float(mean[0]), 0.0),
-                                   friction_per_Mcycle=max(float(mean[1]), 0.0))
+        return dataclasses.replace(ray, friction_per_deg=_in_range("friction_per_deg", mean[0]),
+                                   friction_per_Mcycle=_in_range("friction_per_Mcycle", mean[1]))
 
     def calibrate(self, conditions: Mapping[str, Conditions]) -> TwinRUL:
         """Simulate the boundary along the directions the failed training units' histories gave at each
