@@ -3,6 +3,7 @@ cross-correlation, refused when the motion differs), and the per-phase reference
 event there, the model's error repeated at every start and stop is not)."""
 
 import json
+from collections import Counter
 
 import numpy as np
 import pytest
@@ -10,7 +11,18 @@ import pytest
 from tests.health.monitoring.test_monitoring import PERIOD, part
 from ur5fault.health.monitoring import assess, fit_baseline
 from ur5fault.health.monitoring.baseline import Baseline
-from ur5fault.health.monitoring.task import CHUNK_S, CONTEXT_S, TARGET_JITTER_RAD, matches, reference
+from ur5fault.health.monitoring.task import (
+    CHUNK_S,
+    CONTEXT_S,
+    MAX_FAILED,
+    MAX_MATCHES,
+    SSD_RESOLUTION,
+    TARGET_JITTER_RAD,
+    chunks,
+    matches,
+    reference,
+    tolerance,
+)
 from ur5fault.health.monitoring.verdict import judged_transients, limits
 
 
@@ -171,3 +183,94 @@ def test_short_logs_pair_or_not_without_error(n):
     t = jitter(cycle(1), 5)
     ref, matched = reference(t[:n], [(t, np.zeros_like(t))], PERIOD)
     assert ref.shape == (n, 6) and matched.shape == (1, n)
+
+
+def plain_ssd(chunk, ref):
+    """The sum of squared differences of ``chunk`` with every stretch of ``ref``, per joint by scipy's FFT
+    convolution."""
+    from scipy.signal import fftconvolve
+
+    L = chunk.shape[0]
+    cross = sum(fftconvolve(ref[:, j], chunk[::-1, j], mode="valid") for j in range(chunk.shape[1]))
+    csum = np.concatenate([[0.0], np.cumsum((ref**2).sum(axis=1))])
+    return (chunk**2).sum() + (csum[L:] - csum[:-L]) - 2.0 * cross
+
+
+def plain_matches(target, ref_target, period_s, same_run=False):
+    """The pairing as first written, every lag in order of its squared difference (equal ones nearest first)
+    checked in a Python loop and kept unless within half a chunk of one kept before (no cap): the slow obvious
+    path."""
+    n = target.shape[0]
+    ctx = int(round(CONTEXT_S / period_s))
+    out = []
+    for a, b in chunks(n - 2 * ctx, period_s):
+        a, b = a + ctx, b + ctx
+        ch = target[a - ctx : b + ctx]
+        ssd = plain_ssd(ch, ref_target)
+        tol = tolerance(ch, period_s)
+        lags = np.arange(ssd.size)
+        ok = ssd <= ch.size * tol**2
+        if same_run:
+            ok &= np.abs(lags - (a - ctx)) >= round(CHUNK_S / period_s)
+        found = []
+        key = np.floor(ssd / (SSD_RESOLUTION * (ch**2).sum()))  # equal to the FFT's rounding: the nearest first
+        for k in sorted(lags[ok], key=lambda k: (key[k], abs(k - (a - ctx)))):
+            far = all(abs(k - f) >= (b - a) // 2 for f in found)
+            if far and np.abs(ref_target[k : k + ch.shape[0]] - ch).max() <= tol:
+                found.append(int(k))
+        out.append((a, b, [k - (a - ctx) for k in found]))
+    return out
+
+
+def test_pairing_keeps_the_best_repeats_the_plain_loop_finds():
+    """A cyclic task of 24 cycles (more repeats than MAX_MATCHES) against itself and against a shifted run: each
+    chunk keeps the first MAX_MATCHES lags of the plain loop's, which finds them all."""
+    base = jitter(cycle(24), 11)
+    other = jitter(np.concatenate([np.repeat(cycle(24)[:1], 37, axis=0), cycle(24)]), 12)
+    for mon, same in ((base, True), (other, False)):
+        plain = plain_matches(mon, base, PERIOD, same)
+        fast = matches(mon, base, PERIOD, same_run=same)[1:-1]
+        assert [(a, b) for a, b, _ in plain] == [(a, b) for a, b, _ in fast]
+        assert max(len(offs) for _, _, offs in plain) > MAX_MATCHES  # the cap is exercised
+        for (_, _, p), (_, _, f) in zip(plain, fast):
+            assert f == sorted(p[:MAX_MATCHES])
+
+
+def test_a_long_rest_pairs_with_a_bounded_number_of_checks():
+    """A robot standing for 240 s at one pose (targets within the controller's jitter) against itself: every
+    lag of at least CHUNK_S agrees; each chunk keeps MAX_MATCHES and checks no more (the loop checked every lag:
+    about cubic in the log's length). A rest 2.5e-4 rad off that pose on every joint passes the squared-difference
+    bound at every lag but not the largest difference: MAX_FAILED checks per chunk, none kept."""
+    n = int(round(240.0 / PERIOD))
+    rest = jitter(np.repeat(A[None], n, axis=0), 21)
+    count: Counter = Counter()
+    pairs = matches(rest, rest, PERIOD, same_run=True, counter=count)
+    inner = pairs[1:-1]
+    assert len(inner) == len(chunks(n - 2 * int(round(CONTEXT_S / PERIOD)), PERIOD)) == 119
+    assert all(len(offs) == MAX_MATCHES for _, _, offs in inner)
+    assert all(abs(o) >= CHUNK_S / PERIOD for _, _, offs in inner for o in offs)
+    assert count["kept"] == count["checked"] == MAX_MATCHES * len(inner)
+    ref, matched = reference(rest, [(rest, np.ones_like(rest))], PERIOD, self_index=0)
+    assert matched[0, pairs[0][1] : pairs[-1][0]].all()
+    np.testing.assert_array_equal(ref[matched[0]], 1.0)
+    off = jitter(np.repeat(A[None] + 2.5e-4, n, axis=0), 22)
+    count = Counter()
+    pairs = matches(rest, off, PERIOD, counter=count)
+    assert all(offs == [] for _, _, offs in pairs)
+    assert count["kept"] == 0 and count["checked"] == MAX_FAILED * len(inner)
+
+
+def test_a_reloaded_baseline_is_the_fitted_one(tmp_path):
+    """baseline.json keeps the task runs' targets and residuals at full precision: reloaded, they are bit for bit
+    the fitted ones (NaN where a tick was not logged), and so are the verdicts."""
+    base = [run(f"b{k}", cycle(4, lead_s=0.3 * k), 20 + k) for k in range(2)]
+    base[0].logged[100:110] = False  # two unlogged ticks' worth of gap: NaN in the reference, null in the file
+    bp = fit_baseline(base, "sha")
+    path = tmp_path / "baseline.json"
+    path.write_text(json.dumps(bp.to_json(), indent=2))
+    back = Baseline.load(path)
+    assert np.isnan(bp.task_residual_A[0][100:110]).all()
+    for x, y in zip(back.task_target_rad + back.task_residual_A, bp.task_target_rad + bp.task_residual_A):
+        np.testing.assert_array_equal(x, y)
+    pushed = run("pushed", cycle(4, lead_s=0.2), 41, push_at=int(round(6.1 / PERIOD)))
+    assert assess(back, pushed) == assess(bp, pushed)

@@ -102,7 +102,7 @@ class Baseline:
                                          for j, q in enumerate(self.quantum_rad)},
                 "candidates": {k: {"mean": m, "variance": v, "n_blocks": n}
                                for k, (m, v, n) in self.candidates.items()},
-                "task_runs": [{"target_rad": np.round(t, 7).tolist(), "residual_A": _nulls(np.round(r, 6)),
+                "task_runs": [{"target_rad": t.tolist(), "residual_A": _nulls(r),
                                "scale": None if i not in self.task_runs else
                                {JOINT_NAMES[j]: dict(zip(FEATURES, map(float, self.task_scale[i, j])))
                                 for j in range(N_JOINTS)},
