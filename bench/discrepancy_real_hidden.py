@@ -263,6 +263,16 @@ def engineer_table(chosen: list[int], jobs: int, cache: Path | None, identified:
     summarise(rows, per_kind, "the engineer's baseline row (fitted from the robot's healthy runs)")
 
 
+def worn_region_found(m, joint_name: str, centre_deg: float) -> tuple[bool, str]:
+    """Whether the fit reports the injected worn region: an unexplained current on its joint localised to an
+    angle region holding its centre; and how that region reads in the table."""
+    hits = [u for u in m.unexplained_ if u["joint"] == joint_name and u["signal"] == "current_A"
+            and u.get("angle_region")]
+    reg = hits[0]["angle_region"] if hits else None
+    ok = reg is not None and reg["from_deg"] <= centre_deg <= reg["to_deg"]
+    return ok, (f"unexplained {reg['from_deg']:g}..{reg['to_deg']:g} deg" if reg else "-")
+
+
 def score_engineer(name: str, effects, m, clean: dict, wall: float, rows: list, per_kind: dict,
                    params: dict | None = None) -> None:
     """One injected suspect run fitted from the baseline: its findings read as they are; extra ones counted
@@ -275,11 +285,7 @@ def score_engineer(name: str, effects, m, clean: dict, wall: float, rows: list, 
     for kind, j, v in effects:
         jn = JOINT_NAMES[j]
         if kind == "local_friction":
-            hits = [u for u in m.unexplained_ if u["joint"] == jn and u["signal"] == "current_A"
-                    and u.get("angle_region")]
-            reg = hits[0]["angle_region"] if hits else None
-            ok = reg is not None and reg["from_deg"] <= v["centre_deg"] <= reg["to_deg"]
-            where = f"unexplained {reg['from_deg']:g}..{reg['to_deg']:g} deg" if reg else "-"
+            ok, where = worn_region_found(m, jn, v["centre_deg"])
             print(f"| {name} | {kind} {jn} {v['amplitude_A']} A at {v['centre_deg']:.0f} deg | {where} | | | | "
                   f"{'found' if ok else 'missed'} | {extras or 0} | {len(m.unexplained_)} | {wall:.0f} s |",
                   flush=True)
@@ -374,11 +380,7 @@ def score(name: str, effects, log, clean, baseline: bool, jobs: int, rows: list,
     for kind, j, v in effects:
         jn = JOINT_NAMES[j]
         if kind == "local_friction":
-            hits = [u for u in m.unexplained_ if u["joint"] == jn and u["signal"] == "current_A"
-                    and u.get("angle_region")]
-            reg = hits[0]["angle_region"] if hits else None
-            ok = reg is not None and reg["from_deg"] <= v["centre_deg"] <= reg["to_deg"]
-            where = f"unexplained {reg['from_deg']:g}..{reg['to_deg']:g} deg" if reg else "-"
+            ok, where = worn_region_found(m, jn, v["centre_deg"])
             print(f"| {label} | {kind} {jn} {v['amplitude_A']} A at {v['centre_deg']:.0f} deg | {where} | | | "
                   f"{'found' if ok else 'missed'} | {len(extra)} | {len(m.unexplained_)} | {wall:.0f} s |",
                   flush=True)
