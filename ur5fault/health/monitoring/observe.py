@@ -27,6 +27,7 @@ from ...logs import MeasuredLog
 from ...sim.effects import EffectSpec
 from ...twin.replay import LogReplay
 from ...twin.residuals import CONDITION_REST_SPEED_RAD_S
+from .conditions import stribeck_speed
 
 #: the library effects a monitor tests for a persistent change: wear of the drive train (Coulomb and viscous
 #: friction, gear clearance and stiffness) and drift of the motor and its current sensor (torque constant,
@@ -59,6 +60,9 @@ class Observed:
             (:func:`ur5fault.identify.sensors.position_quantum`, per joint; NaN where the joint never moves).
         target_rad: the commanded joint positions ``(n, 6)`` [rad] (the task: :mod:`.task` pairs a log with a
             baseline run that repeats it).
+        stribeck_speed_rad_s: the replay model's friction Stribeck speed [rad/s], where the events' slow condition
+            ends (:func:`.conditions.stribeck_speed`; ``None``: not known, e.g. a part replayed before it was kept,
+            refused as a baseline).
     """
 
     name: str
@@ -75,6 +79,7 @@ class Observed:
     position_residual_rad: NDArray
     position_quantum_rad: NDArray
     target_rad: NDArray
+    stribeck_speed_rad_s: float | None = None
 
     @property
     def n(self) -> int:
@@ -118,7 +123,8 @@ def observe(log: MeasuredLog, params_overrides: dict | None = None, effects: Seq
                     qd > CONDITION_REST_SPEED_RAD_S, log.logged_rows()[1 : n_all + 1][lo:hi],
                     tuple(kept), X[:, lo : lo + m] if kept else np.zeros((0, *e.shape)), e, qd, qdd,
                     (meas[:, 1] - base.q_rad[:hi])[lo:hi],
-                    quanta(log.q_actual_rad), log.q_target_rad[1 : n_all + 1][lo:hi].copy())
+                    quanta(log.q_actual_rad), log.q_target_rad[1 : n_all + 1][lo:hi].copy(),
+                    stribeck_speed(rp.params))
 
 
 def quanta(q_rad: NDArray) -> NDArray:
