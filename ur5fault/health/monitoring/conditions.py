@@ -42,7 +42,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ...sim.axes import N_JOINTS
-from .events import LEVEL_S, WINDOW_S, multiplier, settled_moving, sigma, smooth
+from .events import LEVEL_S, SETTLE_S, WINDOW_S, multiplier, settled_moving, sigma, smooth
 from .task import CONTEXT_S, TARGET_JITTER_RAD
 
 #: the motion conditions, in code order
@@ -75,7 +75,7 @@ def condition(moving: NDArray, speed_rad_s: NDArray, target_rad: NDArray, period
     creeping = np.abs(shifted[2 * k :] - shifted[: -2 * k]) > TARGET_JITTER_RAD  # moved over CONTEXT_S
     out = np.where(~fast & (moving | creeping), SLOW, MOVING).astype(np.int8)
     out[rest] = REST
-    step = np.diff(target_rad, axis=0, prepend=target_rad[:1])
+    back = max(1, int(round(SETTLE_S / period_s)))
     for j in range(out.shape[1]):
         slow = (out[:, j] == SLOW).astype(int)
         d = np.diff(np.concatenate([[0], slow, [0]]))
@@ -83,7 +83,8 @@ def condition(moving: NDArray, speed_rad_s: NDArray, target_rad: NDArray, period
             before = np.flatnonzero(fast_now[:a, j])
             if not before.size:
                 continue
-            came = np.sign(step[before[-1], j])  # the direction of the joint's last motion above the slow band
+            last = before[-1]  # the direction of the joint's last motion above the slow band, over SETTLE_S
+            came = np.sign(target_rad[last, j] - target_rad[max(last - back, 0), j])
             moved = target_rad[b - 1, j] - target_rad[a, j]
             if came != 0 and abs(moved) > TARGET_JITTER_RAD and np.sign(moved) == -came:
                 out[a:b, j] = REVERSAL
