@@ -13,6 +13,9 @@ The transient's spread is modelled per joint as ``sigma^2 = c . [1, moving, |qd|
 acceleration of the joint, smoothed over :data:`SMOOTH_S`; ``moving`` its target moving or stopped less than
 :data:`SETTLE_S` ago), ``c >= 0`` fitted by least squares to ``h^2`` on the baseline runs.
 
+Per motion condition (the arm at rest, slow, reversing, moving: :mod:`.conditions`) the spread and tail are
+fitted on that condition's samples alone; at rest the level is the rest stretch's own.
+
 *Multiplier from the baseline's own extremes.* The normalised transient ``|h| / sigma`` is cut into independent
 windows of :data:`WINDOW_S`; the largest value of each baseline window is kept, and the upper tail of those
 window maxima (above their :data:`TAIL_QUANTILE` quantile) is fitted by an exponential (peaks over threshold;
