@@ -79,9 +79,10 @@ def test_a_slow_drift_at_rest_is_not_an_event():
 def with_creep(seed: int, creep: bool, n_moves: int = 8):
     """A run of ``n_moves`` moves (every joint at 0.3 rad/s for 1.5 s, the model's error 0.02 A noise and 0.1-0.3 A
     bumps), each followed by 1.2 s where wrist_2 stops (0.01 A of noise: a wrist is hardly loaded by the others'
-    motion) while the others move on, and by 1 s of the arm standing (0.01 A of noise). ``creep``: in the third stop wrist_2 creeps back at 0.6-0.9 mrad/s instead (under the
-    twin's rest speed, as Movement_No1's wrist_2 at 33.5-33.9 s) and its residual swings by 0.25 A over it (the
-    friction's sign change, which the twin's smooth sign does not follow). Residual, speed, target ``(n, 6)``."""
+    motion) while the others move on, and by 1 s of the arm standing (0.01 A of noise). ``creep``: in the third
+    stop wrist_2 creeps back at 0.6-0.9 mrad/s instead (under the twin's rest speed, as Movement_No1's wrist_2 at
+    33.5-33.9 s) and its residual swings by 0.25 A over it (the friction's sign change, which the twin's smooth
+    sign does not follow). Residual, speed, target ``(n, 6)``."""
     rng = np.random.default_rng(seed)
     fast, stop, stand = (int(round(x / PERIOD)) for x in (1.5, 1.2, 1.0))
     v, res = [], []
