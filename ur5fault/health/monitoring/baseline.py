@@ -26,7 +26,7 @@ from numpy.typing import NDArray
 from ...errors import ParameterError
 from ...sim.axes import JOINT_NAMES, N_JOINTS
 from .changes import BLOCK_S, block_estimates, spread
-from .conditions import CONDITIONS, condition, enough, rest_level
+from .conditions import CONDITIONS, CONSTANT_SPREAD, REVERSAL, SLOW, condition, constant, enough, rest_level
 from .events import (
     CHANNELS,
     FEATURES,
@@ -189,8 +189,11 @@ def segment(obs: Observed, slow_rad_s: float) -> tuple[NDArray, NDArray, NDArray
     cond = condition(obs.moving, obs.speed_rad_s, obs.target_rad, obs.period_s, slow_rad_s)
     h = [rest_level(r, cond, obs.period_s, transient(r, obs.period_s))
          for r in (obs.residual_A, obs.position_residual_rad)]
-    return (np.stack(h), features(obs.moving, obs.speed_rad_s, obs.accel_rad_s2, obs.period_s),
-            judged_rows(obs.logged, obs.period_s), cond)
+    feats = features(obs.moving, obs.speed_rad_s, obs.accel_rad_s2, obs.period_s)
+    # a slow or reversing joint moves, also where its target creeps under the rest speed: moving for the spread
+    # model on all motions too (which judges it where its condition has no statistics)
+    feats[..., 1] = np.maximum(feats[..., 1], (cond == SLOW) | (cond == REVERSAL))
+    return np.stack(h), feats, judged_rows(obs.logged, obs.period_s), cond
 
 
 def fit_events(segs: list[tuple[NDArray, NDArray, NDArray, NDArray]], period_s: float, quantum_rad: NDArray
@@ -211,8 +214,8 @@ def fit_events(segs: list[tuple[NDArray, NDArray, NDArray, NDArray]], period_s: 
         cc, ct = np.full((len(CONDITIONS), *coef.shape), np.nan), np.full((len(CONDITIONS), *tail.shape), np.nan)
         for k in range(len(CONDITIONS)):
             if have[k].any():
-                cc[k], ct[k] = fit_channel([(h[i], f, ok[:, None] & (c == k)) for h, f, ok, c in segs], period_s,
-                                           floor)
+                cc[k], ct[k] = fit_channel([(h[i], constant(f) if k in CONSTANT_SPREAD else f, ok[:, None] & (c == k))
+                                            for h, f, ok, c in segs], period_s, floor)
                 cc[k][~have[k]] = np.nan
                 ct[k][~have[k]] = np.nan
         c_coefs.append(cc)

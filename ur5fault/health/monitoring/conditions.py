@@ -19,8 +19,8 @@ the controller's jitter, :data:`~.task.TARGET_JITTER_RAD`, over :data:`~.task.CO
 creep at 1 mrad/s hovers about the rest speed) and is not within :data:`~.events.SETTLE_S` of faster motion get
 their own spread and tail from the baseline runs' slow samples.
 
-*Moving*: the rest, as before (the spread model on speed and acceleration, :mod:`.events`): a joint moving
-faster or settling after it, and a joint standing while others move (its load changes with theirs).
+*Moving*: the rest (a joint moving faster or settling after it, and a joint standing while others move: its load
+changes with theirs), judged as before.
 
 *Reversal.* A slow stretch (as above) in which the joint's target moves back, against the direction of its last
 motion above the Stribeck speed, by more than the controller's jitter (:data:`~.task.TARGET_JITTER_RAD`): the
@@ -28,12 +28,15 @@ joint stopped and creeps or starts back, its friction changing sign at low speed
 and breaks away while the twin's smooth sign does not (Movement_No1's wrist_2 at 33.5-34.3 s). Its own
 condition: its error is not that of a joint moving slowly one way.
 
-Each condition's spread and tail are fitted on the baseline samples of that condition alone (per joint, leave one
-run out for the tail, :func:`~.baseline.fit_channel`); a joint whose baseline holds fewer than
-:data:`MIN_CONDITION_S` of a condition has no statistics for it (NaN) and its samples in that condition are judged
-by the widest limit of the statistics it has there (all motions pooled, and the other conditions): widened, not
-narrowed to a condition the baseline did not show. Shapes: ``(n, 6)`` per sample and joint; per condition scale
-``(4, 6, 4)``, tail ``(4, 6, 3)``.
+Every condition gets a spread and a tail fitted on the baseline samples of that condition alone (leave one run out
+for the tail, :func:`~.baseline.fit_channel`): constant per joint at rest, slow and reversing, the model on speed
+and acceleration (:mod:`.events`) moving. A moving joint is judged by the wider of its own and the model fitted
+on all samples (fitted on the moving samples alone, the constant and moving terms are not
+anchored and extrapolate to no spread at a stop). A joint whose
+baseline holds fewer than :data:`MIN_CONDITION_S` of a condition has no statistics for it (NaN) and its samples
+in that condition are judged by the widest limit of the statistics it has there (all motions pooled, and the
+other conditions): widened, not narrowed to a condition the baseline did not show. Shapes: ``(n, 6)`` per sample
+and joint; per condition scale ``(4, 6, 4)``, tail ``(4, 6, 3)``.
 """
 
 from __future__ import annotations
@@ -48,6 +51,10 @@ from .task import CONTEXT_S, TARGET_JITTER_RAD
 #: the motion conditions, in code order
 CONDITIONS = ("rest", "slow", "reversal", "moving")
 REST, SLOW, REVERSAL, MOVING = range(4)
+#: the conditions whose spread is constant per joint (:func:`constant`): within them the features barely vary, and
+#: a fit on them extrapolates to no spread where they vanish; the moving condition keeps the spread model on speed
+#: and acceleration (:mod:`.events`)
+CONSTANT_SPREAD = (REST, SLOW, REVERSAL)
 #: a joint's condition has statistics only when the baseline holds at least this much of it [s] (40 windows of
 #: WINDOW_S, 4 above the tail's 90 % quantile: the task statistics' bar, :data:`~.baseline.MIN_TASK_S`)
 MIN_CONDITION_S = 10.0
@@ -112,6 +119,13 @@ def rest_level(residual: NDArray, cond: NDArray, period_s: float, h: NDArray) ->
     return out
 
 
+def constant(feats: NDArray) -> NDArray:
+    """``feats`` ``(n, 6, 4)`` with only the constant feature kept (the others 0): a spread constant per joint."""
+    out = np.zeros_like(feats)
+    out[..., 0] = feats[..., 0]
+    return out
+
+
 def enough(cond: NDArray, ok: NDArray, period_s: float) -> NDArray:
     """``(3, 6)``: which conditions a baseline's judged samples ``ok`` ``(n,)`` (pooled over its runs: ``cond``
     and ``ok`` concatenated) hold at least :data:`MIN_CONDITION_S` of, per joint."""
@@ -123,16 +137,19 @@ def motion_limit(feats: NDArray, cond: NDArray, judged: NDArray, coef: NDArray, 
                  cond_tail: NDArray, period_s: float, p_log: float, floor: NDArray | float = 0.0) -> NDArray:
     """The limit ``(n, 6)`` of one channel where it is judged by the motion (not a paired baseline run): per
     sample and joint the spread and tail of its condition (``cond_coef`` ``(4, 6, 4)``, ``cond_tail``
-    ``(4, 6, 3)``); where the baseline has none for that joint (NaN: too few samples of it), the widest limit of
-    the statistics the joint has there (all motions, ``coef`` ``(6, 4)`` / ``tail`` ``(6, 3)``, and every other
-    condition): a condition the baseline did not show is judged no tighter than any it did. The multiplier: every
+    ``(4, 6, 3)``), a moving joint the wider of its condition's and that fitted on all samples
+    (``coef`` ``(6, 4)``, ``tail`` ``(6, 3)``: anchored where the moving samples' own fit extrapolates to
+    no spread, at a stop); where the baseline has none for a condition of that joint (NaN: too few samples of
+    it), the widest limit of the statistics the joint has there (all motions and every condition): a condition
+    the baseline did not show is judged no tighter than any it did. The multiplier: every
     (window of :data:`~.events.WINDOW_S`, joint, statistics used) a log holds is one chance of a false alarm,
     each at ``p_log`` over their number (union bound: at most ``p_log`` for the log)."""
     n = feats.shape[0]
     cond = cond.astype(int)
     have = np.isfinite(cond_coef).all(axis=2) & np.isfinite(cond_tail).all(axis=2)  # (k, 6)
     own = have[cond, np.arange(N_JOINTS)[None, :]]  # (n, 6)
-    which = np.where(own, cond + 1, 0)  # 0: widened
+    which = np.where(own, cond + 1, 0)  # 0: all motions (a moving joint, or widened)
+    widen = ~own | (cond == MOVING)
     step = max(1, int(round(WINDOW_S / period_s)))
     chances = 0
     for a in range(0, n, step):
@@ -144,6 +161,6 @@ def motion_limit(feats: NDArray, cond: NDArray, judged: NDArray, coef: NDArray, 
                                                                                   per_log_windows, p_log)
                      for c, t in [(coef, tail)] + models])  # (1 + k, n, 6)
     lims[1:][~np.broadcast_to(have[:, None, :], lims[1:].shape)] = 0.0
-    widest = lims.max(axis=0)
     out = np.take_along_axis(lims, which[None], axis=0)[0]
-    return np.where(own, out, widest)
+    widest = np.where(cond == MOVING, np.maximum(lims[0], lims[MOVING + 1]), lims.max(axis=0))
+    return np.where(widen, widest, out)
