@@ -78,6 +78,8 @@ READS_AS = {"current_sensor_gain": {"current_sensor_gain", "torque_constant"},
             "current_sensor_offset": {"current_sensor_offset"}}
 #: the event channels of each design compared
 VARIANTS = {"current only": ("current",), "both channels": ("current", "position"), "position only": ("position",)}
+JOINTS = ("shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint", "wrist_1_joint", "wrist_2_joint",
+          "wrist_3_joint")
 UNDISTURBED = 8  # 5 baseline runs (leave one out), the undisturbed No5 run, TEST, NIST's rest
 #: the undisturbed runs that repeat their own task, split: their first part [s] (three cycles of No5, two of
 #: TEST) joins the baseline, the rest is monitored (events only: a part's change estimates would need its own
@@ -174,10 +176,12 @@ def _observe(log, params, part_s=None):
     return observe(log, params, part_s=part_s)
 
 
-def separable(base) -> dict[str, dict[str, float]]:
+def separable(base, paired: bool = False) -> dict[str, dict[str, float]]:
     """Per joint, the smallest current-sensor offset [A] and gain change [-] the change test can tell from the
-    baseline's blocks: the bar times the prediction interval's width with the new log's own standard error taken
-    as 0 (a lower bound: a real log's SE adds to it)."""
+    baseline's blocks (``paired``: from its paired difference-estimates, the paired test's): the bar times the
+    prediction interval's width with the new log's own standard error taken as 0 (a lower bound: a real log's SE
+    adds to it)."""
+    stats = base.paired_candidates if paired else base.candidates
     from ur5fault.health.monitoring.changes import bar
     from ur5fault.sim.axes import JOINT_NAMES
 
@@ -186,8 +190,8 @@ def separable(base) -> dict[str, dict[str, float]]:
         row = {}
         for key, label in (("offset_A", f"{j}: current_sensor_offset.offset_A"),
                            ("gain", f"{j}: current_sensor_gain.gain")):
-            if label in base.candidates:
-                _, var, k = base.candidates[label]
+            if label in stats:
+                _, var, k = stats[label]
                 limit, inflate = bar(k)
                 row[key] = float(limit * np.sqrt(var * inflate))
         out[j] = row
@@ -388,7 +392,13 @@ def main(argv=None) -> int:
             for lab in labs:
                 print(f"  {lab['t_start_s']:.2f}-{lab['t_end_s']:.2f} s {', '.join(lab['joints'])}: "
                       f"{'found' if lab['found'] else 'missed'}")
-    sep = {"kufieta": separable(full), "nist": separable(nb)}
+    sep = {"kufieta": separable(full), "nist": separable(nb),
+           "kufieta, paired (the six)": separable(full6, paired=True),
+           "kufieta, paired (the five + the quiet No5 run's first 18 s)": separable(split_base, paired=True),
+           "nist, paired": separable(nb, paired=True)}
+    blocks = {name: {j: b.paired_candidates.get(f"{j}: current_sensor_gain.gain", (0, 0, 0))[2] for j in JOINTS}
+              for name, b in (("the six", full6), ("split", split_base), ("nist", nb))}
+    print("\npaired blocks per baseline (gain candidates): " + str(blocks))
     paired = {o.name: float((judged_transients(b, o)[3] & judged_transients(b, o)[2]).sum() * o.period_s)
               for _, b, o in judged}
     print("\nseconds judged against a paired baseline run: " + ", ".join(f"{n}: {v:.1f}" for n, v in paired.items()))
@@ -398,7 +408,7 @@ def main(argv=None) -> int:
             for j, r in rows.items()))
     out = {"overlay": params, **variants["current only"], "variants": variants, "channel_reach": separation,
            "paired_s": paired, "no_pairing": args.no_pairing, "repeated_task_faults": repeated,
-           "separable": sep, "identify_s": t_ident, "wall_s": time.perf_counter() - t0}
+           "separable": sep, "paired_blocks": blocks, "identify_s": t_ident, "wall_s": time.perf_counter() - t0}
     from ur5fault.util.io import write_json_atomic
 
     Path(args.out).parent.mkdir(parents=True, exist_ok=True)

@@ -52,6 +52,10 @@ def difference(obs: Observed, ref: NDArray) -> tuple[NDArray, NDArray]:
     m = obs.e.shape[0]
     ok = np.isfinite(ref[:m]).all(axis=1) & obs.logged[:m]
     e = np.zeros_like(obs.e)
+    if not ok.any():
+        return e, ok
+    if obs.current_sigma_A is None:
+        raise ValueError(f"{obs.name}: replayed without the current residual's weights (current_sigma_A)")
     d = (obs.residual_A[:m] - np.where(ok[:, None], ref[:m], 0.0)) / obs.current_sigma_A
     e[:, :N_JOINTS] = np.where(ok[:, None], d, 0.0)
     return e, ok
@@ -67,6 +71,8 @@ def current_columns(obs: Observed) -> NDArray:
 def estimates(obs: Observed, ref: NDArray, keep: NDArray) -> dict[str, Estimate]:
     """Each candidate of ``obs`` fitted alone to the paired difference on the paired samples among ``keep``
     ``(m,)``."""
+    if not obs.cands:
+        return {}
     e, ok = difference(obs, ref)
     return fit_alone(obs.cands, current_columns(obs), e, keep & ok)
 
@@ -80,6 +86,8 @@ def block_estimates(obs: Observed, ref: NDArray) -> list[dict[str, Estimate]]:
     """Each candidate fitted alone to the paired difference on consecutive groups of :data:`PAIRED_BLOCK_S`
     of the screened part's paired samples (stretches joined in time order; the groups as even as the count
     allows); none when under half a block is paired."""
+    if not obs.cands:
+        return []
     e, ok = difference(obs, ref)
     idx = np.flatnonzero(ok)
     n = int(round(idx.size * obs.period_s / PAIRED_BLOCK_S))
