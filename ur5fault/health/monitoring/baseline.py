@@ -6,7 +6,8 @@ the tail of its normalised window maxima (:mod:`.events`), per joint the quantum
 per library candidate the mean and spread of its estimates over time blocks of the
 runs (:mod:`.changes`), and for a robot that repeats its task (:mod:`.task`) every baseline run's targets and
 current residual (the reference a log that repeats them is judged against) with the spread and tail of the
-current's transient against that reference, measured where the baseline runs repeat each other. It is written
+current's transient against that reference, measured where the baseline runs repeat each other, and per library
+candidate the mean and spread of its estimates on the difference of residuals there (:mod:`.paired`). It is written
 as ``baseline.json`` (:meth:`Baseline.to_json`) with the SHA-256 of the overlay it belongs to, so a later
 ``ur5fault monitor --baseline-stats`` reuses it only with that same overlay.
 """
