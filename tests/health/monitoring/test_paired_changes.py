@@ -88,3 +88,18 @@ def test_a_gain_on_a_repeated_task_is_changed_and_a_healthy_repeat_is_not():
     assert abs(ch["baseline_value"] - 1.0) < 0.01
     before = assess(dataclasses.replace(b, paired_candidates={}), run("worn", cycle(5, lead_s=0.2), 41, gain=1.1))
     assert before["changes"] == [], before
+
+
+def test_the_paired_statistics_survive_baseline_json(tmp_path):
+    import json
+
+    from ur5fault.health.monitoring.baseline import Baseline
+
+    b = fit_baseline([run(f"b{k}", cycle(3, lead_s=0.3 * k), 20 + k) for k in range(2)], "sha")
+    assert b.paired_candidates
+    path = tmp_path / "baseline.json"
+    path.write_text(json.dumps(b.to_json()))
+    back = Baseline.load(path)
+    assert back.paired_candidates == b.paired_candidates
+    worn = run("worn", cycle(3, lead_s=0.2), 41, gain=1.2)
+    assert assess(back, worn) == assess(b, worn)

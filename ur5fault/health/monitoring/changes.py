@@ -175,5 +175,7 @@ def sentence(ch: dict) -> str:
     """One line per change, as the discrepancy workflow names a finding."""
     lo, hi = ch["interval"]
     alt = "".join(f"; or {a['effect']}.{a['parameter']} = {a['value']:.4g}" for a in ch["alternatives"])
+    how = (" (on the difference from the baseline runs repeating its task)" if ch.get("reference") == "paired"
+           else "")
     return (f"{ch['joint']}: {ch['effect']}.{ch['parameter']} = {ch['value']:.4g} ({lo:.4g}..{hi:.4g}), "
-            f"baseline {ch['baseline_value']:.4g}, {ch['distance']:.1f}x the bar away{alt}")
+            f"baseline {ch['baseline_value']:.4g}, {ch['distance']:.1f}x the bar away{how}{alt}")
