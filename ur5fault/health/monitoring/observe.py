@@ -60,6 +60,9 @@ class Observed:
             (:func:`ur5fault.identify.sensors.position_quantum`, per joint; NaN where the joint never moves).
         target_rad: the commanded joint positions ``(n, 6)`` [rad] (the task: :mod:`.task` pairs a log with a
             baseline run that repeats it).
+        current_sigma_A: the current residual's weight per joint ``(6,)`` [A] (the replay's sensor sigma, ``e``'s
+            divisor on the current channels): the paired change test (:mod:`.paired`) weighs its difference
+            with it. ``None`` only on a part replayed before it was kept (fill it with ``dataclasses.replace``).
         stribeck_speed_rad_s: the replay model's friction Stribeck speed [rad/s], where the events' slow condition
             ends (:func:`.conditions.stribeck_speed`; ``None``: not known, e.g. a part replayed before it was kept,
             refused as a baseline).
@@ -79,6 +82,7 @@ class Observed:
     position_residual_rad: NDArray
     position_quantum_rad: NDArray
     target_rad: NDArray
+    current_sigma_A: NDArray | None = None
     stribeck_speed_rad_s: float | None = None
 
     @property
@@ -124,7 +128,7 @@ def observe(log: MeasuredLog, params_overrides: dict | None = None, effects: Seq
                     tuple(kept), X[:, lo : lo + m] if kept else np.zeros((0, *e.shape)), e, qd, qdd,
                     (meas[:, 1] - base.q_rad[:hi])[lo:hi],
                     quanta(log.q_actual_rad), log.q_target_rad[1 : n_all + 1][lo:hi].copy(),
-                    stribeck_speed(rp.params))
+                    rp.sigma[0].copy(), stribeck_speed(rp.params))
 
 
 def quanta(q_rad: NDArray) -> NDArray:
