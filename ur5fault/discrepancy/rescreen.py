@@ -40,7 +40,7 @@ from .drift import Drift
 from .judging import Finding, SearchStep, channels
 from .rivals import MAX_RIVALS, Rival, current_channel, differ_most, in_place, indistinguishable_held_out, judge_rival
 from .search import backward, columns_of, forward, judge
-from .statistics import BlockGram, generalisation, rss_of, weighted
+from .statistics import BlockGram, generalisation, per_channel, rss_of, weighted
 
 __all__ = ["MAX_RIVALS", "freed_joints", "indistinguishable_held_out", "rescreen", "rivals_of", "select_on_freed"]
 
@@ -109,12 +109,12 @@ def select_on_freed(X: NDArray, e: NDArray, candidates: Sequence[Candidate], col
             continue
         sub = [candidates[k] for k in ks]
         idx = [c for k in ks for c in cols[k]]
-        Xs = X[idx]
+        Xs, e_j, _ = per_channel(X[idx], e)  # each channel its own variance (statistics.py)
         scols = columns_of(sub)
-        bg = BlockGram.build(Xs, e)
+        bg = BlockGram.build(Xs, e_j)
         budget = max_effects - sum(1 for f in findings if f.kept and f.candidate.source == "library"
                                    and f.candidate.joint == j)
-        sel = forward(bg, e, Xs, sub, scols, budget, per_joint=budget)
+        sel = forward(bg, e_j, Xs, sub, scols, budget, per_joint=budget)
         trace += sel.trace
         G, g, ee = bg.total()
         th = rss_of(G, g, ee, [c for k in sel.chosen for c in scols[k]])[1]
@@ -160,6 +160,7 @@ def rescreen(rp: LogReplay, lib_X: NDArray, lib_drift: Drift | None, candidates:
     names = [c for c, _ in new]
     scaled = [_Scaled(c, th) for c, th in new]
     one = [[i] for i in range(len(new))]
+    J_fit, e_fit, _ = per_channel(J_fit, e_fit)  # each channel its own variance (statistics.py)
     bg = BlockGram.build(J_fit, e_fit)
     G, g, ee = bg.total()
     keep, _, gone = backward(bg, e_fit, J_fit, scaled, one, [i for i in range(len(new)) if ok[i]])

@@ -39,7 +39,7 @@ from .candidates import Candidate
 from .drift import Drift
 from .judging import Finding, channels
 from .search import columns_of, judge
-from .statistics import MIN_DELTA_BIC, BlockGram, effective_n, generalisation, rss_of, weighted
+from .statistics import MIN_DELTA_BIC, BlockGram, effective_n, generalisation, per_channel, rss_of, weighted
 
 #: rivals of one finding simulated (each one run of the whole log) at most
 MAX_RIVALS = 2
@@ -144,7 +144,9 @@ def in_place(X: NDArray, e_place: NDArray, e_named: NDArray, candidates: Sequenc
         return []
     sub = [candidates[k] for k in ks]
     scols = columns_of(sub)
-    Xs = X[[c for k in ks for c in cols[k]]]
+    # each channel its own variance (statistics.py): the scale of what all these columns leave of e_place
+    Xs, e_place, s = per_channel(X[[c for k in ks for c in cols[k]]], e_place)
+    e_named = e_named / s
     bg = BlockGram.build(Xs, e_place)
     G, g, ee = bg.total()
     own = float(np.sum(e_place**2) - np.sum(e_named**2))
