@@ -9,9 +9,10 @@ import dataclasses
 import numpy as np
 import pytest
 
-from ur5fault.discrepancy import steps
+from ur5fault.discrepancy import DiscrepancyModel, steps
 from ur5fault.discrepancy.search import columns_of, forward, judge
 from ur5fault.discrepancy.statistics import BlockGram, bic, channel_scale, effective_n, per_channel, rss_of
+from ur5fault.errors import ParameterError
 
 N = 2500  # 20 s at 125 Hz, the screened part of a log
 
@@ -68,6 +69,14 @@ def test_the_offset_beside_a_large_model_error_is_named_per_channel_not_pooled()
     # zero-mean error) is not named either
     check = steps.joint_check(cands, X, [0, 1], e)
     assert check.found == [cands[1]]
+    assert steps.joint_check(cands, X, [0, 1], e, own_variance=False).found == []  # the pooled form
+
+
+def test_the_likelihood_is_a_validated_choice():
+    assert DiscrepancyModel().likelihood == "per_channel"
+    assert DiscrepancyModel(likelihood="pooled").likelihood == "pooled"
+    with pytest.raises(ParameterError, match="likelihood = 'channel' is not valid; choose one of: per_channel, pooled"):
+        DiscrepancyModel(likelihood="channel")
 
 
 def test_channel_scale_is_the_long_run_standard_deviation_floored_at_the_noise():

@@ -81,8 +81,8 @@ def channels(c: Candidate, n_signals: int) -> NDArray:
 
 
 def judge_findings(found: Sequence[Candidate], ref: Refined, n_fit: int, n_signals: int,
-                   alts: Sequence[tuple[int, Candidate, NDArray]] = (), drift: Drift | None = None
-                   ) -> tuple[list[Finding], list[SearchStep]]:
+                   alts: Sequence[tuple[int, Candidate, NDArray]] = (), drift: Drift | None = None,
+                   own_variance: bool = True) -> tuple[list[Finding], list[SearchStep]]:
     """Judge the findings on the problem linearised by the probe batch ``ref``.
 
     On the fitting part they are selected afresh from among themselves (two that only cancel each other,
@@ -102,7 +102,7 @@ def judge_findings(found: Sequence[Candidate], ref: Refined, n_fit: int, n_signa
     e_pseudo = ref.e[:n_fit] + np.tensordot(ref.theta, J_fit, axes=1)  # the residual without the findings
     if drift is not None:
         J_fit, e_pseudo = drift.remove(J_fit), drift.remove(e_pseudo)
-    J_w, e_pseudo, _ = per_channel(J_fit, e_pseudo)  # each channel its own variance (statistics.py)
+    J_w, e_pseudo, _ = per_channel(J_fit, e_pseudo, own_variance)  # each channel its own variance (statistics.py)
     bg = BlockGram.build(J_w, e_pseudo)
     G, g, ee = bg.total()
     again = forward(bg, e_pseudo, J_w, found, cols, len(found))
@@ -178,7 +178,8 @@ def alternatives(fs: FindingSet, kept: list[int], k: int, ref: Refined, J_fit: N
     return out
 
 
-def final_verdicts(kept: list[Finding], pol: Refined, n_fit: int, drift: Drift | None = None) -> list[Finding]:
+def final_verdicts(kept: list[Finding], pol: Refined, n_fit: int, drift: Drift | None = None,
+                   own_variance: bool = True) -> list[Finding]:
     """Each kept finding judged against the others once more, linearised at the polished coefficients (beside
     the ``drift``); returns those that fail now."""
     cands = [f.candidate for f in kept]
@@ -187,7 +188,7 @@ def final_verdicts(kept: list[Finding], pol: Refined, n_fit: int, drift: Drift |
     e_pseudo = pol.e[:n_fit] + np.tensordot(pol.theta, J_fit, axes=1)
     if drift is not None:
         J_fit, e_pseudo = drift.remove(J_fit), drift.remove(e_pseudo)
-    J_fit, e_pseudo, _ = per_channel(J_fit, e_pseudo)  # each channel its own variance (statistics.py)
+    J_fit, e_pseudo, _ = per_channel(J_fit, e_pseudo, own_variance)  # each channel its own variance (statistics.py)
     bg = BlockGram.build(J_fit, e_pseudo)
     failed = []
     for k, f in enumerate(kept):

@@ -54,6 +54,7 @@ class LibraryRecord:
     alternatives: Alternatives
     trace: list[SearchStep]
     drift: Drift | None = None  # projected out of ``X`` and ``e0`` (and of the dictionary's columns)
+    own_variance: bool = True  # each channel its own variance in every selection (statistics.per_channel)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -99,14 +100,16 @@ def drift_of(rp: LogReplay, n: int) -> Drift:
 
 
 def screen_library(rp: LogReplay, n_scr: int, payload_kg: float, kinds: Sequence[str] | None,
-                   max_effects: int, progress: Callable[[float], None] | None = None) -> LibraryRecord:
-    """``max_effects``: most library effects named per joint (robot-wide effects count as one more joint)."""
+                   max_effects: int, progress: Callable[[float], None] | None = None,
+                   own_variance: bool = True) -> LibraryRecord:
+    """``max_effects``: most library effects named per joint (robot-wide effects count as one more joint).
+    ``own_variance``: each channel its own variance in the selections on the screened part, False: pooled."""
     cands = library.candidates(payload_kg, kinds=kinds, params=rp.params)
     base, X_lib, cands = library.screen(rp, n_scr, cands, progress=progress)
     drift = drift_of(rp, n_scr)
     e0 = drift.remove(weighted(rp.measured(n_scr), base.y, rp.sigma))
     X_lib = drift.remove(X_lib)
-    X_w, e_w, _ = per_channel(X_lib, e0)  # each channel its own variance (statistics.py)
+    X_w, e_w, _ = per_channel(X_lib, e0, own_variance)  # each channel its own variance (statistics.py)
     cols = columns_of(cands)
     sel = forward(BlockGram.build(X_w, e_w), e_w, X_w, cands, cols, max_effects * (N_JOINTS + 1),
                   per_joint=max_effects)
@@ -114,7 +117,7 @@ def screen_library(rp: LogReplay, n_scr: int, payload_kg: float, kinds: Sequence
                     for k, alt in zip(sel.chosen, sel.alternatives)}
     return LibraryRecord(base, X_lib, e0, cands, cols, [cands[k] for k in sel.chosen],
                          [c for k in sel.chosen for c in cols[k]], alternatives,
-                         [SearchStep.of("library", v) for v in sel.trace], drift)
+                         [SearchStep.of("library", v) for v in sel.trace], drift, own_variance)
 
 
 def joints_above_floor(e: NDArray, n_signals: int) -> list[int]:
@@ -142,7 +145,7 @@ def discover_terms(rp: LogReplay, lib: LibraryRecord, n_scr: int, max_terms: int
         return DiscoveryRecord(X_all, fixed, lib.chosen, [], {}, [])
     X_all = np.concatenate([X_all, X_dict])
     dcols = columns_of(dcands, start=len(lib.chosen_cols))
-    X_w, e_w, _ = per_channel(X_all, e0)
+    X_w, e_w, _ = per_channel(X_all, e0, lib.own_variance)
     sel = forward(BlockGram.build(X_w, e_w), e_w, X_w, dcands, dcols, max_terms, fixed=fixed)
     alternatives = {dcands[k]: [(dcands[a], th) for a, th in alt][:MAX_ALTERNATIVES]
                     for k, alt in zip(sel.chosen, sel.alternatives)}
@@ -160,7 +163,7 @@ def prefer_library(rp: LogReplay, lib: LibraryRecord, dcands: list[TermCandidate
     place and the term listed as indistinguishable from it on this log (a physical parameter
     with a meaning and a range over a free shape)."""
     X = np.concatenate([lib.X, X_dict])
-    X_w, e0, _ = per_channel(X, lib.e0)  # the judgements in each channel's own variance (statistics.py)
+    X_w, e0, _ = per_channel(X, lib.e0, lib.own_variance)  # each channel its own variance (statistics.py)
     cands: list[Candidate] = [*lib.candidates, *dcands]
     cols = lib.cols + columns_of(dcands, start=lib.X.shape[0])
     bg = BlockGram.build(X_w, e0)
@@ -224,7 +227,7 @@ def tell_apart(rp: LogReplay, lib: LibraryRecord, X_a: NDArray, th_a, X_b: NDArr
 
 
 def joint_check(found: list[Candidate], X: NDArray, fixed: list[int], e0: NDArray,
-                preferred: Sequence[Candidate] = ()) -> JointCheckRecord:
+                preferred: Sequence[Candidate] = (), own_variance: bool = True) -> JointCheckRecord:
     """The findings selected afresh among themselves (forward, then backward), then every dictionary term that
     shares its joint with another finding checked on data it was not fitted to (:func:`same_joint_check`).
     ``preferred``: library effects named in place of a term (:func:`prefer_library`), kept when they fail only
@@ -232,7 +235,7 @@ def joint_check(found: list[Candidate], X: NDArray, fixed: list[int], e0: NDArra
     if len(found) <= 1:
         return JointCheckRecord(found, fixed, [])
     fcols = columns_of(found)
-    Xf, e0, _ = per_channel(X[fixed], e0)  # each channel its own variance (statistics.py)
+    Xf, e0, _ = per_channel(X[fixed], e0, own_variance)  # each channel its own variance (statistics.py)
     bg = BlockGram.build(Xf, e0)
     again = forward(bg, e0, Xf, found, fcols, len(found))
     keep, _, _ = backward(bg, e0, Xf, found, fcols, again.chosen)
@@ -294,21 +297,22 @@ def same_joint_check(bg: BlockGram, e0: NDArray, X: NDArray, found: list[Candida
 
 
 def refine(rp: LogReplay, found: list[Candidate], X: NDArray, fixed: list[int], e0: NDArray,
-           alternatives: Alternatives, n_fit: int, progress=None) -> RefineRecord:
+           alternatives: Alternatives, n_fit: int, progress=None, own_variance: bool = True) -> RefineRecord:
     fs = FindingSet(found)
     alts = [(i, a, th) for i, c in enumerate(found) for a, th in alternatives.get(c, [])]
     if not found:
         return RefineRecord(found, None, rp.run([()], rp.n_samples, progress)[0], alts, fs)
-    G, g, ee = BlockGram.build(*per_channel(X[fixed], e0)[:2]).total()
+    G, g, ee = BlockGram.build(*per_channel(X[fixed], e0, own_variance)[:2]).total()
     theta0 = rss_of(G, g, ee, list(range(len(fixed))))[1]
     evaluate = fs.evaluator(rp, progress, extra_rows=n_fit)
     first = probe_batch(evaluate, theta0, fs.probes(theta0), fs.bounds(), n_fit, alts, evaluate)
     return RefineRecord(found, first, first.sim0, alts, fs)
 
 
-def judge(ref: RefineRecord, n_fit: int, n_signals: int, drift: Drift | None = None) -> JudgeRecord:
+def judge(ref: RefineRecord, n_fit: int, n_signals: int, drift: Drift | None = None,
+          own_variance: bool = True) -> JudgeRecord:
     """``drift``: the nuisance drift of the fitting part, projected out before the findings are judged there."""
     if not ref.found:
         return JudgeRecord([], [])
-    findings, trace = judge_findings(ref.found, ref.first, n_fit, n_signals, ref.alts, drift)
+    findings, trace = judge_findings(ref.found, ref.first, n_fit, n_signals, ref.alts, drift, own_variance)
     return JudgeRecord(findings, list(trace))
