@@ -51,7 +51,7 @@ SCREEN_S = 20.0
 #: the selections' Gaussian likelihood: each channel (signal x joint) its own residual variance, or one pooled
 #: variance for every channel (``statistics.py``; measured in docs/discrepancy.md, *Each channel its own variance*)
 LIKELIHOODS = ("per_channel", "pooled")
-LIKELIHOOD = "per_channel"
+LIKELIHOOD = "pooled"
 class _Stages:
     """Progress of the workflow on one tqdm bar (``ur5fault.util.progress``): one unit per stage."""
 
@@ -95,8 +95,8 @@ class DiscrepancyModel:
         progress: show a progress bar (tqdm; silent when not interactive).
         screen_s: length of the log's first part the library is screened and the dictionary selected on
             [s] (None: the whole fitting part); refinement and judgement use the whole fitting part.
-        likelihood: ``"per_channel"`` (each channel, signal x joint, its own residual variance in every
-            selection; ``statistics.per_channel``) or ``"pooled"`` (one variance for every channel).
+        likelihood: ``"pooled"`` (one variance for every channel, the default) or ``"per_channel"`` (each
+            channel, signal x joint, its own residual variance in every selection; ``statistics.per_channel``).
     """
 
     def __init__(self, fit_fraction: float = FIT_FRACTION, max_effects: int = 1, max_terms: int = 4,
