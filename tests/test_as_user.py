@@ -123,8 +123,9 @@ def test_shipped_campaigns_by_name_from_any_folder(tmp_path, monkeypatch):
     (tmp_path / "paper.yaml").write_text("name: mine\nsweep: {backlash.joint: [1], backlash.backlash_deg: [0.1]}\n")
     assert load_campaign("paper.yaml").name == "mine"  # a file of the user's wins over the shipped one
     with pytest.raises(ConfigFileError, match="nope: no such file, and no shipped campaign of that name "
-                                              r"\(shipped: default, diagnostics, diagnostics_reduced, "
-                                              r"diagnostics_urlog, paper, prognostics, prognostics_small\)"):
+                                              r"\(shipped: default, diagnostics, diagnostics_other_motions, "
+                                              r"diagnostics_reduced, diagnostics_urlog, paper, prognostics, "
+                                              r"prognostics_small\)"):
         load_campaign("nope")
 
 

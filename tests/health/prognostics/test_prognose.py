@@ -10,8 +10,8 @@ import pandas as pd
 
 from ur5fault.cli import main
 from ur5fault.health.features import FEATURE_UNITS
+from ur5fault.health.prognostics.benchmark import run_prognose
 from ur5fault.health.prognostics.life_store import add_life_labels
-from ur5fault.health.prognostics.report import run_prognose
 
 
 def synthetic_fleet(n_units: int = 24, seed: int = 0) -> pd.DataFrame:

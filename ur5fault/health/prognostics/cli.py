@@ -68,7 +68,7 @@ def cmd_prognose(args: argparse.Namespace) -> int:
 
     from ...config import Overlay
     from ...errors import ParameterError
-    from .report import run_prognose
+    from .benchmark import run_prognose
 
     t0 = time.perf_counter()
     for flag, value in (("--model", args.model), ("--twin-calibration", args.twin_calibration),

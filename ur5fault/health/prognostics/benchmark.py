@@ -1,0 +1,276 @@
+"""``ur5fault prognose DIR``: fit the RUL estimators on the training units of a life campaign, predict
+at every inspection of the held-out units before their failure, judge the goals, and write ``metrics.json``
+(every number), ``report.md`` (report.py) and the figures beside each other."""
+
+from __future__ import annotations
+
+import json
+import os
+import time
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+import pandas as pd
+
+from ...errors import ConfigFileError
+from ...util.io import write_json_atomic, write_text_atomic
+from ..diagnostics.report import clean
+from . import metrics as M
+from .clearance_rul import ClearanceRUL
+from .figures import health_index_paths, rul_alpha_cone
+from .joint_index import JOINTS, JointHealthIndex
+from .report import markdown
+from .rul import LinearRUL, PopulationRUL, TaskHealthIndex, WienerRUL
+from .spec import Failure
+from .twin_boundary import TwinSetup
+from .twin_cache import RadiusCache
+from .twin_friction import FrictionRise
+from .twin_rul import CALIBRATION_UNITS_PER_TASK, TwinRUL
+from .wear import WEAR_KINDS
+
+if TYPE_CHECKING:
+    from ...config import Overlay
+
+NEEDED = ("unit_id", "inspection", "cycles", "split", "rul_cycles", "eol_cycles", "censored", "failed")
+ESTIMATORS = ("wiener", "linear", "wiener_joint", "clearance", "twin", "naive")
+#: the estimator the issue's goals are judged on when the twin did not run (the others are shown beside it)
+BASELINE = "wiener"
+#: ... and when it ran: its only inputs per unit are the inspections' health features (clearance and friction maps
+#: fitted on the training units), its simulator ur5fault's drive model, scored under model and wear-law error
+#: in docs/prognostics.md
+TWIN = "twin"
+
+
+def load_inspections(folder: Path) -> tuple[pd.DataFrame, dict[str, Any]]:
+    """The inspections table and manifest of a life-campaign folder (one-line errors)."""
+    path = Path(folder) / "inspections.parquet"
+    if not path.is_file():
+        raise ConfigFileError(f"{path}: not found; run a life campaign into {folder} first "
+                              "(`ur5fault campaign run campaigns/prognostics.yaml`)")
+    try:
+        df = pd.read_parquet(path)
+    except (OSError, ValueError) as exc:
+        raise ConfigFileError(f"{path}: unreadable as Parquet ({' '.join(str(exc).split())[:120]})") from None
+    missing = [c for c in NEEDED if c not in df.columns]
+    if missing:
+        raise ConfigFileError(f"{path}: column {missing[0]!r} missing; not the inspections of a life campaign")
+    try:
+        manifest = json.loads((Path(folder) / "manifest.json").read_text())
+    except (OSError, ValueError):
+        manifest = {}
+    return df, manifest
+
+
+#: where the twin's friction rise per degree of clearance and per 10^6 cycles comes from: "learned" from the
+#: inspections (twin_friction.py), or the fleet's wear "law" as the manifest states it
+TWIN_FRICTION = ("learned", "law")
+
+
+def predict(df: pd.DataFrame, failure: Failure, seed: int = 0, twin: TwinSetup | None = None,
+            twin_calibration: str = "pooled", twin_cache: RadiusCache | None = None, twin_friction: str = "learned"
+            ) -> tuple[dict[str, pd.DataFrame], dict[str, Any], np.ndarray]:
+    """Fit on the failed training units; predict at every pre-failure inspection of the failed test units.
+    ``twin``: also the estimator whose failure boundary the digital twin simulates (twin_rul.py; minutes);
+    ``twin_friction``: one of :data:`TWIN_FRICTION`.
+
+    Returns the prediction tables per estimator, the fitted constants, and the health index of every row.
+    """
+    failed = df[~df["censored"]]
+    train, test = failed[failed["split"] == "train"], failed[failed["split"] == "test"]
+    n_tr, n_te = train["unit_id"].nunique(), test["unit_id"].nunique()
+    if n_tr < 3 or n_te < 1:
+        raise ConfigFileError(f"{n_tr} failed training and {n_te} failed test units: need at least 3 and 1 "
+                              "(a larger fleet or a longer max_cycles)")
+    hi_model = TaskHealthIndex(failure.feature, failure.threshold).fit(train)
+    hi_all = hi_model.transform(df)
+    hi_of = pd.Series(hi_all, index=df.index)
+    hist = {uid: (g["cycles"].to_numpy(float), hi_of[g.index].to_numpy()) for uid, g in
+            df.sort_values("cycles").groupby("unit_id")}
+    wiener = WienerRUL(seed).fit([hist[u][0] for u in train["unit_id"].unique()],
+                                 [hist[u][1] for u in train["unit_id"].unique()], hi_model.failure_level_,
+                                 hi_model.residual_sd_)
+    train_ids = train["unit_id"].unique()
+    linear = LinearRUL(seed).fit([hist[u][0] for u in train_ids], [hist[u][1] for u in train_ids])
+    # the per-joint index (joint_index.py) under the same Wiener estimator, reported beside the baseline
+    # (only where the fleet records per-joint clearances to fit its first stage on)
+    joint_model = wiener_j = clear = None
+    if all(f"backlash_deg_j{j}" in df.columns for j in JOINTS):
+        # the clearance-space estimator (clearance_rul.py): per-joint growth meets the task's failure boundary
+        clear = ClearanceRUL(seed=seed).fit(train)
+        a_of = clear.clearances(df)
+        hist_a = {uid: (g["cycles"].to_numpy(float), a_of[df.index.get_indexer(g.index)], str(g["trajectory"].iloc[0])
+                        if "trajectory" in g.columns else "") for uid, g in df.sort_values("cycles").groupby("unit_id")}
+        joint_model = JointHealthIndex(failure.feature, failure.threshold).fit(train)
+        hj_of = pd.Series(joint_model.transform(df), index=df.index)
+        hist_j = {uid: (g["cycles"].to_numpy(float), hj_of[g.index].to_numpy()) for uid, g in
+                  df.sort_values("cycles").groupby("unit_id")}
+        wiener_j = WienerRUL(seed).fit([hist_j[u][0] for u in train_ids], [hist_j[u][1] for u in train_ids],
+                                       joint_model.failure_level_, joint_model.residual_sd_)
+    naive = PopulationRUL().fit(train.groupby("unit_id")["eol_cycles"].first().to_numpy())
+    twin_rul, twin_pred, friction, rises = None, {}, None, None
+    if twin is not None and clear is not None:
+        cond = {str(uid): (str(g["trajectory"].iloc[0]), float(g["payload_kg"].iloc[0]),
+                           float(g["temperature_C"].iloc[0])) for uid, g in df.groupby("unit_id")}
+        try:
+            if twin_friction == "learned":
+                friction = FrictionRise().fit(train, clear)
+                y_of = friction.rises(df)
+                rises = {str(uid): y_of[df.index.get_indexer(g.index)]
+                         for uid, g in df.sort_values("cycles").groupby("unit_id")}
+            per_task = 0 if twin_calibration == "pooled" else CALIBRATION_UNITS_PER_TASK
+            twin_rul = TwinRUL(twin, clear, seed, twin_calibration, twin_cache, per_task, friction).calibrate(
+                {u: cond[u] for u in map(str, train_ids)})
+        except ValueError as exc:
+            raise ConfigFileError(f"--twin: {exc}") from None
+        sound = test[test["rul_cycles"] > 0].groupby("unit_id").size()   # a unit's inspections before failure
+        twin_pred = twin_rul.predict_units({str(uid): (cond[str(uid)], hist_a[uid][0][:k], hist_a[uid][1][:k])
+                                            for uid, k in sound.items()}, rises)
+    rows: dict[str, list] = {name: [] for name in ESTIMATORS}
+    for uid, g in test.sort_values("cycles").groupby("unit_id"):
+        n_all, h_all = hist[uid]
+        for k, (_, r) in enumerate(g.iterrows()):
+            if r["rul_cycles"] <= 0:
+                continue  # the failure inspection itself: nothing left to predict
+            base = {"unit_id": uid, "cycles": r["cycles"], "eol_cycles": r["eol_cycles"], "rul_true": r["rul_cycles"]}
+            if k == 0:  # no history yet: the population's residual life
+                w = lin = naive.predict(r["cycles"])
+                wj = w if wiener_j else None
+                cl = w if clear else None
+                tw = w if twin_rul else None
+            else:
+                w = wiener.predict(n_all[: k + 1], h_all[: k + 1])
+                lin = linear.predict(n_all[: k + 1], h_all[: k + 1])
+                wj = wiener_j.predict(hist_j[uid][0][: k + 1], hist_j[uid][1][: k + 1]) if wiener_j else None
+                cl = clear.predict(hist_a[uid][2], hist_a[uid][0][: k + 1], hist_a[uid][1][: k + 1]) if clear else None
+                tw = twin_pred[str(uid)][k - 1] if twin_rul else None
+            for name, e in (("linear", lin), ("wiener", w), ("wiener_joint", wj), ("clearance", cl), ("twin", tw),
+                            ("naive", naive.predict(r["cycles"]))):
+                if e is not None:
+                    rows[name].append({**base, "rul_est": e[0], "rul_lo": e[1], "rul_hi": e[2]})
+    pred = {name: pd.DataFrame(v) for name, v in rows.items() if v}
+    fitted = {
+        "health_index": {"features": hi_model.features_, "coef_pooled": hi_model.coef_.tolist(),
+                         "tasks_with_own_index": sorted(hi_model.by_task_),
+                         "failure_level": hi_model.failure_level_,
+                         "residual_sd": hi_model.residual_sd_, "criterion": failure.feature,
+                         "threshold": failure.threshold},
+        "wiener": {"theta_mean_per_cycle": wiener.theta_mean_, "theta_sd_per_cycle": wiener.theta_sd_,
+                   "sigma2_per_cycle": wiener.sigma2_},
+        "linear": {"failure_level": linear.level_, "failure_level_sd": linear.level_sd_,
+                   "prior_mean_intercept": float(linear.prior_mean_[0]),
+                   "prior_mean_slope_per_cycle": float(linear.prior_mean_[1]),
+                   "prior_sd_intercept": float(linear.prior_cov_[0, 0] ** 0.5),
+                   "prior_sd_slope_per_cycle": float(linear.prior_cov_[1, 1] ** 0.5),
+                   "measurement_sd": linear.meas_var_**0.5, "process_var_per_cycle": linear.proc_var_},
+        "wiener_joint": None if joint_model is None else {"index_residual_sd": joint_model.residual_sd_,
+                         "lever_arms_per_deg": {t: v[:-1].tolist() for t, v in joint_model.lever_.items()},
+                         "theta_mean_per_cycle": wiener_j.theta_mean_, "sigma2_per_cycle": wiener_j.sigma2_},
+        "clearance": None if clear is None else {"kernel_kappa": clear.kappa_,
+                      "loo_rmse_log_radius_by_kappa": {f"{k:g}": v for k, v in clear.loo_rmse_log_radius_.items()},
+                      "boundary_log_sd_by_task": clear.boundary_sd_},
+        "twin": None if twin_rul is None else {
+            "calibration": twin_rul.calibration,
+            "log_radius_bias_sd_rays_by_checkpoint": {str(c): list(v) for c, v in twin_rul.calibration_.items()},
+            "log_radius_by_task_by_checkpoint": {str(c): v.to_dict() for c, v in twin_rul.task_calibration_.items()},
+            "calibration_residuals_task_checkpoint_log_ratio": twin_rul.calibration_residuals_,
+            "radius_cache": None if twin_cache is None else {"path": str(twin_cache.path), "hits": twin_cache.hits,
+                                                             "simulated": twin_cache.misses},
+            "n_calibration_units": twin_rul.n_calibration_units_, "n_calibration_rays": twin_rul.n_calibration_rays_,
+            "n_twin_rays_test": twin_rul.n_twin_rays_,
+            "friction": {"source": twin_friction,
+                         "law": {"friction_per_deg": twin.wear.friction_per_deg,
+                                 "friction_per_Mcycle": twin.wear.friction_per_Mcycle},
+                         "learned": None if friction is None else {
+                             **friction.summary(),
+                             "test_rays_friction_per_deg_mean_sd_per_Mcycle_mean_sd": twin_rul.friction_rays_,
+                             "calibration_rays_friction_per_deg_mean_sd_per_Mcycle_mean_sd":
+                                 twin_rul.calibration_friction_}},
+            "model": None if twin.model is None else {"params": dict(twin.model.params),
+                                                      "effects": [e.describe() for e in twin.model.effects]}},
+        "naive": {"train_eol_cycles": naive.eol_.tolist()},
+        "n_train_units": int(n_tr), "n_test_units": int(n_te),
+    }
+    return pred, fitted, hi_all
+
+
+def run_prognose(folder: Path, out: Path | None = None, *, seed: int = 0, twin: bool = False,
+                 twin_model: Overlay | None = None, twin_calibration: str = "pooled",
+                 twin_cache: Path | None = None, twin_friction: str = "learned") -> dict[str, Any]:
+    """The benchmark on a life-campaign folder; returns the metrics written to ``out/metrics.json``.
+    ``twin_model``: the overlay the twin runs instead of the packaged model (a model error the twin carries);
+    ``twin_calibration``: one of twin_rul.CALIBRATIONS; ``twin_cache``: the file of the twin's
+    radii (twin_cache.py), default ``out/twin_radii.json``; ``twin_friction``: one of :data:`TWIN_FRICTION`."""
+    if twin_friction not in TWIN_FRICTION:
+        raise ConfigFileError(f"twin friction must be one of {', '.join(TWIN_FRICTION)}, not {twin_friction!r}")
+    t0 = time.perf_counter()
+    folder = Path(folder)
+    out = Path(out) if out is not None else folder.parent / "benchmark"
+    df, manifest = load_inspections(folder)
+    failure = Failure(**manifest["failure"]) if isinstance(manifest.get("failure"), dict) else Failure()
+    setup = None
+    if twin:
+        if "wear" not in manifest or "identity_inputs" not in manifest:
+            raise ConfigFileError(f"{folder}/manifest.json: no wear law or identity inputs; --twin needs the manifest "
+                                  "of a life campaign")
+        worn = sorted({e.name for e in (twin_model.effects if twin_model else ())} & WEAR_KINDS)
+        if worn:
+            raise ConfigFileError(f"the twin's model overlay carries {', '.join(worn)}: the wear law sets those "
+                                  "effects itself; give them as params instead")
+        setup = TwinSetup.from_manifest(manifest, seed, twin_model)
+    cache = RadiusCache(twin_cache if twin_cache is not None else out / "twin_radii.json") if twin else None
+    pred, fitted, hi = predict(df, failure, seed, setup, twin_calibration, cache, twin_friction)
+    per_unit = df.groupby("unit_id").agg(split=("split", "first"), n=("inspection", "size"),
+                                         eol=("eol_cycles", "first"))
+    if set(per_unit[per_unit["split"] == "train"].index) & set(per_unit[per_unit["split"] == "test"].index):
+        raise ConfigFileError(f"{folder}: a unit is on both sides of the split")  # cannot happen: one label per unit
+    m: dict[str, Any] = {
+        "source": str(folder),
+        "dataset": {
+            "n_units": int(len(per_unit)), "n_train_units": fitted["n_train_units"],
+            "n_test_units": fitted["n_test_units"], "n_censored_units": int(per_unit["eol"].isna().sum()),
+            "n_inspections": int(len(df)), "split_by": "unit",
+            "inspections_per_unit": {"min": int(per_unit["n"].min()), "mean": float(per_unit["n"].mean()),
+                                     "max": int(per_unit["n"].max())},
+            "eol_cycles": {"median": float(per_unit["eol"].median()), "min": float(per_unit["eol"].min()),
+                           "max": float(per_unit["eol"].max())},
+            "failure": {"feature": failure.feature, "threshold": failure.threshold},
+            "fleet_wall_s": manifest.get("wall_s_this_invocation"),
+        },
+        "alpha": M.ALPHA, "lambda": M.LAMBDA,
+        "estimators": {name: M.summary(p) for name, p in pred.items()},
+        "fitted": fitted,
+    }
+    judged = TWIN if TWIN in m["estimators"] else BASELINE
+    w, n = m["estimators"][judged], m["estimators"]["naive"]
+    m["goals"] = {
+        "baseline": judged,
+        "rmse_50_ratio_baseline_to_naive": w["rmse_cycles"]["0.5"] / n["rmse_cycles"]["0.5"],
+        "rmse_50_at_most_half_of_naive": w["rmse_cycles"]["0.5"] <= 0.5 * n["rmse_cycles"]["0.5"],
+        "alpha_lambda_at_least_0.8": w["alpha_lambda_accuracy"] >= 0.8,
+        "by_estimator": {name: {"rmse_50_ratio_to_naive": (q := r["rmse_cycles"]["0.5"] / n["rmse_cycles"]["0.5"]),
+                                "rmse_50_at_most_half_of_naive": q <= 0.5,
+                                "alpha_lambda_at_least_0.8": r["alpha_lambda_accuracy"] >= 0.8}
+                         for name, r in m["estimators"].items() if name != "naive"},
+    }
+    figures = {"rul_alpha_cone": rul_alpha_cone(pred), "health_index": health_index_paths(df, hi,
+                                                                                        fitted["health_index"]
+                                                                                        ["failure_level"])}
+    out.mkdir(parents=True, exist_ok=True)
+    names = []
+    for name, fig in figures.items():
+        tmp = out / f".{name}.png.tmp"
+        fig.savefig(tmp, dpi=110, format="png")
+        os.replace(tmp, out / f"{name}.png")
+        names.append(f"{name}.png")
+    for name, p in pred.items():
+        from ...util.io import write_parquet_atomic
+
+        write_parquet_atomic(p, out / f"predictions_{name}.parquet")
+    m["figures"] = names
+    m["benchmark_wall_s"] = time.perf_counter() - t0
+    m["out"] = str(out)
+    m = clean(m)
+    write_json_atomic(out / "metrics.json", m)
+    write_text_atomic(out / "report.md", markdown(m))
+    return m
