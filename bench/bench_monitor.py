@@ -5,7 +5,9 @@
 
 ``--cache FILE``: keep the replayed log parts (and the identified overlay) in FILE, a pickle, and reuse them when
 it exists: the verdicts can then be recomputed in seconds after a change to the monitor's rules (not to its
-replay, :mod:`ur5fault.health.monitoring.observe`, nor to identify: delete the file then).
+replay, :mod:`ur5fault.health.monitoring.observe`, nor to identify: delete the file then). The parts that set a
+baseline are screened whole (the paired statistics), the monitored ones on their first 20 s; a cache whose
+baseline parts are screened on 20 s only is refused.
 
 *Kufieta robot* (data/kufieta-ur5, payload 0 kg, TCP at the flange). The baseline overlay is ``ur5fault
 identify`` fitted jointly on the five undisturbed runs :data:`BASE_RUNS` (``--no-identify``: the packaged
@@ -170,10 +172,25 @@ def inject(log, joint: int, gain: float):
     return dataclasses.replace(log, current_A=cur, source=f"{log.source} x{gain:g} J{joint + 1}")
 
 
-def _observe(log, params, part_s=None):
+def _observe(log, params, part_s=None, baseline=False):
+    """A log part replayed and screened as the monitor does: a baseline part whole
+    (:data:`~ur5fault.health.monitoring.observe.BASELINE_SCREEN_S`), a monitored one on its first
+    :data:`~ur5fault.discrepancy.model.SCREEN_S`."""
+    from ur5fault.discrepancy.model import SCREEN_S
     from ur5fault.health.monitoring import observe
+    from ur5fault.health.monitoring.observe import BASELINE_SCREEN_S
 
-    return observe(log, params, part_s=part_s)
+    return observe(log, params, part_s=part_s, screen_s=BASELINE_SCREEN_S if baseline else SCREEN_S)
+
+
+def monitored(obs):
+    """A baseline part as a monitored log: its screened rows cut to the first
+    :data:`~ur5fault.discrepancy.model.SCREEN_S`, as :func:`_observe` screens a monitored part (the same replay
+    and screen, so the same rows)."""
+    from ur5fault.discrepancy.model import SCREEN_S
+
+    m = min(obs.e.shape[0], max(2, round(SCREEN_S / obs.period_s)))
+    return dataclasses.replace(obs, X=obs.X[:, :m], e=obs.e[:m])
 
 
 def separable(base, paired: bool = False) -> dict[str, dict[str, float]]:
@@ -288,11 +305,17 @@ def main(argv=None) -> int:
     nist_inj = [inject(nist, j, g) for j, g in GAINS]
     tasks = [(logs[n], params, None) for n in BASE_RUNS + OTHER_RUNS] + [(lg, params, None) for lg in injected] + \
         [(nist, {}, (0.0, split)), (nist, {}, (split, span + 1))] + [(lg, {}, (split, span + 1)) for lg in nist_inj]
+    # the parts that set a baseline (the five, the quiet No5 run, NIST's first part) are screened whole
+    whole = {*range(len(BASE_RUNS)), len(BASE_RUNS) + OTHER_RUNS.index(QUIET), len(tasks) - len(GAINS) - 2}
     if cached is not None:
         obs = cached["obs"]
+        if any(obs[i].e.shape[0] < obs[i].n for i in whole):
+            ap.error(f"{args.cache} holds baseline parts screened on their first 20 s only (written before they "
+                     f"were screened whole); delete it")
     else:
         print(f"replaying {len(tasks)} log parts", file=sys.stderr, flush=True)
-        obs = joblib.Parallel(n_jobs=args.jobs)(joblib.delayed(_observe)(*t) for t in tasks)
+        obs = joblib.Parallel(n_jobs=args.jobs)(joblib.delayed(_observe)(*t, i in whole)
+                                                for i, t in enumerate(tasks))
         if args.cache:
             import pickle
 
@@ -337,8 +360,8 @@ def main(argv=None) -> int:
     full6 = strip(fit_baseline([*base_obs, quiet_obs], sha))
     nb = strip(fit_baseline([nist_base], overlay_sha256({}, ())))
     splits = [(o, SPLIT_S[name]) for o, name in ((quiet_obs, QUIET), (test_obs, "TEST"))]
-    judged = [("kufieta, leave one out", loo[i], o) for i, o in enumerate(base_obs)] + \
-        [("kufieta", full, quiet_obs)] + \
+    judged = [("kufieta, leave one out", loo[i], monitored(o)) for i, o in enumerate(base_obs)] + \
+        [("kufieta", full, monitored(quiet_obs))] + \
         [("kufieta", full6, o) for o in other_obs + inj_obs if o is not quiet_obs] + \
         [("nist, first part vs rest", nb, o) for o in [nist_rest, *nist_inj_obs]] + \
         [("kufieta, own first part + the five vs its rest (events only)",

@@ -313,6 +313,8 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--jobs", type=int, default=JOBS, help=f"worker processes per fit (default {JOBS})")
     ap.add_argument("--cases", default=None, help="comma-separated indices into CASES (default: all)")
+    ap.add_argument("--likelihood", choices=("pooled", "per_channel"), default="pooled",
+                    help="the selections' likelihood (DiscrepancyModel(likelihood=...)); not with --engineer")
     ap.add_argument("--baseline", default=None, metavar="CASES",
                     help="comma-separated indices into CASES (or 'all') also fitted from the clean log's fitted "
                          "model (the change against it), scored in a second table; the clean fits are shared")
@@ -332,6 +334,8 @@ def main() -> None:
     if (args.cache is not None or args.identify) and not args.engineer:
         ap.error("--cache and --identify are used by --engineer only")
     if args.engineer:
+        if args.likelihood != "pooled":
+            ap.error("--likelihood is used by the per-log tables only")
         if args.baseline is not None or args.baseline_only:
             ap.error("--engineer is its own table; give it without --baseline")
         engineer_table(list(range(len(CASES))) if args.cases is None else [int(i) for i in args.cases.split(",")],
@@ -352,7 +356,7 @@ def main() -> None:
         base = read(name)
         if name not in clean:
             t = time.perf_counter()
-            clean[name] = DiscrepancyModel(jobs=jobs).fit(base)
+            clean[name] = DiscrepancyModel(jobs=jobs, likelihood=args.likelihood).fit(base)
             print(f"| {name} | clean | {', '.join(f.candidate.label for f in clean[name].findings_ if f.kept)} "
                   f"| | | | | {len(clean[name].unexplained_)} | {time.perf_counter() - t:.0f} s |", flush=True)
         log = base
@@ -362,16 +366,17 @@ def main() -> None:
             log = inject(log, kind, j, **v)
         ways = (True,) if args.baseline_only else (False, True)
         for baseline in ways if ci in from_clean else (False,):
-            score(name, effects, log, clean[name], baseline, jobs, *results[baseline])
+            score(name, effects, log, clean[name], baseline, jobs, *results[baseline], likelihood=args.likelihood)
     for baseline, (rows, per_kind) in results.items():
         if rows:
             summarise(rows, per_kind, "fitted from the clean log's model" if baseline else "each log on its own")
 
 
-def score(name: str, effects, log, clean, baseline: bool, jobs: int, rows: list, per_kind: dict) -> None:
+def score(name: str, effects, log, clean, baseline: bool, jobs: int, rows: list, per_kind: dict,
+          likelihood: str = "pooled") -> None:
     """Fit one injected log (from the clean fit's model when ``baseline``) and print its rows."""
     t = time.perf_counter()
-    m = DiscrepancyModel(jobs=jobs).fit(log, base_effects=baseline_of(clean) if baseline else ())
+    m = DiscrepancyModel(jobs=jobs, likelihood=likelihood).fit(log, base_effects=baseline_of(clean) if baseline else ())
     wall = time.perf_counter() - t
     label = f"{name} (from clean fit)" if baseline else name
     injected = {(NAMED_AS[k][0], j) for k, j, _ in effects if k in NAMED_AS}

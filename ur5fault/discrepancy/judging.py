@@ -15,7 +15,7 @@ from .candidates import Candidate
 from .drift import Drift
 from .refinement import FindingSet, Refined
 from .search import Verdict, backward, columns_of, forward, judge
-from .statistics import Z_95, BlockGram, Generalisation, generalisation, rss_of
+from .statistics import Z_95, BlockGram, Generalisation, generalisation, per_channel, rss_of
 
 
 @dataclasses.dataclass
@@ -81,8 +81,8 @@ def channels(c: Candidate, n_signals: int) -> NDArray:
 
 
 def judge_findings(found: Sequence[Candidate], ref: Refined, n_fit: int, n_signals: int,
-                   alts: Sequence[tuple[int, Candidate, NDArray]] = (), drift: Drift | None = None
-                   ) -> tuple[list[Finding], list[SearchStep]]:
+                   alts: Sequence[tuple[int, Candidate, NDArray]] = (), drift: Drift | None = None,
+                   own_variance: bool = True) -> tuple[list[Finding], list[SearchStep]]:
     """Judge the findings on the problem linearised by the probe batch ``ref``.
 
     On the fitting part they are selected afresh from among themselves (two that only cancel each other,
@@ -102,14 +102,15 @@ def judge_findings(found: Sequence[Candidate], ref: Refined, n_fit: int, n_signa
     e_pseudo = ref.e[:n_fit] + np.tensordot(ref.theta, J_fit, axes=1)  # the residual without the findings
     if drift is not None:
         J_fit, e_pseudo = drift.remove(J_fit), drift.remove(e_pseudo)
-    bg = BlockGram.build(J_fit, e_pseudo)
+    J_w, e_pseudo, _ = per_channel(J_fit, e_pseudo, own_variance)  # each channel its own variance (statistics.py)
+    bg = BlockGram.build(J_w, e_pseudo)
     G, g, ee = bg.total()
-    again = forward(bg, e_pseudo, J_fit, found, cols, len(found))
-    kept, _, _ = backward(bg, e_pseudo, J_fit, found, cols, again.chosen)
+    again = forward(bg, e_pseudo, J_w, found, cols, len(found))
+    kept, _, _ = backward(bg, e_pseudo, J_w, found, cols, again.chosen)
     dropped: list[Finding] = []
     for k in range(len(found)):
         if k not in kept:
-            v = judge(bg, e_pseudo, J_fit, found, cols, kept, k)
+            v = judge(bg, e_pseudo, J_w, found, cols, kept, k)
             reason = v.reason or "explains nothing the other findings do not"
             dropped.append(Finding(found[k], np.asarray(v.theta), np.asarray(v.se), v, kept=False,
                                    reason=f"explains nothing the others do not ({reason})"))
@@ -143,7 +144,7 @@ def judge_findings(found: Sequence[Candidate], ref: Refined, n_fit: int, n_signa
             f.kept = False
             f.reason = (f"does not generalise: on the held-out part it removes {100 * f.held_out.ratio:.0f} % of "
                         "the change it makes")
-        f.verdict = judge(bg, e_pseudo, J_fit, found, cols, [o for o in kept if o != k], k)
+        f.verdict = judge(bg, e_pseudo, J_w, found, cols, [o for o in kept if o != k], k)
         f.se = np.asarray(f.verdict.se)
         dropped.append(f)
         kept.remove(k)
@@ -152,7 +153,7 @@ def judge_findings(found: Sequence[Candidate], ref: Refined, n_fit: int, n_signa
                            dataclasses.replace(f.verdict, accepted=False, reason=f.reason)) for f in dropped]
     fs = FindingSet(found)
     for k, f in zip(kept, out):  # final verdicts and alternatives, against the kept findings
-        f.verdict = judge(bg, e_pseudo, J_fit, found, cols, [o for o in kept if o != k], k)
+        f.verdict = judge(bg, e_pseudo, J_w, found, cols, [o for o in kept if o != k], k)
         f.se = np.asarray(f.verdict.se)
         f.alternatives = alternatives(fs, kept, k, ref, J_fit, cols, n_fit, alts)
     return out + dropped, trace
@@ -177,7 +178,8 @@ def alternatives(fs: FindingSet, kept: list[int], k: int, ref: Refined, J_fit: N
     return out
 
 
-def final_verdicts(kept: list[Finding], pol: Refined, n_fit: int, drift: Drift | None = None) -> list[Finding]:
+def final_verdicts(kept: list[Finding], pol: Refined, n_fit: int, drift: Drift | None = None,
+                   own_variance: bool = True) -> list[Finding]:
     """Each kept finding judged against the others once more, linearised at the polished coefficients (beside
     the ``drift``); returns those that fail now."""
     cands = [f.candidate for f in kept]
@@ -186,6 +188,7 @@ def final_verdicts(kept: list[Finding], pol: Refined, n_fit: int, drift: Drift |
     e_pseudo = pol.e[:n_fit] + np.tensordot(pol.theta, J_fit, axes=1)
     if drift is not None:
         J_fit, e_pseudo = drift.remove(J_fit), drift.remove(e_pseudo)
+    J_fit, e_pseudo, _ = per_channel(J_fit, e_pseudo, own_variance)  # each channel its own variance (statistics.py)
     bg = BlockGram.build(J_fit, e_pseudo)
     failed = []
     for k, f in enumerate(kept):

@@ -48,6 +48,10 @@ FIT_FRACTION_RANGE = (0.2, 0.9)
 #: the library is screened and the dictionary selected on at most this much of the fitting part [s]
 #: (assumption: 20 s of a robot program hold its motions several times; refinement and judgement use all)
 SCREEN_S = 20.0
+#: the selections' Gaussian likelihood: each channel (signal x joint) its own residual variance, or one pooled
+#: variance for every channel (``statistics.py``; measured in docs/discrepancy.md, *Each channel its own variance*)
+LIKELIHOODS = ("per_channel", "pooled")
+LIKELIHOOD = "pooled"
 class _Stages:
     """Progress of the workflow on one tqdm bar (``ur5fault.util.progress``): one unit per stage."""
 
@@ -91,11 +95,13 @@ class DiscrepancyModel:
         progress: show a progress bar (tqdm; silent when not interactive).
         screen_s: length of the log's first part the library is screened and the dictionary selected on
             [s] (None: the whole fitting part); refinement and judgement use the whole fitting part.
+        likelihood: ``"pooled"`` (one variance for every channel, the default) or ``"per_channel"`` (each
+            channel, signal x joint, its own residual variance in every selection; ``statistics.per_channel``).
     """
 
     def __init__(self, fit_fraction: float = FIT_FRACTION, max_effects: int = 1, max_terms: int = 4,
                  kinds: Sequence[str] | None = None, jobs: int = 1, refiner: str = "secant",
-                 progress: bool = False, screen_s: float | None = SCREEN_S) -> None:
+                 progress: bool = False, screen_s: float | None = SCREEN_S, likelihood: str = LIKELIHOOD) -> None:
         lo, hi = FIT_FRACTION_RANGE
         if not lo <= fit_fraction <= hi:
             raise ParameterError(f"fit_fraction = {fit_fraction} is out of range [{lo}, {hi}]")
@@ -104,6 +110,9 @@ class DiscrepancyModel:
                 raise ParameterError(f"{name} = {v!r} must be a whole number >= {least}")
         if refiner not in ("secant", "minimize"):
             raise ParameterError(f"refiner = {refiner!r} is not valid; choose one of: secant, minimize")
+        if likelihood not in LIKELIHOODS:
+            raise ParameterError(f"likelihood = {likelihood!r} is not valid; choose one of: {', '.join(LIKELIHOODS)}")
+        self.likelihood = likelihood
         self.fit_fraction, self.max_effects, self.max_terms = fit_fraction, max_effects, max_terms
         self.kinds, self.jobs, self.refiner, self.progress = kinds, jobs, refiner, progress
         if screen_s is not None and screen_s <= 0:
@@ -153,8 +162,9 @@ class DiscrepancyModel:
             # samples are the screening's baseline: a worker starts it now, and it is simulated once
             rp.prefetch([()], n_all)
             t = time.perf_counter()
+            own = self.likelihood == "per_channel"
             lib = steps.screen_library(rp, n_scr, log.payload_kg, kinds, self.max_effects,
-                                       stages.start("screening the library"))
+                                       stages.start("screening the library"), own)
             timings["library screening"] = time.perf_counter() - t
             logger.info("library screened in %.0f s: %s", timings["library screening"],
                         [c.label for c in lib.chosen] or "nothing")
@@ -167,9 +177,10 @@ class DiscrepancyModel:
                         [c.label for c in disc.terms] or "nothing")
 
             t = time.perf_counter()
-            check = steps.joint_check(disc.library + disc.terms, disc.X, disc.fixed, lib.e0, list(disc.tell_apart))
+            check = steps.joint_check(disc.library + disc.terms, disc.X, disc.fixed, lib.e0, list(disc.tell_apart),
+                                      own)
             ref = steps.refine(rp, check.found, disc.X, check.fixed, lib.e0, {**lib.alternatives, **disc.alternatives},
-                               n_fit, stages.start("refining the findings"))
+                               n_fit, stages.start("refining the findings"), own)
             timings["refinement"] = time.perf_counter() - t
             logger.info("probe batch over the whole log in %.0f s (%d findings)", timings["refinement"], len(ref.found))
 
@@ -178,7 +189,7 @@ class DiscrepancyModel:
             t = time.perf_counter()
             prog = stages.start("judging")
             drift = steps.drift_of(rp, n_fit)
-            jr = steps.judge(ref, n_fit, len(rp.signals), drift)
+            jr = steps.judge(ref, n_fit, len(rp.signals), drift, own)
             self.search_: list[SearchStep] = lib.trace + disc.trace + check.trace + jr.trace
             self.refinement_ = list(ref.first.steps) if ref.first is not None else []
             for f in jr.findings:
@@ -190,13 +201,13 @@ class DiscrepancyModel:
             steps.alternatives_of_kept(rp, ref, kept, n_fit, drift, prog)
             # a finding dropped on the held-out part or at the final check gives its joint's place back
             again = rescreen(rp, lib.X, lib.drift, lib.candidates, jr.findings, after, n_scr, n_fit, drift,
-                             self.max_effects, prog)
+                             self.max_effects, prog, own)
             jr.findings.extend(again.findings)
             self.search_ += again.trace
             after = again.after
             # every finding of the final model with the library effects the held-out part cannot tell from it
             list_rivals(rp, lib.X, lib.drift, lib.candidates, jr.findings, ref.first.J if ref.first else None,
-                        ref.found, after, n_scr, n_fit, drift, skip=again.findings, progress=prog)
+                        ref.found, after, n_scr, n_fit, drift, skip=again.findings, progress=prog, own_variance=own)
             self._results(rp, ref.nominal, after, n_fit, n_all)
         finally:  # an exception or an interruption: the prefetched replays' worker stops with the fit
             rp.close()
@@ -224,7 +235,7 @@ class DiscrepancyModel:
         self.refinement_ += pol.steps
         for f, th in zip(kept, kfs.split(pol.theta)):
             f.theta = th
-        failed = final_verdicts(kept, pol, self.n_fit_, drift)
+        failed = final_verdicts(kept, pol, self.n_fit_, drift, self.likelihood == "per_channel")
         for f in failed:
             f.kept = False
             f.reason = (f.candidate.range_problem(f.theta)

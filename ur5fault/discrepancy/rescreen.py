@@ -43,7 +43,7 @@ from .drift import Drift
 from .judging import Finding, SearchStep, channels
 from .rivals import MAX_RIVALS, Rival, current_channel, differ_most, in_place, indistinguishable_held_out, judge_rival
 from .search import backward, columns_of, forward, judge
-from .statistics import BlockGram, generalisation, rss_of, weighted
+from .statistics import BlockGram, generalisation, per_channel, rss_of, weighted
 
 __all__ = ["MAX_RIVALS", "freed_joints", "indistinguishable_held_out", "rescreen", "rivals_of", "select_on_freed"]
 
@@ -77,14 +77,15 @@ def freed_joints(findings: Sequence[Finding], max_effects: int) -> list[int | No
 
 
 def rivals_of(X: NDArray, e: NDArray, candidates: Sequence[Candidate], cols: list[list[int]],
-              findings: Sequence[Finding], chosen: Sequence[tuple[int, NDArray]]) -> list[tuple[int, int, NDArray]]:
+              findings: Sequence[Finding], chosen: Sequence[tuple[int, NDArray]], own_variance: bool = True
+              ) -> list[tuple[int, int, NDArray]]:
     """For each candidate chosen on a freed joint, the other offered candidates on that joint that pass every
     test in its place (at most MAX_RIVALS, by improvement): ``(position in chosen, k, theta)``."""
     out = []
     taken = {f.candidate.label for f in findings} | {candidates[k].label for k, _ in chosen}
     for pos, (k, _) in enumerate(chosen):
         out += [(pos, r, th) for r, th in in_place(X, e, e, candidates, cols, taken, candidates[k].joint,
-                                                   share=0.0, robot_wide=False)]
+                                                   share=0.0, robot_wide=False, own_variance=own_variance)]
     return out
 
 
@@ -95,7 +96,8 @@ def offered(candidates: Sequence[Candidate], findings: Sequence[Finding], joint:
 
 
 def select_on_freed(X: NDArray, e: NDArray, candidates: Sequence[Candidate], cols: list[list[int]],
-                    findings: Sequence[Finding], max_effects: int) -> tuple[list[tuple[int, NDArray]], list]:
+                    findings: Sequence[Finding], max_effects: int, own_variance: bool = True
+                    ) -> tuple[list[tuple[int, NDArray]], list]:
     """Forward selection, joint by joint, among the library candidates offered on each freed joint.
 
     Args:
@@ -112,12 +114,12 @@ def select_on_freed(X: NDArray, e: NDArray, candidates: Sequence[Candidate], col
             continue
         sub = [candidates[k] for k in ks]
         idx = [c for k in ks for c in cols[k]]
-        Xs = X[idx]
+        Xs, e_j, _ = per_channel(X[idx], e, own_variance)  # each channel its own variance (statistics.py)
         scols = columns_of(sub)
-        bg = BlockGram.build(Xs, e)
+        bg = BlockGram.build(Xs, e_j)
         budget = max_effects - sum(1 for f in findings if f.kept and f.candidate.source == "library"
                                    and f.candidate.joint == j)
-        sel = forward(bg, e, Xs, sub, scols, budget, per_joint=budget)
+        sel = forward(bg, e_j, Xs, sub, scols, budget, per_joint=budget)
         trace += sel.trace
         G, g, ee = bg.total()
         th = rss_of(G, g, ee, [c for k in sel.chosen for c in scols[k]])[1]
@@ -131,7 +133,8 @@ def select_on_freed(X: NDArray, e: NDArray, candidates: Sequence[Candidate], col
 
 def rescreen(rp: LogReplay, lib_X: NDArray, lib_drift: Drift | None, candidates: Sequence[Candidate],
              findings: Sequence[Finding], after: Replayed, n_scr: int, n_fit: int, drift: Drift | None,
-             max_effects: int, progress: Callable[[float], None] | None = None) -> RescreenRecord:
+             max_effects: int, progress: Callable[[float], None] | None = None, own_variance: bool = True
+             ) -> RescreenRecord:
     """Name library effects on the joints that dropped findings freed (module docstring).
 
     Args:
@@ -143,13 +146,13 @@ def rescreen(rp: LogReplay, lib_X: NDArray, lib_drift: Drift | None, candidates:
     meas = rp.measured(rp.n_samples)
     e_after = weighted(meas, after.y, rp.sigma)
     e_scr = e_after[:n_scr] if lib_drift is None else lib_drift.remove(e_after[:n_scr])
-    chosen, lin_trace = select_on_freed(lib_X, e_scr, candidates, cols, findings, max_effects)
+    chosen, lin_trace = select_on_freed(lib_X, e_scr, candidates, cols, findings, max_effects, own_variance)
     trace = [SearchStep.of("re-screened joint", v) for v in lin_trace]
     if not chosen:
         return RescreenRecord([], trace, after)
     kept_specs = tuple(f.spec() for f in findings if f.kept)
     new = [(candidates[k], th) for k, th in chosen]
-    rivals = rivals_of(lib_X, e_scr, candidates, cols, findings, chosen)
+    rivals = rivals_of(lib_X, e_scr, candidates, cols, findings, chosen, own_variance)
     sims = rp.run([kept_specs + (c.spec(th),) for c, th in new], rp.n_samples, progress)
     # each one's secant beside the kept findings: the change of the weighted readings per unit multiple of its
     # linearised size (a coefficient pair keeps its direction)
@@ -161,6 +164,7 @@ def rescreen(rp: LogReplay, lib_X: NDArray, lib_drift: Drift | None, candidates:
     names = [c for c, _ in new]
     scaled = [_Scaled(c, th) for c, th in new]
     one = [[i] for i in range(len(new))]
+    J_fit, e_fit, _ = per_channel(J_fit, e_fit, own_variance)  # each channel its own variance (statistics.py)
     bg = BlockGram.build(J_fit, e_fit)
     G, g, ee = bg.total()
     keep, _, gone = backward(bg, e_fit, J_fit, scaled, one, [i for i in range(len(new)) if ok[i]])

@@ -39,7 +39,7 @@ from .candidates import Candidate
 from .drift import Drift
 from .judging import Finding, channels
 from .search import columns_of, judge
-from .statistics import MIN_DELTA_BIC, BlockGram, effective_n, generalisation, rss_of, weighted
+from .statistics import MIN_DELTA_BIC, BlockGram, effective_n, generalisation, per_channel, rss_of, weighted
 
 #: rivals of one finding simulated (each one run of the whole log) at most
 MAX_RIVALS = 2
@@ -131,8 +131,8 @@ def current_channel(signals: Sequence[str], joint: int) -> int:
 
 def in_place(X: NDArray, e_place: NDArray, e_named: NDArray, candidates: Sequence[Candidate],
              cols: list[list[int]], taken: set[str], joint: int | None,
-             max_n: int = MAX_RIVALS, share: float = RIVAL_SHARE, robot_wide: bool = True
-             ) -> list[tuple[int, NDArray]]:
+             max_n: int = MAX_RIVALS, share: float = RIVAL_SHARE, robot_wide: bool = True,
+             own_variance: bool = True) -> list[tuple[int, NDArray]]:
     """The library candidates on ``joint`` (and robot-wide ones unless not ``robot_wide``) not in ``taken`` that,
     judged alone against ``e_place`` (the residual without the finding, screened part, drift removed), pass every
     test and take up
@@ -144,7 +144,9 @@ def in_place(X: NDArray, e_place: NDArray, e_named: NDArray, candidates: Sequenc
         return []
     sub = [candidates[k] for k in ks]
     scols = columns_of(sub)
-    Xs = X[[c for k in ks for c in cols[k]]]
+    # each channel its own variance (statistics.py): the scale of what all these columns leave of e_place
+    Xs, e_place, s = per_channel(X[[c for k in ks for c in cols[k]]], e_place, own_variance)
+    e_named = e_named / s
     bg = BlockGram.build(Xs, e_place)
     G, g, ee = bg.total()
     own = float(np.sum(e_place**2) - np.sum(e_named**2))
@@ -162,7 +164,7 @@ def in_place(X: NDArray, e_place: NDArray, e_named: NDArray, candidates: Sequenc
 def list_rivals(rp: LogReplay, lib_X: NDArray, lib_drift: Drift | None, candidates: Sequence[Candidate],
                 findings: Sequence[Finding], first_J: NDArray | None, found: Sequence[Candidate], after: Replayed,
                 n_scr: int, n_fit: int, drift: Drift | None, skip: Sequence[Finding] = (),
-                progress: Callable[[float], None] | None = None) -> None:
+                progress: Callable[[float], None] | None = None, own_variance: bool = True) -> None:
     """Give every kept finding (but those in ``skip``, judged already) its rivals (module docstring): each
     listed one goes to ``f.rivals`` and to ``f.alternatives``.
 
@@ -190,7 +192,8 @@ def list_rivals(rp: LogReplay, lib_X: NDArray, lib_drift: Drift | None, candidat
         if lib_drift is not None:
             e_s, n_s = lib_drift.remove(e_s), lib_drift.remove(n_s)
         listed = taken | {a.label for a, _ in f.alternatives}
-        for r, th in in_place(lib_X, e_s, n_s, candidates, lcols, listed, f.candidate.joint):
+        for r, th in in_place(lib_X, e_s, n_s, candidates, lcols, listed, f.candidate.joint,
+                              own_variance=own_variance):
             plan.append((f, change, candidates[r], th))
     if not plan:
         return

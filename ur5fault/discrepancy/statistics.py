@@ -17,6 +17,42 @@ A finding is judged by what it explains that nothing else does (:func:`judge`):
 * *stability*: every time block of the fitting part that constrains it gives the same estimate within
   a factor :data:`STABILITY_RATIO` (or within :data:`STABILITY_Z` of its own error);
 * *generalisation* (checked by simulation on the held-out part, :func:`generalisation`).
+
+**One variance per channel** (:func:`per_channel`).  Dividing by the sensor's sigma makes a channel of pure
+sensor noise unit-variance, but a replay's residual is mostly the model's own error, and that differs by
+channel: 10-50 x the noise on the Kufieta J1-J3 currents, near the noise on the wrists.  A Gaussian model
+with one variance for all channels judges a one-joint effect's improvement against residual energy pooled
+over every channel, so a joint with a large model error dilutes the improvement on a quiet one.  The
+statistically right form gives each channel ``c`` (signal x joint) its own variance ``sigma_c^2`` and
+effective sample count ``n_c = n (1 - rho_c) / (1 + rho_c)`` (its lag-1 autocorrelation ``rho_c``).  With
+each variance profiled out, a candidate that lowers channel ``c``'s residual sum of squares from ``RSS0_c``
+to ``RSS1_c`` changes ``-2 log L`` by ``sum_c n_c log(RSS1_c / RSS0_c)``, to first order
+``-sum_c n_c dRSS_c / RSS0_c``.
+
+Feasible weighted least squares gives the same to first order and keeps one pooled problem and its
+sufficient statistics (:class:`BlockGram`): divide each channel of the residual and of every column by its
+scale ``s_c``, with ``s_c^2 = RSS_c / n_c`` (the residual's variance times its autocorrelation inflation
+``n / n_c``; :func:`channel_scale`).  In the rescaled problem each channel's sum of squares is ``n_c``, the
+pooled one ``sum_c n_c = n_eff`` (what :func:`effective_n` counts: lag-1 autocorrelation does not change
+with a channel's scale), and the pooled criterion ``n_eff log(RSS~1 / RSS~0)`` is, to first order,
+``-sum_c n_c dRSS_c / RSS0_c``: the per-channel one.  Beyond first order the two differ by terms of the
+order of each channel's share of improvement squared (the pooled form averages ``RSS0_c / RSS1_c`` over the
+channels inside the logarithm, the per-channel one outside it); at the decision threshold (delta BIC -10 over
+thousands of effective samples) those shares are small (``tests/discrepancy/test_per_channel.py``: -47.16
+against -47.17).  The coefficients become the weighted least-squares estimates, and the block
+jackknife, the stability blocks (whose residual scale is then 1 per channel) and the collinearity are taken
+in the same metric, so every test sees a joint's improvement against that joint's own unexplained variance.
+
+Which residual gives ``RSS_c``: the one the problem's *full* model leaves (all the columns being judged,
+least squares; :func:`per_channel`), as Mallows' C_p takes sigma^2 from the full model.  The starting
+model's residual would hold the effect itself: on a channel where a fault dominates the residual it is
+both large and smooth (``rho_c`` near 1), so ``s_c`` would be large and the fault's own channel the least
+trusted.  The full model's residual holds what none of the candidates explains - the model's own error and
+the noise - and does not depend on which candidates a forward step has chosen so far, so the scale is
+estimated once per linearised problem (each stage), not at every step.  ``s_c`` is never below 1: no
+channel is trusted beyond its sensor's noise (with every ``s_c = 1`` this is the pooled form).  The workflow's
+default is the pooled form (``DiscrepancyModel(likelihood=...)``): measured on real logs, the per-channel one
+was no better (docs/discrepancy.md, *Each channel its own variance*).
 """
 
 from __future__ import annotations
@@ -73,6 +109,30 @@ def effective_n(e: NDArray) -> float:
     """Independent samples in a residual: ``sum over channels of n (1 - rho) / (1 + rho)``."""
     rho = lag1(e)
     return float(max(np.sum(e.shape[0] * (1 - rho) / (1 + rho)), 10.0))
+
+
+def channel_scale(e: NDArray) -> NDArray:
+    """Each channel's residual scale ``s_c = sqrt(RSS_c / n_c)`` of ``e`` ``(n, n_channels)``, ``n_c`` its
+    autocorrelation-discounted sample count, never below 1 (the sensor's noise; module docstring)."""
+    rho = lag1(e)
+    n_c = e.shape[0] * (1 - rho) / (1 + rho)
+    return np.sqrt(np.maximum(np.sum(e**2, axis=0) / np.maximum(n_c, 1.0), 1.0))
+
+
+def per_channel(X: NDArray, e: NDArray, own_variance: bool = True) -> tuple[NDArray, NDArray, NDArray]:
+    """The linearised problem ``e ~ X theta`` (``X`` ``(p, n, n_channels)``, ``e`` ``(n, n_channels)``) with
+    each channel divided by the scale of the residual its full model (every column of ``X``) leaves
+    (:func:`channel_scale`; module docstring): ``(X / s, e / s, s)``.  ``own_variance`` False: the pooled
+    form, one variance for every channel (``s = 1``)."""
+    if not own_variance:
+        return X, e, np.ones(e.shape[-1])
+    if X.shape[0] == 0:
+        s = channel_scale(e)
+    else:
+        G, g, _ = BlockGram.build(X, e, 1).total()
+        theta = np.linalg.lstsq(G, g, rcond=1e-12)[0]
+        s = channel_scale(e - np.tensordot(theta, X, axes=1))
+    return X / s, e / s, s
 
 
 def bic(rss: float, n_eff: float, k: int) -> float:

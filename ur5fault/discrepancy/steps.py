@@ -30,7 +30,7 @@ from .refinement import FindingSet, Refined, probe_batch
 from .rivals import current_channel, differ_most
 from .search import backward, columns_of, forward
 from .search import judge as judge_one
-from .statistics import MIN_DELTA_BIC, BlockGram, effective_n, rss_of, weighted
+from .statistics import MIN_DELTA_BIC, BlockGram, effective_n, per_channel, rss_of, weighted
 
 #: residuals above this multiple of the noise floor (sqrt 2 sigma: model and log noise) get joint-local terms
 FLOOR_FACTOR = 2.0
@@ -55,6 +55,7 @@ class LibraryRecord:
     alternatives: Alternatives
     trace: list[SearchStep]
     drift: Drift | None = None  # projected out of ``X`` and ``e0`` (and of the dictionary's columns)
+    own_variance: bool = True  # each channel its own variance in every selection (statistics.per_channel)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -103,21 +104,24 @@ def drift_of(rp: LogReplay, n: int) -> Drift:
 
 
 def screen_library(rp: LogReplay, n_scr: int, payload_kg: float, kinds: Sequence[str] | None,
-                   max_effects: int, progress: Callable[[float], None] | None = None) -> LibraryRecord:
-    """``max_effects``: most library effects named per joint (robot-wide effects count as one more joint)."""
+                   max_effects: int, progress: Callable[[float], None] | None = None,
+                   own_variance: bool = True) -> LibraryRecord:
+    """``max_effects``: most library effects named per joint (robot-wide effects count as one more joint).
+    ``own_variance``: each channel its own variance in the selections on the screened part, False: pooled."""
     cands = library.candidates(payload_kg, kinds=kinds, params=rp.params)
     base, X_lib, cands = library.screen(rp, n_scr, cands, progress=progress)
     drift = drift_of(rp, n_scr)
     e0 = drift.remove(weighted(rp.measured(n_scr), base.y, rp.sigma))
     X_lib = drift.remove(X_lib)
-    bg = BlockGram.build(X_lib, e0)
+    X_w, e_w, _ = per_channel(X_lib, e0, own_variance)  # each channel its own variance (statistics.py)
     cols = columns_of(cands)
-    sel = forward(bg, e0, X_lib, cands, cols, max_effects * (N_JOINTS + 1), per_joint=max_effects)
+    sel = forward(BlockGram.build(X_w, e_w), e_w, X_w, cands, cols, max_effects * (N_JOINTS + 1),
+                  per_joint=max_effects)
     alternatives = {cands[k]: [(cands[a], th) for a, th in alt][:MAX_ALTERNATIVES]
                     for k, alt in zip(sel.chosen, sel.alternatives)}
     return LibraryRecord(base, X_lib, e0, cands, cols, [cands[k] for k in sel.chosen],
                          [c for k in sel.chosen for c in cols[k]], alternatives,
-                         [SearchStep.of("library", v) for v in sel.trace], drift)
+                         [SearchStep.of("library", v) for v in sel.trace], drift, own_variance)
 
 
 def joints_above_floor(e: NDArray, n_signals: int) -> list[int]:
@@ -145,7 +149,8 @@ def discover_terms(rp: LogReplay, lib: LibraryRecord, n_scr: int, max_terms: int
         return DiscoveryRecord(X_all, fixed, lib.chosen, [], {}, [])
     X_all = np.concatenate([X_all, X_dict])
     dcols = columns_of(dcands, start=len(lib.chosen_cols))
-    sel = forward(BlockGram.build(X_all, e0), e0, X_all, dcands, dcols, max_terms, fixed=fixed)
+    X_w, e_w, _ = per_channel(X_all, e0, lib.own_variance)
+    sel = forward(BlockGram.build(X_w, e_w), e_w, X_w, dcands, dcols, max_terms, fixed=fixed)
     alternatives = {dcands[k]: [(dcands[a], th) for a, th in alt][:MAX_ALTERNATIVES]
                     for k, alt in zip(sel.chosen, sel.alternatives)}
     trace = [SearchStep.of("dictionary", v) for v in sel.trace]
@@ -161,17 +166,17 @@ def prefer_library(rp: LogReplay, lib: LibraryRecord, dcands: list[TermCandidate
     significant and in range and the term, judged beside it, adds nothing, the library effect is named in its
     place and the term listed as indistinguishable from it on this log (a physical parameter
     with a meaning and a range over a free shape)."""
-    e0 = lib.e0
     X = np.concatenate([lib.X, X_dict])
+    X_w, e0, _ = per_channel(X, lib.e0, lib.own_variance)  # each channel its own variance (statistics.py)
     cands: list[Candidate] = [*lib.candidates, *dcands]
     cols = lib.cols + columns_of(dcands, start=lib.X.shape[0])
-    bg = BlockGram.build(X, e0)
+    bg = BlockGram.build(X_w, e0)
     G, g, ee = bg.total()
     n_lib = len(lib.candidates)
     current = [lib.candidates.index(c) for c in lib.chosen] + [n_lib + k for k in chosen]
     # first every finding judged against all the others (a library effect that only stood in for a term
     # found later leaves, as in the joint check), so that what is left is what a library effect may replace
-    current, _, gone = backward(bg, e0, X, cands, cols, current)
+    current, _, gone = backward(bg, e0, X_w, cands, cols, current)
     trace = trace + [SearchStep.of("linear joint check", dataclasses.replace(
         v, accepted=False, reason=v.reason or "explains nothing the other findings do not")) for v in gone]
     named: list[int] = []
@@ -190,10 +195,10 @@ def prefer_library(rp: LogReplay, lib: LibraryRecord, dcands: list[TermCandidate
         # replaces varied with the same residual, the model's own error on the joint, and the held-out
         # judgement after refinement drops a finding that does not generalise) and leaves the term nothing
         for k in sorted(options, key=lambda k: rss_of(G, g, ee, base + cols[k])[0]):
-            v = judge_one(bg, e0, X, cands, cols, others, k)
+            v = judge_one(bg, e0, X_w, cands, cols, others, k)
             if not (v.accepted or v.reason.startswith("unstable across time blocks")):
                 continue
-            v_term = judge_one(bg, e0, X, cands, cols, others + [k], t)
+            v_term = judge_one(bg, e0, X_w, cands, cols, others + [k], t)
             if not v_term.accepted:
                 best, v_lib = k, v
                 break
@@ -226,7 +231,7 @@ def tell_apart(rp: LogReplay, lib: LibraryRecord, X_a: NDArray, th_a, X_b: NDArr
 
 
 def joint_check(found: list[Candidate], X: NDArray, fixed: list[int], e0: NDArray,
-                preferred: Sequence[Candidate] = ()) -> JointCheckRecord:
+                preferred: Sequence[Candidate] = (), own_variance: bool = True) -> JointCheckRecord:
     """The findings selected afresh among themselves (forward, then backward), then every dictionary term that
     shares its joint with another finding checked on data it was not fitted to (:func:`same_joint_check`).
     ``preferred``: library effects named in place of a term (:func:`prefer_library`), kept when they fail only
@@ -234,7 +239,7 @@ def joint_check(found: list[Candidate], X: NDArray, fixed: list[int], e0: NDArra
     if len(found) <= 1:
         return JointCheckRecord(found, fixed, [])
     fcols = columns_of(found)
-    Xf = X[fixed]
+    Xf, e0, _ = per_channel(X[fixed], e0, own_variance)  # each channel its own variance (statistics.py)
     bg = BlockGram.build(Xf, e0)
     again = forward(bg, e0, Xf, found, fcols, len(found))
     keep, _, _ = backward(bg, e0, Xf, found, fcols, again.chosen)
@@ -296,12 +301,12 @@ def same_joint_check(bg: BlockGram, e0: NDArray, X: NDArray, found: list[Candida
 
 
 def refine(rp: LogReplay, found: list[Candidate], X: NDArray, fixed: list[int], e0: NDArray,
-           alternatives: Alternatives, n_fit: int, progress=None) -> RefineRecord:
+           alternatives: Alternatives, n_fit: int, progress=None, own_variance: bool = True) -> RefineRecord:
     fs = FindingSet(found)
     alts = [(i, a, th) for i, c in enumerate(found) for a, th in alternatives.get(c, [])]
     if not found:
         return RefineRecord(found, None, rp.run([()], rp.n_samples, progress)[0], alts, fs)
-    G, g, ee = BlockGram.build(X[fixed], e0).total()
+    G, g, ee = BlockGram.build(*per_channel(X[fixed], e0, own_variance)[:2]).total()
     theta0 = rss_of(G, g, ee, list(range(len(fixed))))[1]
     first = probe_batch(fs.evaluator(rp, progress), theta0, fs.probes(theta0), fs.bounds(), n_fit)
     # the alternatives are sized beside the others at the probe batch's estimate (clipped to the ranges, as there)
@@ -341,9 +346,10 @@ def alternatives_of_kept(rp: LogReplay, ref: RefineRecord, kept: Sequence[Findin
         f.alternatives = judged_alternatives(ref.finding_set, idx, k, first, J_fit, columns_of(found), n_fit, ref.alts)
 
 
-def judge(ref: RefineRecord, n_fit: int, n_signals: int, drift: Drift | None = None) -> JudgeRecord:
+def judge(ref: RefineRecord, n_fit: int, n_signals: int, drift: Drift | None = None,
+          own_variance: bool = True) -> JudgeRecord:
     """``drift``: the nuisance drift of the fitting part, projected out before the findings are judged there."""
     if not ref.found:
         return JudgeRecord([], [])
-    findings, trace = judge_findings(ref.found, ref.first, n_fit, n_signals, ref.alts, drift)
+    findings, trace = judge_findings(ref.found, ref.first, n_fit, n_signals, ref.alts, drift, own_variance)
     return JudgeRecord(findings, list(trace))

@@ -103,3 +103,41 @@ def test_the_paired_statistics_survive_baseline_json(tmp_path):
     assert back.paired_candidates == b.paired_candidates
     worn = run("worn", cycle(3, lead_s=0.2), 41, gain=1.2)
     assert assess(back, worn) == assess(b, worn)
+
+
+def test_a_baseline_screened_whole_gives_paired_blocks_past_the_first_20_s():
+    """Two healthy runs of 7 cycles (about 30 s each), screened whole (as the monitor screens a baseline run):
+    the paired statistics count a block per 2 s of every paired sample of both runs, past the 20 s a monitored
+    log is screened on, while the block test keeps its 5 s blocks of each run's first 20 s (4 per run)."""
+    from ur5fault.health.monitoring.paired import baseline_references, paired_seconds
+
+    base = [run(f"b{k}", cycle(7, lead_s=0.3 * k), 20 + k) for k in range(2)]
+    assert all(o.n * PERIOD > 29.0 for o in base)
+    b = fit_baseline(base, "sha")
+    refs = [(o.target_rad, np.where(o.logged[:, None], o.residual_A, np.nan)) for o in base]
+    secs = [paired_seconds(o, ref) for o, ref in zip(base, baseline_references(base, refs))]
+    assert all(s > 25.0 for s in secs), secs  # paired well past 20 s
+    assert b.paired_candidates[LABEL][2] == sum(round(s / 2.0) for s in secs)  # > 2 x 10: blocks past 20 s
+    assert b.candidates[LABEL][2] == 2 * 4
+
+
+def test_observe_screens_the_whole_part_when_asked():
+    """``screen_s=None`` (a baseline run's, :data:`BASELINE_SCREEN_S`): the library columns and the weighted
+    residual cover every sample of the part; a number: its first stretch."""
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[3] / "bench"))
+    from monitor_labels import QUIET, read
+
+    from ur5fault.health.monitoring.observe import BASELINE_SCREEN_S, observe
+
+    assert BASELINE_SCREEN_S is None
+    log = read(QUIET)
+    kinds = ("current_sensor_offset",)
+    whole = observe(log, part_s=(0.0, 3.0), kinds=kinds, screen_s=None)
+    head = observe(log, part_s=(0.0, 3.0), kinds=kinds, screen_s=1.0)
+    assert whole.n == head.n > round(2.9 / log.period_s)
+    assert whole.e.shape[0] == whole.X.shape[1] == whole.n and whole.X.shape[0] == 6
+    assert head.e.shape[0] == head.X.shape[1] == round(1.0 / log.period_s)
+    np.testing.assert_array_equal(whole.e[: head.e.shape[0]], head.e)

@@ -32,6 +32,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ...discrepancy.candidates import LibraryCandidate
+from ...discrepancy.model import SCREEN_S
 from ...discrepancy.search import columns_of, judge
 from ...discrepancy.statistics import MIN_Z, Z_95, BlockGram
 from ...sim.axes import JOINT_NAMES
@@ -89,14 +90,17 @@ def estimates(obs: Observed, keep: NDArray) -> dict[str, Estimate]:
 
 
 def block_estimates(obs: Observed) -> list[dict[str, Estimate]]:
-    """Each candidate fitted alone on each :data:`BLOCK_S` block of the screened part (the last block joins the
-    one before when shorter than half a block); one block when the part is shorter than two."""
-    m = obs.e.shape[0]
+    """Each candidate fitted alone on each :data:`BLOCK_S` block of the screened part's first
+    :data:`~ur5fault.discrepancy.model.SCREEN_S` (the last block joins the one before when shorter than half a
+    block); one block when that is shorter than two. Not past it where a baseline run is screened whole (for the
+    paired test, :data:`.observe.BASELINE_SCREEN_S`): the blocks are the reference of a monitored log's estimate
+    on its own first :data:`~ur5fault.discrepancy.model.SCREEN_S`, and stay the same stretch of each run."""
+    m = min(obs.e.shape[0], max(2, round(SCREEN_S / obs.period_s)))
     n = max(1, int(round(m * obs.period_s / BLOCK_S)))
     edges = np.linspace(0, m, n + 1).round().astype(int)
     out = []
     for a, b in zip(edges[:-1], edges[1:]):
-        keep = obs.logged[:m].copy()
+        keep = obs.logged[: obs.e.shape[0]].copy()
         keep[:a] = False
         keep[b:] = False
         out.append(estimates(obs, keep))

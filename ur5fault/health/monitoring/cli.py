@@ -44,7 +44,7 @@ def cmd_monitor(args: argparse.Namespace) -> int:
     from ...sim.params import load_params
     from ...util.io import check_writable
     from .baseline import Baseline, fit_baseline, overlay_sha256
-    from .observe import observe
+    from .observe import BASELINE_SCREEN_S, observe
     from .report import write
     from .verdict import assess
 
@@ -76,7 +76,8 @@ def cmd_monitor(args: argparse.Namespace) -> int:
         print(f"note: {line}", file=sys.stderr)
     params, effects = dict(overlay.params), overlay.effects
     if stats is None:
-        stats = fit_baseline([observe(g, params, effects, jobs=jobs) for g in healthy], sha)
+        stats = fit_baseline([observe(g, params, effects, screen_s=BASELINE_SCREEN_S, jobs=jobs)
+                              for g in healthy], sha)
     observed = [observe(g, params, effects, jobs=jobs) for g in logs]
     channels = tuple(dict.fromkeys(args.event_channels))
     entries = [assess(stats, o, channels) for o in observed]

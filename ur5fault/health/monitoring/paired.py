@@ -10,14 +10,20 @@ current, an offset a constant, a friction change one proportional to the frictio
 speed); on a repeated task those shapes remain in the difference.
 
 Each monitor candidate (:data:`.observe.MONITOR_KINDS`) is fitted alone to the difference on the paired,
-logged samples of the screened part, with its sensitivity column taken on the log's own replay
+logged samples of the screened part (a monitored log's first :data:`~ur5fault.discrepancy.model.SCREEN_S`; a
+baseline run's whole length, :data:`.observe.BASELINE_SCREEN_S`, so its reference counts every paired block it
+holds), with its sensitivity column taken on the log's own replay
 (``Observed.X``, the current channels; the reference holds current residuals only), and judged by the
 discrepancy workflow's test (:func:`ur5fault.discrepancy.search.judge`) as :mod:`.changes` does. Its reference
 distribution is the same difference-estimate between healthy baseline runs paired with each other and with
 their own repeats (never a run with its own samples, :func:`ur5fault.health.monitoring.task.reference`'s
 ``self_index``), made per :data:`PAIRED_BLOCK_S` of paired samples (:func:`block_estimates`): their mean,
 variance and number feed the same prediction interval and Student's bar (:func:`.changes.bar`) as the unpaired
-test's. The estimate reads as the change *since the paired healthy runs* (a gain of 1.1: the current reads 10 %
+test's. ``k`` counts every block, the consecutive blocks of one run as independent (the block test's
+assumption, stated there): the model's error that would tie neighbouring stretches of a run together cancels in
+the difference at the same point of the task, leaving the sensors' noise and the task's repeatability; where
+neighbouring blocks are still correlated, the bar is lower than it would be counting runs (2-6 here).
+The estimate reads as the change *since the paired healthy runs* (a gain of 1.1: the current reads 10 %
 more than on the same motion of the baseline).
 """
 
