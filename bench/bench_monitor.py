@@ -338,6 +338,14 @@ def main(argv=None) -> int:
                                                                "obs": obs, "identify_s": t_ident,
                                                                "quiet_tail": quiet_tail}))
     quiet_tail = with_sigma(quiet_tail, logs[QUIET], params)
+    # a cache written before the parts kept their model's Stribeck speed: the same value observe() takes from the
+    # replay's parameters (the overlays here do not set the friction law's stribeck_rate_s_per_rad)
+    from ur5fault.health.monitoring.conditions import stribeck_speed
+
+    assert "stribeck_rate_s_per_rad" not in params.get("friction", {})
+    obs, (quiet_tail,) = ([o if o.stribeck_speed_rad_s is not None else
+                           dataclasses.replace(o, stribeck_speed_rad_s=stribeck_speed(load_params())) for o in group]
+                          for group in (obs, [quiet_tail]))
     k = len(BASE_RUNS)
     base_obs, other_obs = obs[:k], obs[k : k + len(OTHER_RUNS)]
     inj_obs = obs[k + len(OTHER_RUNS) : k + len(OTHER_RUNS) + len(GAINS)]

@@ -17,6 +17,8 @@ from ur5fault.health.monitoring.baseline import Baseline, overlay_sha256
 from ur5fault.health.monitoring.events import multiplier
 
 PERIOD = 0.008
+#: the packaged friction law's Stribeck speed [rad/s] (1 / its stribeck_rate_s_per_rad of 10 s/rad)
+STRIBECK_RAD_S = 0.1
 
 
 def part(name: str, residual: np.ndarray, moving: bool = True, speed: np.ndarray | None = None,
@@ -34,7 +36,8 @@ def part(name: str, residual: np.ndarray, moving: bool = True, speed: np.ndarray
     e = np.zeros((n, 12)) if e is None else e
     position = np.zeros((n, 6)) if position is None else position
     return Observed(name, PERIOD, np.arange(n) * PERIOD, residual, speed > 1e-3, np.ones(n, bool), tuple(cands),
-                    X, e, speed, np.zeros((n, 6)), position, np.full(6, quantum_rad), target)
+                    X, e, speed, np.zeros((n, 6)), position, np.full(6, quantum_rad), target,
+                    stribeck_speed_rad_s=STRIBECK_RAD_S)
 
 
 def noise(seed: int, n: int = 2000, sigma: float = 0.1) -> np.ndarray:
@@ -135,12 +138,15 @@ def test_baseline_round_trip_and_refusals(tmp_path):
     np.testing.assert_array_equal(back.tail, b.tail)
     assert back.segments == ("a", "b") and back.overlay_sha256 == b.overlay_sha256
     np.testing.assert_array_equal(back.quantum_rad, b.quantum_rad)
+    np.testing.assert_array_equal(back.cond_scale, b.cond_scale)
+    np.testing.assert_array_equal(back.cond_tail, b.cond_tail)
+    assert back.slow_rad_s == b.slow_rad_s
     path.write_text(json.dumps({**b.to_json(), "channels": 3}))
     with pytest.raises(ParameterError, match="not a valid monitor baseline"):
         Baseline.load(path)
     # the earlier format (current channel only, keys "scale" / "tail" at the top) is refused, not misread
     path.write_text(json.dumps({**b.to_json(), "format": "ur5fault-monitor-baseline-2"}))
-    with pytest.raises(ParameterError, match="ur5fault-monitor-baseline-2.*expected 'ur5fault-monitor-baseline-5'"):
+    with pytest.raises(ParameterError, match="ur5fault-monitor-baseline-2.*expected 'ur5fault-monitor-baseline-6'"):
         Baseline.load(path)
     # the last format (no task runs) likewise: rebuilt, not read without its pairing
     path.write_text(json.dumps({**b.to_json(), "format": "ur5fault-monitor-baseline-3"}))
@@ -148,6 +154,12 @@ def test_baseline_round_trip_and_refusals(tmp_path):
     with pytest.raises(ParameterError, match=old) as e:
         Baseline.load(path)
     assert "not a valid monitor baseline" not in str(e.value)  # its own line, not wrapped in the generic one
+    # formats 4 and 5 (no statistics per motion condition) likewise
+    for old_format in ("ur5fault-monitor-baseline-4", "ur5fault-monitor-baseline-5"):
+        path.write_text(json.dumps({**b.to_json(), "format": old_format}))
+        with pytest.raises(ParameterError, match=f"{old_format}.*write") as e:
+            Baseline.load(path)
+        assert "not a valid monitor baseline" not in str(e.value)
     with pytest.raises(ParameterError, match="too few judged samples"):
         fit_baseline([part("short", noise(4, n=40))], "sha")  # 0.32 s
     with pytest.raises(ParameterError, match="sample period"):

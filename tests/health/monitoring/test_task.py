@@ -155,8 +155,8 @@ def test_without_repeats_the_judgement_is_the_motions_and_the_baseline_round_tri
     assert not paired.any()
     from ur5fault.health.monitoring.baseline import segment
 
-    h, feats, ok = segment(new)
-    np.testing.assert_array_equal(lims["current"], limits(b, new, feats, ok, ("current",))["current"])
+    h, feats, ok, cond = segment(new, b.slow_rad_s)
+    np.testing.assert_array_equal(lims["current"], limits(b, new, feats, ok, cond, ("current",))["current"])
     np.testing.assert_array_equal(hs["current"], h[0])
     # a baseline that pairs keeps its runs and statistics through baseline.json
     base = [run(f"b{k}", cycle(4, lead_s=0.3 * k), 20 + k) for k in range(2)]

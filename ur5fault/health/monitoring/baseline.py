@@ -28,6 +28,7 @@ from ...errors import ParameterError
 from ...sim.axes import JOINT_NAMES, N_JOINTS
 from . import paired
 from .changes import BLOCK_S, Estimate, block_estimates, spread
+from .conditions import CONDITIONS, CONSTANT_SPREAD, REVERSAL, SLOW, condition, constant, enough, rest_level
 from .events import (
     CHANNELS,
     FEATURES,
@@ -46,7 +47,7 @@ from .events import (
 from .observe import Observed
 from .task import paired_transient
 
-FORMAT = "ur5fault-monitor-baseline-5"
+FORMAT = "ur5fault-monitor-baseline-6"
 #: a baseline run's task statistics are fitted only on at least this much of it paired with the other runs or its
 #: own repeats [s] (40 windows of WINDOW_S: 4 above the tail's 90 % quantile); with less, no log is judged
 #: against that run
@@ -70,6 +71,10 @@ class Baseline:
     :mod:`.task`); ``task_scale`` ``(k, 6, 4)``, ``task_tail`` ``(k, 6, 3)``: per baseline run, the spread and
     tail of its current's transient against the other runs and its own repeats where they repeat its task (NaN:
     they do not, over :data:`MIN_TASK_S`; no log is then paired with that run): the spread of *that task*;
+    ``slow_rad_s``: the overlay's Stribeck speed, where the slow condition ends (:mod:`.conditions`);
+    ``cond_scale`` ``(2, 4, 6, 4)``, ``cond_tail`` ``(2, 4, 6, 3)``: per channel and motion condition
+    (:data:`~.conditions.CONDITIONS`) the spread and tail fitted on that condition's samples alone (NaN: under
+    :data:`~.conditions.MIN_CONDITION_S` of it on that joint; the samples are then judged by the widest limit);
     ``paired_candidates``: ``{label: (mean, variance, n_blocks)}`` of the coefficient fitted to the difference of
     a baseline run's residual and the other runs' and its own repeats' at the same point of the task, per block
     of paired samples (:mod:`.paired`; empty: the baseline runs do not repeat each other)."""
@@ -85,6 +90,9 @@ class Baseline:
     task_residual_A: tuple[NDArray, ...]
     task_scale: NDArray
     task_tail: NDArray
+    slow_rad_s: float
+    cond_scale: NDArray
+    cond_tail: NDArray
     paired_candidates: dict[str, tuple[float, float, int]] = dataclasses.field(default_factory=dict)
 
     @property
@@ -117,7 +125,13 @@ class Baseline:
                                "tail": None if i not in self.task_runs else
                                {JOINT_NAMES[j]: dict(zip(("u0", "beta", "p0"), map(float, self.task_tail[i, j])))
                                 for j in range(N_JOINTS)}}
-                              for i, (t, r) in enumerate(zip(self.task_target_rad, self.task_residual_A))]}
+                              for i, (t, r) in enumerate(zip(self.task_target_rad, self.task_residual_A))],
+                "slow_rad_s": self.slow_rad_s,
+                "conditions": {c: {k: {"scale": {JOINT_NAMES[j]: _stat(FEATURES, self.cond_scale[i, m, j])
+                                                 for j in range(N_JOINTS)},
+                                       "tail": {JOINT_NAMES[j]: _stat(("u0", "beta", "p0"), self.cond_tail[i, m, j])
+                                                for j in range(N_JOINTS)}}
+                                   for m, k in enumerate(CONDITIONS)} for i, c in enumerate(CHANNELS)}}
 
     @classmethod
     def from_json(cls, data: Any, where: str) -> Baseline:
@@ -146,6 +160,11 @@ class Baseline:
                                for r in task])
             runs = [(np.array(r["target_rad"], float).reshape(-1, N_JOINTS),
                      np.array(r["residual_A"], float).reshape(-1, N_JOINTS)) for r in task]
+            cnd = data["conditions"]
+            c_scale = np.array([[[_unstat(FEATURES, cnd[c][k]["scale"][j]) for j in JOINT_NAMES] for k in CONDITIONS]
+                                for c in CHANNELS])
+            c_tail = np.array([[[_unstat(("u0", "beta", "p0"), cnd[c][k]["tail"][j]) for j in JOINT_NAMES]
+                                for k in CONDITIONS] for c in CHANNELS])
             if any(t.shape != r.shape for t, r in runs) or len(runs) != len(data["segments"]):
                 raise ValueError("the task runs do not match the segments, or their targets and residuals differ "
                                  "in length")
@@ -153,6 +172,7 @@ class Baseline:
                        scale, tail, quantum, {str(k): (float(v["mean"]), float(v["variance"]), int(v["n_blocks"]))
                                      for k, v in data["candidates"].items()},
                        tuple(t for t, _ in runs), tuple(r for _, r in runs), t_scale, t_tail,
+                       float(data["slow_rad_s"]), c_scale, c_tail,
                        {str(k): (float(v["mean"]), float(v["variance"]), int(v["n_blocks"]))
                         for k, v in data["paired_candidates"].items()})
         except ParameterError:
@@ -172,27 +192,45 @@ class Baseline:
         return cls.from_json(data, str(path))
 
 
-def segment(obs: Observed) -> tuple[NDArray, NDArray, NDArray]:
-    """A log part's transients ``h`` ``(2, n, 6)`` (current [A], position [rad]: :data:`~.events.CHANNELS`),
-    spread features ``(n, 6, 4)`` and judged samples ``(n,)``."""
-    return (np.stack([transient(obs.residual_A, obs.period_s), transient(obs.position_residual_rad, obs.period_s)]),
-            features(obs.moving, obs.speed_rad_s, obs.accel_rad_s2, obs.period_s),
-            judged_rows(obs.logged, obs.period_s))
+def segment(obs: Observed, slow_rad_s: float) -> tuple[NDArray, NDArray, NDArray, NDArray]:
+    """A log part's transients ``h`` ``(2, n, 6)`` (current [A], position [rad]: :data:`~.events.CHANNELS`; at rest
+    against the rest stretch's own level, :mod:`.conditions`), spread features ``(n, 6, 4)``, judged samples
+    ``(n,)`` and motion condition ``(n, 6)`` (``slow_rad_s``: the overlay's Stribeck speed)."""
+    cond = condition(obs.moving, obs.speed_rad_s, obs.target_rad, obs.period_s, slow_rad_s)
+    h = [rest_level(r, cond, obs.period_s, transient(r, obs.period_s))
+         for r in (obs.residual_A, obs.position_residual_rad)]
+    feats = features(obs.moving, obs.speed_rad_s, obs.accel_rad_s2, obs.period_s)
+    # a slow or reversing joint moves, also where its target creeps under the rest speed: moving for the spread
+    # model on all motions too (which judges it where its condition has no statistics)
+    feats[..., 1] = np.maximum(feats[..., 1], (cond == SLOW) | (cond == REVERSAL))
+    return np.stack(h), feats, judged_rows(obs.logged, obs.period_s), cond
 
 
-def fit_events(segs: list[tuple[NDArray, NDArray, NDArray]], period_s: float, quantum_rad: NDArray
-               ) -> tuple[NDArray, NDArray]:
+def fit_events(segs: list[tuple[NDArray, NDArray, NDArray, NDArray]], period_s: float, quantum_rad: NDArray
+               ) -> tuple[NDArray, NDArray, NDArray, NDArray]:
     """Per channel, spread coefficients ``(6, 4)`` on all segments and the tail ``(6, 3)`` of the normalised
-    window maxima, stacked ``(2, 6, 4)``, ``(2, 6, 3)``. With two or more segments each segment is normalised by
-    the spread fitted on the others (leave one out), so the tail holds how far a healthy run the model was not
-    fitted on strays, not how well it fits its own."""
-    coefs, tails = [], []
+    window maxima, stacked ``(2, 6, 4)``, ``(2, 6, 3)``; and the same per motion condition on its samples alone,
+    ``(2, 4, 6, 4)``, ``(2, 4, 6, 3)``, NaN for a joint with under :data:`~.conditions.MIN_CONDITION_S` of the
+    condition (:mod:`.conditions`). With two or more segments each segment is normalised by the spread fitted on
+    the others (leave one out), so the tail holds how far a healthy run the model was not fitted on strays, not
+    how well it fits its own."""
+    have = enough(np.concatenate([c for *_, c in segs]), np.concatenate([ok for _, _, ok, _ in segs]), period_s)
+    coefs, tails, c_coefs, c_tails = [], [], [], []
     for i in range(len(CHANNELS)):
         floor = quantum_sigma(quantum_rad) if CHANNELS[i] == "position" else 0.0
-        coef, tail = fit_channel([(h[i], f, ok) for h, f, ok in segs], period_s, floor)
+        coef, tail = fit_channel([(h[i], f, ok) for h, f, ok, _ in segs], period_s, floor)
         coefs.append(coef)
         tails.append(tail)
-    return np.stack(coefs), np.stack(tails)
+        cc, ct = np.full((len(CONDITIONS), *coef.shape), np.nan), np.full((len(CONDITIONS), *tail.shape), np.nan)
+        for k in range(len(CONDITIONS)):
+            if have[k].any():
+                cc[k], ct[k] = fit_channel([(h[i], constant(f) if k in CONSTANT_SPREAD else f, ok[:, None] & (c == k))
+                                            for h, f, ok, c in segs], period_s, floor)
+                cc[k][~have[k]] = np.nan
+                ct[k][~have[k]] = np.nan
+        c_coefs.append(cc)
+        c_tails.append(ct)
+    return np.stack(coefs), np.stack(tails), np.stack(c_coefs), np.stack(c_tails)
 
 
 def fit_channel(one: list[tuple[NDArray, NDArray, NDArray]], period_s: float, floor: NDArray | float = 0.0
@@ -206,6 +244,15 @@ def fit_channel(one: list[tuple[NDArray, NDArray, NDArray]], period_s: float, fl
         c = fit_scale(one[:k] + one[k + 1 :]) if len(one) >= 2 else coef
         maxima.append(window_maxima(np.abs(h) / sigma(f, c, floor), ok, period_s))
     return coef, fit_tail(np.concatenate(maxima))
+
+
+def _stat(keys: Sequence[str], values: NDArray) -> dict | None:
+    """One joint's coefficients as ``{key: value}``, ``None`` where they are not fitted (NaN)."""
+    return None if not np.isfinite(values).all() else dict(zip(keys, map(float, values)))
+
+
+def _unstat(keys: Sequence[str], entry: dict | None) -> list[float]:
+    return [np.nan] * len(keys) if entry is None else [float(entry[k]) for k in keys]
 
 
 def _nulls(x: NDArray) -> list:
@@ -228,7 +275,7 @@ def fit_task(healthy: Sequence[Observed], segs: list[tuple[NDArray, NDArray, NDA
     refs = [(o.target_rad, task_residual(o)) for o in healthy]
     scale = np.full((len(healthy), N_JOINTS, len(FEATURES)), np.nan)
     tail = np.full((len(healthy), N_JOINTS, 3), np.nan)
-    for k, (o, (_, f, ok)) in enumerate(zip(healthy, segs)):
+    for k, (o, (_, f, ok, _)) in enumerate(zip(healthy, segs)):
         h, paired, _ = paired_transient(o.target_rad, o.residual_A, refs, period_s, self_index=k)
         if int((ok & paired).sum()) * period_s >= MIN_TASK_S:
             scale[k], tail[k] = fit_channel([(h, f, ok & paired)], period_s)
@@ -244,13 +291,17 @@ def fit_baseline(healthy: Sequence[Observed], overlay_sha: str) -> Baseline:
         if abs(o.period_s - period) > 1e-9:
             raise ParameterError(f"{o.name}: sample period {o.period_s:g} s differs from {healthy[0].name}'s "
                                  f"{period:g} s")
-    segs = [segment(o) for o in healthy]
-    if sum(int(ok.sum()) for _, _, ok in segs) * period < 2 * WINDOW_S:
+    slow = healthy[0].stribeck_speed_rad_s
+    if slow is None or any(o.stribeck_speed_rad_s != slow for o in healthy):
+        raise ParameterError("the baseline logs were not all replayed under one model (their friction laws' "
+                             "Stribeck speeds differ or are unknown)")
+    segs = [segment(o, slow) for o in healthy]
+    if sum(int(ok.sum()) for _, _, ok, _ in segs) * period < 2 * WINDOW_S:
         raise ParameterError("the baseline logs hold too few judged samples (under 0.5 s after each replay's first "
                              "0.25 s) to fit the event limits")
     quantum = np.stack([o.position_quantum_rad for o in healthy])
     quantum = np.where(np.isnan(quantum).all(axis=0), np.nan, np.nanmax(np.nan_to_num(quantum, nan=-np.inf), axis=0))
-    scale, tail = fit_events(segs, period, quantum)
+    scale, tail, c_scale, c_tail = fit_events(segs, period, quantum)
     cands = _spreads(block for o in healthy for block in block_estimates(o))
     t_scale, t_tail = fit_task(healthy, segs, period)
     refs = [(o.target_rad, task_residual(o)) for o in healthy]
@@ -258,7 +309,7 @@ def fit_baseline(healthy: Sequence[Observed], overlay_sha: str) -> Baseline:
                             for block in paired.block_estimates(o, ref))
     return Baseline(overlay_sha, period, tuple(o.name for o in healthy), scale, tail, quantum, cands,
                     tuple(o.target_rad for o in healthy), tuple(task_residual(o) for o in healthy), t_scale, t_tail,
-                    paired_cands)
+                    float(slow), c_scale, c_tail, paired_cands)
 
 
 def _spreads(blocks: Iterable[dict[str, Estimate]]) -> dict[str, tuple[float, float, int]]:

@@ -13,6 +13,9 @@ The transient's spread is modelled per joint as ``sigma^2 = c . [1, moving, |qd|
 acceleration of the joint, smoothed over :data:`SMOOTH_S`; ``moving`` its target moving or stopped less than
 :data:`SETTLE_S` ago), ``c >= 0`` fitted by least squares to ``h^2`` on the baseline runs.
 
+Per motion condition (the arm at rest, slow, reversing, moving: :mod:`.conditions`) the spread and tail are
+fitted on that condition's samples alone; at rest the level is the rest stretch's own.
+
 *Multiplier from the baseline's own extremes.* The normalised transient ``|h| / sigma`` is cut into independent
 windows of :data:`WINDOW_S`; the largest value of each baseline window is kept, and the upper tail of those
 window maxima (above their :data:`TAIL_QUANTILE` quantile) is fitted by an exponential (peaks over threshold;
@@ -131,14 +134,23 @@ def _nnls(F: NDArray, y: NDArray) -> NDArray:
     return nnls(r, q.T @ y)[0] / scale
 
 
+def _rows(ok: NDArray, j: int) -> NDArray:
+    """A segment's judged rows of joint ``j``: ``ok`` ``(n,)`` for every joint or ``(n, 6)`` per joint."""
+    return ok[:, j] if ok.ndim == 2 else ok
+
+
 def fit_scale(segments: Sequence[tuple[NDArray, NDArray, NDArray]]) -> NDArray:
-    """Spread coefficients ``(6, 4)`` from baseline segments ``(h (n, 6), features (n, 6, 4), judged (n,))``:
+    """Spread coefficients ``(6, 4)`` from baseline segments ``(h (n, 6), features (n, 6, 4), judged (n,) or
+    (n, 6) per joint)``:
     ``h^2`` on the features, least squares with ``c >= 0``, then twice reweighted by the fitted variance squared
     (a squared residual's scatter grows with its variance: the efficient fit of a variance model)."""
     coef = np.zeros((N_JOINTS, segments[0][1].shape[2]))
     for j in range(N_JOINTS):
-        F = np.concatenate([f[ok, j] for _, f, ok in segments])
-        y = np.concatenate([h[ok, j] ** 2 for h, _, ok in segments])
+        F = np.concatenate([f[_rows(ok, j), j] for _, f, ok in segments])
+        y = np.concatenate([h[_rows(ok, j), j] ** 2 for h, _, ok in segments])
+        if not y.size:  # no judged sample of this joint: no statistics
+            coef[j] = np.nan
+            continue
         c = _nnls(F, y)
         for _ in range(2):
             pred = F @ c
@@ -169,20 +181,26 @@ def quantum_sigma(quantum_rad: NDArray) -> NDArray:
 
 
 def window_maxima(z: NDArray, judged: NDArray, period_s: float) -> NDArray:
-    """``(w, 6)``: the largest ``z`` of each joint in consecutive :data:`WINDOW_S` windows of judged samples."""
+    """``(w, 6)``: the largest ``z`` of each joint in consecutive :data:`WINDOW_S` windows of judged samples
+    (``judged`` ``(n,)``, or ``(n, 6)`` per joint: ``-inf`` where a joint has none in a window; windows without
+    any judged sample are left out)."""
     step = max(1, int(round(WINDOW_S / period_s)))
-    zz = np.where(judged[:, None], z, -np.inf)
+    zz = np.where(judged if judged.ndim == 2 else judged[:, None], z, -np.inf)
     out = [zz[a : a + step].max(axis=0) for a in range(0, zz.shape[0], step)]
     out = np.array(out) if out else np.zeros((0, z.shape[1]))
-    return out[np.isfinite(out).all(axis=1)]
+    return out[np.isfinite(out).any(axis=1)]
 
 
 def fit_tail(maxima: NDArray) -> NDArray:
     """``(6, 3)`` per joint ``(u0, beta, p0)``: the window maxima exceed ``u0 + x`` with probability
-    ``p0 exp(-x / beta)`` (exponential tail above the :data:`TAIL_QUANTILE` quantile, beta its mean excess)."""
+    ``p0 exp(-x / beta)`` (exponential tail above the :data:`TAIL_QUANTILE` quantile, beta its mean excess;
+    ``-inf``: no judged sample of the joint in that window; NaN for a joint without any)."""
     out = np.zeros((maxima.shape[1], 3))
     for j in range(maxima.shape[1]):
-        m = maxima[:, j]
+        m = maxima[:, j][np.isfinite(maxima[:, j])]
+        if not m.size:
+            out[j] = np.nan
+            continue
         u0 = float(np.quantile(m, TAIL_QUANTILE))
         exc = m[m > u0] - u0
         out[j] = (u0, float(exc.mean()) if exc.size else 0.0, exc.size / m.size if m.size else 1.0)

@@ -27,6 +27,7 @@ from ...logs import MeasuredLog
 from ...sim.effects import EffectSpec
 from ...twin.replay import LogReplay
 from ...twin.residuals import CONDITION_REST_SPEED_RAD_S
+from .conditions import stribeck_speed
 
 #: the library effects a monitor tests for a persistent change: wear of the drive train (Coulomb and viscous
 #: friction, gear clearance and stiffness) and drift of the motor and its current sensor (torque constant,
@@ -71,6 +72,9 @@ class Observed:
         current_sigma_A: the current residual's weight per joint ``(6,)`` [A] (the replay's sensor sigma, ``e``'s
             divisor on the current channels): the paired change test (:mod:`.paired`) weighs its difference
             with it. ``None`` only on a part replayed before it was kept (fill it with ``dataclasses.replace``).
+        stribeck_speed_rad_s: the replay model's friction Stribeck speed [rad/s], where the events' slow condition
+            ends (:func:`.conditions.stribeck_speed`; ``None``: not known, e.g. a part replayed before it was kept,
+            refused as a baseline).
     """
 
     name: str
@@ -88,6 +92,7 @@ class Observed:
     position_quantum_rad: NDArray
     target_rad: NDArray
     current_sigma_A: NDArray | None = None
+    stribeck_speed_rad_s: float | None = None
 
     @property
     def n(self) -> int:
@@ -136,7 +141,7 @@ def observe(log: MeasuredLog, params_overrides: dict | None = None, effects: Seq
                     tuple(kept), X[:, lo : lo + m] if kept else np.zeros((0, *e.shape)), e, qd, qdd,
                     (meas[:, 1] - base.q_rad[:hi])[lo:hi],
                     quanta(log.q_actual_rad), log.q_target_rad[1 : n_all + 1][lo:hi].copy(),
-                    rp.sigma[0].copy())
+                    rp.sigma[0].copy(), stribeck_speed(rp.params))
 
 
 def quanta(q_rad: NDArray) -> NDArray:

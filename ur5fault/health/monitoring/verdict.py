@@ -12,6 +12,7 @@ from ...errors import ParameterError
 from . import paired
 from .baseline import Baseline, segment
 from .changes import BLOCK_S, estimates, find_changes, keep_mask, strongest
+from .conditions import motion_limit
 from .events import (
     CHANNELS,
     DEFAULT_CHANNELS,
@@ -29,21 +30,21 @@ from .task import paired_transient, reference
 VERDICTS = ("consistent", "changed", "anomaly")
 
 
-def limits(baseline: Baseline, obs: Observed, feats: NDArray, judged: NDArray,
+def limits(baseline: Baseline, obs: Observed, feats: NDArray, judged: NDArray, cond: NDArray,
            channels: Sequence[str] = CHANNELS) -> dict[str, NDArray]:
     """The event limit ``(n, 6)`` of a log part per judged channel ([A], [rad]): the baseline's spread at its
     motion times the multiplier for its length at the channel's share of :data:`~.events.FALSE_ALARM_PER_LOG`
     (split evenly: the probability that either channel raises a false alarm is at most the sum, whatever their
     dependence); the position spread never below the rounding error of the baseline's or the log's own readings'
-    quantum, the limit never below :data:`~.events.QUANTUM_FLOOR` quanta (:mod:`.events`)."""
-    nw = n_windows(judged, baseline.period_s)
+    quantum, the limit never below :data:`~.events.QUANTUM_FLOOR` quanta (:mod:`.events`). The spread and tail
+    are those of each sample's motion condition ``cond`` ``(n, 6)`` (:mod:`.conditions`)."""
     out = {}
     for c in channels:
         i = CHANNELS.index(c)
         q = np.fmax(baseline.quantum_rad, obs.position_quantum_rad)
         floor = quantum_sigma(q) if c == "position" else 0.0
-        mult = multiplier(baseline.tail[i], nw, FALSE_ALARM_PER_LOG / len(channels))
-        lim = sigma(feats, baseline.scale[i], floor) * mult
+        lim = motion_limit(feats, cond, judged, baseline.scale[i], baseline.tail[i], baseline.cond_scale[i],
+                           baseline.cond_tail[i], baseline.period_s, FALSE_ALARM_PER_LOG / len(channels), floor)
         if c == "position":
             lim = np.maximum(lim, QUANTUM_FLOOR * np.nan_to_num(q, nan=0.0))
         out[c] = lim
@@ -62,9 +63,9 @@ def judged_transients(baseline: Baseline, obs: Observed, channels: Sequence[str]
     paired; elsewhere both are the motion's (:func:`limits`). Every window is judged
     once, by one of the two, each at the share of the false-alarm probability for the log's whole length: the
     probability of a false alarm anywhere stays at most that share."""
-    h, feats, judged = segment(obs)
+    h, feats, judged, cond = segment(obs, baseline.slow_rad_s)
     hs = dict(zip(CHANNELS, h))
-    lims = limits(baseline, obs, feats, judged, channels)
+    lims = limits(baseline, obs, feats, judged, cond, channels)
     paired = np.zeros(judged.shape, bool)
     if baseline.pairs and "current" in channels:
         runs = baseline.task_runs
