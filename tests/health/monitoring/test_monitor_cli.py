@@ -56,6 +56,10 @@ def test_monitor_json_schema(monitored):
             assert set(ev) == {"t_start_s", "t_end_s", "joints", "channels", "peak_A", "peak_rad"}
             assert ev["t_start_s"] <= ev["t_end_s"] and ev["peak_A"] > 0 and ev["joints"]
             assert ev["channels"] == ["current"]  # the default: events on the current alone
+        for ch in e["changes"]:
+            assert set(ch) == {"joint", "effect", "parameter", "value", "interval", "baseline_value", "distance",
+                               "alternatives", "reference"}
+            assert ch["reference"] in ("paired", "blocks")
     for f in ("report.md", "baseline.json", "monitor_1.png", "monitor_2.png"):
         assert (out / f).is_file()
 

@@ -10,7 +10,9 @@ replayed under the same overlay (:mod:`.observe`, through :class:`ur5fault.twin.
   ``{"t_start_s", "t_end_s", "joints", "channels", "peak_A", "peak_rad"}`` each;
 * *changes* (:mod:`.changes`): a library effect of the discrepancy workflow whose estimate on the new log
   (outside its events) lies outside the spread of its estimates over time blocks of the baseline runs (their
-  drift within a run included): a persistent change, named with size and interval.
+  drift within a run included): a persistent change, named with size and interval; where the log repeats a
+  baseline run's task, fitted to the difference of residuals at the same point of the task and judged against the
+  same estimate between healthy baseline runs (:mod:`.paired`).
 
 Verdict per log (:mod:`.verdict`): ``"changed"`` when a change is found, else ``"anomaly"`` when an event is,
 else ``"consistent"``. See docs/monitoring.md.

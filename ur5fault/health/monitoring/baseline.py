@@ -6,7 +6,8 @@ the tail of its normalised window maxima (:mod:`.events`), per joint the quantum
 per library candidate the mean and spread of its estimates over time blocks of the
 runs (:mod:`.changes`), and for a robot that repeats its task (:mod:`.task`) every baseline run's targets and
 current residual (the reference a log that repeats them is judged against) with the spread and tail of the
-current's transient against that reference, measured where the baseline runs repeat each other. It is written
+current's transient against that reference, measured where the baseline runs repeat each other, and per library
+candidate the mean and spread of its estimates on the difference of residuals there (:mod:`.paired`). It is written
 as ``baseline.json`` (:meth:`Baseline.to_json`) with the SHA-256 of the overlay it belongs to, so a later
 ``ur5fault monitor --baseline-stats`` reuses it only with that same overlay.
 """
@@ -16,7 +17,7 @@ from __future__ import annotations
 import dataclasses
 import hashlib
 import json
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -25,7 +26,8 @@ from numpy.typing import NDArray
 
 from ...errors import ParameterError
 from ...sim.axes import JOINT_NAMES, N_JOINTS
-from .changes import BLOCK_S, block_estimates, spread
+from . import paired
+from .changes import BLOCK_S, Estimate, block_estimates, spread
 from .events import (
     CHANNELS,
     FEATURES,
@@ -44,7 +46,7 @@ from .events import (
 from .observe import Observed
 from .task import paired_transient
 
-FORMAT = "ur5fault-monitor-baseline-4"
+FORMAT = "ur5fault-monitor-baseline-5"
 #: a baseline run's task statistics are fitted only on at least this much of it paired with the other runs or its
 #: own repeats [s] (40 windows of WINDOW_S: 4 above the tail's 90 % quantile); with less, no log is judged
 #: against that run
@@ -67,7 +69,10 @@ class Baseline:
     baseline run's joint targets and current residual ``(m, 6)`` (NaN where the tick was not logged;
     :mod:`.task`); ``task_scale`` ``(k, 6, 4)``, ``task_tail`` ``(k, 6, 3)``: per baseline run, the spread and
     tail of its current's transient against the other runs and its own repeats where they repeat its task (NaN:
-    they do not, over :data:`MIN_TASK_S`; no log is then paired with that run): the spread of *that task*."""
+    they do not, over :data:`MIN_TASK_S`; no log is then paired with that run): the spread of *that task*;
+    ``paired_candidates``: ``{label: (mean, variance, n_blocks)}`` of the coefficient fitted to the difference of
+    a baseline run's residual and the other runs' and its own repeats' at the same point of the task, per block
+    of paired samples (:mod:`.paired`; empty: the baseline runs do not repeat each other)."""
 
     overlay_sha256: str
     period_s: float
@@ -80,6 +85,7 @@ class Baseline:
     task_residual_A: tuple[NDArray, ...]
     task_scale: NDArray
     task_tail: NDArray
+    paired_candidates: dict[str, tuple[float, float, int]] = dataclasses.field(default_factory=dict)
 
     @property
     def task_runs(self) -> list[int]:
@@ -102,6 +108,8 @@ class Baseline:
                                          for j, q in enumerate(self.quantum_rad)},
                 "candidates": {k: {"mean": m, "variance": v, "n_blocks": n}
                                for k, (m, v, n) in self.candidates.items()},
+                "paired_candidates": {k: {"mean": m, "variance": v, "n_blocks": n}
+                                      for k, (m, v, n) in self.paired_candidates.items()},
                 "task_runs": [{"target_rad": t.tolist(), "residual_A": _nulls(r),
                                "scale": None if i not in self.task_runs else
                                {JOINT_NAMES[j]: dict(zip(FEATURES, map(float, self.task_scale[i, j])))
@@ -144,7 +152,9 @@ class Baseline:
             return cls(str(data["overlay_sha256"]), float(data["period_s"]), tuple(map(str, data["segments"])),
                        scale, tail, quantum, {str(k): (float(v["mean"]), float(v["variance"]), int(v["n_blocks"]))
                                      for k, v in data["candidates"].items()},
-                       tuple(t for t, _ in runs), tuple(r for _, r in runs), t_scale, t_tail)
+                       tuple(t for t, _ in runs), tuple(r for _, r in runs), t_scale, t_tail,
+                       {str(k): (float(v["mean"]), float(v["variance"]), int(v["n_blocks"]))
+                        for k, v in data["paired_candidates"].items()})
         except ParameterError:
             raise  # already one line saying what to do (ParameterError is a ValueError)
         except (KeyError, TypeError, ValueError, AttributeError) as exc:
@@ -241,14 +251,22 @@ def fit_baseline(healthy: Sequence[Observed], overlay_sha: str) -> Baseline:
     quantum = np.stack([o.position_quantum_rad for o in healthy])
     quantum = np.where(np.isnan(quantum).all(axis=0), np.nan, np.nanmax(np.nan_to_num(quantum, nan=-np.inf), axis=0))
     scale, tail = fit_events(segs, period, quantum)
-    per: dict[str, tuple[list[float], list[float]]] = {}
-    for o in healthy:
-        for block in block_estimates(o):
-            for label, est in block.items():
-                if np.isfinite(est.se):
-                    per.setdefault(label, ([], []))[0].append(est.theta)
-                    per[label][1].append(est.se)
-    cands = {k: spread(th, se) for k, (th, se) in per.items()}
+    cands = _spreads(block for o in healthy for block in block_estimates(o))
     t_scale, t_tail = fit_task(healthy, segs, period)
+    refs = [(o.target_rad, task_residual(o)) for o in healthy]
+    paired_cands = _spreads(block for o, ref in zip(healthy, paired.baseline_references(healthy, refs))
+                            for block in paired.block_estimates(o, ref))
     return Baseline(overlay_sha, period, tuple(o.name for o in healthy), scale, tail, quantum, cands,
-                    tuple(o.target_rad for o in healthy), tuple(task_residual(o) for o in healthy), t_scale, t_tail)
+                    tuple(o.target_rad for o in healthy), tuple(task_residual(o) for o in healthy), t_scale, t_tail,
+                    paired_cands)
+
+
+def _spreads(blocks: Iterable[dict[str, Estimate]]) -> dict[str, tuple[float, float, int]]:
+    """``{label: (mean, variance, n)}`` of each candidate's block estimates (:func:`.changes.spread`)."""
+    per: dict[str, tuple[list[float], list[float]]] = {}
+    for block in blocks:
+        for label, est in block.items():
+            if np.isfinite(est.se):
+                per.setdefault(label, ([], []))[0].append(est.theta)
+                per[label][1].append(est.se)
+    return {k: spread(th, se) for k, (th, se) in per.items()}

@@ -26,10 +26,12 @@ current-sensor gain and a torque constant read alike in the current).
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Sequence
 
 import numpy as np
 from numpy.typing import NDArray
 
+from ...discrepancy.candidates import LibraryCandidate
 from ...discrepancy.search import columns_of, judge
 from ...discrepancy.statistics import MIN_Z, Z_95, BlockGram
 from ...sim.axes import JOINT_NAMES
@@ -65,19 +67,25 @@ def keep_mask(obs: Observed, over: NDArray) -> NDArray:
     return ~bad & obs.logged[:m]
 
 
-def estimates(obs: Observed, keep: NDArray) -> dict[str, Estimate]:
-    """Each candidate of ``obs`` fitted alone on the samples ``keep`` ``(m,)``."""
-    if not obs.cands:
+def fit_alone(cands: Sequence[LibraryCandidate], X: NDArray, e: NDArray, keep: NDArray) -> dict[str, Estimate]:
+    """Each of ``cands`` (columns ``X`` ``(p, m, n_channels)``) fitted alone to ``e`` ``(m, n_channels)`` on the
+    samples ``keep`` ``(m,)``, judged by the discrepancy workflow's test."""
+    if not cands:
         return {}
-    e = np.where(keep[:, None], obs.e, 0.0)
-    X = np.where(keep[None, :, None], obs.X, 0.0)
+    e = np.where(keep[:, None], e, 0.0)
+    X = np.where(keep[None, :, None], X, 0.0)
     bg = BlockGram.build(X, e)
-    cols = columns_of(obs.cands)
+    cols = columns_of(cands)
     out = {}
-    for k, c in enumerate(obs.cands):
-        v = judge(bg, e, X, obs.cands, cols, [], k)
+    for k, c in enumerate(cands):
+        v = judge(bg, e, X, cands, cols, [], k)
         out[c.label] = Estimate(c.label, v.theta[0], v.se[0], v.accepted, v.reason)
     return out
+
+
+def estimates(obs: Observed, keep: NDArray) -> dict[str, Estimate]:
+    """Each candidate of ``obs`` fitted alone on the samples ``keep`` ``(m,)``."""
+    return fit_alone(obs.cands, obs.X, obs.e, keep)
 
 
 def block_estimates(obs: Observed) -> list[dict[str, Estimate]]:
@@ -121,9 +129,11 @@ def _distance(e: Estimate, base: tuple[float, float, int]) -> float:
 
 
 def find_changes(obs: Observed, est: dict[str, Estimate], outside: dict[str, Estimate],
-                 base: dict[str, tuple[float, float, int]]) -> list[dict]:
+                 base: dict[str, tuple[float, float, int]], reference: str = "blocks") -> list[dict]:
     """Changes of ``obs`` against the baseline's ``{label: (mean, variance, n)}``, one per joint (module docstring):
-    ``est`` on every logged sample, ``outside`` on those outside the events."""
+    ``est`` on every logged sample, ``outside`` on those outside the events. ``reference``: what ``base`` holds,
+    written into each change (``"blocks"``: the baseline runs' block estimates; ``"paired"``: the paired
+    difference-estimates of :mod:`.paired`)."""
     flagged = []
     for c in obs.cands:
         e, o = est[c.label], outside[c.label]
@@ -147,13 +157,25 @@ def find_changes(obs: Observed, est: dict[str, Estimate], outside: dict[str, Est
                 for _, a, ea, am in mine[1:]]
         out.append({"joint": JOINT_NAMES[j] if j is not None else None, "effect": c.effect, "parameter": c.param,
                     "value": c.value(e.theta), "interval": [lo, hi], "baseline_value": c.value(mean),
-                    "distance": z, "alternatives": alts})
+                    "distance": z, "alternatives": alts, "reference": reference})
     return out
+
+
+def strongest(*lists: list[dict]) -> list[dict]:
+    """Per joint the change furthest beyond its bar among ``lists`` (e.g. the paired and the unpaired test's)."""
+    best: dict = {}
+    for ch in (c for lst in lists for c in lst):
+        if ch["joint"] not in best or ch["distance"] > best[ch["joint"]]["distance"]:
+            best[ch["joint"]] = ch
+    order = {None: -1, **{j: i for i, j in enumerate(JOINT_NAMES)}}
+    return sorted(best.values(), key=lambda c: order[c["joint"]])
 
 
 def sentence(ch: dict) -> str:
     """One line per change, as the discrepancy workflow names a finding."""
     lo, hi = ch["interval"]
     alt = "".join(f"; or {a['effect']}.{a['parameter']} = {a['value']:.4g}" for a in ch["alternatives"])
+    how = (" (on the difference from the baseline runs repeating its task)" if ch.get("reference") == "paired"
+           else "")
     return (f"{ch['joint']}: {ch['effect']}.{ch['parameter']} = {ch['value']:.4g} ({lo:.4g}..{hi:.4g}), "
-            f"baseline {ch['baseline_value']:.4g}, {ch['distance']:.1f}x the bar away{alt}")
+            f"baseline {ch['baseline_value']:.4g}, {ch['distance']:.1f}x the bar away{how}{alt}")

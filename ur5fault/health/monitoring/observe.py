@@ -59,6 +59,9 @@ class Observed:
             (:func:`ur5fault.identify.sensors.position_quantum`, per joint; NaN where the joint never moves).
         target_rad: the commanded joint positions ``(n, 6)`` [rad] (the task: :mod:`.task` pairs a log with a
             baseline run that repeats it).
+        current_sigma_A: the current residual's weight per joint ``(6,)`` [A] (the replay's sensor sigma, ``e``'s
+            divisor on the current channels): the paired change test (:mod:`.paired`) weighs its difference
+            with it. ``None`` only on a part replayed before it was kept (fill it with ``dataclasses.replace``).
     """
 
     name: str
@@ -75,6 +78,7 @@ class Observed:
     position_residual_rad: NDArray
     position_quantum_rad: NDArray
     target_rad: NDArray
+    current_sigma_A: NDArray | None = None
 
     @property
     def n(self) -> int:
@@ -118,7 +122,8 @@ def observe(log: MeasuredLog, params_overrides: dict | None = None, effects: Seq
                     qd > CONDITION_REST_SPEED_RAD_S, log.logged_rows()[1 : n_all + 1][lo:hi],
                     tuple(kept), X[:, lo : lo + m] if kept else np.zeros((0, *e.shape)), e, qd, qdd,
                     (meas[:, 1] - base.q_rad[:hi])[lo:hi],
-                    quanta(log.q_actual_rad), log.q_target_rad[1 : n_all + 1][lo:hi].copy())
+                    quanta(log.q_actual_rad), log.q_target_rad[1 : n_all + 1][lo:hi].copy(),
+                    rp.sigma[0].copy())
 
 
 def quanta(q_rad: NDArray) -> NDArray:

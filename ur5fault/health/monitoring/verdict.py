@@ -9,8 +9,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ...errors import ParameterError
+from . import paired
 from .baseline import Baseline, segment
-from .changes import estimates, find_changes, keep_mask
+from .changes import BLOCK_S, estimates, find_changes, keep_mask, strongest
 from .events import (
     CHANNELS,
     DEFAULT_CHANNELS,
@@ -23,7 +24,7 @@ from .events import (
     sigma,
 )
 from .observe import Observed
-from .task import paired_transient
+from .task import paired_transient, reference
 
 VERDICTS = ("consistent", "changed", "anomaly")
 
@@ -80,6 +81,35 @@ def judged_transients(baseline: Baseline, obs: Observed, channels: Sequence[str]
     return hs, lims, judged, paired
 
 
+def judge_changes(baseline: Baseline, obs: Observed, over: NDArray) -> list[dict]:
+    """The changes of a log part (``over`` ``(n, 6)``: its event exceedances). Where its screened part repeats a
+    baseline run's task over at least :data:`~.paired.MIN_PAIRED_S` and the baseline holds paired statistics, the
+    paired samples are judged by the paired test (:mod:`.paired`) and the rest, if it holds at least
+    :data:`~.changes.BLOCK_S` (the length of the blocks it is compared with), by the baseline's block estimates
+    (:mod:`.changes`); elsewhere the whole part by the latter. Per joint the change furthest beyond its bar."""
+    m = obs.e.shape[0]
+    logged, keep = obs.logged[:m], keep_mask(obs, over)
+    ref = None
+    if baseline.paired_candidates:
+        refs = list(zip(baseline.task_target_rad, baseline.task_residual_A))
+        ref = reference(obs.target_rad, refs, obs.period_s)[0]
+        if paired.paired_seconds(obs, ref) < paired.MIN_PAIRED_S:
+            ref = None
+    if ref is None:
+        every = estimates(obs, logged)
+        return find_changes(obs, every, estimates(obs, keep) if over.any() else every, baseline.candidates)
+    on = paired.difference(obs, ref)[1]
+    every = paired.estimates(obs, ref, logged)
+    found = find_changes(obs, every, paired.estimates(obs, ref, keep) if over.any() else every,
+                         baseline.paired_candidates, "paired")
+    rest = logged & ~on
+    if rest.sum() * obs.period_s >= BLOCK_S:  # shorter, its estimate holds more of the model's error than a block
+        every = estimates(obs, rest)
+        found = strongest(found, find_changes(obs, every, estimates(obs, keep & ~on) if over.any() else every,
+                                              baseline.candidates))
+    return found
+
+
 def assess(baseline: Baseline, obs: Observed, channels: Sequence[str] = DEFAULT_CHANNELS) -> dict[str, Any]:
     """``{"log", "verdict", "changes", "events"}`` for one log part (``monitor.json``'s entry): ``"changed"`` when
     a persistent change is found (even if events are too: a change needs maintenance, an event may not), else
@@ -93,8 +123,6 @@ def assess(baseline: Baseline, obs: Observed, channels: Sequence[str] = DEFAULT_
         raise ParameterError(f"event channels {list(channels)}: choose from {list(CHANNELS)}")
     hs, lims, judged, _ = judged_transients(baseline, obs, channels)
     events, over = find_events(obs.t_s, hs, lims, judged)
-    every = estimates(obs, obs.logged[: obs.e.shape[0]])
-    outside = estimates(obs, keep_mask(obs, over)) if over.any() else every
-    changes = find_changes(obs, every, outside, baseline.candidates)
+    changes = judge_changes(baseline, obs, over)
     verdict = "changed" if changes else "anomaly" if events else "consistent"
     return {"log": obs.name, "verdict": verdict, "changes": changes, "events": events}

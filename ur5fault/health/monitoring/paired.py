@@ -1,0 +1,108 @@
+"""The change test on a repeated task: a candidate estimated on the difference of residuals at the same point of
+the task.
+
+Where a monitored log repeats a baseline run's commanded motion (:mod:`.task`'s pairing, unchanged), the twin's
+error repeats too, so the *difference* of the log's current residual and the paired baseline runs' residual at
+the same point of the task holds what changed since, and not the model's motion-dependent error that dominates
+a candidate fitted on the residual alone (:mod:`.changes`; docs/monitoring.md, "What the change test can
+separate"). Physically: a current-sensor gain or torque-constant change is a residual proportional to the
+current, an offset a constant, a friction change one proportional to the friction (sign of the speed, or the
+speed); on a repeated task those shapes remain in the difference.
+
+Each monitor candidate (:data:`.observe.MONITOR_KINDS`) is fitted alone to the difference on the paired,
+logged samples of the screened part, with its sensitivity column taken on the log's own replay
+(``Observed.X``, the current channels; the reference holds current residuals only), and judged by the
+discrepancy workflow's test (:func:`ur5fault.discrepancy.search.judge`) as :mod:`.changes` does. Its reference
+distribution is the same difference-estimate between healthy baseline runs paired with each other and with
+their own repeats (never a run with its own samples, :func:`ur5fault.health.monitoring.task.reference`'s
+``self_index``), made per :data:`PAIRED_BLOCK_S` of paired samples (:func:`block_estimates`): their mean,
+variance and number feed the same prediction interval and Student's bar (:func:`.changes.bar`) as the unpaired
+test's. The estimate reads as the change *since the paired healthy runs* (a gain of 1.1: the current reads 10 %
+more than on the same motion of the baseline).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ...sim.axes import N_JOINTS
+from .changes import BLOCK_S, Estimate, fit_alone
+from .observe import Observed
+from .task import CHUNK_S, reference
+
+#: the paired samples a baseline's paired estimate is made on [s]: the stretch the pairing vouches for
+#: (:data:`~.task.CHUNK_S`). The unpaired test's :data:`~.changes.BLOCK_S` must hold several motions of each
+#: joint because a block's estimate absorbs the model's motion-dependent error there; the paired difference holds
+#: none of it to average out (only the sensors' noise and the task's repeatability), so a block needs only to be
+#: one repeat of a stretch of the task
+PAIRED_BLOCK_S = CHUNK_S
+#: a log part is judged by the paired test only with at least this much of its screened part paired [s]: the
+#: length of the unpaired test's blocks (:data:`~.changes.BLOCK_S`), several motions of each joint, so that the
+#: log's own estimate holds them as its reference's do
+MIN_PAIRED_S = BLOCK_S
+
+
+def difference(obs: Observed, ref: NDArray) -> tuple[NDArray, NDArray]:
+    """The weighted difference ``(m, n_channels)`` of the log's current residual and its paired reference ``ref``
+    ``(n, 6)`` [A] on the screened part (the other channels 0), and the samples it holds ``(m,)`` (paired on
+    every joint and logged)."""
+    m = obs.e.shape[0]
+    ok = np.isfinite(ref[:m]).all(axis=1) & obs.logged[:m]
+    e = np.zeros_like(obs.e)
+    if not ok.any():
+        return e, ok
+    if obs.current_sigma_A is None:
+        raise ValueError(f"{obs.name}: replayed without the current residual's weights (current_sigma_A)")
+    d = (obs.residual_A[:m] - np.where(ok[:, None], ref[:m], 0.0)) / obs.current_sigma_A
+    e[:, :N_JOINTS] = np.where(ok[:, None], d, 0.0)
+    return e, ok
+
+
+def current_columns(obs: Observed) -> NDArray:
+    """The candidates' weighted columns ``(p, m, n_channels)`` on the current channels alone (the others 0)."""
+    X = np.zeros_like(obs.X)
+    X[:, :, :N_JOINTS] = obs.X[:, :, :N_JOINTS]
+    return X
+
+
+def estimates(obs: Observed, ref: NDArray, keep: NDArray) -> dict[str, Estimate]:
+    """Each candidate of ``obs`` fitted alone to the paired difference on the paired samples among ``keep``
+    ``(m,)``."""
+    if not obs.cands:
+        return {}
+    e, ok = difference(obs, ref)
+    return fit_alone(obs.cands, current_columns(obs), e, keep & ok)
+
+
+def paired_seconds(obs: Observed, ref: NDArray) -> float:
+    """The screened part's paired, logged seconds."""
+    return float(difference(obs, ref)[1].sum() * obs.period_s)
+
+
+def block_estimates(obs: Observed, ref: NDArray) -> list[dict[str, Estimate]]:
+    """Each candidate fitted alone to the paired difference on consecutive groups of :data:`PAIRED_BLOCK_S`
+    of the screened part's paired samples (stretches joined in time order; the groups as even as the count
+    allows); none when under half a block is paired."""
+    if not obs.cands:
+        return []
+    e, ok = difference(obs, ref)
+    idx = np.flatnonzero(ok)
+    n = int(round(idx.size * obs.period_s / PAIRED_BLOCK_S))
+    if n < 1:
+        return []
+    X = current_columns(obs)
+    out = []
+    for part in np.array_split(idx, n):
+        keep = np.zeros(ok.shape, bool)
+        keep[part] = True
+        out.append(fit_alone(obs.cands, X, e, keep))
+    return out
+
+
+def baseline_references(healthy: Sequence[Observed], refs: Sequence[tuple[NDArray, NDArray]]) -> list[NDArray]:
+    """Per baseline run, its paired reference ``(n, 6)`` from the other runs and its own repeats (never its own
+    samples)."""
+    return [reference(o.target_rad, refs, o.period_s, self_index=k)[0] for k, o in enumerate(healthy)]
