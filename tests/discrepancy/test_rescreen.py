@@ -93,3 +93,86 @@ def test_the_held_out_part_tells_a_rival_apart_only_beyond_the_naming_bar():
     assert not indistinguishable_held_out(e, e + above)
     # a rival that fits the held-out part better is never the worse one
     assert indistinguishable_held_out(e + above, e)
+
+
+class _LinearReplay:
+    """A replay whose readings are linear in the effects' coefficients (one shape per candidate, on its joint's
+    current channel), over a real log's samples (for its operating conditions); records every batch asked for."""
+
+    signals = ("current_A", "position_rad")
+
+    def __init__(self, log, cands, shapes, meas):
+        self.log, self.cands, self.shapes, self._meas = log, cands, shapes, meas
+        self.n_samples = meas.shape[0]
+        self.sigma = np.ones((2, 6))
+        self.asked: list[list[tuple]] = []
+
+    def measured(self, n=None):
+        return self._meas[: n or self.n_samples]
+
+    def y(self, effects) -> np.ndarray:
+        y = np.zeros((self.n_samples, 2, 6))
+        for e in effects:
+            (param, value), = e.values
+            k = next(k for k, c in enumerate(self.cands) if (c.effect, c.joint, c.param) == (e.name, e.joint_index,
+                                                                                              param))
+            y[:, 0, self.cands[k].joint] += self.cands[k].coef(value) * self.shapes[k]
+        return y
+
+    def run(self, effect_sets, n=None, progress=None):
+        from ur5fault.twin.replay import Replayed
+
+        self.asked.append([tuple(e) for e in effect_sets])
+        z = np.zeros((self.n_samples, 6))
+        return [Replayed("ok", self.y(e), z, z, z, z) for e in effect_sets]
+
+
+def test_rivals_of_a_re_screened_effect_are_simulated_only_when_it_is_kept(nist_path):
+    """Two freed joints, each with two library effects of one shape (a Coulomb scale and a current gain on joint 0, an
+    offset and a gain on joint 1).  Joint 0's residual holds the shape everywhere: its effect is kept and the other
+    listed as its rival at the same size.  Joint 1's holds it on the fitting part and the opposite on the held-out
+    part: its effect is dropped there, and its rival is never simulated (three replays, not four)."""
+    from ur5fault.discrepancy.rescreen import rescreen
+    from ur5fault.logs import read_nist
+    from ur5fault.twin.replay import Replayed
+
+    log = read_nist(nist_path).window(0.0, 32.0)
+    n = log.t_s.size - 1
+    n_fit, n_scr = int(0.6 * n), int(0.4 * n)
+    t = np.arange(n) * log.period_s
+    speed = np.sin(2 * np.pi * t / 7.0) + 0.3 * np.sin(2 * np.pi * t / 2.3)
+    cands = [LibraryCandidate("coulomb_friction", 0, param="scale", x0=1.0, probe=1.5),
+             LibraryCandidate("current_sensor_gain", 0, param="gain", x0=1.0, probe=1.1),
+             LibraryCandidate("current_sensor_offset", 1, param="offset_A", x0=0.0, probe=0.1),
+             LibraryCandidate("current_sensor_gain", 1, param="gain", x0=1.0, probe=1.1)]
+    shapes = [200.0 * np.tanh(speed / 0.05)] * 2 + [np.full(n, 100.0)] * 2
+    rng = np.random.default_rng(11)
+    meas = rng.normal(size=(n, 2, 6))
+    meas[:, 0, 0] += 0.05 * shapes[0]
+    meas[:, 0, 1] += np.where(np.arange(n) < n_fit, 0.05, -0.05) * shapes[2]
+    X = np.zeros((4, n_scr, 12))
+    for k, c in enumerate(cands):
+        X[k, :, c.joint] = shapes[k][:n_scr]
+    rp = _LinearReplay(log, cands, shapes, meas)
+    dropped = [_finding(LibraryCandidate("viscous_friction", j, param="scale", x0=1.0, probe=1.5), kept=False)
+               for j in (0, 1)]
+    z = np.zeros((n, 6))
+    after = Replayed("ok", np.zeros((n, 2, 6)), z, z, z, z)
+    rec = rescreen(rp, X, None, cands, dropped, after, n_scr, n_fit, None, max_effects=1)
+
+    by_joint = {f.candidate.joint: f for f in rec.findings}
+    assert by_joint[0].kept and not by_joint[1].kept
+    assert "does not generalise" in by_joint[1].reason
+    # joint 0: the other effect of its shape listed as its rival, at the same size (both fitted to 0.05 x the shape)
+    assert len(by_joint[0].rivals) == 1
+    rival = by_joint[0].rivals[0]
+    assert {rival.candidate.label, by_joint[0].candidate.label} == {cands[0].label, cands[1].label}
+    assert rival.theta[0] == pytest.approx(by_joint[0].theta[0], rel=1e-9)
+    assert by_joint[0].theta[0] == pytest.approx(0.05, rel=0.05)
+    # what was simulated: the two re-screened effects, then the kept one's rival (the final model re-simulated in
+    # that batch only when its judged size moved); nothing of joint 1's rival
+    assert len(rp.asked[0]) == 2
+    rival_j1 = next(c for c in cands[2:] if c.label != by_joint[1].candidate.label)
+    asked = [e for batch in rp.asked for effects in batch for e in effects]
+    assert not any((e.name, e.joint_index) == (rival_j1.effect, 1) for e in asked)
+    assert sum(len(b) for b in rp.asked[1:]) in (1, 2)

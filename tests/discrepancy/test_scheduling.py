@@ -87,3 +87,52 @@ def test_an_exception_in_the_fit_stops_its_prefetched_replay(nist_path, monkeypa
     assert not model.replay_.holds((), 1)
     done, _ = wait(seen["futures"], timeout=60)  # a guard against a hang, not a speed test
     assert len(done) == 1 and seen["futures"][0].exception() is not None  # stopped, not finished
+
+
+def test_alternatives_replayed_after_the_judgement_equal_those_of_the_probe_batch(short_log):
+    """The kept findings' alternatives replayed over the fitting part after the judgement
+    (:func:`steps.alternatives_of_kept`, with the prefetch the workflow starts) against the same alternatives
+    replayed in the probe batch (``probe_batch(..., extra)``, as before): the same sizes bit for bit, the probe
+    batch's other replays unchanged, and the alternative of a finding the judgement dropped never replayed."""
+    from ur5fault.discrepancy.judging import Finding
+    from ur5fault.discrepancy.judging import alternatives as judged_alternatives
+    from ur5fault.discrepancy.refinement import probe_batch
+    from ur5fault.discrepancy.search import columns_of
+
+    rp = LogReplay(short_log, seed=WORKFLOW_SEED, jobs=2)
+    cands = candidates(short_log.payload_kg, joints=[1, 2], kinds=["current_sensor_offset", "current_sensor_gain"],
+                       params=rp.params)
+    off1, off2, gain1, gain2 = (next(c for c in cands if (c.effect, c.joint) == key) for key in (
+        ("current_sensor_offset", 1), ("current_sensor_offset", 2), ("current_sensor_gain", 1),
+        ("current_sensor_gain", 2)))
+    found = [off1, off2]
+    fs = FindingSet(found)
+    theta0 = np.array([0.05, -0.03])
+    alts = [(0, gain1, np.array([0.02])), (1, gain2, np.array([-0.01]))]
+    n_fit = 300
+    before = fs.evaluator(rp, extra_rows=n_fit)
+    old = probe_batch(before, theta0, fs.probes(theta0), fs.bounds(), n_fit, alts, before)
+
+    new = probe_batch(fs.evaluator(rp), theta0, fs.probes(theta0), fs.bounds(), n_fit)
+    np.testing.assert_array_equal(old.J, new.J)
+    np.testing.assert_array_equal(old.e, new.e)
+    ref = steps.RefineRecord(found, new, new.sim0, alts, fs, fs.alternative_sets(np.clip(theta0, *fs.bounds()), alts))
+    kept = [Finding(off1, np.array([0.05]), np.zeros(1), None)]  # the judgement kept the first, dropped the second
+    assert steps.kept_alternatives(ref, kept) == [0]
+    rp.prefetch([ref.alt_sets[a] for a in steps.kept_alternatives(ref, kept)], n_fit)
+    n0 = rp.n_simulated
+    steps.alternatives_of_kept(rp, ref, kept, n_fit)
+    assert rp.n_simulated == n0  # taken from the prefetch
+    rp.close()
+
+    want = judged_alternatives(fs, [0], 0, old, old.J[:, :n_fit], columns_of(found), n_fit, alts)
+    assert len(want) == len(kept[0].alternatives) == 1
+    (c_want, th_want), (c_got, th_got) = want[0], kept[0].alternatives[0]
+    assert c_got == c_want == gain1
+    np.testing.assert_array_equal(th_got, th_want)
+    # replayed here without a prefetch (one process): the same
+    again = [Finding(off1, np.array([0.05]), np.zeros(1), None)]
+    rp1 = LogReplay(short_log, seed=WORKFLOW_SEED)
+    steps.alternatives_of_kept(rp1, ref, again, n_fit)
+    assert rp1.n_simulated == 1  # the kept finding's alternative only
+    np.testing.assert_array_equal(again[0].alternatives[0][1], th_want)

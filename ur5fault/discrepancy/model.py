@@ -184,7 +184,10 @@ class DiscrepancyModel:
             for f in jr.findings:
                 f.tell_apart = disc.tell_apart.get(f.candidate, "")
             kept = [f for f in jr.findings if f.kept]
+            # the kept findings' alternatives (over the fitting part) start on a worker beside the polish's replay
+            rp.prefetch([ref.alt_sets[a] for a in steps.kept_alternatives(ref, kept)], n_fit)
             after = self._polish(rp, kept, ref.first, ref.finding_set, prog, drift) if kept else ref.nominal
+            steps.alternatives_of_kept(rp, ref, kept, n_fit, drift, prog)
             # a finding dropped on the held-out part or at the final check gives its joint's place back
             again = rescreen(rp, lib.X, lib.drift, lib.candidates, jr.findings, after, n_scr, n_fit, drift,
                              self.max_effects, prog)

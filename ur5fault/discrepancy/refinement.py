@@ -246,6 +246,17 @@ class FindingSet:
         """Index among :meth:`probes` of the one that removes finding ``k``."""
         return sum(c.n_coef for c in self.found[:k])
 
+    def alternative_sets(self, theta: NDArray, extra: Sequence[tuple[int, Candidate, NDArray]]
+                         ) -> list[tuple[EffectSpec, ...]]:
+        """The effects of each alternative ``(i, alternative, its coefficients)`` in place of finding ``i``, the
+        others at ``theta``."""
+        out = []
+        for i, alt, alt_theta in extra:
+            th = self.split(theta)
+            th[i] = np.zeros_like(th[i])
+            out.append(self.specs(np.concatenate(th)) + (alt.spec(alt_theta),))
+        return out
+
     def evaluator(self, rp: LogReplay, progress=None, extra_rows: int | None = None):
         """``evaluate(thetas, extra=())``: replays of the whole log at each ``theta`` (and, for each extra
         ``(i, alternative, its coefficients)``, the alternative in place of finding ``i``, the others at
@@ -258,11 +269,7 @@ class FindingSet:
 
         def evaluate(thetas: list[NDArray], extra=()) -> list[tuple[Replayed, NDArray]]:
             sets = [self.specs(theta) for theta in thetas]
-            alt_sets = []
-            for i, alt, alt_theta in extra:
-                th = self.split(thetas[1])
-                th[i] = np.zeros_like(th[i])
-                alt_sets.append(self.specs(np.concatenate(th)) + (alt.spec(alt_theta),))
+            alt_sets = self.alternative_sets(thetas[1], extra) if extra else []
             sims, alt_sims = rp.run_batches([(sets, n_all), (alt_sets, n_extra)], progress)
             return ([(s, weighted(meas, s.y, rp.sigma)) for s in sims]
                     + [(s, weighted(meas[:n_extra], s.y, rp.sigma)) for s in alt_sims])

@@ -22,7 +22,10 @@ and an offset are nearly one shape on the fitting part, and which one the select
 model's own error; so the best MAX_RIVALS other effects that pass every test in the chosen one's place are
 simulated too, and each that passes the held-out check and leaves the joint's held-out residual no worse by
 MIN_DELTA_BIC is listed as an indistinguishable alternative (``rivals.py``, the same rule every named finding's
-rivals are judged by).
+rivals are judged by).  The rivals are chosen on the screened part with the effects, but simulated only for the
+effects that are kept after the whole-log checks, in the batch that re-simulates the final model: the rivals of a
+dropped one would be judged against nothing (its replays do not depend on the batch they are simulated in, so
+what is listed is the same).
 """
 
 from __future__ import annotations
@@ -147,9 +150,7 @@ def rescreen(rp: LogReplay, lib_X: NDArray, lib_drift: Drift | None, candidates:
     kept_specs = tuple(f.spec() for f in findings if f.kept)
     new = [(candidates[k], th) for k, th in chosen]
     rivals = rivals_of(lib_X, e_scr, candidates, cols, findings, chosen)
-    runs = rp.run([kept_specs + (c.spec(th),) for c, th in new]
-                  + [kept_specs + (candidates[k].spec(th),) for _, k, th in rivals], rp.n_samples, progress)
-    sims, rival_sims = runs[: len(new)], runs[len(new):]
+    sims = rp.run([kept_specs + (c.spec(th),) for c, th in new], rp.n_samples, progress)
     # each one's secant beside the kept findings: the change of the weighted readings per unit multiple of its
     # linearised size (a coefficient pair keeps its direction)
     ok = [s.ok for s in sims]
@@ -199,18 +200,22 @@ def rescreen(rp: LogReplay, lib_X: NDArray, lib_drift: Drift | None, candidates:
     for i, ai in zip(keep, a):
         v = judge(bg, e_fit, J_fit, scaled, one, [o for o in keep if o != i], i)
         named.append(_finding(names[i], new[i][1], float(ai), v, held_out=gens[i]))
-        named[-1].rivals = _rivals_held_out(rp, e_after, J, keep, a, i, n_fit, drift,
-                                            [(candidates[k], th, s) for (pos, k, th), s
-                                             in zip(rivals, rival_sims) if pos == i and s.ok],
-                                            after.torque_gear_Nm, names[i])
-        named[-1].alternatives = [(r.candidate, r.theta) for r in named[-1].rivals]
+    # the final model (when the judged sizes moved) and the rivals of the kept effects only, in one batch
+    again = not (len(keep) == 1 and abs(float(a[0]) - 1.0) <= SIZE_RTOL)
+    wanted = [(pos, k, th) for pos, k, th in rivals if pos in keep]
+    sets = (([kept_specs + tuple(f.spec() for f in named)] if again else [])
+            + [kept_specs + (candidates[k].spec(th),) for _, k, th in wanted])
+    runs = rp.run(sets, rp.n_samples, progress) if sets else []
+    final = runs[0] if again else sims[keep[0]]
+    rival_sims = runs[1:] if again else runs
+    for f, i in zip(named, keep):
+        f.rivals = _rivals_held_out(rp, e_after, J, keep, a, i, n_fit, drift,
+                                    [(candidates[k], th, s) for (pos, k, th), s in zip(wanted, rival_sims)
+                                     if pos == i and s.ok], after.torque_gear_Nm, names[i])
+        f.alternatives = [(r.candidate, r.theta) for r in f.rivals]
     trace += [SearchStep.of("re-screened joint, whole log", dataclasses.replace(f.verdict, accepted=f.kept,
                                                                                 reason=f.reason))
               for f in named + out]
-    if len(keep) == 1 and abs(float(a[0]) - 1.0) <= SIZE_RTOL:
-        final = sims[keep[0]]
-    else:
-        final = rp.run([kept_specs + tuple(f.spec() for f in named)], rp.n_samples, progress)[0]
     return RescreenRecord(named + out, trace, final)
 
 

@@ -25,6 +25,7 @@ from . import discovery, library
 from .candidates import Candidate, TermCandidate
 from .drift import Drift
 from .judging import Finding, SearchStep, judge_findings
+from .judging import alternatives as judged_alternatives
 from .refinement import FindingSet, Refined, probe_batch
 from .rivals import current_channel, differ_most
 from .search import backward, columns_of, forward
@@ -85,6 +86,9 @@ class RefineRecord:
     nominal: Replayed      # the whole log replayed through the starting model
     alts: list[tuple[int, Candidate, NDArray]]
     finding_set: FindingSet
+    # each alternative's effects (in place of its finding, the others at their first estimates), replayed over the
+    # fitting part once the findings are judged, for the kept findings only (:func:`alternatives_of_kept`)
+    alt_sets: list[tuple] = dataclasses.field(default_factory=list)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -299,9 +303,42 @@ def refine(rp: LogReplay, found: list[Candidate], X: NDArray, fixed: list[int], 
         return RefineRecord(found, None, rp.run([()], rp.n_samples, progress)[0], alts, fs)
     G, g, ee = BlockGram.build(X[fixed], e0).total()
     theta0 = rss_of(G, g, ee, list(range(len(fixed))))[1]
-    evaluate = fs.evaluator(rp, progress, extra_rows=n_fit)
-    first = probe_batch(evaluate, theta0, fs.probes(theta0), fs.bounds(), n_fit, alts, evaluate)
-    return RefineRecord(found, first, first.sim0, alts, fs)
+    first = probe_batch(fs.evaluator(rp, progress), theta0, fs.probes(theta0), fs.bounds(), n_fit)
+    # the alternatives are sized beside the others at the probe batch's estimate (clipped to the ranges, as there)
+    return RefineRecord(found, first, first.sim0, alts, fs, fs.alternative_sets(np.clip(theta0, *fs.bounds()), alts))
+
+
+def kept_alternatives(ref: RefineRecord, kept: Sequence[Finding]) -> list[int]:
+    """Positions in ``ref.alts`` of the alternatives of the ``kept`` findings (those the judgement kept): the only
+    ones :func:`ur5fault.discrepancy.judging.alternatives` sizes."""
+    cands = {f.candidate for f in kept}
+    return [a for a, (i, _, _) in enumerate(ref.alts) if ref.found[i] in cands]
+
+
+def alternatives_of_kept(rp: LogReplay, ref: RefineRecord, kept: Sequence[Finding], n_fit: int,
+                         drift: Drift | None = None, progress=None) -> None:
+    """The indistinguishable alternatives of each finding the judgement kept (``kept``, in its order) with their own
+    coefficients (``f.alternatives``), as :func:`ur5fault.discrepancy.judging.alternatives` sizes them from the probe
+    batch.  Each is replayed over the fitting part here (or taken from a prefetch the caller started,
+    :func:`kept_alternatives`), not in the probe batch: those of a finding the judgement drops are never sized, so
+    they are not replayed, and a replay does not depend on the batch it is simulated in.  A finding dropped later
+    (at the final check) keeps the alternatives it had when judged, as before."""
+    which = kept_alternatives(ref, kept)
+    if not which:
+        return
+    sims = rp.run([ref.alt_sets[a] for a in which], n_fit, progress)
+    meas = rp.measured(rp.n_samples)[:n_fit]
+    extra_e: list[NDArray | None] = [None] * len(ref.alts)
+    for a, s in zip(which, sims):
+        extra_e[a] = weighted(meas, s.y, rp.sigma) if s.ok else None
+    first = dataclasses.replace(ref.first, extra_e=extra_e)
+    found = list(ref.found)
+    J_fit = ref.first.J[:, :n_fit]
+    if drift is not None:
+        J_fit = drift.remove(J_fit)
+    idx = [found.index(f.candidate) for f in kept]
+    for f, k in zip(kept, idx):
+        f.alternatives = judged_alternatives(ref.finding_set, idx, k, first, J_fit, columns_of(found), n_fit, ref.alts)
 
 
 def judge(ref: RefineRecord, n_fit: int, n_signals: int, drift: Drift | None = None) -> JudgeRecord:
