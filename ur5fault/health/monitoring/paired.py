@@ -16,13 +16,24 @@ holds), with its sensitivity column taken on the log's own replay
 (``Observed.X``, the current channels; the reference holds current residuals only), and judged by the
 discrepancy workflow's test (:func:`ur5fault.discrepancy.search.judge`) as :mod:`.changes` does. Its reference
 distribution is the same difference-estimate between healthy baseline runs paired with each other and with
-their own repeats (never a run with its own samples, :func:`ur5fault.health.monitoring.task.reference`'s
-``self_index``), made per :data:`PAIRED_BLOCK_S` of paired samples (:func:`block_estimates`): their mean,
-variance and number feed the same prediction interval and Student's bar (:func:`.changes.bar`) as the unpaired
-test's. ``k`` counts every block, the consecutive blocks of one run as independent (the block test's
-assumption, stated there): the model's error that would tie neighbouring stretches of a run together cancels in
-the difference at the same point of the task, leaving the sensors' noise and the task's repeatability; where
-neighbouring blocks are still correlated, the bar is lower than it would be counting runs (2-6 here).
+their own repeats (never a run with its own samples), made per :data:`PAIRED_BLOCK_S` of paired samples
+(:func:`block_estimates`): their mean, variance and number feed the same prediction interval and Student's bar
+(:func:`.changes.bar`) as the unpaired test's.
+
+*What ``k`` counts: each independent difference once.* Paired both ways, two repeats of a stretch give
+``d_A = r_A - r_B`` and ``d_B = r_B - r_A = -d_A`` (a run paired with its own repeat at lag L: ``d(t + L) =
+-d(t)``), one difference counted twice, and Student's bar at ``k - 1`` degrees of freedom too low where ``k`` is
+small. So each baseline run is paired only with what comes before it (:func:`baseline_references`: the runs
+before it in the baseline and its own earlier repeats, :func:`~.task.reference`'s ``one_way``): of ``m``
+repeats of a stretch the j-th is compared with the mean of the ``j - 1`` before it, ``m - 1`` differences, the
+number of independent ones among them (paired both ways, the ``m`` differences sum to zero). These are
+uncorrelated where the repeats differ by independent noise of one spread (Helmert's contrasts); their variance,
+``(1 + 1/(j - 1))`` times the repeats', is at least that of a log's difference from the mean of its ``K``
+paired repeats (``1 + 1/K``): a conservative reference. The consecutive blocks of one run are still counted as
+independent (the block test's assumption, stated there): the model's error that would tie neighbouring
+stretches of a run together cancels in the difference at the same point of the task, leaving the sensors' noise
+and the task's repeatability; where neighbouring blocks are still correlated, the bar is lower than it would be
+counting runs (2-6 here).
 The estimate reads as the change *since the paired healthy runs* (a gain of 1.1: the current reads 10 %
 more than on the same motion of the baseline).
 """
@@ -109,6 +120,7 @@ def block_estimates(obs: Observed, ref: NDArray) -> list[dict[str, Estimate]]:
 
 
 def baseline_references(healthy: Sequence[Observed], refs: Sequence[tuple[NDArray, NDArray]]) -> list[NDArray]:
-    """Per baseline run, its paired reference ``(n, 6)`` from the other runs and its own repeats (never its own
-    samples)."""
-    return [reference(o.target_rad, refs, o.period_s, self_index=k)[0] for k, o in enumerate(healthy)]
+    """Per baseline run, its paired reference ``(n, 6)`` from the runs before it and its own earlier repeats
+    (never its own samples): each pair of repeats is compared once (module docstring, what ``k`` counts)."""
+    return [reference(o.target_rad, refs, o.period_s, self_index=k, one_way=True)[0]
+            for k, o in enumerate(healthy)]
