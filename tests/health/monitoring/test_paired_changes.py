@@ -107,15 +107,16 @@ def test_the_paired_statistics_survive_baseline_json(tmp_path):
 
 def test_a_baseline_screened_whole_gives_paired_blocks_past_the_first_20_s():
     """Two healthy runs of 7 cycles (about 30 s each), screened whole (as the monitor screens a baseline run):
-    the paired statistics count a block per 2 s of every paired sample of both runs, past the 20 s a monitored
-    log is screened on, while the block test keeps its 5 s blocks of each run's first 20 s (4 per run)."""
+    the paired statistics count a block per 2 s of the paired samples of both runs (each pair of repeats once),
+    past the 20 s a monitored log is screened on, while the block test keeps its 5 s blocks of each run's first
+    20 s (4 per run)."""
     from ur5fault.health.monitoring.paired import baseline_references, paired_seconds
 
     base = [run(f"b{k}", cycle(7, lead_s=0.3 * k), 20 + k) for k in range(2)]
     assert all(o.n * PERIOD > 29.0 for o in base)
     b = fit_baseline(base, "sha")
     refs = [(o.target_rad, np.where(o.logged[:, None], o.residual_A, np.nan)) for o in base]
-    secs = [paired_seconds(o, ref) for o, ref in zip(base, baseline_references(base, refs))]
+    secs = [paired_seconds(o, ref) for o, ref in zip(base, baseline_references(base, refs, one_way=True))]
     # paired past 20 s (the first run's first cycle has no earlier repeat: each pair is compared once)
     assert all(s > 20.0 for s in secs), secs
     assert b.paired_candidates[LABEL][2] == sum(round(s / 2.0) for s in secs)  # > 2 x 10: blocks past 20 s
@@ -160,13 +161,27 @@ def test_a_self_paired_baseline_counts_each_difference_once():
     first = np.flatnonzero(np.isfinite(d[:L]).all(axis=1) & np.isfinite(d[L : 2 * L]).all(axis=1))
     assert first.size > 0.5 * L  # 5.2 s of the 9.2 s cycle (the chunks whose context fits in the run)
     np.testing.assert_allclose(d[first] + d[first + L], 0.0, atol=1e-12)  # the issue's reproduction
-    (one_way,) = baseline_references([o], refs)
+    (one_way,) = baseline_references([o], refs, one_way=True)
     assert np.isnan(one_way[:L]).all()  # the first cycle: no earlier repeat
     np.testing.assert_array_equal(one_way[first + L], two_way[first + L])  # the second: against the first
     secs_two, secs_one = paired_seconds(o, two_way), paired_seconds(o, one_way)
     assert abs(secs_one - secs_two / 2) < 1.0, (secs_one, secs_two)  # half, to within the 2 s chunks' grid
     k = fit_baseline([o], "sha").paired_candidates[LABEL][2]
     assert k == round(secs_one / 2.0) and k <= round(secs_two / 2.0) / 2, (k, secs_one, secs_two)
+
+
+def test_the_paired_statistics_do_not_depend_on_the_baselines_order():
+    """Two healthy runs, the second with a 3 % gain on shoulder_lift against the first (a systematic difference
+    between healthy runs): in either order the paired mean and variance are the same (each difference enters with
+    both signs), the mean near 0, and the variance holds the 3 %; paired one way only, the order would set the
+    sign of the mean."""
+    a = run("a", cycle(4), 20)
+    b = run("b", cycle(4, lead_s=0.3), 21, gain=1.03)
+    ab = fit_baseline([a, b], "sha").paired_candidates[LABEL]
+    ba = fit_baseline([b, a], "sha").paired_candidates[LABEL]
+    np.testing.assert_allclose(ab[:2], ba[:2], rtol=1e-9, atol=1e-12)
+    assert abs(ab[2] - ba[2]) <= 1  # the independent blocks: one way, to within the 2 s chunks' grid
+    assert abs(ab[0]) < 0.01 and np.sqrt(ab[1]) > 0.02, ab  # mean ~0, spread of the order of the 3 %
 
 
 def test_both_tests_on_one_log_each_spend_half_the_false_alarm_probability(monkeypatch):

@@ -26,7 +26,7 @@ current-sensor gain and a torque constant read alike in the current).
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 
 import numpy as np
 from numpy.typing import NDArray
@@ -114,6 +114,17 @@ def spread(thetas: list[float], ses: list[float] | None = None) -> tuple[float, 
         return float(th.mean()), float(th.var(ddof=1)), int(th.size)
     se = np.asarray(ses if ses is not None else [np.nan], dtype=float)
     return float(th[0]), float(se[0] ** 2), 1
+
+
+def spreads(blocks: Iterable[dict[str, Estimate]]) -> dict[str, tuple[float, float, int]]:
+    """``{label: (mean, variance, n)}`` of each candidate's block estimates (:func:`spread`)."""
+    per: dict[str, tuple[list[float], list[float]]] = {}
+    for block in blocks:
+        for label, est in block.items():
+            if np.isfinite(est.se):
+                per.setdefault(label, ([], []))[0].append(est.theta)
+                per[label][1].append(est.se)
+    return {k: spread(th, se) for k, (th, se) in per.items()}
 
 
 def bar(n_segments: int, share: float = 1.0) -> tuple[float, float]:
