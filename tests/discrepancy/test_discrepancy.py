@@ -30,6 +30,8 @@ KINDS = {
     "coulomb_friction": ("scale", (1.4, 1.9), (0, 1, 2, 3), "current_A"),
     "viscous_friction": ("scale", (1.4, 1.9), (0, 1, 2, 3), "current_A"),
     "breakaway_friction": ("scale", (1.4, 1.9), (0, 1, 2, 3), "current_A"),
+    # on the joints that carry large gravity torque (on the wrists 0.1 x a few N*m is below the noise)
+    "load_friction": ("coeff", (0.06, 0.15), (1, 2), "current_A"),
     "torque_constant": ("scale", (0.75, 0.9), (0, 1, 2, 3), "current_A"),
     "current_sensor_gain": ("gain", (1.1, 1.3), (0, 1, 2, 3), "current_A"),
     "current_sensor_offset": ("offset_A", (0.1, 0.3), (0, 1, 2, 3, 4, 5), "current_A"),

@@ -9,7 +9,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from ur5fault.discrepancy import DiscrepancyModel, steps
+from ur5fault.discrepancy import DiscrepancyModel, joint_check
 from ur5fault.discrepancy.search import columns_of, forward, judge
 from ur5fault.discrepancy.statistics import BlockGram, bic, channel_scale, effective_n, per_channel, rss_of
 from ur5fault.errors import ParameterError
@@ -64,12 +64,12 @@ def test_the_offset_beside_a_large_model_error_is_named_per_channel_not_pooled()
     sel = forward(BlockGram.build(X_w, e_w), e_w, X_w, cands, cols, 2)
     assert sel.chosen == [1]
     assert sel.verdicts[0].theta[0] == pytest.approx(5.0, abs=0.1)
-    # the workflow's joint check of the findings (steps.joint_check) now keeps the offset and drops nothing
+    # the workflow's joint check of the findings (joint_check.joint_check) now keeps the offset and drops nothing
     # else wrongly: the error on joint 0 is explained by no candidate, so its offset (fitting the mean of a
     # zero-mean error) is not named either
-    check = steps.joint_check(cands, X, [0, 1], e)
+    check = joint_check.joint_check(cands, X, [0, 1], e)
     assert check.found == [cands[1]]
-    assert steps.joint_check(cands, X, [0, 1], e, own_variance=False).found == []  # the pooled form
+    assert joint_check.joint_check(cands, X, [0, 1], e, own_variance=False).found == []  # the pooled form
 
 
 def test_the_likelihood_is_a_validated_choice():

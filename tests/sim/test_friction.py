@@ -130,3 +130,40 @@ def test_friction_share_decides_what_the_gear_carries():
     np.testing.assert_allclose(t_f, steady, rtol=0.01)  # both sides apply eq. (2) at speed
     assert t_gear[0] == pytest.approx(steady, rel=0.05)
     assert abs(t_gear[1]) < 0.05 * abs(steady)
+
+
+def test_load_levels_add_coeff_times_the_magnitude_of_the_gear_torque():
+    from ur5fault.sim.drive.friction import load_levels
+
+    tau = np.array([-40.0, 0.0, 25.0])
+    tc, ts = load_levels(TC, TS, 0.05, tau)
+    np.testing.assert_allclose(tc, TC + 0.05 * np.array([40.0, 0.0, 25.0]), rtol=0, atol=1e-12)
+    np.testing.assert_allclose(ts - tc, TS - TC, rtol=0, atol=1e-12)  # static excess unchanged
+    tc0, ts0 = load_levels(TC, TS, 0.0, tau)  # absent: the levels exactly as they were
+    assert np.all(tc0 == TC) and np.all(ts0 == TS)
+
+
+@pytest.mark.slow
+def test_load_friction_at_constant_speed_grows_linearly_with_the_gear_torque():
+    """The whole chain (compiled path): on the shoulder's constant-speed samples of the pick-and-place, the friction
+    with ``load_friction`` minus the friction without it is ``coeff * |T_gear|`` (the LuGre law's steady state with
+    its Coulomb level raised by that much; speeds far above the Stribeck range, so g = T_c + coeff |T_gear|)."""
+    from ur5fault import RunSpec, Simulator, make_effect, pick_and_place
+
+    coeff = 0.08
+    res = Simulator().run(pick_and_place(), [RunSpec("h", 0), RunSpec("l", 0, (make_effect(
+        "load_friction", "shoulder_lift_joint", coeff=coeff),))], duration_s=8.0)
+    assert res.status == ("ok", "ok")
+    j = 1
+    q = res["q_rad"][:, :, j]
+    dt = np.diff(res.t_s[:2])[0]
+    w = np.gradient(q, dt, axis=1)
+    a = np.gradient(w, dt, axis=1)
+    sel = (np.abs(w[1]) > 0.3) & (np.abs(a[1]) < 0.05) & (np.abs(w[0] - w[1]) < 1e-3)
+    assert sel.sum() > 50
+    d_tf = (res["T_f_Nm"][1, :, j] - res["T_f_Nm"][0, :, j])[sel]
+    load = np.abs(res["T_gear_Nm"][1, :, j])[sel]
+    assert np.ptp(load) > 5.0  # the load varies, so the slope is tested, not one point
+    slope, icpt = np.polyfit(load, np.sign(w[1, sel]) * d_tf, 1)
+    assert slope == pytest.approx(coeff, rel=0.03)
+    assert abs(icpt) < 0.02 * coeff * load.mean() + 0.05

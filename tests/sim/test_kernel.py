@@ -31,6 +31,8 @@ def packed():
     P[PI["sigma1"]] = rng.uniform(0.0, 50.0, P[PI["sigma1"]].shape)
     P[PI["share"]] = rng.uniform(0.0, 1.0, P[PI["share"]].shape)
     P[PI["share"]][:, :2] = 0.0  # all on the link: the kernel skips the motor side
+    P[PI["load_fric"]] = rng.uniform(0.0, 0.3, P[PI["load_fric"]].shape)  # load-dependent friction ...
+    P[PI["load_fric"]][:, 3] = 0.0  # ... and without it (the kernel's memo in use)
     return sim, P
 
 
@@ -75,11 +77,12 @@ def test_runs_agree_within_the_self_perturbation_baseline(duration_s):
     nudged = load_params(overrides={"friction": {"coulomb_Nm": [c * (1 + 1e-12) for c in p.friction.coulomb_Nm]}})
     runs = [RunSpec("h", 3), RunSpec("b", 3, (make_effect("backlash", 2, backlash_deg=0.1),)),
             RunSpec("m", 3, (make_effect("motor_harmonic", 4, sin_Nm=0.012, cos_Nm=-0.008, periods_per_rev=4),
-                             make_effect("motor_harmonic", 2, sin_Nm=0.02, cos_Nm=0.01, periods_per_rev=3)))]
+                             make_effect("motor_harmonic", 2, sin_Nm=0.02, cos_Nm=0.01, periods_per_rev=3))),
+            RunSpec("l", 3, (make_effect("load_friction", 2, coeff=0.1), make_effect("load_friction", 3, coeff=0.05)))]
     ref = Simulator(p, drive="numpy").run(pick_and_place(), runs, duration_s=duration_s)
     fast = Simulator(p, drive="numba").run(pick_and_place(), runs, duration_s=duration_s)
     base = Simulator(nudged, drive="numba").run(pick_and_place(), runs, duration_s=duration_s)
-    assert ref.status == fast.status == base.status == ("ok", "ok", "ok")
+    assert ref.status == fast.status == base.status == ("ok",) * 4
     for s in ("q_rad", "q_FB_rad", "i_q_A", "i_FB_A", "T_gear_Nm", "T_f_Nm"):
         kernel = np.max(np.abs(fast[s] - ref[s]), axis=(0, 1))  # per joint
         baseline = np.max(np.abs(base[s] - fast[s]))

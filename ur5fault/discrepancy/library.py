@@ -32,6 +32,9 @@ PROBES: dict[tuple[str, str], float | None] = {
     ("breakaway_friction", "scale"): 1.5,
     ("presliding_stiffness", "scale"): 0.3,
     ("friction_share", "motor_side_share"): None,  # probed at the end of its range farther from the model's
+    # load-dependent gear friction (issue 17): 5 % of the transmitted torque, the size the real logs' at-speed
+    # residual gives on shoulder_lift (bench/load_friction_evidence.py)
+    ("load_friction", "coeff"): 0.05,
     ("gear_stiffness", "scale"): 0.5,
     ("torque_constant", "scale"): 0.9,
     ("resolver_offset", "offset_deg"): 0.01,

@@ -30,6 +30,7 @@ from ..sim.effects import EffectSpec
 from ..twin.replay import LogReplay, Replayed
 from ..twin.residuals import FIT_FRACTION, fit_samples, localise, rms_table, unexplained
 from . import steps
+from .joint_check import joint_check
 from .judging import Finding, SearchStep, final_verdicts
 from .library import kinds as library_kinds
 from .multilog import MultiReplay, per_log
@@ -177,7 +178,7 @@ class DiscrepancyModel:
                         [c.label for c in disc.terms] or "nothing")
 
             t = time.perf_counter()
-            check = steps.joint_check(disc.library + disc.terms, disc.X, disc.fixed, lib.e0, list(disc.tell_apart),
+            check = joint_check(disc.library + disc.terms, disc.X, disc.fixed, lib.e0, list(disc.tell_apart),
                                       own)
             ref = steps.refine(rp, check.found, disc.X, check.fixed, lib.e0, {**lib.alternatives, **disc.alternatives},
                                n_fit, stages.start("refining the findings"), own)

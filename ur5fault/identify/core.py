@@ -20,7 +20,7 @@ from ..errors import ParameterError
 from ..logs import MeasuredLog
 from ..sim.axes import N_JOINTS
 from ..sim.params import RobotParams, load_params
-from . import friction, loop, motor, payload, ripple, sensors, stickslip, urmodel
+from . import friction, loadfriction, loop, motor, payload, ripple, sensors, stickslip, urmodel
 from .report import Identification, overlay_params
 from .signals import derive_all
 from .stats import BLOCK_S, N_BOOT, Estimate, block_indices, bootstrap, fallback, interval
@@ -97,6 +97,8 @@ def identify(log: MeasuredLog | Sequence[MeasuredLog], params: RobotParams | Non
     coulomb_A = np.array([e.value for e in fric if e.key == "friction.coulomb_A"])
     say("torque ripple periodic in the motor angle (moving samples)")
     est += ripple.identify_ripple(fit, full, blocks, n_boot, seed, ripple_max_hz)
+    say("load-dependent friction (check, samples above the Stribeck range)")
+    est += loadfriction.identify_load_friction(fit, full, blocks, n_boot, seed, p.friction.stribeck_rate_s_per_rad)
 
     say("sensor noise at rest and resolver resolution")
     noise = sensors.noise_at_rest(sig, n_boot, seed, {"sensors.current_noise_A": p.sensors.current_noise_A,

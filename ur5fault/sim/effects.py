@@ -212,6 +212,14 @@ REGISTRY: dict[str, Effect] = {
             ap.both(ap.multiply("friction_coulomb_Nm", "scale"), ap.multiply("friction_static_Nm", "scale")),
         ),
         Effect(
+            "load_friction",
+            "load-dependent gear friction: Coulomb and static friction grow with the torque the strain-wave gear "
+            "transmits (tooth and wave-generator bearing loads)",
+            (EffectParam("coeff", "-", 0.0, 1.0, 0.0, "N*m of friction added per N*m of gear torque"),),
+            True,
+            ap.set_value("friction_load_coeff", "coeff"),
+        ),
+        Effect(
             "viscous_friction",
             "viscous friction scaled at every temperature",
             (EffectParam("scale", "-", 0.0, 10.0, 1.0, "factor on f_v"),),

@@ -37,6 +37,7 @@ class RunArrays:
     friction_presliding_stiffness_Nm_per_rad: NDArray
     friction_bristle_damping_Nms_per_rad: NDArray
     friction_motor_side_share: NDArray
+    friction_load_coeff: NDArray  # [-] Coulomb and static friction added per N*m of gear torque (``load_friction``)
     temperature_C: NDArray
     motor_is_pmsm: NDArray
     motor_kt_Nm_per_A: NDArray
@@ -121,6 +122,7 @@ def build_run_arrays(params: RobotParams, effects: Sequence[Sequence[EffectSpec]
         friction_presliding_stiffness_Nm_per_rad=joint(f.presliding_stiffness_Nm_per_rad),
         friction_bristle_damping_Nms_per_rad=joint(f.bristle_damping_Nms_per_rad),
         friction_motor_side_share=joint(f.motor_side_share),
+        friction_load_coeff=np.full((n, N_JOINTS), REGISTRY["load_friction"].absent("coeff")),
         temperature_C=joint(params.joint_temperature_C),
         motor_is_pmsm=np.tile(is_pmsm, (n, 1)),
         motor_kt_Nm_per_A=joint(kt),

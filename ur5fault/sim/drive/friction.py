@@ -37,6 +37,15 @@ def viscous_coefficient(
     )
 
 
+def load_levels(coulomb_Nm: ArrayLike, static_Nm: ArrayLike, load_coeff: ArrayLike, gear_torque_Nm: ArrayLike
+                ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Coulomb and static friction levels of a strain-wave gear carrying ``gear_torque_Nm`` [N*m]: both raised by
+    ``load_coeff * |T_gear|`` (load-dependent friction: the tooth and wave-generator bearing forces, and so their
+    friction, grow with the transmitted torque; effect ``load_friction``, docs/model.md)."""
+    extra = np.asarray(load_coeff, dtype=float) * np.abs(np.asarray(gear_torque_Nm, dtype=float))
+    return np.asarray(coulomb_Nm, dtype=float) + extra, np.asarray(static_Nm, dtype=float) + extra
+
+
 def stribeck_level(w_rad_s: ArrayLike, coulomb_Nm: ArrayLike, static_Nm: ArrayLike,
                    stribeck_rate_s_per_rad: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Eq. (2)'s friction level ``g(|w|)`` [N*m] and its derivative ``dg/d|w|`` [N*m*s/rad]."""

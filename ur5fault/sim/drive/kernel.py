@@ -19,7 +19,7 @@ from .layout import PARAM_NAMES, PI, STATE_NAMES, XI
 #: changed with this file untouched would reuse cached kernels that index the wrong rows (seen once as a
 #: segfault after a merge).  A changed layout therefore stops here until this number is updated, which also
 #: changes this file and so invalidates the cache.
-LAYOUT_CRC32 = 153234730
+LAYOUT_CRC32 = 3071488245
 if zlib.crc32(("|".join(PARAM_NAMES) + "#" + "|".join(STATE_NAMES)).encode()) != LAYOUT_CRC32:
     raise ImportError("ur5fault/sim/drive/layout.py changed: update LAYOUT_CRC32 in ur5fault/sim/drive/kernel.py "
                       "(and check the row constants below) so numba recompiles the cached kernels")
@@ -38,6 +38,7 @@ RATIO_NOM, KE_NOM, CROSS_NOM = PI["ratio_nom"], PI["ke_nom"], PI["cross_nom"]
 RES_C0, ENC_C0, CUR_A, CUR_C0, CUR_C1 = PI["res_c0"], PI["enc_c0"], PI["cur_a"], PI["cur_c0"], PI["cur_c1"]
 LUGRE, SIGMA0, SIGMA1, SHARE = PI["lugre"], PI["sigma0"], PI["sigma1"], PI["share"]
 MH_SIN, MH_COS, MH_PER = PI["mh_sin"], PI["mh_cos"], PI["mh_per"]
+LOAD_FRIC = PI["load_fric"]
 # state rows
 TH_M, W_M, I_Q, I_D, V_Q, V_D = (XI[n] for n in ("th_m", "w_m", "i_q", "i_d", "v_q", "v_d"))
 INTEG_V, INTEG_Q, INTEG_D = XI["integ_v"], XI["integ_q"], XI["integ_d"]
@@ -72,6 +73,13 @@ def _level(w, tc, ts, rate):
 
 
 @njit(cache=True, inline="always")
+def _levels(X, P, r, j):
+    """friction.load_levels: the Coulomb and static levels under the step's gear torque ``X[T_ID]``."""
+    extra = P[LOAD_FRIC, r, j] * abs(X[T_ID, r, j])
+    return P[T_COULOMB, r, j] + extra, P[T_STATIC, r, j] + extra
+
+
+@njit(cache=True, inline="always")
 def _decay(s0, w, g, dt):
     """lugre._decay: (x, e, r)."""
     x = s0 * abs(w) * dt / max(g, LEVEL_FLOOR_NM)
@@ -90,10 +98,12 @@ def _sign(w):
 def _lugre_factors(X, P, r, j, m, w, dt, rate):
     """The LuGre law's factors at speed w: Stribeck level g, dg/d|w| (``friction.stribeck_level``) and the bristle
     decay's x, exp(-x), (1 - exp(-x)) / x (``lugre._decay``), memoised in the six rows from ``m`` (pure functions
-    of w for the run's parameters, so a repeated speed returns the values computed before, bit for bit)."""
-    if X[m, r, j] == w:
+    of w for the run's parameters, so a repeated speed returns the values computed before, bit for bit; not with
+    load-dependent friction, whose levels also follow the gear torque: recomputed there)."""
+    if X[m, r, j] == w and P[LOAD_FRIC, r, j] == 0.0:
         return X[m + 1, r, j], X[m + 2, r, j], X[m + 3, r, j], X[m + 4, r, j], X[m + 5, r, j]
-    g, dg = _level(w, P[T_COULOMB, r, j], P[T_STATIC, r, j], rate)
+    tc, ts = _levels(X, P, r, j)
+    g, dg = _level(w, tc, ts, rate)
     x, e, rr = _decay(P[SIGMA0, r, j], w, g, dt)  # (_decay floors g itself)
     X[m, r, j], X[m + 1, r, j], X[m + 2, r, j], X[m + 3, r, j], X[m + 4, r, j], X[m + 5, r, j] = w, g, dg, x, e, rr
     return g, dg, x, e, rr
@@ -102,8 +112,9 @@ def _lugre_factors(X, P, r, j, m, w, dt, rate):
 @njit(cache=True, inline="always")
 def _friction(X, P, r, j, m, z, w, dt, rate):
     """friction.friction_step at speed w: (z+, T_f, S) of the joint's law (``m``: the side's memo rows)."""
-    tc, ts, fv = P[T_COULOMB, r, j], P[T_STATIC, r, j], P[FV, r, j]
+    fv = P[FV, r, j]
     if P[LUGRE, r, j] == 0.0:
+        tc, ts = _levels(X, P, r, j)
         g, dg = _level(w, tc, ts, rate)
         eps = P[EPS, r, j]
         y = w / eps
@@ -195,6 +206,7 @@ def physics_rj(X, P, r, j, q, qd, dt, stribeck, has_cogging):
         t_id = min(t_low, 0.0)
     else:
         t_id = 0.0
+    X[T_ID, r, j] = t_id  # the friction levels below follow it (load-dependent friction)
     # link-side friction at the current speed (applied implicitly by MuJoCo)
     share = P[SHARE, r, j]
     _, f_l, s_l = _friction(X, P, r, j, MEMO_L, X[Z_L, r, j], qd, dt, stribeck)
@@ -218,7 +230,6 @@ def physics_rj(X, P, r, j, q, qd, dt, stribeck, has_cogging):
     X[W_M, r, j] = w_new
     X[TH_M, r, j] = th_m + dt * w_new  # symplectic: the new speed
     X[I_D, r, j], X[I_Q, r, j] = i_d_new, i_q_new
-    X[T_ID, r, j] = t_id
     X[F_L, r, j], X[S_L, r, j], X[QD_PREV, r, j] = f_l, s_l, qd
     return t_id - f_l + s_l * qd
 

@@ -22,6 +22,8 @@ PARAM_NAMES = (
     "lugre", "sigma0", "sigma1", "share",
     # motor-angle harmonic (effect ``motor_harmonic``): sin and cos amplitudes [N*m, motor side], periods per turn
     "mh_sin", "mh_cos", "mh_per",
+    # load-dependent friction (effect ``load_friction``): Coulomb and static levels grow by load_fric * |T_gear| [-]
+    "load_fric",
 )
 #: drive state (rows of the packed array X)
 STATE_NAMES = (

@@ -62,7 +62,7 @@ def pack_params(p, g, a) -> NDArray:
         "lugre": a.friction_is_lugre, "sigma0": a.friction_presliding_stiffness_Nm_per_rad,
         "sigma1": a.friction_bristle_damping_Nms_per_rad, "share": a.friction_motor_side_share,
         "mh_sin": a.motor_harmonic_Nm[..., 0], "mh_cos": a.motor_harmonic_Nm[..., 1],
-        "mh_per": a.motor_harmonic_per_rev,
+        "mh_per": a.motor_harmonic_per_rev, "load_fric": a.friction_load_coeff,
     }
     for name, v in values.items():
         out[PI[name]] = np.broadcast_to(np.asarray(v, dtype=float), (n, 6))
@@ -135,15 +135,21 @@ class NumpyDrive(_Views):
             self.ts, p("ke_nom"), p("cross_nom"), p("v_lim"))
         X[XI["v_d"]], X[XI["v_q"]] = power.limit_voltage(vd, vq, p("v_lim"))
 
+    def _levels(self) -> tuple[NDArray, NDArray]:
+        """Coulomb and static levels [N*m] under this step's gear torque (``friction.load_levels``)."""
+        p = self._p
+        return fr.load_levels(p("t_coulomb"), p("t_static"), p("load_fric"), self.t_id)
+
     def _friction(self, z: NDArray, w: NDArray) -> tuple[NDArray, NDArray, NDArray]:
         p = self._p
-        return fr.friction_step(p("lugre") != 0.0, z, w, p("t_coulomb"), p("t_static"), p("fv"), self.stribeck,
-                                p("eps"), p("sigma0"), p("sigma1"), self.dt)
+        tc, ts = self._levels()
+        return fr.friction_step(p("lugre") != 0.0, z, w, tc, ts, p("fv"), self.stribeck, p("eps"), p("sigma0"),
+                                p("sigma1"), self.dt)
 
     def _bristle(self, z: NDArray, w: NDArray) -> NDArray:
         p = self._p
-        return fr.bristle_update(p("lugre") != 0.0, z, w, p("t_coulomb"), p("t_static"), self.stribeck, p("sigma0"),
-                                 self.dt)
+        tc, ts = self._levels()
+        return fr.bristle_update(p("lugre") != 0.0, z, w, tc, ts, self.stribeck, p("sigma0"), self.dt)
 
     def physics(self, q: NDArray, qd: NDArray) -> NDArray:
         """Windings, gear, friction and rotor over one step; returns the link torque whose friction part the
