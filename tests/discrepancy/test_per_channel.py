@@ -60,14 +60,14 @@ def test_the_offset_beside_a_large_model_error_is_named_per_channel_not_pooled()
     assert pooled.chosen == []
     v = judge(BlockGram.build(X, e), e, X, cands, cols, [], 1)
     assert v.delta_bic > -10 and v.z > 100  # z and stability pass: only the pooled likelihood fails it
-    X_w, e_w, s = per_channel(X, e)
+    X_w, e_w, s = per_channel(X, e, own_variance=True)
     sel = forward(BlockGram.build(X_w, e_w), e_w, X_w, cands, cols, 2)
     assert sel.chosen == [1]
     assert sel.verdicts[0].theta[0] == pytest.approx(5.0, abs=0.1)
     # the workflow's joint check of the findings (joint_check.joint_check) now keeps the offset and drops nothing
     # else wrongly: the error on joint 0 is explained by no candidate, so its offset (fitting the mean of a
     # zero-mean error) is not named either
-    check = joint_check.joint_check(cands, X, [0, 1], e)
+    check = joint_check.joint_check(cands, X, [0, 1], e, own_variance=True)
     assert check.found == [cands[1]]
     assert joint_check.joint_check(cands, X, [0, 1], e, own_variance=False).found == []  # the pooled form
 
@@ -102,7 +102,7 @@ def test_the_pooled_criterion_of_the_rescaled_problem_is_the_per_channel_one_to_
     e = rng.standard_normal((N, 3)) * np.array([1.0, 4.0, 30.0])
     X = rng.standard_normal((1, N, 3)) * np.array([0.02, 0.05, 0.3])
     e = e + 6.0 * X[0]
-    X_w, e_w, _ = per_channel(X, e)
+    X_w, e_w, _ = per_channel(X, e, own_variance=True)
     G, g, ee = BlockGram.build(X_w, e_w).total()
     rss1, th = rss_of(G, g, ee, [0])
     res_w = e_w - th[0] * X_w[0]

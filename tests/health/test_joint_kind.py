@@ -109,3 +109,22 @@ def test_rule_at_an_operating_point_and_the_detector_score():
     assert kind.tolist() == ["resolver_offset", "resolver_offset"]
     kind, _ = joint_kind.predict(model, df, ("a_j1",))  # even odds: neither
     assert kind.tolist() == ["healthy", "healthy"]
+
+
+def test_every_fit_runs_the_same_rounds_whatever_its_row_count():
+    """The saved by-joint classifier and its out-of-fold fits must be the same model: scikit-learn's early stopping
+    ('auto') switched on above 10,000 rows, so the full dataset's final fit stopped at 75 rounds while the folds,
+    under 10,000 rows, ran 300, and the threshold read off the folds gave 42 % false alarms (docs/diagnostics.md)."""
+    pytest.importorskip("sklearn")
+    from ur5fault.health.diagnostics.classifier import HGB_PARAMS, make_classifier
+
+    rng = np.random.default_rng(0)
+    X = rng.normal(size=(10_200, 3))
+    y = rng.integers(0, 2, size=10_200)  # noise: early stopping would end the fit after about ten rounds
+    clf = make_classifier(0)
+    clf.set_params(max_iter=40)  # the rule, not the count, is tested: a short fit above the 10,000-row switch
+    clf.fit(X, y)
+    assert clf.n_iter_ == 40
+    assert HGB_PARAMS["early_stopping"] is False
+    auto = make_classifier(0).set_params(max_iter=40, early_stopping="auto").fit(X, y)
+    assert auto.n_iter_ < 40  # the switch this guards against is real in the installed scikit-learn

@@ -33,3 +33,17 @@ def test_identify_reports_a_simulated_load_friction_coefficient_and_writes_nothi
     assert null.identifiable and null.lo <= 0.0 <= null.hi, null
     for ident in idents:  # reported, never written
         assert all(x["effect"] != "load_friction" for x in ident.overlay(p).get("effects", []))
+
+
+def test_a_friction_law_without_a_stribeck_term_takes_every_moving_sample():
+    """A model whose Stribeck rate is 0 (a valid law: no Stribeck term) has no Stribeck range to stay above: every
+    moving sample is at speed (it divided by the rate and raised ZeroDivisionError inside ``identify``)."""
+    from types import SimpleNamespace
+
+    from ur5fault.identify.loadfriction import at_speed
+
+    qd = np.array([[0.0], [0.05], [-0.5], [2.0]]).repeat(6, axis=1)
+    fit = SimpleNamespace(moving=np.array([False, True, True, True])[:, None].repeat(6, axis=1),
+                          sig=SimpleNamespace(qd_target_rad_s=qd))
+    assert at_speed(fit, 1, 0.0).tolist() == [False, True, True, True]
+    assert at_speed(fit, 1, 10.0).tolist() == [False, False, True, True]  # above 3 / 10 = 0.3 rad/s

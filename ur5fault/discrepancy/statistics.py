@@ -119,7 +119,7 @@ def channel_scale(e: NDArray) -> NDArray:
     return np.sqrt(np.maximum(np.sum(e**2, axis=0) / np.maximum(n_c, 1.0), 1.0))
 
 
-def per_channel(X: NDArray, e: NDArray, own_variance: bool = True) -> tuple[NDArray, NDArray, NDArray]:
+def per_channel(X: NDArray, e: NDArray, own_variance: bool = False) -> tuple[NDArray, NDArray, NDArray]:
     """The linearised problem ``e ~ X theta`` (``X`` ``(p, n, n_channels)``, ``e`` ``(n, n_channels)``) with
     each channel divided by the scale of the residual its full model (every column of ``X``) leaves
     (:func:`channel_scale`; module docstring): ``(X / s, e / s, s)``.  ``own_variance`` False: the pooled

@@ -36,8 +36,10 @@ KEY = "check.load_friction_coeff"
 
 
 def at_speed(fit: FrictionFit, j: int, stribeck_rate_s_per_rad: float) -> NDArray:
-    """``(n,)`` bool: joint ``j`` slides above the Stribeck range."""
-    return fit.moving[:, j] & (np.abs(fit.sig.qd_target_rad_s[:, j]) > 3.0 / stribeck_rate_s_per_rad)
+    """``(n,)`` bool: joint ``j`` slides above the Stribeck range (three Stribeck speeds; a law without a
+    Stribeck term, rate 0, has no such range: every moving sample)."""
+    above = 3.0 / stribeck_rate_s_per_rad if stribeck_rate_s_per_rad > 0 else 0.0
+    return fit.moving[:, j] & (np.abs(fit.sig.qd_target_rad_s[:, j]) > above)
 
 
 def load_column_Nm(fit: FrictionFit, j: int) -> NDArray:

@@ -35,7 +35,8 @@ on all samples (fitted on the moving samples alone, the constant and moving term
 anchored and extrapolate to no spread at a stop). A joint whose
 baseline holds fewer than :data:`MIN_CONDITION_S` of a condition has no statistics for it (NaN) and its samples
 in that condition are judged by the widest limit of the statistics it has there (all motions pooled, and the
-other conditions): widened, not narrowed to a condition the baseline did not show. Shapes: ``(n, 6)`` per sample
+other conditions; a moving joint without moving statistics by the all-motions fit, which holds its moving samples):
+widened, not narrowed to a condition the baseline did not show. Shapes: ``(n, 6)`` per sample
 and joint; per condition scale ``(4, 6, 4)``, tail ``(4, 6, 3)``.
 """
 
@@ -127,7 +128,7 @@ def constant(feats: NDArray) -> NDArray:
 
 
 def enough(cond: NDArray, ok: NDArray, period_s: float) -> NDArray:
-    """``(3, 6)``: which conditions a baseline's judged samples ``ok`` ``(n,)`` (pooled over its runs: ``cond``
+    """``(4, 6)``: which conditions a baseline's judged samples ``ok`` ``(n,)`` (pooled over its runs: ``cond``
     and ``ok`` concatenated) hold at least :data:`MIN_CONDITION_S` of, per joint."""
     return np.array([((cond == k) & ok[:, None]).sum(axis=0) * period_s >= MIN_CONDITION_S
                      for k in range(len(CONDITIONS))])
@@ -140,8 +141,9 @@ def motion_limit(feats: NDArray, cond: NDArray, judged: NDArray, coef: NDArray, 
     ``(4, 6, 3)``), a moving joint the wider of its condition's and that fitted on all samples
     (``coef`` ``(6, 4)``, ``tail`` ``(6, 3)``: anchored where the moving samples' own fit extrapolates to
     no spread, at a stop); where the baseline has none for a condition of that joint (NaN: too few samples of
-    it), the widest limit of the statistics the joint has there (all motions and every condition): a condition
-    the baseline did not show is judged no tighter than any it did. The multiplier: every
+    it), the widest limit of the statistics the joint has there (all motions and every condition; a moving
+    sample without moving statistics: the all-motions fit, which was fitted on the moving samples among others):
+    a condition the baseline did not show is judged no tighter than any it did. The multiplier: every
     (window of :data:`~.events.WINDOW_S`, joint, statistics used) a log holds is one chance of a false alarm,
     each at ``p_log`` over their number (union bound: at most ``p_log`` for the log)."""
     n = feats.shape[0]
