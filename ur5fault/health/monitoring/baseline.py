@@ -47,7 +47,8 @@ from .events import (
 from .observe import Observed
 from .task import paired_transient
 
-FORMAT = "ur5fault-monitor-baseline-6"
+#: 7: the paired statistics' n_blocks counts each independent difference once (a format-6 file counted each twice)
+FORMAT = "ur5fault-monitor-baseline-7"
 #: a baseline run's task statistics are fitted only on at least this much of it paired with the other runs or its
 #: own repeats [s] (40 windows of WINDOW_S: 4 above the tail's 90 % quantile); with less, no log is judged
 #: against that run
