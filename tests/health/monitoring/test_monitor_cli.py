@@ -120,3 +120,18 @@ def test_bad_model_one_line(tmp_path):
     log = head(tmp_path, "Movement_No2", 6.0)
     r = run(str(log), *RTDE, "--baseline", str(model), "--baseline-logs", str(log), "--out", str(tmp_path / "o"))
     assert r.returncode == 2 and r.stderr.startswith("ur5fault: error:") and "Traceback" not in r.stderr
+
+
+@pytest.mark.slow
+def test_a_baseline_run_monitored_against_its_own_statistics_refused(monitored):
+    """One of the baseline's runs monitored against the baseline.json it is part of: it would pair with its own
+    samples at lag 0 and never change; refused with one line naming the run."""
+    tmp, model, _, out, _ = monitored
+    own = tmp / "Movement_No2_14s.csv"  # one of the fixture's baseline logs
+    r = run(str(own), *RTDE, "--baseline", str(model), "--baseline-stats", str(out / "baseline.json"),
+            "--out", str(tmp / "self"), "--jobs", "2")
+    assert r.returncode == 2, r.stderr
+    last = r.stderr.strip().splitlines()[-1]  # after the replay's notes (the log's clock)
+    assert last.startswith("ur5fault: error:") and "is one of the baseline's runs" in last
+    assert "Movement_No2_14s.csv: the same samples" in last and "Traceback" not in r.stderr
+    assert r.stderr.count("ur5fault: error:") == 1

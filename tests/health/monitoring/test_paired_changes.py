@@ -8,7 +8,7 @@ import dataclasses
 import numpy as np
 
 from tests.health.monitoring.test_monitoring import PERIOD, part
-from tests.health.monitoring.test_task import cycle, jitter
+from tests.health.monitoring.test_task import C, cycle, jitter
 from ur5fault.discrepancy.candidates import LibraryCandidate
 from ur5fault.health.monitoring import assess, fit_baseline
 from ur5fault.health.monitoring.paired import difference, estimates
@@ -107,16 +107,18 @@ def test_the_paired_statistics_survive_baseline_json(tmp_path):
 
 def test_a_baseline_screened_whole_gives_paired_blocks_past_the_first_20_s():
     """Two healthy runs of 7 cycles (about 30 s each), screened whole (as the monitor screens a baseline run):
-    the paired statistics count a block per 2 s of every paired sample of both runs, past the 20 s a monitored
-    log is screened on, while the block test keeps its 5 s blocks of each run's first 20 s (4 per run)."""
+    the paired statistics count a block per 2 s of the paired samples of both runs (each pair of repeats once),
+    past the 20 s a monitored log is screened on, while the block test keeps its 5 s blocks of each run's first
+    20 s (4 per run)."""
     from ur5fault.health.monitoring.paired import baseline_references, paired_seconds
 
     base = [run(f"b{k}", cycle(7, lead_s=0.3 * k), 20 + k) for k in range(2)]
     assert all(o.n * PERIOD > 29.0 for o in base)
     b = fit_baseline(base, "sha")
     refs = [(o.target_rad, np.where(o.logged[:, None], o.residual_A, np.nan)) for o in base]
-    secs = [paired_seconds(o, ref) for o, ref in zip(base, baseline_references(base, refs))]
-    assert all(s > 25.0 for s in secs), secs  # paired well past 20 s
+    secs = [paired_seconds(o, ref) for o, ref in zip(base, baseline_references(base, refs, one_way=True))]
+    # paired past 20 s (the first run's first cycle has no earlier repeat: each pair is compared once)
+    assert all(s > 20.0 for s in secs), secs
     assert b.paired_candidates[LABEL][2] == sum(round(s / 2.0) for s in secs)  # > 2 x 10: blocks past 20 s
     assert b.candidates[LABEL][2] == 2 * 4
 
@@ -141,3 +143,94 @@ def test_observe_screens_the_whole_part_when_asked():
     assert whole.e.shape[0] == whole.X.shape[1] == whole.n and whole.X.shape[0] == 6
     assert head.e.shape[0] == head.X.shape[1] == round(1.0 / log.period_s)
     np.testing.assert_array_equal(whole.e[: head.e.shape[0]], head.e)
+
+
+def test_a_self_paired_baseline_counts_each_difference_once():
+    """One healthy run that repeats its task twice (two 9.2 s cycles) as the baseline. Paired both ways, its
+    second cycle is compared with its first and its first with its second: the difference at t + L is minus the
+    one at t, to the bit (one difference, counted twice). The baseline's paired statistics pair each sample only
+    with the earlier repeat: the first cycle has no reference, and the blocks are those of the second cycle's
+    paired seconds alone, half of what the two-way pairing gave."""
+    from ur5fault.health.monitoring.paired import baseline_references, paired_seconds
+
+    o = run("b0", cycle(2, move_s=4.0), 20)
+    L = 2 * (round(4.0 / PERIOD) + round(0.6 / PERIOD))  # samples of one cycle
+    refs = [(o.target_rad, np.where(o.logged[:, None], o.residual_A, np.nan))]
+    two_way = reference(o.target_rad, refs, PERIOD, self_index=0)[0]
+    d = o.residual_A - two_way
+    first = np.flatnonzero(np.isfinite(d[:L]).all(axis=1) & np.isfinite(d[L : 2 * L]).all(axis=1))
+    assert first.size > 0.5 * L  # 5.2 s of the 9.2 s cycle (the chunks whose context fits in the run)
+    np.testing.assert_allclose(d[first] + d[first + L], 0.0, atol=1e-12)  # the issue's reproduction
+    (one_way,) = baseline_references([o], refs, one_way=True)
+    assert np.isnan(one_way[:L]).all()  # the first cycle: no earlier repeat
+    np.testing.assert_array_equal(one_way[first + L], two_way[first + L])  # the second: against the first
+    secs_two, secs_one = paired_seconds(o, two_way), paired_seconds(o, one_way)
+    assert abs(secs_one - secs_two / 2) < 1.0, (secs_one, secs_two)  # half, to within the 2 s chunks' grid
+    k = fit_baseline([o], "sha").paired_candidates[LABEL][2]
+    assert k == round(secs_one / 2.0) and k <= round(secs_two / 2.0) / 2, (k, secs_one, secs_two)
+
+
+def test_the_paired_statistics_do_not_depend_on_the_baselines_order():
+    """Two healthy runs, the second with a 3 % gain on shoulder_lift against the first (a systematic difference
+    between healthy runs): in either order the paired mean and variance are the same (each difference enters with
+    both signs), the mean near 0, and the variance holds the 3 %; paired one way only, the order would set the
+    sign of the mean."""
+    a = run("a", cycle(4), 20)
+    b = run("b", cycle(4, lead_s=0.3), 21, gain=1.03)
+    ab = fit_baseline([a, b], "sha").paired_candidates[LABEL]
+    ba = fit_baseline([b, a], "sha").paired_candidates[LABEL]
+    np.testing.assert_allclose(ab[:2], ba[:2], rtol=1e-9, atol=1e-12)
+    assert abs(ab[2] - ba[2]) <= 1  # the independent blocks: one way, to within the 2 s chunks' grid
+    assert abs(ab[0]) < 0.01 and np.sqrt(ab[1]) > 0.02, ab  # mean ~0, spread of the order of the 3 %
+
+
+def test_both_tests_on_one_log_each_spend_half_the_false_alarm_probability(monkeypatch):
+    """A log that repeats the baseline's task for 5 cycles, then moves to a pose the baseline never visits for 7 s:
+    its paired samples are judged by the paired test, the rest by the block test, each at half the workflow's
+    tail (their bars raised: z 4 -> 4.16 for one block; Student's t at half the tail for k blocks); a log paired
+    throughout is judged by the paired test alone at the full tail."""
+    from scipy import stats
+
+    from ur5fault.health.monitoring import verdict
+    from ur5fault.health.monitoring.changes import bar
+
+    tail = stats.norm.sf(4.0)
+    assert bar(1) == (4.0, 1.0)
+    assert abs(bar(1, 0.5)[0] - 4.161) < 1e-3  # the standard normal's quantile at 1.58e-5 (1 - 0.9999842)
+    for k in (3, 5, 12):
+        assert abs(stats.t.sf(bar(k, 0.5)[0], k - 1) - tail / 2) < 1e-3 * tail
+        assert bar(k, 0.5)[0] > bar(k)[0] and bar(k, 0.5)[1] == bar(k)[1]
+    shares = []
+    real = verdict.find_changes
+
+    def spy(*args, **kw):
+        shares.append((args[4] if len(args) > 4 else kw.get("reference", "blocks"),
+                       args[5] if len(args) > 5 else kw.get("share", 1.0)))
+        return real(*args, **kw)
+
+    monkeypatch.setattr(verdict, "find_changes", spy)
+    b = fit_baseline([run(f"b{k}", cycle(5, lead_s=0.3 * k), 20 + k) for k in range(2)], "sha")
+    tail_away = cycle(2, second=C)[1:]  # starts where the cycles end (A), then C: not in the baseline
+    both = np.concatenate([cycle(5, lead_s=0.2), tail_away])
+    assess(b, run("both", both, 40))
+    assert shares == [("paired", 0.5), ("blocks", 0.5)], shares
+    shares.clear()
+    assess(b, run("paired only", cycle(5, lead_s=0.2), 41))
+    assert shares == [("paired", 1.0)], shares
+
+
+def test_a_baseline_run_is_refused_as_a_monitored_log():
+    """A monitored log that is one of the baseline's runs (or a part of one) pairs with its own samples at lag 0
+    and could never change: refused with one line naming the run. A repeat of the same task is not refused."""
+    import pytest
+
+    from ur5fault.errors import ParameterError
+    from ur5fault.health.monitoring.verdict import baseline_run_of
+
+    base = [run(f"b{k}", cycle(3, lead_s=0.3 * k), 20 + k) for k in range(2)]
+    b = fit_baseline(base, "sha")
+    with pytest.raises(ParameterError, match=r"b1 is one of the baseline's runs \(b1: the same samples\)"):
+        assess(b, base[1])
+    later = base[0].target_rad[200:]  # a later part of b0's samples (its replay's other arrays kept: unused here)
+    assert baseline_run_of(b, dataclasses.replace(base[0], target_rad=later)) == "b0"
+    assert assess(b, run("repeat", cycle(3, lead_s=0.2), 41))["verdict"] == "consistent"

@@ -17,7 +17,7 @@ from __future__ import annotations
 import dataclasses
 import hashlib
 import json
-from collections.abc import Iterable, Sequence
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -27,7 +27,7 @@ from numpy.typing import NDArray
 from ...errors import ParameterError
 from ...sim.axes import JOINT_NAMES, N_JOINTS
 from . import paired
-from .changes import BLOCK_S, Estimate, block_estimates, spread
+from .changes import BLOCK_S, block_estimates, spreads
 from .conditions import CONDITIONS, CONSTANT_SPREAD, REVERSAL, SLOW, condition, constant, enough, rest_level
 from .events import (
     CHANNELS,
@@ -47,7 +47,8 @@ from .events import (
 from .observe import Observed
 from .task import paired_transient
 
-FORMAT = "ur5fault-monitor-baseline-6"
+#: 7: the paired statistics' n_blocks counts each independent difference once (a format-6 file counted each twice)
+FORMAT = "ur5fault-monitor-baseline-7"
 #: a baseline run's task statistics are fitted only on at least this much of it paired with the other runs or its
 #: own repeats [s] (40 windows of WINDOW_S: 4 above the tail's 90 % quantile); with less, no log is judged
 #: against that run
@@ -302,22 +303,10 @@ def fit_baseline(healthy: Sequence[Observed], overlay_sha: str) -> Baseline:
     quantum = np.stack([o.position_quantum_rad for o in healthy])
     quantum = np.where(np.isnan(quantum).all(axis=0), np.nan, np.nanmax(np.nan_to_num(quantum, nan=-np.inf), axis=0))
     scale, tail, c_scale, c_tail = fit_events(segs, period, quantum)
-    cands = _spreads(block for o in healthy for block in block_estimates(o))
+    cands = spreads(block for o in healthy for block in block_estimates(o))
     t_scale, t_tail = fit_task(healthy, segs, period)
     refs = [(o.target_rad, task_residual(o)) for o in healthy]
-    paired_cands = _spreads(block for o, ref in zip(healthy, paired.baseline_references(healthy, refs))
-                            for block in paired.block_estimates(o, ref))
+    paired_cands = paired.baseline_spreads(healthy, refs)
     return Baseline(overlay_sha, period, tuple(o.name for o in healthy), scale, tail, quantum, cands,
                     tuple(o.target_rad for o in healthy), tuple(task_residual(o) for o in healthy), t_scale, t_tail,
                     float(slow), c_scale, c_tail, paired_cands)
-
-
-def _spreads(blocks: Iterable[dict[str, Estimate]]) -> dict[str, tuple[float, float, int]]:
-    """``{label: (mean, variance, n)}`` of each candidate's block estimates (:func:`.changes.spread`)."""
-    per: dict[str, tuple[list[float], list[float]]] = {}
-    for block in blocks:
-        for label, est in block.items():
-            if np.isfinite(est.se):
-                per.setdefault(label, ([], []))[0].append(est.theta)
-                per[label][1].append(est.se)
-    return {k: spread(th, se) for k, (th, se) in per.items()}

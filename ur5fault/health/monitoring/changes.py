@@ -26,7 +26,7 @@ current-sensor gain and a torque constant read alike in the current).
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 
 import numpy as np
 from numpy.typing import NDArray
@@ -116,39 +116,59 @@ def spread(thetas: list[float], ses: list[float] | None = None) -> tuple[float, 
     return float(th[0]), float(se[0] ** 2), 1
 
 
-def bar(n_segments: int) -> tuple[float, float]:
-    """The distance a change must exceed, and the factor on the baseline variance, for ``n_segments`` runs."""
-    if n_segments < 2:
-        return MIN_Z, 1.0
+def spreads(blocks: Iterable[dict[str, Estimate]]) -> dict[str, tuple[float, float, int]]:
+    """``{label: (mean, variance, n)}`` of each candidate's block estimates (:func:`spread`)."""
+    per: dict[str, tuple[list[float], list[float]]] = {}
+    for block in blocks:
+        for label, est in block.items():
+            if np.isfinite(est.se):
+                per.setdefault(label, ([], []))[0].append(est.theta)
+                per[label][1].append(est.se)
+    return {k: spread(th, se) for k, (th, se) in per.items()}
+
+
+def bar(n_segments: int, share: float = 1.0) -> tuple[float, float]:
+    """The distance a change must exceed, and the factor on the baseline variance, for ``n_segments`` blocks.
+    ``share``: the fraction of the workflow's tail probability (that of :data:`MIN_Z` standard errors) this test
+    may spend: where two tests judge one log and a change is flagged when either does, each at half (Bonferroni:
+    the probability that either raises a false alarm is at most the sum), its bar raised to match (z 4 -> 4.16
+    for one block)."""
     from scipy import stats
 
-    return float(stats.t.isf(stats.norm.sf(MIN_Z), n_segments - 1)), 1.0 + 1.0 / n_segments
+    if not 0.0 < share <= 1.0:
+        raise ValueError(f"share {share}: must be in (0, 1]")
+    tail = float(stats.norm.sf(MIN_Z)) * share
+    if n_segments < 2:
+        return (MIN_Z if share == 1.0 else float(stats.norm.isf(tail))), 1.0
+    return float(stats.t.isf(tail, n_segments - 1)), 1.0 + 1.0 / n_segments
 
 
-def _distance(e: Estimate, base: tuple[float, float, int]) -> float:
+def _distance(e: Estimate, base: tuple[float, float, int], share: float = 1.0) -> float:
     """How far ``e`` lies from the baseline's estimates, in multiples of the bar (>= 1: a change)."""
     mean, var, k = base
-    limit, inflate = bar(k)
+    limit, inflate = bar(k, share)
     return abs(e.theta - mean) / float(np.sqrt(e.se**2 + var * inflate)) / limit
 
 
 def find_changes(obs: Observed, est: dict[str, Estimate], outside: dict[str, Estimate],
-                 base: dict[str, tuple[float, float, int]], reference: str = "blocks") -> list[dict]:
+                 base: dict[str, tuple[float, float, int]], reference: str = "blocks", share: float = 1.0
+                 ) -> list[dict]:
     """Changes of ``obs`` against the baseline's ``{label: (mean, variance, n)}``, one per joint (module docstring):
     ``est`` on every logged sample, ``outside`` on those outside the events. ``reference``: what ``base`` holds,
     written into each change (``"blocks"``: the baseline runs' block estimates; ``"paired"``: the paired
-    difference-estimates of :mod:`.paired`)."""
+    difference-estimates of :mod:`.paired`). ``share``: the fraction of the false-alarm probability this test
+    spends (:func:`bar`)."""
     flagged = []
     for c in obs.cands:
         e, o = est[c.label], outside[c.label]
         if c.label not in base or not e.accepted or not np.isfinite(e.se):
             continue
-        d = _distance(e, base[c.label])
+        d = _distance(e, base[c.label], share)
         if d < 1.0:
             continue
         mean, var, k = base[c.label]
-        limit = bar(k)[0]
-        holds = (o.accepted and _distance(o, base[c.label]) >= 1.0) or not np.isfinite(o.se) \
+        limit = bar(k, share)[0]
+        holds = (o.accepted and _distance(o, base[c.label], share) >= 1.0) or not np.isfinite(o.se) \
             or o.se > abs(e.theta - mean) / limit
         if holds:
             flagged.append((d, c, e, mean))

@@ -16,13 +16,26 @@ holds), with its sensitivity column taken on the log's own replay
 (``Observed.X``, the current channels; the reference holds current residuals only), and judged by the
 discrepancy workflow's test (:func:`ur5fault.discrepancy.search.judge`) as :mod:`.changes` does. Its reference
 distribution is the same difference-estimate between healthy baseline runs paired with each other and with
-their own repeats (never a run with its own samples, :func:`ur5fault.health.monitoring.task.reference`'s
-``self_index``), made per :data:`PAIRED_BLOCK_S` of paired samples (:func:`block_estimates`): their mean,
-variance and number feed the same prediction interval and Student's bar (:func:`.changes.bar`) as the unpaired
-test's. ``k`` counts every block, the consecutive blocks of one run as independent (the block test's
-assumption, stated there): the model's error that would tie neighbouring stretches of a run together cancels in
-the difference at the same point of the task, leaving the sensors' noise and the task's repeatability; where
-neighbouring blocks are still correlated, the bar is lower than it would be counting runs (2-6 here).
+their own repeats (never a run with its own samples), made per :data:`PAIRED_BLOCK_S` of paired samples
+(:func:`block_estimates`): their mean, variance and number feed the same prediction interval and Student's bar
+(:func:`.changes.bar`) as the unpaired test's.
+
+*What ``k`` counts: each independent difference once.* Paired both ways, two repeats of a stretch give
+``d_A = r_A - r_B`` and ``d_B = r_B - r_A = -d_A`` (a run paired with its own repeat at lag L: ``d(t + L) =
+-d(t)``): one difference, two blocks. Counted as two, Student's bar at ``k - 1`` degrees of freedom is too low
+where ``k`` is small. So ``k`` is the number of blocks the baseline gives with each run paired only with what
+comes before it (the runs before it in the baseline and its own earlier repeats, :func:`baseline_references`
+``one_way``, :func:`~.task.reference`): of ``m`` repeats of a stretch the j-th against the mean of the ``j - 1``
+before it, ``m - 1`` differences, the number of independent ones (paired both ways, the ``m`` differences sum
+to zero). The mean and variance stay those of the blocks paired both ways (:func:`baseline_spreads`): which of
+two healthy runs comes first in the baseline is arbitrary, and a difference between them belongs in the
+reference with either sign (paired one way only, a systematic difference between the earlier and the later runs
+would read as a mean of one sign with a narrow spread, and the baseline's order would set it).
+The consecutive blocks of one run are still counted as
+independent (the block test's assumption, stated there): the model's error that would tie neighbouring
+stretches of a run together cancels in the difference at the same point of the task, leaving the sensors' noise
+and the task's repeatability; where neighbouring blocks are still correlated, the bar is lower than it would be
+counting runs (2-6 here).
 The estimate reads as the change *since the paired healthy runs* (a gain of 1.1: the current reads 10 %
 more than on the same motion of the baseline).
 """
@@ -35,7 +48,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ...sim.axes import N_JOINTS
-from .changes import BLOCK_S, Estimate, fit_alone
+from .changes import BLOCK_S, Estimate, fit_alone, spreads
 from .observe import Observed
 from .task import CHUNK_S, reference
 
@@ -88,27 +101,55 @@ def paired_seconds(obs: Observed, ref: NDArray) -> float:
     return float(difference(obs, ref)[1].sum() * obs.period_s)
 
 
+def _groups(obs: Observed, ok: NDArray) -> list[NDArray]:
+    """The paired samples ``ok`` ``(m,)`` cut into consecutive groups of about :data:`PAIRED_BLOCK_S` (stretches
+    joined in time order; the groups as even as the count allows); none when under half a block is paired."""
+    idx = np.flatnonzero(ok)
+    n = int(round(idx.size * obs.period_s / PAIRED_BLOCK_S))
+    return np.array_split(idx, n) if n >= 1 else []
+
+
 def block_estimates(obs: Observed, ref: NDArray) -> list[dict[str, Estimate]]:
-    """Each candidate fitted alone to the paired difference on consecutive groups of :data:`PAIRED_BLOCK_S`
-    of the screened part's paired samples (stretches joined in time order; the groups as even as the count
-    allows); none when under half a block is paired."""
+    """Each candidate fitted alone to the paired difference on each group of :data:`PAIRED_BLOCK_S` of the
+    screened part's paired samples (:func:`_groups`)."""
     if not obs.cands:
         return []
     e, ok = difference(obs, ref)
-    idx = np.flatnonzero(ok)
-    n = int(round(idx.size * obs.period_s / PAIRED_BLOCK_S))
-    if n < 1:
-        return []
     X = current_columns(obs)
     out = []
-    for part in np.array_split(idx, n):
+    for part in _groups(obs, ok):
         keep = np.zeros(ok.shape, bool)
         keep[part] = True
         out.append(fit_alone(obs.cands, X, e, keep))
     return out
 
 
-def baseline_references(healthy: Sequence[Observed], refs: Sequence[tuple[NDArray, NDArray]]) -> list[NDArray]:
+def baseline_references(healthy: Sequence[Observed], refs: Sequence[tuple[NDArray, NDArray]],
+                        one_way: bool = False) -> list[NDArray]:
     """Per baseline run, its paired reference ``(n, 6)`` from the other runs and its own repeats (never its own
-    samples)."""
-    return [reference(o.target_rad, refs, o.period_s, self_index=k)[0] for k, o in enumerate(healthy)]
+    samples); ``one_way``: from the runs before it and its own earlier repeats only, each pair of repeats
+    compared once (module docstring, what ``k`` counts)."""
+    return [reference(o.target_rad, refs, o.period_s, self_index=k, one_way=one_way)[0]
+            for k, o in enumerate(healthy)]
+
+
+def independent_blocks(healthy: Sequence[Observed], refs: Sequence[tuple[NDArray, NDArray]]) -> int:
+    """The number of independent paired blocks the baseline runs give: their blocks with each pair of repeats
+    compared once (:func:`baseline_references` ``one_way``)."""
+    return sum(len(_groups(o, difference(o, ref)[1]))
+               for o, ref in zip(healthy, baseline_references(healthy, refs, one_way=True)))
+
+
+def baseline_spreads(healthy: Sequence[Observed], refs: Sequence[tuple[NDArray, NDArray]]
+                     ) -> dict[str, tuple[float, float, int]]:
+    """``{label: (mean, variance, k)}`` of each candidate's paired estimates over the baseline runs: mean and
+    variance of its blocks paired both ways (either sign of each difference between healthy runs), ``k`` the
+    number of independent ones (:func:`independent_blocks`, at most the blocks it was estimated on; module
+    docstring). A candidate with no independent block has no paired statistics."""
+    both = spreads(block for o, ref in zip(healthy, baseline_references(healthy, refs))
+                   for block in block_estimates(o, ref))
+    k = independent_blocks(healthy, refs) if both else 0
+    if k < 1:
+        return {}
+    # k = 1 with two blocks paired both ways (d and -d): judged as a single block, z on their variance
+    return {label: (mean, var, min(k, n)) for label, (mean, var, n) in both.items()}

@@ -211,19 +211,25 @@ def matches(target: NDArray, ref_target: NDArray, period_s: float, same_run: boo
 
 
 def reference(target: NDArray, refs: Sequence[tuple[NDArray, NDArray]], period_s: float,
-              self_index: int | None = None) -> tuple[NDArray, NDArray]:
+              self_index: int | None = None, one_way: bool = False) -> tuple[NDArray, NDArray]:
     """The paired reference residual ``(n, 6)`` (NaN where no reference run repeats the motion) and which
     reference runs are paired with each sample ``(len(refs), n)``. ``refs``: ``(target (m, 6), residual (m, 6))``
     of each reference run, the residual NaN where the robot did not log the tick (a filled gap is no reference);
     ``self_index``: the entry of ``refs`` that is this log itself (paired only at lags of at least
-    :data:`CHUNK_S`)."""
+    :data:`CHUNK_S`). ``one_way`` (with ``self_index``): paired only with what comes before it, the runs of
+    ``refs`` before ``self_index`` and its own earlier repeats, so that when every run of ``refs`` is paired so,
+    each pair of repeats is compared once (:func:`.paired.baseline_references`)."""
     n = target.shape[0]
     total = np.zeros((n, target.shape[1]))
     count = np.zeros(n, int)
     matched = np.zeros((len(refs), n), bool)
     for i, (rt, rr) in enumerate(refs):
+        if one_way and self_index is not None and i > self_index:
+            continue
         for a, b, offs in matches(target, rt, period_s, same_run=i == self_index):
             for o in offs:
+                if one_way and i == self_index and o > 0:
+                    continue
                 rows = rr[a + o : b + o]
                 ok = np.isfinite(rows).all(axis=1)
                 total[a:b][ok] += rows[ok]

@@ -25,7 +25,7 @@ from .events import (
     sigma,
 )
 from .observe import Observed
-from .task import paired_transient, reference
+from .task import CONTEXT_S, paired_transient, reference
 
 VERDICTS = ("consistent", "changed", "anomaly")
 
@@ -87,7 +87,9 @@ def judge_changes(baseline: Baseline, obs: Observed, over: NDArray) -> list[dict
     baseline run's task over at least :data:`~.paired.MIN_PAIRED_S` and the baseline holds paired statistics, the
     paired samples are judged by the paired test (:mod:`.paired`) and the rest, if it holds at least
     :data:`~.changes.BLOCK_S` (the length of the blocks it is compared with), by the baseline's block estimates
-    (:mod:`.changes`); elsewhere the whole part by the latter. Per joint the change furthest beyond its bar."""
+    (:mod:`.changes`); elsewhere the whole part by the latter. Per joint the change furthest beyond its bar. Where
+    both tests judge the log, a change is flagged when either finds one, so each spends half the false-alarm
+    probability (Bonferroni: :func:`.changes.bar`'s ``share``)."""
     m = obs.e.shape[0]
     logged, keep = obs.logged[:m], keep_mask(obs, over)
     ref = None
@@ -100,15 +102,38 @@ def judge_changes(baseline: Baseline, obs: Observed, over: NDArray) -> list[dict
         every = estimates(obs, logged)
         return find_changes(obs, every, estimates(obs, keep) if over.any() else every, baseline.candidates)
     on = paired.difference(obs, ref)[1]
+    rest = logged & ~on
+    both = rest.sum() * obs.period_s >= BLOCK_S  # shorter, its estimate holds more of the model's error than a block
+    share = 0.5 if both else 1.0
     every = paired.estimates(obs, ref, logged)
     found = find_changes(obs, every, paired.estimates(obs, ref, keep) if over.any() else every,
-                         baseline.paired_candidates, "paired")
-    rest = logged & ~on
-    if rest.sum() * obs.period_s >= BLOCK_S:  # shorter, its estimate holds more of the model's error than a block
+                         baseline.paired_candidates, "paired", share)
+    if both:
         every = estimates(obs, rest)
         found = strongest(found, find_changes(obs, every, estimates(obs, keep & ~on) if over.any() else every,
-                                              baseline.candidates))
+                                              baseline.candidates, share=share))
     return found
+
+
+def baseline_run_of(baseline: Baseline, obs: Observed) -> str | None:
+    """The baseline run ``obs`` is (part of), if any: its joint targets found verbatim, over its first second of
+    motion (:data:`~.task.CONTEXT_S`), in that run's. A repeat of a task never gives the same targets to the bit
+    while moving (the controller's jitter, :data:`~.task.TARGET_JITTER_RAD`); the same log's samples always do.
+    A log that never moves is not told (its targets at rest may repeat exactly, NIST's do)."""
+    x = obs.target_rad
+    L = int(round(CONTEXT_S / obs.period_s))
+    if x.shape[0] < L or L < 2:
+        return None
+    moving = np.flatnonzero((np.diff(x, axis=0) != 0).any(axis=1))
+    if moving.size == 0:
+        return None
+    s0 = min(int(moving[0]), x.shape[0] - L)
+    window = x[s0 : s0 + L]
+    for name, t in zip(baseline.segments, baseline.task_target_rad):
+        for j in np.flatnonzero((t[: t.shape[0] - L + 1] == window[0]).all(axis=1)):
+            if np.array_equal(t[j : j + L], window):
+                return name
+    return None
 
 
 def assess(baseline: Baseline, obs: Observed, channels: Sequence[str] = DEFAULT_CHANNELS) -> dict[str, Any]:
@@ -122,6 +147,11 @@ def assess(baseline: Baseline, obs: Observed, channels: Sequence[str] = DEFAULT_
     unknown = sorted(set(channels) - set(CHANNELS))
     if unknown or not channels:
         raise ParameterError(f"event channels {list(channels)}: choose from {list(CHANNELS)}")
+    run = baseline_run_of(baseline, obs)
+    if run is not None:
+        raise ParameterError(f"{obs.name} is one of the baseline's runs ({run}: the same samples); judged against "
+                             f"itself it pairs at lag 0 and can never change: monitor it against a baseline "
+                             f"without it")
     hs, lims, judged, _ = judged_transients(baseline, obs, channels)
     events, over = find_events(obs.t_s, hs, lims, judged)
     changes = judge_changes(baseline, obs, over)
