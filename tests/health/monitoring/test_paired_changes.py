@@ -231,6 +231,11 @@ def test_a_baseline_run_is_refused_as_a_monitored_log():
     b = fit_baseline(base, "sha")
     with pytest.raises(ParameterError, match=r"b1 is one of the baseline's runs \(b1: the same samples\)"):
         assess(b, base[1])
-    later = base[0].target_rad[200:]  # a later part of b0's samples (its replay's other arrays kept: unused here)
-    assert baseline_run_of(b, dataclasses.replace(base[0], target_rad=later)) == "b0"
+    o = base[0]  # a later part of b0's samples
+    later = dataclasses.replace(o, target_rad=o.target_rad[200:], residual_A=o.residual_A[200:],
+                                logged=o.logged[200:])
+    assert baseline_run_of(b, later) == "b0"
+    # another run of the same program: its targets to the bit, what it measured not (a push, another run's noise)
+    other = dataclasses.replace(base[1], residual_A=base[1].residual_A + 0.01)
+    assert baseline_run_of(b, other) is None
     assert assess(b, run("repeat", cycle(3, lead_s=0.2), 41))["verdict"] == "consistent"

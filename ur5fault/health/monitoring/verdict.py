@@ -116,10 +116,11 @@ def judge_changes(baseline: Baseline, obs: Observed, over: NDArray) -> list[dict
 
 
 def baseline_run_of(baseline: Baseline, obs: Observed) -> str | None:
-    """The baseline run ``obs`` is (part of), if any: its joint targets found verbatim, over its first second of
-    motion (:data:`~.task.CONTEXT_S`), in that run's. A repeat of a task never gives the same targets to the bit
-    while moving (the controller's jitter, :data:`~.task.TARGET_JITTER_RAD`); the same log's samples always do.
-    A log that never moves is not told (its targets at rest may repeat exactly, NIST's do)."""
+    """The baseline run ``obs`` is (part of), if any: its joint targets found verbatim, from its first second of
+    motion (:data:`~.task.CONTEXT_S`) on, in that run's, **and** its current residual equal to that run's over the
+    whole overlap. The targets alone do not tell a log from another run of the same program: a controller (or a
+    simulation) commanding the same motion twice can write the same targets to the bit; what it measured differs
+    (another run's noise, a push). A log that never moves is not told (its targets at rest repeat exactly)."""
     x = obs.target_rad
     L = int(round(CONTEXT_S / obs.period_s))
     if x.shape[0] < L or L < 2:
@@ -129,9 +130,14 @@ def baseline_run_of(baseline: Baseline, obs: Observed) -> str | None:
         return None
     s0 = min(int(moving[0]), x.shape[0] - L)
     window = x[s0 : s0 + L]
-    for name, t in zip(baseline.segments, baseline.task_target_rad):
+    r_log = np.where(obs.logged[:, None], obs.residual_A, np.nan)
+    for name, t, r in zip(baseline.segments, baseline.task_target_rad, baseline.task_residual_A):
         for j in np.flatnonzero((t[: t.shape[0] - L + 1] == window[0]).all(axis=1)):
-            if np.array_equal(t[j : j + L], window):
+            if not np.array_equal(t[j : j + L], window):
+                continue
+            m = min(x.shape[0] - s0, t.shape[0] - j)
+            if np.array_equal(t[j : j + m], x[s0 : s0 + m]) and np.allclose(r[j : j + m], r_log[s0 : s0 + m],
+                                                                            rtol=0.0, atol=1e-9, equal_nan=True):
                 return name
     return None
 
