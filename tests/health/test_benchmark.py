@@ -435,7 +435,7 @@ def test_classifiers_of_an_older_format_are_refused_in_one_line(tmp_path, capsys
 def test_merged_kind_accuracy_counts_gain_for_torque_constant():
     from sklearn.metrics import balanced_accuracy_score
 
-    from ur5fault.health.diagnostics.metrics import merge_kinds
+    from ur5fault.health.diagnostics.kind_call import merge_kinds
 
     y = np.array(["healthy", "current_sensor_gain", "torque_constant", "backlash"])
     pred = np.array(["healthy", "torque_constant", "current_sensor_gain", "backlash"])

@@ -39,7 +39,7 @@ from ...errors import ConfigFileError
 from ...sim.axes import N_JOINTS
 from ..diagnostics import calibration, joint_kind
 from ..diagnostics.data import CONTEXT_COLUMNS, SIM_ONLY_PREFIX
-from ..diagnostics.metrics import MERGED_KINDS
+from ..diagnostics.kind_call import MERGED_KINDS
 from ..diagnostics.saved import SCHEMA_FORMAT
 from ..features import FEATURE_UNITS
 from ..twin_features import FEATURE_UNITS as TWIN_FEATURE_UNITS
@@ -148,7 +148,7 @@ def cannot_tell(w: Window, j: int, has_motor_encoders: bool) -> dict[str, str]:
 def same_signature(kind: str) -> list[str]:
     """The kinds whose signature is the same as ``kind``'s in every signal the features read (a current-sensor
     gain and a torque-constant loss: both a current residual proportional to the current,
-    :data:`ur5fault.health.diagnostics.metrics.MERGED_KINDS`): a window cannot tell them apart, whatever the
+    :data:`ur5fault.health.diagnostics.kind_call.MERGED_KINDS`): a window cannot tell them apart, whatever the
     classifier's split of the probability between them says."""
     group = MERGED_KINDS.get(kind)
     return sorted(k for k, g in MERGED_KINDS.items() if group is not None and g == group and k != kind)

@@ -15,6 +15,7 @@ import numpy as np
 
 from . import joint_kind
 from .data import Dataset
+from .kind_call import MERGED_KINDS, PAIR, balanced_accuracy_as_called, merge_kinds, right_as_called, tell_pair
 from .models import Models, joint_fault_rows
 
 FALSE_ALARM_RATE = 0.05
@@ -70,7 +71,8 @@ FROM_OUT_OF_FOLD = "training runs out of fold"
 def detection(ds: Dataset, models: Models, threshold: float | None = None,
               score: np.ndarray | None = None, threshold_from: str | None = None) -> dict[str, Any]:
     """Detection AUC overall, per fault kind, per fault-size bin and over the upper half of each kind's size
-    range (log scale, the range of the train and test runs); detection rate at 5 % false alarms: at
+    range (log scale, the range of the train and test runs; also per faulty joint, NaN under
+    :data:`MIN_BIN_RUNS` runs: where a kind is not seen); detection rate at 5 % false alarms: at
     ``threshold`` (an operating point fixed before these runs were scored: read off the training runs out of
     fold, or a saved detector's; ``threshold_from`` says which) or, without one, at the threshold read off these
     test runs themselves.  The latter - an oracle no user has, since it needs the labels of the runs it scores -
@@ -101,8 +103,13 @@ def detection(ds: Dataset, models: Models, threshold: float | None = None,
         auc = _auc_vs_healthy(score, healthy, pos)
         upper = pos & (sizes >= math.sqrt(edges[0] * edges[-1])) if edges.size else pos & False
         auc_up = _auc_vs_healthy(score, healthy, upper) if upper.sum() >= MIN_BIN_RUNS else math.nan
+        joints = te["fault_joint"].to_numpy(int)
+        up_by_joint = {str(j): _auc_vs_healthy(score, healthy, upper & (joints == j))
+                       if (upper & (joints == j)).sum() >= MIN_BIN_RUNS else math.nan
+                       for j in sorted(set(joints[upper]))}
         per_kind[kind] = {"unit": unit, "n_test": int(pos.sum()), "auc": auc,
                           "auc_upper_half": auc_up, "n_test_upper_half": int(upper.sum()),
+                          "auc_upper_half_by_joint": up_by_joint,
                           "detection_rate_upper_half": float(detected[upper].mean()) if upper.any() else math.nan,
                           "auc_se": auc_standard_error(auc, int(pos.sum()), int(healthy.sum())),
                           "detection_rate": float(detected[pos].mean()), "by_size": bins}
@@ -161,19 +168,6 @@ def localisation(ds: Dataset, models: Models, detected: np.ndarray) -> dict[str,
         "confusion": confusion(y, pred, list(range(1, 7))),
         "per_kind": per_kind,
     }
-
-
-#: fault kinds whose signatures are the same shape in every signal the twin features read, merged for the second
-#: balanced accuracy: a current-sensor gain g reads g i, a torque-constant scale s needs i / s to hold the same
-#: torque - both a current residual proportional to the current, while the position and encoder signals of a
-#: healthy loop hold (docs/diagnostics.md)
-MERGED_KINDS = {"current_sensor_gain": "current_gain_or_torque_constant",
-                "torque_constant": "current_gain_or_torque_constant"}
-
-
-def merge_kinds(labels: np.ndarray) -> np.ndarray:
-    """``labels`` with the kinds of :data:`MERGED_KINDS` replaced by their common name."""
-    return np.array([MERGED_KINDS.get(str(v), str(v)) for v in labels])
 
 
 def upper_half(ds: Dataset) -> np.ndarray:
@@ -236,14 +230,31 @@ def _kind_by_joint(ds: Dataset, models: Models, detected: np.ndarray, threshold:
     out = {**_kind_scores(y, pred, detected & (y != "healthy")),
            "joint_accuracy": float(right_joint[jm].mean()) if jm.any() else math.nan}
     if threshold is not None:
-        at, _ = joint_kind.predict(models.joint_kind, ds.test, ds.inputs, float(threshold), strict=True)
+        at, at_joint = joint_kind.predict(models.joint_kind, ds.test, ds.inputs, float(threshold), strict=True)
         flagged = joint_kind.fault_score(models.joint_kind, ds.test, ds.inputs) > float(threshold)
         up = upper_half(ds)
+        told = tell_pair(at, ds.test, at_joint, ds.inputs)
         out["at_operating_point"] = {
             "threshold_score": float(threshold), **_kind_scores(y, at, flagged & (y != "healthy")),
             "upper_half": {"n_test": int(up.sum()), **_kind_scores(y[up], at[up], (flagged & (y != "healthy"))[up])},
+            "cannot_tell": {**_as_called(y, told), "upper_half": _as_called(y[up], told[up])},
         }
     return out
+
+
+def _as_called(y: np.ndarray, told: np.ndarray) -> dict[str, Any]:
+    """The kind calls of :func:`.kind_call.tell_pair` ("cannot tell" for the gain / torque-constant pair) scored as
+    a set: balanced accuracy, accuracy, how many runs got the pair call and how many the gain by the sign of its
+    estimate, and the confusion matrix (a column for the pair call)."""
+    labels = ["healthy"] + sorted((set(y) | set(told)) - {"healthy", PAIR}) + [PAIR]
+    return {
+        "balanced_accuracy": balanced_accuracy_as_called(y, told),
+        "accuracy": float(right_as_called(y, told).mean()),
+        "n_called_pair": int((told == PAIR).sum()),
+        "n_called_gain_by_sign": int((told == "current_sensor_gain").sum()),
+        "labels": labels,
+        "confusion": confusion(y, told, labels),
+    }
 
 
 def _kind_scores(y: np.ndarray, pred: np.ndarray, faulty_flagged: np.ndarray) -> dict[str, Any]:

@@ -9,6 +9,7 @@ from typing import Any
 
 from ...sim.axes import JOINT_NAMES
 from ...util.io import write_figure_atomic, write_json_atomic, write_text_atomic
+from .kind_call import PAIR
 from .metrics import FROM_TEST_SPLIT
 
 
@@ -62,6 +63,15 @@ def markdown(m: dict[str, Any]) -> str:
             + "; per kind (AUC / upper half of its sizes): "
             + "; ".join(f"{k} {_f(v['auc'], '.2f')} / {_f(v['auc_upper_half'], '.2f')}"
                         for k, v in bj["per_kind"].items()) + ".",
+            "",
+            "Upper half of each kind's sizes by faulty joint (AUC against every healthy test run; - under "
+            "3 runs):",
+            "",
+            "| fault kind | " + " | ".join(JOINT_NAMES) + " |",
+            "| --- |" + " --- |" * len(JOINT_NAMES),
+            *[f"| {k} | " + " | ".join(_f(v.get("auc_upper_half_by_joint", {}).get(str(j)), ".2f")
+                                       for j in range(1, len(JOINT_NAMES) + 1)) + " |"
+              for k, v in bj["per_kind"].items()],
         ]
     lines += [
         "",
@@ -114,6 +124,18 @@ def markdown(m: dict[str, Any]) -> str:
                   for lab, row in zip(op["labels"], op["confusion"])],
                 "",
             ]
+            ct = op.get("cannot_tell")
+            if ct:
+                forced, up_ct = _f(op["balanced_accuracy"]), _f(ct["upper_half"]["balanced_accuracy"])
+                lines += [
+                    "Called with \"cannot tell\" for current-sensor gain and torque constant (one signature: "
+                    f"`{PAIR}`, a call right for either; `current_sensor_gain` where the gain estimate of the called "
+                    "joint is negative, which a torque-constant loss cannot give; `kind_call.py`): balanced "
+                    f"**{_f(ct['balanced_accuracy'])}** (forced to choose between the two: {forced}); "
+                    f"{ct['n_called_pair']} runs called `{PAIR}`, {ct['n_called_gain_by_sign']} "
+                    f"`current_sensor_gain` by the sign; over the upper half of each kind's sizes {up_ct}.",
+                    "",
+                ]
     lines += [
         "## Backlash: smallest alpha detected per joint",
         f"alpha_90: {bl['detection_probability']:.0%} of the runs with that backlash flagged at "
