@@ -26,18 +26,6 @@ def test_layout_and_rows():
     assert np.isnan(x[0, 2, 0]) and x[0, 5, 3] == 6.0
 
 
-def test_contrast_is_the_joints_abs_t_over_the_other_joints_largest():
-    rows = np.zeros((1, 6, 3))
-    rows[0, :, 0] = [1.0, -5.0, 2.0, np.nan, 0.0, 0.0]  # a t stem: joint 2 stands out by |-5| - |2| = 3
-    rows[0, :, 1] = 7.0  # not a t stem: no contrast column
-    rows[0, :, 2] = np.nan
-    rows[0, 0, 2] = 3.0  # a t stem with one joint's value: no other joint to compare with
-    c = joint_kind.contrast(rows, ["a_t", "b", "c_t"])
-    assert c.shape == (1, 6, 2)
-    np.testing.assert_array_equal(c[0, :, 0], [1 - 5, 5 - 2, 2 - 5, np.nan, 0 - 5, 0 - 5])
-    assert np.isnan(c[0, :, 1]).all()
-
-
 def test_labels_per_joint():
     df = pd.DataFrame({"fault": ["healthy", "backlash"], "fault_joint": [0, 3]})
     y = joint_kind.joint_labels(df)

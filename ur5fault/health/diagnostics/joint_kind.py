@@ -65,26 +65,6 @@ def joint_rows(df: pd.DataFrame, inputs: tuple[str, ...] | list[str]) -> np.ndar
     return out
 
 
-#: the per-joint stems whose values are on one scale on every joint (t values: standard normal on a healthy joint),
-#: so that a joint's value can be compared with the other joints' (:func:`contrast`)
-T_SUFFIX = "_t"
-
-
-def contrast(rows: np.ndarray, stems: list[str]) -> np.ndarray:
-    """``(n_runs, 6, n_t)``: for every t-value stem (ending in :data:`T_SUFFIX`), the joint's ``|t|`` minus the
-    largest ``|t|`` of the other five joints (NaN where the joint's own or every other joint's is NaN).
-
-    A single-joint fault stands out on one joint; what the twin does not know (the payload, its centre of mass,
-    the latency) lifts several joints' t values at once.  A joint row alone cannot tell the two apart."""
-    idx = [i for i, s in enumerate(stems) if s.endswith(T_SUFFIX)]
-    a = np.abs(rows[:, :, idx])
-    out = np.full_like(a, np.nan)
-    for j in range(rows.shape[1]):
-        best = np.nan_to_num(np.delete(a, j, axis=1), nan=-np.inf).max(axis=1)
-        out[:, j] = a[:, j] - np.where(np.isneginf(best), np.nan, best)
-    return out
-
-
 def joint_labels(df: pd.DataFrame) -> np.ndarray:
     """``(n_runs, 6)``: the fault kind on the faulty joint of a single-joint fault, ``none`` elsewhere."""
     fault = df["fault"].to_numpy(str)
