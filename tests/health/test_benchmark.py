@@ -250,6 +250,12 @@ def test_saved_classifiers_round_trip_and_score_another_campaign(tmp_path):
     assert (other_dir / "benchmark_transfer" / "metrics.json").exists()
 
 
+def test_benchmark_refuses_no_worker(tmp_path, capsys):
+    assert main(["benchmark", str(tmp_path), "--jobs", "0"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--jobs must be at least 1, got 0" in err
+
+
 def test_scoring_needs_saved_classifiers_and_their_columns(tmp_path, capsys):
     d = tmp_path / "c"
     d.mkdir()
@@ -275,6 +281,10 @@ def test_default_benchmark_compares_the_feature_sets(tmp_path):
     assert cmp["twin"]["trained"]["auc_all"] > 0.85 and abs(cmp["twin"]["shuffled"]["auc_all"] - 0.5) < 0.2
     assert abs(cmp["paper"]["trained"]["auc_all"] - 0.5) < 0.2
     assert "## Feature sets compared" in (tmp_path / "benchmark" / "report.md").read_text()
+    # the comparison's evaluations in two worker processes beside the main training: the same figures
+    par = run_benchmark(tmp_path, tmp_path / "parallel", jobs=2)
+    assert json.dumps(par["comparison"], sort_keys=True) == json.dumps(cmp, sort_keys=True)  # NaN equal too
+    assert par["detection"]["auc_all"] == m["detection"]["auc_all"]
 
 
 # ----------------------------------------------------------------------------- calibration of p(fault)
