@@ -10,9 +10,10 @@ from numpy.typing import NDArray
 
 from ...errors import ParameterError
 from . import paired
-from .baseline import Baseline, segment
+from .baseline import Baseline
 from .changes import BLOCK_S, estimates, find_changes, keep_mask, strongest
 from .conditions import motion_limit
+from .event_fit import segment
 from .events import (
     CHANNELS,
     DEFAULT_CHANNELS,
