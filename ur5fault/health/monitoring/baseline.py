@@ -34,8 +34,9 @@ from .event_fit import fit_events, fit_task, segment, task_residual
 from .events import CHANNELS, FEATURES, LEVEL_S, SMOOTH_S, WINDOW_S
 from .observe import Observed
 
-#: 7: the paired statistics' n_blocks counts each independent difference once (a format-6 file counted each twice)
-FORMAT = "ur5fault-monitor-baseline-7"
+#: 8: the paired statistics on 0.5 s blocks, ``n_blocks`` the effective number of independent ones (a float: their
+#: autocorrelation accounted for, :mod:`.effective`); 7 counted each independent 2 s difference once, 6 twice
+FORMAT = "ur5fault-monitor-baseline-8"
 
 
 def overlay_sha256(params: dict, effects: Sequence) -> str:
@@ -59,9 +60,10 @@ class Baseline:
     ``cond_scale`` ``(2, 4, 6, 4)``, ``cond_tail`` ``(2, 4, 6, 3)``: per channel and motion condition
     (:data:`~.conditions.CONDITIONS`) the spread and tail fitted on that condition's samples alone (NaN: under
     :data:`~.conditions.MIN_CONDITION_S` of it on that joint; the samples are then judged by the widest limit);
-    ``paired_candidates``: ``{label: (mean, variance, n_blocks)}`` of the coefficient fitted to the difference of
+    ``paired_candidates``: ``{label: (mean, variance, k_eff)}`` of the coefficient fitted to the difference of
     a baseline run's residual and the other runs' and its own repeats' at the same point of the task, per block
-    of paired samples (:mod:`.paired`; empty: the baseline runs do not repeat each other)."""
+    of paired samples, ``k_eff`` the effective number of independent blocks (:mod:`.paired`; empty: the
+    baseline runs do not repeat each other)."""
 
     overlay_sha256: str
     period_s: float
@@ -77,7 +79,7 @@ class Baseline:
     slow_rad_s: float
     cond_scale: NDArray
     cond_tail: NDArray
-    paired_candidates: dict[str, tuple[float, float, int]] = dataclasses.field(default_factory=dict)
+    paired_candidates: dict[str, tuple[float, float, float]] = dataclasses.field(default_factory=dict)
 
     @property
     def task_runs(self) -> list[int]:
@@ -157,7 +159,7 @@ class Baseline:
                                      for k, v in data["candidates"].items()},
                        tuple(t for t, _ in runs), tuple(r for _, r in runs), t_scale, t_tail,
                        float(data["slow_rad_s"]), c_scale, c_tail,
-                       {str(k): (float(v["mean"]), float(v["variance"]), int(v["n_blocks"]))
+                       {str(k): (float(v["mean"]), float(v["variance"]), float(v["n_blocks"]))
                         for k, v in data["paired_candidates"].items()})
         except ParameterError:
             raise  # already one line saying what to do (ParameterError is a ValueError)

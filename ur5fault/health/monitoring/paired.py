@@ -17,10 +17,10 @@ holds), with its sensitivity column taken on the log's own replay
 discrepancy workflow's test (:func:`ur5fault.discrepancy.search.judge`) as :mod:`.changes` does. Its reference
 distribution is the same difference-estimate between healthy baseline runs paired with each other and with
 their own repeats (never a run with its own samples), made per :data:`PAIRED_BLOCK_S` of paired samples
-(:func:`block_estimates`): their mean, variance and number feed the same prediction interval and Student's bar
+(:func:`block_estimates`): their mean, variance and effective number feed the same prediction interval and Student's bar
 (:func:`.changes.bar`) as the unpaired test's.
 
-*What ``k`` counts: each independent difference once.* Paired both ways, two repeats of a stretch give
+*What ``k`` counts: each difference once.* Paired both ways, two repeats of a stretch give
 ``d_A = r_A - r_B`` and ``d_B = r_B - r_A = -d_A`` (a run paired with its own repeat at lag L: ``d(t + L) =
 -d(t)``): one difference, two blocks. Counted as two, Student's bar at ``k - 1`` degrees of freedom is too low
 where ``k`` is small. So ``k`` is the number of blocks the baseline gives with each run paired only with what
@@ -31,11 +31,22 @@ to zero). The mean and variance stay those of the blocks paired both ways (:func
 two healthy runs comes first in the baseline is arbitrary, and a difference between them belongs in the
 reference with either sign (paired one way only, a systematic difference between the earlier and the later runs
 would read as a mean of one sign with a narrow spread, and the baseline's order would set it).
-The consecutive blocks of one run are still counted as
-independent (the block test's assumption, stated there): the model's error that would tie neighbouring
-stretches of a run together cancels in the difference at the same point of the task, leaving the sensors' noise
-and the task's repeatability; where neighbouring blocks are still correlated, the bar is lower than it would be
-counting runs (2-6 here).
+*Neighbouring blocks are not counted as independent* (they were before, with blocks of 2 s): the one-way
+blocks of each run, in time order, give the design effect ``DE`` of their autocorrelation (:mod:`.effective`:
+pooled over the runs about the both-way mean, the lags within one pairing stretch always counted, then Geyer's
+initial positive sequence), and ``k_eff = k / DE`` independent blocks set Student's bar; the variance is
+corrected for the bias the correlation puts in it. A difference that holds over a whole run (a warmer run, an
+offset that drifted) is correlation at every lag of that run, so a baseline whose runs each sit apart is worth
+about as many blocks as it has runs; one whose differences are the sensors' noise and the task's repeatability
+is worth about all its blocks.
+
+*Why the false-alarm rate holds.* The log's estimate over its paired samples is (to first order) a weighted mean
+of the same candidate's estimates on its own short blocks, so under no change its spread about the reference's
+mean is at most that of a single block, whatever their correlation (the variance of a weighted mean is at most
+the largest variance of its terms): the prediction interval compares it with the spread of a single baseline
+block (``var_b``) plus its own standard error, a conservative width. What remains is how well ``var_b`` is
+known: its ``k_eff - 1`` degrees of freedom in Student's quantile at the workflow's tail, which is why ``k_eff``
+must not count correlated blocks as independent.
 The estimate reads as the change *since the paired healthy runs* (a gain of 1.1: the current reads 10 %
 more than on the same motion of the baseline).
 """
@@ -49,15 +60,22 @@ from numpy.typing import NDArray
 
 from ...sim.axes import N_JOINTS
 from .changes import BLOCK_S, Estimate, fit_alone, spreads
+from .effective import design_effect, effective
 from .observe import Observed
 from .task import CHUNK_S, reference
 
-#: the paired samples a baseline's paired estimate is made on [s]: the stretch the pairing vouches for
-#: (:data:`~.task.CHUNK_S`). The unpaired test's :data:`~.changes.BLOCK_S` must hold several motions of each
-#: joint because a block's estimate absorbs the model's motion-dependent error there; the paired difference holds
-#: none of it to average out (only the sensors' noise and the task's repeatability), so a block needs only to be
-#: one repeat of a stretch of the task
-PAIRED_BLOCK_S = CHUNK_S
+#: the paired samples a baseline's paired estimate is made on [s]: a quarter of the pairing's stretch
+#: (:data:`~.task.CHUNK_S`), 62 samples at the robots' 125 Hz. The unpaired test's :data:`~.changes.BLOCK_S` must
+#: hold several motions of each joint because a block's estimate absorbs the model's motion-dependent error there;
+#: the paired difference holds none of it to average out (only the sensors' noise and the task's
+#: repeatability). Shorter blocks give more of them, and Student's bar at the workflow's tail falls fast with
+#: their number (125.6, 32.6, 9.8, 6.2 at 3, 4, 7, 12); neighbouring blocks are not independent, which their
+#: autocorrelation accounts for (:mod:`.effective`; the four blocks of one stretch share its paired reference, so
+#: the lags within it are always counted, :data:`MIN_LAG`). It was 2 s (the stretch) before.
+PAIRED_BLOCK_S = CHUNK_S / 4
+#: the lags of the block sequence always counted in the design effect (:func:`.effective.design_effect`): the
+#: blocks of one pairing stretch share its reference runs and lag
+MIN_LAG = int(round(CHUNK_S / PAIRED_BLOCK_S))
 #: a log part is judged by the paired test only with at least this much of its screened part paired [s]: the
 #: length of the unpaired test's blocks (:data:`~.changes.BLOCK_S`), several motions of each joint, so that the
 #: log's own estimate holds them as its reference's do
@@ -111,16 +129,18 @@ def _groups(obs: Observed, ok: NDArray) -> list[NDArray]:
 
 def block_estimates(obs: Observed, ref: NDArray) -> list[dict[str, Estimate]]:
     """Each candidate fitted alone to the paired difference on each group of :data:`PAIRED_BLOCK_S` of the
-    screened part's paired samples (:func:`_groups`)."""
+    screened part's paired samples (:func:`_groups`), in time order. Each fit sees only its group's span (the
+    same estimate as on the whole part with the rest left out, at a fraction of the cost)."""
     if not obs.cands:
         return []
     e, ok = difference(obs, ref)
     X = current_columns(obs)
     out = []
     for part in _groups(obs, ok):
-        keep = np.zeros(ok.shape, bool)
-        keep[part] = True
-        out.append(fit_alone(obs.cands, X, e, keep))
+        lo, hi = int(part[0]), int(part[-1]) + 1
+        keep = np.zeros(hi - lo, bool)
+        keep[part - lo] = True
+        out.append(fit_alone(obs.cands, X[:, lo:hi], e[lo:hi], keep))
     return out
 
 
@@ -134,22 +154,33 @@ def baseline_references(healthy: Sequence[Observed], refs: Sequence[tuple[NDArra
 
 
 def independent_blocks(healthy: Sequence[Observed], refs: Sequence[tuple[NDArray, NDArray]]) -> int:
-    """The number of independent paired blocks the baseline runs give: their blocks with each pair of repeats
-    compared once (:func:`baseline_references` ``one_way``)."""
+    """The number of paired blocks the baseline runs give with each pair of repeats compared once
+    (:func:`baseline_references` ``one_way``), before their autocorrelation is accounted for."""
     return sum(len(_groups(o, difference(o, ref)[1]))
                for o, ref in zip(healthy, baseline_references(healthy, refs, one_way=True)))
 
 
 def baseline_spreads(healthy: Sequence[Observed], refs: Sequence[tuple[NDArray, NDArray]]
-                     ) -> dict[str, tuple[float, float, int]]:
-    """``{label: (mean, variance, k)}`` of each candidate's paired estimates over the baseline runs: mean and
-    variance of its blocks paired both ways (either sign of each difference between healthy runs), ``k`` the
-    number of independent ones (:func:`independent_blocks`, at most the blocks it was estimated on; module
-    docstring). A candidate with no independent block has no paired statistics."""
+                     ) -> dict[str, tuple[float, float, float]]:
+    """``{label: (mean, variance, k_eff)}`` of each candidate's paired estimates over the baseline runs (module
+    docstring): mean and variance of its blocks paired both ways (either sign of each difference between healthy
+    runs); ``k_eff`` the independent blocks its one-way blocks (each pair of repeats compared once) are worth,
+    ``k / DE`` with ``DE`` the design effect of their autocorrelation within each run about that mean
+    (:func:`.effective.design_effect`, the lags within one pairing stretch always counted), and the variance
+    corrected for the bias the correlation puts in it (:func:`.effective.effective`). A candidate whose blocks
+    are worth fewer than 2 independent ones has no paired statistics."""
     both = spreads(block for o, ref in zip(healthy, baseline_references(healthy, refs))
                    for block in block_estimates(o, ref))
-    k = independent_blocks(healthy, refs) if both else 0
-    if k < 1:
+    if not both:
         return {}
-    # k = 1 with two blocks paired both ways (d and -d): judged as a single block, z on their variance
-    return {label: (mean, var, min(k, n)) for label, (mean, var, n) in both.items()}
+    one_way = [block_estimates(o, ref) for o, ref in zip(healthy, baseline_references(healthy, refs, one_way=True))]
+    out = {}
+    for label, (mean, var, _) in both.items():
+        seqs = [np.array([b[label].theta for b in run if label in b and np.isfinite(b[label].se)]) for run in one_way]
+        k = sum(s.size for s in seqs)
+        if k < 2:
+            continue
+        got = effective(var, k, design_effect(seqs, mean, MIN_LAG))
+        if got is not None:
+            out[label] = (mean, got[0], got[1])
+    return out
