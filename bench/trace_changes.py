@@ -68,10 +68,17 @@ def trace(name: str, base, obs, joint: int) -> None:
         ref = reference(obs.target_rad, refs, obs.period_s)[0]
         on = paired.difference(obs, ref)[1]
         est = paired.estimates(obs, ref, logged)
-        print(f"| paired ({on.sum() * obs.period_s:.1f} s) | | | | | | | | |")
+        secs = float((logged & on).sum() * obs.period_s)
+        stats = base.paired_candidates
+        if hasattr(paired, "for_log"):  # the reference for a log of that length (after the autocorrelation change)
+            stats = paired.for_log(stats, secs)
+            de = ", ".join(f"{lb.split(': ')[1]} {base.paired_candidates[lb][3]:.2f}"
+                           for lb in labels if lb in base.paired_candidates)
+            print(f"| design effect | {de} | | | | | | | |")
+        print(f"| paired ({secs:.1f} s) | | | | | | | | |")
         for lb in labels:
             if lb in est:
-                print(row("paired", lb, est[lb], base.paired_candidates))
+                print(row("paired", lb, est[lb], stats))
     rest = logged & ~on
     if rest.sum() * obs.period_s >= 5.0 or not on.any():
         est = estimates(obs, rest)

@@ -6,6 +6,7 @@ current-sensor gain on a repeated task is found on its joint with its size; a he
 import dataclasses
 
 import numpy as np
+import pytest
 
 from tests.health.monitoring.test_monitoring import PERIOD, part
 from tests.health.monitoring.test_task import C, cycle, jitter
@@ -74,7 +75,7 @@ def test_a_gain_on_a_repeated_task_is_changed_and_a_healthy_repeat_is_not():
     carry the twin's error."""
     base = [run(f"b{k}", cycle(5, lead_s=0.3 * k), 20 + k) for k in range(3)]
     b = fit_baseline(base, "sha")
-    mean, var, k = b.paired_candidates[LABEL]
+    mean, var, k, _ = b.paired_candidates[LABEL]
     assert k >= 10 and abs(mean) < 0.01  # healthy repeats paired with each other: no gain between them
     healthy = assess(b, run("healthy", cycle(5, lead_s=0.2), 40))
     assert healthy["verdict"] == "consistent", healthy
@@ -300,8 +301,23 @@ def test_healthy_runs_that_each_sit_a_few_percent_apart_are_worth_about_one_bloc
     refs = [(o.target_rad, np.where(o.logged[:, None], o.residual_A, np.nan)) for o in base]
     assert independent_blocks(base, refs) > 100
     b = fit_baseline(base, "sha")
-    _, var, k_eff = b.paired_candidates[LABEL]
+    _, var, k_eff, _ = b.paired_candidates[LABEL]
     assert 2.0 <= k_eff < 4.0, k_eff
     assert 0.02 < np.sqrt(var) < 0.06  # the runs' spread (differences of 3-6 %), not the blocks' noise
     out = assess(b, run("log", cycle(5, lead_s=0.2), 41, gain=1.06))
     assert not any(c["joint"] == "shoulder_lift_joint" for c in out["changes"]), out
+
+
+def test_the_reference_of_a_log_scales_one_blocks_spread_by_the_design_effect_over_its_length():
+    """Hand-computed: one block's variance 1, k_eff 4, design effect 2. A log of 10 s paired (20 blocks of 0.5 s)
+    predicts ``1 x (2 / 20 + 1 / 4) = 0.35``, returned as the variance that ``1 + 1 / k_eff`` turns into it
+    (0.28); a log of one block (or a design effect above its blocks) is never narrower than one block: 1.25."""
+    from ur5fault.health.monitoring.changes import bar
+    from ur5fault.health.monitoring.paired import for_log
+
+    stats = {"x": (0.5, 1.0, 4.0, 2.0)}
+    mean, var, k = for_log(stats, 10.0)["x"]
+    assert (mean, k) == (0.5, 4.0)
+    assert var == pytest.approx(0.28) and var * bar(k)[1] == pytest.approx(0.35)
+    assert for_log(stats, 0.5)["x"][1] * bar(4.0)[1] == pytest.approx(1.25)
+    assert for_log({"x": (0.0, 1.0, 4.0, 40.0)}, 10.0)["x"][1] == pytest.approx(1.0)

@@ -40,13 +40,19 @@ offset that drifted) is correlation at every lag of that run, so a baseline whos
 about as many blocks as it has runs; one whose differences are the sensors' noise and the task's repeatability
 is worth about all its blocks.
 
-*Why the false-alarm rate holds.* The log's estimate over its paired samples is (to first order) a weighted mean
-of the same candidate's estimates on its own short blocks, so under no change its spread about the reference's
-mean is at most that of a single block, whatever their correlation (the variance of a weighted mean is at most
-the largest variance of its terms): the prediction interval compares it with the spread of a single baseline
-block (``var_b``) plus its own standard error, a conservative width. What remains is how well ``var_b`` is
-known: its ``k_eff - 1`` degrees of freedom in Student's quantile at the workflow's tail, which is why ``k_eff``
-must not count correlated blocks as independent.
+*Why the false-alarm rate holds.* The log's estimate over its ``n`` paired blocks is (to first order) a weighted
+mean of the same candidate's estimates on its own short blocks. Under no change, blocks with the baseline's
+autocorrelation make its variance that of one block times ``DE / n`` (never more than one block's): the
+prediction interval uses the baseline's single-block spread ``var_b`` so scaled, plus the reference mean's
+``var_b / k_eff`` and the log's own standard error (:func:`for_log`; that error and ``DE / n`` count the log's
+noise twice, a conservative width). How well ``var_b`` is known sets Student's quantile at the workflow's tail
+with ``k_eff - 1`` degrees of freedom, which is why ``k_eff`` must not count correlated blocks as independent.
+What it assumes: the log's healthy difference has the autocorrelation of the baseline's (a difference of the
+log from the healthy runs that holds over the whole log, beyond what the baseline runs show between each other,
+is not covered; with a single baseline run, its own cycles show only the differences within one session).
+Before, the interval used one block's spread unscaled (``min(1, DE / n)`` taken as 1), which asks a 20 s
+log's estimate to lie as far out as a single 2 s block's.
+
 The estimate reads as the change *since the paired healthy runs* (a gain of 1.1: the current reads 10 %
 more than on the same motion of the baseline).
 """
@@ -161,12 +167,12 @@ def independent_blocks(healthy: Sequence[Observed], refs: Sequence[tuple[NDArray
 
 
 def baseline_spreads(healthy: Sequence[Observed], refs: Sequence[tuple[NDArray, NDArray]]
-                     ) -> dict[str, tuple[float, float, float]]:
-    """``{label: (mean, variance, k_eff)}`` of each candidate's paired estimates over the baseline runs (module
+                     ) -> dict[str, tuple[float, float, float, float]]:
+    """``{label: (mean, variance, k_eff, DE)}`` of each candidate's paired estimates over the baseline runs (module
     docstring): mean and variance of its blocks paired both ways (either sign of each difference between healthy
-    runs); ``k_eff`` the independent blocks its one-way blocks (each pair of repeats compared once) are worth,
-    ``k / DE`` with ``DE`` the design effect of their autocorrelation within each run about that mean
-    (:func:`.effective.design_effect`, the lags within one pairing stretch always counted), and the variance
+    runs); ``DE`` the design effect of its one-way blocks' autocorrelation (each pair of repeats compared once;
+    within each run, about that mean, the lags within one pairing stretch always counted:
+    :func:`.effective.design_effect`), ``k_eff = k / DE`` the independent blocks they are worth, and the variance
     corrected for the bias the correlation puts in it (:func:`.effective.effective`). A candidate whose blocks
     are worth fewer than 2 independent ones has no paired statistics."""
     both = spreads(block for o, ref in zip(healthy, baseline_references(healthy, refs))
@@ -180,7 +186,25 @@ def baseline_spreads(healthy: Sequence[Observed], refs: Sequence[tuple[NDArray, 
         k = sum(s.size for s in seqs)
         if k < 2:
             continue
-        got = effective(var, k, design_effect(seqs, mean, MIN_LAG))
+        de = design_effect(seqs, mean, MIN_LAG)
+        got = effective(var, k, de)
         if got is not None:
-            out[label] = (mean, got[0], got[1])
+            out[label] = (mean, got[0], got[1], de)
     return out
+
+
+def for_log(stats: dict[str, tuple[float, float, float, float]], paired_s: float
+            ) -> dict[str, tuple[float, float, float]]:
+    """The reference ``{label: (mean, variance, k_eff)}`` of a log's estimate on ``paired_s`` seconds of paired
+    samples, as :func:`.changes.find_changes` takes it (its prediction variance ``variance (1 + 1 / k_eff)``).
+
+    The log's estimate is (to first order) a weighted mean of its ``n = paired_s / PAIRED_BLOCK_S`` blocks'
+    estimates, so under no change its variance is that of one block times ``min(1, DE / n)`` (``DE`` the
+    baseline's design effect: ``n`` blocks of that autocorrelation are worth ``n / DE`` independent ones, and
+    never less than one; a weighted mean's variance is at most the equal-weight mean's for blocks of unequal
+    information). The reference mean adds ``variance / k_eff``. So the prediction variance is
+    ``variance (min(1, DE / n) + 1 / k_eff)``, returned as the variance that :func:`.changes.bar`'s factor
+    ``1 + 1 / k_eff`` turns into it."""
+    n = max(paired_s / PAIRED_BLOCK_S, 1.0)
+    return {label: (mean, var * (min(1.0, de / n) + 1.0 / k) / (1.0 + 1.0 / k), k)
+            for label, (mean, var, k, de) in stats.items()}
