@@ -67,6 +67,7 @@ def trace(name: str, base, obs, joint: int) -> None:
         refs = list(zip(base.task_target_rad, base.task_residual_A))
         ref = reference(obs.target_rad, refs, obs.period_s)[0]
         on = paired.difference(obs, ref)[1]
+    if on.any():
         est = paired.estimates(obs, ref, logged)
         secs = float((logged & on).sum() * obs.period_s)
         stats = base.paired_candidates
