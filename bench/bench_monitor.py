@@ -195,13 +195,16 @@ def monitored(obs):
 
 def separable(base, paired: bool = False) -> dict[str, dict[str, float]]:
     """Per joint, the smallest current-sensor offset [A] and gain change [-] the change test can tell from the
-    baseline's blocks (``paired``: from its paired difference-estimates, the paired test's): the bar times the
-    prediction interval's width with the new log's own standard error taken as 0 (a lower bound: a real log's SE
-    adds to it)."""
-    stats = base.paired_candidates if paired else base.candidates
+    baseline's blocks (``paired``: from its paired difference-estimates, the paired test's, for a log paired over
+    the whole screened 20 s): the bar times the prediction interval's width with the new log's own standard error
+    taken as 0 (a lower bound: a real log's SE adds to it)."""
+    from ur5fault.discrepancy.model import SCREEN_S
     from ur5fault.health.monitoring.changes import bar
+    from ur5fault.health.monitoring.paired import for_log
     from ur5fault.sim.axes import JOINT_NAMES
 
+    # the paired test's reference for a log paired over its whole screened 20 s
+    stats = for_log(base.paired_candidates, SCREEN_S) if paired else base.candidates
     out = {}
     for j in JOINT_NAMES:
         row = {}
@@ -427,7 +430,7 @@ def main(argv=None) -> int:
            "kufieta, paired (the six)": separable(full6, paired=True),
            "kufieta, paired (the five + the quiet No5 run's first 18 s)": separable(split_base, paired=True),
            "nist, paired": separable(nb, paired=True)}
-    blocks = {name: {j: b.paired_candidates.get(f"{j}: current_sensor_gain.gain", (0, 0, 0))[2] for j in JOINTS}
+    blocks = {name: {j: b.paired_candidates.get(f"{j}: current_sensor_gain.gain", (0, 0, 0, 0))[2] for j in JOINTS}
               for name, b in (("the six", full6), ("split", split_base), ("nist", nb))}
     print("\npaired blocks per baseline (gain candidates): " + str(blocks))
     paired = {o.name: float((judged_transients(b, o)[3] & judged_transients(b, o)[2]).sum() * o.period_s)

@@ -6,6 +6,7 @@ current-sensor gain on a repeated task is found on its joint with its size; a he
 import dataclasses
 
 import numpy as np
+import pytest
 
 from tests.health.monitoring.test_monitoring import PERIOD, part
 from tests.health.monitoring.test_task import C, cycle, jitter
@@ -74,7 +75,7 @@ def test_a_gain_on_a_repeated_task_is_changed_and_a_healthy_repeat_is_not():
     carry the twin's error."""
     base = [run(f"b{k}", cycle(5, lead_s=0.3 * k), 20 + k) for k in range(3)]
     b = fit_baseline(base, "sha")
-    mean, var, k = b.paired_candidates[LABEL]
+    mean, var, k, _ = b.paired_candidates[LABEL]
     assert k >= 10 and abs(mean) < 0.01  # healthy repeats paired with each other: no gain between them
     healthy = assess(b, run("healthy", cycle(5, lead_s=0.2), 40))
     assert healthy["verdict"] == "consistent", healthy
@@ -107,10 +108,15 @@ def test_the_paired_statistics_survive_baseline_json(tmp_path):
 
 def test_a_baseline_screened_whole_gives_paired_blocks_past_the_first_20_s():
     """Two healthy runs of 7 cycles (about 30 s each), screened whole (as the monitor screens a baseline run):
-    the paired statistics count a block per 2 s of the paired samples of both runs (each pair of repeats once),
+    the paired statistics count a block per 0.5 s of the paired samples of both runs (each pair of repeats once),
     past the 20 s a monitored log is screened on, while the block test keeps its 5 s blocks of each run's first
-    20 s (4 per run)."""
-    from ur5fault.health.monitoring.paired import baseline_references, paired_seconds
+    20 s (4 per run). Their autocorrelation makes them worth fewer, but more than 20 of them."""
+    from ur5fault.health.monitoring.paired import (
+        PAIRED_BLOCK_S,
+        baseline_references,
+        independent_blocks,
+        paired_seconds,
+    )
 
     base = [run(f"b{k}", cycle(7, lead_s=0.3 * k), 20 + k) for k in range(2)]
     assert all(o.n * PERIOD > 29.0 for o in base)
@@ -119,7 +125,9 @@ def test_a_baseline_screened_whole_gives_paired_blocks_past_the_first_20_s():
     secs = [paired_seconds(o, ref) for o, ref in zip(base, baseline_references(base, refs, one_way=True))]
     # paired past 20 s (the first run's first cycle has no earlier repeat: each pair is compared once)
     assert all(s > 20.0 for s in secs), secs
-    assert b.paired_candidates[LABEL][2] == sum(round(s / 2.0) for s in secs)  # > 2 x 10: blocks past 20 s
+    k = independent_blocks(base, refs)
+    assert k == sum(round(s / PAIRED_BLOCK_S) for s in secs) > 2 * 20 / PAIRED_BLOCK_S  # blocks past 20 s
+    assert 20 < b.paired_candidates[LABEL][2] <= k
     assert b.candidates[LABEL][2] == 2 * 4
 
 
@@ -151,7 +159,12 @@ def test_a_self_paired_baseline_counts_each_difference_once():
     one at t, to the bit (one difference, counted twice). The baseline's paired statistics pair each sample only
     with the earlier repeat: the first cycle has no reference, and the blocks are those of the second cycle's
     paired seconds alone, half of what the two-way pairing gave."""
-    from ur5fault.health.monitoring.paired import baseline_references, paired_seconds
+    from ur5fault.health.monitoring.paired import (
+        PAIRED_BLOCK_S,
+        baseline_references,
+        independent_blocks,
+        paired_seconds,
+    )
 
     o = run("b0", cycle(2, move_s=4.0), 20)
     L = 2 * (round(4.0 / PERIOD) + round(0.6 / PERIOD))  # samples of one cycle
@@ -166,21 +179,34 @@ def test_a_self_paired_baseline_counts_each_difference_once():
     np.testing.assert_array_equal(one_way[first + L], two_way[first + L])  # the second: against the first
     secs_two, secs_one = paired_seconds(o, two_way), paired_seconds(o, one_way)
     assert abs(secs_one - secs_two / 2) < 1.0, (secs_one, secs_two)  # half, to within the 2 s chunks' grid
-    k = fit_baseline([o], "sha").paired_candidates[LABEL][2]
-    assert k == round(secs_one / 2.0) and k <= round(secs_two / 2.0) / 2, (k, secs_one, secs_two)
+    k = independent_blocks([o], refs)
+    assert k == round(secs_one / PAIRED_BLOCK_S) and k <= round(secs_two / PAIRED_BLOCK_S) / 2 + 1, (k, secs_one,
+                                                                                          secs_two)
+    assert fit_baseline([o], "sha").paired_candidates[LABEL][2] <= k  # worth at most that many
 
 
 def test_the_paired_statistics_do_not_depend_on_the_baselines_order():
     """Two healthy runs, the second with a 3 % gain on shoulder_lift against the first (a systematic difference
-    between healthy runs): in either order the paired mean and variance are the same (each difference enters with
-    both signs), the mean near 0, and the variance holds the 3 %; paired one way only, the order would set the
-    sign of the mean."""
+    between healthy runs): in either order the blocks paired both ways have the same mean and variance (each
+    difference enters with both signs), the mean near 0, and the variance holds the 3 %; paired one way only, the
+    order would set the sign of the mean. And the difference holds over the whole run, so every one-way block
+    sits 3 % off that mean: correlation at every lag, one independent difference, not a block per 0.5 s; with
+    fewer than 2 independent blocks the gain has no paired statistics (it cannot be told from the runs' own
+    difference)."""
+    from ur5fault.health.monitoring.changes import spreads
+    from ur5fault.health.monitoring.paired import baseline_references, block_estimates, independent_blocks
+
     a = run("a", cycle(4), 20)
     b = run("b", cycle(4, lead_s=0.3), 21, gain=1.03)
-    ab = fit_baseline([a, b], "sha").paired_candidates[LABEL]
-    ba = fit_baseline([b, a], "sha").paired_candidates[LABEL]
+    stats = []
+    for pair in ([a, b], [b, a]):
+        refs = [(o.target_rad, np.where(o.logged[:, None], o.residual_A, np.nan)) for o in pair]
+        stats.append(spreads(blk for o, ref in zip(pair, baseline_references(pair, refs))
+                             for blk in block_estimates(o, ref))[LABEL])
+        assert independent_blocks(pair, refs) > 10  # blocks of 0.5 s, one way
+        assert LABEL not in fit_baseline(pair, "sha").paired_candidates
+    ab, ba = stats
     np.testing.assert_allclose(ab[:2], ba[:2], rtol=1e-9, atol=1e-12)
-    assert abs(ab[2] - ba[2]) <= 1  # the independent blocks: one way, to within the 2 s chunks' grid
     assert abs(ab[0]) < 0.01 and np.sqrt(ab[1]) > 0.02, ab  # mean ~0, spread of the order of the 3 %
 
 
@@ -239,3 +265,59 @@ def test_a_baseline_run_is_refused_as_a_monitored_log():
     other = dataclasses.replace(base[1], residual_A=base[1].residual_A + 0.01)
     assert baseline_run_of(b, other) is None
     assert assess(b, run("repeat", cycle(3, lead_s=0.2), 41))["verdict"] == "consistent"
+
+
+def test_a_small_gain_on_a_task_one_baseline_run_repeats_is_found():
+    """One healthy run of 6 cycles as the baseline (NIST's case: its reference is its own cycles paired with each
+    other): its 0.5 s blocks, paired one way, are worth more independent blocks than its 2 s stretches are in
+    number (the healthy difference is the sensors' noise: little autocorrelation), so a 2 % gain on
+    shoulder_lift is "changed" there with its size (read on the simulated current, as the first test derives),
+    and a healthy repeat is "consistent"."""
+    from ur5fault.health.monitoring.paired import baseline_references, paired_seconds
+
+    base = run("b0", cycle(6), 20)
+    refs = [(base.target_rad, np.where(base.logged[:, None], base.residual_A, np.nan))]
+    secs = paired_seconds(base, baseline_references([base], refs, one_way=True)[0])
+    b = fit_baseline([base], "sha")
+    assert b.paired_candidates[LABEL][2] > secs / 2.0, (b.paired_candidates[LABEL], secs)
+    assert assess(b, run("healthy", cycle(5, lead_s=0.2), 40))["verdict"] == "consistent"
+    out = assess(b, run("worn", cycle(5, lead_s=0.2), 41, gain=1.02))
+    assert out["verdict"] == "changed", out
+    (ch,) = out["changes"]
+    sim, err = (c[:, 1] for c in currents(cycle(5, lead_s=0.2)))
+    expected = 1.0 + 0.02 * float(np.sum((sim + err) * sim) / np.sum(sim * sim))
+    assert ch["joint"] == "shoulder_lift_joint" and ch["reference"] == "paired"
+    assert ch["effect"] == "current_sensor_gain" and abs(ch["value"] - expected) < 0.003, (ch, expected)
+
+
+def test_healthy_runs_that_each_sit_a_few_percent_apart_are_worth_about_one_block_each():
+    """Three healthy runs of one task whose shoulder_lift currents read 1.00, 1.03 and 0.97 times the true one (a
+    spread between healthy runs that holds over each whole run): their 0.5 s blocks are over 100, but every
+    block of a run sits off the mean the same way, so they are worth about the 3 runs (the design effect of
+    their autocorrelation), and a new run at 1.06, twice the healthy runs' spread, is not called changed."""
+    from ur5fault.health.monitoring.paired import independent_blocks
+
+    base = [run(f"b{k}", cycle(5, lead_s=0.3 * k), 20 + k, gain=g) for k, g in enumerate((1.0, 1.03, 0.97))]
+    refs = [(o.target_rad, np.where(o.logged[:, None], o.residual_A, np.nan)) for o in base]
+    assert independent_blocks(base, refs) > 100
+    b = fit_baseline(base, "sha")
+    _, var, k_eff, _ = b.paired_candidates[LABEL]
+    assert 2.0 <= k_eff < 4.0, k_eff
+    assert 0.02 < np.sqrt(var) < 0.06  # the runs' spread (differences of 3-6 %), not the blocks' noise
+    out = assess(b, run("log", cycle(5, lead_s=0.2), 41, gain=1.06))
+    assert not any(c["joint"] == "shoulder_lift_joint" for c in out["changes"]), out
+
+
+def test_the_reference_of_a_log_scales_one_blocks_spread_by_the_design_effect_over_its_length():
+    """Hand-computed: one block's variance 1, k_eff 4, design effect 2. A log of 10 s paired (20 blocks of 0.5 s)
+    predicts ``1 x (2 / 20 + 1 / 4) = 0.35``, returned as the variance that ``1 + 1 / k_eff`` turns into it
+    (0.28); a log of one block (or a design effect above its blocks) is never narrower than one block: 1.25."""
+    from ur5fault.health.monitoring.changes import bar
+    from ur5fault.health.monitoring.paired import for_log
+
+    stats = {"x": (0.5, 1.0, 4.0, 2.0)}
+    mean, var, k = for_log(stats, 10.0)["x"]
+    assert (mean, k) == (0.5, 4.0)
+    assert var == pytest.approx(0.28) and var * bar(k)[1] == pytest.approx(0.35)
+    assert for_log(stats, 0.5)["x"][1] * bar(4.0)[1] == pytest.approx(1.25)
+    assert for_log({"x": (0.0, 1.0, 4.0, 40.0)}, 10.0)["x"][1] == pytest.approx(1.0)

@@ -153,7 +153,7 @@ def test_without_repeats_the_judgement_is_the_motions_and_the_baseline_round_tri
     new = part("new", np.random.default_rng(9).normal(0, 0.1, (2000, 6)))
     hs, lims, judged, paired = judged_transients(b, new)
     assert not paired.any()
-    from ur5fault.health.monitoring.baseline import segment
+    from ur5fault.health.monitoring.event_fit import segment
 
     h, feats, ok, cond = segment(new, b.slow_rad_s)
     np.testing.assert_array_equal(lims["current"], limits(b, new, feats, ok, cond, ("current",))["current"])

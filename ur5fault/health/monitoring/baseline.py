@@ -7,7 +7,8 @@ per library candidate the mean and spread of its estimates over time blocks of t
 runs (:mod:`.changes`), and for a robot that repeats its task (:mod:`.task`) every baseline run's targets and
 current residual (the reference a log that repeats them is judged against) with the spread and tail of the
 current's transient against that reference, measured where the baseline runs repeat each other, and per library
-candidate the mean and spread of its estimates on the difference of residuals there (:mod:`.paired`). It is written
+candidate the mean and spread of its estimates on the difference of residuals there (:mod:`.paired`). The event
+limits are fitted in :mod:`.event_fit`; this module keeps them with the change statistics. It is written
 as ``baseline.json`` (:meth:`Baseline.to_json`) with the SHA-256 of the overlay it belongs to, so a later
 ``ur5fault monitor --baseline-stats`` reuses it only with that same overlay.
 """
@@ -28,31 +29,15 @@ from ...errors import ParameterError
 from ...sim.axes import JOINT_NAMES, N_JOINTS
 from . import paired
 from .changes import BLOCK_S, block_estimates, spreads
-from .conditions import CONDITIONS, CONSTANT_SPREAD, REVERSAL, SLOW, condition, constant, enough, rest_level
-from .events import (
-    CHANNELS,
-    FEATURES,
-    LEVEL_S,
-    SMOOTH_S,
-    WINDOW_S,
-    features,
-    fit_scale,
-    fit_tail,
-    judged_rows,
-    quantum_sigma,
-    sigma,
-    transient,
-    window_maxima,
-)
+from .conditions import CONDITIONS
+from .event_fit import fit_events, fit_task, segment, task_residual
+from .events import CHANNELS, FEATURES, LEVEL_S, SMOOTH_S, WINDOW_S
 from .observe import Observed
-from .task import paired_transient
 
-#: 7: the paired statistics' n_blocks counts each independent difference once (a format-6 file counted each twice)
-FORMAT = "ur5fault-monitor-baseline-7"
-#: a baseline run's task statistics are fitted only on at least this much of it paired with the other runs or its
-#: own repeats [s] (40 windows of WINDOW_S: 4 above the tail's 90 % quantile); with less, no log is judged
-#: against that run
-MIN_TASK_S = 10.0
+#: 8: the paired statistics on 0.5 s blocks, ``n_blocks`` the effective number of independent ones (a float: their
+#: autocorrelation accounted for, :mod:`.effective`) and their ``design_effect``; 7 counted each independent 2 s
+#: difference once, 6 twice
+FORMAT = "ur5fault-monitor-baseline-8"
 
 
 def overlay_sha256(params: dict, effects: Sequence) -> str:
@@ -71,14 +56,15 @@ class Baseline:
     baseline run's joint targets and current residual ``(m, 6)`` (NaN where the tick was not logged;
     :mod:`.task`); ``task_scale`` ``(k, 6, 4)``, ``task_tail`` ``(k, 6, 3)``: per baseline run, the spread and
     tail of its current's transient against the other runs and its own repeats where they repeat its task (NaN:
-    they do not, over :data:`MIN_TASK_S`; no log is then paired with that run): the spread of *that task*;
+    they do not, over :data:`~.event_fit.MIN_TASK_S`; no log is then paired with that run): the spread of *that task*;
     ``slow_rad_s``: the overlay's Stribeck speed, where the slow condition ends (:mod:`.conditions`);
     ``cond_scale`` ``(2, 4, 6, 4)``, ``cond_tail`` ``(2, 4, 6, 3)``: per channel and motion condition
     (:data:`~.conditions.CONDITIONS`) the spread and tail fitted on that condition's samples alone (NaN: under
     :data:`~.conditions.MIN_CONDITION_S` of it on that joint; the samples are then judged by the widest limit);
-    ``paired_candidates``: ``{label: (mean, variance, n_blocks)}`` of the coefficient fitted to the difference of
-    a baseline run's residual and the other runs' and its own repeats' at the same point of the task, per block
-    of paired samples (:mod:`.paired`; empty: the baseline runs do not repeat each other)."""
+    ``paired_candidates``: ``{label: (mean, variance, k_eff, DE)}`` of the coefficient fitted to the difference
+    of a baseline run's residual and the other runs' and its own repeats' at the same point of the task, per block
+    of paired samples, ``k_eff`` the effective number of independent blocks and ``DE`` their design effect
+    (:mod:`.paired`; empty: the baseline runs do not repeat each other)."""
 
     overlay_sha256: str
     period_s: float
@@ -94,7 +80,7 @@ class Baseline:
     slow_rad_s: float
     cond_scale: NDArray
     cond_tail: NDArray
-    paired_candidates: dict[str, tuple[float, float, int]] = dataclasses.field(default_factory=dict)
+    paired_candidates: dict[str, tuple[float, float, float, float]] = dataclasses.field(default_factory=dict)
 
     @property
     def task_runs(self) -> list[int]:
@@ -117,8 +103,8 @@ class Baseline:
                                          for j, q in enumerate(self.quantum_rad)},
                 "candidates": {k: {"mean": m, "variance": v, "n_blocks": n}
                                for k, (m, v, n) in self.candidates.items()},
-                "paired_candidates": {k: {"mean": m, "variance": v, "n_blocks": n}
-                                      for k, (m, v, n) in self.paired_candidates.items()},
+                "paired_candidates": {k: {"mean": m, "variance": v, "n_blocks": n, "design_effect": de}
+                                      for k, (m, v, n, de) in self.paired_candidates.items()},
                 "task_runs": [{"target_rad": t.tolist(), "residual_A": _nulls(r),
                                "scale": None if i not in self.task_runs else
                                {JOINT_NAMES[j]: dict(zip(FEATURES, map(float, self.task_scale[i, j])))
@@ -174,8 +160,8 @@ class Baseline:
                                      for k, v in data["candidates"].items()},
                        tuple(t for t, _ in runs), tuple(r for _, r in runs), t_scale, t_tail,
                        float(data["slow_rad_s"]), c_scale, c_tail,
-                       {str(k): (float(v["mean"]), float(v["variance"]), int(v["n_blocks"]))
-                        for k, v in data["paired_candidates"].items()})
+                       {str(k): (float(v["mean"]), float(v["variance"]), float(v["n_blocks"]),
+                                 float(v["design_effect"])) for k, v in data["paired_candidates"].items()})
         except ParameterError:
             raise  # already one line saying what to do (ParameterError is a ValueError)
         except (KeyError, TypeError, ValueError, AttributeError) as exc:
@@ -193,60 +179,6 @@ class Baseline:
         return cls.from_json(data, str(path))
 
 
-def segment(obs: Observed, slow_rad_s: float) -> tuple[NDArray, NDArray, NDArray, NDArray]:
-    """A log part's transients ``h`` ``(2, n, 6)`` (current [A], position [rad]: :data:`~.events.CHANNELS`; at rest
-    against the rest stretch's own level, :mod:`.conditions`), spread features ``(n, 6, 4)``, judged samples
-    ``(n,)`` and motion condition ``(n, 6)`` (``slow_rad_s``: the overlay's Stribeck speed)."""
-    cond = condition(obs.moving, obs.speed_rad_s, obs.target_rad, obs.period_s, slow_rad_s)
-    h = [rest_level(r, cond, obs.period_s, transient(r, obs.period_s))
-         for r in (obs.residual_A, obs.position_residual_rad)]
-    feats = features(obs.moving, obs.speed_rad_s, obs.accel_rad_s2, obs.period_s)
-    # a slow or reversing joint moves, also where its target creeps under the rest speed: moving for the spread
-    # model on all motions too (which judges it where its condition has no statistics)
-    feats[..., 1] = np.maximum(feats[..., 1], (cond == SLOW) | (cond == REVERSAL))
-    return np.stack(h), feats, judged_rows(obs.logged, obs.period_s), cond
-
-
-def fit_events(segs: list[tuple[NDArray, NDArray, NDArray, NDArray]], period_s: float, quantum_rad: NDArray
-               ) -> tuple[NDArray, NDArray, NDArray, NDArray]:
-    """Per channel, spread coefficients ``(6, 4)`` on all segments and the tail ``(6, 3)`` of the normalised
-    window maxima, stacked ``(2, 6, 4)``, ``(2, 6, 3)``; and the same per motion condition on its samples alone,
-    ``(2, 4, 6, 4)``, ``(2, 4, 6, 3)``, NaN for a joint with under :data:`~.conditions.MIN_CONDITION_S` of the
-    condition (:mod:`.conditions`). With two or more segments each segment is normalised by the spread fitted on
-    the others (leave one out), so the tail holds how far a healthy run the model was not fitted on strays, not
-    how well it fits its own."""
-    have = enough(np.concatenate([c for *_, c in segs]), np.concatenate([ok for _, _, ok, _ in segs]), period_s)
-    coefs, tails, c_coefs, c_tails = [], [], [], []
-    for i in range(len(CHANNELS)):
-        floor = quantum_sigma(quantum_rad) if CHANNELS[i] == "position" else 0.0
-        coef, tail = fit_channel([(h[i], f, ok) for h, f, ok, _ in segs], period_s, floor)
-        coefs.append(coef)
-        tails.append(tail)
-        cc, ct = np.full((len(CONDITIONS), *coef.shape), np.nan), np.full((len(CONDITIONS), *tail.shape), np.nan)
-        for k in range(len(CONDITIONS)):
-            if have[k].any():
-                cc[k], ct[k] = fit_channel([(h[i], constant(f) if k in CONSTANT_SPREAD else f, ok[:, None] & (c == k))
-                                            for h, f, ok, c in segs], period_s, floor)
-                cc[k][~have[k]] = np.nan
-                ct[k][~have[k]] = np.nan
-        c_coefs.append(cc)
-        c_tails.append(ct)
-    return np.stack(coefs), np.stack(tails), np.stack(c_coefs), np.stack(c_tails)
-
-
-def fit_channel(one: list[tuple[NDArray, NDArray, NDArray]], period_s: float, floor: NDArray | float = 0.0
-                ) -> tuple[NDArray, NDArray]:
-    """One channel's spread coefficients ``(6, 4)`` and tail ``(6, 3)`` from segments ``(h, features, judged)``
-    (:func:`fit_events`; a segment without judged samples only adds nothing)."""
-    one = [s for s in one if s[2].any()]
-    coef = fit_scale(one)
-    maxima = []
-    for k, (h, f, ok) in enumerate(one):
-        c = fit_scale(one[:k] + one[k + 1 :]) if len(one) >= 2 else coef
-        maxima.append(window_maxima(np.abs(h) / sigma(f, c, floor), ok, period_s))
-    return coef, fit_tail(np.concatenate(maxima))
-
-
 def _stat(keys: Sequence[str], values: NDArray) -> dict | None:
     """One joint's coefficients as ``{key: value}``, ``None`` where they are not fitted (NaN)."""
     return None if not np.isfinite(values).all() else dict(zip(keys, map(float, values)))
@@ -259,28 +191,6 @@ def _unstat(keys: Sequence[str], entry: dict | None) -> list[float]:
 def _nulls(x: NDArray) -> list:
     """``x`` as nested lists, NaN as ``None`` (JSON's null)."""
     return [[None if not np.isfinite(v) else float(v) for v in row] for row in x]
-
-
-def task_residual(obs: Observed) -> NDArray:
-    """A baseline run's current residual as a reference ``(n, 6)``: NaN where the tick was not logged."""
-    return np.where(obs.logged[:, None], obs.residual_A, np.nan)
-
-
-def fit_task(healthy: Sequence[Observed], segs: list[tuple[NDArray, NDArray, NDArray]], period_s: float
-             ) -> tuple[NDArray, NDArray]:
-    """Per baseline run, its current transient's spread ``(k, 6, 4)`` and tail ``(k, 6, 3)`` against the other
-    runs and its own repeats (never its own samples) where they repeat its task; NaN for a run paired over less
-    than :data:`MIN_TASK_S`. Per run, not pooled: a log paired with a run is judged by the spread of that run's
-    task (a fast task's repeats differ more than a slow one's). A single run's tail is fitted on the spread
-    fitted on itself (no run left out)."""
-    refs = [(o.target_rad, task_residual(o)) for o in healthy]
-    scale = np.full((len(healthy), N_JOINTS, len(FEATURES)), np.nan)
-    tail = np.full((len(healthy), N_JOINTS, 3), np.nan)
-    for k, (o, (_, f, ok, _)) in enumerate(zip(healthy, segs)):
-        h, paired, _ = paired_transient(o.target_rad, o.residual_A, refs, period_s, self_index=k)
-        if int((ok & paired).sum()) * period_s >= MIN_TASK_S:
-            scale[k], tail[k] = fit_channel([(h, f, ok & paired)], period_s)
-    return scale, tail
 
 
 def fit_baseline(healthy: Sequence[Observed], overlay_sha: str) -> Baseline:

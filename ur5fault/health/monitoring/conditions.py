@@ -29,7 +29,7 @@ and breaks away while the twin's smooth sign does not (Movement_No1's wrist_2 at
 condition: its error is not that of a joint moving slowly one way.
 
 Every condition gets a spread and a tail fitted on the baseline samples of that condition alone (leave one run out
-for the tail, :func:`~.baseline.fit_channel`): constant per joint at rest, slow and reversing, the model on speed
+for the tail, :func:`~.event_fit.fit_channel`): constant per joint at rest, slow and reversing, the model on speed
 and acceleration (:mod:`.events`) moving. A moving joint is judged by the wider of its own and the model fitted
 on all samples (fitted on the moving samples alone, the constant and moving terms are not
 anchored and extrapolate to no spread at a stop). A joint whose
@@ -57,7 +57,7 @@ REST, SLOW, REVERSAL, MOVING = range(4)
 #: and acceleration (:mod:`.events`)
 CONSTANT_SPREAD = (REST, SLOW, REVERSAL)
 #: a joint's condition has statistics only when the baseline holds at least this much of it [s] (40 windows of
-#: WINDOW_S, 4 above the tail's 90 % quantile: the task statistics' bar, :data:`~.baseline.MIN_TASK_S`)
+#: WINDOW_S, 4 above the tail's 90 % quantile: the task statistics' bar, :data:`~.event_fit.MIN_TASK_S`)
 MIN_CONDITION_S = 10.0
 
 

@@ -17,10 +17,10 @@ holds), with its sensitivity column taken on the log's own replay
 discrepancy workflow's test (:func:`ur5fault.discrepancy.search.judge`) as :mod:`.changes` does. Its reference
 distribution is the same difference-estimate between healthy baseline runs paired with each other and with
 their own repeats (never a run with its own samples), made per :data:`PAIRED_BLOCK_S` of paired samples
-(:func:`block_estimates`): their mean, variance and number feed the same prediction interval and Student's bar
+(:func:`block_estimates`): their mean, variance and effective number feed the same prediction interval and Student's bar
 (:func:`.changes.bar`) as the unpaired test's.
 
-*What ``k`` counts: each independent difference once.* Paired both ways, two repeats of a stretch give
+*What ``k`` counts: each difference once.* Paired both ways, two repeats of a stretch give
 ``d_A = r_A - r_B`` and ``d_B = r_B - r_A = -d_A`` (a run paired with its own repeat at lag L: ``d(t + L) =
 -d(t)``): one difference, two blocks. Counted as two, Student's bar at ``k - 1`` degrees of freedom is too low
 where ``k`` is small. So ``k`` is the number of blocks the baseline gives with each run paired only with what
@@ -31,11 +31,28 @@ to zero). The mean and variance stay those of the blocks paired both ways (:func
 two healthy runs comes first in the baseline is arbitrary, and a difference between them belongs in the
 reference with either sign (paired one way only, a systematic difference between the earlier and the later runs
 would read as a mean of one sign with a narrow spread, and the baseline's order would set it).
-The consecutive blocks of one run are still counted as
-independent (the block test's assumption, stated there): the model's error that would tie neighbouring
-stretches of a run together cancels in the difference at the same point of the task, leaving the sensors' noise
-and the task's repeatability; where neighbouring blocks are still correlated, the bar is lower than it would be
-counting runs (2-6 here).
+*Neighbouring blocks are not counted as independent* (they were before, with blocks of 2 s): the one-way
+blocks of each run, in time order, give the design effect ``DE`` of their autocorrelation (:mod:`.effective`:
+pooled over the runs about the both-way mean, the lags within one pairing stretch always counted, then Geyer's
+initial positive sequence), and ``k_eff = k / DE`` independent blocks set Student's bar; the variance is
+corrected for the bias the correlation puts in it. A difference that holds over a whole run (a warmer run, an
+offset that drifted) is correlation at every lag of that run, so a baseline whose runs each sit apart is worth
+about as many blocks as it has runs; one whose differences are the sensors' noise and the task's repeatability
+is worth about all its blocks.
+
+*Why the false-alarm rate holds.* The log's estimate over its ``n`` paired blocks is (to first order) a weighted
+mean of the same candidate's estimates on its own short blocks. Under no change, blocks with the baseline's
+autocorrelation make its variance that of one block times ``DE / n`` (never more than one block's): the
+prediction interval uses the baseline's single-block spread ``var_b`` so scaled, plus the reference mean's
+``var_b / k_eff`` and the log's own standard error (:func:`for_log`; that error and ``DE / n`` count the log's
+noise twice, a conservative width). How well ``var_b`` is known sets Student's quantile at the workflow's tail
+with ``k_eff - 1`` degrees of freedom, which is why ``k_eff`` must not count correlated blocks as independent.
+What it assumes: the log's healthy difference has the autocorrelation of the baseline's (a difference of the
+log from the healthy runs that holds over the whole log, beyond what the baseline runs show between each other,
+is not covered; with a single baseline run, its own cycles show only the differences within one session).
+Before, the interval used one block's spread unscaled (``min(1, DE / n)`` taken as 1), which asks a 20 s
+log's estimate to lie as far out as a single 2 s block's.
+
 The estimate reads as the change *since the paired healthy runs* (a gain of 1.1: the current reads 10 %
 more than on the same motion of the baseline).
 """
@@ -49,15 +66,22 @@ from numpy.typing import NDArray
 
 from ...sim.axes import N_JOINTS
 from .changes import BLOCK_S, Estimate, fit_alone, spreads
+from .effective import design_effect, effective
 from .observe import Observed
 from .task import CHUNK_S, reference
 
-#: the paired samples a baseline's paired estimate is made on [s]: the stretch the pairing vouches for
-#: (:data:`~.task.CHUNK_S`). The unpaired test's :data:`~.changes.BLOCK_S` must hold several motions of each
-#: joint because a block's estimate absorbs the model's motion-dependent error there; the paired difference holds
-#: none of it to average out (only the sensors' noise and the task's repeatability), so a block needs only to be
-#: one repeat of a stretch of the task
-PAIRED_BLOCK_S = CHUNK_S
+#: the paired samples a baseline's paired estimate is made on [s]: a quarter of the pairing's stretch
+#: (:data:`~.task.CHUNK_S`), 62 samples at the robots' 125 Hz. The unpaired test's :data:`~.changes.BLOCK_S` must
+#: hold several motions of each joint because a block's estimate absorbs the model's motion-dependent error there;
+#: the paired difference holds none of it to average out (only the sensors' noise and the task's
+#: repeatability). Shorter blocks give more of them, and Student's bar at the workflow's tail falls fast with
+#: their number (125.6, 32.6, 9.8, 6.2 at 3, 4, 7, 12); neighbouring blocks are not independent, which their
+#: autocorrelation accounts for (:mod:`.effective`; the four blocks of one stretch share its paired reference, so
+#: the lags within it are always counted, :data:`MIN_LAG`). It was 2 s (the stretch) before.
+PAIRED_BLOCK_S = CHUNK_S / 4
+#: the lags of the block sequence always counted in the design effect (:func:`.effective.design_effect`): the
+#: blocks of one pairing stretch share its reference runs and lag
+MIN_LAG = int(round(CHUNK_S / PAIRED_BLOCK_S))
 #: a log part is judged by the paired test only with at least this much of its screened part paired [s]: the
 #: length of the unpaired test's blocks (:data:`~.changes.BLOCK_S`), several motions of each joint, so that the
 #: log's own estimate holds them as its reference's do
@@ -111,16 +135,18 @@ def _groups(obs: Observed, ok: NDArray) -> list[NDArray]:
 
 def block_estimates(obs: Observed, ref: NDArray) -> list[dict[str, Estimate]]:
     """Each candidate fitted alone to the paired difference on each group of :data:`PAIRED_BLOCK_S` of the
-    screened part's paired samples (:func:`_groups`)."""
+    screened part's paired samples (:func:`_groups`), in time order. Each fit sees only its group's span (the
+    same estimate as on the whole part with the rest left out, at a fraction of the cost)."""
     if not obs.cands:
         return []
     e, ok = difference(obs, ref)
     X = current_columns(obs)
     out = []
     for part in _groups(obs, ok):
-        keep = np.zeros(ok.shape, bool)
-        keep[part] = True
-        out.append(fit_alone(obs.cands, X, e, keep))
+        lo, hi = int(part[0]), int(part[-1]) + 1
+        keep = np.zeros(hi - lo, bool)
+        keep[part - lo] = True
+        out.append(fit_alone(obs.cands, X[:, lo:hi], e[lo:hi], keep))
     return out
 
 
@@ -134,22 +160,51 @@ def baseline_references(healthy: Sequence[Observed], refs: Sequence[tuple[NDArra
 
 
 def independent_blocks(healthy: Sequence[Observed], refs: Sequence[tuple[NDArray, NDArray]]) -> int:
-    """The number of independent paired blocks the baseline runs give: their blocks with each pair of repeats
-    compared once (:func:`baseline_references` ``one_way``)."""
+    """The number of paired blocks the baseline runs give with each pair of repeats compared once
+    (:func:`baseline_references` ``one_way``), before their autocorrelation is accounted for."""
     return sum(len(_groups(o, difference(o, ref)[1]))
                for o, ref in zip(healthy, baseline_references(healthy, refs, one_way=True)))
 
 
 def baseline_spreads(healthy: Sequence[Observed], refs: Sequence[tuple[NDArray, NDArray]]
-                     ) -> dict[str, tuple[float, float, int]]:
-    """``{label: (mean, variance, k)}`` of each candidate's paired estimates over the baseline runs: mean and
-    variance of its blocks paired both ways (either sign of each difference between healthy runs), ``k`` the
-    number of independent ones (:func:`independent_blocks`, at most the blocks it was estimated on; module
-    docstring). A candidate with no independent block has no paired statistics."""
+                     ) -> dict[str, tuple[float, float, float, float]]:
+    """``{label: (mean, variance, k_eff, DE)}`` of each candidate's paired estimates over the baseline runs (module
+    docstring): mean and variance of its blocks paired both ways (either sign of each difference between healthy
+    runs); ``DE`` the design effect of its one-way blocks' autocorrelation (each pair of repeats compared once;
+    within each run, about that mean, the lags within one pairing stretch always counted:
+    :func:`.effective.design_effect`), ``k_eff = k / DE`` the independent blocks they are worth, and the variance
+    corrected for the bias the correlation puts in it (:func:`.effective.effective`). A candidate whose blocks
+    are worth fewer than 2 independent ones has no paired statistics."""
     both = spreads(block for o, ref in zip(healthy, baseline_references(healthy, refs))
                    for block in block_estimates(o, ref))
-    k = independent_blocks(healthy, refs) if both else 0
-    if k < 1:
+    if not both:
         return {}
-    # k = 1 with two blocks paired both ways (d and -d): judged as a single block, z on their variance
-    return {label: (mean, var, min(k, n)) for label, (mean, var, n) in both.items()}
+    one_way = [block_estimates(o, ref) for o, ref in zip(healthy, baseline_references(healthy, refs, one_way=True))]
+    out = {}
+    for label, (mean, var, _) in both.items():
+        seqs = [np.array([b[label].theta for b in run if label in b and np.isfinite(b[label].se)]) for run in one_way]
+        k = sum(s.size for s in seqs)
+        if k < 2:
+            continue
+        de = design_effect(seqs, mean, MIN_LAG)
+        got = effective(var, k, de)
+        if got is not None:
+            out[label] = (mean, got[0], got[1], de)
+    return out
+
+
+def for_log(stats: dict[str, tuple[float, float, float, float]], paired_s: float
+            ) -> dict[str, tuple[float, float, float]]:
+    """The reference ``{label: (mean, variance, k_eff)}`` of a log's estimate on ``paired_s`` seconds of paired
+    samples, as :func:`.changes.find_changes` takes it (its prediction variance ``variance (1 + 1 / k_eff)``).
+
+    The log's estimate is (to first order) a weighted mean of its ``n = paired_s / PAIRED_BLOCK_S`` blocks'
+    estimates, so under no change its variance is that of one block times ``min(1, DE / n)`` (``DE`` the
+    baseline's design effect: ``n`` blocks of that autocorrelation are worth ``n / DE`` independent ones, and
+    never less than one; a weighted mean's variance is at most the equal-weight mean's for blocks of unequal
+    information). The reference mean adds ``variance / k_eff``. So the prediction variance is
+    ``variance (min(1, DE / n) + 1 / k_eff)``, returned as the variance that :func:`.changes.bar`'s factor
+    ``1 + 1 / k_eff`` turns into it."""
+    n = max(paired_s / PAIRED_BLOCK_S, 1.0)
+    return {label: (mean, var * (min(1.0, de / n) + 1.0 / k) / (1.0 + 1.0 / k), k)
+            for label, (mean, var, k, de) in stats.items()}

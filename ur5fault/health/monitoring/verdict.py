@@ -10,9 +10,10 @@ from numpy.typing import NDArray
 
 from ...errors import ParameterError
 from . import paired
-from .baseline import Baseline, segment
+from .baseline import Baseline
 from .changes import BLOCK_S, estimates, find_changes, keep_mask, strongest
 from .conditions import motion_limit
+from .event_fit import segment
 from .events import (
     CHANNELS,
     DEFAULT_CHANNELS,
@@ -106,8 +107,9 @@ def judge_changes(baseline: Baseline, obs: Observed, over: NDArray) -> list[dict
     both = rest.sum() * obs.period_s >= BLOCK_S  # shorter, its estimate holds more of the model's error than a block
     share = 0.5 if both else 1.0
     every = paired.estimates(obs, ref, logged)
-    found = find_changes(obs, every, paired.estimates(obs, ref, keep) if over.any() else every,
-                         baseline.paired_candidates, "paired", share)
+    stats = paired.for_log(baseline.paired_candidates, float((keep & on).sum() * obs.period_s))
+    found = find_changes(obs, every, paired.estimates(obs, ref, keep) if over.any() else every, stats, "paired",
+                         share)
     if both:
         every = estimates(obs, rest)
         found = strongest(found, find_changes(obs, every, estimates(obs, keep & ~on) if over.any() else every,
