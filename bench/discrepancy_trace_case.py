@@ -90,17 +90,18 @@ def main() -> None:
     if args.per_log:
         pcache = None if args.clean_cache is None else args.clean_cache / f"perlog_{name}.pkl"
         if pcache is not None and pcache.exists():
-            clean_vals, kept = pickle.loads(pcache.read_bytes())
+            clean_vals, kept, clean_keys = pickle.loads(pcache.read_bytes())
             print(f"clean fit (stored): kept {kept}")
         else:
             t = time.perf_counter()
             clean = DiscrepancyModel(jobs=args.jobs, likelihood=args.likelihood).fit(base)
             clean_vals, kept = hidden.kept_values(clean), [f.candidate.label for f in clean.findings_ if f.kept]
+            clean_keys = hidden.kept_keys(clean)
             print(f"clean fit, {time.perf_counter() - t:.0f} s: kept {kept}")
             rest_means(clean, [j for kind, j, _ in effects if kind == "current_sensor_offset"], "clean")
             if pcache is not None:
                 pcache.parent.mkdir(parents=True, exist_ok=True)
-                pcache.write_bytes(pickle.dumps((clean_vals, kept)))
+                pcache.write_bytes(pickle.dumps((clean_vals, kept, clean_keys)))
         start = ()
     elif args.engineer:
         healthy, base = hidden.engineer_plan(name)
@@ -139,6 +140,9 @@ def main() -> None:
                 print(f"per log: {kind} {JOINT_NAMES[j]} truth {to_size(v[par]):+.4g}: injected fit "
                       f"{'-' if est is None else f'{est:+.4g}'}{' (alternative)' if alt else ''}, clean fit "
                       f"{there:+.4g}, change {'-' if est is None else f'{est - there:+.4g}'}")
+        injected = {(hidden.NAMED_AS[k][0], j) for k, j, _ in effects if k in hidden.NAMED_AS}
+        extra = hidden.kept_keys(m) - clean_keys - injected - {("torque_constant", j) for _, j in injected}
+        print(f"per log: extra findings {sorted(extra, key=str) or 0}; unexplained {len(m.unexplained_)}")
         rest_means(m, [j for kind, j, _ in effects if kind == "current_sensor_offset"], "injected")
     print(f"case {args.case} {name} {effects}: wall {time.perf_counter() - t:.0f} s")
     lib = seen["lib"]
