@@ -39,7 +39,7 @@ import discrepancy_real_hidden as hidden  # noqa: E402
 from ur5fault.discrepancy import DiscrepancyModel, steps  # noqa: E402
 from ur5fault.discrepancy.model import LIKELIHOODS  # noqa: E402
 from ur5fault.discrepancy.search import judge  # noqa: E402
-from ur5fault.discrepancy.statistics import BlockGram  # noqa: E402
+from ur5fault.discrepancy.statistics import BlockGram, per_channel  # noqa: E402
 from ur5fault.sim.axes import JOINT_NAMES  # noqa: E402
 
 
@@ -146,17 +146,18 @@ def main() -> None:
         rest_means(m, [j for kind, j, _ in effects if kind == "current_sensor_offset"], "injected")
     print(f"case {args.case} {name} {effects}: wall {time.perf_counter() - t:.0f} s")
     lib = seen["lib"]
-    bg = BlockGram.build(lib.X, lib.e0)
+    X_w, e_w, _ = per_channel(lib.X, lib.e0, lib.own_variance)  # the screening's own problem (its likelihood)
+    bg = BlockGram.build(X_w, e_w)
     chosen = [lib.candidates.index(c) for c in lib.chosen]
     for kind, j, _ in effects:
         if kind != "current_sensor_offset":
             continue
         k = next(i for i, c in enumerate(lib.candidates) if c.effect == kind and c.joint == j)
         for how, others in (("alone", []), ("beside the screening's choices", [o for o in chosen if o != k])):
-            v = judge(bg, lib.e0, lib.X, lib.candidates, lib.cols, others, k)
+            v = judge(bg, e_w, X_w, lib.candidates, lib.cols, others, k)
             print(f"screening, offset on {JOINT_NAMES[j]} {how}: {v.theta[0]:+.4f} A, z {v.z:.1f}, "
                   f"delta BIC {v.delta_bic:.1f} [{v.reason or 'passes'}]")
-        alone = [judge(bg, lib.e0, lib.X, lib.candidates, lib.cols, [], i) for i, c in enumerate(lib.candidates)
+        alone = [judge(bg, e_w, X_w, lib.candidates, lib.cols, [], i) for i, c in enumerate(lib.candidates)
                  if c.joint in (j, None)]
         for v in sorted(alone, key=lambda v: v.delta_bic)[:6]:
             print(f"  alone: {v.label} {np.round(v.theta, 4)} z {v.z:.1f} delta BIC {v.delta_bic:.1f} "
