@@ -91,3 +91,34 @@ def test_the_likelihood_per_condition_is_a_choice():
     assert DiscrepancyModel(likelihood="per_condition").likelihood == "per_condition"
     with pytest.raises(ParameterError, match="choose one of: per_channel, per_condition, pooled"):
         DiscrepancyModel(likelihood="rest")
+
+
+def test_the_drift_removed_in_the_weighted_metric_is_the_joint_weighted_fit_with_it():
+    """Frisch-Waugh-Lovell in the weighted metric: an offset's weighted least-squares estimate beside the drift, from
+    the residual and column with the drift removed unweighted and then again weighted (``Drift.remove_weighted``),
+    equals the estimate of one weighted regression on the offset and the drift's basis together (numpy's lstsq)."""
+    from ur5fault.discrepancy.drift import Drift
+
+    n, period = 2500, 0.008
+    d = Drift(n, period, ("current_A", "position_rad"))
+    rng = np.random.default_rng(2)
+    t = np.arange(n) * period
+    e = rng.standard_normal((n, 12))
+    e[:, 3] += 0.7 + 5.0 * np.sin(2 * np.pi * 0.05 * t)  # joint 3's current: an offset and a slow drift
+    X = np.zeros((1, n, 12))
+    X[0, :, 3] = 1.0
+    s = np.ones((n, 12))
+    s[:, 3] = np.where(np.floor(t) % 2 == 0, 1.0, 8.0)  # a scale that varies from sample to sample
+    Xw = d.remove_weighted(d.remove(X) / s, s)
+    ew = d.remove_weighted(d.remove(e) / s, s)
+    fwl = float(np.sum(Xw[0, :, 3] * ew[:, 3]) / np.sum(Xw[0, :, 3] ** 2))
+    B = d.bases[3]
+    design = np.column_stack([1.0 / s[:, 3], B / s[:, 3][:, None]])
+    joint = np.linalg.lstsq(design, e[:, 3] / s[:, 3], rcond=None)[0][0]
+    assert B.shape[1] >= 3
+    assert fwl == pytest.approx(joint, rel=1e-9)
+    assert abs(joint - 0.7) < 0.2
+    # without the weighted projection (drift removed unweighted, then weighted) the estimate is another one
+    naive = d.remove(X) / s, d.remove(e) / s
+    other = float(np.sum(naive[0][0, :, 3] * naive[1][:, 3]) / np.sum(naive[0][0, :, 3] ** 2))
+    assert abs(other - joint) > 1e-3

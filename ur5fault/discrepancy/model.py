@@ -236,7 +236,7 @@ class DiscrepancyModel:
             return self.likelihood == "per_channel"
         n = rp.n_samples
         rest = conditions(rp.log, n, np.zeros((n, N_JOINTS)))["at rest"]
-        return VarianceGroups(np.tile(rest.astype(np.int8), len(rp.signals)))
+        return VarianceGroups(np.tile(rest.astype(np.int8), len(rp.signals)), lambda k: steps.drift_of(rp, k))
 
     def _polish(self, rp: LogReplay, kept: list[Finding], first: Refined, fs: FindingSet, progress,
                 drift) -> Replayed:

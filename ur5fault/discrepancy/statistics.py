@@ -59,6 +59,8 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -127,6 +129,9 @@ class VarianceGroups:
     The workflow's groups are a joint at rest and moving (``DiscrepancyModel(likelihood="per_condition")``)."""
 
     labels: NDArray
+    #: the drift nuisance of a problem of ``n`` samples (``drift.Drift``; None: none), projected out again in the
+    #: weighted metric: a drift removed unweighted would carry the model's error in motion into the samples at rest
+    drift: Callable[[int], Any] | None = None
 
     def __post_init__(self) -> None:
         if np.ndim(self.labels) != 2:
@@ -178,8 +183,14 @@ def per_channel(X: NDArray, e: NDArray, own_variance: OwnVariance = False) -> tu
         G, g, _ = BlockGram.build(X, e, 1).total()
         theta = np.linalg.lstsq(G, g, rcond=1e-12)[0]
         r = e - np.tensordot(theta, X, axes=1)
-    s = group_scale(r, own_variance.of(*e.shape)) if grouped else channel_scale(r)
-    return X / s, e / s, s
+    if not grouped:
+        s = channel_scale(r)
+        return X / s, e / s, s
+    s = group_scale(r, own_variance.of(*e.shape))
+    if own_variance.drift is None:
+        return X / s, e / s, s
+    d = own_variance.drift(e.shape[0])
+    return d.remove_weighted(X / s, s), d.remove_weighted(e / s, s), s
 
 
 def bic(rss: float, n_eff: float, k: int) -> float:
