@@ -56,12 +56,6 @@ MAX_RIVALS = 2
 #: bound and assumption: on logs of thousands of samples 10 % less improvement than a finding that lowers BIC
 #: by 100 or more is itself more than MIN_DELTA_BIC, so the held-out check would not list it
 RIVAL_SHARE = 0.9
-#: the effects that scale or shift a joint's measured current: on a joint whose current is of one sign (gravity)
-#: they are nearly one column, and which of them the screening takes is decided by the model's own error there
-#: (the NIST elbow's current offset -0.15 A: the offset took 78 % of the torque constant's improvement,
-#: docs/discrepancy.md, *The five offset misses traced per log*); each is simulated as a rival of a finding of
-#: another of them whatever its share, so that the held-out part judges them
-CURRENT_FAMILY = frozenset({"current_sensor_offset", "current_sensor_gain", "torque_constant"})
 
 
 @dataclasses.dataclass(frozen=True)
@@ -147,13 +141,12 @@ def current_channel(signals: Sequence[str], joint: int) -> int:
 def in_place(X: NDArray, e_place: NDArray, e_named: NDArray, candidates: Sequence[Candidate],
              cols: list[list[int]], taken: set[str], joint: int | None,
              max_n: int = MAX_RIVALS, share: float = RIVAL_SHARE, robot_wide: bool = True,
-             own_variance: OwnVariance = False, family: frozenset[str] = frozenset()) -> list[tuple[int, NDArray]]:
+             own_variance: OwnVariance = False) -> list[tuple[int, NDArray]]:
     """The library candidates on ``joint`` (and robot-wide ones unless not ``robot_wide``) not in ``taken`` that,
     judged alone against ``e_place`` (the residual without the finding, screened part, drift removed), pass every
     test and take up
-    at least ``share`` of the finding's improvement ``|e_place|^2 - |e_named|^2`` (the effects in ``family`` on
-    ``joint`` whatever their share): ``(k, theta)``, the best ``max_n`` by improvement.  ``share=0``: any that
-    passes."""
+    at least ``share`` of the finding's improvement ``|e_place|^2 - |e_named|^2``: ``(k, theta)``, the best
+    ``max_n`` by improvement.  ``share=0``: any that passes."""
     ks = [k for k, c in enumerate(candidates)
           if (c.joint == joint or (robot_wide and c.joint is None)) and c.label not in taken]
     if not ks:
@@ -169,10 +162,8 @@ def in_place(X: NDArray, e_place: NDArray, e_named: NDArray, candidates: Sequenc
     ranked = sorted(((ee - rss_of(G, g, ee, scols[i])[0], i) for i in range(len(ks))), reverse=True)
     out = []
     for gain, i in ranked:
-        if len(out) == max_n:
+        if len(out) == max_n or gain < share * own:
             break
-        if gain < share * own and not (sub[i].effect in family and sub[i].joint == joint):
-            continue
         v = judge(bg, e_place, Xs, sub, scols, [], i)
         if v.accepted:
             out.append((ks[i], np.asarray(v.theta)))
@@ -210,9 +201,8 @@ def list_rivals(rp: LogReplay, lib_X: NDArray, lib_drift: Drift | None, candidat
         if lib_drift is not None:
             e_s, n_s = lib_drift.remove(e_s), lib_drift.remove(n_s)
         listed = taken | {a.label for a, _ in f.alternatives}
-        family = CURRENT_FAMILY if f.candidate.effect in CURRENT_FAMILY else frozenset()
         for r, th in in_place(lib_X, e_s, n_s, candidates, lcols, listed, f.candidate.joint,
-                              own_variance=own_variance, family=family):
+                              own_variance=own_variance):
             plan.append((f, change, candidates[r], th))
     if not plan:
         return
