@@ -122,3 +122,4 @@ def test_the_drift_removed_in_the_weighted_metric_is_the_joint_weighted_fit_with
     naive = d.remove(X) / s, d.remove(e) / s
     other = float(np.sum(naive[0][0, :, 3] * naive[1][:, 3]) / np.sum(naive[0][0, :, 3] ** 2))
     assert abs(other - joint) > 1e-3
+
