@@ -50,6 +50,7 @@ sys.path.insert(0, str(REPO / "tests"))
 from real_hidden import busy_angle_deg, inject  # noqa: E402
 
 from ur5fault.discrepancy import DiscrepancyModel  # noqa: E402
+from ur5fault.discrepancy.model import LIKELIHOODS  # noqa: E402
 from ur5fault.logs.readers import read_log, read_rtde  # noqa: E402
 from ur5fault.sim.axes import JOINT_NAMES  # noqa: E402
 from ur5fault.twin.residuals import FIT_FRACTION, fit_samples  # noqa: E402
@@ -313,7 +314,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--jobs", type=int, default=JOBS, help=f"worker processes per fit (default {JOBS})")
     ap.add_argument("--cases", default=None, help="comma-separated indices into CASES (default: all)")
-    ap.add_argument("--likelihood", choices=("pooled", "per_channel"), default="pooled",
+    ap.add_argument("--likelihood", choices=LIKELIHOODS, default="pooled",
                     help="the selections' likelihood (DiscrepancyModel(likelihood=...)); not with --engineer")
     ap.add_argument("--baseline", default=None, metavar="CASES",
                     help="comma-separated indices into CASES (or 'all') also fitted from the clean log's fitted "

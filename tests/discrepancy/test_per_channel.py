@@ -75,7 +75,8 @@ def test_the_offset_beside_a_large_model_error_is_named_per_channel_not_pooled()
 def test_the_likelihood_is_a_validated_choice():
     assert DiscrepancyModel().likelihood == "pooled"  # measured no better on real logs (docs/discrepancy.md)
     assert DiscrepancyModel(likelihood="per_channel").likelihood == "per_channel"
-    with pytest.raises(ParameterError, match="likelihood = 'channel' is not valid; choose one of: per_channel, pooled"):
+    with pytest.raises(ParameterError, match="likelihood = 'channel' is not valid; choose one of: per_channel, "
+                                             "per_condition, pooled"):
         DiscrepancyModel(likelihood="channel")
 
 

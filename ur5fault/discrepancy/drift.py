@@ -101,3 +101,23 @@ class Drift:
         if A.shape[-2] != self.n:
             raise ValueError(f"drift of {self.n} samples applied to {A.shape[-2]}")
         return remove(A, self.bases, self.channel)
+
+    def remove_weighted(self, A: NDArray, s: NDArray) -> NDArray:
+        """``A`` ``(..., n, n_channels)``, already divided by a scale ``s`` ``(n, n_channels)`` that varies from
+        sample to sample, with the drift projected out in that metric (each joint's basis divided by its
+        current channel's scale): the weighted least-squares fit beside the drift (Frisch-Waugh-Lovell).  When
+        ``A`` had the drift removed unweighted first (:meth:`remove`) this gives the same: what that took out lies
+        in the span of the weighted basis."""
+        if self.channel is None or not self.dof:
+            return A
+        if A.shape[-2] != self.n or s.shape[0] != self.n:
+            raise ValueError(f"drift of {self.n} samples applied to {A.shape[-2]}")
+        A = np.array(A, dtype=float, copy=True)
+        for j, B in enumerate(self.bases):
+            if not B.shape[1]:
+                continue
+            ch = self.channel + j
+            Q = np.linalg.qr(B / s[:, ch][:, None])[0]
+            sub = A[..., ch]
+            A[..., ch] = sub - np.einsum("nd,...d->...n", Q, np.einsum("nd,...n->...d", Q, sub))
+        return A

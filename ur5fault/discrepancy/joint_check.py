@@ -15,7 +15,7 @@ from .candidates import Candidate
 from .judging import SearchStep
 from .search import backward, columns_of, forward
 from .search import judge as judge_one
-from .statistics import MIN_DELTA_BIC, BlockGram, effective_n, per_channel, rss_of
+from .statistics import MIN_DELTA_BIC, BlockGram, OwnVariance, effective_n, per_channel, rss_of
 
 
 @dataclasses.dataclass(frozen=True)
@@ -26,7 +26,7 @@ class JointCheckRecord:
 
 
 def joint_check(found: list[Candidate], X: NDArray, fixed: list[int], e0: NDArray,
-                preferred: Sequence[Candidate] = (), own_variance: bool = False) -> JointCheckRecord:
+                preferred: Sequence[Candidate] = (), own_variance: OwnVariance = False) -> JointCheckRecord:
     """The findings selected afresh among themselves (forward, then backward), then every dictionary term that
     shares its joint with another finding checked on data it was not fitted to (:func:`same_joint_check`).
     ``preferred``: library effects named in place of a term (:func:`prefer_library`), kept when they fail only

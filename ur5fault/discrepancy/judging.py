@@ -15,7 +15,7 @@ from .candidates import Candidate
 from .drift import Drift
 from .refinement import FindingSet, Refined
 from .search import Verdict, backward, columns_of, forward, judge
-from .statistics import Z_95, BlockGram, Generalisation, generalisation, per_channel, rss_of
+from .statistics import Z_95, BlockGram, Generalisation, OwnVariance, generalisation, per_channel, rss_of
 
 
 @dataclasses.dataclass
@@ -82,7 +82,7 @@ def channels(c: Candidate, n_signals: int) -> NDArray:
 
 def judge_findings(found: Sequence[Candidate], ref: Refined, n_fit: int, n_signals: int,
                    alts: Sequence[tuple[int, Candidate, NDArray]] = (), drift: Drift | None = None,
-                   own_variance: bool = False) -> tuple[list[Finding], list[SearchStep]]:
+                   own_variance: OwnVariance = False) -> tuple[list[Finding], list[SearchStep]]:
     """Judge the findings on the problem linearised by the probe batch ``ref``.
 
     On the fitting part they are selected afresh from among themselves (two that only cancel each other,
@@ -179,7 +179,7 @@ def alternatives(fs: FindingSet, kept: list[int], k: int, ref: Refined, J_fit: N
 
 
 def final_verdicts(kept: list[Finding], pol: Refined, n_fit: int, drift: Drift | None = None,
-                   own_variance: bool = False) -> list[Finding]:
+                   own_variance: OwnVariance = False) -> list[Finding]:
     """Each kept finding judged against the others once more, linearised at the polished coefficients (beside
     the ``drift``); returns those that fail now."""
     cands = [f.candidate for f in kept]

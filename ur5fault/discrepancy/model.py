@@ -28,7 +28,7 @@ from ..logs import MeasuredLog
 from ..sim.axes import JOINT_NAMES, N_JOINTS
 from ..sim.effects import EffectSpec
 from ..twin.replay import LogReplay, Replayed
-from ..twin.residuals import FIT_FRACTION, fit_samples, localise, rms_table, unexplained
+from ..twin.residuals import FIT_FRACTION, conditions, fit_samples, localise, rms_table, unexplained
 from . import steps
 from .joint_check import joint_check
 from .judging import Finding, SearchStep, final_verdicts
@@ -39,6 +39,7 @@ from .refinement import FindingSet, Refined, polish
 from .rescreen import rescreen
 from .rivals import list_rivals
 from .search import columns_of
+from .statistics import OwnVariance, VarianceGroups
 
 logger = logging.getLogger(__name__)
 
@@ -49,9 +50,11 @@ FIT_FRACTION_RANGE = (0.2, 0.9)
 #: the library is screened and the dictionary selected on at most this much of the fitting part [s]
 #: (assumption: 20 s of a robot program hold its motions several times; refinement and judgement use all)
 SCREEN_S = 20.0
-#: the selections' Gaussian likelihood: each channel (signal x joint) its own residual variance, or one pooled
-#: variance for every channel (``statistics.py``; measured in docs/discrepancy.md, *Each channel its own variance*)
-LIKELIHOODS = ("per_channel", "pooled")
+#: the selections' Gaussian likelihood: each channel (signal x joint) its own residual variance, each channel its
+#: own variance at rest and in motion (the joint's target speed; the model's own errors of friction and inertia act
+#: in motion only), or one pooled variance for every channel (``statistics.py``; measured in docs/discrepancy.md,
+#: *Each channel its own variance* and *At rest and in motion*)
+LIKELIHOODS = ("per_channel", "per_condition", "pooled")
 LIKELIHOOD = "pooled"
 class _Stages:
     """Progress of the workflow on one tqdm bar (``ur5fault.util.progress``): one unit per stage."""
@@ -96,8 +99,9 @@ class DiscrepancyModel:
         progress: show a progress bar (tqdm; silent when not interactive).
         screen_s: length of the log's first part the library is screened and the dictionary selected on
             [s] (None: the whole fitting part); refinement and judgement use the whole fitting part.
-        likelihood: ``"pooled"`` (one variance for every channel, the default) or ``"per_channel"`` (each
-            channel, signal x joint, its own residual variance in every selection; ``statistics.per_channel``).
+        likelihood: ``"pooled"`` (one variance for every channel, the default), ``"per_channel"`` (each
+            channel, signal x joint, its own residual variance in every selection; ``statistics.per_channel``) or
+            ``"per_condition"`` (each channel its own variance while its joint is at rest and while it moves).
     """
 
     def __init__(self, fit_fraction: float = FIT_FRACTION, max_effects: int = 1, max_terms: int = 4,
@@ -163,7 +167,7 @@ class DiscrepancyModel:
             # samples are the screening's baseline: a worker starts it now, and it is simulated once
             rp.prefetch([()], n_all)
             t = time.perf_counter()
-            own = self.likelihood == "per_channel"
+            own = self._variance(rp)
             lib = steps.screen_library(rp, n_scr, log.payload_kg, kinds, self.max_effects,
                                        stages.start("screening the library"), own)
             timings["library screening"] = time.perf_counter() - t
@@ -224,6 +228,16 @@ class DiscrepancyModel:
         return self
 
     # --------------------------------------------------------------------------------- pieces
+    def _variance(self, rp: LogReplay | MultiReplay) -> OwnVariance:
+        """What the selections' likelihood gives its own variance (``statistics.per_channel``): nothing (pooled),
+        each channel, or each channel at rest and in motion (its joint's target speed, the residual conditions'
+        "at rest", over the replayed samples ``1..n``)."""
+        if self.likelihood != "per_condition":
+            return self.likelihood == "per_channel"
+        n = rp.n_samples
+        rest = conditions(rp.log, n, np.zeros((n, N_JOINTS)))["at rest"]
+        return VarianceGroups(np.tile(rest.astype(np.int8), len(rp.signals)), lambda k: steps.drift_of(rp, k))
+
     def _polish(self, rp: LogReplay, kept: list[Finding], first: Refined, fs: FindingSet, progress,
                 drift) -> Replayed:
         """Gauss-Newton on the kept findings from their judged coefficients, then their final verdicts (one
@@ -236,7 +250,7 @@ class DiscrepancyModel:
         self.refinement_ += pol.steps
         for f, th in zip(kept, kfs.split(pol.theta)):
             f.theta = th
-        failed = final_verdicts(kept, pol, self.n_fit_, drift, self.likelihood == "per_channel")
+        failed = final_verdicts(kept, pol, self.n_fit_, drift, self._variance(rp))
         for f in failed:
             f.kept = False
             f.reason = (f.candidate.range_problem(f.theta)

@@ -43,7 +43,7 @@ from .drift import Drift
 from .judging import Finding, SearchStep, channels
 from .rivals import MAX_RIVALS, Rival, current_channel, differ_most, in_place, indistinguishable_held_out, judge_rival
 from .search import backward, columns_of, forward, judge
-from .statistics import BlockGram, generalisation, per_channel, rss_of, weighted
+from .statistics import BlockGram, OwnVariance, generalisation, per_channel, rss_of, weighted
 
 __all__ = ["MAX_RIVALS", "freed_joints", "indistinguishable_held_out", "rescreen", "rivals_of", "select_on_freed"]
 
@@ -77,7 +77,7 @@ def freed_joints(findings: Sequence[Finding], max_effects: int) -> list[int | No
 
 
 def rivals_of(X: NDArray, e: NDArray, candidates: Sequence[Candidate], cols: list[list[int]],
-              findings: Sequence[Finding], chosen: Sequence[tuple[int, NDArray]], own_variance: bool = False
+              findings: Sequence[Finding], chosen: Sequence[tuple[int, NDArray]], own_variance: OwnVariance = False
               ) -> list[tuple[int, int, NDArray]]:
     """For each candidate chosen on a freed joint, the other offered candidates on that joint that pass every
     test in its place (at most MAX_RIVALS, by improvement): ``(position in chosen, k, theta)``."""
@@ -96,7 +96,7 @@ def offered(candidates: Sequence[Candidate], findings: Sequence[Finding], joint:
 
 
 def select_on_freed(X: NDArray, e: NDArray, candidates: Sequence[Candidate], cols: list[list[int]],
-                    findings: Sequence[Finding], max_effects: int, own_variance: bool = False
+                    findings: Sequence[Finding], max_effects: int, own_variance: OwnVariance = False
                     ) -> tuple[list[tuple[int, NDArray]], list]:
     """Forward selection, joint by joint, among the library candidates offered on each freed joint.
 
@@ -133,7 +133,7 @@ def select_on_freed(X: NDArray, e: NDArray, candidates: Sequence[Candidate], col
 
 def rescreen(rp: LogReplay, lib_X: NDArray, lib_drift: Drift | None, candidates: Sequence[Candidate],
              findings: Sequence[Finding], after: Replayed, n_scr: int, n_fit: int, drift: Drift | None,
-             max_effects: int, progress: Callable[[float], None] | None = None, own_variance: bool = False
+             max_effects: int, progress: Callable[[float], None] | None = None, own_variance: OwnVariance = False
              ) -> RescreenRecord:
     """Name library effects on the joints that dropped findings freed (module docstring).
 

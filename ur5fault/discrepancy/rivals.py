@@ -39,7 +39,16 @@ from .candidates import Candidate
 from .drift import Drift
 from .judging import Finding, channels
 from .search import columns_of, judge
-from .statistics import MIN_DELTA_BIC, BlockGram, effective_n, generalisation, per_channel, rss_of, weighted
+from .statistics import (
+    MIN_DELTA_BIC,
+    BlockGram,
+    OwnVariance,
+    effective_n,
+    generalisation,
+    per_channel,
+    rss_of,
+    weighted,
+)
 
 #: rivals of one finding simulated (each one run of the whole log) at most
 MAX_RIVALS = 2
@@ -132,7 +141,7 @@ def current_channel(signals: Sequence[str], joint: int) -> int:
 def in_place(X: NDArray, e_place: NDArray, e_named: NDArray, candidates: Sequence[Candidate],
              cols: list[list[int]], taken: set[str], joint: int | None,
              max_n: int = MAX_RIVALS, share: float = RIVAL_SHARE, robot_wide: bool = True,
-             own_variance: bool = False) -> list[tuple[int, NDArray]]:
+             own_variance: OwnVariance = False) -> list[tuple[int, NDArray]]:
     """The library candidates on ``joint`` (and robot-wide ones unless not ``robot_wide``) not in ``taken`` that,
     judged alone against ``e_place`` (the residual without the finding, screened part, drift removed), pass every
     test and take up
@@ -164,7 +173,7 @@ def in_place(X: NDArray, e_place: NDArray, e_named: NDArray, candidates: Sequenc
 def list_rivals(rp: LogReplay, lib_X: NDArray, lib_drift: Drift | None, candidates: Sequence[Candidate],
                 findings: Sequence[Finding], first_J: NDArray | None, found: Sequence[Candidate], after: Replayed,
                 n_scr: int, n_fit: int, drift: Drift | None, skip: Sequence[Finding] = (),
-                progress: Callable[[float], None] | None = None, own_variance: bool = False) -> None:
+                progress: Callable[[float], None] | None = None, own_variance: OwnVariance = False) -> None:
     """Give every kept finding (but those in ``skip``, judged already) its rivals (module docstring): each
     listed one goes to ``f.rivals`` and to ``f.alternatives``.
 

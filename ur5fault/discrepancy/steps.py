@@ -30,7 +30,7 @@ from .refinement import FindingSet, Refined, probe_batch
 from .rivals import current_channel, differ_most
 from .search import backward, columns_of, forward
 from .search import judge as judge_one
-from .statistics import BlockGram, per_channel, rss_of, weighted
+from .statistics import BlockGram, OwnVariance, per_channel, rss_of, weighted
 
 #: residuals above this multiple of the noise floor (sqrt 2 sigma: model and log noise) get joint-local terms
 FLOOR_FACTOR = 2.0
@@ -55,7 +55,7 @@ class LibraryRecord:
     alternatives: Alternatives
     trace: list[SearchStep]
     drift: Drift | None = None  # projected out of ``X`` and ``e0`` (and of the dictionary's columns)
-    own_variance: bool = False  # each channel its own variance in every selection (statistics.per_channel)
+    own_variance: OwnVariance = False  # each channel its own variance in every selection (statistics.per_channel)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -98,7 +98,7 @@ def drift_of(rp: LogReplay, n: int) -> Drift:
 
 def screen_library(rp: LogReplay, n_scr: int, payload_kg: float, kinds: Sequence[str] | None,
                    max_effects: int, progress: Callable[[float], None] | None = None,
-                   own_variance: bool = False) -> LibraryRecord:
+                   own_variance: OwnVariance = False) -> LibraryRecord:
     """``max_effects``: most library effects named per joint (robot-wide effects count as one more joint).
     ``own_variance``: each channel its own variance in the selections on the screened part, False: pooled."""
     cands = library.candidates(payload_kg, kinds=kinds, params=rp.params)
@@ -224,7 +224,7 @@ def tell_apart(rp: LogReplay, lib: LibraryRecord, X_a: NDArray, th_a, X_b: NDArr
 
 
 def refine(rp: LogReplay, found: list[Candidate], X: NDArray, fixed: list[int], e0: NDArray,
-           alternatives: Alternatives, n_fit: int, progress=None, own_variance: bool = False) -> RefineRecord:
+           alternatives: Alternatives, n_fit: int, progress=None, own_variance: OwnVariance = False) -> RefineRecord:
     fs = FindingSet(found)
     alts = [(i, a, th) for i, c in enumerate(found) for a, th in alternatives.get(c, [])]
     if not found:
@@ -270,7 +270,7 @@ def alternatives_of_kept(rp: LogReplay, ref: RefineRecord, kept: Sequence[Findin
 
 
 def judge(ref: RefineRecord, n_fit: int, n_signals: int, drift: Drift | None = None,
-          own_variance: bool = False) -> JudgeRecord:
+          own_variance: OwnVariance = False) -> JudgeRecord:
     """``drift``: the nuisance drift of the fitting part, projected out before the findings are judged there."""
     if not ref.found:
         return JudgeRecord([], [])
