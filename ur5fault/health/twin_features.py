@@ -147,9 +147,13 @@ def twin_features(t_s: NDArray, q_set_rad: NDArray, meas: dict[str, NDArray], tw
         t_s: log times ``(n_log,)`` [s].
         q_set_rad: commanded joint angles ``(n_log, 6)``.
         meas, twin: the run's and its twin's ``q_FB_rad``, ``q_M_FB_rad``, ``i_FB_A`` (``(n_log, 6)``);
-            ``twin`` also its noise-free motor current ``i_q_A`` and gear torque ``T_gear_Nm`` (the shapes
-            of the projections are taken from the twin's noise-free signals: a noisy regressor would bias
-            its coefficient towards -1 where the joint's current is mostly noise).
+            ``twin`` also its motor current ``i_q_A`` and gear torque ``T_gear_Nm``, free of the sensors'
+            own noise (the projections' shapes are taken from these, not from the readings: a reading's
+            noise in the regressor would bias its coefficient towards -1 where the joint's current is mostly
+            noise). They still carry the loops' response to the twin's sensor noise, which biases the gain
+            estimate where a joint carries almost no current (wrist_2 with no payload: 0.0061 A RMS, 0.0008 A
+            with the twin's noise off; healthy estimates +0.45 median: docs/diagnostics.md, "Wrist 2's gain
+            estimate on healthy runs").
         params: the twin's model (gear ratio and stiffness, torque constant, friction levels).
         payload_kg: the configured payload mass (the robot knows it) [kg]; 0: no centre-of-mass columns.
         payload_held: ``(n_log,)`` whether the payload is held (the gripper commands); None: throughout.
