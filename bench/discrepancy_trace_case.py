@@ -39,7 +39,8 @@ import discrepancy_real_hidden as hidden  # noqa: E402
 from ur5fault.discrepancy import DiscrepancyModel, steps  # noqa: E402
 from ur5fault.discrepancy.model import LIKELIHOODS  # noqa: E402
 from ur5fault.discrepancy.search import judge  # noqa: E402
-from ur5fault.discrepancy.statistics import BlockGram, per_channel  # noqa: E402
+from ur5fault.discrepancy.statistics import BlockGram  # noqa: E402
+from ur5fault.discrepancy.weighting import per_channel  # noqa: E402
 from ur5fault.sim.axes import JOINT_NAMES  # noqa: E402
 
 

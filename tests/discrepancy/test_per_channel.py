@@ -1,4 +1,4 @@
-"""Each channel its own variance (``statistics.per_channel``): a one-joint effect is judged against its own
+"""Each channel its own variance (``weighting.per_channel``): a one-joint effect is judged against its own
 joint's unexplained variance, not against residual energy pooled over every channel.  Synthetic linear
 problems, no simulation."""
 
@@ -11,7 +11,8 @@ import pytest
 
 from ur5fault.discrepancy import DiscrepancyModel, joint_check
 from ur5fault.discrepancy.search import columns_of, forward, judge
-from ur5fault.discrepancy.statistics import BlockGram, bic, channel_scale, effective_n, per_channel, rss_of
+from ur5fault.discrepancy.statistics import BlockGram, bic, effective_n, rss_of
+from ur5fault.discrepancy.weighting import channel_scale, per_channel
 from ur5fault.errors import ParameterError
 
 N = 2500  # 20 s at 125 Hz, the screened part of a log

@@ -1,4 +1,4 @@
-"""Each channel its own variance at rest and in motion (``statistics.VarianceGroups``, ``group_scale``): a constant
+"""Each channel its own variance at rest and in motion (``weighting.VarianceGroups``, ``group_scale``): a constant
 on a joint's current is estimated where the model's own error (friction, inertia: motion) is small, not judged
 against the error in motion.  Synthetic linear problems, no simulation; expected values computed by hand."""
 
@@ -11,7 +11,8 @@ import pytest
 
 from ur5fault.discrepancy import DiscrepancyModel
 from ur5fault.discrepancy.search import columns_of, judge
-from ur5fault.discrepancy.statistics import BlockGram, VarianceGroups, group_scale, per_channel
+from ur5fault.discrepancy.statistics import BlockGram
+from ur5fault.discrepancy.weighting import VarianceGroups, group_scale, per_channel
 from ur5fault.errors import ParameterError
 
 N = 2500  # 20 s at 125 Hz, the screened part of a log

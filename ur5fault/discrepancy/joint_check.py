@@ -15,7 +15,8 @@ from .candidates import Candidate
 from .judging import SearchStep
 from .search import backward, columns_of, forward
 from .search import judge as judge_one
-from .statistics import MIN_DELTA_BIC, BlockGram, OwnVariance, effective_n, per_channel, rss_of
+from .statistics import MIN_DELTA_BIC, BlockGram, effective_n, rss_of
+from .weighting import OwnVariance, per_channel
 
 
 @dataclasses.dataclass(frozen=True)

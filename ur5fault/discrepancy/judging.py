@@ -15,7 +15,8 @@ from .candidates import Candidate
 from .drift import Drift
 from .refinement import FindingSet, Refined
 from .search import Verdict, backward, columns_of, forward, judge
-from .statistics import Z_95, BlockGram, Generalisation, OwnVariance, generalisation, per_channel, rss_of
+from .statistics import Z_95, BlockGram, Generalisation, generalisation, rss_of
+from .weighting import OwnVariance, per_channel
 
 
 @dataclasses.dataclass

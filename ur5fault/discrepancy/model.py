@@ -39,7 +39,7 @@ from .refinement import FindingSet, Refined, polish
 from .rescreen import rescreen
 from .rivals import list_rivals
 from .search import columns_of
-from .statistics import OwnVariance, VarianceGroups
+from .weighting import OwnVariance, VarianceGroups
 
 logger = logging.getLogger(__name__)
 
@@ -100,7 +100,7 @@ class DiscrepancyModel:
         screen_s: length of the log's first part the library is screened and the dictionary selected on
             [s] (None: the whole fitting part); refinement and judgement use the whole fitting part.
         likelihood: ``"pooled"`` (one variance for every channel, the default), ``"per_channel"`` (each
-            channel, signal x joint, its own residual variance in every selection; ``statistics.per_channel``) or
+            channel, signal x joint, its own residual variance in every selection; ``weighting.per_channel``) or
             ``"per_condition"`` (each channel its own variance while its joint is at rest and while it moves).
     """
 
@@ -229,7 +229,7 @@ class DiscrepancyModel:
 
     # --------------------------------------------------------------------------------- pieces
     def _variance(self, rp: LogReplay | MultiReplay) -> OwnVariance:
-        """What the selections' likelihood gives its own variance (``statistics.per_channel``): nothing (pooled),
+        """What the selections' likelihood gives its own variance (``weighting.per_channel``): nothing (pooled),
         each channel, or each channel at rest and in motion (its joint's target speed, the residual conditions'
         "at rest", over the replayed samples ``1..n``)."""
         if self.likelihood != "per_condition":

@@ -43,7 +43,8 @@ from .drift import Drift
 from .judging import Finding, SearchStep, channels
 from .rivals import MAX_RIVALS, Rival, current_channel, differ_most, in_place, indistinguishable_held_out, judge_rival
 from .search import backward, columns_of, forward, judge
-from .statistics import BlockGram, OwnVariance, generalisation, per_channel, rss_of, weighted
+from .statistics import BlockGram, generalisation, rss_of, weighted
+from .weighting import OwnVariance, per_channel
 
 __all__ = ["MAX_RIVALS", "freed_joints", "indistinguishable_held_out", "rescreen", "rivals_of", "select_on_freed"]
 

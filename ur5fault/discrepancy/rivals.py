@@ -39,16 +39,8 @@ from .candidates import Candidate
 from .drift import Drift
 from .judging import Finding, channels
 from .search import columns_of, judge
-from .statistics import (
-    MIN_DELTA_BIC,
-    BlockGram,
-    OwnVariance,
-    effective_n,
-    generalisation,
-    per_channel,
-    rss_of,
-    weighted,
-)
+from .statistics import MIN_DELTA_BIC, BlockGram, effective_n, generalisation, rss_of, weighted
+from .weighting import OwnVariance, per_channel
 
 #: rivals of one finding simulated (each one run of the whole log) at most
 MAX_RIVALS = 2

@@ -30,7 +30,8 @@ from .refinement import FindingSet, Refined, probe_batch
 from .rivals import current_channel, differ_most
 from .search import backward, columns_of, forward
 from .search import judge as judge_one
-from .statistics import BlockGram, OwnVariance, per_channel, rss_of, weighted
+from .statistics import BlockGram, rss_of, weighted
+from .weighting import OwnVariance, per_channel
 
 #: residuals above this multiple of the noise floor (sqrt 2 sigma: model and log noise) get joint-local terms
 FLOOR_FACTOR = 2.0
@@ -55,7 +56,7 @@ class LibraryRecord:
     alternatives: Alternatives
     trace: list[SearchStep]
     drift: Drift | None = None  # projected out of ``X`` and ``e0`` (and of the dictionary's columns)
-    own_variance: OwnVariance = False  # each channel its own variance in every selection (statistics.per_channel)
+    own_variance: OwnVariance = False  # each channel its own variance in every selection (weighting.per_channel)
 
 
 @dataclasses.dataclass(frozen=True)
