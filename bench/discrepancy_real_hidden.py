@@ -356,10 +356,11 @@ def main() -> None:
         name, effects = CASES[ci]
         base = read(name)
         if name not in clean:
-            t = time.perf_counter()
+            t, c = time.perf_counter(), time.process_time()
             clean[name] = DiscrepancyModel(jobs=jobs, likelihood=args.likelihood).fit(base)
             print(f"| {name} | clean | {', '.join(f.candidate.label for f in clean[name].findings_ if f.kept)} "
-                  f"| | | | | {len(clean[name].unexplained_)} | {time.perf_counter() - t:.0f} s |", flush=True)
+                  f"| | | | | {len(clean[name].unexplained_)} | {time.perf_counter() - t:.0f} s "
+                  f"(CPU {time.process_time() - c:.0f} s) |", flush=True)
         log = base
         for kind, j, v in effects:
             if kind == "local_friction" and "centre_deg" not in v:
@@ -376,9 +377,9 @@ def main() -> None:
 def score(name: str, effects, log, clean, baseline: bool, jobs: int, rows: list, per_kind: dict,
           likelihood: str = "pooled") -> None:
     """Fit one injected log (from the clean fit's model when ``baseline``) and print its rows."""
-    t = time.perf_counter()
+    t, c = time.perf_counter(), time.process_time()
     m = DiscrepancyModel(jobs=jobs, likelihood=likelihood).fit(log, base_effects=baseline_of(clean) if baseline else ())
-    wall = time.perf_counter() - t
+    wall = f"{time.perf_counter() - t:.0f} s (CPU {time.process_time() - c:.0f} s)"
     label = f"{name} (from clean fit)" if baseline else name
     injected = {(NAMED_AS[k][0], j) for k, j, _ in effects if k in NAMED_AS}
     before = set() if baseline else kept_keys(clean)
@@ -388,7 +389,7 @@ def score(name: str, effects, log, clean, baseline: bool, jobs: int, rows: list,
         if kind == "local_friction":
             ok, where = worn_region_found(m, jn, v["centre_deg"])
             print(f"| {label} | {kind} {jn} {v['amplitude_A']} A at {v['centre_deg']:.0f} deg | {where} | | | "
-                  f"{'found' if ok else 'missed'} | {len(extra)} | {len(m.unexplained_)} | {wall:.0f} s |",
+                  f"{'found' if ok else 'missed'} | {len(extra)} | {len(m.unexplained_)} | {wall} |",
                   flush=True)
             per_kind.setdefault(kind, []).append((ok, float("nan"), bool(extra)))
             continue
@@ -401,7 +402,7 @@ def score(name: str, effects, log, clean, baseline: bool, jobs: int, rows: list,
         shown = "-" if est is None else f"{est:.4g}"
         extras = ", ".join(f"{e} {'robot' if k is None else JOINT_NAMES[k]}" for e, k in sorted(extra, key=str))
         print(f"| {label} | {kind} {jn} {v[par]:g} | {how} | {shown} | {truth:.4g} | {100 * err:+.0f} % | "
-              f"{extras or 0} | {len(m.unexplained_)} | {wall:.0f} s |", flush=True)
+              f"{extras or 0} | {len(m.unexplained_)} | {wall} |", flush=True)
         per_kind.setdefault(kind, []).append((ok, err, bool(extra)))
     rows.append((name, effects, m, extra))
 
