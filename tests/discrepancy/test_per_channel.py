@@ -4,10 +4,9 @@ problems, no simulation."""
 
 from __future__ import annotations
 
-import dataclasses
-
 import numpy as np
 import pytest
+from stand_in_candidates import Offset
 
 from ur5fault.discrepancy import DiscrepancyModel, joint_check
 from ur5fault.discrepancy.search import columns_of, forward, judge
@@ -16,22 +15,6 @@ from ur5fault.discrepancy.weighting import channel_scale, per_channel
 from ur5fault.errors import ParameterError
 
 N = 2500  # 20 s at 125 Hz, the screened part of a log
-
-
-@dataclasses.dataclass(frozen=True)
-class Offset:
-    """A stand-in library candidate: a constant on one channel (one coefficient, any value allowed)."""
-
-    joint: int
-    source: str = "library"
-    n_coef: int = 1
-
-    @property
-    def label(self) -> str:
-        return f"offset on joint {self.joint}"
-
-    def bounds(self):
-        return np.full(1, -np.inf), np.full(1, np.inf)
 
 
 def two_joints(error_sigma: float, offset_sigma: float, seed: int = 7):

@@ -4,10 +4,9 @@ against the error in motion.  Synthetic linear problems, no simulation; expected
 
 from __future__ import annotations
 
-import dataclasses
-
 import numpy as np
 import pytest
+from stand_in_candidates import Offset
 
 from ur5fault.discrepancy import DiscrepancyModel
 from ur5fault.discrepancy.search import columns_of, judge
@@ -16,22 +15,6 @@ from ur5fault.discrepancy.weighting import VarianceGroups, group_scale, per_chan
 from ur5fault.errors import ParameterError
 
 N = 2500  # 20 s at 125 Hz, the screened part of a log
-
-
-@dataclasses.dataclass(frozen=True)
-class Offset:
-    """A stand-in library candidate: a constant on one channel (one coefficient, any value allowed)."""
-
-    joint: int = 0
-    source: str = "library"
-    n_coef: int = 1
-
-    @property
-    def label(self) -> str:
-        return f"offset on joint {self.joint}"
-
-    def bounds(self):
-        return np.full(1, -np.inf), np.full(1, np.inf)
 
 
 def test_group_scale_is_each_groups_own_scale_and_the_channels_for_a_small_group():
