@@ -253,7 +253,7 @@ def test_saved_classifiers_round_trip_and_score_another_campaign(tmp_path):
 def test_benchmark_refuses_no_worker(tmp_path, capsys):
     assert main(["benchmark", str(tmp_path), "--jobs", "0"]) == 2
     err = capsys.readouterr().err
-    assert err.count("\n") == 1 and "--jobs must be at least 1, got 0" in err
+    assert err.count("\n") == 1 and "--jobs 0: must be a whole number of at least 1" in err
 
 
 def test_scoring_needs_saved_classifiers_and_their_columns(tmp_path, capsys):

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 import math
-import os
 import sys
 
 
@@ -24,13 +23,14 @@ def register(sub) -> None:
                         "folder, without retraining (report in OTHER_DIR/benchmark_transfer unless --out; "
                         "default: train and score on DIR's own split)")
     b.add_argument("--jobs", type=int, help="worker processes for the feature sets' comparison, run beside the "
-                                            "main training (default: all cores; 1: one after the other)")
+                                            "main training (default: all cores available; 1: one after the other)")
     b.set_defaults(func=cmd_benchmark)
 
 
 def cmd_benchmark(args: argparse.Namespace) -> int:
     import time
 
+    from ...campaign.limits import effective_jobs
     from ...errors import ParameterError
     from ...util.io import check_writable
     from . import run_benchmark
@@ -39,13 +39,12 @@ def cmd_benchmark(args: argparse.Namespace) -> int:
     if args.test is not None and args.features is not None:
         raise ParameterError("--features chooses the inputs of new classifiers; --test scores saved ones with "
                              "their own inputs: use one of them")
-    if args.jobs is not None and args.jobs < 1:
-        raise ParameterError(f"--jobs must be at least 1, got {args.jobs}")
+    jobs, _ = effective_jobs(args.jobs)  # the campaigns' rule: at least 1, at most the cores available
     if args.out is not None:  # before the data are read and the classifiers trained, not after
         check_writable(args.out, folder=True)
     m = run_benchmark(args.dir, args.out, seed=args.seed, shuffle_labels=args.shuffle_labels,
                       feature_set=args.features, test_dir=args.test,
-                      jobs=(os.cpu_count() or 1) if args.jobs is None else args.jobs)
+                      jobs=jobs)
     det, loc, kind = m["detection"], m["localisation"], m["kind"]
     print(f"{m['dataset']['n_train']} train / {m['dataset']['n_test']} test runs, features {m['feature_set']}"
           + (" (training labels shuffled)" if m["shuffled_labels"] else ""))
