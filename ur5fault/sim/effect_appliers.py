@@ -61,6 +61,17 @@ def delay(a, row, j, v):
     a.setpoint_delay_s[row] = v["delay_ms"] * 1e-3
 
 
+#: the per-run white-noise sigmas of the sensors (:class:`ur5fault.sim.run_arrays.RunArrays`), all that the
+#: effect ``sensor_noise`` scales: quantisation steps, filters, offsets and gains are not noise and stay
+NOISE_FIELDS = ("resolver_noise_rad", "encoder_noise_rad", "encoder_speed_noise_rad_s", "current_noise_A")
+
+
+def sensor_noise(a, row, j, v):
+    """Every sensor's white-noise sigma of the run, on every joint, times ``scale``."""
+    for field in NOISE_FIELDS:
+        getattr(a, field)[row, :] *= v["scale"]
+
+
 def payload_com(a, row, j, v):
     a.payload_com_m[row, :] = (v["dx_m"], v["dy_m"], v["dz_m"])
 

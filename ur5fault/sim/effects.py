@@ -276,6 +276,16 @@ REGISTRY: dict[str, Effect] = {
             ap.delay,
         ),
         Effect(
+            "sensor_noise",
+            "white noise of every sensor scaled (resolver, motor encoder angle and speed, current); quantisation, "
+            "sample-and-hold, filters, offsets and gains unchanged. 0 is the noise-free reading a digital twin "
+            "carries (the healthy robot's expected reading, not a second noisy robot)",
+            (EffectParam("scale", "-", 0.0, 10.0, 1.0, "factor on the model's noise sigmas (sensors.*_noise_*; "
+                         "upper bound an assumption, as the friction scales')"),),
+            False,
+            ap.sensor_noise,
+        ),
+        Effect(
             "cogging",
             "torque ripple periodic in motor angle (cogging or gear ripple)",
             (
@@ -324,3 +334,8 @@ REGISTRY: dict[str, Effect] = {
         *_TERM_EFFECTS,
     ]
 }
+
+#: the white sensor noise silenced (``sensor_noise.scale = 0``): what every digital twin carries, the campaign's
+#: (:func:`ur5fault.campaign.digital_twin.twin_effects`) and ``ur5fault diagnose``'s
+#: (:func:`ur5fault.health.diagnosis.replay_twin`), so that the two compute their features alike
+NOISE_FREE: EffectSpec = make_effect("sensor_noise", scale=0.0)
