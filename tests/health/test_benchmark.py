@@ -236,6 +236,12 @@ def test_saved_classifiers_round_trip_and_score_another_campaign(tmp_path):
     ds = load_dataset(df, "both")
     assert [c["name"] for c in schema["inputs"]] == list(ds.inputs)
     assert schema["training_set_sha256"] == training_hash(ds) and schema["ur5fault_version"]
+    from ur5fault.health.diagnostics.limits import DEFAULT_Z, LimitCalibration
+
+    # the detection limits' calibration: read off the training runs, saved for ur5fault diagnose, reported
+    assert schema["detection_limit_calibration"] == LimitCalibration.from_training(ds.train).to_dict()
+    assert m["detection_limits"]["z_default"] == DEFAULT_Z
+    assert "## Detection where the motion can show the fault" in (train_dir / "benchmark" / "report.md").read_text()
     refit, _ = evaluate(df, with_figures=False, with_importance=False, feature_set="both")
     assert refit["detection"]["auc_all"] == pytest.approx(m["detection"]["auc_all"], abs=0)
     from ur5fault.health.diagnostics.models import fit_models

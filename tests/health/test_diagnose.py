@@ -56,7 +56,7 @@ def _synthetic_table(rng: np.random.Generator, n: int = 240) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-def _save_stand_in(folder: Path, calibrated: bool) -> Path:
+def _save_stand_in(folder: Path, calibrated: bool, limit_calibration: dict | None = None) -> Path:
     ds = load_dataset(_synthetic_table(np.random.default_rng(0)), "twin")
     models = fit_models(ds, seed=0)
     healthy = (ds.test["fault"] == "healthy").to_numpy()
@@ -66,7 +66,7 @@ def _save_stand_in(folder: Path, calibrated: bool) -> Path:
         models.calibrator, fit = fit_calibration(ds, seed=0)
         info = fit["info"]
     save_models(models, ds, "twin", 0.5, folder, window_s=WINDOW_S, log_period_s=1e-3, calibration=info,
-                joint_kind_threshold=joint_thr)
+                joint_kind_threshold=joint_thr, limit_calibration=limit_calibration)
     return folder
 
 
@@ -303,8 +303,38 @@ def test_classifiers_saved_without_calibration_load_and_say_so(logs, detector, t
     d = _diagnose(logs["healthy"], detector, tmp_path / "h")  # the stand-in detector is saved uncalibrated
     assert d["detector"]["calibrated"] is False
     assert any("without a calibration" in n for n in d["notes"])
+    # nor with the detection limits' calibration (its table has no SE columns): the limits are left out, said so
+    assert d["detection_limit_z"] is None
+    assert not any("detection_limits" in j for w in d["windows"] for j in w["joints"])
+    assert sum("without the detection-limit calibration" in n for n in d["notes"]) == 1
     assert all(w["p_fault"] == w["p_fault_score"] for w in d["windows"])
     assert d["detector"]["p_fault_at_threshold"] == d["detector"]["threshold_5pct_false_alarms"]
+
+
+def test_detection_limits_are_z_spread_se_of_each_window_or_cannot_tell_with_why(logs, tmp_path):
+    from ur5fault.health.diagnostics.limits import DEFAULT_Z, ESTIMATE_OF, ESTIMATES, LimitCalibration
+
+    spread = 2.0  # a hand-set calibration: every estimate's healthy t values spread twice their SE
+    cal = LimitCalibration({e: (spread,) * 6 for e in ESTIMATES}, {e: (50,) * 6 for e in ESTIMATES})
+    det = _save_stand_in(tmp_path / "det", calibrated=False, limit_calibration=cal.to_dict())
+    d = _diagnose(logs["healthy"], det, tmp_path / "h")
+    assert d["detection_limit_z"] == DEFAULT_Z
+    n_finite = 0
+    for w, (_, se, _) in zip(d["windows"], _offsets(logs["healthy"]), strict=True):
+        for j in w["joints"]:
+            assert set(j["detection_limits"]) == set(ESTIMATE_OF)
+            lim = j["detection_limits"]["current_sensor_offset"]
+            assert lim["unit"] == "A"
+            if "current_sensor_offset" in j["cannot_tell"]:  # the window's own rule wins, with its reason
+                assert lim["detectable_from"] is None
+                assert lim["cannot_tell"] == j["cannot_tell"]["current_sensor_offset"]
+            else:
+                assert lim["detectable_from"] == pytest.approx(DEFAULT_Z * spread * se[j["joint"] - 1], rel=1e-9)
+                n_finite += 1
+            for k, v in j["detection_limits"].items():  # null exactly where a reason is given
+                assert (v["detectable_from"] is None) == ("cannot_tell" in v), (k, v)
+    assert n_finite >= 6
+    assert "Smallest fault each joint's motion could show" in (tmp_path / "h" / "report.md").read_text()
 
 
 NIST_LOG = Path(__file__).resolve().parents[2] / "data" / "nist-ur5" / "ur5testresult_halfspeed_payload1.6lb_1.csv.gz"

@@ -20,6 +20,7 @@ from ...errors import ParameterError
 from ...logs import MeasuredLog
 from ...sim.effects import EffectSpec
 from ...twin import LogReplay, Replayed
+from ..diagnostics.limits import DEFAULT_Z, LimitCalibration
 from .baseline import MIN_SPREAD_WINDOWS, BaselineMap, fit_map, training_reference
 from .score import check_schema, score_windows
 from .windows import Window, window_features
@@ -101,9 +102,14 @@ def diagnose(log: MeasuredLog, detector_dir: str | Path, params_overrides: dict 
             raise ParameterError(f"{log.source}: sampled every {1e3 * log.period_s:g} ms, its baseline logs every "
                                  f"{1e3 * baseline.period_s:g} ms; the features depend on the rate: give a baseline "
                                  "logged like the diagnosed log")
+    cal = schema.get("detection_limit_calibration")
     scored = score_windows(models, schema, windows, log.q_motor_rad is not None,
-                           None if baseline is None else baseline.apply)
+                           None if baseline is None else baseline.apply,
+                           None if not cal else LimitCalibration.from_dict(cal))
     notes = list(log.assumptions(replay.params.joint_temperature_C))
+    if not cal:
+        notes.append("these classifiers were saved without the detection-limit calibration: no detection_limits "
+                     "per joint (run `ur5fault benchmark` again with this version to add them)")
     if baseline is not None:
         n = {r: v["n_inputs"] for r, v in baseline.summary()["rules"].items()}
         few = n["shifted_few_windows"]
@@ -150,6 +156,8 @@ def diagnose(log: MeasuredLog, detector_dir: str | Path, params_overrides: dict 
         "conditions": context,
         # None: the inputs were scored as they are, against the simulated healthy runs only
         "baseline": None if baseline is None else baseline.summary(),
+        # the z of every joint's detection_limits (None: the detector saved no calibration, and they are left out)
+        "detection_limit_z": DEFAULT_Z if cal else None,
         "n_windows": len(scored),
         "n_flagged": len(flagged),
         "windows": scored,

@@ -56,6 +56,30 @@ def _baseline(b: dict[str, Any] | None) -> str:
             f"(no value), {n['condition']} operating conditions left as they are; reference: {b['reference']}.")
 
 
+def _limit_lines(d: dict[str, Any]) -> list[str]:
+    """Per joint and kind, the median over the windows of the smallest size the motion could show (``cannot tell``
+    in how many windows); nothing when the detector saved no calibration."""
+    w = d["windows"]
+    if not w or d.get("detection_limit_z") is None or "detection_limits" not in w[0]["joints"][0]:
+        return []
+    kinds = list(w[0]["joints"][0]["detection_limits"])
+    lines = ["", f"Smallest fault each joint's motion could show (detection limit at z = {d['detection_limit_z']:g}: "
+                 "median over the windows; cannot tell: in how many windows the motion leaves it unidentified; "
+                 "`detection_limits` in diagnosis.json):", "",
+             "| joint | " + " | ".join(f"{k} [{w[0]['joints'][0]['detection_limits'][k]['unit']}]" for k in kinds)
+             + " |", "| --- |" + " --- |" * len(kinds)]
+    for j in range(len(w[0]["joints"])):
+        cells = []
+        for k in kinds:
+            vals = [x["joints"][j]["detection_limits"][k]["detectable_from"] for x in w]
+            ok = [v for v in vals if v is not None]
+            blind = len(vals) - len(ok)
+            cells.append((f"{np.median(ok):.3g}" if ok else "-")
+                         + (f" (cannot tell {blind}/{len(vals)})" if blind else ""))
+        lines.append(f"| J{j + 1} | " + " | ".join(cells) + " |")
+    return lines
+
+
 def _report(d: dict[str, Any]) -> str:
     det = d["detector"]
     lines = [f"# Diagnosis of {d['log']}", "",
@@ -85,6 +109,7 @@ def _report(d: dict[str, Any]) -> str:
         where = f"J{top['joint']} {top['p_fault_joint']:.2f}" if top else "-"
         lines.append(f"| {w['start_s']:.1f}-{w['end_s']:.1f} | {w['p_fault']:.3f} | {'yes' if w['flagged'] else 'no'}"
                      f" | {where} | {kinds} |")
+    lines += _limit_lines(d)
     lines += ["", f"![p(fault) per window and joint]({FIGURE_FILE})", ""]
     if d["notes"]:
         lines += ["Notes:", *[f"- {n}" for n in d["notes"]], ""]

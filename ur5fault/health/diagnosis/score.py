@@ -24,6 +24,11 @@ window's two halves (an empirical spread, not a confidence interval: NaN where a
 carries the variance inflation of its signature against the others of its fit; above :data:`MAX_VIF` it is
 marked ``confounded`` (it holds only if the other faults of that fit are absent: in a window where wrist 1
 turns one way only, a current offset and a Coulomb-friction change look alike).
+
+Detection limits (with the calibration saved with the detector): per joint and kind the smallest size the
+window's motion could show (:func:`ur5fault.health.diagnostics.limits.joint_limits`, at
+:data:`~ur5fault.health.diagnostics.limits.DEFAULT_Z`), or none with why; a kind the window's own rules above say
+it cannot tell gets none with that reason.
 """
 
 from __future__ import annotations
@@ -40,6 +45,7 @@ from ...sim.axes import N_JOINTS
 from ..diagnostics import calibration, joint_kind
 from ..diagnostics.data import CONTEXT_COLUMNS, SIM_ONLY_PREFIX
 from ..diagnostics.kind_call import MERGED_KINDS
+from ..diagnostics.limits import DEFAULT_Z, ESTIMATE_OF, LimitCalibration, joint_limits
 from ..diagnostics.saved import SCHEMA_FORMAT
 from ..features import FEATURE_UNITS
 from ..twin_features import FEATURE_UNITS as TWIN_FEATURE_UNITS
@@ -69,10 +75,6 @@ NEEDS_MOTOR_ENCODERS = {
                       "link and the current carries the same torque, so only the motor encoder sees the windup "
                       "(UR-log benchmark AUC 0.42)",
 }
-#: each kind's size estimate (name of :data:`ur5fault.health.twin_features.ESTIMATE_UNITS`)
-ESTIMATE_OF = {"current_sensor_offset": "current_offset_A", "current_sensor_gain": "current_gain_err",
-               "torque_constant": "current_gain_err", "coulomb_friction": "coulomb_scale_err",
-               "resolver_offset": "mismatch_offset_rad", "backlash": "backlash_rad", "gear_stiffness": "compliance_err"}
 #: largest variance inflation factor at which a size estimate counts as told apart from the others of its fit
 #: (the usual rule of thumb for collinear regressors: above 10 a coefficient's variance is ten times what
 #: independent regressors would give, e.g. an offset and a gain in a window whose current hardly varies);
@@ -158,12 +160,24 @@ def _finite(v: float) -> float | None:
     return float(v) if np.isfinite(v) else None
 
 
+def window_limits(w: Window, j: int, blind: dict[str, str], cal: LimitCalibration) -> dict[str, dict[str, Any]]:
+    """The window's detection limits on joint ``j`` (0-based) per kind (module docstring); ``blind``: its
+    :func:`cannot_tell`, which overrides a finite limit."""
+    out = joint_limits(w.features, cal, j + 1, DEFAULT_Z)
+    for kind, why in blind.items():
+        if kind in out and out[kind]["detectable_from"] is not None:
+            out[kind] = {"detectable_from": None, "unit": out[kind]["unit"], "cannot_tell": why}
+    return out
+
+
 def score_windows(models, schema: dict[str, Any], windows: list[Window], has_motor_encoders: bool,
-                  inputs_map: Callable[[np.ndarray], np.ndarray] | None = None) -> list[dict[str, Any]]:
+                  inputs_map: Callable[[np.ndarray], np.ndarray] | None = None,
+                  limit_calibration: LimitCalibration | None = None) -> list[dict[str, Any]]:
     """Per window: its times, ``p_fault``, ``flagged``, the run-level detector's reading, and per joint
     ``p_fault_joint``, the likeliest kinds with size estimates and intervals, and the kinds it cannot tell
     (module docstring).  ``inputs_map``: applied to the classifier inputs ``(n_windows, n_inputs)`` before they
-    are scored (a robot's baseline, :mod:`.baseline`); the size estimates stay the window's own."""
+    are scored (a robot's baseline, :mod:`.baseline`); the size estimates stay the window's own.
+    ``limit_calibration``: each joint also gets ``detection_limits`` (:func:`window_limits`); None: left out."""
     from ..diagnostics.classifier import single_threaded
 
     names = [c["name"] for c in schema["inputs"]]
@@ -199,7 +213,9 @@ def score_windows(models, schema: dict[str, Any], windows: list[Window], has_mot
                               if ok and all(np.isfinite(halves)) else None,
                               "cannot_tell": c in blind, "same_signature_as": same_signature(c)})
             joints.append({"joint": j + 1, "p_fault_joint": float(p_joint[i, j]), "kinds": kinds,
-                           "cannot_tell": blind})
+                           "cannot_tell": blind,
+                           **({} if limit_calibration is None else
+                              {"detection_limits": window_limits(w, j, blind, limit_calibration)})})
         score = float(score_joint[i].max())
         out.append({"start_s": w.start_s, "end_s": w.end_s, "p_fault": float(p_joint[i].max()),
                     "p_fault_score": score, "flagged": bool(score > thr),

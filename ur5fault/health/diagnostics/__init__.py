@@ -23,6 +23,7 @@ import pandas as pd
 from ...errors import ParameterError
 from .calibration import fit_calibration, test_reliability
 from .data import CONTEXT_COLUMNS, FEATURE_SETS, Dataset, has_twin_features, load_dataset, load_features
+from .limit_metrics import for_dataset
 from .metrics import (
     FROM_OUT_OF_FOLD,
     FROM_TEST_SPLIT,
@@ -43,7 +44,7 @@ from .thresholds import PAPER_TCP_MM, backlash_thresholds
 def evaluate(features: pd.DataFrame, *, seed: int = 0, shuffle_labels: bool = False,
              threshold_mm: float = PAPER_TCP_MM, source: str = "features", with_figures: bool = True,
              with_importance: bool = True, feature_set: str = "paper", saved: tuple[Models, dict] | None = None,
-             test_features: pd.DataFrame | None = None, calibrate: bool = False
+             test_features: pd.DataFrame | None = None, calibrate: bool = False, with_limits: bool = True
              ) -> tuple[dict[str, Any], dict[str, Any]]:
     """Train on the train split, score on the test split.
 
@@ -58,6 +59,8 @@ def evaluate(features: pd.DataFrame, *, seed: int = 0, shuffle_labels: bool = Fa
         test_features: score on every ``ok`` row of this table (another campaign) instead of the test split.
         calibrate: also calibrate the detector's probability on out-of-fold predictions of the train split
             (:mod:`.calibration`; not with shuffled labels) and report its reliability on the test split.
+        with_limits: also report detection over the runs above their detection limit (:mod:`.limit_metrics`;
+            needs the twin estimates' SE and t columns).
 
     Returns:
         ``(metrics, figures)``: every number (JSON-able) and the matplotlib Figures by name.
@@ -66,13 +69,13 @@ def evaluate(features: pd.DataFrame, *, seed: int = 0, shuffle_labels: bool = Fa
 
     with single_threaded():
         return _evaluate(features, seed, shuffle_labels, threshold_mm, source, with_figures, with_importance,
-                         feature_set, saved, test_features, calibrate)
+                         feature_set, saved, test_features, calibrate, with_limits)
 
 
 def _evaluate(features: pd.DataFrame, seed: int, shuffle_labels: bool, threshold_mm: float, source: str,
               with_figures: bool, with_importance: bool, feature_set: str = "paper",
               saved: tuple[Models, dict] | None = None, test_features: pd.DataFrame | None = None,
-              calibrate: bool = False) -> tuple[dict[str, Any], dict[str, Any]]:
+              calibrate: bool = False, with_limits: bool = True) -> tuple[dict[str, Any], dict[str, Any]]:
     t0 = time.perf_counter()
     ds: Dataset = load_dataset(features, feature_set if saved is None else saved[1]["feature_set"])
     if test_features is not None:
@@ -117,6 +120,8 @@ def _evaluate(features: pd.DataFrame, seed: int, shuffle_labels: bool, threshold
     ok_rows = features[features["status"] == "ok"] if "status" in features else features
     bl = backlash_thresholds(te, detected, ok_rows, threshold_mm, seed)
     imp = importance(ds, models, seed) if with_importance else []
+    limits = None if not with_limits else for_dataset(
+        ds, None if saved is None else saved[1], score if joint_score is None else joint_score, score, detected)
     metrics = {
         "dataset": {
             "source": source,
@@ -139,6 +144,8 @@ def _evaluate(features: pd.DataFrame, seed: int, shuffle_labels: bool, threshold
         "localisation": loc,
         "kind": kind,
         "backlash": bl,
+        # detection over the runs above their own detection limit (None: the table has no twin estimates' SEs)
+        "detection_limits": limits,
         "calibration": calib,
         "importance": imp,
         "timing": {"fit_s": t_fit, "benchmark_wall_s": time.perf_counter() - t0},
@@ -226,7 +233,8 @@ def run_benchmark(campaign_dir: str | Path, out: str | Path | None = None, *, se
                     joint_kind_threshold=(metrics["detection_by_joint"] or {}).get("threshold_score"),
                     joint_kind_threshold_from=(metrics["detection_by_joint"] or {}).get("threshold_from"),
                     calibration=None if metrics["calibration"] is None else {
-                        k: v for k, v in metrics["calibration"].items() if k != "test"})
+                        k: v for k, v in metrics["calibration"].items() if k != "test"},
+                    limit_calibration=(metrics["detection_limits"] or {}).get("calibration"))
     metrics["out"] = str(out_dir)
     return metrics
 
@@ -250,7 +258,7 @@ def _compared(features: pd.DataFrame, seed: int, shuffled: bool, threshold_mm: f
               feature_set: str) -> dict[str, Any]:
     """One row of :func:`compare_feature_sets`: the headline figures of one feature set, trained or shuffled."""
     m, _ = evaluate(features, seed=seed, shuffle_labels=shuffled, threshold_mm=threshold_mm, source=source,
-                    with_figures=False, with_importance=False, feature_set=feature_set)
+                    with_figures=False, with_importance=False, feature_set=feature_set, with_limits=False)
     return summary(m)
 
 

@@ -96,15 +96,15 @@ def detection(ds: Dataset, models: Models, threshold: float | None = None,
         for lo, hi in zip(edges[:-1], edges[1:]):
             inb = pos & (sizes >= lo) & (sizes < hi)
             n = int(inb.sum())
-            auc = _auc_vs_healthy(score, healthy, inb) if n >= MIN_BIN_RUNS else math.nan
+            auc = auc_vs_healthy(score, healthy, inb) if n >= MIN_BIN_RUNS else math.nan
             bins.append({"size_lo": float(lo), "size_hi": float(hi), "n_test": n, "auc": auc,
                          "auc_se": auc_standard_error(auc, n, int(healthy.sum())),
                          "detection_rate": float(detected[inb].mean()) if n else math.nan})
-        auc = _auc_vs_healthy(score, healthy, pos)
+        auc = auc_vs_healthy(score, healthy, pos)
         upper = pos & (sizes >= math.sqrt(edges[0] * edges[-1])) if edges.size else pos & False
-        auc_up = _auc_vs_healthy(score, healthy, upper) if upper.sum() >= MIN_BIN_RUNS else math.nan
+        auc_up = auc_vs_healthy(score, healthy, upper) if upper.sum() >= MIN_BIN_RUNS else math.nan
         joints = te["fault_joint"].to_numpy(int)
-        up_by_joint = {str(j): _auc_vs_healthy(score, healthy, upper & (joints == j))
+        up_by_joint = {str(j): auc_vs_healthy(score, healthy, upper & (joints == j))
                        if (upper & (joints == j)).sum() >= MIN_BIN_RUNS else math.nan
                        for j in sorted(set(joints[upper]))}
         per_kind[kind] = {"unit": unit, "n_test": int(pos.sum()), "auc": auc,
@@ -129,7 +129,8 @@ def detection(ds: Dataset, models: Models, threshold: float | None = None,
     }
 
 
-def _auc_vs_healthy(score: np.ndarray, healthy: np.ndarray, pos: np.ndarray) -> float:
+def auc_vs_healthy(score: np.ndarray, healthy: np.ndarray, pos: np.ndarray) -> float:
+    """ROC AUC of ``score`` with the ``pos`` runs against the ``healthy`` ones (the others left out)."""
     keep = healthy | pos
     return roc_auc(pos[keep].astype(int), score[keep])
 

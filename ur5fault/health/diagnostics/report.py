@@ -10,6 +10,7 @@ from typing import Any
 from ...sim.axes import JOINT_NAMES
 from ...util.io import write_figure_atomic, write_json_atomic, write_text_atomic
 from .kind_call import PAIR
+from .limit_report import limit_lines
 from .metrics import FROM_TEST_SPLIT
 
 
@@ -167,6 +168,8 @@ def markdown(m: dict[str, Any]) -> str:
         flagged = f"{_f(v.get('detection_rate_crossed_test'), '.0%')} of {v.get('n_test_crossed', 0)}"
         lines.append(f"| J{j} {JOINT_NAMES[int(j) - 1]} | {v['n_test']} ({v['detected']}) | {a90} | {interval} | "
                      f"{emp} | {dev} | {at_thr} | {crossed} | {flagged} |")
+    if m.get("detection_limits"):
+        lines += limit_lines(m["detection_limits"], (m.get("detection_by_joint") or det)["per_kind"])
     lines += ["", "## What the detector uses (permutation importance, test ROC AUC drop)", "",
               "| input | AUC drop (s.d.) |", "| --- | --- |"]
     lines += [f"| {x['feature']} | {_f(x['auc_drop_mean'], '.4f')} ({_f(x['auc_drop_std'], '.4f')}) |"

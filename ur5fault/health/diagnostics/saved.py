@@ -17,7 +17,10 @@
   runs'; ``None`` when the campaign's manifest does not say them), and the healthy training runs' median and
   robust spread of every input (``healthy_training_inputs``, :func:`healthy_reference`: ``ur5fault diagnose
   --baseline-logs`` refers a robot's windows to it; absent from classifiers saved before it, which then read it
-  from the campaign's feature table beside the benchmark folder).
+  from the campaign's feature table beside the benchmark folder), and the robust spread of each twin size
+  estimate's t value per joint on the healthy training runs (``detection_limit_calibration``,
+  :class:`.limits.LimitCalibration`: the detection limits of ``ur5fault diagnose``; absent from classifiers saved
+  before it, whose diagnosis then leaves the limits out).
 
 Scoring another campaign with them (``ur5fault benchmark TRAIN_DIR --test OTHER_DIR``) needs its
 table to hold every input column; a missing one is named.
@@ -78,11 +81,14 @@ def healthy_reference(train: pd.DataFrame, inputs: list[str] | tuple[str, ...]) 
 def save_models(models: Models, ds: Dataset, feature_set: str, threshold_score: float, out: Path,
                 window_s: float | None = None, log_period_s: float | None = None,
                 calibration: dict[str, Any] | None = None, joint_kind_threshold: float | None = None,
-                joint_kind_threshold_from: str | None = None) -> Path:
+                joint_kind_threshold_from: str | None = None, limit_calibration: dict[str, Any] | None = None
+                ) -> Path:
     """Write the classifiers and their schema into ``out/models``; return that folder (``window_s``,
     ``log_period_s``: the training runs' simulated duration and log period, from the campaign manifest;
     ``calibration``: how ``models.calibrator`` was fitted, recorded in the schema; ``joint_kind_threshold_from``:
-    where the by-joint operating point was read, :data:`.metrics.FROM_OUT_OF_FOLD` for ``ur5fault benchmark``)."""
+    where the by-joint operating point was read, :data:`.metrics.FROM_OUT_OF_FOLD` for ``ur5fault benchmark``;
+    ``limit_calibration``: :meth:`.limits.LimitCalibration.to_dict` of the training runs, for the detection limits
+    of ``ur5fault diagnose``)."""
     import sklearn
     import skops
     import skops.io as sio
@@ -118,6 +124,9 @@ def save_models(models: Models, ds: Dataset, feature_set: str, threshold_score: 
         "calibration": None if models.calibrator is None else (calibration or {"method": "unrecorded"}),
         # the reference a robot's own healthy baseline is referred to (ur5fault diagnose --baseline-logs)
         "healthy_training_inputs": healthy_reference(ds.train, ds.inputs),
+        # the spread of the twin estimates' t values on the healthy training runs (ur5fault diagnose's detection
+        # limits, limits.py); absent: saved before it, or a table without the estimates' SEs
+        **({"detection_limit_calibration": limit_calibration} if limit_calibration else {}),
     }
     write_json_atomic(folder / SCHEMA_FILE, schema)
     return folder
