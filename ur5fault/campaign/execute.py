@@ -27,6 +27,7 @@ import numpy as np
 from ..config import parse_trajectory
 from ..sim.params import load_params
 from ..util.io import check_writable, write_json_atomic, write_parquet_atomic
+from ..util.parallel import one_blas_thread
 from ..util.progress import campaign_progress
 from .digital_twin import twin_id, twin_runs
 from .identity import DRIVE, STEPPER, Identities
@@ -77,11 +78,17 @@ def run_batch(camp: Campaign, batch: Sequence[CampaignRun], ts_dir: str | None,
         identities: run_id -> run identity, recorded in the time-series files.
         parent_pid: the campaign process, for loky workers: a worker exits when it dies.
     """
+    exit_with_parent(parent_pid)
+    with one_blas_thread():  # a batch is one core's work: the campaign's processes fill the cores
+        return _simulate_batch(camp, batch, ts_dir, identities)
+
+
+def _simulate_batch(camp: Campaign, batch: Sequence[CampaignRun], ts_dir: str | None,
+                    identities: Mapping[str, str] | None) -> list[dict[str, Any]]:
+    """:func:`run_batch` in this process."""
     from ..health.features import FEATURE_UNITS, run_features
     from ..health.signals import needs_motor_encoders
     from ..sim.engine import RunSpec, Simulator
-
-    exit_with_parent(parent_pid)
 
     traj_spec = batch[0].cond["trajectory"]
     traj = parse_trajectory(traj_spec, "trajectory")
