@@ -3,11 +3,15 @@
     python bench/diagnostics_timing.py results/diagnostics --wall-s 1234 [--jobs 2]
 
 Counts the simulated run-steps of every run in ``OUT/features.parquet`` (each run's trajectory
-duration / physics step; trajectories differ in length), times bare ``mj_step`` of the UR5 model in
-this process, and prints one JSON line: the wall time, the run-steps, the bare-step cost and the
-ratio wall x cores / (run-steps x bare step) - the overhead of everything (drive chain, logging,
-features, Parquet, process start-up, the benchmark) over stepping the multibody alone.  Figures taken
-on a shared machine must be re-measured on a quiet one: the ratio is what carries over.
+duration / physics step; trajectories differ in length) and of the digital twins simulated beside them
+(a campaign with ``twin_residuals``: one twin per distinct seed, payload, temperature and trajectory,
+never stored - on the diagnostics campaign 2,000 twins, 270 M run-steps beside the stored runs' 344 M),
+times bare ``mj_step`` of the UR5 model in this process, and prints one JSON line: the wall time, the
+run-steps, the bare-step cost and the ratio wall x cores / (run-steps x bare step) - the overhead of
+everything (drive chain, logging, features, Parquet, process start-up, the benchmark) over stepping the
+multibody alone (``..._stored_runs_only``: the same against the stored runs' steps alone, this script's
+figure before the twins were counted).  ``bench/campaign_stages.py`` splits a campaign's CPU time by stage.
+Figures taken on a shared machine must be re-measured on a quiet one: the ratio is what carries over.
 """
 
 from __future__ import annotations
@@ -45,22 +49,32 @@ def main() -> None:
     ap.add_argument("--wall-s", type=float, required=True, help="measured wall time of campaign + benchmark")
     ap.add_argument("--jobs", type=int, default=os.cpu_count() or 1)
     args = ap.parse_args()
-    df = pd.read_parquet(args.out / "features.parquet", columns=["trajectory"])
+    df = pd.read_parquet(args.out / "features.parquet")
     dt = load_params().physics_dt_s
-    durations = {t: parse_trajectory(json.loads(t) if t.startswith("{") else t, "trajectory").duration_s
-                 for t in df["trajectory"].unique()}
-    run_steps = sum(round(durations[t] / dt) for t in df["trajectory"])
+    duration = json.loads((args.out / "manifest.json").read_text()).get("campaign_data", {})
+    duration = duration.get("duration_s") if isinstance(duration, dict) else None
+    steps = {t: round((duration or parse_trajectory(json.loads(t) if t.startswith("{") else t,
+                                                    "trajectory").duration_s) / dt)
+             for t in df["trajectory"].unique()}
+    run_steps = sum(steps[t] for t in df["trajectory"])
+    twin_steps = 0
+    if any(c.startswith("twin_est_") for c in df.columns):  # twin residuals: each run's digital twin simulated too
+        twins = df[["seed", "payload_kg", "temperature_C", "trajectory"]].drop_duplicates()
+        twin_steps = sum(steps[t] for t in twins["trajectory"])
     bare = bare_mj_step_s()
     bench = args.out / "benchmark" / "metrics.json"
     out = {
         "n_runs": len(df),
-        "simulated_s": run_steps * dt,
-        "run_steps": run_steps,
+        "simulated_s": (run_steps + twin_steps) * dt,
+        "run_steps": run_steps + twin_steps,
+        "run_steps_stored_runs": run_steps,
+        "run_steps_digital_twins": twin_steps,
         "wall_s": args.wall_s,
         "jobs": args.jobs,
         "bare_mj_step_us": bare * 1e6,
-        "bare_stepping_wall_s_on_jobs_cores": run_steps * bare / args.jobs,
-        "ratio_to_bare_mj_step": args.wall_s * args.jobs / (run_steps * bare),
+        "bare_stepping_wall_s_on_jobs_cores": (run_steps + twin_steps) * bare / args.jobs,
+        "ratio_to_bare_mj_step": args.wall_s * args.jobs / ((run_steps + twin_steps) * bare),
+        "ratio_to_bare_mj_step_stored_runs_only": args.wall_s * args.jobs / (run_steps * bare),
         "benchmark_wall_s": json.loads(bench.read_text())["timing"]["benchmark_wall_s"] if bench.exists() else None,
     }
     print(json.dumps(out))

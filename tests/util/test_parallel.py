@@ -213,3 +213,18 @@ def test_balanced_a_task_the_pool_refuses_fails_the_call_instead_of_hanging_it(m
     assert pool.n_submitted == 2  # the failure stopped the feeding
     assert not [t for t in threading.enumerate() if t.name == "ur5fault-task-feeder"]
     assert thread_errors == []
+
+
+def test_one_blas_thread_limits_blas_in_its_context_and_restores_it():
+    import numpy  # noqa: F401  (loads the BLAS the limit reaches)
+    from threadpoolctl import threadpool_info
+
+    from ur5fault.util.parallel import one_blas_thread
+
+    def blas_threads() -> list[int]:
+        return [i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"]
+
+    before = blas_threads()
+    with one_blas_thread():
+        assert blas_threads() and all(n == 1 for n in blas_threads())
+    assert blas_threads() == before

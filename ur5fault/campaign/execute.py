@@ -27,6 +27,7 @@ import numpy as np
 from ..config import parse_trajectory
 from ..sim.params import load_params
 from ..util.io import check_writable, write_json_atomic, write_parquet_atomic
+from ..util.parallel import one_blas_thread
 from ..util.progress import campaign_progress
 from .digital_twin import twin_id, twin_runs
 from .identity import DRIVE, STEPPER, Identities
@@ -77,11 +78,17 @@ def run_batch(camp: Campaign, batch: Sequence[CampaignRun], ts_dir: str | None,
         identities: run_id -> run identity, recorded in the time-series files.
         parent_pid: the campaign process, for loky workers: a worker exits when it dies.
     """
+    exit_with_parent(parent_pid)
+    with one_blas_thread():  # a batch is one core's work: the campaign's processes fill the cores
+        return _simulate_batch(camp, batch, ts_dir, identities)
+
+
+def _simulate_batch(camp: Campaign, batch: Sequence[CampaignRun], ts_dir: str | None,
+                    identities: Mapping[str, str] | None) -> list[dict[str, Any]]:
+    """:func:`run_batch` in this process."""
     from ..health.features import FEATURE_UNITS, run_features
     from ..health.signals import needs_motor_encoders
     from ..sim.engine import RunSpec, Simulator
-
-    exit_with_parent(parent_pid)
 
     traj_spec = batch[0].cond["trajectory"]
     traj = parse_trajectory(traj_spec, "trajectory")
@@ -96,6 +103,12 @@ def run_batch(camp: Campaign, batch: Sequence[CampaignRun], ts_dir: str | None,
     index = {rc.run_id: i for i, rc in enumerate(batch)}
     ratio = np.asarray(sim.params.gear.ratio)
     splits = assign_splits(camp.split, (rc.cond for rc in camp.runs))
+    motion = None  # the batch's commanded motion, built once for its runs' twin features
+    if camp.twin_residuals:
+        from ..health.twin_features import commanded_motion
+
+        motion = commanded_motion(res.t_s, res.q_set_rad, sim.params)
+    held = traj.gripped(res.t_s)  # when the gripper holds the payload: the batch's trajectory
     rows = []
     for i, rc in enumerate(batch):
         twin_i = index.get(rc.twin().run_id)  # None: the campaign simulates no twin for this run
@@ -128,17 +141,18 @@ def run_batch(camp: Campaign, batch: Sequence[CampaignRun], ts_dir: str | None,
             row.setdefault(key, float("nan"))
         if camp.twin_residuals:
             _add_twin_features(row, res, i, twin_index[twin_id(rc)], sim.params, float(rc.cond["payload_kg"]),
-                               traj.gripped(res.t_s))
+                               held, motion)
         if not camp.motor_encoders:  # logged like a UR robot: what the motor encoder gives is unknown
             row.update({k: float("nan") for k in row if needs_motor_encoders(k)})
         rows.append(row)
     return rows
 
 
-def _add_twin_features(row: dict[str, Any], res, i: int, k: int, params, payload_kg: float, held) -> None:
+def _add_twin_features(row: dict[str, Any], res, i: int, k: int, params, payload_kg: float, held, motion) -> None:
     """The twin residual features of run ``i`` against its digital twin ``k`` of the same batch (NaN, and the
     run not ``ok``, when the twin failed); ``payload_kg``, ``held``: the configured payload mass and when the
-    gripper holds it (known to the robot: the centre-of-mass columns of the current fit)."""
+    gripper holds it (known to the robot: the centre-of-mass columns of the current fit); ``motion``: the
+    batch's ``commanded_motion``."""
     from ..health.twin_features import FEATURE_UNITS as TWIN_UNITS
     from ..health.twin_features import twin_features
 
@@ -149,7 +163,8 @@ def _add_twin_features(row: dict[str, Any], res, i: int, k: int, params, payload
         return
     names = ("q_FB_rad", "q_M_FB_rad", "i_FB_A")
     row.update(twin_features(res.t_s, res.q_set_rad, {n: res[n][i] for n in names},
-                             {n: res[n][k] for n in (*names, "i_q_A", "T_gear_Nm")}, params, payload_kg, held))
+                             {n: res[n][k] for n in (*names, "i_q_A", "T_gear_Nm")}, params, payload_kg, held,
+                             motion))
 
 
 def run_campaign(camp: Campaign, out: Path | None = None, *, jobs: int | None = None, backend: str = "loky",

@@ -54,14 +54,17 @@ Features per joint ``j`` (units in the names):
 
 from __future__ import annotations
 
+import dataclasses
+import functools
+
 import numpy as np
 from numpy.typing import NDArray
 
 from ..sim.axes import N_JOINTS
 from ..sim.drive.friction import stribeck_level
 from ..sim.params import RobotParams
-from ..twin.residuals import motion_conditions
-from .twin_fit import RCOND_NUISANCE, com_columns, hac_fit, latency_column, noise_scale
+from ..twin.residuals import command_conditions
+from .twin_fit import RCOND_NUISANCE, com_columns, flange_kinematics, hac_fit, latency_column, noise_scale
 
 #: motion conditions used, short name -> the key of :func:`ur5fault.twin.motion_conditions`
 CONDITIONS = {"rest": "at rest", "speed": "at speed", "reversal": "near velocity reversals", "accel": "accelerating"}
@@ -100,32 +103,79 @@ def feature_units() -> dict[str, str]:
 FEATURE_UNITS = feature_units()
 
 
-def projection_columns(t_s: NDArray, q_set_rad: NDArray, twin: dict[str, NDArray], params: RobotParams
-                       ) -> tuple[list[NDArray], list[NDArray]]:
-    """The regressors of the two least-squares fits, ``(n_log, 6)`` each: the current fit's (1, i_twin,
-    i_coulomb) and the mismatch fit's (1, sign(T_twin) / 2, T_twin / k), as the module docstring defines them."""
+@dataclasses.dataclass(frozen=True)
+class CommandedMotion:
+    """What the twin features take from the commanded motion and the twin's model alone, the same for every run
+    of one trajectory and model (a campaign's batch builds it once: :func:`commanded_motion`).
+
+    Attributes:
+        dt_s: log period [s].
+        q_set_rad: the commanded joint angles ``(n_log, 6)``.
+        qd: commanded speed ``(n_log, 6)`` [rad/s] (``np.gradient`` of ``q_set_rad``).
+        masks: :func:`ur5fault.twin.residuals.command_conditions` of the commanded motion, ``(n_log, 6)`` each.
+        i_coulomb_A: the current fit's Coulomb column ``(n_log, 6)`` (module docstring) [A].
+    """
+
+    dt_s: float
+    q_set_rad: NDArray
+    qd: NDArray
+    masks: dict[str, NDArray]
+    i_coulomb_A: NDArray
+
+    @functools.cached_property
+    def flange(self) -> tuple[NDArray, NDArray]:
+        """:func:`ur5fault.health.twin_fit.flange_kinematics` of the commanded angles (computed when first
+        needed: only a run with a held payload's centre-of-mass columns needs it)."""
+        return flange_kinematics(self.q_set_rad)
+
+
+def commanded_motion(t_s: NDArray, q_set_rad: NDArray, params: RobotParams) -> CommandedMotion:
+    """:class:`CommandedMotion` of log times ``t_s`` ``(n_log,)`` [s], commanded angles ``q_set_rad`` ``(n_log, 6)``
+    and the twin's model ``params`` (friction levels, torque constants, gear ratios)."""
     dt = float(t_s[1] - t_s[0])
     qd = np.gradient(q_set_rad, dt, axis=0)
-    torque = twin["T_gear_Nm"]
+    qdd = np.gradient(qd, dt, axis=0)
     fr, mo = params.friction, params.motor
     level = stribeck_level(qd, np.asarray(fr.coulomb_Nm), np.asarray(fr.static_Nm), fr.stribeck_rate_s_per_rad)[0]
     i_coulomb = np.sign(qd) * level / (np.asarray(mo.torque_constant_Nm_per_A) * np.asarray(params.gear.ratio))
+    return CommandedMotion(dt, q_set_rad, qd, command_conditions(qd, qdd, dt), i_coulomb)
+
+
+def _motion_for(t_s: NDArray, q_set_rad: NDArray, params: RobotParams, motion: CommandedMotion | None
+                ) -> CommandedMotion:
+    """``motion`` when given (checked to be of ``q_set_rad``'s length), else built from the commanded motion."""
+    if motion is None:
+        return commanded_motion(t_s, q_set_rad, params)
+    if motion.qd.shape != np.shape(q_set_rad):
+        raise ValueError(f"commanded motion of shape {motion.qd.shape} given for joint angles of shape "
+                         f"{np.shape(q_set_rad)}")
+    return motion
+
+
+def projection_columns(t_s: NDArray, q_set_rad: NDArray, twin: dict[str, NDArray], params: RobotParams,
+                       motion: CommandedMotion | None = None) -> tuple[list[NDArray], list[NDArray]]:
+    """The regressors of the two least-squares fits, ``(n_log, 6)`` each: the current fit's (1, i_twin,
+    i_coulomb) and the mismatch fit's (1, sign(T_twin) / 2, T_twin / k), as the module docstring defines them.
+    ``motion``: :func:`commanded_motion` of ``t_s``, ``q_set_rad``, ``params`` when the caller has it."""
+    motion = _motion_for(t_s, q_set_rad, params, motion)
+    torque = twin["T_gear_Nm"]
     flank = np.where(np.abs(torque) > FLANK_SHARE * np.abs(torque).max(axis=0), np.sign(torque), np.nan)
     windup = torque / np.asarray(params.gear.stiffness_Nm_per_rad)
     ones = np.ones_like(torque)
-    return [ones, twin["i_q_A"], i_coulomb], [ones, 0.5 * np.nan_to_num(flank), windup]
+    return [ones, twin["i_q_A"], motion.i_coulomb_A], [ones, 0.5 * np.nan_to_num(flank), windup]
 
 
 def current_fit(t_s: NDArray, q_set_rad: NDArray, residual_A: NDArray, twin: dict[str, NDArray], params: RobotParams,
-                payload_kg: float = 0.0, payload_held: NDArray | None = None) -> tuple[NDArray, NDArray, NDArray]:
+                payload_kg: float = 0.0, payload_held: NDArray | None = None, motion: CommandedMotion | None = None
+                ) -> tuple[NDArray, NDArray, NDArray]:
     """The current fit over all joints (module docstring): ``(coef, se)`` of the per-joint estimates, ``(6, 3)``
     each (offset, gain error, Coulomb scale error), and the nuisance's ``(4, 2)`` (CoM x, y, z, latency; estimate
-    and SE)."""
-    dt = float(t_s[1] - t_s[0])
-    cols, _ = projection_columns(t_s, q_set_rad, twin, params)
+    and SE).  ``motion``: as :func:`projection_columns` takes it."""
+    motion = _motion_for(t_s, q_set_rad, params, motion)
+    cols, _ = projection_columns(t_s, q_set_rad, twin, params, motion)
     n = residual_A.shape[0]
-    nuisance = np.concatenate([com_columns(q_set_rad, payload_kg, params, payload_held),
-                               latency_column(twin["i_q_A"], dt)[:, :, None]], axis=2)  # (n, 6, 4)
+    nuisance = np.concatenate([com_columns(q_set_rad, payload_kg, params, payload_held, lambda: motion.flange),
+                               latency_column(twin["i_q_A"], motion.dt_s)[:, :, None]], axis=2)  # (n, 6, 4)
     per_joint = np.zeros((n, N_JOINTS, 3 * N_JOINTS))
     for j in range(N_JOINTS):
         for k, col in enumerate(cols):
@@ -139,8 +189,8 @@ def current_fit(t_s: NDArray, q_set_rad: NDArray, residual_A: NDArray, twin: dic
 
 
 def twin_features(t_s: NDArray, q_set_rad: NDArray, meas: dict[str, NDArray], twin: dict[str, NDArray],
-                  params: RobotParams, payload_kg: float = 0.0, payload_held: NDArray | None = None
-                  ) -> dict[str, float]:
+                  params: RobotParams, payload_kg: float = 0.0, payload_held: NDArray | None = None,
+                  motion: CommandedMotion | None = None) -> dict[str, float]:
     """Twin residual features of one run.
 
     Args:
@@ -157,18 +207,19 @@ def twin_features(t_s: NDArray, q_set_rad: NDArray, meas: dict[str, NDArray], tw
         params: the twin's model (gear ratio and stiffness, torque constant, friction levels).
         payload_kg: the configured payload mass (the robot knows it) [kg]; 0: no centre-of-mass columns.
         payload_held: ``(n_log,)`` whether the payload is held (the gripper commands); None: throughout.
+        motion: :func:`commanded_motion` of ``t_s``, ``q_set_rad`` and ``params``, when the caller has it (the
+            runs of a batch share it); None: computed here.
     """
-    dt = float(t_s[1] - t_s[0])
+    motion = _motion_for(t_s, q_set_rad, params, motion)
     ratio = np.asarray(params.gear.ratio)
     mis_m = meas["q_M_FB_rad"] / ratio - meas["q_FB_rad"]
     mis_t = twin["q_M_FB_rad"] / ratio - twin["q_FB_rad"]
     res = {"current": meas["i_FB_A"] - twin["i_FB_A"], "position": meas["q_FB_rad"] - twin["q_FB_rad"],
            "mismatch": mis_m - mis_t}
-    qd = np.gradient(q_set_rad, dt, axis=0)
-    qdd = np.gradient(qd, dt, axis=0)
-    masks = motion_conditions(qd, qdd, twin["T_gear_Nm"], dt)
-    _, mismatch_cols = projection_columns(t_s, q_set_rad, twin, params)
-    cur_coef, cur_se, nuisance = current_fit(t_s, q_set_rad, res["current"], twin, params, payload_kg, payload_held)
+    masks = motion.masks
+    _, mismatch_cols = projection_columns(t_s, q_set_rad, twin, params, motion)
+    cur_coef, cur_se, nuisance = current_fit(t_s, q_set_rad, res["current"], twin, params, payload_kg, payload_held,
+                                             motion)
     f: dict[str, float] = {}
     estimates = []
     for j in range(N_JOINTS):

@@ -29,6 +29,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
+from collections.abc import Callable
 
 import mujoco
 import numpy as np
@@ -131,20 +132,14 @@ def _kinematic_model() -> mujoco.MjModel:
     return mujoco.MjModel.from_xml_path(model_path())
 
 
-def com_columns(q_rad: NDArray, payload_kg: float, params: RobotParams, held: NDArray | None = None) -> NDArray:
-    """Motor current per metre of payload centre-of-mass shift, ``(n, 6, 3)``: joint by flange axis x, y, z
-    (module docstring), at the joint angles ``q_rad`` ``(n, 6)``; zero where the payload is not held
-    (``held`` ``(n,)``, None: held throughout) or its mass is zero."""
-    n = q_rad.shape[0]
-    out = np.zeros((n, N_JOINTS, 3))
-    hold = np.ones(n, bool) if held is None else np.asarray(held, bool)
-    if payload_kg <= 0 or not hold.any():
-        return out
+def flange_kinematics(q_rad: NDArray) -> tuple[NDArray, NDArray]:
+    """The joints' axes ``(n, 6, 3)`` and the flange's rotation ``(n, 3, 3)`` in the base frame at the joint angles
+    ``q_rad`` ``(n, 6)`` (``mj_kinematics`` of the kinematic model per row): what :func:`com_columns` needs of the
+    motion, the same for every run of one commanded trajectory."""
     model = _kinematic_model()
     data = mujoco.MjData(model)
     flange = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "tool")
-    force = payload_kg * np.asarray(model.opt.gravity)
-    per_amp = 1.0 / (np.asarray(params.motor.torque_constant_Nm_per_A) * np.asarray(params.gear.ratio))
+    n = q_rad.shape[0]
     axes = np.empty((n, N_JOINTS, 3))
     rot = np.empty((n, 3, 3))
     for t in range(n):
@@ -152,6 +147,25 @@ def com_columns(q_rad: NDArray, payload_kg: float, params: RobotParams, held: ND
         mujoco.mj_kinematics(model, data)
         axes[t] = data.xaxis[:N_JOINTS]
         rot[t] = data.xmat[flange].reshape(3, 3)
+    return axes, rot
+
+
+def com_columns(q_rad: NDArray, payload_kg: float, params: RobotParams, held: NDArray | None = None,
+                kinematics: Callable[[], tuple[NDArray, NDArray]] | None = None) -> NDArray:
+    """Motor current per metre of payload centre-of-mass shift, ``(n, 6, 3)``: joint by flange axis x, y, z
+    (module docstring), at the joint angles ``q_rad`` ``(n, 6)``; zero where the payload is not held
+    (``held`` ``(n,)``, None: held throughout) or its mass is zero.  ``kinematics``: gives
+    :func:`flange_kinematics` of ``q_rad`` when called (a batch's runs share it); None: computed here."""
+    n = q_rad.shape[0]
+    out = np.zeros((n, N_JOINTS, 3))
+    hold = np.ones(n, bool) if held is None else np.asarray(held, bool)
+    if payload_kg <= 0 or not hold.any():
+        return out
+    axes, rot = kinematics() if kinematics is not None else flange_kinematics(q_rad)
+    if axes.shape != (n, N_JOINTS, 3):
+        raise ValueError(f"kinematics of {axes.shape[0]} samples given for {n} joint-angle rows")
+    force = payload_kg * np.asarray(_kinematic_model().opt.gravity)
+    per_amp = 1.0 / (np.asarray(params.motor.torque_constant_Nm_per_A) * np.asarray(params.gear.ratio))
     for k in range(3):
         moment = np.cross(axes, rot[:, None, :, k])  # z_j x R e_k, (n, 6, 3)
         out[:, :, k] = -(moment @ force) * per_amp
@@ -163,4 +177,5 @@ def latency_column(i_twin_A: NDArray, dt_s: float) -> NDArray:
     return -np.gradient(i_twin_A, dt_s, axis=0)
 
 
-__all__ = ["RCOND_NUISANCE", "Fit", "bartlett_lag", "com_columns", "hac_fit", "latency_column", "noise_scale"]
+__all__ = ["RCOND_NUISANCE", "Fit", "bartlett_lag", "com_columns", "flange_kinematics", "hac_fit", "latency_column",
+           "noise_scale"]

@@ -9,6 +9,7 @@ PMSM phase currents ``i_{a,b,c}_A_j{j}`` for three-phase joints, and the TCP pos
 from __future__ import annotations
 
 import dataclasses
+import functools
 import json
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -38,7 +39,9 @@ class SimResult:
         q_set_rad: servo setpoint at the log times ``(n_log, 6)`` (shared by the batch).
         signals: joint signals ``name -> (n_runs, n_log, 6)``; see :attr:`JOINT_SIGNALS`.
         tcp_m, tcp_des_m: actual and desired TCP position in the base frame ``(n_runs, n_log, 3)`` [m].
-        phase_currents_A: ``(n_runs, n_log, 6, 3)`` phase currents (NaN for DC-equivalent joints).
+        motor_pole_pairs, motor_is_pmsm: per run and joint ``(n_runs, 6)``, for :attr:`phase_currents_A`.
+        phase_currents_A: ``(n_runs, n_log, 6, 3)`` phase currents (NaN for DC-equivalent joints), computed
+            when first asked for (from the logged d/q currents and motor angles: only time series need them).
         run_ids, seeds, status, reason: per run; status is ``ok``, ``diverged`` or ``protective_stop``.
         effects: per run, the effects it carried (``EffectSpec.describe()`` strings).
         meta: physics step, trajectory, gear ratios, versions.
@@ -65,7 +68,8 @@ class SimResult:
     signals: dict[str, NDArray]
     tcp_m: NDArray
     tcp_des_m: NDArray
-    phase_currents_A: NDArray
+    motor_pole_pairs: NDArray
+    motor_is_pmsm: NDArray
     run_ids: tuple[str, ...]
     seeds: tuple[int, ...]
     status: tuple[str, ...]
@@ -76,6 +80,15 @@ class SimResult:
     @property
     def n_runs(self) -> int:
         return len(self.run_ids)
+
+    @functools.cached_property
+    def phase_currents_A(self) -> NDArray:
+        """``(n_runs, n_log, 6, 3)`` phase currents [A] (inverse Park/Clarke of the logged d/q currents at the
+        motor's electrical angle; NaN for DC-equivalent joints)."""
+        sig = self.signals
+        elec = sig["q_M_rad"] * self.motor_pole_pairs[:, None, :]
+        phases = phase_currents(sig["i_d_A"], sig["i_q_A"], elec)
+        return np.where(self.motor_is_pmsm[:, None, :, None], phases, np.nan)
 
     # ------------------------------------------------------------------ notebooks
     #: runs listed by ``repr`` before it abbreviates
@@ -132,9 +145,6 @@ class SimResult:
                     d.qpos[:] = log["q_rad"][r, i]
                     mujoco.mj_kinematics(m, d)
                     tcp[r, i] = d.site_xpos[site]
-        elec = log["q_M_rad"] * a.motor_pole_pairs[:, None, :]
-        phases = phase_currents(log["i_d_A"], log["i_q_A"], elec)
-        phases = np.where(a.motor_is_pmsm[:, None, :, None], phases, np.nan)
         p = params
         meta = {
             "physics_dt_s": p.physics_dt_s,
@@ -154,7 +164,8 @@ class SimResult:
             "model_path": str(model_path),
         }
         return cls(
-            t_s=t_log, q_set_rad=q_set_log, signals=log, tcp_m=tcp, tcp_des_m=tcp_des, phase_currents_A=phases,
+            t_s=t_log, q_set_rad=q_set_log, signals=log, tcp_m=tcp, tcp_des_m=tcp_des,
+            motor_pole_pairs=np.array(a.motor_pole_pairs), motor_is_pmsm=np.array(a.motor_is_pmsm),
             run_ids=tuple(r.run_id for r in runs), seeds=tuple(r.seed for r in runs), status=tuple(status),
             reason=tuple(reason), effects=tuple(tuple(e.describe() for e in r.effects) for r in runs), meta=meta,
         )

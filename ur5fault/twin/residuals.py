@@ -90,6 +90,12 @@ def motion_conditions(qd: NDArray, qdd: NDArray, torque: NDArray, period_s: floa
     """Boolean masks ``(n, 6)`` of the motion conditions ("at speed", "near velocity reversals",
     "accelerating", "at rest", "under high load") from the target speed ``qd`` [rad/s], acceleration
     ``qdd`` [rad/s^2] and a torque ``(n, 6)``, sampled every ``period_s``."""
+    return {**command_conditions(qd, qdd, period_s), "under high load": _peak(torque)}
+
+
+def command_conditions(qd: NDArray, qdd: NDArray, period_s: float) -> dict[str, NDArray]:
+    """The conditions of :func:`motion_conditions` that follow from the commanded motion alone ("at speed",
+    "near velocity reversals", "accelerating", "at rest"): the same for every run of one trajectory."""
     win = max(1, round(REVERSAL_WINDOW_S / period_s))
     near = np.zeros_like(qd, dtype=bool)
     moving = np.abs(qd) > CONDITION_REST_SPEED_RAD_S
@@ -100,12 +106,12 @@ def motion_conditions(qd: NDArray, qdd: NDArray, torque: NDArray, period_s: floa
             if last != 0 and sign[k, j] != last:
                 near[max(0, k - win) : k + win, j] = True
             last = sign[k, j]
+    return {"at speed": _peak(qd), "near velocity reversals": near, "accelerating": _peak(qdd), "at rest": ~moving}
 
-    def peak(x: NDArray) -> NDArray:
-        return np.abs(x) > PEAK_SHARE * np.maximum(np.abs(x).max(axis=0), 1e-12)
 
-    return {"at speed": peak(qd), "near velocity reversals": near, "accelerating": peak(qdd),
-            "at rest": ~moving, "under high load": peak(torque)}
+def _peak(x: NDArray) -> NDArray:
+    """Where ``|x|`` exceeds PEAK_SHARE of its joint's largest value."""
+    return np.abs(x) > PEAK_SHARE * np.maximum(np.abs(x).max(axis=0), 1e-12)
 
 
 def rms_by_condition(r: NDArray, masks: dict[str, NDArray], j: int) -> tuple[dict[str, float], str]:

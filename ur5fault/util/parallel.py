@@ -23,6 +23,21 @@ from typing import Any
 _POLL_S = 1.0
 
 
+def one_blas_thread():
+    """Context limiting BLAS (numpy's OpenBLAS) to one thread in this process while a task runs.
+
+    A task is one core's work and the tasks' processes already fill the cores; OpenBLAS would otherwise spread
+    every product over all of them (its default: the machine's cores), so the small products of a task (a twin
+    feature fit: 8,400 x 22 matrices) wait on threads that the other processes keep busy.  Measured on the
+    2-core machine under load: 120 ms of CPU per current fit with two threads, 18 ms with one
+    (docs/performance.md).  One thread also makes a product's rounding independent of the machine's core count:
+    OpenBLAS splits a long inner dimension over its threads and adds the parts in another order.
+    """
+    from threadpoolctl import threadpool_limits
+
+    return threadpool_limits(limits=1, user_api="blas")
+
+
 def own_share(cost: Sequence[float], jobs: int) -> int:
     """Index of the first task this process runs: tasks from the end whose cost fits ``1 / jobs`` of the total
     (at least one, and at least one left for the workers)."""
