@@ -25,7 +25,11 @@ of freedom and their sample variance would be too small. So the blocks are weigh
 
 What this does not see: a difference shared by *every* baseline run and the monitored log alike (it is in the
 mean, not the spread), and a correlation longer than the runs' paired sequences (with a single run of few blocks,
-``rho_l`` at long lags is noise and Geyer's sum stops early; ``min_lag`` is the span always counted).
+``rho_l`` at long lags is noise and Geyer's sum stops early; ``min_lag`` is the span always counted). And
+``k_eff`` is the number of independent blocks the *mean* is worth, not the degrees of freedom of the variance:
+where a few runs sit apart, the spread rests on their few means, and Student's bar at ``k_eff - 1`` degrees of
+freedom is too low (three simulated runs apart by half a block's noise: 9.8 % of healthy logs outside a 95 %
+interval, ``tests/health/monitoring/test_change_coverage.py``).
 """
 
 from __future__ import annotations

@@ -41,8 +41,9 @@ a whole run (a warmer run, an offset that drifted) is correlation at every lag o
 runs each sit apart is worth about as many blocks as it has runs; one whose differences are the sensors' noise
 and the task's repeatability is worth about all its blocks. Geyer's sum alone missed a run-long offset small
 against one block's noise (its correlation at each lag under the estimates' noise, the sum cut off after a few
-lags: on simulated runs with such an offset, 9-19 % of healthy logs outside a 95 % interval); the runs' means
-see it (:mod:`.effective`; ``tests/health/monitoring/test_change_coverage.py``).
+lags: on simulated runs with such an offset, 9-19 % of healthy logs outside a 95 % interval, the log's noise
+counted once); the runs' means see it (:mod:`.effective`; ``tests/health/monitoring/test_change_coverage.py``:
+4.5 and 9.8 %).
 
 *Why the false-alarm rate holds.* The log's estimate over its ``n`` paired blocks is (to first order) a weighted
 mean of the same candidate's estimates on its own short blocks. Under no change, blocks with the baseline's
