@@ -199,21 +199,19 @@ def separable(base, paired: bool = False) -> dict[str, dict[str, float]]:
     the whole screened 20 s): the bar times the prediction interval's width with the new log's own standard error
     taken as 0 (a lower bound: a real log's SE adds to it)."""
     from ur5fault.discrepancy.model import SCREEN_S
-    from ur5fault.health.monitoring.changes import bar
+    from ur5fault.health.monitoring.changes import bar, block_reference
     from ur5fault.health.monitoring.paired import for_log
     from ur5fault.sim.axes import JOINT_NAMES
 
     # the paired test's reference for a log paired over its whole screened 20 s
-    stats = for_log(base.paired_candidates, SCREEN_S) if paired else base.candidates
+    refs = for_log(base.paired_candidates, SCREEN_S) if paired else block_reference(base.candidates)
     out = {}
     for j in JOINT_NAMES:
         row = {}
         for key, label in (("offset_A", f"{j}: current_sensor_offset.offset_A"),
                            ("gain", f"{j}: current_sensor_gain.gain")):
-            if label in stats:
-                _, var, k = stats[label]
-                limit, inflate = bar(k)
-                row[key] = float(limit * np.sqrt(var * inflate))
+            if label in refs:
+                row[key] = float(bar(refs[label].k) * np.sqrt(refs[label].variance(0.0)))
         out[j] = row
     return out
 

@@ -49,3 +49,21 @@ def test_an_ar1_sequences_design_effect():
     assert design_effect([x], 0.0) == pytest.approx(3.0, rel=0.1)
     # white noise: about 1
     assert design_effect([rng.normal(size=20_000)], 0.0) == pytest.approx(1.0, abs=0.1)
+
+
+def test_the_design_effect_of_runs_as_clusters():
+    """Hand-computed (effective.cluster_design_effect): runs (1, 1), (-1, -1), (0, 0, 0, 0) about 0, their blocks'
+    sample variance 4/7: the pooled mean's variance from the runs' means (4 + 4 + 0) x 3 / (2 x 64) = 0.1875,
+    A = 0.1875 x 8 / (4/7 x 7) = 0.375, DE = 0.375 x 8 / 1.375 = 24/11. Two runs each at their mean: k / R,
+    as the autocorrelation gives (above). One run tells nothing: 1. The run design effect is the larger."""
+    from ur5fault.health.monitoring.effective import cluster_design_effect, run_design_effect
+
+    seqs = [np.ones(2), -np.ones(2), np.zeros(4)]
+    var = float(np.concatenate(seqs).var(ddof=1))
+    assert var == pytest.approx(4 / 7)
+    assert cluster_design_effect(seqs, 0.0, var) == pytest.approx(24 / 11)
+    two = [np.ones(10), -np.ones(10)]
+    assert cluster_design_effect(two, 0.0, float(np.concatenate(two).var(ddof=1))) == pytest.approx(10.0)
+    assert cluster_design_effect([np.arange(5.0)], 2.0, 2.5) == 1.0
+    assert cluster_design_effect(seqs, 0.0, 0.0) == 1.0
+    assert run_design_effect(seqs, 0.0, var) == pytest.approx(max(24 / 11, design_effect(seqs, 0.0)))

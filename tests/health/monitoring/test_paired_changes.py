@@ -221,11 +221,11 @@ def test_both_tests_on_one_log_each_spend_half_the_false_alarm_probability(monke
     from ur5fault.health.monitoring.changes import bar
 
     tail = stats.norm.sf(4.0)
-    assert bar(1) == (4.0, 1.0)
-    assert abs(bar(1, 0.5)[0] - 4.161) < 1e-3  # the standard normal's quantile at 1.58e-5 (1 - 0.9999842)
+    assert bar(1) == 4.0
+    assert abs(bar(1, 0.5) - 4.161) < 1e-3  # the standard normal's quantile at 1.58e-5 (1 - 0.9999842)
     for k in (3, 5, 12):
-        assert abs(stats.t.sf(bar(k, 0.5)[0], k - 1) - tail / 2) < 1e-3 * tail
-        assert bar(k, 0.5)[0] > bar(k)[0] and bar(k, 0.5)[1] == bar(k)[1]
+        assert abs(stats.t.sf(bar(k, 0.5), k - 1) - tail / 2) < 1e-3 * tail
+        assert bar(k, 0.5) > bar(k)
     shares = []
     real = verdict.find_changes
 
@@ -310,14 +310,34 @@ def test_healthy_runs_that_each_sit_a_few_percent_apart_are_worth_about_one_bloc
 
 def test_the_reference_of_a_log_scales_one_blocks_spread_by_the_design_effect_over_its_length():
     """Hand-computed: one block's variance 1, k_eff 4, design effect 2. A log of 10 s paired (20 blocks of 0.5 s)
-    predicts ``1 x (2 / 20 + 1 / 4) = 0.35``, returned as the variance that ``1 + 1 / k_eff`` turns into it
-    (0.28); a log of one block (or a design effect above its blocks) is never narrower than one block: 1.25."""
-    from ur5fault.health.monitoring.changes import bar
+    is predicted to vary by ``1 x 2 / 20 = 0.1``, the mean by ``1 / 4``: with the log's own SE under the
+    prediction (0.2: 0.04) the prediction variance is ``0.1 + 0.25 = 0.35``, its SE counted once, not added
+    (0.39); with its SE above it (0.5: 0.25), its own: ``0.25 + 0.25 = 0.5``. A log of one block (or a design effect
+    above its blocks) is never predicted narrower than one block: ``1 + 0.25``."""
     from ur5fault.health.monitoring.paired import for_log
 
     stats = {"x": (0.5, 1.0, 4.0, 2.0)}
-    mean, var, k = for_log(stats, 10.0)["x"]
-    assert (mean, k) == (0.5, 4.0)
-    assert var == pytest.approx(0.28) and var * bar(k)[1] == pytest.approx(0.35)
-    assert for_log(stats, 0.5)["x"][1] * bar(4.0)[1] == pytest.approx(1.25)
-    assert for_log({"x": (0.0, 1.0, 4.0, 40.0)}, 10.0)["x"][1] == pytest.approx(1.0)
+    ref = for_log(stats, 10.0)["x"]
+    assert (ref.mean, ref.k) == (0.5, 4.0)
+    assert (ref.log_var, ref.mean_var) == (pytest.approx(0.1), pytest.approx(0.25))
+    assert ref.variance(0.2) == pytest.approx(0.35) and ref.variance(0.5) == pytest.approx(0.5)
+    assert ref.z(0.5 + 0.7, 0.2) == pytest.approx(0.7 / np.sqrt(0.35))
+    assert for_log(stats, 0.5)["x"].variance(0.0) == pytest.approx(1.25)
+    assert for_log({"x": (0.0, 1.0, 4.0, 40.0)}, 10.0)["x"].variance(0.0) == pytest.approx(1.25)
+
+
+def test_the_block_tests_reference_counts_the_logs_noise_once():
+    """Hand-computed, the block test's reference (:func:`.changes.block_reference`): blocks of variance 0.04 over
+    8 blocks predict the log's estimate to vary as one block's, 0.04, and the mean by 0.005: a log SE of 0.1
+    (0.01, under the prediction) gives 0.045 (0.055 before, with its SE added); one of 0.3 (0.09) gives 0.095. A
+    single block (its variance its own SE squared, 0.04) predicts nothing for the log: its SE 0.1 gives
+    0.01 + 0.04, as before. A reference with a negative variance or under one block is refused."""
+    from ur5fault.health.monitoring.changes import Reference, block_reference
+
+    refs = block_reference({"x": (1.0, 0.04, 8), "y": (2.0, 0.04, 1)})
+    assert refs["x"].variance(0.1) == pytest.approx(0.045) and refs["x"].variance(0.3) == pytest.approx(0.095)
+    assert refs["x"].k == 8 and refs["y"].k == 1
+    assert refs["y"].variance(0.1) == pytest.approx(0.05)
+    for bad in ((0.0, -1.0, 0.1, 3.0), (0.0, 1.0, 0.1, 0.5), (float("nan"), 1.0, 0.1, 3.0)):
+        with pytest.raises(ValueError):
+            Reference(*bad)

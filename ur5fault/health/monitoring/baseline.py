@@ -34,10 +34,11 @@ from .event_fit import fit_events, fit_task, segment, task_residual
 from .events import CHANNELS, FEATURES, LEVEL_S, SMOOTH_S, WINDOW_S
 from .observe import Observed
 
-#: 8: the paired statistics on 0.5 s blocks, ``n_blocks`` the effective number of independent ones (a float: their
-#: autocorrelation accounted for, :mod:`.effective`) and their ``design_effect``; 7 counted each independent 2 s
-#: difference once, 6 twice
-FORMAT = "ur5fault-monitor-baseline-8"
+#: 9: the paired statistics' ``design_effect`` the larger of their autocorrelation's and the runs' as clusters
+#: (:func:`.effective.run_design_effect`); 8: the paired statistics on 0.5 s blocks, ``n_blocks`` the effective
+#: number of independent ones (a float: their autocorrelation accounted for, :mod:`.effective`) and their
+#: ``design_effect``; 7 counted each independent 2 s difference once, 6 twice
+FORMAT = "ur5fault-monitor-baseline-9"
 
 
 def overlay_sha256(params: dict, effects: Sequence) -> str:

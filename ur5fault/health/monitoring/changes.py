@@ -2,17 +2,27 @@
 
 Every screened candidate (:mod:`.observe`) is fitted alone to the log's weighted residual and judged by the
 discrepancy workflow's own test (:func:`ur5fault.discrepancy.search.judge`: BIC, block-jackknife z, stability in
-time blocks). A candidate is a *change* when the log's estimate is significant and lies
-outside the prediction interval of the baseline's estimates of the same candidate:
-``|theta - mean_b| / sqrt(se^2 + var_b (1 + 1/k)) > t_{k-1}``. The baseline's estimates are made per time block
-of :data:`BLOCK_S` of every baseline run (:func:`block_estimates`), so ``var_b``, the variance of the ``k`` block
-estimates, holds both the spread between healthy runs (the model's own motion-dependent error) and the drift
-within a run (a warming motor's offset); ``t_{k-1}`` is Student's quantile at the tail probability of
+time blocks). A candidate is a *change* when the log's estimate is significant and lies outside the prediction
+interval of the baseline's estimates of the same candidate (:class:`Reference`):
+``|theta - mean_b| / sqrt(max(se^2, V) + var_b / k) > t_{k-1}``, ``V`` the variance the baseline predicts for
+the log's estimate under no change. The baseline's estimates are made per time block of :data:`BLOCK_S` of every
+baseline run (:func:`block_estimates`), so ``var_b``, the variance of the ``k`` block estimates, holds both the
+spread between healthy runs (the model's own motion-dependent error) and the drift within a run (a warming
+motor's offset); ``t_{k-1}`` is Student's quantile at the tail probability of
 :data:`~ur5fault.discrepancy.statistics.MIN_Z` standard errors (the discrepancy workflow's bar, corrected for the
 few blocks a baseline has; the blocks of one run are counted as independent, an assumption that makes the bar
-lower than if only runs were counted). A single block: its own jackknife variance and ``MIN_Z``. A block estimate
-also carries its own noise (a 5 s block is noisier than the monitored log's 20 s), which widens the interval:
-a conservative choice.
+lower than if only runs were counted). A single block: its own jackknife variance as the mean's, the log's own
+SE as its estimate's, and ``MIN_Z``.
+
+*The log's noise counted once.* ``theta - mean_b`` has the variance of the log's estimate plus that of the
+baseline's mean (``var_b / k``: independent runs). The log's estimate on its screened part (up to 20 s) is
+predicted to vary no more than one block's (``V = var_b``, unscaled: the model's motion-dependent error need not
+average out over a longer part as a block's noise does; a conservative choice), and ``var_b`` already holds a
+block's own noise (each block estimate carries it). The log's jackknife standard error ``se`` is a second
+estimate of part of the same variance, from the log itself: its noise within its own jackknife blocks, not the
+model's error that a block's estimate absorbs. Added to ``V`` (as before) it counted the log's noise twice;
+the larger of the two is taken instead: ``V`` where the log is like the baseline, its own ``se`` where it is
+noisier than the baseline's blocks predict.
 
 A push is an event, not a worn gear: a change must also hold on the samples outside the log's events (and
 :data:`EVENT_GUARD_S` around them), or those samples must be unable to tell (their standard error larger than
@@ -127,8 +137,46 @@ def spreads(blocks: Iterable[dict[str, Estimate]]) -> dict[str, tuple[float, flo
     return {k: spread(th, se) for k, (th, se) in per.items()}
 
 
-def bar(n_segments: int, share: float = 1.0) -> tuple[float, float]:
-    """The distance a change must exceed, and the factor on the baseline variance, for ``n_segments`` blocks.
+@dataclasses.dataclass(frozen=True)
+class Reference:
+    """What a log's estimate of one candidate is judged against (module docstring): the baseline's ``mean``;
+    ``log_var``, the variance the baseline predicts for the log's estimate under no change (0: it predicts none,
+    the log's own standard error stands alone); ``mean_var``, the variance of ``mean``; ``k``, the (effective)
+    number of blocks Student's bar counts (:func:`bar`)."""
+
+    mean: float
+    log_var: float
+    mean_var: float
+    k: float
+
+    def __post_init__(self) -> None:
+        if not (np.isfinite(self.mean) and self.log_var >= 0.0 and self.mean_var >= 0.0 and self.k >= 1.0):
+            raise ValueError(f"reference mean {self.mean}, variances {self.log_var} / {self.mean_var}, k {self.k}: "
+                             f"need a finite mean, variances >= 0 and k >= 1")
+
+    def variance(self, se: float) -> float:
+        """The prediction variance of ``theta - mean`` for a log's estimate of standard error ``se``: the larger of
+        the baseline's and the log's own estimate of the log's variance (two estimates of the same noise, so never
+        their sum), plus the mean's."""
+        return max(se**2, self.log_var) + self.mean_var
+
+    def z(self, theta: float, se: float) -> float:
+        """``|theta - mean|`` in prediction standard deviations (:meth:`variance`)."""
+        return abs(theta - self.mean) / float(np.sqrt(self.variance(se)))
+
+
+def block_reference(stats: dict[str, tuple[float, float, int]]) -> dict[str, Reference]:
+    """The block test's :class:`Reference` per candidate from the baseline's ``{label: (mean, variance, n)}``
+    (:func:`spreads`): the log's estimate predicted to vary as one block's, ``variance``, and the mean by
+    ``variance / n``; a single block (``variance`` its jackknife SE squared): no prediction for the log, the
+    block's variance the mean's."""
+    return {label: (Reference(mean, var, var / n, n) if n >= 2 else Reference(mean, 0.0, var, 1))
+            for label, (mean, var, n) in stats.items()}
+
+
+def bar(n_segments: float, share: float = 1.0) -> float:
+    """The distance in prediction standard deviations a change must exceed for ``n_segments`` (effective)
+    blocks: Student's quantile at ``n_segments - 1`` degrees of freedom, the normal's for a single block.
     ``share``: the fraction of the workflow's tail probability (that of :data:`MIN_Z` standard errors) this test
     may spend: where two tests judge one log and a change is flagged when either does, each at half (Bonferroni:
     the probability that either raises a false alarm is at most the sum), its bar raised to match (z 4 -> 4.16
@@ -139,21 +187,18 @@ def bar(n_segments: int, share: float = 1.0) -> tuple[float, float]:
         raise ValueError(f"share {share}: must be in (0, 1]")
     tail = float(stats.norm.sf(MIN_Z)) * share
     if n_segments < 2:
-        return (MIN_Z if share == 1.0 else float(stats.norm.isf(tail))), 1.0
-    return float(stats.t.isf(tail, n_segments - 1)), 1.0 + 1.0 / n_segments
+        return MIN_Z if share == 1.0 else float(stats.norm.isf(tail))
+    return float(stats.t.isf(tail, n_segments - 1))
 
 
-def _distance(e: Estimate, base: tuple[float, float, int], share: float = 1.0) -> float:
+def _distance(e: Estimate, ref: Reference, share: float = 1.0) -> float:
     """How far ``e`` lies from the baseline's estimates, in multiples of the bar (>= 1: a change)."""
-    mean, var, k = base
-    limit, inflate = bar(k, share)
-    return abs(e.theta - mean) / float(np.sqrt(e.se**2 + var * inflate)) / limit
+    return ref.z(e.theta, e.se) / bar(ref.k, share)
 
 
 def find_changes(obs: Observed, est: dict[str, Estimate], outside: dict[str, Estimate],
-                 base: dict[str, tuple[float, float, int]], reference: str = "blocks", share: float = 1.0
-                 ) -> list[dict]:
-    """Changes of ``obs`` against the baseline's ``{label: (mean, variance, n)}``, one per joint (module docstring):
+                 base: dict[str, Reference], reference: str = "blocks", share: float = 1.0) -> list[dict]:
+    """Changes of ``obs`` against the baseline's ``{label: Reference}``, one per joint (module docstring):
     ``est`` on every logged sample, ``outside`` on those outside the events. ``reference``: what ``base`` holds,
     written into each change (``"blocks"``: the baseline runs' block estimates; ``"paired"``: the paired
     difference-estimates of :mod:`.paired`). ``share``: the fraction of the false-alarm probability this test
@@ -166,8 +211,8 @@ def find_changes(obs: Observed, est: dict[str, Estimate], outside: dict[str, Est
         d = _distance(e, base[c.label], share)
         if d < 1.0:
             continue
-        mean, var, k = base[c.label]
-        limit = bar(k, share)[0]
+        mean = base[c.label].mean
+        limit = bar(base[c.label].k, share)
         holds = (o.accepted and _distance(o, base[c.label], share) >= 1.0) or not np.isfinite(o.se) \
             or o.se > abs(e.theta - mean) / limit
         if holds:

@@ -13,13 +13,23 @@ of freedom and their sample variance would be too small. So the blocks are weigh
   (clipped at 0: a negative correlation never buys blocks), then in Geyer's initial positive sequence (pairs
   ``rho_l + rho_{l+1}`` while their sum is positive; Geyer 1992, *Practical Markov chain Monte Carlo*, Stat. Sci.
   7: the sum of a stationary sequence's autocorrelations, truncated where its estimate turns to noise);
+* Geyer's sum stops where a pair of estimated autocorrelations is not positive, so a run-long offset that is
+  small against one block's noise (``rho_l`` about ``tau^2 / var_b`` at every lag, under the estimates' own noise
+  of about ``1 / sqrt(k)``) is cut off after a few lags though it adds ``m tau^2`` to the variance of a run's
+  ``m`` blocks' mean. So the spread of the runs' own means is measured too (:func:`cluster_design_effect`, the
+  design effect of runs as clusters: the variance of the pooled mean from the runs' means, over that of ``k``
+  independent blocks), and the larger of the two is taken (:func:`run_design_effect`);
 * ``k`` blocks are then worth ``k_eff = k / DE`` independent ones (the variance of their mean is ``DE`` times
   that of ``k`` independent blocks), and their sample variance's expectation is ``sigma^2 (k - DE) / (k - 1)``
   (the average correlation between two of them is ``(DE - 1) / (k - 1)``): :func:`effective` undoes that bias.
 
 What this does not see: a difference shared by *every* baseline run and the monitored log alike (it is in the
 mean, not the spread), and a correlation longer than the runs' paired sequences (with a single run of few blocks,
-``rho_l`` at long lags is noise and Geyer's sum stops early; ``min_lag`` is the span always counted).
+``rho_l`` at long lags is noise and Geyer's sum stops early; ``min_lag`` is the span always counted). And
+``k_eff`` is the number of independent blocks the *mean* is worth, not the degrees of freedom of the variance:
+where a few runs sit apart, the spread rests on their few means, and Student's bar at ``k_eff - 1`` degrees of
+freedom is too low (three simulated runs apart by half a block's noise: 9.8 % of healthy logs outside a 95 %
+interval, ``tests/health/monitoring/test_change_coverage.py``).
 """
 
 from __future__ import annotations
@@ -66,6 +76,32 @@ def design_effect(seqs: Sequence[NDArray], mean: float, min_lag: int = 1) -> flo
         de += 2.0 * pair
         lag += 2
     return max(de, 1.0)
+
+
+def cluster_design_effect(seqs: Sequence[NDArray], mean: float, var: float) -> float:
+    """The design effect of the runs as clusters: ``R`` sequences of ``m_r`` blocks (``k`` in all) about ``mean``,
+    ``var`` the blocks' sample variance. Runs independent of each other, the pooled mean's variance is ``V =
+    sum m_r^2 Var(mean_r) / k^2``, each ``Var(mean_r)`` estimated by ``(mean_r - mean)^2 R / (R - 1)`` (about a
+    mean estimated from the ``R`` runs). ``DE`` is ``V`` over that of ``k`` independent blocks, ``sigma^2 / k``,
+    with ``sigma^2 = var (k - 1) / (k - DE)`` (the sample variance's bias under that correlation, as
+    :func:`effective` corrects it): ``DE = A k / (1 + A)``, ``A = V k / (var (k - 1))``. Blocks that are all their
+    run's mean give ``k / R`` (each run one block); independent ones about 1. 1 when fewer than two runs hold
+    blocks (one run's mean tells nothing of another's) or ``var`` is 0."""
+    xs = [np.asarray(s, float) for s in seqs if len(s)]
+    k = sum(x.size for x in xs)
+    if len(xs) < 2 or not var > 0.0:
+        return 1.0
+    R = len(xs)
+    v = sum(x.size**2 * (x.mean() - mean) ** 2 for x in xs) * R / ((R - 1) * k**2)
+    a = v * k / (var * (k - 1))
+    return max(1.0, float(a * k / (1.0 + a)))
+
+
+def run_design_effect(seqs: Sequence[NDArray], mean: float, var: float, min_lag: int = 1) -> float:
+    """The larger of the autocorrelation's design effect (:func:`design_effect`) and the runs' as clusters
+    (:func:`cluster_design_effect`; module docstring): each misses what the other sees (a short correlation within
+    runs; a run-long offset too small per block for Geyer's sum), and each is at least 1."""
+    return max(design_effect(seqs, mean, min_lag), cluster_design_effect(seqs, mean, var))
 
 
 def effective(var: float, k: int, de: float) -> tuple[float, float] | None:

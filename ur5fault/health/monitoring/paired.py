@@ -17,8 +17,8 @@ holds), with its sensitivity column taken on the log's own replay
 discrepancy workflow's test (:func:`ur5fault.discrepancy.search.judge`) as :mod:`.changes` does. Its reference
 distribution is the same difference-estimate between healthy baseline runs paired with each other and with
 their own repeats (never a run with its own samples), made per :data:`PAIRED_BLOCK_S` of paired samples
-(:func:`block_estimates`): their mean, variance and effective number feed the same prediction interval and Student's bar
-(:func:`.changes.bar`) as the unpaired test's.
+(:func:`block_estimates`): their mean, variance and effective number feed the same prediction interval
+(:class:`.changes.Reference`) and Student's bar (:func:`.changes.bar`) as the unpaired test's.
 
 *What ``k`` counts: each difference once.* Paired both ways, two repeats of a stretch give
 ``d_A = r_A - r_B`` and ``d_B = r_B - r_A = -d_A`` (a run paired with its own repeat at lag L: ``d(t + L) =
@@ -34,24 +34,43 @@ would read as a mean of one sign with a narrow spread, and the baseline's order 
 *Neighbouring blocks are not counted as independent* (they were before, with blocks of 2 s): the one-way
 blocks of each run, in time order, give the design effect ``DE`` of their autocorrelation (:mod:`.effective`:
 pooled over the runs about the both-way mean, the lags within one pairing stretch always counted, then Geyer's
-initial positive sequence), and ``k_eff = k / DE`` independent blocks set Student's bar; the variance is
-corrected for the bias the correlation puts in it. A difference that holds over a whole run (a warmer run, an
-offset that drifted) is correlation at every lag of that run, so a baseline whose runs each sit apart is worth
-about as many blocks as it has runs; one whose differences are the sensors' noise and the task's repeatability
-is worth about all its blocks.
+initial positive sequence; or, where larger, the design effect of the runs as clusters, from the spread of the
+runs' own mean blocks: :func:`.effective.run_design_effect`), and ``k_eff = k / DE`` independent blocks set
+Student's bar; the variance is corrected for the bias the correlation puts in it. A difference that holds over
+a whole run (a warmer run, an offset that drifted) is correlation at every lag of that run, so a baseline whose
+runs each sit apart is worth about as many blocks as it has runs; one whose differences are the sensors' noise
+and the task's repeatability is worth about all its blocks. Geyer's sum alone missed a run-long offset small
+against one block's noise (its correlation at each lag under the estimates' noise, the sum cut off after a few
+lags: on simulated runs with such an offset, 9-19 % of healthy logs outside a 95 % interval, the log's noise
+counted once); the runs' means see it (:mod:`.effective`; ``tests/health/monitoring/test_change_coverage.py``:
+4.5 and 9.8 %).
 
 *Why the false-alarm rate holds.* The log's estimate over its ``n`` paired blocks is (to first order) a weighted
 mean of the same candidate's estimates on its own short blocks. Under no change, blocks with the baseline's
-autocorrelation make its variance that of one block times ``DE / n`` (never more than one block's): the
-prediction interval uses the baseline's single-block spread ``var_b`` so scaled, plus the reference mean's
-``var_b / k_eff`` and the log's own standard error (:func:`for_log`; that error and ``DE / n`` count the log's
-noise twice, a conservative width). How well ``var_b`` is known sets Student's quantile at the workflow's tail
+autocorrelation make its variance that of one block times ``DE / n`` (never more than one block's): ``V =
+var_b min(1, DE / n)``, the baseline's single-block spread ``var_b`` so scaled. ``theta - mean_b`` adds the
+reference mean's ``var_b / k_eff``. How well ``var_b`` is known sets Student's quantile at the workflow's tail
 with ``k_eff - 1`` degrees of freedom, which is why ``k_eff`` must not count correlated blocks as independent.
 What it assumes: the log's healthy difference has the autocorrelation of the baseline's (a difference of the
 log from the healthy runs that holds over the whole log, beyond what the baseline runs show between each other,
-is not covered; with a single baseline run, its own cycles show only the differences within one session).
-Before, the interval used one block's spread unscaled (``min(1, DE / n)`` taken as 1), which asks a 20 s
-log's estimate to lie as far out as a single 2 s block's.
+is not covered; with a single baseline run, its own cycles show only the differences within one session), and
+the log is no longer than the baseline runs ``DE`` is measured on (an offset between healthy runs that holds
+over a run enters ``DE`` as correlation over the run's ``m`` blocks, so ``var_b DE / n`` holds it about right
+for a log of ``m`` blocks, overstates it for a shorter log and understates it for a longer one; a monitored log
+is screened on its first 20 s, the baseline runs whole).
+
+*The log's noise counted once.* A block's estimate is made on the difference of two healthy runs' residuals, so
+``var_b`` holds both sides' noise; ``V`` is therefore already the variance of the log's whole estimate,
+including the log's own noise and its reference's. The log's jackknife standard error ``se`` (the workflow's 10
+blocks of the log) estimates part of the same variance from the log itself: the noise within its own jackknife
+blocks, not a difference that holds over the whole log. So ``se^2 <= V`` in expectation where the log is like
+the baseline, and their sum counts the log's noise twice (what this module did before, "a conservative width":
+up to ``sqrt(2)`` too wide, where ``se^2`` is as large as ``V`` and the reference mean well known). The
+prediction variance is ``max(se^2, V) + var_b / k_eff`` (:class:`.changes.Reference`): ``V`` where the log is
+like the baseline, the log's own ``se`` where it is noisier than the baseline's blocks predict (another noise
+level, fewer repeats in its reference).
+Before the autocorrelation was counted, the interval used one block's spread unscaled (``min(1, DE / n)``
+taken as 1), which asks a 20 s log's estimate to lie as far out as a single 2 s block's.
 
 The estimate reads as the change *since the paired healthy runs* (a gain of 1.1: the current reads 10 %
 more than on the same motion of the baseline).
@@ -65,8 +84,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ...sim.axes import N_JOINTS
-from .changes import BLOCK_S, Estimate, fit_alone, spreads
-from .effective import design_effect, effective
+from .changes import BLOCK_S, Estimate, Reference, fit_alone, spreads
+from .effective import effective, run_design_effect
 from .observe import Observed
 from .task import CHUNK_S, reference
 
@@ -170,9 +189,10 @@ def baseline_spreads(healthy: Sequence[Observed], refs: Sequence[tuple[NDArray, 
                      ) -> dict[str, tuple[float, float, float, float]]:
     """``{label: (mean, variance, k_eff, DE)}`` of each candidate's paired estimates over the baseline runs (module
     docstring): mean and variance of its blocks paired both ways (either sign of each difference between healthy
-    runs); ``DE`` the design effect of its one-way blocks' autocorrelation (each pair of repeats compared once;
-    within each run, about that mean, the lags within one pairing stretch always counted:
-    :func:`.effective.design_effect`), ``k_eff = k / DE`` the independent blocks they are worth, and the variance
+    runs); ``DE`` the design effect of its one-way blocks (each pair of repeats compared once): of their
+    autocorrelation within each run, about that mean, the lags within one pairing stretch always counted, or of
+    the runs as clusters where larger (:func:`.effective.run_design_effect`); ``k_eff = k / DE`` the independent
+    blocks they are worth, and the variance
     corrected for the bias the correlation puts in it (:func:`.effective.effective`). A candidate whose blocks
     are worth fewer than 2 independent ones has no paired statistics."""
     both = spreads(block for o, ref in zip(healthy, baseline_references(healthy, refs))
@@ -186,25 +206,23 @@ def baseline_spreads(healthy: Sequence[Observed], refs: Sequence[tuple[NDArray, 
         k = sum(s.size for s in seqs)
         if k < 2:
             continue
-        de = design_effect(seqs, mean, MIN_LAG)
+        de = run_design_effect(seqs, mean, var, MIN_LAG)
         got = effective(var, k, de)
         if got is not None:
             out[label] = (mean, got[0], got[1], de)
     return out
 
 
-def for_log(stats: dict[str, tuple[float, float, float, float]], paired_s: float
-            ) -> dict[str, tuple[float, float, float]]:
-    """The reference ``{label: (mean, variance, k_eff)}`` of a log's estimate on ``paired_s`` seconds of paired
-    samples, as :func:`.changes.find_changes` takes it (its prediction variance ``variance (1 + 1 / k_eff)``).
+def for_log(stats: dict[str, tuple[float, float, float, float]], paired_s: float) -> dict[str, Reference]:
+    """The :class:`.changes.Reference` of a log's estimate on ``paired_s`` seconds of paired samples per candidate
+    of the baseline's ``{label: (mean, variance, k_eff, DE)}``, as :func:`.changes.find_changes` takes it.
 
     The log's estimate is (to first order) a weighted mean of its ``n = paired_s / PAIRED_BLOCK_S`` blocks'
     estimates, so under no change its variance is that of one block times ``min(1, DE / n)`` (``DE`` the
     baseline's design effect: ``n`` blocks of that autocorrelation are worth ``n / DE`` independent ones, and
     never less than one; a weighted mean's variance is at most the equal-weight mean's for blocks of unequal
-    information). The reference mean adds ``variance / k_eff``. So the prediction variance is
-    ``variance (min(1, DE / n) + 1 / k_eff)``, returned as the variance that :func:`.changes.bar`'s factor
-    ``1 + 1 / k_eff`` turns into it."""
+    information): the reference's ``log_var``, which the log's own standard error replaces only where larger
+    (module docstring, the log's noise counted once). The reference mean's variance is ``variance / k_eff``;
+    Student's bar counts ``k_eff``."""
     n = max(paired_s / PAIRED_BLOCK_S, 1.0)
-    return {label: (mean, var * (min(1.0, de / n) + 1.0 / k) / (1.0 + 1.0 / k), k)
-            for label, (mean, var, k, de) in stats.items()}
+    return {label: Reference(mean, var * min(1.0, de / n), var / k, k) for label, (mean, var, k, de) in stats.items()}

@@ -11,7 +11,7 @@ from numpy.typing import NDArray
 from ...errors import ParameterError
 from . import paired
 from .baseline import Baseline
-from .changes import BLOCK_S, estimates, find_changes, keep_mask, strongest
+from .changes import BLOCK_S, block_reference, estimates, find_changes, keep_mask, strongest
 from .conditions import motion_limit
 from .event_fit import segment
 from .events import (
@@ -101,7 +101,8 @@ def judge_changes(baseline: Baseline, obs: Observed, over: NDArray) -> list[dict
             ref = None
     if ref is None:
         every = estimates(obs, logged)
-        return find_changes(obs, every, estimates(obs, keep) if over.any() else every, baseline.candidates)
+        return find_changes(obs, every, estimates(obs, keep) if over.any() else every,
+                            block_reference(baseline.candidates))
     on = paired.difference(obs, ref)[1]
     rest = logged & ~on
     both = rest.sum() * obs.period_s >= BLOCK_S  # shorter, its estimate holds more of the model's error than a block
@@ -113,7 +114,7 @@ def judge_changes(baseline: Baseline, obs: Observed, over: NDArray) -> list[dict
     if both:
         every = estimates(obs, rest)
         found = strongest(found, find_changes(obs, every, estimates(obs, keep & ~on) if over.any() else every,
-                                              baseline.candidates, share=share))
+                                              block_reference(baseline.candidates), share=share))
     return found
 
 
