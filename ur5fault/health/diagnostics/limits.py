@@ -69,6 +69,12 @@ Z_VALUES = (2.0, 3.0, 5.0)
 DEFAULT_Z = 3.0
 
 
+def _known(kind: str) -> None:
+    """Refuse a fault kind without a size estimate (naming the known ones)."""
+    if kind not in ESTIMATE_OF:
+        raise KeyError(f"no size estimate for fault kind {kind!r} (known: {', '.join(sorted(ESTIMATE_OF))})")
+
+
 def size_from_estimate(kind: str, limit: np.ndarray | float) -> np.ndarray:
     """A limit on ``kind``'s size estimate (its unit, >= 0; inf allowed) -> the same limit on ``fault_size``.
 
@@ -77,8 +83,7 @@ def size_from_estimate(kind: str, limit: np.ndarray | float) -> np.ndarray:
     Coulomb scale 1 + s gives s; a torque constant or a gear stiffness scaled by 1 - s gives ``1/(1 - s) - 1``, so
     an estimate limit L is a size limit ``L / (1 + L)`` (1 at L = inf)."""
     lim = np.asarray(limit, dtype=float)
-    if kind not in ESTIMATE_OF:
-        raise KeyError(f"no size estimate for fault kind {kind!r} (known: {', '.join(sorted(ESTIMATE_OF))})")
+    _known(kind)
     if kind in ("backlash", "resolver_offset"):
         return np.degrees(lim)
     if kind in ("torque_constant", "gear_stiffness"):
@@ -91,8 +96,7 @@ def estimate_from_size(kind: str, size: np.ndarray | float) -> np.ndarray:
     """The magnitude of ``kind``'s size estimate that a fault of ``fault_size`` ``size`` gives (the inverse of
     :func:`size_from_estimate`)."""
     s = np.asarray(size, dtype=float)
-    if kind not in ESTIMATE_OF:
-        raise KeyError(f"no size estimate for fault kind {kind!r} (known: {', '.join(sorted(ESTIMATE_OF))})")
+    _known(kind)
     if kind in ("backlash", "resolver_offset"):
         return np.radians(s)
     if kind in ("torque_constant", "gear_stiffness"):
