@@ -172,6 +172,19 @@ def test_a_changed_radius_in_the_twin_cache_is_simulated_again(tmp_path, monkeyp
     assert len(calls) > n and verify_checksum(path) is None
 
 
+def test_a_radius_cache_of_another_version_is_rebuilt_when_it_is_ours_and_refused_when_not(tmp_path, caplog):
+    from ur5fault.errors import ConfigFileError
+    from ur5fault.health.prognostics.twin_cache import RadiusCache
+
+    path = write_json_atomic(tmp_path / "radii.json", {"version": 0, "radii": {"k": 1.0}}, checksum=True)
+    with caplog.at_level(logging.WARNING):
+        assert RadiusCache(path).entries == {}  # ours (a sound sidecar): rebuilt, no human needed
+    assert "version 0" in caplog.text
+    checksum_path(path).unlink()  # not known to be ours: a user's file is never overwritten
+    with pytest.raises(ConfigFileError, match="remove it"):
+        RadiusCache(path)
+
+
 def test_changed_inspections_or_manifest_of_a_life_campaign_are_refused(tmp_path):
     from ur5fault.health.prognostics.benchmark import NEEDED, load_inspections
 
