@@ -196,3 +196,49 @@ def test_corrupted_feature_table_is_reported(tmp_path, done):
     data[len(data) // 3] ^= 0x10
     path.write_bytes(bytes(data))
     assert status(out)["features"]["state"] == "bad"
+
+
+def test_a_changed_feature_table_is_never_read_and_a_rerun_rebuilds_it(tmp_path, done, capsys):
+    """The consolidated table read back (CampaignResult, `ur5fault benchmark`) is verified first: a flipped
+    byte is one line naming the file and the command to re-run, and the re-run rebuilds it from the runs."""
+    from ur5fault.campaign import CampaignResult
+    from ur5fault.cli import main
+    from ur5fault.util.io import StoredFileError
+
+    out = _copy(done, tmp_path)
+    path = out / "features.parquet"
+    ref = pd.read_parquet(path)
+    data = bytearray(path.read_bytes())
+    data[len(data) // 3] ^= 0x10
+    path.write_bytes(bytes(data))
+    with pytest.raises(StoredFileError, match="features.parquet: its bytes differ.*campaign run"):
+        CampaignResult.load(out)
+    assert main(["benchmark", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "features.parquet: its bytes differ" in err and "campaign run" in err
+    run_campaign(load_campaign(tiny(tmp_path)), out, jobs=1, progress=False, note=None)
+    pd.testing.assert_frame_equal(CampaignResult.load(out).features, ref)
+
+
+def test_a_changed_manifest_is_reported_by_status_and_repaired_by_a_rerun(tmp_path, done):
+    out = _copy(done, tmp_path)
+    path = out / "manifest.json"
+    assert path.with_name("manifest.json.sha256").is_file()
+    path.write_text(path.read_text().replace('"threshold_mm": ', '"threshold_mm": 9', 1))  # valid JSON, wrong
+    info = status(out)
+    assert info["manifest"]["state"] == "bad" and "checksum" in info["manifest"]["detail"]
+    r = subprocess.run([sys.executable, "-m", "ur5fault.cli", "campaign", "status", str(out)], capture_output=True,
+                       text=True, timeout=120)
+    assert r.returncode == 1
+    run_campaign(load_campaign(tiny(tmp_path)), out, jobs=1, progress=False, note=None)
+    info = status(out)
+    assert "manifest" not in info and info["runs"]["ok"] == 3 and info["features"]["state"] == "ok"
+
+
+def test_a_killed_writers_temporaries_are_cleared_by_the_next_run(tmp_path, done):
+    out = _copy(done, tmp_path)
+    left = [out / ".features.parquet.x1.tmp", out / "runs" / ".r0.parquet.x2.tmp", out / ".manifest.json.x3.tmp"]
+    for p in left:
+        p.write_bytes(b"PAR1 half")
+    run_campaign(load_campaign(tiny(tmp_path)), out, jobs=1, progress=False, note=None)
+    assert not any(p.exists() for p in left)

@@ -23,6 +23,7 @@ from ur5fault.health.diagnostics.data import input_columns, load_dataset  # noqa
 from ur5fault.health.diagnostics.metrics import auc_standard_error  # noqa: E402
 from ur5fault.health.diagnostics.thresholds import alpha_at, empirical_alpha, fit_logistic  # noqa: E402
 from ur5fault.health.features import FEATURE_UNITS  # noqa: E402
+from ur5fault.util.io import checksum_path  # noqa: E402
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -375,6 +376,7 @@ def test_calibration_is_saved_loaded_and_reported(tmp_path):
     s = json.loads((tmp_path / "benchmark" / "models" / SCHEMA_FILE).read_text())
     s["calibration"] = None
     (tmp_path / "benchmark" / "models" / SCHEMA_FILE).write_text(json.dumps(s))
+    checksum_path(tmp_path / "benchmark" / "models" / SCHEMA_FILE).unlink(missing_ok=True)  # as saved before sidecars
     with pytest.raises(ConfigFileError, match="disagree on the calibration"):
         load_models(tmp_path / "benchmark")
 
@@ -414,6 +416,7 @@ def test_the_operating_point_is_read_off_the_training_runs_and_the_test_split_on
     s.pop("joint_kind_threshold_from")
     s["joint_kind_threshold_5pct_false_alarms"] = bj["oracle_test_split"]["threshold_score"]
     path.write_text(json.dumps(s))
+    checksum_path(path).unlink(missing_ok=True)  # as saved before sidecars: edited, not damaged
     _, old = load_models(tmp_path / "benchmark")
     assert old["joint_kind_threshold_5pct_false_alarms"] == oof
     assert old["joint_kind_threshold_test_split"] == bj["oracle_test_split"]["threshold_score"]
@@ -435,6 +438,7 @@ def test_classifiers_of_an_older_format_are_refused_in_one_line(tmp_path, capsys
     for old in (2, 1):
         s["schema_format"] = old
         path.write_text(json.dumps(s))
+        checksum_path(path).unlink(missing_ok=True)  # as saved before sidecars: edited, not damaged
         with pytest.raises(ConfigFileError, match=f"schema format {old}, whose p.fault. is the run-level"):
             load_models(tmp_path / "benchmark")
         assert main(["benchmark", str(tmp_path), "--test", str(tmp_path)]) == 2
@@ -444,6 +448,7 @@ def test_classifiers_of_an_older_format_are_refused_in_one_line(tmp_path, capsys
     s["schema_format"] = 3
     s["joint_kind_threshold_5pct_false_alarms"] = None
     path.write_text(json.dumps(s))
+    checksum_path(path).unlink(missing_ok=True)  # as saved before sidecars: edited, not damaged
     with pytest.raises(ConfigFileError, match="no fault-kind classifier by joint"):
         load_models(tmp_path / "benchmark")
 

@@ -29,6 +29,7 @@ from ur5fault.health.diagnostics.data import load_dataset  # noqa: E402
 from ur5fault.health.diagnostics.metrics import alarm_threshold  # noqa: E402
 from ur5fault.health.diagnostics.models import fit_models  # noqa: E402
 from ur5fault.health.diagnostics.saved import SCHEMA_FILE, save_models  # noqa: E402
+from ur5fault.util.io import checksum_path  # noqa: E402
 
 WINDOW_S = 2.5  # the stand-in detector's "training runs' duration"
 LOG_S = 5.2  # two windows of 2.5 s after the first sample (a log reader takes at least 5 s)
@@ -238,6 +239,7 @@ def _rewrite_schema(src: Path, dst: Path, **changes) -> Path:
         else:
             schema[k] = v
     p.write_text(json.dumps(schema))
+    checksum_path(p).unlink(missing_ok=True)  # as saved before sidecars: edited, not damaged
     return dst
 
 

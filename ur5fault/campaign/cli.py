@@ -79,9 +79,11 @@ def cmd_run(args: argparse.Namespace) -> int:
     manifest = run_campaign(camp, camp.out, jobs=args.jobs, backend=args.backend, scheduler=args.scheduler,
                             progress=not args.quiet, save_timeseries=args.save_timeseries or None,
                             replace_changed=args.replace_changed)
-    import pandas as pd
 
-    features = pd.read_parquet(Path(camp.out) / "features.parquet")
+    from ..util.io import read_parquet_stored
+    from .store import REBUILD_FEATURES
+
+    features = read_parquet_stored(Path(camp.out) / "features.parquet", REBUILD_FEATURES)
     thr = args.threshold_mm if args.threshold_mm is not None else camp.threshold_mm
     table = tcp_table(features, camp.swept_keys)
     if table.shape[1] > 20:  # a sampled campaign's continuous backlash sizes: no readable grid
@@ -107,7 +109,8 @@ def cmd_status(args: argparse.Namespace) -> int:
     runs = info.get("runs") or info.get("inspections") or {}   # a life campaign's files are inspections
     table = info.get("inspections_table" if info.get("kind") == "life" else "features") or {}
     stale = info.get("state") == "complete" and table.get("state") != "ok"
-    return 1 if runs.get("bad") or runs.get("changed") or stale else 0
+    damaged = (info.get("manifest") or {}).get("state") == "bad"
+    return 1 if runs.get("bad") or runs.get("changed") or stale or damaged else 0
 
 
 def cmd_plot(args: argparse.Namespace) -> int:

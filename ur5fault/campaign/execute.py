@@ -26,7 +26,7 @@ import numpy as np
 
 from ..config import parse_trajectory
 from ..sim.params import load_params
-from ..util.io import check_writable, write_json_atomic, write_parquet_atomic
+from ..util.io import check_writable, remove_stale_temporaries, write_json_atomic, write_parquet_atomic
 from ..util.parallel import one_blas_thread
 from ..util.progress import campaign_progress
 from .digital_twin import twin_id, twin_runs
@@ -224,7 +224,7 @@ def _run_locked(camp: Campaign, out: Path, jobs: int, backend: str, client, prog
         say(f"campaign {camp.name}: {len(camp.runs)} runs (twins included), {len(todo)} to simulate -> {out}")
         t0 = time.perf_counter()
         started = build_manifest(camp, ids, None, "running", backend, jobs, save_ts, t0)
-        write_json_atomic(out / "manifest.json", started)
+        write_json_atomic(out / "manifest.json", started, checksum=True)
         ts_dir = out / "timeseries" if save_ts else None
         batches = plan_batches(camp, todo, jobs)
         total, done = len(camp.runs), len(camp.runs) - len(todo)
@@ -259,16 +259,14 @@ def _run_locked(camp: Campaign, out: Path, jobs: int, backend: str, client, prog
         manifest = build_manifest(camp, ids, features, "complete", backend, jobs, save_ts, t0, earlier=started)
         manifest["runs_resimulated"] = {"missing": len(found.missing), "bad": len(found.bad),
                                         "changed": len(found.changed)}
-        write_json_atomic(out / "manifest.json", manifest)
+        write_json_atomic(out / "manifest.json", manifest, checksum=True)
         return manifest
 
 
 def _remove_stale_temporaries(out: Path) -> None:
     """Temporary files of a writer killed mid-write (we hold the lock, so no one else writes here)."""
     for folder in (out, out / "runs", out / "timeseries"):
-        if folder.is_dir():
-            for p in folder.glob(".*.tmp"):
-                p.unlink(missing_ok=True)
+        remove_stale_temporaries(folder, 0)
 
 
 def _execute(camp: Campaign, batches: list[list[CampaignRun]], out: Path, ts_dir: Path | None, jobs: int,

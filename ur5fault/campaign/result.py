@@ -6,7 +6,6 @@ notebooks."""
 from __future__ import annotations
 
 import dataclasses
-import json
 import logging
 import tempfile
 from collections.abc import Iterable, Mapping
@@ -18,6 +17,8 @@ import pandas as pd
 from ..errors import ConfigFileError, UnknownNameError
 from ..sim.effects import REGISTRY
 from ..util import provenance, yamlsafe
+from ..util.io import read_json_stored, read_parquet_stored
+from .store import REBUILD_FEATURES
 from .summary import EffectSweep, acceptable_backlash, effect_sweep, severity_table, swept_effects, tcp_table
 
 _log = logging.getLogger(__name__)
@@ -45,7 +46,8 @@ class CampaignResult:
         for name in ("features.parquet", "manifest.json"):
             if not (out / name).exists():
                 raise ConfigFileError(f"{out}: no {name} (run the campaign to its end first)")
-        return cls(out, pd.read_parquet(out / "features.parquet"), json.loads((out / "manifest.json").read_text()))
+        return cls(out, read_parquet_stored(out / "features.parquet", REBUILD_FEATURES),
+                   read_json_stored(out / "manifest.json", REBUILD_FEATURES))
 
     # ------------------------------------------------------------------ what the campaign was
     @property
@@ -107,7 +109,7 @@ class CampaignResult:
         ts = self.out / "timeseries"
         for r in ids:
             if r not in self._series and (ts / f"{r}.parquet").exists():
-                self._series[r] = pd.read_parquet(ts / f"{r}.parquet")
+                self._series[r] = read_parquet_stored(ts / f"{r}.parquet", REBUILD_FEATURES)
         missing = [r for r in ids if r not in self._series]
         if missing:
             self._series.update(self._resimulate(missing))

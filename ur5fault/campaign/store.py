@@ -25,14 +25,17 @@ from ..errors import ConfigFileError, Ur5FaultError
 from ..health.features import FEATURE_UNITS
 from ..health.twin_features import FEATURE_UNITS as TWIN_FEATURE_UNITS
 from ..sim.effects import REGISTRY
-from ..util.io import verify_checksum, write_parquet_atomic
+from ..util.io import DAMAGED_PARQUET_ERRORS, checksum_path, verify_checksum, write_parquet_atomic
 from .identity import digest, first_difference
 
 META_KEY = b"ur5fault"
 #: what reading a damaged Parquet file raises: pyarrow's own errors, but also IndexError, KeyError,
 #: UnicodeDecodeError, OverflowError... from values a flipped byte made absurd (found by flipping
 #: every byte of a run file, tests/campaign/test_integrity.py)
-DAMAGED_READ_ERRORS = (OSError, ValueError, LookupError, ArithmeticError, TypeError)
+DAMAGED_READ_ERRORS = DAMAGED_PARQUET_ERRORS
+#: what to run when a campaign's consolidated table fails its checksum: the stored runs are verified and reused
+REBUILD_FEATURES = ("run the campaign again into this folder (`ur5fault campaign run CAMPAIGN.yaml --out DIR`): it "
+                    "verifies the stored runs, re-simulates only bad ones and rebuilds the table")
 #: columns every per-run file has (the feature table's schema; others may be added)
 REQUIRED_COLUMNS = ("run_id", "status", "twin_run_id", *FEATURE_UNITS)
 #: units of the run-description columns (features: :data:`ur5fault.health.features.FEATURE_UNITS`)
@@ -203,8 +206,18 @@ def consolidate(out: Path, records: Mapping[str, Mapping[str, Any]],
     return df
 
 
+def manifest_damage(out: Path) -> str | None:
+    """Why ``OUT/manifest.json`` cannot be trusted (its bytes changed since it was written), else None (also
+    when absent, or written before manifests had checksums)."""
+    path = Path(out) / "manifest.json"
+    return verify_checksum(path) if path.exists() and checksum_path(path).exists() else None
+
+
 def read_manifest(out: Path) -> dict[str, Any]:
-    """``OUT/manifest.json`` as a mapping ({} when absent or unreadable)."""
+    """``OUT/manifest.json`` as a mapping ({} when absent, unreadable or failing its checksum:
+    :func:`manifest_damage` says why)."""
+    if manifest_damage(out):
+        return {}
     try:
         m = json.loads((Path(out) / "manifest.json").read_text())
     except (OSError, ValueError):

@@ -12,9 +12,11 @@ from .identity import Identities, digest
 from .lock import lock_holder
 from .spec import Campaign, build_campaign
 from .store import (
+    REBUILD_FEATURES,
     FileCheck,
     check_run_file,
     check_timeseries_file,
+    manifest_damage,
     read_consolidated,
     read_manifest,
     run_path,
@@ -92,6 +94,7 @@ def status(out: Path) -> dict[str, Any]:
             (out / name).exists() for name in ("manifest.json", "features.parquet", "inspections.parquet")):
         raise ConfigFileError(f"{out}: not a campaign folder (no manifest.json, runs/ or feature table in it)")
     manifest = read_manifest(out)
+    damaged = manifest_damage(out)
     holder = lock_holder(out)
     state = manifest.get("state")
     if state == "running" and holder is None:  # the manifest of a process that was stopped: nothing runs now
@@ -103,6 +106,8 @@ def status(out: Path) -> dict[str, Any]:
                  else {"held": True, "host": holder[0], "pid": holder[1]}),
         "n_runs_expected": None,
     }
+    if damaged:  # read as absent; the runs are still checked for soundness
+        info["manifest"] = {"state": "bad", "detail": f"{damaged}; {REBUILD_FEATURES}"}
     if manifest.get("kind") == "life":  # a fleet run to failure (issue 20): inspections, not runs
         from ..health.prognostics.life_status import life_status
 

@@ -128,7 +128,9 @@ class Simulator:
         if self.stepper != "compiled":
             return self.stepper, ""
         from . import mjlib
+        from .jitcache import protect
 
+        protect(mjlib)  # its numba cache verified on read (jitcache.py)
         why = mjlib.unavailable_reason()
         if not why and mjlib.python_callbacks_set():
             why = f"MuJoCo callback {', '.join(mjlib.python_callbacks_set())} is set"

@@ -7,11 +7,14 @@ MJCF's own ``opt.gravity`` (9.82 m/s^2 in the packaged model), never restated he
 
 from __future__ import annotations
 
+import sys
+
 import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
 from .axes import N_JOINTS
+from .jitcache import protect
 
 
 def gravity_torque(ids, g_m_s2: float, mass: NDArray, xipos: NDArray, xanchor: NDArray,
@@ -53,3 +56,5 @@ def gravity_moment_j(j, mass, xipos, xanchor, xaxis, subtree, up):
             ty += m * (az * up[0] - ax * up[2])
             tz += m * (ax * up[1] - ay * up[0])
     return tx * xaxis[j, 0] + ty * xaxis[j, 1] + tz * xaxis[j, 2]
+
+protect(sys.modules[__name__])  # the numba cache of the functions above verified on read (jitcache.py)

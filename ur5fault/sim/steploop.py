@@ -16,6 +16,7 @@ lockstep loop with the compiled drive bit for bit (``tests/sim/test_steploop.py`
 from __future__ import annotations
 
 import inspect
+import sys
 import zlib
 from pathlib import Path
 
@@ -23,7 +24,7 @@ import numba
 import numpy as np
 from numba import njit, prange
 
-from . import mjlib, terms
+from . import gravity, jitcache, mjlib, terms
 from .drive import kernel
 from .drive.kernel import Q_FB, S_L, physics_rj, sensors_rj, servo_rj
 from .drive.layout import PARAM_NAMES, STATE_NAMES
@@ -250,3 +251,7 @@ def run(mb, X, P, setpoints, delay_k, rngs, timing, payload, logging, hook, prog
         advance(s, end, si0, noise, bt, tm)
         s = end
     return log, status, event
+
+
+# the numba caches of everything compiled here verified on read (a damaged file is compiled again, jitcache.py)
+jitcache.protect(kernel, mjlib, terms, gravity, sys.modules[__name__])

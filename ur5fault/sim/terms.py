@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import sys
 
 import numpy as np
 from numba import njit
@@ -35,6 +36,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..errors import ParameterError
 from .axes import JOINT_NAMES
+from .jitcache import protect
 
 #: harmonic terms per joint and kind that one run can carry (slots of ``RunArrays``)
 MAX_HARMONICS = 3
@@ -282,3 +284,5 @@ def load_torque_rj(r, j, q, w, m_ii, dt, grav, amp_j, per_j, coul, coul_w, strib
         tv += hold[r, j] * last_sign[r, j] * e
         slope += abs(hold[r, j] * last_sign[r, j] * 2.0 * w / (hold_w[r, j] * hold_w[r, j]) * e)
     return t + tv / (1.0 + max(slope, 0.0) * dt / m_ii)
+
+protect(sys.modules[__name__])  # the numba cache of the functions above verified on read (jitcache.py)

@@ -7,7 +7,13 @@ computed from the bytes on disk before the file is renamed into place (so ``sha2
 checks it too); :func:`verify_checksum` detects any changed byte, where Parquet's own page
 checksums (off by default, and not covering the footer) would not.  The sidecar is written first:
 a crash between the two renames leaves a file whose checksum does not match, which readers treat
-as bad, never as sound."""
+as bad, never as sound.  :func:`check_stored` is the check every reader of a stored result makes
+before using it: one line naming the file and the command that writes it again.
+
+The temporary file is flushed to disk (``fsync``) before it is renamed, and the folder after, so that
+a power cut cannot leave a renamed but empty file (the rename reaching the disk before the data).
+A process killed mid-write leaves only a temporary ``.<name>.<random>.tmp`` beside the target,
+never a damaged target; :func:`remove_stale_temporaries` clears them."""
 
 from __future__ import annotations
 
@@ -15,6 +21,7 @@ import hashlib
 import json
 import os
 import tempfile
+import time
 from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
@@ -25,10 +32,19 @@ from ..errors import Ur5FaultError
 
 FILE_MODE = 0o644
 CHECKSUM_SUFFIX = ".sha256"
+#: glob of the temporary files :func:`_atomic` writes (``tempfile.mkstemp(prefix=".<name>.", suffix=".tmp")``)
+TEMP_GLOB = ".*.tmp"
+#: age [s] past which a temporary file in a folder no lock protects is taken as left by a killed writer (an
+#: assumption: no single file ur5fault writes takes an hour; a younger one may belong to a running process)
+STALE_TEMP_S = 3600.0
 
 
 class OutputError(Ur5FaultError, OSError):
     """An output file or folder cannot be written (also an :class:`OSError`)."""
+
+
+class StoredFileError(Ur5FaultError, ValueError):
+    """A stored result fails its checksum (changed on disk since it was written) or cannot be read back."""
 
 
 def check_writable(path: str | Path, *, folder: bool = False) -> Path:
@@ -88,6 +104,87 @@ def verify_checksum(path: str | Path) -> str | None:
     return None
 
 
+def check_stored(path: str | Path, remake: str) -> Path:
+    """``path`` when its bytes match the SHA-256 sidecar written with it; else :class:`StoredFileError` naming
+    the file and ``remake`` (what to run to write it again).  A file without a sidecar (written by an older
+    ur5fault, or not by ur5fault) passes unverified: a changed byte cannot remove a sidecar."""
+    path = Path(path)
+    if not checksum_path(path).exists():
+        return path
+    why = verify_checksum(path)
+    if why:
+        raise StoredFileError(f"{path}: {why}; {remake}")
+    return path
+
+
+def read_json_stored(path: str | Path, remake: str) -> Any:
+    """A JSON file checked by :func:`check_stored`, with one-line errors naming the file and ``remake``."""
+    path = Path(path)
+    check_stored(path, remake)
+    try:
+        return json.loads(path.read_text())
+    except FileNotFoundError:
+        raise StoredFileError(f"{path}: no such file; {remake}") from None
+    except (OSError, ValueError) as exc:  # UnicodeDecodeError is a ValueError
+        raise StoredFileError(f"{path}: unreadable as JSON ({' '.join(str(exc).split())[:120]}); {remake}") from None
+
+
+#: what reading a damaged Parquet file raises besides pyarrow's own errors (values a flipped byte made absurd)
+DAMAGED_PARQUET_ERRORS = (OSError, ValueError, LookupError, ArithmeticError, TypeError)
+
+
+def read_parquet_stored(path: str | Path, remake: str) -> pd.DataFrame:
+    """A Parquet table checked by :func:`check_stored`, with one-line errors naming the file and ``remake``."""
+    import pyarrow as pa
+
+    path = Path(path)
+    if not path.is_file():
+        raise StoredFileError(f"{path}: no such file; {remake}")
+    check_stored(path, remake)
+    try:
+        return pd.read_parquet(path)
+    except (*DAMAGED_PARQUET_ERRORS, pa.ArrowException) as exc:
+        raise StoredFileError(f"{path}: unreadable as Parquet ({' '.join(str(exc).split())[:120]}); "
+                              f"{remake}") from None
+
+
+def remove_stale_temporaries(folder: str | Path, older_than_s: float = STALE_TEMP_S) -> list[Path]:
+    """Remove the temporary files (:data:`TEMP_GLOB`) of writers killed mid-write from ``folder`` (not its
+    subfolders): all of them (``older_than_s=0``) when the caller holds the folder's lock, else those older
+    than ``older_than_s``, which no running writer can own.  Returns the files removed."""
+    folder = Path(folder)
+    removed = []
+    if not folder.is_dir():
+        return removed
+    now = time.time()
+    for p in folder.glob(TEMP_GLOB):
+        try:
+            if older_than_s <= 0 or now - p.stat().st_mtime > older_than_s:
+                p.unlink()
+                removed.append(p)
+        except OSError:  # gone meanwhile, or a read-only folder: nothing to clear, nothing to fail over
+            pass
+    return removed
+
+
+def _fsync(path: str | Path, folder: bool = False) -> None:
+    """Flush ``path`` (a file, or a ``folder``'s entries) to disk; a folder that cannot be flushed (some file
+    systems refuse it) is left as it is."""
+    try:
+        fd = os.open(path, os.O_RDONLY | (os.O_DIRECTORY if folder else 0))
+    except OSError:
+        if folder:
+            return
+        raise
+    try:
+        os.fsync(fd)
+    except OSError:
+        if not folder:
+            raise
+    finally:
+        os.close(fd)
+
+
 def _atomic(path: str | Path, write: Callable[[str], None], checksum: bool = False) -> Path:
     """Call ``write(tmp_path)`` and rename the temporary file over ``path`` (its SHA-256 sidecar first
     when ``checksum``)."""
@@ -101,9 +198,11 @@ def _atomic(path: str | Path, write: Callable[[str], None], checksum: bool = Fal
     try:
         write(tmp)
         os.chmod(tmp, FILE_MODE)
+        _fsync(tmp)
         if checksum:
             write_text_atomic(checksum_path(path), f"{file_sha256(tmp)}  {path.name}\n")
         os.replace(tmp, path)
+        _fsync(path.parent, folder=True)
     except BaseException as exc:
         Path(tmp).unlink(missing_ok=True)
         if isinstance(exc, OSError) and not isinstance(exc, Ur5FaultError):
@@ -135,14 +234,15 @@ def write_text_atomic(path: str | Path, text: str) -> Path:
     return _atomic(path, lambda tmp: Path(tmp).write_text(text))
 
 
-def write_bytes_atomic(path: str | Path, data: bytes) -> Path:
-    """Write ``data`` atomically."""
-    return _atomic(path, lambda tmp: Path(tmp).write_bytes(data))
+def write_bytes_atomic(path: str | Path, data: bytes, checksum: bool = False) -> Path:
+    """Write ``data`` atomically, with a SHA-256 sidecar when ``checksum``."""
+    return _atomic(path, lambda tmp: Path(tmp).write_bytes(data), checksum)
 
 
-def write_json_atomic(path: str | Path, data: Mapping[str, Any]) -> Path:
-    """Write ``data`` as indented JSON atomically."""
-    return write_text_atomic(path, json.dumps(data, indent=2, default=str))
+def write_json_atomic(path: str | Path, data: Mapping[str, Any], checksum: bool = False) -> Path:
+    """Write ``data`` as indented JSON atomically, with a SHA-256 sidecar when ``checksum``."""
+    text = json.dumps(data, indent=2, default=str)
+    return _atomic(path, lambda tmp: Path(tmp).write_text(text), checksum)
 
 
 #: resolution of every PNG figure ur5fault writes [dots per inch]

@@ -13,14 +13,13 @@ Needs scikit-learn and skops: ``pip install 'scikit-learn>=1.3' 'skops>=0.10'`` 
 from __future__ import annotations
 
 import dataclasses
-import json
 import time
 from pathlib import Path
 from typing import Any
 
 import pandas as pd
 
-from ...errors import ParameterError
+from ...errors import ConfigFileError, ParameterError
 from .calibration import fit_calibration, test_reliability
 from .data import CONTEXT_COLUMNS, FEATURE_SETS, Dataset, has_twin_features, load_dataset, load_features
 from .limit_metrics import for_dataset
@@ -198,7 +197,12 @@ def run_benchmark(campaign_dir: str | Path, out: str | Path | None = None, *, se
     manifest = campaign_dir / "manifest.json"
     man: dict[str, Any] = {}
     if campaign_dir.is_dir() and manifest.exists():
-        man = json.loads(manifest.read_text())
+        from ...campaign.store import REBUILD_FEATURES
+        from ...util.io import read_json_stored
+
+        man = read_json_stored(manifest, REBUILD_FEATURES)
+        if not isinstance(man, dict):
+            raise ConfigFileError(f"{manifest}: not a campaign manifest (not a JSON object); {REBUILD_FEATURES}")
         thr = float(man.get("threshold_mm") or PAPER_TCP_MM)
     compare = compare and feature_set is None  # a chosen set is scored alone
     if feature_set is None:

@@ -49,13 +49,20 @@ def has_twin_features(features: pd.DataFrame) -> bool:
 
 def load_features(path: Path) -> pd.DataFrame:
     """A campaign folder's (or a file's) feature table."""
+    import pyarrow as pa
+
+    from ...campaign.store import REBUILD_FEATURES
+    from ...util.io import DAMAGED_PARQUET_ERRORS, check_stored
+
     p = path / "features.parquet" if path.is_dir() else path
     if not p.exists():
         raise ConfigFileError(f"{p}: no such feature table (run `ur5fault campaign run` first)")
+    check_stored(p, REBUILD_FEATURES)  # a changed byte would change features silently: refused before reading
     try:
         return pd.read_parquet(p)
-    except (OSError, ValueError) as exc:  # pyarrow's ArrowInvalid is a ValueError
-        raise ConfigFileError(f"{p}: not a campaign folder, and cannot read it as a feature table ({exc})") from None
+    except (*DAMAGED_PARQUET_ERRORS, pa.ArrowException) as exc:
+        raise ConfigFileError(f"{p}: not a campaign folder, and cannot read it as a feature table "
+                              f"({' '.join(str(exc).split())[:120]})") from None
 
 
 @dataclasses.dataclass(frozen=True)

@@ -8,7 +8,7 @@ from pathlib import Path
 from typing import Any
 
 from ...sim.axes import JOINT_NAMES
-from ...util.io import write_figure_atomic, write_json_atomic, write_text_atomic
+from ...util.io import remove_stale_temporaries, write_figure_atomic, write_json_atomic, write_text_atomic
 from .kind_call import PAIR
 from .limit_report import limit_lines
 from .metrics import FROM_TEST_SPLIT
@@ -250,6 +250,7 @@ def write_report(m: dict[str, Any], figures: dict[str, Any], out: Path) -> list[
     """Write ``<name>.png`` for each figure, ``metrics.json`` (NaN as null) and ``report.md``, each
     atomically; return the paths."""
     out.mkdir(parents=True, exist_ok=True)
+    remove_stale_temporaries(out)  # of a writer killed mid-write over an hour ago
     paths = []
     for name, fig in figures.items():
         paths.append(write_figure_atomic(fig, out / f"{name}.png"))

@@ -22,6 +22,11 @@
   :class:`.limits.LimitCalibration`: the detection limits of ``ur5fault diagnose``; absent from classifiers saved
   before it, whose diagnosis then leaves the limits out).
 
+Both files are written with SHA-256 sidecars (``<name>.sha256``) and ``schema.json`` records the SHA-256 of
+the ``classifiers.skops`` it was saved with (``classifiers_sha256``): :func:`load_models` refuses, in one line
+naming the file, a file whose bytes changed since it was written and a folder mixed from two benchmarks (an
+interrupted save).  Folders saved before the sidecars load unverified.
+
 Scoring another campaign with them (``ur5fault benchmark TRAIN_DIR --test OTHER_DIR``) needs its
 table to hold every input column; a missing one is named.
 """
@@ -30,6 +35,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import zipfile
 from pathlib import Path
 from typing import Any
 
@@ -38,7 +44,15 @@ import pandas as pd
 
 from ...errors import ConfigFileError
 from ...util import provenance
-from ...util.io import write_bytes_atomic, write_json_atomic
+from ...util.io import (
+    StoredFileError,
+    check_stored,
+    file_sha256,
+    read_json_stored,
+    remove_stale_temporaries,
+    write_bytes_atomic,
+    write_json_atomic,
+)
 from .data import Dataset
 from .metrics import FROM_OUT_OF_FOLD, FROM_TEST_SPLIT
 from .models import Models
@@ -50,6 +64,8 @@ SCHEMA_FILE = "schema.json"
 #: standard errors and t values; 3: p(fault) is the fault-kind classifier by joint's score, and the calibration
 #: map saved is that score's (formats 1-2 calibrated the run-level detector: refused in one line)
 SCHEMA_FORMAT = 3
+#: what to run when the saved classifiers fail their checksums
+RESAVE = "run `ur5fault benchmark` on the training campaign again to save them anew"
 #: median absolute deviation -> standard deviation of a normal distribution
 MAD_SCALE = 1.4826
 #: module prefixes of the types a saved file may hold (anything else is refused on loading)
@@ -97,13 +113,17 @@ def save_models(models: Models, ds: Dataset, feature_set: str, threshold_score: 
 
     folder = Path(out) / MODELS_DIR
     folder.mkdir(parents=True, exist_ok=True)
+    remove_stale_temporaries(folder)  # of a writer killed mid-write over an hour ago
     objs = {"detector": models.detector, "localiser": models.localiser, "kind": models.kind,
             "joint_kind": models.joint_kind}
     stored = {**objs, "calibrator": models.calibrator}
-    write_bytes_atomic(folder / CLASSIFIERS_FILE, sio.dumps({k: v for k, v in stored.items() if v is not None}))
+    classifiers = write_bytes_atomic(folder / CLASSIFIERS_FILE,
+                                     sio.dumps({k: v for k, v in stored.items() if v is not None}), checksum=True)
     units = column_units(ds.inputs)
     schema = {
         "schema_format": SCHEMA_FORMAT,
+        # binds this schema to the classifiers saved with it (a folder mixed from two saves is refused)
+        "classifiers_sha256": file_sha256(classifiers),
         "feature_set": feature_set,
         "inputs": [{"name": c, "unit": units.get(c, "-")} for c in ds.inputs],
         "classes": {k: [v.item() if hasattr(v, "item") else v for v in m.classes_] for k, m in objs.items()
@@ -128,7 +148,7 @@ def save_models(models: Models, ds: Dataset, feature_set: str, threshold_score: 
         # limits, limits.py); absent: saved before it, or a table without the estimates' SEs
         **({"detection_limit_calibration": limit_calibration} if limit_calibration else {}),
     }
-    write_json_atomic(folder / SCHEMA_FILE, schema)
+    write_json_atomic(folder / SCHEMA_FILE, schema, checksum=True)
     return folder
 
 
@@ -137,6 +157,7 @@ def load_models(folder: str | Path) -> tuple[Models, dict[str, Any]]:
 
     Raises:
         ConfigFileError: no saved models there, or the file holds a type outside scikit-learn and numpy.
+        StoredFileError: a file changed since it was saved, or the two files come from different saves.
     """
     import skops.io as sio
 
@@ -147,13 +168,27 @@ def load_models(folder: str | Path) -> tuple[Models, dict[str, Any]]:
     if not path.exists() or not schema_path.exists():
         raise ConfigFileError(f"{folder}: no saved classifiers ({CLASSIFIERS_FILE} and {SCHEMA_FILE}); "
                               "run `ur5fault benchmark` on a campaign first")
+    schema = read_json_stored(schema_path, RESAVE)
+    if not isinstance(schema, dict):
+        raise ConfigFileError(f"{schema_path}: not a schema of saved classifiers (not a JSON object); {RESAVE}")
+    check_stored(path, RESAVE)
     data = path.read_bytes()
-    untrusted = [t for t in sio.get_untrusted_types(data=data) if not t.startswith(TRUSTED_PREFIXES)]
-    if untrusted:
-        raise ConfigFileError(f"{path}: holds types outside scikit-learn and numpy ({', '.join(untrusted[:5])}); "
-                              "not loaded")
-    objs = sio.loads(data, trusted=sio.get_untrusted_types(data=data))
-    schema = json.loads(schema_path.read_text())
+    recorded = schema.get("classifiers_sha256")
+    if recorded is not None and recorded != hashlib.sha256(data).hexdigest():
+        raise StoredFileError(f"{path}: not the classifiers {SCHEMA_FILE} was saved with (the folder is mixed from "
+                              f"two saves, or the file changed); {RESAVE}")
+    try:
+        types = sio.get_untrusted_types(data=data)
+        untrusted = [t for t in types if not t.startswith(TRUSTED_PREFIXES)]
+        if untrusted:
+            raise ConfigFileError(f"{path}: holds types outside scikit-learn and numpy ({', '.join(untrusted[:5])}); "
+                                  "not loaded")
+        objs = sio.loads(data, trusted=types)
+    except ConfigFileError:
+        raise
+    except (zipfile.BadZipFile, OSError, ValueError, LookupError, TypeError, AttributeError) as exc:
+        raise StoredFileError(f"{path}: unreadable as saved classifiers ({type(exc).__name__}: "
+                              f"{' '.join(str(exc).split())[:100]}); {RESAVE}") from None
     fmt = schema.get("schema_format", 1)
     if not isinstance(fmt, int) or fmt < SCHEMA_FORMAT:
         raise ConfigFileError(f"{folder}: saved with schema format {fmt}, whose p(fault) is the run-level detector's "

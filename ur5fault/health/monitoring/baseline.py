@@ -27,6 +27,7 @@ from numpy.typing import NDArray
 
 from ...errors import ParameterError
 from ...sim.axes import JOINT_NAMES, N_JOINTS
+from ...util.io import checksum_path, verify_checksum
 from . import paired
 from .changes import BLOCK_S, block_estimates, spreads
 from .conditions import CONDITIONS
@@ -171,6 +172,9 @@ class Baseline:
     @classmethod
     def load(cls, path: str | Path) -> Baseline:
         path = Path(path)
+        why = verify_checksum(path) if checksum_path(path).exists() else None
+        if why:  # a changed digit would move an event limit silently
+            raise ParameterError(f"{path}: {why}; rebuild it with `ur5fault monitor --baseline-logs ...`")
         try:
             data = json.loads(path.read_text())
         except FileNotFoundError:

@@ -12,7 +12,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from ...sim.axes import JOINT_NAMES, N_JOINTS
-from ...util.io import write_figure_atomic, write_json_atomic, write_text_atomic
+from ...util.io import remove_stale_temporaries, write_figure_atomic, write_json_atomic, write_text_atomic
 from .baseline import Baseline
 from .changes import sentence
 from .events import CHANNELS, FALSE_ALARM_PER_LOG, FEATURES, UNITS, WINDOW_S, multiplier
@@ -92,8 +92,9 @@ def write(out: Path, baseline: Baseline, observed: Sequence[Observed], entries: 
           model: str, channels: Sequence[str]) -> list[Path]:
     """Write every output into ``out`` (created), atomically; returns the paths, ``monitor.json`` first."""
     out.mkdir(parents=True, exist_ok=True)
+    remove_stale_temporaries(out)  # of a writer killed mid-write over an hour ago
     paths = [write_json_atomic(out / "monitor.json", {"logs": list(entries)}),
-             write_json_atomic(out / "baseline.json", baseline.to_json())]
+             write_json_atomic(out / "baseline.json", baseline.to_json(), checksum=True)]
     figs, paired_s = [], []
     for k, (obs, e) in enumerate(zip(observed, entries)):
         name = f"monitor_{k + 1}.png"

@@ -5,7 +5,6 @@ at every inspection of the held-out units before their failure, judge the goals,
 from __future__ import annotations
 
 import json
-import os
 import time
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -14,7 +13,15 @@ import numpy as np
 import pandas as pd
 
 from ...errors import ConfigFileError
-from ...util.io import write_json_atomic, write_text_atomic
+from ...util.io import (
+    check_stored,
+    read_parquet_stored,
+    remove_stale_temporaries,
+    write_figure_atomic,
+    write_json_atomic,
+    write_parquet_atomic,
+    write_text_atomic,
+)
 from ..diagnostics.report import clean
 from . import metrics as M
 from .clearance_rul import ClearanceRUL
@@ -48,15 +55,16 @@ def load_inspections(folder: Path) -> tuple[pd.DataFrame, dict[str, Any]]:
     if not path.is_file():
         raise ConfigFileError(f"{path}: not found; run a life campaign into {folder} first "
                               "(`ur5fault campaign run campaigns/prognostics.yaml`)")
-    try:
-        df = pd.read_parquet(path)
-    except (OSError, ValueError) as exc:
-        raise ConfigFileError(f"{path}: unreadable as Parquet ({' '.join(str(exc).split())[:120]})") from None
+    remake = f"run the life campaign into {folder} again (`ur5fault campaign run CAMPAIGN.yaml --out DIR`)"
+    df = read_parquet_stored(path, remake)
     missing = [c for c in NEEDED if c not in df.columns]
     if missing:
         raise ConfigFileError(f"{path}: column {missing[0]!r} missing; not the inspections of a life campaign")
+    mpath = Path(folder) / "manifest.json"
+    if mpath.exists():  # a manifest that changed on disk would give a wrong wear law and inputs: refused
+        check_stored(mpath, remake)
     try:
-        manifest = json.loads((Path(folder) / "manifest.json").read_text())
+        manifest = json.loads(mpath.read_text())
     except (OSError, ValueError):
         manifest = {}
     return df, manifest
@@ -257,15 +265,12 @@ def run_prognose(folder: Path, out: Path | None = None, *, seed: int = 0, twin: 
                                                                                         fitted["health_index"]
                                                                                         ["failure_level"])}
     out.mkdir(parents=True, exist_ok=True)
+    remove_stale_temporaries(out)  # of a writer killed mid-write over an hour ago
     names = []
     for name, fig in figures.items():
-        tmp = out / f".{name}.png.tmp"
-        fig.savefig(tmp, dpi=110, format="png")
-        os.replace(tmp, out / f"{name}.png")
+        write_figure_atomic(fig, out / f"{name}.png")  # its temporary file removed on any failure
         names.append(f"{name}.png")
     for name, p in pred.items():
-        from ...util.io import write_parquet_atomic
-
         write_parquet_atomic(p, out / f"predictions_{name}.parquet")
     m["figures"] = names
     m["benchmark_wall_s"] = time.perf_counter() - t0

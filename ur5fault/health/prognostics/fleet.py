@@ -30,7 +30,7 @@ from ...campaign.workers import check_backend, dask_client, dispatch, exit_with_
 from ...config import parse_trajectory
 from ...sim.axes import N_JOINTS
 from ...sim.effects import make_effect
-from ...util.io import check_writable, write_json_atomic
+from ...util.io import check_writable, remove_stale_temporaries, write_json_atomic
 from ...util.progress import campaign_progress
 from .life_store import (
     LifeIdentities,
@@ -204,8 +204,7 @@ def _run_locked(camp, out: Path, n_jobs: int, client, progress, say, max_rounds,
                 replace_changed) -> dict[str, Any]:
     t0 = time.perf_counter()
     for folder in (out, out / "runs", out / "reference"):
-        for p in folder.glob(".*.tmp") if folder.is_dir() else ():
-            p.unlink(missing_ok=True)  # a writer killed mid-write; we hold the lock
+        remove_stale_temporaries(folder, 0)  # a writer killed mid-write; we hold the lock
     ids = LifeIdentities(camp)
     pending, finished, refs, unusable = resume_state(camp, out, ids)
     changed = [u for u in unusable if u[1] == "changed"]
@@ -217,7 +216,8 @@ def _run_locked(camp, out: Path, n_jobs: int, client, progress, say, max_rounds,
     for rid, state, why in unusable[:5]:
         say(f"{out / 'runs' / rid}.parquet: {why or state}; simulating the unit again from there")
     say(f"life campaign {camp.name}: {len(camp.units)} units, {len(finished)} finished, {len(pending)} to run -> {out}")
-    write_json_atomic(out / "manifest.json", _manifest(camp, ids, "running", backend, n_jobs, t0, None))
+    write_json_atomic(out / "manifest.json", _manifest(camp, ids, "running", backend, n_jobs, t0, None),
+                      checksum=True)
     report = campaign_progress(progress, len(camp.units))
     report(len(finished), 0.0)
     rounds = 0
@@ -246,11 +246,12 @@ def _run_locked(camp, out: Path, n_jobs: int, client, progress, say, max_rounds,
     finally:
         report.close()
     if pending:
-        write_json_atomic(out / "manifest.json", _manifest(camp, ids, "running", backend, n_jobs, t0, None))
+        write_json_atomic(out / "manifest.json", _manifest(camp, ids, "running", backend, n_jobs, t0, None),
+                          checksum=True)
         return _manifest(camp, ids, "running", backend, n_jobs, t0, None)
     df = consolidate_life(out, ids, finished)
     manifest = _manifest(camp, ids, "complete", backend, n_jobs, t0, df)
-    write_json_atomic(out / "manifest.json", manifest)
+    write_json_atomic(out / "manifest.json", manifest, checksum=True)
     return manifest
 
 

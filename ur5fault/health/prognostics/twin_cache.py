@@ -5,7 +5,9 @@ A radius is a function of the ray (task, payload, temperature, direction, speed,
 the search runs: the resolved robot parameters of the twin's model (its overlay applied), the overlay's
 effects, the wear law, the failure criterion, log period, duration, noise seed, drive and stepper, the search
 constants and the package version.  Each entry is keyed by the SHA-256 of all of them, so a changed model,
-setup or search can never read another's radius; the file holds only radii, written atomically.
+setup or search can never read another's radius; the file holds only radii, written atomically with a
+SHA-256 sidecar.  A cache whose bytes changed since it was written (a changed digit would be a wrong radius,
+read silently) is set aside with a warning and its radii simulated again: a cache never needs a human.
 """
 
 from __future__ import annotations
@@ -13,6 +15,7 @@ from __future__ import annotations
 import dataclasses
 import hashlib
 import json
+import logging
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -20,8 +23,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ...errors import ConfigFileError
-from ...util.io import write_json_atomic
+from ...util.io import checksum_path, verify_checksum, write_json_atomic
 from . import twin_boundary as tb
+
+_log = logging.getLogger(__name__)
 
 #: format of the file (a change of the key's contents bumps it)
 VERSION = 1
@@ -53,14 +58,23 @@ class RadiusCache:
     def __init__(self, path: str | Path) -> None:
         self.path = Path(path)
         self.entries: dict[str, float] = {}
-        if self.path.is_file():
+        why = verify_checksum(self.path) if self.path.is_file() and checksum_path(self.path).exists() else None
+        if why:
+            _log.warning("%s: %s; its radii are simulated again and the file rewritten", self.path, why)
+        elif self.path.is_file():
             try:
                 data = json.loads(self.path.read_text())
             except (OSError, ValueError):
                 raise ConfigFileError(f"{self.path}: not a twin radius cache (unreadable JSON); remove it") from None
-            if not isinstance(data, dict) or data.get("version") != VERSION or not isinstance(data.get("radii"), dict):
+            ours = checksum_path(self.path).exists()  # written by a RadiusCache (its sidecar verified above)
+            if isinstance(data, dict) and data.get("version") != VERSION and ours:
+                _log.warning("%s: a radius cache of version %s, this is %s; its radii are simulated again and the "
+                             "file rewritten", self.path, data.get("version"), VERSION)
+            elif not (isinstance(data, dict) and data.get("version") == VERSION
+                      and isinstance(data.get("radii"), dict)):
                 raise ConfigFileError(f"{self.path}: not a twin radius cache of version {VERSION}; remove it")
-            self.entries = {str(k): float(v) for k, v in data["radii"].items()}
+            else:
+                self.entries = {str(k): float(v) for k, v in data["radii"].items()}
         self.hits = self.misses = 0
 
     def radii(self, setup: tb.TwinSetup, rays: Sequence[tb.Ray]) -> NDArray:
@@ -80,5 +94,5 @@ class RadiusCache:
         if todo:
             new = tb.failure_radii(setup, [rays[i] for i in todo])
             self.entries.update({keys[i]: float(v) for i, v in zip(todo, new, strict=True)})
-            write_json_atomic(self.path, {"version": VERSION, "radii": self.entries})
+            write_json_atomic(self.path, {"version": VERSION, "radii": self.entries}, checksum=True)
         return np.array([self.entries[k] for k in keys])

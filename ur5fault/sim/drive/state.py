@@ -197,8 +197,10 @@ class NumbaDrive(_Views):
     """Fast path: ``drive/kernel.py`` compiled with numba, same equations and order."""
 
     def __init__(self, P: NDArray, X: NDArray, dt: float, ts: float, stribeck: float) -> None:
+        from ..jitcache import protect
         from . import kernel
 
+        protect(kernel)  # its numba cache verified on read (jitcache.py)
         self.k = kernel
         self.P, self.X, self.dt, self.ts, self.stribeck = P, X, dt, ts, stribeck
         self.has_cogging = has_ripple(P)
