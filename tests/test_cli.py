@@ -103,3 +103,33 @@ def test_verbose_logs_through_logging(tmp_path, where):
     assert "ur5fault: INFO: ur5fault.sim.engine: simulating 1 run(s) x 400 physics steps" in r.stderr
     quiet = run(*args)
     assert quiet.returncode == 0 and "INFO" not in quiet.stderr
+
+
+def _documented_run_configurations():
+    """The run configuration of docs/usage.md and of `ur5fault simulate --help`, as YAML texts."""
+    import re
+    import textwrap
+
+    from ur5fault.cli import RUN_CONFIG_HELP
+
+    from conftest import REPO
+
+    page = (REPO / "docs" / "usage.md").read_text().split("## The run configuration file", 1)[1]
+    doc = re.search(r"```yaml\n(.*?)```", page, re.S).group(1)
+    lines = RUN_CONFIG_HELP.split("\n\n", 1)[0].splitlines()[1:]  # the indented block after its title line
+    return {"usage.md": doc, "simulate --help": textwrap.dedent("\n".join(lines))}
+
+
+@pytest.mark.parametrize("where", ["usage.md", "simulate --help"])
+def test_documented_run_configuration_runs(where, tmp_path, capsys):
+    """The example a user copies: it ran into a protective stop (a scalar gear damping of 15 N*m*s/rad on all six
+    joints made the wrists' gear mode unstable within 10 ms; exit status 1)."""
+    import json
+
+    from ur5fault.cli import main
+
+    cfg = tmp_path / "run.yaml"
+    cfg.write_text(_documented_run_configurations()[where])
+    rc = main(["simulate", "--config", str(cfg), "--duration-s", "0.05", "--quiet", "--out", str(tmp_path / "r.csv")])
+    summary = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    assert rc == 0 and summary["status"] == "ok", summary

@@ -133,6 +133,8 @@ CAMPAIGN_ARGS = [
     ("out-in-file-list", "out: [x]\n" + GOOD, [], "out = ['x'] must be a non-empty one-line text"),
     ("dask-bad-address", GOOD, ["--backend", "dask", "--scheduler", "nonsense"], "cannot connect to a Dask scheduler"),
     ("dask-no-address", GOOD, ["--backend", "dask"], "--backend dask needs --scheduler ADDRESS"),
+    ("dask-address-without-dask", GOOD, ["--scheduler", "tcp://127.0.0.1:8786"],  # was run locally, address unused
+     "--scheduler tcp://127.0.0.1:8786 is for --backend dask"),
     ("model-duplicate-key", GOOD, ["--model", "{tmp}/dup.yaml"], "duplicate key 'params'"),
     ("model-empty", GOOD, ["--model", "{tmp}/empty.yaml"], "the file is empty"),
     ("campaign-missing", None, [], "cannot read (No such file or directory)"),

@@ -36,7 +36,7 @@ run configuration (--config RUN.yaml); every key is optional:
     - {effect: backlash, joint: shoulder_lift_joint, backlash_deg: 0.1}
     - {effect: coulomb_friction, joint: elbow, scale: 1.5}
   params:                           # overrides of the robot parameters, merged key by key
-    gear: {damping_Nms_per_rad: 15}
+    gear: {damping_Nms_per_rad: [18, 24, 14, 1.2, 1.2, 0.36]}   # per joint; one number sets all six
 
 model overlay (--model OVERLAY.yaml): only the keys params and effects, as above.
 joints: shoulder_pan_joint .. wrist_3_joint, 1..6, or UR's short names base, shoulder (= shoulder_lift),

@@ -10,7 +10,7 @@ A run configuration (``ur5fault simulate --config run.yaml``)::
     log_period_s: 0.001
     effects:                          # any entry of the effect registry
       - {effect: backlash, joint: shoulder_lift_joint, backlash_deg: 0.1}
-    params: {gear: {damping_Nms_per_rad: 15}}   # overrides of the robot parameters
+    params: {gear: {damping_Nms_per_rad: [18, 24, 14, 1.2, 1.2, 0.36]}}   # overrides of the robot parameters
 
 A *model overlay* (written by the discrepancy workflow, accepted by ``--model``) holds the
 ``params`` and ``effects`` keys only; they are merged into every run.

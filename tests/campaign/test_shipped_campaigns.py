@@ -35,3 +35,18 @@ def test_other_motions_are_not_the_training_motions():
     train, other = _motion_seeds("diagnostics.yaml"), _motion_seeds("diagnostics_other_motions.yaml")
     assert train and other and not (train & other)
     assert len(other) >= 20  # enough motions that one motion does not decide the figure
+
+
+@pytest.mark.parametrize("name", ["paper", "paper.yaml"])
+def test_a_users_copy_in_the_working_folder_wins_by_either_name(name, tmp_path, monkeypatch):
+    """docs/usage.md: copy a shipped campaign, edit it, run it by name. `paper` ran the shipped paper.yaml while
+    the user's edited paper.yaml sat in the working folder (only `paper.yaml` found it)."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "paper.yaml").write_text("name: paper\nsweep: {backlash.joint: [2], backlash.backlash_deg: [0.3]}\n")
+    camp = load_campaign(name, tmp_path / "out")
+    assert len(camp.runs) == 2  # the copy's one fault and its healthy twin, not the shipped 18 + 1
+
+
+def test_a_shipped_name_without_a_copy_is_the_shipped_campaign(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert len(load_campaign("paper", tmp_path / "out").runs) == 19

@@ -131,3 +131,64 @@ def test_commands_that_cannot_fit_it_refuse_an_unknown_payload(tmp_path, capsys,
     err = capsys.readouterr().err.strip().splitlines()
     assert rc == 2 and len(err) == 1, err
     assert "payload unknown (no --payload-kg): this command needs the payload stated" in err[0], err
+
+
+def test_hold_out_beside_a_manifest_takes_its_defaults(tmp_path):
+    """`--hold-out LOG` next to a manifest: the held log is read with the manifest's format, payload and tool
+    (it had no format at all, `unknown log format None`)."""
+    m = tmp_path / "robot.yaml"
+    m.write_text(f"format: rtde\npayload_kg: 0.5\ntcp_offset_m: [0, 0, 0.1]\nlogs:\n  - {RUN1}\n")
+    entries = log_entries(_args([str(m), "--hold-out", str(TEST)]))
+    assert [(e.path, e.fmt, e.payload_kg, e.tcp_offset_m, e.hold_out) for e in entries] == [
+        (RUN1, "rtde", 0.5, (0, 0, 0.1), False), (TEST, "rtde", 0.5, (0, 0, 0.1), True)]
+    fit, held = read_log_options(_args([str(m), "--hold-out", str(TEST)]))
+    assert [g.source for g in held] == [TEST.name] and held[0].payload_kg == 0.5
+
+
+@pytest.mark.parametrize("manifest, argv, message", [
+    ("format: rtde\npayload_kg: 0\ntcp_offset_m: [0, 0, 0]\nlogs: [{RUN1}]\n", ["--format", "nist"],
+     "robot.yaml: --format nist applies to no log: the manifest states each log's format (rtde)"),
+    ("format: rtde\npayload_kg: 0\ntcp_offset_m: [0, 0, 0]\nlogs: [{RUN1}]\n", ["--payload-kg", "1.2"],
+     "robot.yaml: --payload-kg 1.2 applies to no log: the manifest states each log's payload_kg (0)"),
+    ("format: rtde\npayload_kg: 0\ntcp_offset_m: [0, 0, 0]\nlogs: [{RUN1}]\n", ["--tcp-offset-m", "0", "0", "0.1"],
+     "robot.yaml: --tcp-offset-m 0 0 0.1 applies to no log: the manifest states each log's tcp_offset_m (0 0 0)"),
+    ("format: nist\nlogs: [{NIST}]\n", ["--payload-kg", "1.2", "--tcp-offset-m", "0", "0", "0"],
+     "robot.yaml: --payload-kg 1.2 applies to no log: the manifest states each log's payload_kg (the log's own)"),
+])
+def test_a_command_line_option_no_log_takes_is_refused(tmp_path, capsys, manifest, argv, message):
+    """A command-line default every log of the manifest overrides was dropped without a word (the run went on
+    with the manifest's values)."""
+    m = tmp_path / "robot.yaml"
+    m.write_text(manifest.format(RUN1=RUN1, NIST=NIST_LOG))
+    rc = main(["identify", str(m), *argv, "--out", str(tmp_path / "p.yaml")])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 2 and len(err) == 1 and message in err[0], err
+    assert not (tmp_path / "p.yaml").exists()
+
+
+def test_a_command_line_option_some_log_takes_or_repeats_is_kept(tmp_path):
+    m = tmp_path / "robot.yaml"
+    m.write_text(f"format: rtde\nlogs:\n  - {{path: {RUN1}, payload_kg: 0.5, tcp_offset_m: [0, 0, 0]}}\n"
+                 f"  - {RUN2}\n")
+    entries = log_entries(_args([str(m), "--format", "rtde", "--payload-kg", "0", "--tcp-offset-m", "0", "0", "0"]))
+    assert [(e.fmt, e.payload_kg) for e in entries] == [("rtde", 0.5), ("rtde", 0.0)]  # RUN2 takes the default
+
+
+def test_a_baseline_group_that_takes_the_command_line_options_keeps_them(tmp_path):
+    """monitor / diagnose: the command line's options serve the logs and the baseline logs; a manifest of one
+    group that states its own does not make them unused while the other group's files take them."""
+    m = tmp_path / "robot.yaml"
+    m.write_text(f"format: rtde\npayload_kg: 0\ntcp_offset_m: [0, 0, 0]\nlogs: [{RUN1}]\n")
+    args = _args([str(m), "--format", "rtde", "--payload-kg", "0.5", "--tcp-offset-m", "0", "0", "0"])
+    base = argparse.Namespace(**{**vars(args), "log": [str(RUN2)], "hold_out": []})
+    assert [e.payload_kg for e in log_entries(args, base)] == [0]
+    with pytest.raises(ParameterError, match="--payload-kg 0.5 applies to no log"):
+        log_entries(args)
+
+
+def test_a_manifest_is_the_only_log(tmp_path, capsys):
+    m = tmp_path / "robot.yaml"
+    m.write_text(f"format: rtde\nlogs: [{RUN1}]\n")
+    rc = main(["discrepancy", str(m), str(RUN2), "--format", "rtde", "--out", str(tmp_path / "o")])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 2 and len(err) == 1 and "robot.yaml: a manifest of logs must be the only log given" in err[0], err

@@ -105,11 +105,16 @@ def shipped_campaigns() -> list[str]:
 def resolve_campaign(path: str | Path) -> Path:
     """A campaign file: an existing path, or the name of a shipped campaign (``paper`` or ``paper.yaml``).
 
-    A path that exists always wins, so a user's own ``paper.yaml`` in the working folder is the one run.
+    A path that exists always wins, so a user's own ``paper.yaml`` in the working folder is the one run, by
+    either name (``paper`` too: it ran the shipped one while the user's edited copy sat there).
     """
     p = Path(path)
     if p.exists() or p.parent != Path("."):
         return p
+    if p.suffix not in (".yaml", ".yml"):
+        for own in (p.with_name(f"{p.name}.yaml"), p.with_name(f"{p.name}.yml")):
+            if own.is_file():
+                return own
     shipped = SHIPPED_DIR / (p.name if p.suffix in (".yaml", ".yml") else f"{p.name}.yaml")
     if shipped.is_file():
         return shipped

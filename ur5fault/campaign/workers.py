@@ -25,11 +25,14 @@ PARENT_POLL_S = 1.0
 
 def check_backend(backend: str, scheduler: str | None, jobs: int | None) -> tuple[int, str | None]:
     """The worker count for ``backend`` (``"loky"``: at most the cores available, with a note when capped;
-    ``"dask"``: as given), after checking the backend and that Dask has a scheduler address."""
+    ``"dask"``: as given), after checking the backend and that Dask, and only Dask, has a scheduler address."""
     if backend not in ("loky", "dask"):
         raise ParameterError(f"backend = {backend!r} is not valid; choose one of: loky, dask")
     if backend == "dask" and not scheduler:
         raise ParameterError("--backend dask needs --scheduler ADDRESS (e.g. tcp://127.0.0.1:8786)")
+    if backend != "dask" and scheduler:
+        raise ParameterError(f"--scheduler {scheduler} is for --backend dask (the {backend} backend runs on this "
+                             "machine and would not use it); add --backend dask or drop --scheduler")
     return effective_jobs(jobs) if backend == "loky" else (jobs or 1, None)
 
 

@@ -18,7 +18,9 @@ unknown: ``ur5fault discrepancy`` and ``ur5fault identify`` fit it (mass, and it
 ``tcp_offset_m`` is not given either; :mod:`ur5fault.discrepancy.payload`, :mod:`ur5fault.identify.payload`) and
 say so; the other commands refuse it with one line. A nist
 or sim log carries its payload; ``unknown`` declares it unknown all the same (its tool offset too, unless
-``tcp_offset_m`` is given).
+``tcp_offset_m`` is given). Logs of ``--hold-out`` beside a manifest take its defaults as its own logs do. A
+command-line option that no log takes (the manifest states each log's own) and that differs from what they state
+is refused with one line, never dropped; a manifest is the only log given.
 """
 
 from __future__ import annotations
@@ -100,7 +102,55 @@ def _check_payload_options(fmt: str, payload_kg, tcp_offset_m, where: str) -> No
                                      f"{fmt} log carries its own payload and tool offset")
 
 
-def _manifest(path: Path, args: argparse.Namespace) -> list[LogEntry]:
+#: the command line's options that are defaults of a manifest's logs: (attribute of the parsed arguments, flag,
+#: key of the manifest and of a log)
+CLI_DEFAULTS = (("fmt", "--format", "format"), ("payload_kg", "--payload-kg", "payload_kg"),
+                ("tcp_offset_m", "--tcp-offset-m", "tcp_offset_m"))
+
+
+def _entry(item: dict, data: dict, args: argparse.Namespace, path: Path, w: str, used: set[str]) -> LogEntry:
+    """One log of a manifest (``data``; ``item`` its own options, ``path`` its file): the log's own value of each
+    option, else the manifest's, else the command line's; ``used`` collects the command-line options it took."""
+    def value(attr: str, key: str):
+        if key in item:
+            return item[key]
+        if key in data:
+            return data[key]
+        used.add(attr)
+        return getattr(args, attr)
+
+    fmt = value("fmt", "format")
+    if fmt not in args.log_formats:
+        raise ParameterError(f"{w}format {fmt!r} is not one of: {', '.join(args.log_formats)}"
+                             if fmt is not None else
+                             f"{w}no format: give --format or the manifest's 'format' ({', '.join(args.log_formats)})")
+    rtde = fmt == "rtde"  # the manifest's and the command line's payload and tool are defaults of rtde logs
+    payload = value("payload_kg", "payload_kg") if rtde or "payload_kg" in item else None
+    payload = payload.strip().lower() if isinstance(payload, str) else payload
+    tcp = value("tcp_offset_m", "tcp_offset_m") if rtde or "tcp_offset_m" in item else None
+    if tcp is not None and (not isinstance(tcp, (list, tuple)) or len(tcp) != 3):
+        raise ParameterError(f"{w}tcp_offset_m = {tcp!r} must be 3 numbers [m]")
+    _check_payload_options(fmt, payload, tcp, w)
+    return LogEntry(path, fmt, payload, None if tcp is None else tuple(tcp),  # type: ignore[arg-type]
+                    check_bool(item.get("hold_out", False), f"{w}hold_out"))
+
+
+def _shown(value) -> str:
+    """An option's value as the command line writes it (None: a nist or sim log's own payload)."""
+    if value is None:
+        return "the log's own"
+    return " ".join(f"{v:g}" for v in value) if isinstance(value, (list, tuple)) else str(value)
+
+
+def _same(a, b) -> bool:
+    if isinstance(a, (list, tuple)) and isinstance(b, (list, tuple)):
+        return len(a) == len(b) and all(_same(x, y) for x, y in zip(a, b))
+    return a == b
+
+
+def _manifest(path: Path, args: argparse.Namespace, held: Sequence[str], used: set[str]) -> list[LogEntry]:
+    """The logs of the manifest ``path``, then the command line's ``held`` (``--hold-out``; paths as given, each
+    with the manifest's defaults); ``used`` collects the command-line options some log took."""
     data = read_yaml(path)
     where = f"{path.name}: "
     bad = sorted(set(data) - set(MANIFEST_KEYS))
@@ -118,34 +168,47 @@ def _manifest(path: Path, args: argparse.Namespace) -> list[LogEntry]:
         bad = sorted(set(item) - set(LOG_KEYS))
         if bad:
             raise ParameterError(f"{w}unknown key {bad[0]!r} (keys: {', '.join(LOG_KEYS)})")
-        fmt = item.get("format", data.get("format", args.fmt))
-        if fmt not in args.log_formats:
-            raise ParameterError(f"{w}format {fmt!r} is not one of: {', '.join(args.log_formats)}")
-        rtde = fmt == "rtde"  # the manifest's and the command line's payload and tool are defaults of rtde logs
-        payload = item.get("payload_kg", data.get("payload_kg", args.payload_kg) if rtde else None)
-        payload = payload.strip().lower() if isinstance(payload, str) else payload
-        tcp = item.get("tcp_offset_m", data.get("tcp_offset_m", args.tcp_offset_m) if rtde else None)
-        if tcp is not None and (not isinstance(tcp, (list, tuple)) or len(tcp) != 3):
-            raise ParameterError(f"{w}tcp_offset_m = {tcp!r} must be 3 numbers [m]")
-        _check_payload_options(fmt, payload, tcp, w)
-        out.append(LogEntry((path.parent / str(item["path"])), fmt, payload,
-                            None if tcp is None else tuple(tcp),  # type: ignore[arg-type]
-                            check_bool(item.get("hold_out", False), f"{w}hold_out")))
-    return out
+        out.append(_entry(item, data, args, path.parent / str(item["path"]), w, used))
+    return out + [_entry({"hold_out": True}, data, args, Path(p), f"--hold-out {p}: ", used) for p in held]
 
 
-def log_entries(args: argparse.Namespace) -> list[LogEntry]:
-    """The logs the command line names (files, or one manifest), and ``--hold-out``'s, in order."""
+def _resolve(args: argparse.Namespace) -> tuple[list[LogEntry], set[str], Path | None]:
+    """(the logs the command line names, the command-line options they take, the manifest or None)."""
     paths = [args.log] if isinstance(args.log, str) else list(args.log)
     held = list(getattr(args, "hold_out", []) or [])
-    if len(paths) == 1 and Path(paths[0]).suffix.lower() in MANIFEST_SUFFIXES:
-        entries = _manifest(Path(paths[0]), args)
-        return entries + [LogEntry(Path(p), args.fmt, args.payload_kg, _tcp(args), True) for p in held]
+    manifests = [p for p in paths if Path(p).suffix.lower() in MANIFEST_SUFFIXES]
+    if manifests and len(paths) > 1:
+        raise ParameterError(f"{manifests[0]}: a manifest of logs must be the only log given (list the others in "
+                             "it, or give log files only)")
+    if manifests:
+        used: set[str] = set()
+        return _manifest(Path(paths[0]), args, held, used), used, Path(paths[0])
     if args.fmt is None:
         raise ParameterError("--format is required (or a YAML manifest of logs that names it)")
     _check_payload_options(args.fmt, args.payload_kg, args.tcp_offset_m, "")
-    return [LogEntry(Path(p), args.fmt, args.payload_kg, _tcp(args), False) for p in paths] + \
+    entries = [LogEntry(Path(p), args.fmt, args.payload_kg, _tcp(args), False) for p in paths] + \
         [LogEntry(Path(p), args.fmt, args.payload_kg, _tcp(args), True) for p in held]
+    return entries, {attr for attr, _, _ in CLI_DEFAULTS}, None
+
+
+def log_entries(args: argparse.Namespace, *others: argparse.Namespace) -> list[LogEntry]:
+    """The logs the command line names (files, or one manifest), and ``--hold-out``'s, in order. ``others``: the
+    command's other groups of logs (a baseline), which share the command line's options. An option that no log of
+    any group takes (a manifest states each log's own) and that differs from what they state is refused: it would
+    be dropped without a word."""
+    entries, used, manifest = _resolve(args)
+    if manifest is None:
+        return entries
+    for other in others:
+        used |= _resolve(other)[1]
+    for attr, flag, key in CLI_DEFAULTS:
+        given = getattr(args, attr)
+        stated = [getattr(e, attr) for e in entries]
+        if given is not None and attr not in used and not all(_same(given, s) for s in stated):
+            raise ParameterError(f"{manifest.name}: {flag} {_shown(given)} applies to no log: the manifest states "
+                                 f"each log's {key} ({', '.join(sorted({_shown(s) for s in stated}))}); drop {flag} "
+                                 "or edit the manifest")
+    return entries
 
 
 def _tcp(args: argparse.Namespace):
@@ -172,11 +235,12 @@ def read_entry(e: LogEntry, length: MinLength | None = None, *, allow_unknown: b
     return log
 
 
-def read_log_options(args: argparse.Namespace, *, allow_unknown: bool = False
-                     ) -> tuple[list[MeasuredLog], list[MeasuredLog]]:
+def read_log_options(args: argparse.Namespace, *, allow_unknown: bool = False,
+                     others: Sequence[argparse.Namespace] = ()) -> tuple[list[MeasuredLog], list[MeasuredLog]]:
     """The logs to fit and the logs held out whole, read and checked; ``allow_unknown``: logs whose payload is
-    unknown are returned as such (:func:`read_entry`), for a caller that fits it."""
-    entries = log_entries(args)
+    unknown are returned as such (:func:`read_entry`), for a caller that fits it; ``others``: as
+    :func:`log_entries`'s."""
+    entries = log_entries(args, *others)
     names = [e.path.name for e in entries]
     dup = sorted({n for n in names if names.count(n) > 1})
     if dup:

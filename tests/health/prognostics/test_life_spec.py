@@ -70,3 +70,5 @@ def test_cli_prognose_without_inspections_is_one_line_exit_2(tmp_path, capsys):
     assert main(["prognose", str(tmp_path / "nowhere")]) == 2
     err = capsys.readouterr().err
     assert err.startswith("ur5fault: error: ") and err.count("\n") == 1 and "inspections.parquet" in err
+    # the command it names works from an installed wheel (a shipped campaign by name, no checkout path)
+    assert f"`ur5fault campaign run prognostics --out {tmp_path / 'nowhere'}`" in err and "campaigns/" not in err

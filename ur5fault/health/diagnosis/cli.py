@@ -41,14 +41,16 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
     from .score import check_schema
     from .windows import window_length
 
-    entries = log_entries(args)
-    if len(entries) != 1:
-        raise ParameterError(f"diagnose reads one log; the manifest names {len(entries)}")
-    base = []
+    base_args = None
     if args.baseline_logs:
         base_args = copy.copy(args)
         base_args.log = args.baseline_logs
-        base = log_entries(base_args)
+    entries = log_entries(args, *([base_args] if base_args else []))  # the command line's options serve both
+    if len(entries) != 1:
+        raise ParameterError(f"diagnose reads one log; the manifest names {len(entries)}")
+    base = []
+    if base_args is not None:
+        base = log_entries(base_args, args)
         held = [e.path.name for e in base if e.hold_out]
         if held:
             raise ParameterError(f"{held[0]}: hold_out has no meaning in a diagnose baseline (every baseline log is "

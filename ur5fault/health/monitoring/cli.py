@@ -64,9 +64,11 @@ def cmd_monitor(args: argparse.Namespace) -> int:
     if args.baseline_logs:
         base_args = copy.copy(args)
         base_args.log = args.baseline_logs
-    check_files_length([e.path for a in (args, base_args) if a is not None for e in log_entries(a)], "monitor")
-    logs, _ = read_log_options(args)
-    healthy = read_log_options(base_args)[0] if base_args is not None else []
+    groups = [args] if base_args is None else [args, base_args]  # the command line's options are shared by both
+    check_files_length([e.path for a in groups for e in log_entries(a, *(g for g in groups if g is not a))],
+                       "monitor")
+    logs, _ = read_log_options(args, others=groups[1:])
+    healthy = read_log_options(base_args, others=[args])[0] if base_args is not None else []
     check_logs_length([*logs, *healthy], "monitor")
     clash = sorted({g.source for g in logs} & {g.source for g in healthy})
     if clash:

@@ -53,8 +53,8 @@ def load_inspections(folder: Path) -> tuple[pd.DataFrame, dict[str, Any]]:
     """The inspections table and manifest of a life-campaign folder (one-line errors)."""
     path = Path(folder) / "inspections.parquet"
     if not path.is_file():
-        raise ConfigFileError(f"{path}: not found; run a life campaign into {folder} first "
-                              "(`ur5fault campaign run campaigns/prognostics.yaml`)")
+        raise ConfigFileError(f"{path}: not found; run a life campaign into {folder} first (a shipped one: "
+                              f"`ur5fault campaign run prognostics --out {folder}`, or prognostics_small)")
     remake = f"run the life campaign into {folder} again (`ur5fault campaign run CAMPAIGN.yaml --out DIR`)"
     df = read_parquet_stored(path, remake)
     missing = [c for c in NEEDED if c not in df.columns]
