@@ -67,6 +67,21 @@ def parse_effects(items: Any, where: str) -> tuple[EffectSpec, ...]:
     return tuple(out)
 
 
+def refuse_repeats(effects: Sequence[EffectSpec], where: str) -> None:
+    """One effect per joint in a run's own list: a second ``backlash`` on the same joint would silently replace
+    the first (an effect that sets a value keeps the last) or compound with it (one that scales), neither of
+    which a user giving two sizes means.  Harmonics of different periods are different effects and may repeat.
+    (A model overlay's list is not checked: ``discrepancy`` writes a finding on top of its starting model's effect
+    of the same kind on purpose.)"""
+    seen: dict[tuple, int] = {}
+    for i, e in enumerate(effects):
+        key = (e.name, e.joint, dict(e.values).get("periods_per_rev"))
+        if key in seen:
+            raise ParameterError(f"{where}[{i}]: {e.describe()} repeats {where}[{seen[key]}] "
+                                 f"({effects[seen[key]].describe()}); give each effect once per joint")
+        seen[key] = i
+
+
 def parse_trajectory(spec: Any, where: str) -> Trajectory:
     """``"name"`` or ``{name: ..., <option>: value}`` -> a :class:`Trajectory`.
 
@@ -183,6 +198,7 @@ def build_run_config(data: Mapping[str, Any], where: str = "config", overlay: Ov
         overrides = deep_merge(dict(overlay.params), overrides)
     params = load_params(overrides=overrides, where=f"{where}: params")
     effects = parse_effects(data.get("effects"), f"{where}: effects")
+    refuse_repeats(effects, f"{where}: effects")
     if overlay is not None:
         effects = overlay.effects + effects
     if data.get("payload_kg") is not None:
