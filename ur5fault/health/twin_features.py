@@ -33,10 +33,10 @@ Features per joint ``j`` (units in the names):
     1/s times the current, b = 1/s - 1: the two are the same shape in the current and told apart only
     by the rest of the signals); ``twin_est_coulomb_scale_err`` = c (Coulomb scale - 1);
   - mismatch residual ~ ``d`` * 1 + ``e`` * sign(T_twin) / 2 + ``f`` * T_twin / k, with T_twin the twin's
-    gear torque and k the gear stiffness: ``twin_est_mismatch_offset_rad`` = d (a resolver offset o
-    reads the link o too high, the position loop moves the link back by o and the motor with it, so the
-    mismatch falls by o: d = -o), T_twin also without the twin's noise; ``twin_est_backlash_rad`` = e (a clearance alpha swaps flanks with
-    the sign of the gear torque: the mismatch jumps by alpha); ``twin_est_compliance_err`` = f (a
+    gear torque (also simulated without sensor noise) and k the gear stiffness: ``twin_est_mismatch_offset_rad``
+    = d (a resolver offset o reads the link o too high, the position loop moves the link back by o and the motor
+    with it, so the mismatch falls by o: d = -o); ``twin_est_backlash_rad`` = e (a clearance alpha swaps flanks
+    with the sign of the gear torque: the mismatch jumps by alpha); ``twin_est_compliance_err`` = f (a
     stiffness scale s makes the windup T/(s k): f = 1/s - 1).
 
   The current fit is made over all six joints at once (:mod:`ur5fault.health.twin_fit`), each joint weighted
