@@ -1,7 +1,9 @@
 """Wrist 2's current-gain estimate on healthy and faulty runs with the digital twin of twin format 2 (its own
 sensor noise, an independent seed: what campaigns and ``ur5fault diagnose`` use) and of a "format 3" twin (no
 sensor noise, ``NOISE_FREE``: measured, not adopted); docs/diagnostics.md, "Wrist 2's gain estimate on healthy
-runs" and "A noise-free twin, measured".  Two parts.
+runs" and "A noise-free twin, measured".  ("Format 3" here is that rejected noise-free twin, not the twin residuals
+format 3 campaigns now record, whose regressors come from noise-free twins: its third column, "noisy reading,
+noise-free regressors"; bench/twin_regressors.py.)  Two parts.
 
 1. ``--features FILE``: the healthy runs of a diagnostics table, ``twin_est_current_gain_err_j5`` by payload bin
    and its correlation with the nuisance columns and the estimate's own SE.

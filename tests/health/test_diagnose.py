@@ -22,7 +22,7 @@ pytest.importorskip("sklearn")
 pytest.importorskip("skops")
 
 from ur5fault.cli import main  # noqa: E402
-from ur5fault.health.diagnosis.score import COMPUTABLE  # noqa: E402
+from ur5fault.health.diagnosis.score import COMPUTABLE, MAX_VIF  # noqa: E402
 from ur5fault.health.diagnostics import joint_kind  # noqa: E402
 from ur5fault.health.diagnostics.calibration import fit_calibration  # noqa: E402
 from ur5fault.health.diagnostics.data import load_dataset  # noqa: E402
@@ -360,4 +360,11 @@ def test_real_nist_log_few_seconds_diagnosed_without_motor_encoders(detector, tm
             assert len({j["cannot_tell"][k] for k in ("backlash", "resolver_offset", "gear_stiffness")}) == 3
             assert "holds the offset reading on the setpoint" in j["cannot_tell"]["resolver_offset"]
             est = next(k for k in j["kinds"] if k["kind"] == "current_sensor_offset")
-            assert est["size"] is None or abs(est["size"]) < 1.0  # A: within the sensor's plausible range
+            # A: within the sensor's plausible range where the window tells the offset from the joint's other
+            # columns; where it does not (variance inflation above MAX_VIF: the shoulder and elbow, whose current is
+            # a near-constant gravity load in a 2.5 s window, VIF ~1e5-1e6) the point estimate can sit anywhere in
+            # its standard error, and the diagnosis must say so. (With the noisy twin's current as the regressor,
+            # before twin format 3, its noise kept the VIF lower and the estimate near 0 by attenuation:
+            # docs/diagnostics.md, "Regressors free of the twin's noise")
+            if est["size"] is not None and abs(est["size"]) >= 1.0:
+                assert est["confounded"] and est["variance_inflation"] > MAX_VIF

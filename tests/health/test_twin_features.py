@@ -17,6 +17,7 @@ import pytest
 
 from ur5fault import RunSpec, Simulator, make_effect
 from ur5fault.health.twin_features import FEATURE_UNITS, NUISANCE_UNITS, twin_features
+from ur5fault.health.twin_regressors import REGRESSOR_EFFECTS
 
 pytestmark = pytest.mark.slow
 
@@ -36,12 +37,13 @@ def batch():
         RunSpec("gain", 11, load + (make_effect("current_sensor_gain", 2, gain=1.1),)),
         RunSpec("resolver", 11, load + (make_effect("resolver_offset", 4, offset_deg=0.3),)),
         RunSpec("twin", 12345, load),
+        RunSpec("quiet twin", 12345, load + REGRESSOR_EFFECTS),  # its current and gear torque: the regressors
     ]
     sim = Simulator()
     res = sim.run(traj, runs, duration_s=DURATION_S)
     assert all(s == "ok" for s in res.status)
     names = ("q_FB_rad", "q_M_FB_rad", "i_FB_A")
-    twin = {n: res[n][4] for n in (*names, "i_q_A", "T_gear_Nm")}
+    twin = {**{n: res[n][4] for n in names}, **{n: res[n][5] for n in ("i_q_A", "T_gear_Nm")}}
     return {rid: twin_features(res.t_s, res.q_set_rad, {n: res[n][i] for n in names}, twin, sim.params)
             for i, rid in enumerate(("healthy", "offset", "gain", "resolver"))}
 
@@ -99,12 +101,13 @@ def com_batch():
         RunSpec("com", 11, load + (make_effect("payload_com", dx_m=COM_DX_M),)),
         RunSpec("offset", 11, load + (make_effect("current_sensor_offset", 4, offset_A=OFFSET_A),)),
         RunSpec("twin", 12345, load),
+        RunSpec("quiet twin", 12345, load + REGRESSOR_EFFECTS),
     ]
     sim = Simulator()
     res = sim.run(traj, runs, duration_s=COM_DURATION_S)
     assert all(s == "ok" for s in res.status)
     names = ("q_FB_rad", "q_M_FB_rad", "i_FB_A")
-    twin = {n: res[n][2] for n in (*names, "i_q_A", "T_gear_Nm")}
+    twin = {**{n: res[n][2] for n in names}, **{n: res[n][3] for n in ("i_q_A", "T_gear_Nm")}}
     held = traj.gripped(res.t_s)
     assert held.any() and not held.all()  # the payload is picked up within the simulated time
     return {rid: twin_features(res.t_s, res.q_set_rad, {n: res[n][i] for n in names}, twin, sim.params, COM_KG, held)

@@ -6,7 +6,9 @@ payload mass and joint temperature; not its fault, not the nuisance the robot do
 centre of mass, setpoint latency: the run's ``<effect>.<param>`` conditions), and not its noise stream
 (an independent seed, so the residual carries the noise of both).  A run and its simulated healthy
 twin share their conditions, hence one digital twin.  Twins are simulated in the batch of their runs
-(:func:`ur5fault.campaign.execute.run_batch`).
+(:func:`ur5fault.campaign.execute.run_batch`), and with them the batch's noise-free twins on a grid of payload
+masses (:func:`regressor_runs`), whose motor currents and gear torques are the twin fits' regressors
+(:mod:`ur5fault.health.twin_regressors`).
 """
 
 from __future__ import annotations
@@ -36,6 +38,22 @@ def twin_effects(camp: Campaign, rc: CampaignRun) -> tuple[EffectSpec, ...]:
     c = rc.cond
     return camp.base_effects + (make_effect("payload", mass_kg=c["payload_kg"]),
                                 make_effect("temperature", temperature_C=c["temperature_C"]))
+
+
+def regressor_runs(camp: Campaign, batch: Sequence[CampaignRun], temperature_C: float
+                   ) -> tuple[tuple[float, ...], dict[str, tuple[int, tuple[EffectSpec, ...]]]]:
+    """The batch's noise-free twins (:mod:`ur5fault.health.twin_regressors`): ``(grid masses [kg], run id ->
+    (noise seed, effects))``, one per mass of :func:`~ur5fault.health.twin_regressors.payload_grid` of the batch's
+    payloads, at ``temperature_C`` (the regressors move each run's viscous friction to its own); the base model
+    as a twin's, its sensors' white noise off.  A run's regressors come from the grid masses just below and
+    above its own payload and do not depend on the other runs of its batch."""
+    from ..health.twin_regressors import REGRESSOR_EFFECTS, REGRESSOR_PREFIX, payload_grid
+
+    grid = payload_grid(rc.cond["payload_kg"] for rc in batch)
+    runs = {f"{REGRESSOR_PREFIX}{kg:g}kg": (0, camp.base_effects + (
+        make_effect("payload", mass_kg=kg), make_effect("temperature", temperature_C=temperature_C))
+        + REGRESSOR_EFFECTS) for kg in grid}
+    return grid, runs
 
 
 def twin_id(rc: CampaignRun) -> str:

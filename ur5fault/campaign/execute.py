@@ -29,7 +29,7 @@ from ..sim.params import load_params
 from ..util.io import check_writable, remove_stale_temporaries, write_json_atomic, write_parquet_atomic
 from ..util.parallel import one_blas_thread
 from ..util.progress import campaign_progress
-from .digital_twin import twin_id, twin_runs
+from .digital_twin import regressor_runs, twin_id, twin_runs
 from .identity import DRIVE, STEPPER, Identities
 from .identity import run_effects as _effects_of
 from .labels import assign_splits, refresh_splits, row_labels
@@ -97,6 +97,10 @@ def _simulate_batch(camp: Campaign, batch: Sequence[CampaignRun], ts_dir: str | 
     twins = twin_runs(camp, batch) if camp.twin_residuals else {}
     twin_index = {tid: len(specs) + k for k, tid in enumerate(twins)}
     specs += [RunSpec(tid, seed, eff) for tid, (seed, eff) in twins.items()]
+    grid_temp = sim.params.friction.reference_temp_C  # the regressor twins' temperature: f_v's reference
+    grid, grid_runs = regressor_runs(camp, batch, grid_temp) if camp.twin_residuals else ((), {})
+    grid_index = [len(specs) + k for k in range(len(grid_runs))]
+    specs += [RunSpec(rid, seed, eff) for rid, (seed, eff) in grid_runs.items()]
     t0 = time.perf_counter()
     res = sim.run(traj, specs, log_period_s=camp.log_period_s, duration_s=camp.duration_s)
     wall = time.perf_counter() - t0
@@ -104,10 +108,19 @@ def _simulate_batch(camp: Campaign, batch: Sequence[CampaignRun], ts_dir: str | 
     ratio = np.asarray(sim.params.gear.ratio)
     splits = assign_splits(camp.split, (rc.cond for rc in camp.runs))
     motion = None  # the batch's commanded motion, built once for its runs' twin features
+    regressors = None  # the batch's noise-free twins (the fits' regressors), or (status, reason) if one failed
     if camp.twin_residuals:
         from ..health.twin_features import commanded_motion
+        from ..health.twin_regressors import RegressorGrid
 
         motion = commanded_motion(res.t_s, res.q_set_rad, sim.params)
+        failed = [g for g in grid_index if res.status[g] != "ok"]
+        if failed:  # every run of the batch loses its twin features: its regressors are missing
+            regressors = (res.status[failed[0]], f"noise-free regressor twin {specs[failed[0]].run_id}: "
+                                                 f"{res.reason[failed[0]]}")
+        else:
+            regressors = RegressorGrid(np.asarray(grid), grid_temp, res["i_q_A"][grid_index],
+                                       res["T_gear_Nm"][grid_index], motion.qd, sim.params)
     held = traj.gripped(res.t_s)  # when the gripper holds the payload: the batch's trajectory
     rows = []
     for i, rc in enumerate(batch):
@@ -140,31 +153,36 @@ def _simulate_batch(camp: Campaign, batch: Sequence[CampaignRun], ts_dir: str | 
         for key in FEATURE_UNITS:  # every file has the full schema (tcp_dev_* is NaN without a sound twin)
             row.setdefault(key, float("nan"))
         if camp.twin_residuals:
-            _add_twin_features(row, res, i, twin_index[twin_id(rc)], sim.params, float(rc.cond["payload_kg"]),
-                               held, motion)
+            _add_twin_features(row, res, i, twin_index[twin_id(rc)], sim.params, rc.cond, held, motion, regressors)
         if not camp.motor_encoders:  # logged like a UR robot: what the motor encoder gives is unknown
             row.update({k: float("nan") for k in row if needs_motor_encoders(k)})
         rows.append(row)
     return rows
 
 
-def _add_twin_features(row: dict[str, Any], res, i: int, k: int, params, payload_kg: float, held, motion) -> None:
+def _add_twin_features(row: dict[str, Any], res, i: int, k: int, params, cond: dict[str, Any], held, motion,
+                       regressors) -> None:
     """The twin residual features of run ``i`` against its digital twin ``k`` of the same batch (NaN, and the
-    run not ``ok``, when the twin failed); ``payload_kg``, ``held``: the configured payload mass and when the
-    gripper holds it (known to the robot: the centre-of-mass columns of the current fit); ``motion``: the
-    batch's ``commanded_motion``."""
+    run not ``ok``, when the twin or a noise-free regressor twin failed); ``cond``: the run's conditions (its
+    configured payload mass and temperature, known to the robot); ``held``: when the gripper holds the payload
+    (the centre-of-mass columns of the current fit); ``motion``: the batch's ``commanded_motion``;
+    ``regressors``: the batch's :class:`~ur5fault.health.twin_regressors.RegressorGrid`, or the ``(status,
+    reason)`` of its twin that failed."""
     from ..health.twin_features import FEATURE_UNITS as TWIN_UNITS
     from ..health.twin_features import twin_features
 
-    if res.status[k] != "ok":
+    if res.status[k] != "ok" or isinstance(regressors, tuple):
         row.update(dict.fromkeys(TWIN_UNITS, float("nan")))
         if row["status"] == "ok":
-            row["status"], row["reason"] = res.status[k], f"digital twin: {res.reason[k]}"
+            row["status"], row["reason"] = ((res.status[k], f"digital twin: {res.reason[k]}") if res.status[k] != "ok"
+                                            else regressors)
         return
+    payload_kg = float(cond["payload_kg"])
+    i_a, torque = regressors.signals(payload_kg, float(cond["temperature_C"]))
     names = ("q_FB_rad", "q_M_FB_rad", "i_FB_A")
     row.update(twin_features(res.t_s, res.q_set_rad, {n: res[n][i] for n in names},
-                             {n: res[n][k] for n in (*names, "i_q_A", "T_gear_Nm")}, params, payload_kg, held,
-                             motion))
+                             {**{n: res[n][k] for n in names}, "i_q_A": i_a, "T_gear_Nm": torque}, params,
+                             payload_kg, held, motion))
 
 
 def run_campaign(camp: Campaign, out: Path | None = None, *, jobs: int | None = None, backend: str = "loky",

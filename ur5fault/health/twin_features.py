@@ -23,7 +23,9 @@ Features per joint ``j`` (units in the names):
   written in closed form from the twin's own signals, because a campaign cannot afford a probe batch
   per run).  Two joint fits per joint:
 
-  - current residual ~ ``a`` * 1 + ``b`` * i_twin + ``c`` * i_coulomb, where i_coulomb =
+  - current residual ~ ``a`` * 1 + ``b`` * i_twin + ``c`` * i_coulomb, where i_twin is the twin's motor current
+    simulated without sensor noise (:mod:`ur5fault.health.twin_regressors`: the regressors' shapes carry no
+    noise of the twin's, whose reading the residual subtracts), i_coulomb =
     sign(w) T_level(w) / (K_t N) is the motor current that carries the twin's Coulomb/static friction at
     the commanded speed w: ``twin_est_current_offset_A`` = a (a current-sensor offset gives its offset:
     the loops hold the true current where the motion needs it, so the reading carries the offset);
@@ -31,10 +33,10 @@ Features per joint ``j`` (units in the names):
     1/s times the current, b = 1/s - 1: the two are the same shape in the current and told apart only
     by the rest of the signals); ``twin_est_coulomb_scale_err`` = c (Coulomb scale - 1);
   - mismatch residual ~ ``d`` * 1 + ``e`` * sign(T_twin) / 2 + ``f`` * T_twin / k, with T_twin the twin's
-    gear torque and k the gear stiffness: ``twin_est_mismatch_offset_rad`` = d (a resolver offset o
-    reads the link o too high, the position loop moves the link back by o and the motor with it, so the
-    mismatch falls by o: d = -o); ``twin_est_backlash_rad`` = e (a clearance alpha swaps flanks with
-    the sign of the gear torque: the mismatch jumps by alpha); ``twin_est_compliance_err`` = f (a
+    gear torque (also simulated without sensor noise) and k the gear stiffness: ``twin_est_mismatch_offset_rad``
+    = d (a resolver offset o reads the link o too high, the position loop moves the link back by o and the motor
+    with it, so the mismatch falls by o: d = -o); ``twin_est_backlash_rad`` = e (a clearance alpha swaps flanks
+    with the sign of the gear torque: the mismatch jumps by alpha); ``twin_est_compliance_err`` = f (a
     stiffness scale s makes the windup T/(s k): f = 1/s - 1).
 
   The current fit is made over all six joints at once (:mod:`ur5fault.health.twin_fit`), each joint weighted
@@ -196,14 +198,13 @@ def twin_features(t_s: NDArray, q_set_rad: NDArray, meas: dict[str, NDArray], tw
     Args:
         t_s: log times ``(n_log,)`` [s].
         q_set_rad: commanded joint angles ``(n_log, 6)``.
-        meas, twin: the run's and its twin's ``q_FB_rad``, ``q_M_FB_rad``, ``i_FB_A`` (``(n_log, 6)``);
-            ``twin`` also its motor current ``i_q_A`` and gear torque ``T_gear_Nm``, free of the sensors'
-            own noise (the projections' shapes are taken from these, not from the readings: a reading's
-            noise in the regressor would bias its coefficient towards -1 where the joint's current is mostly
-            noise). They still carry the loops' response to the twin's sensor noise, which biases the gain
-            estimate where a joint carries almost no current (wrist_2 with no payload: 0.0061 A RMS, 0.0008 A
-            with the twin's noise off; healthy estimates +0.45 median: docs/diagnostics.md, "Wrist 2's gain
-            estimate on healthy runs").
+        meas, twin: the run's and its twin's ``q_FB_rad``, ``q_M_FB_rad``, ``i_FB_A`` (``(n_log, 6)``): the
+            residuals are their differences.  ``twin`` also the motor current ``i_q_A`` and gear torque
+            ``T_gear_Nm`` the projections' shapes are taken from: those of the same twin **simulated without
+            sensor noise** (:mod:`ur5fault.health.twin_regressors`).  The noisy twin's own signals carry the
+            loops' answer to its sensor noise, correlated with its reading that the residual subtracts: an
+            errors-in-variables bias (wrist 2's healthy gain estimate +0.43 median on the full dataset with twin
+            format 2; docs/diagnostics.md, "Wrist 2's gain estimate on healthy runs").
         params: the twin's model (gear ratio and stiffness, torque constant, friction levels).
         payload_kg: the configured payload mass (the robot knows it) [kg]; 0: no centre-of-mass columns.
         payload_held: ``(n_log,)`` whether the payload is held (the gripper commands); None: throughout.

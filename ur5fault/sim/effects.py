@@ -335,7 +335,8 @@ REGISTRY: dict[str, Effect] = {
     ]
 }
 
-#: the white sensor noise silenced (``sensor_noise.scale = 0``): what every digital twin carries, the campaign's
-#: (:func:`ur5fault.campaign.digital_twin.twin_effects`) and ``ur5fault diagnose``'s
+#: the white sensor noise silenced (``sensor_noise.scale = 0``): what the noise-free twins that give the twin
+#: fits their regressors carry (:mod:`ur5fault.health.twin_regressors`), the campaign's
+#: (:func:`ur5fault.campaign.digital_twin.regressor_runs`) and ``ur5fault diagnose``'s
 #: (:func:`ur5fault.health.diagnosis.replay_twin`), so that the two compute their features alike
 NOISE_FREE: EffectSpec = make_effect("sensor_noise", scale=0.0)

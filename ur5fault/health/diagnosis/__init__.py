@@ -10,6 +10,7 @@ healthy baseline when one is given (:func:`robot_baseline`, :mod:`.baseline`). W
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -32,12 +33,18 @@ TWIN_SEED = 1
 def replay_twin(log: MeasuredLog, params_overrides: dict | None = None, base_effects: Sequence[EffectSpec] = (),
                 *, seed: int = TWIN_SEED) -> tuple[LogReplay, Replayed]:
     """The log's digital twin: its commands replayed through the model (it depends on the log's commands,
-    payload, tool and temperatures only, never on its measured signals)."""
+    payload, tool and temperatures only, never on its measured signals).  Its readings ``y`` carry its own sensor
+    noise (seed ``seed``); its motor current ``current_true_A`` and gear torque ``torque_gear_Nm``, the twin fits'
+    regressors, are those of the same replay without sensor noise (:mod:`ur5fault.health.twin_regressors`), as a
+    campaign's twin features take them."""
+    from ..twin_regressors import REGRESSOR_EFFECTS
+
     replay = LogReplay(log, params_overrides, base_effects, seed=seed)
-    rep = replay.run([()])[0]
-    if not rep.ok:
-        raise ParameterError(f"{log.source}: the twin's replay failed ({rep.status}); check the log and the model")
-    return replay, rep
+    rep, quiet = replay.run([(), REGRESSOR_EFFECTS])
+    for r, what in ((rep, "twin's replay"), (quiet, "noise-free twin's replay")):
+        if not r.ok:
+            raise ParameterError(f"{log.source}: the {what} failed ({r.status}); check the log and the model")
+    return replay, dataclasses.replace(rep, current_true_A=quiet.current_true_A, torque_gear_Nm=quiet.torque_gear_Nm)
 
 
 def log_windows(log: MeasuredLog, window_s: float, twin: tuple[LogReplay, Replayed]) -> list[Window]:

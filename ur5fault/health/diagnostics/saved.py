@@ -62,8 +62,10 @@ CLASSIFIERS_FILE = "classifiers.skops"
 SCHEMA_FILE = "schema.json"
 #: 2: the twin features' current estimates are fitted with the payload CoM and latency held out and carry
 #: standard errors and t values; 3: p(fault) is the fault-kind classifier by joint's score, and the calibration
-#: map saved is that score's (formats 1-2 calibrated the run-level detector: refused in one line)
-SCHEMA_FORMAT = 3
+#: map saved is that score's (formats 1-2 calibrated the run-level detector: refused in one line); 4: the twin fits'
+#: regressors come from noise-free twins (twin residuals format 3, health/twin_regressors.py), so the twin
+#: estimates a format-3 classifier learnt do not mean what ``ur5fault diagnose`` now computes (refused likewise)
+SCHEMA_FORMAT = 4
 #: what to run when the saved classifiers fail their checksums
 RESAVE = "run `ur5fault benchmark` on the training campaign again to save them anew"
 #: median absolute deviation -> standard deviation of a normal distribution
@@ -191,9 +193,11 @@ def load_models(folder: str | Path) -> tuple[Models, dict[str, Any]]:
                               f"{' '.join(str(exc).split())[:100]}); {RESAVE}") from None
     fmt = schema.get("schema_format", 1)
     if not isinstance(fmt, int) or fmt < SCHEMA_FORMAT:
-        raise ConfigFileError(f"{folder}: saved with schema format {fmt}, whose p(fault) is the run-level detector's "
-                              f"(this version reads format {SCHEMA_FORMAT}: p(fault) from the fault-kind classifier "
-                              "by joint, calibrated); run `ur5fault benchmark` on the campaign again")
+        why = ("whose twin estimates took their regressors from the noisy twin" if fmt == 3
+               else "whose p(fault) is the run-level detector's")
+        raise ConfigFileError(f"{folder}: saved with schema format {fmt}, {why} (this version reads format "
+                              f"{SCHEMA_FORMAT}: p(fault) from the fault-kind classifier by joint, calibrated, on twin "
+                              "estimates with noise-free regressors); run the campaign and `ur5fault benchmark` again")
     if fmt > SCHEMA_FORMAT:
         raise ConfigFileError(f"{folder}: schema format {fmt} is newer than this version reads ({SCHEMA_FORMAT}); "
                               "update ur5fault")
