@@ -89,3 +89,21 @@ def test_com_columns_from_given_kinematics_equal_their_own():
     assert not np.any(com_columns(q, 0.0, params, held, given)) and calls == [1]  # no payload: not asked for
     with pytest.raises(ValueError, match="kinematics of"):
         com_columns(q, 2.0, params, held, lambda: flange_kinematics(q[:-1]))
+
+
+def test_coulomb_column_is_zero_at_rest_and_the_friction_level_while_moving():
+    """A resting target's speed is rounding (~1e-8 rad/s) whose sign is noise: the column held a full friction level
+    of random sign on resting samples.  At rest it is 0; moving, sign(w) times the static/Coulomb level over K_t N
+    (eq. (2)'s level at 0.5 rad/s written out from the packaged parameters)."""
+    params = load_params()
+    t = (np.arange(N) + 1) * DT
+    q = np.full((N, 6), 0.3) + 1e-9 * np.random.default_rng(3).standard_normal((N, 6))  # at rest, rounding jitter
+    q[N // 2 :, 1] += -0.5 * (t[N // 2 :] - t[N // 2])  # joint 2 moves at -0.5 rad/s in the second half
+    motion = commanded_motion(t, q, params)
+    col = motion.i_coulomb_A
+    assert np.all(col[: N // 2 - 2] == 0.0)  # everything at rest in the first half
+    assert np.all(col[:, [0, 2, 3, 4, 5]] == 0.0)
+    fr, mo = params.friction, params.motor
+    level = fr.coulomb_Nm[1] + (fr.static_Nm[1] - fr.coulomb_Nm[1]) * (1.0 - np.tanh(0.5 * fr.stribeck_rate_s_per_rad))
+    expect = -level / (mo.torque_constant_Nm_per_A[1] * params.gear.ratio[1])
+    np.testing.assert_allclose(col[N // 2 + 5 : -5, 1], expect, rtol=1e-9)

@@ -26,7 +26,7 @@ Features per joint ``j`` (units in the names):
   - current residual ~ ``a`` * 1 + ``b`` * i_twin + ``c`` * i_coulomb, where i_twin is the twin's motor current
     simulated without sensor noise (:mod:`ur5fault.health.twin_regressors`: the regressors' shapes carry no
     noise of the twin's, whose reading the residual subtracts), i_coulomb =
-    sign(w) T_level(w) / (K_t N) is the motor current that carries the twin's Coulomb/static friction at
+    sign(w) T_level(w) / (K_t N) (0 at rest) is the motor current that carries the twin's Coulomb/static friction at
     the commanded speed w: ``twin_est_current_offset_A`` = a (a current-sensor offset gives its offset:
     the loops hold the true current where the motion needs it, so the reading carries the offset);
     ``twin_est_current_gain_err`` = b (a gain error g - 1 gives g - 1; a torque-constant scale s needs
@@ -139,8 +139,14 @@ def commanded_motion(t_s: NDArray, q_set_rad: NDArray, params: RobotParams) -> C
     qdd = np.gradient(qd, dt, axis=0)
     fr, mo = params.friction, params.motor
     level = stribeck_level(qd, np.asarray(fr.coulomb_Nm), np.asarray(fr.static_Nm), fr.stribeck_rate_s_per_rad)[0]
-    i_coulomb = np.sign(qd) * level / (np.asarray(mo.torque_constant_Nm_per_A) * np.asarray(params.gear.ratio))
-    return CommandedMotion(dt, q_set_rad, qd, command_conditions(qd, qdd, dt), i_coulomb)
+    conditions = command_conditions(qd, qdd, dt)
+    # at rest the friction is static and holds whatever the load needs, so a Coulomb scale has no first-order
+    # signature there; and the sign of a resting target's speed (rounding, ~1e-8 rad/s) is noise, which gave the
+    # column a full friction level of random sign on every resting sample
+    moving = ~conditions["at rest"]
+    i_coulomb = np.where(moving, np.sign(qd) * level, 0.0) / (np.asarray(mo.torque_constant_Nm_per_A)
+                                                              * np.asarray(params.gear.ratio))
+    return CommandedMotion(dt, q_set_rad, qd, conditions, i_coulomb)
 
 
 def _motion_for(t_s: NDArray, q_set_rad: NDArray, params: RobotParams, motion: CommandedMotion | None
