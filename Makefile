@@ -37,7 +37,7 @@ diagnostics: $(STAMP)
 	$(BIN)/ur5fault benchmark results/diagnostics && \
 	end=$$(date +%s) && \
 	echo "make diagnostics: $$((end - start)) s end to end (campaign + benchmark)" && \
-	$(BIN)/python bench/diagnostics_timing.py results/diagnostics --wall-s $$((end - start))
+	$(BIN)/python bench/diagnostics_timing.py results/diagnostics --wall-s $$((end - start)) --campaign campaigns/diagnostics.yaml
 
 # issue 20: the prognostics fleet (campaigns/prognostics.yaml, 100 units run to failure) and its RUL benchmark,
 # end to end, timed, into results/prognostics/{fleet,benchmark}. Resumes an interrupted fleet. On a shared or

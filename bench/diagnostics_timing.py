@@ -5,7 +5,9 @@
 Counts the simulated run-steps of every run in ``OUT/features.parquet`` (each run's trajectory
 duration / physics step; trajectories differ in length) and of the digital twins simulated beside them
 (a campaign with ``twin_residuals``: one twin per distinct seed, payload, temperature and trajectory,
-never stored - on the diagnostics campaign 2,000 twins, 270 M run-steps beside the stored runs' 344 M),
+never stored - on the diagnostics campaign 2,000 twins, 270 M run-steps beside the stored runs' 344 M) and, with
+``--campaign FILE``, the noise-free regressor twins every batch simulates on its payload grid (the batches a
+from-scratch run with ``--jobs`` plans; a resumed run may have planned others),
 times bare ``mj_step`` of the UR5 model in this process, and prints one JSON line: the wall time, the
 run-steps, the bare-step cost and the ratio wall x cores / (run-steps x bare step) - the overhead of
 everything (drive chain, logging, features, Parquet, process start-up, the benchmark) over stepping the
@@ -48,6 +50,7 @@ def main() -> None:
     ap.add_argument("out", type=Path)
     ap.add_argument("--wall-s", type=float, required=True, help="measured wall time of campaign + benchmark")
     ap.add_argument("--jobs", type=int, default=os.cpu_count() or 1)
+    ap.add_argument("--campaign", help="the campaign file (or shipped name): count its batches' regressor twins too")
     args = ap.parse_args()
     df = pd.read_parquet(args.out / "features.parquet")
     dt = load_params().physics_dt_s
@@ -61,6 +64,20 @@ def main() -> None:
     if any(c.startswith("twin_est_") for c in df.columns):  # twin residuals: each run's digital twin simulated too
         twins = df[["seed", "payload_kg", "temperature_C", "trajectory"]].drop_duplicates()
         twin_steps = sum(steps[t] for t in twins["trajectory"])
+    grid_steps = 0
+    if args.campaign:  # each batch's noise-free twins on its payload grid (health/twin_regressors.py)
+        from ur5fault.campaign.execute import plan_batches
+        from ur5fault.campaign.spec import load_campaign
+        from ur5fault.health.twin_regressors import payload_grid
+
+        camp = load_campaign(args.campaign)
+        if camp.twin_residuals:
+            for batch in plan_batches(camp, camp.runs, args.jobs):
+                n = len(payload_grid(rc.cond["payload_kg"] for rc in batch))
+                t = batch[0].cond["trajectory"]
+                t = json.dumps(t, sort_keys=True) if isinstance(t, dict) else t
+                grid_steps += n * steps[t]
+    twin_steps += grid_steps
     bare = bare_mj_step_s()
     bench = args.out / "benchmark" / "metrics.json"
     out = {
@@ -68,7 +85,8 @@ def main() -> None:
         "simulated_s": (run_steps + twin_steps) * dt,
         "run_steps": run_steps + twin_steps,
         "run_steps_stored_runs": run_steps,
-        "run_steps_digital_twins": twin_steps,
+        "run_steps_digital_twins": twin_steps - grid_steps,
+        "run_steps_regressor_twins": grid_steps,
         "wall_s": args.wall_s,
         "jobs": args.jobs,
         "bare_mj_step_us": bare * 1e6,
