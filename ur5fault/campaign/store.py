@@ -29,10 +29,6 @@ from ..util.io import DAMAGED_PARQUET_ERRORS, checksum_path, verify_checksum, wr
 from .identity import digest, first_difference
 
 META_KEY = b"ur5fault"
-#: what reading a damaged Parquet file raises: pyarrow's own errors, but also IndexError, KeyError,
-#: UnicodeDecodeError, OverflowError... from values a flipped byte made absurd (found by flipping
-#: every byte of a run file, tests/campaign/test_integrity.py)
-DAMAGED_READ_ERRORS = DAMAGED_PARQUET_ERRORS
 #: what to run when a campaign's consolidated table fails its checksum: the stored runs are verified and reused
 REBUILD_FEATURES = ("run the campaign again into this folder (`ur5fault campaign run CAMPAIGN.yaml --out DIR`): it "
                     "verifies the stored runs, re-simulates only bad ones and rebuilds the table")
@@ -123,7 +119,7 @@ def check_run_file(path: Path, expected: Mapping[str, Any] | None = None) -> Fil
         if n_rows != 1:
             return FileCheck("bad", f"{n_rows} rows, expected 1")
         rid = pf.read(columns=["run_id"]).column(0)[0].as_py()
-    except (*DAMAGED_READ_ERRORS, pa.ArrowException) as exc:
+    except (*DAMAGED_PARQUET_ERRORS, pa.ArrowException) as exc:
         return FileCheck("bad", f"unreadable as Parquet ({' '.join(str(exc).split())[:120]})")
     if rid != path.stem:
         return FileCheck("bad", f"holds run {rid!r}, not {path.stem!r}")
@@ -149,7 +145,7 @@ def check_timeseries_file(path: Path, identity: str, n_rows: int) -> FileCheck:
     try:
         pf = pq.ParquetFile(path)
         schema, rows = pf.schema_arrow, pf.metadata.num_rows
-    except (*DAMAGED_READ_ERRORS, pa.ArrowException) as exc:
+    except (*DAMAGED_PARQUET_ERRORS, pa.ArrowException) as exc:
         return FileCheck("bad", f"unreadable as Parquet ({' '.join(str(exc).split())[:120]})")
     if rows != n_rows or "t_s" not in schema.names:
         return FileCheck("bad", f"{rows} samples, expected {n_rows}")
@@ -186,7 +182,7 @@ def consolidate(out: Path, records: Mapping[str, Mapping[str, Any]],
             try:
                 frames.append(pq.read_table(path).to_pandas())
                 continue
-            except (*DAMAGED_READ_ERRORS, pa.ArrowException) as exc:
+            except (*DAMAGED_PARQUET_ERRORS, pa.ArrowException) as exc:
                 check = FileCheck("bad", f"unreadable as Parquet ({' '.join(str(exc).split())[:120]})")
         bad.append((rid, f"{check.state}{': ' + check.detail if check.detail else ''}"))
     if bad:
@@ -239,7 +235,7 @@ def read_consolidated(path: Path) -> tuple[Any, str | None, dict[str, Any] | Non
         return None, None, {"state": "bad", "detail": corrupt}
     try:
         table = pq.read_table(path)
-    except (*DAMAGED_READ_ERRORS, pa.ArrowException) as exc:
+    except (*DAMAGED_PARQUET_ERRORS, pa.ArrowException) as exc:
         return None, None, {"state": "bad", "detail": f"unreadable as Parquet ({' '.join(str(exc).split())[:120]})"}
     raw = (table.schema.metadata or {}).get(b"ur5fault")
     try:

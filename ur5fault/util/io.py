@@ -129,7 +129,9 @@ def read_json_stored(path: str | Path, remake: str) -> Any:
         raise StoredFileError(f"{path}: unreadable as JSON ({' '.join(str(exc).split())[:120]}); {remake}") from None
 
 
-#: what reading a damaged Parquet file raises besides pyarrow's own errors (values a flipped byte made absurd)
+#: what reading a damaged Parquet file raises besides pyarrow's own errors: IndexError, KeyError, UnicodeDecodeError,
+#: OverflowError... from values a flipped byte made absurd (found by flipping every byte of a run file,
+#: tests/campaign/test_integrity.py)
 DAMAGED_PARQUET_ERRORS = (OSError, ValueError, LookupError, ArithmeticError, TypeError)
 
 
