@@ -209,16 +209,17 @@ def manifest_damage(out: Path) -> str | None:
     return verify_checksum(path) if path.exists() and checksum_path(path).exists() else None
 
 
-def read_manifest(out: Path) -> dict[str, Any]:
-    """``OUT/manifest.json`` as a mapping ({} when absent, unreadable or failing its checksum:
-    :func:`manifest_damage` says why)."""
-    if manifest_damage(out):
-        return {}
+def read_manifest(out: Path) -> tuple[dict[str, Any], str | None]:
+    """``(OUT/manifest.json as a mapping, why it cannot be trusted)``: ``({}, why)`` when it fails its checksum
+    (:func:`manifest_damage`), ``({}, None)`` when absent or unreadable.  One hash of the file for both."""
+    damaged = manifest_damage(out)
+    if damaged:
+        return {}, damaged
     try:
         m = json.loads((Path(out) / "manifest.json").read_text())
     except (OSError, ValueError):
-        return {}
-    return m if isinstance(m, dict) else {}
+        return {}, None
+    return (m if isinstance(m, dict) else {}), None
 
 
 def read_consolidated(path: Path) -> tuple[Any, str | None, dict[str, Any] | None]:

@@ -16,7 +16,6 @@ from .store import (
     FileCheck,
     check_run_file,
     check_timeseries_file,
-    manifest_damage,
     read_consolidated,
     read_manifest,
     run_path,
@@ -93,8 +92,7 @@ def status(out: Path) -> dict[str, Any]:
     if any(out.iterdir()) and not runs_dir(out).is_dir() and lock_holder(out) is None and not any(
             (out / name).exists() for name in ("manifest.json", "features.parquet", "inspections.parquet")):
         raise ConfigFileError(f"{out}: not a campaign folder (no manifest.json, runs/ or feature table in it)")
-    manifest = read_manifest(out)
-    damaged = manifest_damage(out)
+    manifest, damaged = read_manifest(out)
     holder = lock_holder(out)
     state = manifest.get("state")
     if state == "running" and holder is None:  # the manifest of a process that was stopped: nothing runs now
