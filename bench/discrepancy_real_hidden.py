@@ -316,6 +316,9 @@ def main() -> None:
     ap.add_argument("--cases", default=None, help="comma-separated indices into CASES (default: all)")
     ap.add_argument("--likelihood", choices=LIKELIHOODS, default="pooled",
                     help="the selections' likelihood (DiscrepancyModel(likelihood=...)); not with --engineer")
+    ap.add_argument("--rest-hold", action="store_true",
+                    help="fit the current held in each rest interval as a nuisance (DiscrepancyModel(rest_hold=True)); "
+                         "not with --engineer")
     ap.add_argument("--baseline", default=None, metavar="CASES",
                     help="comma-separated indices into CASES (or 'all') also fitted from the clean log's fitted "
                          "model (the change against it), scored in a second table; the clean fits are shared")
@@ -335,8 +338,8 @@ def main() -> None:
     if (args.cache is not None or args.identify) and not args.engineer:
         ap.error("--cache and --identify are used by --engineer only")
     if args.engineer:
-        if args.likelihood != "pooled":
-            ap.error("--likelihood is used by the per-log tables only")
+        if args.likelihood != "pooled" or args.rest_hold:
+            ap.error("--likelihood and --rest-hold are used by the per-log tables only")
         if args.baseline is not None or args.baseline_only:
             ap.error("--engineer is its own table; give it without --baseline")
         engineer_table(list(range(len(CASES))) if args.cases is None else [int(i) for i in args.cases.split(",")],
@@ -357,7 +360,7 @@ def main() -> None:
         base = read(name)
         if name not in clean:
             t, c = time.perf_counter(), time.process_time()
-            clean[name] = DiscrepancyModel(jobs=jobs, likelihood=args.likelihood).fit(base)
+            clean[name] = DiscrepancyModel(jobs=jobs, likelihood=args.likelihood, rest_hold=args.rest_hold).fit(base)
             print(f"| {name} | clean | {', '.join(f.candidate.label for f in clean[name].findings_ if f.kept)} "
                   f"| | | | | {len(clean[name].unexplained_)} | {time.perf_counter() - t:.0f} s "
                   f"(CPU {time.process_time() - c:.0f} s) |", flush=True)
@@ -368,17 +371,19 @@ def main() -> None:
             log = inject(log, kind, j, **v)
         ways = (True,) if args.baseline_only else (False, True)
         for baseline in ways if ci in from_clean else (False,):
-            score(name, effects, log, clean[name], baseline, jobs, *results[baseline], likelihood=args.likelihood)
+            score(name, effects, log, clean[name], baseline, jobs, *results[baseline], likelihood=args.likelihood,
+                  rest_hold=args.rest_hold)
     for baseline, (rows, per_kind) in results.items():
         if rows:
             summarise(rows, per_kind, "fitted from the clean log's model" if baseline else "each log on its own")
 
 
 def score(name: str, effects, log, clean, baseline: bool, jobs: int, rows: list, per_kind: dict,
-          likelihood: str = "pooled") -> None:
+          likelihood: str = "pooled", rest_hold: bool = False) -> None:
     """Fit one injected log (from the clean fit's model when ``baseline``) and print its rows."""
     t, c = time.perf_counter(), time.process_time()
-    m = DiscrepancyModel(jobs=jobs, likelihood=likelihood).fit(log, base_effects=baseline_of(clean) if baseline else ())
+    m = DiscrepancyModel(jobs=jobs, likelihood=likelihood, rest_hold=rest_hold).fit(
+        log, base_effects=baseline_of(clean) if baseline else ())
     wall = f"{time.perf_counter() - t:.0f} s (CPU {time.process_time() - c:.0f} s)"
     label = f"{name} (from clean fit)" if baseline else name
     injected = {(NAMED_AS[k][0], j) for k, j, _ in effects if k in NAMED_AS}

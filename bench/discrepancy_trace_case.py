@@ -72,12 +72,18 @@ def main() -> None:
                     help="fit the suspect run from the baseline fitted on the robot's healthy runs")
     ap.add_argument("--likelihood", choices=LIKELIHOODS, default="pooled",
                     help="the selections' likelihood of every fit (DiscrepancyModel(likelihood=...))")
+    ap.add_argument("--rest-hold", action="store_true",
+                    help="every fit with the current held at rest as a nuisance (DiscrepancyModel(rest_hold=True))")
     ap.add_argument("--per-log", action="store_true",
                     help="fit the injected log on its own (from nothing), as the bench's per-log table does")
     args = ap.parse_args()
     if not 0 <= args.case < len(hidden.CASES):
         ap.error(f"case must be in 0..{len(hidden.CASES) - 1}")
     name, effects = hidden.CASES[args.case]
+
+    def model() -> DiscrepancyModel:
+        return DiscrepancyModel(jobs=args.jobs, likelihood=args.likelihood, rest_hold=args.rest_hold)
+
     seen = {}
     screen = steps.screen_library
 
@@ -95,7 +101,7 @@ def main() -> None:
             print(f"clean fit (stored): kept {kept}")
         else:
             t = time.perf_counter()
-            clean = DiscrepancyModel(jobs=args.jobs, likelihood=args.likelihood).fit(base)
+            clean = model().fit(base)
             clean_vals, kept = hidden.kept_values(clean), [f.candidate.label for f in clean.findings_ if f.kept]
             clean_keys = hidden.kept_keys(clean)
             print(f"clean fit, {time.perf_counter() - t:.0f} s: kept {kept}")
@@ -107,7 +113,7 @@ def main() -> None:
     elif args.engineer:
         healthy, base = hidden.engineer_plan(name)
         def fit(logs, st, pr=None):
-            return DiscrepancyModel(jobs=args.jobs, likelihood=args.likelihood).fit(logs, pr, base_effects=st)
+            return model().fit(logs, pr, base_effects=st)
 
         b = hidden._cached(args.clean_cache, hidden.baseline_key(name), lambda: hidden.baseline_record(healthy, fit))
         start, params = b["effects"], b.get("params")
@@ -117,7 +123,7 @@ def main() -> None:
         print(f"clean fit's findings (stored): {[e.name for e in start]}")
     else:
         t = time.perf_counter()
-        clean = DiscrepancyModel(jobs=args.jobs, likelihood=args.likelihood).fit(base)
+        clean = model().fit(base)
         start = hidden.baseline_of(clean)
         if cache is not None:
             cache.parent.mkdir(parents=True, exist_ok=True)
@@ -129,7 +135,7 @@ def main() -> None:
     steps.screen_library = recorded
     try:
         t = time.perf_counter()
-        m = DiscrepancyModel(jobs=args.jobs, likelihood=args.likelihood).fit(log, params, base_effects=start)
+        m = model().fit(log, params, base_effects=start)
     finally:
         steps.screen_library = screen
     if args.per_log:

@@ -29,6 +29,7 @@ from numpy.typing import NDArray
 
 from ..sim.axes import N_JOINTS
 from .discovery import MIN_TEMPERATURE_SPAN_K  # a joint whose temperature gets a dictionary column keeps it
+from .rest_hold import union
 
 #: spacing of the drift's bumps [s] (one per 5 s stability block of the 20 s screened part; see above)
 KNOT_S = 5.0
@@ -86,9 +87,14 @@ def remove(A: NDArray, bases: list[NDArray], current_channel: int) -> NDArray:
 class Drift:
     """The drift of one log part (samples ``1..n``): :meth:`remove` projects it out of residuals and columns."""
 
-    def __init__(self, n: int, period_s: float, signals, temperature_C: NDArray | None = None) -> None:
+    def __init__(self, n: int, period_s: float, signals, temperature_C: NDArray | None = None,
+                 hold: list[NDArray] | None = None) -> None:
+        """``hold``: per joint, further nuisance columns ``(n, k)`` of its current fitted with the drift (the
+        current held at rest, :mod:`.rest_hold`); None: the drift alone."""
         self.n = n
         self.bases = basis(n, period_s, temperature_C)
+        if hold is not None:
+            self.bases = [union(B, R) for B, R in zip(self.bases, hold)]
         self.channel = list(signals).index("current_A") * N_JOINTS if "current_A" in signals else None
 
     @property

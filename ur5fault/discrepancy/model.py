@@ -56,6 +56,8 @@ SCREEN_S = 20.0
 #: *Each channel its own variance* and *At rest and in motion*)
 LIKELIHOODS = ("per_channel", "per_condition", "pooled")
 LIKELIHOOD = "pooled"
+#: the current held at rest as a nuisance (``rest_hold.py``): off (measured in docs/discrepancy.md)
+REST_HOLD = False
 class _Stages:
     """Progress of the workflow on one tqdm bar (``ur5fault.util.progress``): one unit per stage."""
 
@@ -102,11 +104,16 @@ class DiscrepancyModel:
         likelihood: ``"pooled"`` (one variance for every channel, the default), ``"per_channel"`` (each
             channel, signal x joint, its own residual variance in every selection; ``weighting.per_channel``) or
             ``"per_condition"`` (each channel its own variance while its joint is at rest and while it moves).
+        rest_hold: fit one constant per rest interval of each joint's current as a nuisance beside the drift
+            (``rest_hold.py``: the current static friction leaves held at rest), in every selection and judgement
+            on the fitting part; an offset or gain is then seen in motion only.  Off by default (measured in
+            docs/discrepancy.md, *The current held at rest as a nuisance*).
     """
 
     def __init__(self, fit_fraction: float = FIT_FRACTION, max_effects: int = 1, max_terms: int = 4,
                  kinds: Sequence[str] | None = None, jobs: int = 1, refiner: str = "secant",
-                 progress: bool = False, screen_s: float | None = SCREEN_S, likelihood: str = LIKELIHOOD) -> None:
+                 progress: bool = False, screen_s: float | None = SCREEN_S, likelihood: str = LIKELIHOOD,
+                 rest_hold: bool = REST_HOLD) -> None:
         lo, hi = FIT_FRACTION_RANGE
         if not lo <= fit_fraction <= hi:
             raise ParameterError(f"fit_fraction = {fit_fraction} is out of range [{lo}, {hi}]")
@@ -117,7 +124,9 @@ class DiscrepancyModel:
             raise ParameterError(f"refiner = {refiner!r} is not valid; choose one of: secant, minimize")
         if likelihood not in LIKELIHOODS:
             raise ParameterError(f"likelihood = {likelihood!r} is not valid; choose one of: {', '.join(LIKELIHOODS)}")
-        self.likelihood = likelihood
+        if not isinstance(rest_hold, (bool, np.bool_)):
+            raise ParameterError(f"rest_hold = {rest_hold!r} must be True or False")
+        self.likelihood, self.rest_hold = likelihood, bool(rest_hold)
         self.fit_fraction, self.max_effects, self.max_terms = fit_fraction, max_effects, max_terms
         self.kinds, self.jobs, self.refiner, self.progress = kinds, jobs, refiner, progress
         if screen_s is not None and screen_s <= 0:
@@ -169,7 +178,7 @@ class DiscrepancyModel:
             t = time.perf_counter()
             own = self._variance(rp)
             lib = steps.screen_library(rp, n_scr, log.payload_kg, kinds, self.max_effects,
-                                       stages.start("screening the library"), own)
+                                       stages.start("screening the library"), own, self.rest_hold)
             timings["library screening"] = time.perf_counter() - t
             logger.info("library screened in %.0f s: %s", timings["library screening"],
                         [c.label for c in lib.chosen] or "nothing")
@@ -193,7 +202,7 @@ class DiscrepancyModel:
             # simulation of which is the final model when the estimate has converged)
             t = time.perf_counter()
             prog = stages.start("judging")
-            drift = steps.drift_of(rp, n_fit)
+            drift = steps.drift_of(rp, n_fit, self.rest_hold)
             jr = steps.judge(ref, n_fit, len(rp.signals), drift, own)
             self.search_: list[SearchStep] = lib.trace + disc.trace + check.trace + jr.trace
             self.refinement_ = list(ref.first.steps) if ref.first is not None else []
@@ -236,7 +245,8 @@ class DiscrepancyModel:
             return self.likelihood == "per_channel"
         n = rp.n_samples
         rest = conditions(rp.log, n, np.zeros((n, N_JOINTS)))["at rest"]
-        return VarianceGroups(np.tile(rest.astype(np.int8), len(rp.signals)), lambda k: steps.drift_of(rp, k))
+        return VarianceGroups(np.tile(rest.astype(np.int8), len(rp.signals)),
+                              lambda k: steps.drift_of(rp, k, self.rest_hold))
 
     def _polish(self, rp: LogReplay, kept: list[Finding], first: Refined, fs: FindingSet, progress,
                 drift) -> Replayed:

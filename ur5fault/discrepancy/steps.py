@@ -27,6 +27,7 @@ from .drift import Drift
 from .judging import Finding, SearchStep, judge_findings
 from .judging import alternatives as judged_alternatives
 from .refinement import FindingSet, Refined, probe_batch
+from .rest_hold import of_log as rest_hold_of
 from .rivals import current_channel, differ_most
 from .search import backward, columns_of, forward
 from .search import judge as judge_one
@@ -92,19 +93,22 @@ class JudgeRecord:
     trace: list[SearchStep]
 
 
-def drift_of(rp: LogReplay, n: int) -> Drift:
-    """The nuisance drift of the log's samples ``1..n`` (``drift.py``)."""
-    return Drift(n, rp.log.period_s, rp.signals, rp.log.temperature_C)
+def drift_of(rp: LogReplay, n: int, rest_hold: bool = False) -> Drift:
+    """The nuisance drift of the log's samples ``1..n`` (``drift.py``); ``rest_hold``: with one constant per rest
+    interval of each joint's current beside it (``rest_hold.py``)."""
+    hold = rest_hold_of(rp.log, n, rp.params.controller.position_bw_Hz) if rest_hold else None
+    return Drift(n, rp.log.period_s, rp.signals, rp.log.temperature_C, hold)
 
 
 def screen_library(rp: LogReplay, n_scr: int, payload_kg: float, kinds: Sequence[str] | None,
                    max_effects: int, progress: Callable[[float], None] | None = None,
-                   own_variance: OwnVariance = False) -> LibraryRecord:
+                   own_variance: OwnVariance = False, rest_hold: bool = False) -> LibraryRecord:
     """``max_effects``: most library effects named per joint (robot-wide effects count as one more joint).
-    ``own_variance``: each channel its own variance in the selections on the screened part, False: pooled."""
+    ``own_variance``: each channel its own variance in the selections on the screened part, False: pooled.
+    ``rest_hold``: the current held in each rest interval fitted beside the drift (``rest_hold.py``)."""
     cands = library.candidates(payload_kg, kinds=kinds, params=rp.params)
     base, X_lib, cands = library.screen(rp, n_scr, cands, progress=progress)
-    drift = drift_of(rp, n_scr)
+    drift = drift_of(rp, n_scr, rest_hold)
     e0 = drift.remove(weighted(rp.measured(n_scr), base.y, rp.sigma))
     X_lib = drift.remove(X_lib)
     X_w, e_w, _ = per_channel(X_lib, e0, own_variance)  # each channel its own variance (statistics.py)
