@@ -115,3 +115,23 @@ def test_benchmark_python_api_refuses_only_when_asked(tmp_path):
     with pytest.raises(OutputError, match="give --replace"):
         run_benchmark(tmp_path / "no-such-campaign", out, replace=False)
     assert Path(out / "report.md").read_text() == "kept\n"
+
+
+def test_simulate_summary_of_a_protective_stop_is_strict_json(tmp_path, capsys):
+    """A gear stiffness in its range (1e8 N*m/rad at most) that the 50 us step cannot follow on the wrists: the run
+    ends in a protective stop before any finite sample (exit 1), and stdout is still valid JSON (the figures as
+    null, not NaN, which JSON does not have), with no numpy warning on stderr."""
+    import json
+
+    cfg = tmp_path / "run.yaml"
+    cfg.write_text("params:\n  gear: {stiffness_Nm_per_rad: 9.0e7}\n")
+    assert main(["simulate", "--config", str(cfg), "--duration-s", "0.05", "--quiet",
+                 "--out", str(tmp_path / "r.parquet")]) == 1
+    cap = capsys.readouterr()
+
+    def refuse(name):
+        raise ValueError(f"{name} in the summary")
+
+    summary = json.loads(cap.out, parse_constant=refuse)
+    assert summary["status"] == "protective_stop" and summary["peak_current_A"] is None
+    assert "RuntimeWarning" not in cap.err and "All-NaN" not in cap.err

@@ -84,7 +84,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     verb = "replaced" if replaced else "wrote"
     sys.stderr.write(f"{verb} {out} ({res.t_s.size} samples x {len(res.to_pandas(0).columns)} columns)\n")
     sys.stderr.write("effects: " + ("; ".join(res.effects[0]) or "none (healthy)") + "\n")
-    print(json.dumps(res.summary(0), indent=None))
+    print(json.dumps(res.summary(0), indent=None, allow_nan=False))  # strict JSON: jq reads it
     return 0 if res.status[0] == "ok" else 1
 
 
