@@ -48,9 +48,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
     # before the fit, not after it: a folder or an earlier result in the way, or a name that is no YAML, refused now
     check_new_output(args.out, replace=args.replace, suffixes=(".yaml", ".yml"))
     if args.json:
-        check_new_output(args.json, replace=args.replace, suffixes=(".json",), option="--json")
-        if Path(args.json).absolute() == Path(args.out).absolute():
-            raise ParameterError(f"--json {args.json} is the --out file too; give two names")
+        check_new_output(args.json, replace=args.replace, suffixes=(".json",), option="--json")  # never --out
     check_files_length([e.path for e in log_entries(args)], "identify")  # an hour-long log: refused in seconds
     logs, _ = read_log_options(args, allow_unknown=True)
     check_logs_length(logs, "identify")
