@@ -30,23 +30,25 @@ bench: $(STAMP)
 	$(BIN)/python bench/bench_speed.py --campaign
 
 # issue 11: the diagnostics dataset (campaigns/diagnostics.yaml, 2,000 sampled runs + backlash twins) and its
-# benchmark, end to end, timed. Resumes an interrupted run; for a timing from scratch: rm -rf results/diagnostics
+# benchmark, end to end, timed. Resumes an interrupted run; for a timing from scratch: rm -rf results/diagnostics.
+# The target rebuilds the benchmark of the campaign it made: --replace (the command alone refuses an earlier one)
 diagnostics: $(STAMP)
 	@start=$$(date +%s); \
 	$(BIN)/ur5fault campaign run campaigns/diagnostics.yaml --out results/diagnostics --quiet --yes && \
-	$(BIN)/ur5fault benchmark results/diagnostics && \
+	$(BIN)/ur5fault benchmark results/diagnostics --replace && \
 	end=$$(date +%s) && \
 	echo "make diagnostics: $$((end - start)) s end to end (campaign + benchmark)" && \
 	$(BIN)/python bench/diagnostics_timing.py results/diagnostics --wall-s $$((end - start)) --campaign campaigns/diagnostics.yaml
 
 # issue 20: the prognostics fleet (campaigns/prognostics.yaml, 100 units run to failure) and its RUL benchmark,
 # end to end, timed, into results/prognostics/{fleet,benchmark}. Resumes an interrupted fleet. On a shared or
-# small machine: PROGNOSTICS=campaigns/prognostics_small.yaml (30 units)
+# small machine: PROGNOSTICS=campaigns/prognostics_small.yaml (30 units). The target rebuilds the benchmark of the
+# fleet it made: --replace (the twin's radius cache there is kept and extended)
 PROGNOSTICS ?= campaigns/prognostics.yaml
 prognostics: $(STAMP)
 	@start=$$(date +%s); \
 	$(BIN)/ur5fault campaign run $(PROGNOSTICS) --out results/prognostics/fleet --quiet && \
-	$(BIN)/ur5fault prognose results/prognostics/fleet --out results/prognostics/benchmark --twin && \
+	$(BIN)/ur5fault prognose results/prognostics/fleet --out results/prognostics/benchmark --twin --replace && \
 	end=$$(date +%s) && \
 	echo "make prognostics: $$((end - start)) s end to end (fleet + benchmark)"
 

@@ -101,7 +101,7 @@ def test_verbose_logs_through_logging(tmp_path, where):
     r = run(*(["-v", *args] if where == "before" else [*args, "-v"]))
     assert r.returncode == 0, r.stderr
     assert "ur5fault: INFO: ur5fault.sim.engine: simulating 1 run(s) x 400 physics steps" in r.stderr
-    quiet = run(*args)
+    quiet = run(*args, "--replace")  # the same file again
     assert quiet.returncode == 0 and "INFO" not in quiet.stderr
 
 

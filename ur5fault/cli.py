@@ -69,7 +69,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     data["effects"] = effects
     overlay = Overlay.load(args.model) if args.model else None
     cfg = build_run_config(data, where, overlay)
-    out = _check_out_file(Path(args.out))  # before simulating, not after
+    out = _check_out_file(Path(args.out), args.replace)  # before simulating, not after
     replaced = out.exists()
     sim = Simulator(cfg.params)
     with progress.bar(1.0, "simulate", "run", enabled=not args.quiet,
@@ -84,7 +84,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     verb = "replaced" if replaced else "wrote"
     sys.stderr.write(f"{verb} {out} ({res.t_s.size} samples x {len(res.to_pandas(0).columns)} columns)\n")
     sys.stderr.write("effects: " + ("; ".join(res.effects[0]) or "none (healthy)") + "\n")
-    print(json.dumps(res.summary(0), indent=None))
+    print(json.dumps(res.summary(0), indent=None, allow_nan=False))  # strict JSON: jq reads it
     return 0 if res.status[0] == "ok" else 1
 
 
@@ -92,17 +92,12 @@ def cmd_simulate(args: argparse.Namespace) -> int:
 OUT_SUFFIXES = (".parquet", ".csv")
 
 
-def _check_out_file(out: Path) -> Path:
-    """``simulate --out``: a ``.parquet`` or ``.csv`` file in an existing, writable folder."""
-    from .util.io import check_writable
+def _check_out_file(out: Path, replace: bool) -> Path:
+    """``simulate --out``: a ``.parquet`` or ``.csv`` file that can be written (missing folders are created) and
+    holds no earlier run unless ``replace``."""
+    from .util.io import check_new_output
 
-    check_writable(out)
-    if not out.parent.is_dir():
-        raise Ur5FaultError(f"--out {out}: folder {out.parent} does not exist; create it first")
-    if out.suffix.lower() not in OUT_SUFFIXES:
-        raise Ur5FaultError(f"--out {out}: unknown file type {out.suffix or '(no suffix)'!r}; "
-                            f"give a {' or '.join(OUT_SUFFIXES)} file")
-    return out
+    return check_new_output(out, replace=replace, suffixes=OUT_SUFFIXES)
 
 
 def _parse_effect_arg(spec: str) -> dict:
@@ -276,8 +271,9 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--log-period-s", type=float, dest="log_period_s",
                    help="time between logged samples [s], a whole multiple of the 50 us physics step (default 0.001)")
     s.add_argument("--out", default="run.parquet", metavar="FILE.parquet|FILE.csv",
-                   help="output file, Parquet (with the run's metadata) or CSV by its suffix, in an existing folder "
-                        "(default run.parquet)")
+                   help="output file, Parquet (with the run's metadata) or CSV by its suffix; missing folders are "
+                        "created (default run.parquet)")
+    s.add_argument("--replace", action="store_true", help="replace an earlier file at --out (default: refused)")
     s.add_argument("--quiet", action="store_true", help="no progress bar")
     s.set_defaults(func=cmd_simulate)
     e = sub.add_parser("effects", help="list the effect registry")

@@ -10,13 +10,18 @@ from pathlib import Path
 from ..logs.options import add_log_options
 from ..twin.residuals import FIT_FRACTION
 
+#: what `discrepancy` writes into --out (report.py); one of them there is an earlier result
+RESULT_FILES = ("report.md", "model.yaml", "summary.json")
+
 
 def register(sub) -> None:
     d = sub.add_parser("discrepancy", help="find, name and fix where the model and a measured log disagree")
     add_log_options(d, ("rtde", "nist", "sim"), hold_out=True)
     d.add_argument("--model", help="model overlay YAML to start from (e.g. an earlier model.yaml; default: none, the "
                                    "nominal model)")
-    d.add_argument("--out", required=True, help="output folder (report.md, model.yaml, summary.json)")
+    d.add_argument("--out", required=True, help="output folder (report.md, model.yaml, summary.json; created)")
+    d.add_argument("--replace", action="store_true",
+                   help="replace an earlier result at --out (default: refused, nothing a user made is lost silently)")
     d.add_argument("--fit-fraction", type=float, default=FIT_FRACTION,
                    help=f"share of the log used for fitting (0.2..0.9, default {FIT_FRACTION:g})")
     d.add_argument("--max-effects", type=int, default=1,
@@ -36,7 +41,7 @@ def cmd_discrepancy(args: argparse.Namespace) -> int:
     from ..logs.measured import assumption_notes
     from ..logs.options import log_entries, read_log_options
     from ..sim.params import load_params
-    from ..util.io import check_writable
+    from ..util.io import check_new_output
     from .model import DiscrepancyModel
     from .report import summary, write_report
 
@@ -44,7 +49,7 @@ def cmd_discrepancy(args: argparse.Namespace) -> int:
     # everything that can be checked before minutes of fitting is checked first
     model = DiscrepancyModel(fit_fraction=args.fit_fraction, max_effects=args.max_effects,
                              max_terms=args.max_terms, jobs=jobs, progress=not args.quiet)
-    check_writable(args.out, folder=True)
+    check_new_output(args.out, folder=True, results=RESULT_FILES, replace=args.replace)
     check_files_length([e.path for e in log_entries(args)], "discrepancy")  # an hour-long log: refused in seconds
     logs, held = read_log_options(args, allow_unknown=True)  # an unknown payload is fitted (and said so)
     check_logs_length([*logs, *held], "discrepancy")

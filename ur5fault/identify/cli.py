@@ -15,7 +15,11 @@ from .stats import MAX_BOOT, N_BOOT
 def register(sub) -> None:
     d = sub.add_parser("identify", help="re-derive the measured drive parameters from a log (parameter overlay)")
     add_log_options(d, ("nist", "rtde"))
-    d.add_argument("--out", required=True, help="parameter overlay YAML to write (accepted by --model)")
+    d.add_argument("--out", required=True, metavar="PARAMS.yaml",
+                   help="parameter overlay YAML to write (accepted by --model; missing folders are created)")
+    d.add_argument("--replace", action="store_true",
+                   help="replace an earlier result at --out or --json (default: refused, nothing a user made is "
+                        "lost silently)")
     d.add_argument("--json", metavar="FILE.json", help="also write every estimate with its interval as JSON "
                                                           "(default: not written)")
     d.add_argument("--no-sweep", action="store_true",
@@ -34,16 +38,17 @@ def cmd_identify(args: argparse.Namespace) -> int:
     from ..logs.measured import assumption_notes
     from ..logs.options import log_entries, read_log_options
     from ..sim.params import load_params
-    from ..util.io import check_writable, write_json_atomic, write_text_atomic
+    from ..util.io import check_new_output, write_json_atomic, write_text_atomic
     from . import identify
 
     if not 20 <= args.bootstrap <= MAX_BOOT:
         raise ParameterError(f"--bootstrap = {args.bootstrap} must be 20..{MAX_BOOT} resamples")
     if not math.isfinite(args.sweep_window_s) or args.sweep_window_s <= 0:
         raise ParameterError(f"--sweep-window-s = {args.sweep_window_s} must be a positive number of seconds")
-    check_writable(args.out)  # before the fit, not after it (a folder, or a file in the way, is refused now)
+    # before the fit, not after it: a folder or an earlier result in the way, or a name that is no YAML, refused now
+    check_new_output(args.out, replace=args.replace, suffixes=(".yaml", ".yml"))
     if args.json:
-        check_writable(args.json)
+        check_new_output(args.json, replace=args.replace, suffixes=(".json",), option="--json")  # never --out
     check_files_length([e.path for e in log_entries(args)], "identify")  # an hour-long log: refused in seconds
     logs, _ = read_log_options(args, allow_unknown=True)
     check_logs_length(logs, "identify")

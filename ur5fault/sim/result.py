@@ -215,15 +215,20 @@ class SimResult:
         CSV has no place for it; Parquet keeps it)."""
         return write_csv_atomic(self.to_pandas(run), path)
 
-    def summary(self, run: int = 0) -> dict[str, float]:
-        """A few headline numbers of one run (for the command line)."""
-        err = np.abs(self.q_set_rad - self.signals["q_FB_rad"][run])
-        tcp_err = np.linalg.norm(self.tcp_m[run] - self.tcp_des_m[run], axis=-1)
-        return {
-            "duration_s": float(self.t_s[-1]),
-            "status": self.status[run],
-            "tracking_rms_deg_max_joint": float(np.degrees(np.sqrt(np.nanmean(err**2, axis=0))).max()),
-            "tcp_track_max_mm": float(np.nanmax(tcp_err) * 1e3),
-            "peak_current_A": float(np.nanmax(np.abs(self.signals["i_FB_A"][run]))),
-            "peak_gear_torque_Nm": float(np.nanmax(np.abs(self.signals["T_gear_Nm"][run]))),
-        }
+    def summary(self, run: int = 0) -> dict[str, float | str | None]:
+        """A few headline numbers of one run (for the command line); ``None`` where the run has no finite
+        value (a run ended by a protective stop), so that the summary stays valid JSON."""
+        import warnings
+
+        with warnings.catch_warnings():  # an all-NaN run: numpy's "All-NaN slice" warning says nothing more
+            warnings.simplefilter("ignore", RuntimeWarning)
+            err = np.abs(self.q_set_rad - self.signals["q_FB_rad"][run])
+            tcp_err = np.linalg.norm(self.tcp_m[run] - self.tcp_des_m[run], axis=-1)
+            values = {
+                "tracking_rms_deg_max_joint": float(np.degrees(np.sqrt(np.nanmean(err**2, axis=0))).max()),
+                "tcp_track_max_mm": float(np.nanmax(tcp_err) * 1e3),
+                "peak_current_A": float(np.nanmax(np.abs(self.signals["i_FB_A"][run]))),
+                "peak_gear_torque_Nm": float(np.nanmax(np.abs(self.signals["T_gear_Nm"][run]))),
+            }
+        return {"duration_s": float(self.t_s[-1]), "status": self.status[run],
+                **{k: v if np.isfinite(v) else None for k, v in values.items()}}

@@ -40,6 +40,7 @@ def test_fleet_draws_are_deterministic_and_do_not_depend_on_fleet_size():
     ({"failure": {"feature": "tcp_dev_max_m"}}, "life.failure.feature"),
     ({"failure": {"threshold": -1}}, "life.failure.threshold"),
     ({"wear": {"unit_sigma": -1}}, "life.wear.unit_sigma"),
+    ({"wear": {"backlash_rate_deg_per_MJ": float("nan")}}, r"^t: life.wear.backlash_rate_deg_per_MJ = nan"),
     ({"wear": {"rate": 1}}, "life.wear"),
     ({"duty": {"payload_kg": [2, 1]}}, "life.duty.payload_kg"),
     ({"duty": {"trajectories": ["nowhere"]}}, "trajector"),

@@ -22,7 +22,9 @@ def register(sub) -> None:
                         "(default: none, the inputs are scored as they are)")
     d.add_argument("--detector", required=True,
                    help="folder of the saved classifiers (a benchmark folder with models/, or models/ itself)")
-    d.add_argument("--out", required=True, help="output folder (diagnosis.json, report.md, diagnosis.png)")
+    d.add_argument("--out", required=True, help="output folder (diagnosis.json, report.md, diagnosis.png; created)")
+    d.add_argument("--replace", action="store_true",
+                   help="replace an earlier result at --out (default: refused, nothing a user made is lost silently)")
     d.set_defaults(func=cmd_diagnose)
 
 
@@ -33,11 +35,11 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
     from ...errors import ParameterError
     from ...logs.length import check_files_length, check_logs_length
     from ...logs.options import log_entries, read_entry
-    from ...util.io import check_writable
+    from ...util.io import check_new_output
     from ..diagnostics.classifier import require_sklearn
     from ..diagnostics.saved import load_models
     from . import diagnose, robot_baseline
-    from .report import write_diagnosis
+    from .report import FIGURE_FILE, JSON_FILE, REPORT_FILE, write_diagnosis
     from .score import check_schema
     from .windows import window_length
 
@@ -63,7 +65,7 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
             raise ParameterError(f"{entries[0].path} is both diagnosed and a baseline log; a run cannot judge "
                                  "itself: give other healthy logs of the robot")
     require_sklearn()
-    check_writable(args.out, folder=True)
+    check_new_output(args.out, folder=True, results=(JSON_FILE, REPORT_FILE, FIGURE_FILE), replace=args.replace)
     window_s = check_schema(load_models(args.detector)[1], args.detector)  # refused before the replay
     check_files_length([e.path for e in (*entries, *base)], "diagnose")
     log = read_entry(entries[0], window_length(window_s))

@@ -20,6 +20,7 @@ from typing import Any
 import pandas as pd
 
 from ...errors import ConfigFileError, ParameterError
+from ...util.io import check_new_output
 from .calibration import fit_calibration, test_reliability
 from .data import CONTEXT_COLUMNS, FEATURE_SETS, Dataset, has_twin_features, load_dataset, load_features
 from .limit_metrics import for_dataset
@@ -36,7 +37,7 @@ from .metrics import (
 )
 from .models import Models, fit_models
 from .report import write_report
-from .saved import check_inputs, load_models, save_models
+from .saved import MODELS_DIR, check_inputs, load_models, save_models
 from .thresholds import PAPER_TCP_MM, backlash_thresholds
 
 
@@ -175,9 +176,13 @@ def _split_by(te: pd.DataFrame) -> str:
     return "trajectory seed" if ":" in g else "split group"
 
 
+#: what a benchmark writes into its report folder; one of them there is an earlier result
+RESULT_FILES = ("report.md", "metrics.json", MODELS_DIR)
+
+
 def run_benchmark(campaign_dir: str | Path, out: str | Path | None = None, *, seed: int = 0,
                   shuffle_labels: bool = False, feature_set: str | None = None, test_dir: str | Path | None = None,
-                  compare: bool = True, jobs: int = 1) -> dict[str, Any]:
+                  compare: bool = True, jobs: int = 1, replace: bool = True) -> dict[str, Any]:
     """``ur5fault benchmark``: evaluate a campaign folder and write ``report.md``, ``metrics.json``, the figures
     and the trained classifiers (``models/``) into ``out`` (default ``<campaign_dir>/benchmark``); return the
     metrics.
@@ -190,8 +195,18 @@ def run_benchmark(campaign_dir: str | Path, out: str | Path | None = None, *, se
             control) and add the table.
         jobs: worker processes for the comparison's evaluations, run while this process trains and scores the
             chosen set (1: all in this process, one after the other; the figures are the same either way).
+        replace: replace an earlier report and classifiers in the report folder (False: refused in one line
+            before any work, as `ur5fault benchmark` does without --replace).
     """
     campaign_dir = Path(campaign_dir)
+    base = campaign_dir if campaign_dir.is_dir() else campaign_dir.parent
+    if out is not None:
+        out_dir = Path(out)
+    elif test_dir is not None:
+        out_dir = (Path(test_dir) if Path(test_dir).is_dir() else Path(test_dir).parent) / "benchmark_transfer"
+    else:
+        out_dir = base / ("benchmark_shuffled" if shuffle_labels else "benchmark")
+    check_new_output(out_dir, folder=True, results=RESULT_FILES, replace=replace)  # before reading or training
     features = load_features(campaign_dir)
     thr = PAPER_TCP_MM
     manifest = campaign_dir / "manifest.json"
@@ -207,7 +222,6 @@ def run_benchmark(campaign_dir: str | Path, out: str | Path | None = None, *, se
     compare = compare and feature_set is None  # a chosen set is scored alone
     if feature_set is None:
         feature_set = "both" if has_twin_features(features) else "paper"
-    base = campaign_dir if campaign_dir.is_dir() else campaign_dir.parent
     if test_dir is not None:
         if shuffle_labels:
             raise ParameterError("--shuffle-labels trains new classifiers; --test scores saved ones: use one of them")
@@ -216,8 +230,6 @@ def run_benchmark(campaign_dir: str | Path, out: str | Path | None = None, *, se
         metrics, figures = evaluate(features, seed=seed, threshold_mm=thr, source=str(test_dir), saved=saved,
                                     test_features=load_features(test_dir), with_importance=False)
         metrics.pop("_models")
-        out_dir = Path(out) if out is not None else (test_dir if test_dir.is_dir() else test_dir.parent) / (
-            "benchmark_transfer")
         write_report(metrics, figures, out_dir)
         metrics["out"] = str(out_dir)
         return metrics
@@ -229,7 +241,6 @@ def run_benchmark(campaign_dir: str | Path, out: str | Path | None = None, *, se
     if compare:
         metrics["comparison"] = (compare_feature_sets(features, seed, thr, str(campaign_dir)) if pending is None
                                  else {fs: {k: f.result() for k, f in row.items()} for fs, row in pending.items()})
-    out_dir = Path(out) if out is not None else base / ("benchmark_shuffled" if shuffle_labels else "benchmark")
     write_report(metrics, figures, out_dir)
     if not shuffle_labels:
         save_models(models, load_dataset(features, feature_set), feature_set,

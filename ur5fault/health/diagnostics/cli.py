@@ -12,6 +12,9 @@ def register(sub) -> None:
                                          "split (needs scikit-learn: pip install 'scikit-learn>=1.3')")
     b.add_argument("dir", help="campaign output folder (with features.parquet), e.g. results/diagnostics")
     b.add_argument("--out", help="report folder (default: DIR/benchmark)")
+    b.add_argument("--replace", action="store_true",
+                   help="replace an earlier report and classifiers in the report folder (default: refused, nothing a "
+                        "user made is lost silently)")
     b.add_argument("--seed", type=int, default=0, help="random state of the classifiers and the bootstrap (default 0)")
     b.add_argument("--shuffle-labels", action="store_true",
                    help="control run: permute the training labels (every score must fall to chance)")
@@ -32,7 +35,6 @@ def cmd_benchmark(args: argparse.Namespace) -> int:
 
     from ...campaign.limits import effective_jobs
     from ...errors import ParameterError
-    from ...util.io import check_writable
     from . import run_benchmark
 
     t0 = time.perf_counter()
@@ -40,11 +42,9 @@ def cmd_benchmark(args: argparse.Namespace) -> int:
         raise ParameterError("--features chooses the inputs of new classifiers; --test scores saved ones with "
                              "their own inputs: use one of them")
     jobs, _ = effective_jobs(args.jobs)  # the campaigns' rule: at least 1, at most the cores available
-    if args.out is not None:  # before the data are read and the classifiers trained, not after
-        check_writable(args.out, folder=True)
     m = run_benchmark(args.dir, args.out, seed=args.seed, shuffle_labels=args.shuffle_labels,
                       feature_set=args.features, test_dir=args.test,
-                      jobs=jobs)
+                      jobs=jobs, replace=args.replace)  # the report folder checked before any training
     det, loc, kind = m["detection"], m["localisation"], m["kind"]
     print(f"{m['dataset']['n_train']} train / {m['dataset']['n_test']} test runs, features {m['feature_set']}"
           + (" (training labels shuffled)" if m["shuffled_labels"] else ""))

@@ -11,6 +11,9 @@ from pathlib import Path
 
 from ...logs.options import add_log_options
 
+#: what `monitor` writes into --out (report.py); one of them there is an earlier result
+RESULT_FILES = ("monitor.json", "baseline.json", "report.md")
+
 
 def register(sub) -> None:
     p = sub.add_parser("monitor", help="compare new logs of a robot with its fitted baseline: consistent, changed "
@@ -26,7 +29,10 @@ def register(sub) -> None:
     src.add_argument("--baseline-stats", metavar="FILE",
                      help="baseline.json written by an earlier ur5fault monitor with the same overlay; this or "
                           "--baseline-logs is required")
-    p.add_argument("--out", required=True, help="output folder (monitor.json, baseline.json, report.md, figures)")
+    p.add_argument("--out", required=True, help="output folder (monitor.json, baseline.json, report.md, figures; "
+                                                "created)")
+    p.add_argument("--replace", action="store_true",
+                   help="replace an earlier result at --out (default: refused, nothing a user made is lost silently)")
     p.add_argument("--event-channels", nargs="+", choices=("current", "position"), default=["current"],
                    metavar="CHANNEL",
                    help="the residuals events are judged on: current (default) and/or position (the measured "
@@ -42,7 +48,7 @@ def cmd_monitor(args: argparse.Namespace) -> int:
     from ...logs.measured import assumption_notes
     from ...logs.options import log_entries, read_log_options
     from ...sim.params import load_params
-    from ...util.io import check_writable
+    from ...util.io import check_new_output
     from .baseline import Baseline, fit_baseline, overlay_sha256
     from .observe import BASELINE_SCREEN_S, observe
     from .report import write
@@ -51,7 +57,7 @@ def cmd_monitor(args: argparse.Namespace) -> int:
     jobs = (os.cpu_count() or 1) if args.jobs is None else args.jobs
     if jobs < 1:
         raise ParameterError(f"--jobs {jobs} must be at least 1")
-    check_writable(args.out, folder=True)
+    check_new_output(args.out, folder=True, results=RESULT_FILES, replace=args.replace)
     overlay = Overlay.load(args.baseline)
     sha = overlay_sha256(dict(overlay.params), overlay.effects)
     stats = None

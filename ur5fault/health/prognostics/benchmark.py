@@ -14,6 +14,7 @@ import pandas as pd
 
 from ...errors import ConfigFileError
 from ...util.io import (
+    check_new_output,
     check_stored,
     read_parquet_stored,
     remove_stale_temporaries,
@@ -202,18 +203,26 @@ def predict(df: pd.DataFrame, failure: Failure, seed: int = 0, twin: TwinSetup |
     return pred, fitted, hi_all
 
 
+#: what a prognose benchmark writes into its report folder; one of them there is an earlier result
+RESULT_FILES = ("report.md", "metrics.json")
+
+
 def run_prognose(folder: Path, out: Path | None = None, *, seed: int = 0, twin: bool = False,
                  twin_model: Overlay | None = None, twin_calibration: str = "pooled",
-                 twin_cache: Path | None = None, twin_friction: str = "learned") -> dict[str, Any]:
+                 twin_cache: Path | None = None, twin_friction: str = "learned",
+                 replace: bool = True) -> dict[str, Any]:
     """The benchmark on a life-campaign folder; returns the metrics written to ``out/metrics.json``.
     ``twin_model``: the overlay the twin runs instead of the packaged model (a model error the twin carries);
     ``twin_calibration``: one of twin_rul.CALIBRATIONS; ``twin_cache``: the file of the twin's
-    radii (twin_cache.py), default ``out/twin_radii.json``; ``twin_friction``: one of :data:`TWIN_FRICTION`."""
+    radii (twin_cache.py), default ``out/twin_radii.json``; ``twin_friction``: one of :data:`TWIN_FRICTION`;
+    ``replace``: replace an earlier report in ``out`` (False: refused in one line before any work, as `ur5fault
+    prognose` does without --replace; the twin's radius cache there is a cache, read and extended either way)."""
     if twin_friction not in TWIN_FRICTION:
         raise ConfigFileError(f"twin friction must be one of {', '.join(TWIN_FRICTION)}, not {twin_friction!r}")
     t0 = time.perf_counter()
     folder = Path(folder)
     out = Path(out) if out is not None else folder.parent / "benchmark"
+    check_new_output(out, folder=True, results=RESULT_FILES, replace=replace)  # before reading or simulating
     df, manifest = load_inspections(folder)
     failure = Failure(**manifest["failure"]) if isinstance(manifest.get("failure"), dict) else Failure()
     setup = None

@@ -17,6 +17,9 @@ def register(sub) -> None:
                                         "units (report.md, metrics.json, figures)")
     p.add_argument("dir", help="life campaign folder (with inspections.parquet), e.g. results/prognostics/fleet")
     p.add_argument("--out", help="report folder (default: DIR/../benchmark)")
+    p.add_argument("--replace", action="store_true",
+                   help="replace an earlier report in the report folder (default: refused, nothing a user made is "
+                        "lost silently; the twin's radius cache there is read and extended either way)")
     p.add_argument("--seed", type=int, default=0,
                    help="random state of the RUL distributions' Monte Carlo draws (default: 0)")
     p.add_argument("--twin", action="store_true",
@@ -79,7 +82,7 @@ def cmd_prognose(args: argparse.Namespace) -> int:
     m = run_prognose(Path(args.dir), Path(args.out) if args.out else None, seed=args.seed, twin=args.twin,
                      twin_model=model, twin_calibration=args.twin_calibration or "pooled",
                      twin_cache=Path(args.twin_cache) if args.twin_cache else None,
-                     twin_friction=args.twin_friction or "learned")
+                     twin_friction=args.twin_friction or "learned", replace=args.replace)
     print(f"{m['dataset']['n_train_units']} train / {m['dataset']['n_test_units']} test units")
     for name in m["estimators"]:
         r = m["estimators"][name]

@@ -93,7 +93,13 @@ class WearLaw:
         for key in data:
             if key not in names:
                 raise UnknownNameError("key", key, names, where)
-        return cls(**data)
+        try:
+            return cls(**data)
+        except ParameterError as exc:  # name the file and key path, as every other key of the life section
+            text = str(exc)
+            if where != "life.wear" and text.startswith("life.wear."):
+                raise ParameterError(where + text[len("life.wear"):]) from None
+            raise
 
 
 def stream(seed: int, unit: int, inspection: int, purpose: int) -> np.random.Generator:
