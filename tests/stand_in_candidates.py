@@ -21,3 +21,15 @@ class Offset:
 
     def bounds(self):
         return np.full(1, -np.inf), np.full(1, np.inf)
+
+
+@dataclasses.dataclass(frozen=True)
+class Col:
+    """A stand-in candidate of any label: on ``joint`` (None: the robot's), ``n_coef`` coefficients, unbounded."""
+
+    label: str
+    joint: int | None = None
+    n_coef: int = 1
+
+    def bounds(self):
+        return np.full(self.n_coef, -np.inf), np.full(self.n_coef, np.inf)

@@ -7,6 +7,7 @@ import dataclasses
 
 import numpy as np
 import pytest
+from stand_in_candidates import Col
 
 from ur5fault.discrepancy.refinement import polish, probe_batch
 from ur5fault.discrepancy.search import columns_of, forward
@@ -31,17 +32,6 @@ def ar1(rng, rho, shape):
     for t in range(1, shape[0]):
         out[t] = rho * out[t - 1] + np.sqrt(1 - rho**2) * e[t]
     return out
-
-
-@dataclasses.dataclass(frozen=True)
-class Col:
-    """A stand-in candidate with one coefficient."""
-
-    label: str
-    n_coef: int = 1
-
-    def bounds(self):
-        return np.full(self.n_coef, -np.inf), np.full(self.n_coef, np.inf)
 
 
 def test_effective_n_follows_the_autocorrelation():

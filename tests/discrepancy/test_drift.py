@@ -3,10 +3,9 @@ on synthetic linear problems (no simulation)."""
 
 from __future__ import annotations
 
-import dataclasses
-
 import numpy as np
 import pytest
+from stand_in_candidates import Col
 
 from ur5fault.discrepancy.drift import Drift, bumps
 from ur5fault.discrepancy.search import columns_of, forward, judge
@@ -15,16 +14,6 @@ from ur5fault.discrepancy.statistics import BlockGram
 PERIOD_S = 0.008
 N = 2500  # 20 s at 125 Hz, the screened part
 SIGNALS = ("current_A", "position_rad")
-
-
-@dataclasses.dataclass(frozen=True)
-class Col:
-    label: str
-    joint: int | None = None
-    n_coef: int = 1
-
-    def bounds(self):
-        return np.full(self.n_coef, -np.inf), np.full(self.n_coef, np.inf)
 
 
 def test_bumps_are_zero_mean_orthonormal_and_five_seconds_apart():

@@ -4,12 +4,12 @@ simulation; expected values computed by hand in the tests."""
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from types import SimpleNamespace
 
 import numpy as np
 import pytest
+from stand_in_candidates import Col
 
 from ur5fault.discrepancy import DiscrepancyModel
 from ur5fault.discrepancy.drift import Drift
@@ -21,16 +21,6 @@ from ur5fault.errors import ParameterError
 PERIOD_S = 0.008
 N = 2500  # 20 s at 125 Hz, the screened part
 SIGNALS = ("current_A", "position_rad")
-
-
-@dataclasses.dataclass(frozen=True)
-class Col:
-    label: str
-    joint: int | None = None
-    n_coef: int = 1
-
-    def bounds(self):
-        return np.full(self.n_coef, -np.inf), np.full(self.n_coef, np.inf)
 
 
 def test_the_minimum_hold_is_the_position_loops_two_percent_settling_time():
