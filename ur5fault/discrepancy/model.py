@@ -39,6 +39,7 @@ from .refinement import FindingSet, Refined, polish
 from .rescreen import rescreen
 from .rivals import list_rivals
 from .search import columns_of
+from .stage_bar import StageBar
 from .weighting import OwnVariance, VarianceGroups
 
 logger = logging.getLogger(__name__)
@@ -58,33 +59,6 @@ LIKELIHOODS = ("per_channel", "per_condition", "pooled")
 LIKELIHOOD = "pooled"
 #: the current held at rest as a nuisance (``rest_hold.py``): off (measured in docs/discrepancy.md)
 REST_HOLD = False
-class _Stages:
-    """Progress of the workflow on one tqdm bar (``ur5fault.util.progress``): one unit per stage."""
-
-    NAMES = ("screening the library", "discovering terms", "refining the findings", "judging")
-
-    def __init__(self, enabled: bool) -> None:
-        from ..util import progress
-
-        self.bar = progress.bar(len(self.NAMES), "discrepancy", "stage", enabled=enabled,
-                                bar_format="{desc}: {percentage:3.0f}%|{bar}| {elapsed}<{remaining}")
-        self.k = 0
-
-    def start(self, name: str):
-        self.k = self.NAMES.index(name)
-        self.bar.set_description(f"discrepancy: {name}")
-        self.bar.n = self.k
-        self.bar.refresh()
-
-        def frac(f: float) -> None:
-            self.bar.n = round(self.k + min(max(f, 0.0), 1.0), 3)
-            self.bar.refresh()
-
-        return frac
-
-    def close(self) -> None:
-        self.bar.n = len(self.NAMES)
-        self.bar.close()
 
 
 class DiscrepancyModel:
@@ -166,7 +140,7 @@ class DiscrepancyModel:
         n_all = rp.n_samples
         n_scr = n_fit if self.screen_s is None else min(n_fit, max(2, round(self.screen_s / log.period_s)))
         self.n_fit_, self.n_all_, self.n_screen_ = n_fit, n_all, n_scr
-        stages = _Stages(self.progress)
+        stages = StageBar(self.progress)
         timings: dict[str, float] = {}
         if not all(r.known for r in self.payload_.values()):
             timings["payload fit"] = t_payload
