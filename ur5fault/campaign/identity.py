@@ -41,8 +41,9 @@ INPUT_ORDER = ("identity_format", "ur5fault_version", "sim_revision", "mujoco_ve
                "motor_encoders")
 #: version of the digital twin and its features (health/twin_features.py), recorded when a campaign has them
 #: (2: the current fit over all joints with the payload CoM and latency held out, standard errors and t values;
-#: 3: the fits' current and gear-torque regressors from noise-free twins, health/twin_regressors.py)
-TWIN_RESIDUALS_FORMAT = 3
+#: 3: the fits' current and gear-torque regressors from noise-free twins, health/twin_regressors.py; 4: the current
+#: fit's payload CoM columns from noise-free twins with the CoM shifted, not the gravity torque in closed form)
+TWIN_RESIDUALS_FORMAT = 4
 #: the simulator configuration campaigns run with: passed to the engine by every campaign kind
 #: (campaign/execute.py, health/prognostics/fleet.py) and recorded here, so the identity names what ran
 DRIVE, STEPPER = "numba", "compiled"

@@ -36,15 +36,22 @@ def replay_twin(log: MeasuredLog, params_overrides: dict | None = None, base_eff
     payload, tool and temperatures only, never on its measured signals).  Its readings ``y`` carry its own sensor
     noise (seed ``seed``); its motor current ``current_true_A`` and gear torque ``torque_gear_Nm``, the twin fits'
     regressors, are those of the same replay without sensor noise (:mod:`ur5fault.health.twin_regressors`), as a
-    campaign's twin features take them."""
-    from ..twin_regressors import REGRESSOR_EFFECTS
+    campaign's twin features take them; its ``com_A_per_m``, the current fit's payload centre-of-mass columns, from
+    three more noise-free replays with the payload's centre of mass shifted (with a payload only)."""
+    from ..twin_regressors import COM_AXES, REGRESSOR_EFFECTS, com_difference, com_effects
 
     replay = LogReplay(log, params_overrides, base_effects, seed=seed)
-    rep, quiet = replay.run([(), REGRESSOR_EFFECTS])
-    for r, what in ((rep, "twin's replay"), (quiet, "noise-free twin's replay")):
+    shifted = [REGRESSOR_EFFECTS + e for e in com_effects()] if log.payload_kg > 0 else []
+    rep, quiet, *com = replay.run([(), REGRESSOR_EFFECTS, *shifted])
+    for r, what in ((rep, "twin's replay"), (quiet, "noise-free twin's replay"),
+                    *((c, f"noise-free twin's replay with the payload CoM shifted along {ax}")
+                      for c, ax in zip(com, COM_AXES))):
         if not r.ok:
             raise ParameterError(f"{log.source}: the {what} failed ({r.status}); check the log and the model")
-    return replay, dataclasses.replace(rep, current_true_A=quiet.current_true_A, torque_gear_Nm=quiet.torque_gear_Nm)
+    columns = (com_difference(np.stack([c.current_true_A for c in com]), quiet.current_true_A) if com
+               else np.zeros((*quiet.current_true_A.shape, len(COM_AXES))))
+    return replay, dataclasses.replace(rep, current_true_A=quiet.current_true_A, torque_gear_Nm=quiet.torque_gear_Nm,
+                                       com_A_per_m=columns)
 
 
 def log_windows(log: MeasuredLog, window_s: float, twin: tuple[LogReplay, Replayed]) -> list[Window]:

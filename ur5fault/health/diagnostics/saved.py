@@ -64,8 +64,10 @@ SCHEMA_FILE = "schema.json"
 #: standard errors and t values; 3: p(fault) is the fault-kind classifier by joint's score, and the calibration
 #: map saved is that score's (formats 1-2 calibrated the run-level detector: refused in one line); 4: the twin fits'
 #: regressors come from noise-free twins (twin residuals format 3, health/twin_regressors.py), so the twin
-#: estimates a format-3 classifier learnt do not mean what ``ur5fault diagnose`` now computes (refused likewise)
-SCHEMA_FORMAT = 4
+#: estimates a format-3 classifier learnt do not mean what ``ur5fault diagnose`` now computes (refused likewise);
+#: 5: the current fit's payload CoM columns come from CoM-shifted noise-free twins (twin residuals format 4), which
+#: moves wrist 2's current estimates (refused likewise)
+SCHEMA_FORMAT = 5
 #: what to run when the saved classifiers fail their checksums
 RESAVE = "run `ur5fault benchmark` on the training campaign again to save them anew"
 #: median absolute deviation -> standard deviation of a normal distribution
@@ -193,11 +195,13 @@ def load_models(folder: str | Path) -> tuple[Models, dict[str, Any]]:
                               f"{' '.join(str(exc).split())[:100]}); {RESAVE}") from None
     fmt = schema.get("schema_format", 1)
     if not isinstance(fmt, int) or fmt < SCHEMA_FORMAT:
-        why = ("whose twin estimates took their regressors from the noisy twin" if fmt == 3
+        why = ("whose twin estimates fitted the payload CoM's gravity torque alone" if fmt == 4
+               else "whose twin estimates took their regressors from the noisy twin" if fmt == 3
                else "whose p(fault) is the run-level detector's")
         raise ConfigFileError(f"{folder}: saved with schema format {fmt}, {why} (this version reads format "
                               f"{SCHEMA_FORMAT}: p(fault) from the fault-kind classifier by joint, calibrated, on twin "
-                              "estimates with noise-free regressors); run the campaign and `ur5fault benchmark` again")
+                              "estimates with noise-free regressors and CoM columns); run the campaign and "
+                              "`ur5fault benchmark` again")
     if fmt > SCHEMA_FORMAT:
         raise ConfigFileError(f"{folder}: schema format {fmt} is newer than this version reads ({SCHEMA_FORMAT}); "
                               "update ur5fault")
