@@ -431,14 +431,12 @@ def test_classifiers_of_an_older_format_are_refused_in_one_line(tmp_path, capsys
     run_benchmark(tmp_path, compare=False)
     path = tmp_path / "benchmark" / "models" / SCHEMA_FILE
     s = json.loads(path.read_text())
-    assert s["schema_format"] == 5
+    assert s["schema_format"] == 4
     load_models(tmp_path / "benchmark")
-    # format 4: the current fit's payload CoM columns were the CoM's gravity torque alone; format 3: the twin
-    # estimates' regressors were the noisy twin's own signals; format 2: p(fault) and its
+    # format 3: the twin estimates' regressors were the noisy twin's own signals; format 2: p(fault) and its
     # calibration were the run-level detector's; format 1: the twin estimates were fitted without the payload CoM
     # and latency held out - all refused, by the benchmark and by diagnose
-    for old, why in ((4, "whose twin estimates fitted the payload CoM's gravity torque alone"),
-                     (3, "whose twin estimates took their regressors from the noisy twin"),
+    for old, why in ((3, "whose twin estimates took their regressors from the noisy twin"),
                      (2, "whose p.fault. is the run-level"), (1, "whose p.fault. is the run-level")):
         s["schema_format"] = old
         path.write_text(json.dumps(s))
@@ -449,7 +447,7 @@ def test_classifiers_of_an_older_format_are_refused_in_one_line(tmp_path, capsys
         err = capsys.readouterr().err
         assert err.startswith("ur5fault: error: ") and err.count("\n") == 1 and f"format {old}" in err
     # a file without the kind classifier by joint's threshold (the source of p(fault)) is refused too
-    s["schema_format"] = 5
+    s["schema_format"] = 4
     s["joint_kind_threshold_5pct_false_alarms"] = None
     path.write_text(json.dumps(s))
     checksum_path(path).unlink(missing_ok=True)  # as saved before sidecars: edited, not damaged

@@ -57,7 +57,8 @@ def _synthetic_table(rng: np.random.Generator, n: int = 240) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-def _save_stand_in(folder: Path, calibrated: bool, limit_calibration: dict | None = None) -> Path:
+def _save_stand_in(folder: Path, calibrated: bool, limit_calibration: dict | None = None,
+                   twin_com_twins: bool = False) -> Path:
     ds = load_dataset(_synthetic_table(np.random.default_rng(0)), "twin")
     models = fit_models(ds, seed=0)
     healthy = (ds.test["fault"] == "healthy").to_numpy()
@@ -67,7 +68,7 @@ def _save_stand_in(folder: Path, calibrated: bool, limit_calibration: dict | Non
         models.calibrator, fit = fit_calibration(ds, seed=0)
         info = fit["info"]
     save_models(models, ds, "twin", 0.5, folder, window_s=WINDOW_S, log_period_s=1e-3, calibration=info,
-                joint_kind_threshold=joint_thr, limit_calibration=limit_calibration)
+                joint_kind_threshold=joint_thr, limit_calibration=limit_calibration, twin_com_twins=twin_com_twins)
     return folder
 
 
@@ -189,6 +190,26 @@ def test_healthy_window_offsets_within_three_standard_errors_of_zero(logs):
     # noise-free twins (format 4) every estimate is within 3
     for est, se, _ in _offsets(logs["healthy"]):
         assert np.all(np.abs(est) <= 3.0 * se), (est, se)
+
+
+def test_a_detector_trained_with_com_twins_has_them_replayed(logs, tmp_path_factory):
+    # a campaign with twin_com_twins fits the payload CoM with columns from CoM-shifted noise-free twins: diagnose
+    # replays them for such a detector, and refuses a twin replayed without them (its features would differ)
+    from ur5fault.errors import ParameterError
+    from ur5fault.health.diagnosis import diagnose, replay_twin
+    from ur5fault.logs import read_log
+
+    det = _save_stand_in(tmp_path_factory.mktemp("com_twins"), calibrated=False, twin_com_twins=True)
+    log = read_log(logs["healthy"], "sim")
+    plain = replay_twin(log)
+    assert plain[1].com_A_per_m is None
+    with pytest.raises(ParameterError, match="CoM twins"):
+        diagnose(log, det, twin=plain)
+    replay, rep = replay_twin(log, com_twins=True)
+    assert rep.com_A_per_m.shape == (*rep.current_true_A.shape, 3)
+    assert np.abs(rep.com_A_per_m[:, 1:5]).max() > 0  # J2-J5 carry the held payload's CoM torque
+    out = diagnose(log, det, twin=(replay, rep))
+    assert out["windows"] and all(np.isfinite(w["p_fault"]) for w in out["windows"])
 
 
 def test_a_simulated_log_carries_the_grippers_schedule(logs):

@@ -100,15 +100,15 @@ def test_com_columns_are_differences_per_metre_interpolated_in_mass():
         g.com_columns(1.0)
 
 
-def test_campaign_batches_simulate_com_twins_above_zero_kg_only():
+def test_campaign_batches_simulate_com_twins_above_zero_kg_only_with_the_option():
     from types import SimpleNamespace
 
     from ur5fault.campaign.digital_twin import regressor_id, regressor_runs
 
-    camp = SimpleNamespace(base_effects=())
     batch = [SimpleNamespace(cond={"payload_kg": 0.4}), SimpleNamespace(cond={"payload_kg": 1.0})]
-    grid, runs = regressor_runs(camp, batch, 28.0)
-    assert grid == (0.0, 1.0)
+    grid, runs = regressor_runs(SimpleNamespace(base_effects=(), twin_com_twins=False), batch, 28.0)
+    assert grid == (0.0, 1.0) and set(runs) == {regressor_id(0.0), regressor_id(1.0)}  # the option off
+    grid, runs = regressor_runs(SimpleNamespace(base_effects=(), twin_com_twins=True), batch, 28.0)
     assert set(runs) == {regressor_id(0.0), regressor_id(1.0), *(regressor_id(1.0, ax) for ax in "xyz")}
     shift = runs[regressor_id(1.0, "z")][1][-1]
     assert shift.name == "payload_com" and dict(shift.values) == {"dx_m": 0.0, "dy_m": 0.0, "dz_m": COM_STEP_M}

@@ -161,16 +161,18 @@ def _simulate_batch(camp: Campaign, batch: Sequence[CampaignRun], ts_dir: str | 
 
 def _regressor_grid(res, grid, grid_at: dict[str, int], temperature_C: float, qd, params):
     """The batch's :class:`~ur5fault.health.twin_regressors.RegressorGrid` from its noise-free twins (``grid_at``:
-    run id -> index in ``res``), with the centre-of-mass columns of its CoM twins (zero at 0 kg)."""
+    run id -> index in ``res``), with the centre-of-mass columns of its CoM twins (zero at 0 kg) where it has them."""
     from ..health.twin_regressors import COM_AXES, RegressorGrid, com_difference
     from .digital_twin import regressor_id
 
     base = [grid_at[regressor_id(kg)] for kg in grid]
     i_a = res["i_q_A"][base]
-    com = np.zeros((*i_a.shape, len(COM_AXES)))
-    for g, kg in enumerate(grid):
-        if kg > 0:
-            com[g] = com_difference(res["i_q_A"][[grid_at[regressor_id(kg, ax)] for ax in COM_AXES]], i_a[g])
+    com = None
+    if any(regressor_id(kg, COM_AXES[0]) in grid_at for kg in grid):  # the campaign's twin_com_twins
+        com = np.zeros((*i_a.shape, len(COM_AXES)))
+        for g, kg in enumerate(grid):
+            if kg > 0:
+                com[g] = com_difference(res["i_q_A"][[grid_at[regressor_id(kg, ax)] for ax in COM_AXES]], i_a[g])
     return RegressorGrid(np.asarray(grid), temperature_C, i_a, res["T_gear_Nm"][base], qd, params, com)
 
 
@@ -196,7 +198,9 @@ def _add_twin_features(row: dict[str, Any], res, i: int, k: int, params, cond: d
     names = ("q_FB_rad", "q_M_FB_rad", "i_FB_A")
     row.update(twin_features(res.t_s, res.q_set_rad, {n: res[n][i] for n in names},
                              {**{n: res[n][k] for n in names}, "i_q_A": i_a, "T_gear_Nm": torque,
-                              "com_A_per_m": regressors.com_columns(payload_kg)}, params, payload_kg, held, motion))
+                              **({} if regressors.com_A_per_m is None
+                                 else {"com_A_per_m": regressors.com_columns(payload_kg)})},
+                             params, payload_kg, held, motion))
 
 
 def run_campaign(camp: Campaign, out: Path | None = None, *, jobs: int | None = None, backend: str = "loky",

@@ -64,10 +64,8 @@ SCHEMA_FILE = "schema.json"
 #: standard errors and t values; 3: p(fault) is the fault-kind classifier by joint's score, and the calibration
 #: map saved is that score's (formats 1-2 calibrated the run-level detector: refused in one line); 4: the twin fits'
 #: regressors come from noise-free twins (twin residuals format 3, health/twin_regressors.py), so the twin
-#: estimates a format-3 classifier learnt do not mean what ``ur5fault diagnose`` now computes (refused likewise);
-#: 5: the current fit's payload CoM columns come from CoM-shifted noise-free twins (twin residuals format 4), which
-#: moves wrist 2's current estimates (refused likewise)
-SCHEMA_FORMAT = 5
+#: estimates a format-3 classifier learnt do not mean what ``ur5fault diagnose`` now computes (refused likewise)
+SCHEMA_FORMAT = 4
 #: what to run when the saved classifiers fail their checksums
 RESAVE = "run `ur5fault benchmark` on the training campaign again to save them anew"
 #: median absolute deviation -> standard deviation of a normal distribution
@@ -101,14 +99,15 @@ def healthy_reference(train: pd.DataFrame, inputs: list[str] | tuple[str, ...]) 
 def save_models(models: Models, ds: Dataset, feature_set: str, threshold_score: float, out: Path,
                 window_s: float | None = None, log_period_s: float | None = None,
                 calibration: dict[str, Any] | None = None, joint_kind_threshold: float | None = None,
-                joint_kind_threshold_from: str | None = None, limit_calibration: dict[str, Any] | None = None
-                ) -> Path:
+                joint_kind_threshold_from: str | None = None, limit_calibration: dict[str, Any] | None = None,
+                twin_com_twins: bool = False) -> Path:
     """Write the classifiers and their schema into ``out/models``; return that folder (``window_s``,
     ``log_period_s``: the training runs' simulated duration and log period, from the campaign manifest;
     ``calibration``: how ``models.calibrator`` was fitted, recorded in the schema; ``joint_kind_threshold_from``:
     where the by-joint operating point was read, :data:`.metrics.FROM_OUT_OF_FOLD` for ``ur5fault benchmark``;
     ``limit_calibration``: :meth:`.limits.LimitCalibration.to_dict` of the training runs, for the detection limits
-    of ``ur5fault diagnose``)."""
+    of ``ur5fault diagnose``; ``twin_com_twins``: the campaign's twin fits took their payload CoM columns from
+    CoM-shifted noise-free twins, which ``ur5fault diagnose`` must then replay too)."""
     import sklearn
     import skops
     import skops.io as sio
@@ -144,6 +143,9 @@ def save_models(models: Models, ds: Dataset, feature_set: str, threshold_score: 
         "skops_version": skops.__version__,
         "window_s": None if window_s is None else float(window_s),
         "log_period_s": None if log_period_s is None else float(log_period_s),
+        # the twin fits' payload CoM columns: from CoM-shifted noise-free twins (true; the campaign's twin_com_twins)
+        # or the CoM's gravity torque (false, and absent in files saved before the option)
+        "twin_com_twins": bool(twin_com_twins),
         # None: p(fault) is the detector's own probability, not calibrated (classifiers saved before calibration)
         "calibration": None if models.calibrator is None else (calibration or {"method": "unrecorded"}),
         # the reference a robot's own healthy baseline is referred to (ur5fault diagnose --baseline-logs)
@@ -195,13 +197,11 @@ def load_models(folder: str | Path) -> tuple[Models, dict[str, Any]]:
                               f"{' '.join(str(exc).split())[:100]}); {RESAVE}") from None
     fmt = schema.get("schema_format", 1)
     if not isinstance(fmt, int) or fmt < SCHEMA_FORMAT:
-        why = ("whose twin estimates fitted the payload CoM's gravity torque alone" if fmt == 4
-               else "whose twin estimates took their regressors from the noisy twin" if fmt == 3
+        why = ("whose twin estimates took their regressors from the noisy twin" if fmt == 3
                else "whose p(fault) is the run-level detector's")
         raise ConfigFileError(f"{folder}: saved with schema format {fmt}, {why} (this version reads format "
                               f"{SCHEMA_FORMAT}: p(fault) from the fault-kind classifier by joint, calibrated, on twin "
-                              "estimates with noise-free regressors and CoM columns); run the campaign and "
-                              "`ur5fault benchmark` again")
+                              "estimates with noise-free regressors); run the campaign and `ur5fault benchmark` again")
     if fmt > SCHEMA_FORMAT:
         raise ConfigFileError(f"{folder}: schema format {fmt} is newer than this version reads ({SCHEMA_FORMAT}); "
                               "update ur5fault")
