@@ -155,14 +155,14 @@ def test_current_offset_on_wrist_1_is_found_there_at_its_size(logs, detector, tm
 HEALTHY_OFFSET_A = 0.02
 
 
-def _offsets(log_path: Path) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
+def _offsets(log_path: Path, com_twins: bool = False) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
     """Per 2.5 s window: the current-offset estimates of the six joints, their standard errors and VIFs."""
     from ur5fault.health.diagnosis import replay_twin
     from ur5fault.health.diagnosis.windows import window_features, window_length
     from ur5fault.logs import read_log
 
     log = read_log(log_path, "sim", window_length(WINDOW_S))
-    ws = window_features(log, *replay_twin(log), WINDOW_S, {"payload_kg": float(log.payload_kg)})
+    ws = window_features(log, *replay_twin(log, com_twins=com_twins), WINDOW_S, {"payload_kg": float(log.payload_kg)})
     return [tuple(np.array([w.features[f"twin_est_current_offset_A{x}_j{j}"] for j in range(1, 7)])
                   for x in ("", "_se")) + (np.array([v["current_offset_A"] for v in w.vif]),) for w in ws]
 
@@ -184,11 +184,17 @@ def test_healthy_window_gives_no_current_offset_and_an_injected_one_comes_out(lo
             assert s[3] == pytest.approx(SMALL_OFFSET_A, abs=HEALTHY_OFFSET_A)
 
 
+@pytest.mark.xfail(strict=True, reason="not found yet: the shoulder's first-window offset is 0.010 A at 3.6 standard "
+                                       "errors (its fit confounded, VIF 43); every other estimate is within 3 "
+                                       "(with the CoM twins of twin_com_twins every estimate is: the next test)")
 def test_healthy_window_offsets_within_three_standard_errors_of_zero(logs):
-    # with the CoM's gravity torque in closed form (twin residuals format 3) the shoulder's first-window offset was
-    # 0.010 A at 3.6 standard errors (its fit confounded, VIF 43); since the CoM columns come from CoM-shifted
-    # noise-free twins (format 4) every estimate is within 3
     for est, se, _ in _offsets(logs["healthy"]):
+        assert np.all(np.abs(est) <= 3.0 * se), (est, se)
+
+
+def test_healthy_window_offsets_within_three_standard_errors_of_zero_with_com_twins(logs):
+    # the same windows with the payload CoM columns from CoM-shifted noise-free twins (twin_com_twins)
+    for est, se, _ in _offsets(logs["healthy"], com_twins=True):
         assert np.all(np.abs(est) <= 3.0 * se), (est, se)
 
 
