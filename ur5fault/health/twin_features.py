@@ -41,10 +41,11 @@ Features per joint ``j`` (units in the names):
 
   The current fit is made over all six joints at once (:mod:`ur5fault.health.twin_fit`), each joint weighted
   by its noise, with four more columns shared by the joints for the nuisance the robot does not know: the
-  payload's centre-of-mass shift along the flange's x, y, z (since twin residuals format 4 the motor current of
-  noise-free twins with the CoM shifted, minus the unshifted one's, per metre: gravity, the payload's inertia and
-  what the loops make of them, :mod:`ur5fault.health.twin_regressors`; without those twins the gravity torque of
-  the shift through the twin's kinematics, while the payload is held) and the setpoint latency (``-di_twin/dt``).
+  payload's centre-of-mass shift along the flange's x, y, z (the gravity torque of the shift through the twin's
+  kinematics, while the payload is held; with the campaign option ``twin_com_twins``, twin residuals format 4, the
+  motor current of noise-free twins with the CoM shifted minus the unshifted one's, per metre: gravity, the
+  payload's inertia and what the loops make of them, :mod:`ur5fault.health.twin_regressors`) and the setpoint
+  latency (``-di_twin/dt``).
   An offset is thus estimated with a CoM that puts a near-constant torque on the wrists held out: the CoM's torque is
   the same on J2, J3 and J4, an offset sits on one joint.  Run-level estimates of the nuisance:
   ``twin_est_payload_com_<x|y|z>_m`` [m] and ``twin_est_latency_s`` [s].
@@ -182,8 +183,9 @@ def current_fit(t_s: NDArray, q_set_rad: NDArray, residual_A: NDArray, twin: dic
     each (offset, gain error, Coulomb scale error), and the nuisance's ``(4, 2)`` (CoM x, y, z, latency; estimate
     and SE).  ``motion``: as :func:`projection_columns` takes it.  The CoM columns are ``twin["com_A_per_m"]``
     ``(n, 6, 3)`` [A/m] when given (noise-free twins with the CoM shifted: :mod:`ur5fault.health.twin_regressors`,
-    what campaigns and ``ur5fault diagnose`` pass since twin residuals format 4), else the CoM's gravity torque in
-    closed form (:func:`ur5fault.health.twin_fit.com_columns`, zero where ``payload_held`` is false)."""
+    what campaigns with ``twin_com_twins`` and ``ur5fault diagnose`` for their detectors pass), else the CoM's
+    gravity torque in closed form (:func:`ur5fault.health.twin_fit.com_columns`, zero where ``payload_held`` is
+    false)."""
     motion = _motion_for(t_s, q_set_rad, params, motion)
     cols, _ = projection_columns(t_s, q_set_rad, twin, params, motion)
     n = residual_A.shape[0]

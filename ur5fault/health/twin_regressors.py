@@ -27,7 +27,8 @@ of :mod:`ur5fault.sim.drive.kernel` in steady tracking; of the model only the vi
 temperature).  ``ur5fault diagnose`` replays one log at one payload: its noise-free twin is exact
 (:func:`ur5fault.health.diagnosis.replay_twin`).
 
-The payload centre-of-mass columns of the current fit come from noise-free twins too (twin residuals format 4):
+With the campaign option ``twin_com_twins`` (twin residuals format 4) the payload centre-of-mass columns of the
+current fit come from noise-free twins too:
 at every grid mass above zero, three more noise-free twins with the payload's centre of mass moved by
 :data:`COM_STEP_M` along the flange's x, y and z (:func:`com_effects`); a column is the difference of the shifted
 twin's motor current from the unshifted one's, per metre (:meth:`RegressorGrid.com_columns`, interpolated in the
@@ -63,9 +64,9 @@ REGRESSOR_PREFIX = "regressor-"
 #: what the regressor twins add to a twin's effects: its sensors' white noise off
 REGRESSOR_EFFECTS = (NOISE_FREE,)
 #: the payload centre-of-mass shift of the CoM regressor twins along each flange axis [m] (assumption: within the
-#: diagnostics campaign's nuisance range, +-3 cm sideways and 0-8 cm along the tool; on wrist 2 the current's
-#: response to a shift along the tool is 0.028 A/cm at 1 cm and 0.033 A/cm at 5 cm, so a finite step reads the
-#: slope over the range rather than at zero)
+#: diagnostics campaign's nuisance range, +-3 cm sideways and 0-8 cm along the tool; wrist 2's response is not
+#: linear: a shift along the tool reads +0.028 of its gain per cm at 1 cm and +0.033 per cm at 5 cm - noise-free
+#: twins, motion seed 3, 2 kg, 4 s, a scratch run - so a finite step reads the slope over the range, not at zero)
 COM_STEP_M = 0.03
 #: flange axes of the CoM regressor twins, in the columns' order
 COM_AXES = ("x", "y", "z")
