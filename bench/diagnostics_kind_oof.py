@@ -136,6 +136,7 @@ def figures(tr, p: np.ndarray, classes: list[str], fold: np.ndarray, inputs, pri
     flagged = score > thr
     up = upper_half(tr)
     per_kind = {}
+    wrist_2 = tr["fault_joint"].to_numpy(float) == 5
     for k in sorted(set(y) - {"healthy"}):
         pos = y == k
         keep, keep_up = healthy | pos, healthy | (pos & up)
@@ -143,6 +144,11 @@ def figures(tr, p: np.ndarray, classes: list[str], fold: np.ndarray, inputs, pri
                        "n_upper": int((pos & up).sum()),
                        "auc_upper": roc_auc(pos[keep_up].astype(int), score[keep_up]),
                        "flagged_upper": float(flagged[pos & up].mean())}
+        w2 = pos & wrist_2  # the kind on wrist 2 alone against every healthy run
+        if w2.any():
+            per_kind[k].update({"n_wrist_2": int(w2.sum()),
+                                "auc_wrist_2": roc_auc(w2[healthy | w2].astype(int), score[healthy | w2]),
+                                "flagged_wrist_2": float(flagged[w2].mean())})
     pred = kind_calls(p, classes, flagged, prior)
     told = tell_pair(pred, tr, 1 + (1.0 - p[:, :, classes.index(joint_kind.NONE)]).argmax(axis=1), inputs)
     labels = ["healthy"] + sorted(set(y) - {"healthy"})
@@ -202,6 +208,10 @@ def main() -> None:
               f"upper {r['kind_balanced_upper']:.3f}/"
               f"{r['kind_balanced_upper_merged']:.3f}) LOFO FA {np.round(r['false_alarms_leave_one_fold_out'], 3)}")
         print("  upper-half AUC: " + ", ".join(f"{k} {v['auc_upper']:.3f}" for k, v in r["per_kind"].items()))
+        print("  AUC all sizes: " + ", ".join(f"{k} {v['auc']:.3f}" for k, v in r["per_kind"].items()))
+        print("  wrist 2, all sizes: AUC (n, flagged) " + ", ".join(
+            f"{k} {v['auc_wrist_2']:.3f} ({v['n_wrist_2']}, {v['flagged_wrist_2']:.2f})"
+            for k, v in r["per_kind"].items() if "auc_wrist_2" in v))
 
 
 if __name__ == "__main__":

@@ -6,8 +6,8 @@ Counts the simulated run-steps of every run in ``OUT/features.parquet`` (each ru
 duration / physics step; trajectories differ in length) and of the digital twins simulated beside them
 (a campaign with ``twin_residuals``: one twin per distinct seed, payload, temperature and trajectory,
 never stored - on the diagnostics campaign 2,000 twins, 270 M run-steps beside the stored runs' 344 M) and, with
-``--campaign FILE``, the noise-free regressor twins every batch simulates on its payload grid (the batches a
-from-scratch run with ``--jobs`` plans; a resumed run may have planned others),
+``--campaign FILE``, the noise-free regressor twins every batch simulates on its payload grid, with their CoM
+twins (the batches a from-scratch run with ``--jobs`` plans; a resumed run may have planned others),
 times bare ``mj_step`` of the UR5 model in this process, and prints one JSON line: the wall time, the
 run-steps, the bare-step cost and the ratio wall x cores / (run-steps x bare step) - the overhead of
 everything (drive chain, logging, features, Parquet, process start-up, the benchmark) over stepping the
@@ -65,15 +65,15 @@ def main() -> None:
         twins = df[["seed", "payload_kg", "temperature_C", "trajectory"]].drop_duplicates()
         twin_steps = sum(steps[t] for t in twins["trajectory"])
     grid_steps = 0
-    if args.campaign:  # each batch's noise-free twins on its payload grid (health/twin_regressors.py)
+    if args.campaign:  # each batch's noise-free twins on its payload grid, with their CoM twins (twin_regressors.py)
+        from ur5fault.campaign.digital_twin import regressor_runs
         from ur5fault.campaign.execute import plan_batches
         from ur5fault.campaign.spec import load_campaign
-        from ur5fault.health.twin_regressors import payload_grid
 
         camp = load_campaign(args.campaign)
         if camp.twin_residuals:
             for batch in plan_batches(camp, camp.runs, args.jobs):
-                n = len(payload_grid(rc.cond["payload_kg"] for rc in batch))
+                n = len(regressor_runs(camp, batch, 28.0)[1])  # grid twins and their CoM twins
                 t = batch[0].cond["trajectory"]
                 t = json.dumps(t, sort_keys=True) if isinstance(t, dict) else t
                 grid_steps += n * steps[t]

@@ -232,6 +232,26 @@ def test_twin_residuals_add_features_and_change_the_identity(tmp_path):
     assert not np.isinf(df[est].to_numpy()).any()  # standard errors and t values: a number or NaN (not identified)
 
 
+def test_com_twins_option_changes_the_identity_and_the_com_estimates(tmp_path):
+    # twin_com_twins: the current fit's payload CoM columns from CoM-shifted noise-free twins (format 4); its runs
+    # get other identities (a folder of the other kind is not resumed silently) and other CoM estimates
+    from ur5fault.campaign.identity import Identities
+
+    spec = {**copy.deepcopy(TINY), "twin_residuals": True, "duration_s": 2.0}  # the payload gripped by 1 s
+    plain, com = (build_campaign({**spec, "twin_com_twins": on}, "tiny.yaml", out=tmp_path / str(on))
+                  for on in (False, True))
+    assert Identities(com).identity(com.runs[0]) != Identities(plain).identity(plain.runs[0])
+    tables = {}
+    for camp in (plain, com):
+        run_campaign(camp, camp.out, jobs=1, progress=False)
+        tables[camp.twin_com_twins] = pd.read_parquet(camp.out / "features.parquet").sort_values("run_id")
+    assert set(tables[True]["status"]) == {"ok"}
+    assert np.isfinite(tables[True]["twin_est_current_gain_err_j5"]).all()
+    assert not np.allclose(tables[True]["twin_est_payload_com_x_m"], tables[False]["twin_est_payload_com_x_m"])
+    with pytest.raises(ParameterError, match="twin_com_twins needs twin_residuals"):
+        build_campaign({**copy.deepcopy(TINY), "twin_com_twins": True}, "tiny.yaml")
+
+
 def test_twin_residuals_must_be_a_bool():
     with pytest.raises(ParameterError, match="twin_residuals"):
         build_campaign({**copy.deepcopy(TINY), "twin_residuals": "yes"}, "tiny.yaml")

@@ -7,7 +7,9 @@ centre of mass, setpoint latency: the run's ``<effect>.<param>`` conditions), an
 (an independent seed, so the residual carries the noise of both).  A run and its simulated healthy
 twin share their conditions, hence one digital twin.  Twins are simulated in the batch of their runs
 (:func:`ur5fault.campaign.execute.run_batch`), and with them the batch's noise-free twins on a grid of payload
-masses (:func:`regressor_runs`), whose motor currents and gear torques are the twin fits' regressors
+masses (:func:`regressor_runs`), whose motor currents and gear torques are the twin fits' regressors, and (option
+``twin_com_twins``) at each grid mass above zero three more with the payload's centre of mass shifted, the current
+fit's CoM columns
 (:mod:`ur5fault.health.twin_regressors`).
 """
 
@@ -45,15 +47,29 @@ def regressor_runs(camp: Campaign, batch: Sequence[CampaignRun], temperature_C: 
     """The batch's noise-free twins (:mod:`ur5fault.health.twin_regressors`): ``(grid masses [kg], run id ->
     (noise seed, effects))``, one per mass of :func:`~ur5fault.health.twin_regressors.payload_grid` of the batch's
     payloads, at ``temperature_C`` (the regressors move each run's viscous friction to its own); the base model
-    as a twin's, its sensors' white noise off.  A run's regressors come from the grid masses just below and
-    above its own payload and do not depend on the other runs of its batch."""
-    from ..health.twin_regressors import REGRESSOR_EFFECTS, REGRESSOR_PREFIX, payload_grid
+    as a twin's, its sensors' white noise off; with the campaign's ``twin_com_twins``, at each mass above zero also
+    the three CoM twins
+    (:func:`~ur5fault.health.twin_regressors.com_effects`, ids :func:`regressor_id`).  A run's regressors come from
+    the grid masses just below and above its own payload and do not depend on the other runs of its batch."""
+    from ..health.twin_regressors import COM_AXES, REGRESSOR_EFFECTS, com_effects, payload_grid
 
     grid = payload_grid(rc.cond["payload_kg"] for rc in batch)
-    runs = {f"{REGRESSOR_PREFIX}{kg:g}kg": (0, camp.base_effects + (
-        make_effect("payload", mass_kg=kg), make_effect("temperature", temperature_C=temperature_C))
-        + REGRESSOR_EFFECTS) for kg in grid}
+    runs: dict[str, tuple[int, tuple[EffectSpec, ...]]] = {}
+    for kg in grid:
+        base = camp.base_effects + (make_effect("payload", mass_kg=kg),
+                                    make_effect("temperature", temperature_C=temperature_C)) + REGRESSOR_EFFECTS
+        runs[regressor_id(kg)] = (0, base)
+        if camp.twin_com_twins and kg > 0:  # a shift of no mass moves nothing: the CoM columns at 0 kg are zero
+            for ax, shift in zip(COM_AXES, com_effects()):
+                runs[regressor_id(kg, ax)] = (0, base + shift)
     return grid, runs
+
+
+def regressor_id(kg: float, com_axis: str | None = None) -> str:
+    """Run id of the noise-free twin at grid mass ``kg``, or of its CoM twin shifted along ``com_axis``."""
+    from ..health.twin_regressors import REGRESSOR_PREFIX
+
+    return f"{REGRESSOR_PREFIX}{kg:g}kg" + ("" if com_axis is None else f"-com-{com_axis}")
 
 
 def twin_id(rc: CampaignRun) -> str:

@@ -99,7 +99,8 @@ def _simulate_batch(camp: Campaign, batch: Sequence[CampaignRun], ts_dir: str | 
     specs += [RunSpec(tid, seed, eff) for tid, (seed, eff) in twins.items()]
     grid_temp = sim.params.friction.reference_temp_C  # the regressor twins' temperature: f_v's reference
     grid, grid_runs = regressor_runs(camp, batch, grid_temp) if camp.twin_residuals else ((), {})
-    grid_index = [len(specs) + k for k in range(len(grid_runs))]
+    grid_at = {rid: len(specs) + k for k, rid in enumerate(grid_runs)}
+    grid_index = list(grid_at.values())
     specs += [RunSpec(rid, seed, eff) for rid, (seed, eff) in grid_runs.items()]
     t0 = time.perf_counter()
     res = sim.run(traj, specs, log_period_s=camp.log_period_s, duration_s=camp.duration_s)
@@ -111,7 +112,6 @@ def _simulate_batch(camp: Campaign, batch: Sequence[CampaignRun], ts_dir: str | 
     regressors = None  # the batch's noise-free twins (the fits' regressors), or (status, reason) if one failed
     if camp.twin_residuals:
         from ..health.twin_features import commanded_motion
-        from ..health.twin_regressors import RegressorGrid
 
         motion = commanded_motion(res.t_s, res.q_set_rad, sim.params)
         failed = [g for g in grid_index if res.status[g] != "ok"]
@@ -119,8 +119,7 @@ def _simulate_batch(camp: Campaign, batch: Sequence[CampaignRun], ts_dir: str | 
             regressors = (res.status[failed[0]], f"noise-free regressor twin {specs[failed[0]].run_id}: "
                                                  f"{res.reason[failed[0]]}")
         else:
-            regressors = RegressorGrid(np.asarray(grid), grid_temp, res["i_q_A"][grid_index],
-                                       res["T_gear_Nm"][grid_index], motion.qd, sim.params)
+            regressors = _regressor_grid(res, grid, grid_at, grid_temp, motion.qd, sim.params)
     held = traj.gripped(res.t_s)  # when the gripper holds the payload: the batch's trajectory
     rows = []
     for i, rc in enumerate(batch):
@@ -160,6 +159,23 @@ def _simulate_batch(camp: Campaign, batch: Sequence[CampaignRun], ts_dir: str | 
     return rows
 
 
+def _regressor_grid(res, grid, grid_at: dict[str, int], temperature_C: float, qd, params):
+    """The batch's :class:`~ur5fault.health.twin_regressors.RegressorGrid` from its noise-free twins (``grid_at``:
+    run id -> index in ``res``), with the centre-of-mass columns of its CoM twins (zero at 0 kg) where it has them."""
+    from ..health.twin_regressors import COM_AXES, RegressorGrid, com_difference
+    from .digital_twin import regressor_id
+
+    base = [grid_at[regressor_id(kg)] for kg in grid]
+    i_a = res["i_q_A"][base]
+    com = None
+    if any(regressor_id(kg, COM_AXES[0]) in grid_at for kg in grid):  # the campaign's twin_com_twins
+        com = np.zeros((*i_a.shape, len(COM_AXES)))
+        for g, kg in enumerate(grid):
+            if kg > 0:
+                com[g] = com_difference(res["i_q_A"][[grid_at[regressor_id(kg, ax)] for ax in COM_AXES]], i_a[g])
+    return RegressorGrid(np.asarray(grid), temperature_C, i_a, res["T_gear_Nm"][base], qd, params, com)
+
+
 def _add_twin_features(row: dict[str, Any], res, i: int, k: int, params, cond: dict[str, Any], held, motion,
                        regressors) -> None:
     """The twin residual features of run ``i`` against its digital twin ``k`` of the same batch (NaN, and the
@@ -181,8 +197,10 @@ def _add_twin_features(row: dict[str, Any], res, i: int, k: int, params, cond: d
     i_a, torque = regressors.signals(payload_kg, float(cond["temperature_C"]))
     names = ("q_FB_rad", "q_M_FB_rad", "i_FB_A")
     row.update(twin_features(res.t_s, res.q_set_rad, {n: res[n][i] for n in names},
-                             {**{n: res[n][k] for n in names}, "i_q_A": i_a, "T_gear_Nm": torque}, params,
-                             payload_kg, held, motion))
+                             {**{n: res[n][k] for n in names}, "i_q_A": i_a, "T_gear_Nm": torque,
+                              **({} if regressors.com_A_per_m is None
+                                 else {"com_A_per_m": regressors.com_columns(payload_kg)})},
+                             params, payload_kg, held, motion))
 
 
 def run_campaign(camp: Campaign, out: Path | None = None, *, jobs: int | None = None, backend: str = "loky",

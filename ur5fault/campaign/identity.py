@@ -41,8 +41,11 @@ INPUT_ORDER = ("identity_format", "ur5fault_version", "sim_revision", "mujoco_ve
                "motor_encoders")
 #: version of the digital twin and its features (health/twin_features.py), recorded when a campaign has them
 #: (2: the current fit over all joints with the payload CoM and latency held out, standard errors and t values;
-#: 3: the fits' current and gear-torque regressors from noise-free twins, health/twin_regressors.py)
+#: 3: the fits' current and gear-torque regressors from noise-free twins, health/twin_regressors.py; 4: the current
+#: fit's payload CoM columns from noise-free twins with the CoM shifted, not the gravity torque in closed form: the
+#: campaign option ``twin_com_twins``, recorded as format 4 where it is on; campaigns without it stay format 3)
 TWIN_RESIDUALS_FORMAT = 3
+TWIN_RESIDUALS_FORMAT_COM_TWINS = 4
 #: the simulator configuration campaigns run with: passed to the engine by every campaign kind
 #: (campaign/execute.py, health/prognostics/fleet.py) and recorded here, so the identity names what ran
 DRIVE, STEPPER = "numba", "compiled"
@@ -94,7 +97,8 @@ class Identities:
             "params": load_params(overrides=dict(camp.base_params)).to_dict(),
         }
         if camp.twin_residuals:  # only then: the identities of campaigns without twins stay as they were
-            self.common["twin_residuals"] = TWIN_RESIDUALS_FORMAT
+            self.common["twin_residuals"] = (TWIN_RESIDUALS_FORMAT_COM_TWINS if camp.twin_com_twins
+                                             else TWIN_RESIDUALS_FORMAT)
         if not camp.motor_encoders:  # likewise: recorded only when the runs are logged without them
             self.common["motor_encoders"] = False
         self._common_digest = digest(self.common)

@@ -18,6 +18,9 @@ Campaign YAML (see campaigns/default.yaml)::
     save_timeseries: false
     twin_residuals: false           # give every run its digital twin and the twin residual features
                                     # (ur5fault/health/twin_features.py); about twice the simulation
+    twin_com_twins: false           # with twin_residuals: the current fit's payload CoM columns from noise-free
+                                    # twins with the CoM shifted (twin residuals format 4; about +10 % of the
+                                    # diagnostics campaign's run-steps); false: the CoM's gravity torque (format 3)
     motor_encoders: true            # false: log like a UR robot (no motor-side encoder): every feature of
                                     # the encoder mismatch is NaN (ur5fault/health/signals.py)
 
@@ -59,7 +62,7 @@ from .sampling import sample_runs
 
 CAMPAIGN_KEYS = ("name", "out", "trajectory", "base", "sweep", "zip", "threshold_mm", "batch_size",
                  "log_period_s", "save_timeseries", "duration_s", "split", "sample", "twin_residuals",
-                 "motor_encoders")
+                 "twin_com_twins", "motor_encoders")
 BASE_KEYS = ("seed", "payload_kg", "temperature_C", "effects", "params")
 #: largest TCP acceptability threshold [mm]: the UR5's reach is 850 mm
 MAX_THRESHOLD_MM = 1000.0
@@ -87,6 +90,9 @@ class Campaign:
     twin_residuals: bool = False  # every run gets its digital twin and the twin residual features
     #: False: the runs are logged like a UR robot's, without the motor-side encoder (its features are NaN)
     motor_encoders: bool = True
+    #: with ``twin_residuals``: the current fit's payload CoM columns from CoM-shifted noise-free twins
+    #: (health/twin_regressors.py; twin residuals format 4), else the CoM's gravity torque in closed form
+    twin_com_twins: bool = False
 
     @property
     def sha256(self) -> str:
@@ -190,6 +196,9 @@ def build_campaign(data: Mapping[str, Any], where: str, text: str = "", path: Pa
     save_ts = check_bool(data.get("save_timeseries", False), f"{where}: save_timeseries")
     twin_res = check_bool(data.get("twin_residuals", False), f"{where}: twin_residuals")
     motor_enc = check_bool(data.get("motor_encoders", True), f"{where}: motor_encoders")
+    com_twins = check_bool(data.get("twin_com_twins", False), f"{where}: twin_com_twins")
+    if com_twins and not twin_res:
+        raise ParameterError(f"{where}: twin_com_twins needs twin_residuals: true (they are the twin fits' columns)")
     name = check_text(data["name"], f"{where}: name") if data.get("name") is not None else (
         path.stem if path else "campaign")
     file_out = check_text(data["out"], f"{where}: out", max_len=4096) if data.get("out") is not None else None
@@ -198,7 +207,7 @@ def build_campaign(data: Mapping[str, Any], where: str, text: str = "", path: Pa
     resolved = {**dict(data), "base": {**dict(base), "params": params}}
     return Campaign(name, path, text or yaml.safe_dump(dict(data)), out_dir, base_effects, params,
                     tuple(runs.values()), tuple(swept), thr, bs, lp, save_ts, dur, resolved,
-                    parse_split(data.get("split"), where), twin_res, motor_enc)
+                    parse_split(data.get("split"), where), twin_res, motor_enc, com_twins)
 
 
 def _base_conditions(data: Mapping[str, Any], base: Mapping[str, Any], where: str) -> dict[str, Any]:

@@ -41,9 +41,12 @@ Features per joint ``j`` (units in the names):
 
   The current fit is made over all six joints at once (:mod:`ur5fault.health.twin_fit`), each joint weighted
   by its noise, with four more columns shared by the joints for the nuisance the robot does not know: the
-  payload's centre-of-mass shift along the flange's x, y, z (the gravity torque of that shift through the
-  twin's kinematics, while the payload is held) and the setpoint latency (``-di_twin/dt``).  An offset is
-  thus estimated with a CoM that puts a near-constant torque on the wrists held out: the CoM's torque is
+  payload's centre-of-mass shift along the flange's x, y, z (the gravity torque of the shift through the twin's
+  kinematics, while the payload is held; with the campaign option ``twin_com_twins``, twin residuals format 4, the
+  motor current of noise-free twins with the CoM shifted minus the unshifted one's, per metre: gravity, the
+  payload's inertia and what the loops make of them, :mod:`ur5fault.health.twin_regressors`) and the setpoint
+  latency (``-di_twin/dt``).
+  An offset is thus estimated with a CoM that puts a near-constant torque on the wrists held out: the CoM's torque is
   the same on J2, J3 and J4, an offset sits on one joint.  Run-level estimates of the nuisance:
   ``twin_est_payload_com_<x|y|z>_m`` [m] and ``twin_est_latency_s`` [s].
 
@@ -178,12 +181,20 @@ def current_fit(t_s: NDArray, q_set_rad: NDArray, residual_A: NDArray, twin: dic
                 ) -> tuple[NDArray, NDArray, NDArray]:
     """The current fit over all joints (module docstring): ``(coef, se)`` of the per-joint estimates, ``(6, 3)``
     each (offset, gain error, Coulomb scale error), and the nuisance's ``(4, 2)`` (CoM x, y, z, latency; estimate
-    and SE).  ``motion``: as :func:`projection_columns` takes it."""
+    and SE).  ``motion``: as :func:`projection_columns` takes it.  The CoM columns are ``twin["com_A_per_m"]``
+    ``(n, 6, 3)`` [A/m] when given (noise-free twins with the CoM shifted: :mod:`ur5fault.health.twin_regressors`,
+    what campaigns with ``twin_com_twins`` and ``ur5fault diagnose`` for their detectors pass), else the CoM's
+    gravity torque in closed form (:func:`ur5fault.health.twin_fit.com_columns`, zero where ``payload_held`` is
+    false)."""
     motion = _motion_for(t_s, q_set_rad, params, motion)
     cols, _ = projection_columns(t_s, q_set_rad, twin, params, motion)
     n = residual_A.shape[0]
-    nuisance = np.concatenate([com_columns(q_set_rad, payload_kg, params, payload_held, lambda: motion.flange),
-                               latency_column(twin["i_q_A"], motion.dt_s)[:, :, None]], axis=2)  # (n, 6, 4)
+    com = twin.get("com_A_per_m")
+    if com is None:  # the CoM's gravity torque in closed form (no CoM twins given)
+        com = com_columns(q_set_rad, payload_kg, params, payload_held, lambda: motion.flange)
+    elif payload_kg <= 0:
+        com = np.zeros_like(com)
+    nuisance = np.concatenate([com, latency_column(twin["i_q_A"], motion.dt_s)[:, :, None]], axis=2)  # (n, 6, 4)
     per_joint = np.zeros((n, N_JOINTS, 3 * N_JOINTS))
     for j in range(N_JOINTS):
         for k, col in enumerate(cols):
@@ -210,7 +221,8 @@ def twin_features(t_s: NDArray, q_set_rad: NDArray, meas: dict[str, NDArray], tw
             sensor noise** (:mod:`ur5fault.health.twin_regressors`).  The noisy twin's own signals carry the
             loops' answer to its sensor noise, correlated with its reading that the residual subtracts: an
             errors-in-variables bias (wrist 2's healthy gain estimate +0.43 median on the full dataset with twin
-            format 2; docs/diagnostics.md, "Wrist 2's gain estimate on healthy runs").
+            format 2; docs/diagnostics.md, "Wrist 2's gain estimate on healthy runs").  Optionally
+            ``com_A_per_m`` ``(n_log, 6, 3)``: the current fit's payload CoM columns (:func:`current_fit`).
         params: the twin's model (gear ratio and stiffness, torque constant, friction levels).
         payload_kg: the configured payload mass (the robot knows it) [kg]; 0: no centre-of-mass columns.
         payload_held: ``(n_log,)`` whether the payload is held (the gripper commands); None: throughout.

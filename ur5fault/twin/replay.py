@@ -63,6 +63,8 @@ class Replayed:
     q_motor_rad: NDArray  # true motor angle
     current_true_A: NDArray  # motor current before the sensor
     torque_gear_Nm: NDArray
+    #: the twin fits' payload centre-of-mass columns ``(n, 6, 3)`` [A/m] (health/twin_regressors.py), when built
+    com_A_per_m: NDArray | None = None
 
     @property
     def ok(self) -> bool:

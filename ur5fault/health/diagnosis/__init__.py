@@ -31,20 +31,28 @@ TWIN_SEED = 1
 
 
 def replay_twin(log: MeasuredLog, params_overrides: dict | None = None, base_effects: Sequence[EffectSpec] = (),
-                *, seed: int = TWIN_SEED) -> tuple[LogReplay, Replayed]:
+                *, seed: int = TWIN_SEED, com_twins: bool = False) -> tuple[LogReplay, Replayed]:
     """The log's digital twin: its commands replayed through the model (it depends on the log's commands,
     payload, tool and temperatures only, never on its measured signals).  Its readings ``y`` carry its own sensor
     noise (seed ``seed``); its motor current ``current_true_A`` and gear torque ``torque_gear_Nm``, the twin fits'
     regressors, are those of the same replay without sensor noise (:mod:`ur5fault.health.twin_regressors`), as a
-    campaign's twin features take them."""
-    from ..twin_regressors import REGRESSOR_EFFECTS
+    campaign's twin features take them; with ``com_twins`` (a detector trained on a campaign with
+    ``twin_com_twins``) its ``com_A_per_m``, the current fit's payload centre-of-mass columns, from three more
+    noise-free replays with the payload's centre of mass shifted (zero without a payload)."""
+    from ..twin_regressors import COM_AXES, REGRESSOR_EFFECTS, com_difference, com_effects
 
     replay = LogReplay(log, params_overrides, base_effects, seed=seed)
-    rep, quiet = replay.run([(), REGRESSOR_EFFECTS])
-    for r, what in ((rep, "twin's replay"), (quiet, "noise-free twin's replay")):
+    shifted = [REGRESSOR_EFFECTS + e for e in com_effects()] if com_twins and log.payload_kg > 0 else []
+    rep, quiet, *com = replay.run([(), REGRESSOR_EFFECTS, *shifted])
+    for r, what in ((rep, "twin's replay"), (quiet, "noise-free twin's replay"),
+                    *((c, f"noise-free twin's replay with the payload CoM shifted along {ax}")
+                      for c, ax in zip(com, COM_AXES))):
         if not r.ok:
             raise ParameterError(f"{log.source}: the {what} failed ({r.status}); check the log and the model")
-    return replay, dataclasses.replace(rep, current_true_A=quiet.current_true_A, torque_gear_Nm=quiet.torque_gear_Nm)
+    columns = (com_difference(np.stack([c.current_true_A for c in com]), quiet.current_true_A) if com
+               else np.zeros((*quiet.current_true_A.shape, len(COM_AXES))) if com_twins else None)
+    return replay, dataclasses.replace(rep, current_true_A=quiet.current_true_A, torque_gear_Nm=quiet.torque_gear_Nm,
+                                       com_A_per_m=columns)
 
 
 def log_windows(log: MeasuredLog, window_s: float, twin: tuple[LogReplay, Replayed]) -> list[Window]:
@@ -74,7 +82,8 @@ def robot_baseline(healthy: Sequence[MeasuredLog], detector_dir: str | Path, par
         raise ParameterError(f"{odd[0]}: sampled every {1e3 * healthy[0].period_s:g} ms in {healthy[0].source}, "
                              "otherwise here; a baseline's logs must share one sample period")
     if windows is None:
-        windows = [log_windows(g, window_s, replay_twin(g, params_overrides, base_effects, seed=seed))
+        com = bool(schema.get("twin_com_twins", False))
+        windows = [log_windows(g, window_s, replay_twin(g, params_overrides, base_effects, seed=seed, com_twins=com))
                    for g in healthy]
     return fit_map(training_reference(detector_dir, schema), [(g.source, w) for g, w in zip(healthy, windows)],
                    healthy[0].period_s, [g.content_sha256() for g in healthy])
@@ -94,7 +103,13 @@ def diagnose(log: MeasuredLog, detector_dir: str | Path, params_overrides: dict 
 
     models, schema = load_models(detector_dir)
     window_s = check_schema(schema, str(detector_dir))
-    replay, rep = twin if twin is not None else replay_twin(log, params_overrides, base_effects, seed=seed)
+    com = bool(schema.get("twin_com_twins", False))
+    replay, rep = twin if twin is not None else replay_twin(log, params_overrides, base_effects, seed=seed,
+                                                             com_twins=com)
+    if com != (rep.com_A_per_m is not None):
+        raise ParameterError(f"{log.source}: the twin given was replayed {'without' if com else 'with'} the payload "
+                             f"CoM twins the detector's campaign {'had' if com else 'did not have'} "
+                             f"(replay_twin(..., com_twins={com}))")
     if windows is None:
         windows = log_windows(log, window_s, (replay, rep))
     context = {k: windows[0].features[k] for k in ("payload_kg", "temperature_C")}

@@ -56,6 +56,8 @@ def _signals(log: MeasuredLog, rep: Replayed, lo: int, hi: int, ratio: NDArray) 
     twin_motor = nan if log.q_motor_rad is None else (rep.y[lo:hi, 2] + pos) * ratio
     twin = {"q_FB_rad": pos, "i_FB_A": rep.y[lo:hi, 0], "q_M_FB_rad": twin_motor,
             "i_q_A": rep.current_true_A[lo:hi], "T_gear_Nm": rep.torque_gear_Nm[lo:hi]}
+    if rep.com_A_per_m is not None:
+        twin["com_A_per_m"] = rep.com_A_per_m[lo:hi]
     return meas, twin
 
 

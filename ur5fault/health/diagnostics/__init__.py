@@ -249,7 +249,8 @@ def run_benchmark(campaign_dir: str | Path, out: str | Path | None = None, *, se
                     joint_kind_threshold_from=(metrics["detection_by_joint"] or {}).get("threshold_from"),
                     calibration=None if metrics["calibration"] is None else {
                         k: v for k, v in metrics["calibration"].items() if k != "test"},
-                    limit_calibration=(metrics["detection_limits"] or {}).get("calibration"))
+                    limit_calibration=(metrics["detection_limits"] or {}).get("calibration"),
+                    twin_com_twins=bool((man.get("campaign_data") or {}).get("twin_com_twins", False)))
     metrics["out"] = str(out_dir)
     return metrics
 

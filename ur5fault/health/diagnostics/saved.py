@@ -99,14 +99,15 @@ def healthy_reference(train: pd.DataFrame, inputs: list[str] | tuple[str, ...]) 
 def save_models(models: Models, ds: Dataset, feature_set: str, threshold_score: float, out: Path,
                 window_s: float | None = None, log_period_s: float | None = None,
                 calibration: dict[str, Any] | None = None, joint_kind_threshold: float | None = None,
-                joint_kind_threshold_from: str | None = None, limit_calibration: dict[str, Any] | None = None
-                ) -> Path:
+                joint_kind_threshold_from: str | None = None, limit_calibration: dict[str, Any] | None = None,
+                twin_com_twins: bool = False) -> Path:
     """Write the classifiers and their schema into ``out/models``; return that folder (``window_s``,
     ``log_period_s``: the training runs' simulated duration and log period, from the campaign manifest;
     ``calibration``: how ``models.calibrator`` was fitted, recorded in the schema; ``joint_kind_threshold_from``:
     where the by-joint operating point was read, :data:`.metrics.FROM_OUT_OF_FOLD` for ``ur5fault benchmark``;
     ``limit_calibration``: :meth:`.limits.LimitCalibration.to_dict` of the training runs, for the detection limits
-    of ``ur5fault diagnose``)."""
+    of ``ur5fault diagnose``; ``twin_com_twins``: the campaign's twin fits took their payload CoM columns from
+    CoM-shifted noise-free twins, which ``ur5fault diagnose`` must then replay too)."""
     import sklearn
     import skops
     import skops.io as sio
@@ -142,6 +143,9 @@ def save_models(models: Models, ds: Dataset, feature_set: str, threshold_score: 
         "skops_version": skops.__version__,
         "window_s": None if window_s is None else float(window_s),
         "log_period_s": None if log_period_s is None else float(log_period_s),
+        # the twin fits' payload CoM columns: from CoM-shifted noise-free twins (true; the campaign's twin_com_twins)
+        # or the CoM's gravity torque (false, and absent in files saved before the option)
+        "twin_com_twins": bool(twin_com_twins),
         # None: p(fault) is the detector's own probability, not calibrated (classifiers saved before calibration)
         "calibration": None if models.calibrator is None else (calibration or {"method": "unrecorded"}),
         # the reference a robot's own healthy baseline is referred to (ur5fault diagnose --baseline-logs)
