@@ -129,3 +129,16 @@ def test_temporaries_of_a_killed_writer_are_swept_old_ones_only_unless_locked(tm
     assert io.remove_stale_temporaries(tmp_path, 0) == [young]  # the caller holds the folder's lock
     assert other.exists()  # not a name ur5fault's writer makes
     assert io.remove_stale_temporaries(tmp_path / "absent") == []
+
+
+def test_a_replaced_results_figures_that_the_new_one_did_not_draw_are_removed(tmp_path):
+    """With --replace, an earlier result's residual_*.png of a signal the new result has not must not stay beside
+    the new report; the new figures and files of other names stay."""
+    from ur5fault.util.io import remove_unwritten
+
+    for name in ("residual_current_A.png", "residual_position_rad.png", "notes.png", "report.md"):
+        (tmp_path / name).write_text("earlier")
+    written = [tmp_path / "residual_current_A.png"]
+    removed = remove_unwritten(tmp_path, "residual_*.png", written)
+    assert removed == [tmp_path / "residual_position_rad.png"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["notes.png", "report.md", "residual_current_A.png"]

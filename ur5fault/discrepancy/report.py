@@ -12,7 +12,7 @@ import numpy as np
 from ..sim.axes import JOINT_NAMES, N_JOINTS
 from ..sim.effects import REGISTRY
 from ..twin.residuals import UNEXPLAINED_FACTOR
-from ..util.io import remove_stale_temporaries, write_figure_atomic, write_text_atomic
+from ..util.io import remove_stale_temporaries, remove_unwritten, write_figure_atomic, write_text_atomic
 from .candidates import LibraryCandidate, TermCandidate
 from .speed import bare_mj_step_us, wall_over_mj_steps
 from .statistics import Z_95
@@ -226,6 +226,7 @@ def write_report(model: DiscrepancyModel, out: Path) -> list[Path]:
     paths = []
     for s, fig in figures(model).items():
         paths.append(write_figure_atomic(fig, out / f"residual_{s}.png", RESIDUAL_FIGURE_DPI))
+    remove_unwritten(out, "residual_*.png", paths)  # an earlier result's figures of other signals (--replace)
     write_text_atomic(out / "report.md", _markdown(model, summ, paths))
     return [out / "report.md", out / "model.yaml", out / "summary.json", *paths]
 

@@ -192,6 +192,19 @@ def remove_stale_temporaries(folder: str | Path, older_than_s: float = STALE_TEM
     return removed
 
 
+def remove_unwritten(folder: str | Path, pattern: str, written: list[Path]) -> list[Path]:
+    """Remove the files of ``folder`` matching the glob ``pattern`` that are not in ``written``: the figures of an
+    earlier result (``--replace``) that this one did not draw, so no figure beside a report belongs to another
+    result.  Called once the new ones are written.  Returns the files removed."""
+    keep = {Path(p).resolve() for p in written}
+    removed = []
+    for path in sorted(Path(folder).glob(pattern)):
+        if path.resolve() not in keep and path.is_file():
+            path.unlink(missing_ok=True)
+            removed.append(path)
+    return removed
+
+
 def _fsync(path: str | Path, folder: bool = False) -> None:
     """Flush ``path`` (a file, or a ``folder``'s entries) to disk; a folder that cannot be flushed (some file
     systems refuse it) is left as it is."""

@@ -12,7 +12,13 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from ...sim.axes import JOINT_NAMES, N_JOINTS
-from ...util.io import remove_stale_temporaries, write_figure_atomic, write_json_atomic, write_text_atomic
+from ...util.io import (
+    remove_stale_temporaries,
+    remove_unwritten,
+    write_figure_atomic,
+    write_json_atomic,
+    write_text_atomic,
+)
 from .baseline import Baseline
 from .changes import sentence
 from .events import CHANNELS, FALSE_ALARM_PER_LOG, FEATURES, UNITS, WINDOW_S, multiplier
@@ -103,6 +109,7 @@ def write(out: Path, baseline: Baseline, observed: Sequence[Observed], entries: 
                          float(judged_as[2].sum() * obs.period_s)))
         paths.append(write_figure_atomic(figure(baseline, obs, e, channels, judged_as), out / name))
         figs.append(name)
+    remove_unwritten(out, "monitor_*.png", paths)  # an earlier result's figures of more logs (--replace)
     paths.append(write_text_atomic(out / "report.md", markdown(baseline, entries, figs, model, channels,
                                                                paired_s)))
     return paths
