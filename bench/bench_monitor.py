@@ -428,14 +428,9 @@ def main(argv=None) -> int:
            "kufieta, paired (the six)": separable(full6, paired=True),
            "kufieta, paired (the five + the quiet No5 run's first 18 s)": separable(split_base, paired=True),
            "nist, paired": separable(nb, paired=True)}
-    from ur5fault.discrepancy.model import SCREEN_S
-    from ur5fault.health.monitoring.paired import for_log
-
-    blocks = {name: {j: round(for_log(b.paired_candidates, SCREEN_S)[f"{j}: current_sensor_gain.gain"].k, 1)
-                     for j in JOINTS if f"{j}: current_sensor_gain.gain" in b.paired_candidates}
+    blocks = {name: {j: b.paired_candidates.get(f"{j}: current_sensor_gain.gain", (0, 0, 0, 0))[2] for j in JOINTS}
               for name, b in (("the six", full6), ("split", split_base), ("nist", nb))}
-    print("\npaired bar's k (Welch-Satterthwaite df + 1) for a 20 s log, per baseline (gain candidates): "
-          + str(blocks))
+    print("\npaired blocks per baseline (gain candidates): " + str(blocks))
     paired = {o.name: float((judged_transients(b, o)[3] & judged_transients(b, o)[2]).sum() * o.period_s)
               for _, b, o in judged}
     print("\nseconds judged against a paired baseline run: " + ", ".join(f"{n}: {v:.1f}" for n, v in paired.items()))

@@ -57,8 +57,7 @@ def old_distance(est, ref, share: float = 1.0) -> float:
     """The distance with the log's noise counted twice (its ``se^2`` added to the baseline's prediction of it)."""
     from ur5fault.health.monitoring.changes import bar
 
-    return (abs(est.theta - ref.mean) / float(np.sqrt(est.se**2 + ref.log_var + ref.run_var + ref.mean_var))
-            / bar(ref.k, share))
+    return abs(est.theta - ref.mean) / float(np.sqrt(est.se**2 + ref.log_var + ref.mean_var)) / bar(ref.k, share)
 
 
 def row(test: str, label: str, est, refs, share: float = 1.0) -> str:
@@ -70,8 +69,7 @@ def row(test: str, label: str, est, refs, share: float = 1.0) -> str:
     limit = bar(ref.k, share)
     half = limit * float(np.sqrt(ref.variance(est.se)))
     return (f"| {test} | {label.split(': ')[1]} | {est.theta:.4g} | {est.se:.2g} | {ref.mean:.4g} / "
-            f"{np.sqrt(ref.log_var):.2g} / {np.sqrt(ref.mean_var):.2g} / "
-            f"{np.sign(ref.run_var) * np.sqrt(abs(ref.run_var)):.2g} / {ref.k:.1f} | {limit:.1f} | {half:.3g} | "
+            f"{np.sqrt(ref.log_var):.2g} / {np.sqrt(ref.mean_var):.2g} / {ref.k:.1f} | {limit:.1f} | {half:.3g} | "
             f"{_distance(est, ref, share):.2f} | {old_distance(est, ref, share):.2f} | "
             f"{'yes' if est.accepted else 'no: ' + est.reason} |")
 
@@ -161,8 +159,7 @@ def trace(name: str, base, obs, joint: int) -> None:
                                                     "current_sensor_offset.offset_A")]
     m = obs.e.shape[0]
     logged = obs.logged[:m]
-    print(f"\n### {name}\n\n| test | candidate | estimate | SE | reference mean / predicted sd / mean's sd / runs' sd "
-          f"/ k | "
+    print(f"\n### {name}\n\n| test | candidate | estimate | SE | reference mean / predicted sd / mean's sd / k | "
           f"bar | half-width | distance | before | accepted |\n| --- | --- | --- | --- | --- | --- | --- | --- | --- "
           f"| --- |")
     on = np.zeros(m, bool)
@@ -174,10 +171,9 @@ def trace(name: str, base, obs, joint: int) -> None:
         est = paired.estimates(obs, ref, logged)
         secs = float((logged & on).sum() * obs.period_s)
         stats = paired.for_log(base.paired_candidates, secs)
-        pc = base.paired_candidates
-        de = ", ".join(f"{lb.split(': ')[1]} {pc[lb].within_de:.2f} (runs {pc[lb].between_df + 1:.0f})"
-                       for lb in labels if lb in pc)
-        print(f"| design effect within runs | {de} | | | | | | | | |")
+        de = ", ".join(f"{lb.split(': ')[1]} {base.paired_candidates[lb][3]:.2f}"
+                       for lb in labels if lb in base.paired_candidates)
+        print(f"| design effect | {de} | | | | | | | | |")
         print(f"| paired ({secs:.1f} s) | | | | | | | | | |")
         for lb in labels:
             if lb in est:

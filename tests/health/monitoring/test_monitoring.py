@@ -146,7 +146,7 @@ def test_baseline_round_trip_and_refusals(tmp_path):
         Baseline.load(path)
     # the earlier format (current channel only, keys "scale" / "tail" at the top) is refused, not misread
     path.write_text(json.dumps({**b.to_json(), "format": "ur5fault-monitor-baseline-2"}))
-    with pytest.raises(ParameterError, match="ur5fault-monitor-baseline-2.*expected 'ur5fault-monitor-baseline-10'"):
+    with pytest.raises(ParameterError, match="ur5fault-monitor-baseline-2.*expected 'ur5fault-monitor-baseline-9'"):
         Baseline.load(path)
     # the last format (no task runs) likewise: rebuilt, not read without its pairing
     path.write_text(json.dumps({**b.to_json(), "format": "ur5fault-monitor-baseline-3"}))
@@ -154,9 +154,8 @@ def test_baseline_round_trip_and_refusals(tmp_path):
     with pytest.raises(ParameterError, match=old) as e:
         Baseline.load(path)
     assert "not a valid monitor baseline" not in str(e.value)  # its own line, not wrapped in the generic one
-    # formats 4 and 5 (no statistics per motion condition) and 9 (paired statistics as design effects, not
-    # variance components) likewise
-    for old_format in ("ur5fault-monitor-baseline-4", "ur5fault-monitor-baseline-5", "ur5fault-monitor-baseline-9"):
+    # formats 4 and 5 (no statistics per motion condition) likewise
+    for old_format in ("ur5fault-monitor-baseline-4", "ur5fault-monitor-baseline-5"):
         path.write_text(json.dumps({**b.to_json(), "format": old_format}))
         with pytest.raises(ParameterError, match=f"{old_format}.*write") as e:
             Baseline.load(path)

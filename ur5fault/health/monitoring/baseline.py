@@ -30,18 +30,16 @@ from ...sim.axes import JOINT_NAMES, N_JOINTS
 from ...util.io import checksum_path, verify_checksum
 from . import paired
 from .changes import BLOCK_S, block_estimates, spreads
-from .components import Components
 from .conditions import CONDITIONS
 from .event_fit import fit_events, fit_task, segment, task_residual
 from .events import CHANNELS, FEATURES, LEVEL_S, SMOOTH_S, WINDOW_S
 from .observe import Observed
 
-#: 10: the paired statistics the variance components of runs and blocks (:mod:`.components`); 9: the paired
-#: statistics' ``design_effect`` the larger of their autocorrelation's and the runs' as clusters
+#: 9: the paired statistics' ``design_effect`` the larger of their autocorrelation's and the runs' as clusters
 #: (:func:`.effective.run_design_effect`); 8: the paired statistics on 0.5 s blocks, ``n_blocks`` the effective
 #: number of independent ones (a float: their autocorrelation accounted for, :mod:`.effective`) and their
 #: ``design_effect``; 7 counted each independent 2 s difference once, 6 twice
-FORMAT = "ur5fault-monitor-baseline-10"
+FORMAT = "ur5fault-monitor-baseline-9"
 
 
 def overlay_sha256(params: dict, effects: Sequence) -> str:
@@ -65,10 +63,10 @@ class Baseline:
     ``cond_scale`` ``(2, 4, 6, 4)``, ``cond_tail`` ``(2, 4, 6, 3)``: per channel and motion condition
     (:data:`~.conditions.CONDITIONS`) the spread and tail fitted on that condition's samples alone (NaN: under
     :data:`~.conditions.MIN_CONDITION_S` of it on that joint; the samples are then judged by the widest limit);
-    ``paired_candidates``: ``{label: Components}``, the mean and variance components (runs and blocks) of the
-    coefficient fitted to the difference of a baseline run's residual and the other runs' and its own repeats' at
-    the same point of the task, per block of paired samples (:mod:`.paired`, :mod:`.components`; empty: the
-    baseline runs do not repeat each other)."""
+    ``paired_candidates``: ``{label: (mean, variance, k_eff, DE)}`` of the coefficient fitted to the difference
+    of a baseline run's residual and the other runs' and its own repeats' at the same point of the task, per block
+    of paired samples, ``k_eff`` the effective number of independent blocks and ``DE`` their design effect
+    (:mod:`.paired`; empty: the baseline runs do not repeat each other)."""
 
     overlay_sha256: str
     period_s: float
@@ -84,7 +82,7 @@ class Baseline:
     slow_rad_s: float
     cond_scale: NDArray
     cond_tail: NDArray
-    paired_candidates: dict[str, Components] = dataclasses.field(default_factory=dict)
+    paired_candidates: dict[str, tuple[float, float, float, float]] = dataclasses.field(default_factory=dict)
 
     @property
     def task_runs(self) -> list[int]:
@@ -107,7 +105,8 @@ class Baseline:
                                          for j, q in enumerate(self.quantum_rad)},
                 "candidates": {k: {"mean": m, "variance": v, "n_blocks": n}
                                for k, (m, v, n) in self.candidates.items()},
-                "paired_candidates": {k: c.to_json() for k, c in self.paired_candidates.items()},
+                "paired_candidates": {k: {"mean": m, "variance": v, "n_blocks": n, "design_effect": de}
+                                      for k, (m, v, n, de) in self.paired_candidates.items()},
                 "task_runs": [{"target_rad": t.tolist(), "residual_A": _nulls(r),
                                "scale": None if i not in self.task_runs else
                                {JOINT_NAMES[j]: dict(zip(FEATURES, map(float, self.task_scale[i, j])))
@@ -163,7 +162,8 @@ class Baseline:
                                      for k, v in data["candidates"].items()},
                        tuple(t for t, _ in runs), tuple(r for _, r in runs), t_scale, t_tail,
                        float(data["slow_rad_s"]), c_scale, c_tail,
-                       {str(k): Components.from_json(v) for k, v in data["paired_candidates"].items()})
+                       {str(k): (float(v["mean"]), float(v["variance"]), float(v["n_blocks"]),
+                                 float(v["design_effect"])) for k, v in data["paired_candidates"].items()})
         except ParameterError:
             raise  # already one line saying what to do (ParameterError is a ValueError)
         except (KeyError, TypeError, ValueError, AttributeError) as exc:

@@ -29,9 +29,7 @@ mean, not the spread), and a correlation longer than the runs' paired sequences 
 ``k_eff`` is the number of independent blocks the *mean* is worth, not the degrees of freedom of the variance:
 where a few runs sit apart, the spread rests on their few means, and Student's bar at ``k_eff - 1`` degrees of
 freedom is too low (three simulated runs apart by half a block's noise: 9.8 % of healthy logs outside a 95 %
-interval, ``tests/health/monitoring/test_change_coverage.py``). So the paired test now splits the blocks' variance
-into runs and blocks (:mod:`.components`, which takes :func:`design_effect` within runs); :func:`run_design_effect`
-and :func:`effective` are kept as the measured alternative (docs/monitoring.md).
+interval, ``tests/health/monitoring/test_change_coverage.py``).
 """
 
 from __future__ import annotations

@@ -31,23 +31,22 @@ to zero). The mean and variance stay those of the blocks paired both ways (:func
 two healthy runs comes first in the baseline is arbitrary, and a difference between them belongs in the
 reference with either sign (paired one way only, a systematic difference between the earlier and the later runs
 would read as a mean of one sign with a narrow spread, and the baseline's order would set it).
-*Runs and blocks* (:mod:`.components`; this replaced a single design effect): the one-way blocks of each run, in
-time order, are split into the variance components of a one-way random-effects model, a difference between
-healthy runs that holds over a run (a warmer run, an offset that drifted: the runs' offsets, ``tau^2``, from the
-spread of the runs' mean blocks, ``R - 1`` degrees of freedom) and the blocks' noise about their run's level
-(``sigma^2``, its autocorrelation within runs the design effect ``DE_w`` of :mod:`.effective`, the lags within
-one pairing stretch always counted, then Geyer's initial positive sequence; the blocks' effective count its
-degrees of freedom). The log's prediction variance is their sum, and Student's bar counts Welch-Satterthwaite's
-degrees of freedom from the two parts': a baseline whose runs sit apart is worth about as many degrees of freedom
-as it has runs less one, one whose differences are the sensors' noise and the task's repeatability more, with no
-switch between them. Before, one design effect (the larger of Geyer's and the runs' as clusters) gave ``k_eff =
-k / DE`` for the bar, and with three runs apart by half a block's noise 9.8 % of healthy logs fell outside a 5 %
-interval; with the components 6.35 % (``tests/health/monitoring/test_change_coverage.py``, docs/monitoring.md).
+*Neighbouring blocks are not counted as independent* (they were before, with blocks of 2 s): the one-way
+blocks of each run, in time order, give the design effect ``DE`` of their autocorrelation (:mod:`.effective`:
+pooled over the runs about the both-way mean, the lags within one pairing stretch always counted, then Geyer's
+initial positive sequence; or, where larger, the design effect of the runs as clusters, from the spread of the
+runs' own mean blocks: :func:`.effective.run_design_effect`), and ``k_eff = k / DE`` independent blocks set
+Student's bar; the variance is corrected for the bias the correlation puts in it. A difference that holds over
+a whole run (a warmer run, an offset that drifted) is correlation at every lag of that run, so a baseline whose
+runs each sit apart is worth about as many blocks as it has runs; one whose differences are the sensors' noise
+and the task's repeatability is worth about all its blocks. Geyer's sum alone missed a run-long offset small
+against one block's noise (its correlation at each lag under the estimates' noise, the sum cut off after a few
+lags: on simulated runs with such an offset, 9-19 % of healthy logs outside a 95 % interval, the log's noise
+counted once); the runs' means see it (:mod:`.effective`; ``tests/health/monitoring/test_change_coverage.py``:
+4.5 and 9.8 %).
 
-*Why the false-alarm rate holds* (written for one level of noise; :mod:`.components` splits ``var_b`` into the
-runs' offsets and the blocks' noise, ``DE`` is then ``DE_w`` and ``k_eff`` Welch-Satterthwaite's count). The
-log's estimate over its ``n`` paired blocks is (to first order) a weighted mean of the same candidate's
-estimates on its own short blocks. Under no change, blocks with the baseline's
+*Why the false-alarm rate holds.* The log's estimate over its ``n`` paired blocks is (to first order) a weighted
+mean of the same candidate's estimates on its own short blocks. Under no change, blocks with the baseline's
 autocorrelation make its variance that of one block times ``DE / n`` (never more than one block's): ``V =
 var_b min(1, DE / n)``, the baseline's single-block spread ``var_b`` so scaled. ``theta - mean_b`` adds the
 reference mean's ``var_b / k_eff``. How well ``var_b`` is known sets Student's quantile at the workflow's tail
@@ -86,7 +85,7 @@ from numpy.typing import NDArray
 
 from ...sim.axes import N_JOINTS
 from .changes import BLOCK_S, Estimate, Reference, fit_alone, spreads
-from .components import Components, components
+from .effective import effective, run_design_effect
 from .observe import Observed
 from .task import CHUNK_S, reference
 
@@ -187,14 +186,15 @@ def independent_blocks(healthy: Sequence[Observed], refs: Sequence[tuple[NDArray
 
 
 def baseline_spreads(healthy: Sequence[Observed], refs: Sequence[tuple[NDArray, NDArray]]
-                     ) -> dict[str, Components]:
-    """``{label: Components}`` of each candidate's paired estimates over the baseline runs (module docstring): the
-    mean of its blocks paired both ways (either sign of each difference between healthy runs); the variance
-    components of its one-way blocks (each pair of repeats compared once), runs and blocks, the blocks'
-    autocorrelation within each run about its own mean, the lags within one pairing stretch always counted, at the
-    level of the blocks paired both ways (each run against all the others, as a log is paired; one-way blocks
-    are paired against fewer runs, so noisier: :func:`.components.components`). A candidate whose blocks are
-    worth under one within degree of freedom has no paired statistics."""
+                     ) -> dict[str, tuple[float, float, float, float]]:
+    """``{label: (mean, variance, k_eff, DE)}`` of each candidate's paired estimates over the baseline runs (module
+    docstring): mean and variance of its blocks paired both ways (either sign of each difference between healthy
+    runs); ``DE`` the design effect of its one-way blocks (each pair of repeats compared once): of their
+    autocorrelation within each run, about that mean, the lags within one pairing stretch always counted, or of
+    the runs as clusters where larger (:func:`.effective.run_design_effect`); ``k_eff = k / DE`` the independent
+    blocks they are worth, and the variance
+    corrected for the bias the correlation puts in it (:func:`.effective.effective`). A candidate whose blocks
+    are worth fewer than 2 independent ones has no paired statistics."""
     both = spreads(block for o, ref in zip(healthy, baseline_references(healthy, refs))
                    for block in block_estimates(o, ref))
     if not both:
@@ -203,18 +203,26 @@ def baseline_spreads(healthy: Sequence[Observed], refs: Sequence[tuple[NDArray, 
     out = {}
     for label, (mean, var, _) in both.items():
         seqs = [np.array([b[label].theta for b in run if label in b and np.isfinite(b[label].se)]) for run in one_way]
-        if sum(s.size for s in seqs) < 2:
+        k = sum(s.size for s in seqs)
+        if k < 2:
             continue
-        got = components(seqs, mean, MIN_LAG, var)
+        de = run_design_effect(seqs, mean, var, MIN_LAG)
+        got = effective(var, k, de)
         if got is not None:
-            out[label] = got
+            out[label] = (mean, got[0], got[1], de)
     return out
 
 
-def for_log(stats: dict[str, Components], paired_s: float) -> dict[str, Reference]:
+def for_log(stats: dict[str, tuple[float, float, float, float]], paired_s: float) -> dict[str, Reference]:
     """The :class:`.changes.Reference` of a log's estimate on ``paired_s`` seconds of paired samples per candidate
-    of the baseline's variance components, as :func:`.changes.find_changes` takes it: the log's estimate is (to
-    first order) a weighted mean of its ``n = paired_s / PAIRED_BLOCK_S`` blocks' estimates
-    (:meth:`.components.Components.reference`; module docstring)."""
+    of the baseline's ``{label: (mean, variance, k_eff, DE)}``, as :func:`.changes.find_changes` takes it.
+
+    The log's estimate is (to first order) a weighted mean of its ``n = paired_s / PAIRED_BLOCK_S`` blocks'
+    estimates, so under no change its variance is that of one block times ``min(1, DE / n)`` (``DE`` the
+    baseline's design effect: ``n`` blocks of that autocorrelation are worth ``n / DE`` independent ones, and
+    never less than one; a weighted mean's variance is at most the equal-weight mean's for blocks of unequal
+    information): the reference's ``log_var``, which the log's own standard error replaces only where larger
+    (module docstring, the log's noise counted once). The reference mean's variance is ``variance / k_eff``;
+    Student's bar counts ``k_eff``."""
     n = max(paired_s / PAIRED_BLOCK_S, 1.0)
-    return {label: c.reference(n) for label, c in stats.items()}
+    return {label: Reference(mean, var * min(1.0, de / n), var / k, k) for label, (mean, var, k, de) in stats.items()}
