@@ -21,6 +21,7 @@ import pytest
 from scipy import stats
 
 from ur5fault.discrepancy.statistics import JACKKNIFE_BLOCKS
+from ur5fault.health.monitoring.components import components
 from ur5fault.health.monitoring.effective import effective, run_design_effect
 from ur5fault.health.monitoring.paired import MIN_LAG, PAIRED_BLOCK_S, for_log
 
@@ -40,24 +41,41 @@ def ar1(rng: np.random.Generator, m: int, rho: float) -> np.ndarray:
     return x
 
 
-def outside_share(runs: int, m: int, n: int, rho: float, tau: float, seed: int) -> float:
+def _jackknife_se(log: np.ndarray) -> float:
+    """The log's estimate's (its blocks' mean's) standard error by the block jackknife over the workflow's groups."""
+    groups = np.array_split(log, JACKKNIFE_BLOCKS)
+    loo = np.array([(log.sum() - g.sum()) / (log.size - g.size) for g in groups])
+    return float(np.sqrt((len(groups) - 1) / len(groups) * np.sum((loo - loo.mean()) ** 2)))
+
+
+def outside_share(runs: int, m: int, n: int, rho: float, tau: float, seed: int, model: str = "design") -> float:
     """The share of ``TRIALS`` healthy logs outside the interval at ``LEVEL`` (module docstring); trials whose
-    baseline is worth under 2 blocks (no statistics) are left out, and must be few."""
+    baseline is worth under 2 blocks (no statistics) are left out, and must be few. ``model``: ``"design"`` the
+    monitor's default (one design effect, :func:`.paired.for_log`), ``"components"`` the variance components of
+    runs and blocks with Welch-Satterthwaite's degrees of freedom (:mod:`.components`, measured, not the
+    default: docs/monitoring.md)."""
     rng = np.random.default_rng(seed)
     out, judged = 0, 0
     for _ in range(TRIALS):
         seqs = [ar1(rng, m, rho) + tau * rng.normal() for _ in range(runs)]
         blocks = np.concatenate(seqs)
         mean, var = float(blocks.mean()), float(blocks.var(ddof=1))
+        if model == "components":
+            comp = components(seqs, mean, MIN_LAG)
+            if comp is None:
+                continue
+            ref = comp.reference(n)
+            log = ar1(rng, n, rho) + tau * rng.normal()
+            judged += 1
+            out += ref.z(float(log.mean()), _jackknife_se(log)) > stats.t.isf(LEVEL / 2, ref.k - 1)
+            continue
         de = run_design_effect(seqs, mean, var, MIN_LAG)
         got = effective(var, blocks.size, de)
         if got is None:
             continue
         ref = for_log({"x": (mean, got[0], got[1], de)}, n * PAIRED_BLOCK_S)["x"]
         log = ar1(rng, n, rho) + tau * rng.normal()
-        groups = np.array_split(log, JACKKNIFE_BLOCKS)
-        loo = np.array([(log.sum() - g.sum()) / (n - g.size) for g in groups])
-        se = float(np.sqrt((len(groups) - 1) / len(groups) * np.sum((loo - loo.mean()) ** 2)))
+        se = _jackknife_se(log)
         judged += 1
         out += ref.z(float(log.mean()), se) > stats.t.isf(LEVEL / 2, ref.k - 1)
     assert judged > 0.9 * TRIALS, judged
@@ -88,3 +106,16 @@ def test_a_run_long_offset_small_against_a_blocks_noise_is_seen_by_the_runs_mean
                    "counted twice; docs/monitoring.md)")
 def test_three_runs_that_sit_apart_by_half_a_blocks_noise_hold_the_level():
     assert outside_share(3, 80, 40, 0.3, 0.5, seed=2) <= HOLDS
+
+
+@pytest.mark.parametrize(("runs", "tau"), [(3, 0.0), (6, 0.2), (3, 0.5), (5, 0.0), (6, 0.0)])
+def test_the_variance_components_hold_the_level_where_runs_sit_apart_and_where_they_do_not(runs, tau):
+    """The measured alternative (:mod:`.components`, not the default): the between-run part counted with the
+    runs' means' ``R - 1`` degrees of freedom by Welch-Satterthwaite. Measured at 5 %: 2.7 / 4.3 / 6.35 / 2.9 /
+    2.8 % (seeds 3 and 4: 2.7 / 5.7 / 5.85 / 2.15 / 3.45 and 2.2 / 5.1 / 7.1 / 2.85 / 2.65 %: with three runs
+    apart, 6.43 % pooled over 6000 trials, still above the level). Not twice too wide where the runs do not sit
+    apart (over 2 %). What it costs at the monitor's z = 4 and why it is not the default: docs/monitoring.md."""
+    share = outside_share(runs, 80, 40, 0.3, tau, seed=2, model="components")
+    assert share <= HOLDS, share
+    if tau == 0.0:
+        assert share >= 0.02, share

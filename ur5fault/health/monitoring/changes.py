@@ -142,23 +142,27 @@ class Reference:
     """What a log's estimate of one candidate is judged against (module docstring): the baseline's ``mean``;
     ``log_var``, the variance the baseline predicts for the log's estimate under no change (0: it predicts none,
     the log's own standard error stands alone); ``mean_var``, the variance of ``mean``; ``k``, the (effective)
-    number of blocks Student's bar counts (:func:`bar`)."""
+    number of blocks Student's bar counts (:func:`bar`: ``k - 1`` degrees of freedom); ``run_var``, the variance
+    of a difference between healthy runs that holds over the log's whole run, which its own standard error does
+    not see (:mod:`.components`; 0: none predicted)."""
 
     mean: float
     log_var: float
     mean_var: float
     k: float
+    run_var: float = 0.0
 
     def __post_init__(self) -> None:
-        if not (np.isfinite(self.mean) and self.log_var >= 0.0 and self.mean_var >= 0.0 and self.k >= 1.0):
+        if not (np.isfinite(self.mean) and self.log_var >= 0.0 and self.mean_var >= 0.0 and self.k >= 1.0
+                and self.run_var + self.mean_var >= 0.0):
             raise ValueError(f"reference mean {self.mean}, variances {self.log_var} / {self.mean_var}, k {self.k}: "
                              f"need a finite mean, variances >= 0 and k >= 1")
 
     def variance(self, se: float) -> float:
         """The prediction variance of ``theta - mean`` for a log's estimate of standard error ``se``: the larger of
         the baseline's and the log's own estimate of the log's variance (two estimates of the same noise, so never
-        their sum), plus the mean's."""
-        return max(se**2, self.log_var) + self.mean_var
+        their sum), plus its run's offset's and the mean's."""
+        return max(se**2, self.log_var) + self.run_var + self.mean_var
 
     def z(self, theta: float, se: float) -> float:
         """``|theta - mean|`` in prediction standard deviations (:meth:`variance`)."""
