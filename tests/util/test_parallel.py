@@ -228,3 +228,26 @@ def test_one_blas_thread_limits_blas_in_its_context_and_restores_it():
     with one_blas_thread():
         assert blas_threads() and all(n == 1 for n in blas_threads())
     assert blas_threads() == before
+
+
+def test_blas_one_thread_decorator_limits_blas_while_the_function_runs_and_restores_it():
+    import numpy  # noqa: F401  (loads the BLAS the limit reaches)
+    from threadpoolctl import threadpool_info
+
+    from ur5fault.discrepancy.model import DiscrepancyModel
+    from ur5fault.util.parallel import blas_one_thread
+
+    def blas_threads() -> list[int]:
+        return [i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"]
+
+    @blas_one_thread
+    def inside(x: int) -> tuple[int, list[int]]:
+        return x + 1, blas_threads()
+
+    before = blas_threads()
+    got, threads = inside(1)
+    assert got == 2 and threads and all(n == 1 for n in threads)
+    assert blas_threads() == before
+    assert inside.__name__ == "inside"
+    # the discrepancy fit runs under it (its Gram products, docs/performance.md)
+    assert DiscrepancyModel.fit.__wrapped__.__name__ == "fit"

@@ -38,6 +38,19 @@ def one_blas_thread():
     return threadpool_limits(limits=1, user_api="blas")
 
 
+def blas_one_thread(f):
+    """Decorator: ``f`` runs under :func:`one_blas_thread` (a workflow whose own process does small products while
+    its workers fill the cores, e.g. the discrepancy fit's selections beside its replays)."""
+    import functools
+
+    @functools.wraps(f)
+    def wrapper(*args, **kwargs):
+        with one_blas_thread():
+            return f(*args, **kwargs)
+
+    return wrapper
+
+
 def own_share(cost: Sequence[float], jobs: int) -> int:
     """Index of the first task this process runs: tasks from the end whose cost fits ``1 / jobs`` of the total
     (at least one, and at least one left for the workers)."""
