@@ -66,8 +66,8 @@ def main() -> None:
         twin_steps = sum(steps[t] for t in twins["trajectory"])
     grid_steps = 0
     if args.campaign:  # each batch's noise-free twins on its payload grid, with their CoM twins (twin_regressors.py)
+        from ur5fault.campaign.batches import plan_batches
         from ur5fault.campaign.digital_twin import regressor_runs
-        from ur5fault.campaign.execute import plan_batches
         from ur5fault.campaign.spec import load_campaign
 
         camp = load_campaign(args.campaign)

@@ -281,3 +281,24 @@ def test_runs_logged_without_motor_encoders_have_no_mismatch_features(tmp_path):
     assert json.loads((tmp_path / "manifest.json").read_text())["motor_encoders"] is False
     with pytest.raises(ParameterError, match="motor_encoders"):
         build_campaign({**copy.deepcopy(TINY), "motor_encoders": "no"}, "tiny.yaml")
+
+
+def test_the_cost_estimate_counts_every_run_the_campaign_simulates(tmp_path, monkeypatch):
+    # a twin campaign simulates its runs, their digital twins and each batch's noise-free regressor twins (with
+    # twin_com_twins their CoM twins too): the estimate checked against the steps the simulator was asked for
+    from ur5fault.campaign.limits import estimate
+    from ur5fault.sim.engine import Simulator
+
+    camp = build_campaign({**copy.deepcopy(TINY), "twin_residuals": True, "twin_com_twins": True,
+                           "duration_s": 0.2}, "tiny.yaml", out=tmp_path)
+    asked = []
+    run = Simulator.run
+
+    def counting(self, traj, specs, **kw):
+        asked.append(len(specs) * round(kw["duration_s"] / self.params.physics_dt_s))
+        return run(self, traj, specs, **kw)
+
+    monkeypatch.setattr(Simulator, "run", counting)
+    run_campaign(camp, tmp_path, jobs=1, progress=False)
+    assert sum(asked) > len(camp.runs) * round(0.2 / 50e-6)  # twins simulated beside the runs
+    assert estimate(camp, 1).run_steps == sum(asked)

@@ -15,6 +15,8 @@ from ..config import parse_trajectory
 from ..errors import ParameterError
 from ..sim.budget import check_memory, core_hours, fmt_bytes, sim_bytes
 from ..sim.params import load_params
+from .batches import plan_batches
+from .digital_twin import regressor_runs, twin_id
 from .runs import trajectory_specs
 from .spec import Campaign
 
@@ -70,17 +72,20 @@ def estimate(camp: Campaign, jobs: int) -> CostEstimate:
     for spec in trajectory_specs(camp.runs):
         durations[repr(spec)] = camp.duration_s or parse_trajectory(spec, "trajectory").duration_s
     steps = sum(round(durations[repr(rc.cond["trajectory"])] / dt) for rc in camp.runs)
+    grid_at_once = 0
     if camp.twin_residuals:  # every run's digital twin (one per distinct known conditions and seed)
-        from .digital_twin import twin_id
-
         twins = {twin_id(rc): rc for rc in camp.runs}
         steps += sum(round(durations[repr(rc.cond["trajectory"])] / dt) for rc in twins.values())
+        for batch in plan_batches(camp, camp.runs, jobs):  # + each batch's noise-free regressor twins
+            n_grid = len(regressor_runs(camp, batch, 0.0)[1])  # (their count does not depend on the temperature)
+            steps += n_grid * round(durations[repr(batch[0].cond["trajectory"])] / dt)
+            grid_at_once = max(grid_at_once, n_grid)
     max_logged = int(max(durations.values()) / camp.log_period_s)
     n = len(camp.runs)
     per_worker = -(-n // max(1, jobs))
     runs_at_once = min(n, 2 * max(1, min(camp.batch_size - 1, per_worker)))  # plan_batches: a chunk + its twins
     if camp.twin_residuals:
-        runs_at_once += max(1, min(camp.batch_size - 1, per_worker))  # + the chunk's digital twins
+        runs_at_once += max(1, min(camp.batch_size - 1, per_worker)) + grid_at_once  # + its digital, regressor twins
     processes = max(1, min(jobs, n))
     memory = sim_bytes(runs_at_once, max_logged, processes) + sim_bytes(0, 0)  # + the parent process
     return CostEstimate(n, float(steps), core_hours(steps), processes, runs_at_once, max_logged, memory)
