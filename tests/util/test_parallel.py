@@ -235,12 +235,12 @@ def test_blas_one_thread_decorator_limits_blas_while_the_function_runs_and_resto
     from threadpoolctl import threadpool_info
 
     from ur5fault.discrepancy.model import DiscrepancyModel
-    from ur5fault.util.parallel import blas_one_thread
+    from ur5fault.util.parallel import runs_on_one_blas_thread
 
     def blas_threads() -> list[int]:
         return [i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"]
 
-    @blas_one_thread
+    @runs_on_one_blas_thread
     def inside(x: int) -> tuple[int, list[int]]:
         return x + 1, blas_threads()
 

@@ -29,7 +29,7 @@ from ..sim.axes import JOINT_NAMES, N_JOINTS
 from ..sim.effects import EffectSpec
 from ..twin.replay import LogReplay, Replayed
 from ..twin.residuals import FIT_FRACTION, conditions, fit_samples, localise, rms_table, unexplained
-from ..util.parallel import blas_one_thread
+from ..util.parallel import runs_on_one_blas_thread
 from . import steps
 from .joint_check import joint_check
 from .judging import Finding, SearchStep, final_verdicts
@@ -110,7 +110,7 @@ class DiscrepancyModel:
         self.screen_s = screen_s
 
     # ------------------------------------------------------------------------------------------- fit
-    @blas_one_thread  # its Gram products (p x 3000 per block) waited on a 2nd BLAS thread the workers keep busy
+    @runs_on_one_blas_thread  # its Gram products (p x 3000 per block) waited on a 2nd BLAS thread the workers keep busy
     def fit(self, log: MeasuredLog | Sequence[MeasuredLog], params_overrides: dict | None = None,
             base_effects: Sequence[EffectSpec] = (), hold_out: Sequence[MeasuredLog] = (),
             on_payload: Callable[[str], None] | None = None) -> DiscrepancyModel:

@@ -38,7 +38,7 @@ def one_blas_thread():
     return threadpool_limits(limits=1, user_api="blas")
 
 
-def blas_one_thread(f):
+def runs_on_one_blas_thread(f):
     """Decorator: ``f`` runs under :func:`one_blas_thread` (a workflow whose own process does small products while
     its workers fill the cores, e.g. the discrepancy fit's selections beside its replays)."""
     import functools
