@@ -29,7 +29,6 @@ from numpy.typing import NDArray
 
 from ..sim.axes import N_JOINTS
 from .discovery import MIN_TEMPERATURE_SPAN_K  # a joint whose temperature gets a dictionary column keeps it
-from .rest_hold import union
 
 #: spacing of the drift's bumps [s] (one per 5 s stability block of the 20 s screened part; see above)
 KNOT_S = 5.0
@@ -69,6 +68,18 @@ def basis(n: int, period_s: float, temperature_C: NDArray | None = None) -> list
                     Bj = B @ q
         out.append(Bj)
     return out
+
+
+def union(B: NDArray, R: NDArray) -> NDArray:
+    """An orthonormal basis ``(n, d)`` of the span of the columns of ``B`` and ``R`` together (``B`` orthonormal)."""
+    if not R.shape[1]:
+        return B
+    if not B.shape[1]:
+        return R
+    R_perp = R - B @ (B.T @ R)
+    u, s, _ = np.linalg.svd(R_perp, full_matrices=False)
+    keep = s > 1e-8 * max(1.0, float(np.linalg.norm(R, axis=0).max()))
+    return np.concatenate([B, u[:, keep]], axis=1)
 
 
 def remove(A: NDArray, bases: list[NDArray], current_channel: int) -> NDArray:

@@ -69,15 +69,3 @@ def of_log(log: MeasuredLog, n: int, position_bw_Hz) -> list[NDArray]:
     rest = conditions(log, n, np.zeros((n, N_JOINTS)))["at rest"]
     bw = np.broadcast_to(np.asarray(position_bw_Hz, dtype=float), (N_JOINTS,))
     return [indicators(rest[:, [j]], math.ceil(min_hold_s(bw[j]) / log.period_s - 1e-9))[0] for j in range(N_JOINTS)]
-
-
-def union(B: NDArray, R: NDArray) -> NDArray:
-    """An orthonormal basis ``(n, d)`` of the span of the columns of ``B`` and ``R`` together (``B`` orthonormal)."""
-    if not R.shape[1]:
-        return B
-    if not B.shape[1]:
-        return R
-    R_perp = R - B @ (B.T @ R)
-    u, s, _ = np.linalg.svd(R_perp, full_matrices=False)
-    keep = s > 1e-8 * max(1.0, float(np.linalg.norm(R, axis=0).max()))
-    return np.concatenate([B, u[:, keep]], axis=1)
