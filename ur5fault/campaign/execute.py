@@ -96,7 +96,7 @@ def _simulate_batch(camp: Campaign, batch: Sequence[CampaignRun], ts_dir: str | 
             regressors = (res.status[failed[0]], f"noise-free regressor twin {specs[failed[0]].run_id}: "
                                                  f"{res.reason[failed[0]]}")
         else:
-            regressors = _regressor_grid(res, grid, grid_at, grid_temp, motion.qd, sim.params)
+            regressors = _regressor_grid(res, grid, grid_at, grid_temp, motion.qd, sim.params, camp.twin_com_twins)
     held = traj.gripped(res.t_s)  # when the gripper holds the payload: the batch's trajectory
     rows = []
     for i, rc in enumerate(batch):
@@ -136,16 +136,17 @@ def _simulate_batch(camp: Campaign, batch: Sequence[CampaignRun], ts_dir: str | 
     return rows
 
 
-def _regressor_grid(res, grid, grid_at: dict[str, int], temperature_C: float, qd, params):
+def _regressor_grid(res, grid, grid_at: dict[str, int], temperature_C: float, qd, params, com_twins: bool):
     """The batch's :class:`~ur5fault.health.twin_regressors.RegressorGrid` from its noise-free twins (``grid_at``:
-    run id -> index in ``res``), with the centre-of-mass columns of its CoM twins (zero at 0 kg) where it has them."""
+    run id -> index in ``res``), with the centre-of-mass columns of its CoM twins (zero at 0 kg) where the
+    campaign simulates them (``com_twins``: its ``twin_com_twins``)."""
     from ..health.twin_regressors import COM_AXES, RegressorGrid, com_difference
     from .digital_twin import regressor_id
 
     base = [grid_at[regressor_id(kg)] for kg in grid]
     i_a = res["i_q_A"][base]
     com = None
-    if any(regressor_id(kg, COM_AXES[0]) in grid_at for kg in grid):  # the campaign's twin_com_twins
+    if com_twins:
         com = np.zeros((*i_a.shape, len(COM_AXES)))
         for g, kg in enumerate(grid):
             if kg > 0:
