@@ -34,7 +34,7 @@ D = {"wide": 0.1 / MAD_TO_SD, "narrow": 0.1 / MAD_TO_SD, "few": 0.2, "flat": 0.0
 
 
 def _window(values: dict[str, float]) -> Window:
-    return Window(0.0, 1.0, dict(values), (0,) * 6, (1.0,) * 6)
+    return Window(0.0, 1.0, dict(values), (1.0,) * 6)
 
 
 def _baseline_windows() -> list[Window]:

@@ -165,3 +165,80 @@ def test_detection_over_the_runs_above_their_limit_on_a_hand_built_test_split():
     # at z = 2 the limit is 0.115 deg: still none of the small ones
     assert m["by_z"]["2"]["per_kind"]["backlash"]["n_kept"] == 4
     assert m["by_z"]["3"]["backlash_alpha_90"]["1"]["n_test"] == 4  # alpha_90 over the kept runs only
+
+
+def test_alpha_90_on_the_motions_that_reverse_the_gear_torque_reads_the_twin_not_the_label():
+    # backlash on J2: eight runs whose motion reverses J2's gear torque (SE defined), flagged from 0.1 deg up; six
+    # whose motion never does (SE undefined), never flagged whatever their size.  Over all fourteen the detector
+    # never reaches 90 % (the goal's literal alpha_90 is not reached); over the eight reversing ones it does.
+    se = "twin_est_backlash_rad_se_j2"
+    rev = [{"fault": "backlash", "fault_joint": 2, "fault_size": a, se: 0.001}
+           for a in (0.02, 0.03, 0.05, 0.1, 0.2, 0.3, 0.4, 0.5)]
+    blind = [{"fault": "backlash", "fault_joint": 2, "fault_size": a, se: np.nan}
+             for a in (0.1, 0.2, 0.3, 0.4, 0.5, 0.5)]
+    healthy = [{"fault": "healthy", "fault_joint": 0, "fault_size": 0.0, se: np.nan} for _ in range(3)]
+    test = _frame(rev + blind + healthy)
+    flagged = np.array([False, False, False, True, True, True, True, True] + [False] * 6 + [False] * 3)
+    from ur5fault.health.diagnostics.limit_metrics import reversing_alpha_90, torque_reverses
+    from ur5fault.health.diagnostics.thresholds import backlash_thresholds
+
+    np.testing.assert_array_equal(torque_reverses(test)[:, 1], [True] * 8 + [False] * 9)
+    out = reversing_alpha_90(test, flagged)["2"]
+    assert out["n_test"] == 8 and out["detected"] == 5 and out["n_not_reversing"] == 6
+    assert 0.05 <= out["alpha_90_empirical_deg"] <= 0.1
+    everything = backlash_thresholds(test, flagged, pd.DataFrame())["per_joint"]["2"]
+    assert everything["n_test"] == 14 and math.isnan(everything["alpha_90_empirical_deg"])
+    # the label does not decide which runs count: the same rows with their sizes shuffled keep the same runs
+    shuffled = test.copy()
+    shuffled.loc[:13, "fault_size"] = test.loc[:13, "fault_size"].to_numpy()[::-1]
+    assert reversing_alpha_90(shuffled, flagged)["2"]["n_test"] == 8
+    m = limit_detection(test, _unit_calibration(), np.ones(len(test), bool), flagged.astype(float),
+                        flagged.astype(float), flagged, (3.0,))
+    assert m["backlash_alpha_90_torque_reverses"]["2"]["n_not_reversing"] == 6
+
+
+def test_flank_share_against_hand_computed_torques():
+    from ur5fault.health.twin_features import flank_share
+
+    T = np.zeros((4, 6))
+    T[:, 0] = [-30.0, -10.0, 0.0, 3.0]     # weaker flank 3 of a peak 30
+    T[:, 1] = [-30.0, -10.0, -0.5, 0.0]    # approaches zero from one side only
+    T[:, 2] = [2.0, -2.0, 1.0, -1.0]       # equal both ways
+    T[:, 3] = [5.0, 4.0, 6.0, 1.0]         # one sign
+    # joint 5 carries no torque; joint 6 a single reversal sample
+    T[:, 5] = [10.0, 10.0, -0.1, 10.0]
+    np.testing.assert_allclose(flank_share(T), [0.1, 0.0, 1.0, 0.0, 0.0, 0.01])
+
+
+def test_the_backlash_cannot_be_told_where_the_twin_torque_does_not_reverse_whatever_its_se():
+    # J3 of three runs with the same finite backlash SE: the twin's torque reverses by 10 % of its peak, by 1 %
+    # (under the flank column's 2 %: it only approaches zero) or the campaign has no flank column (NaN: the SE
+    # alone decides, as before the column)
+    se, share = "twin_est_backlash_rad_se_j3", "twin_gear_flank_share_j3"
+    rows = [{se: 0.001, share: 0.10}, {se: 0.001, share: 0.01}, {se: 0.001, share: np.nan}]
+    runs = _frame(rows)
+    for j in (1, 2, 4, 5, 6):
+        runs[f"twin_gear_flank_share_j{j}"] = 0.5
+    lim = detection_limits(runs, _unit_calibration(), 3.0)["backlash"][:, 2]
+    assert lim[0] == pytest.approx(0.003 * DEG) and np.isinf(lim[1]) and lim[2] == pytest.approx(0.003 * DEG)
+    assert np.isfinite(detection_limits(runs, _unit_calibration(), 3.0)["current_sensor_offset"][1, 2])  # others
+    one = joint_limits(runs.iloc[1].to_dict(), _unit_calibration(), 3)
+    assert one["backlash"]["detectable_from"] is None and "never changes flank" in one["backlash"]["cannot_tell"]
+    assert joint_limits(runs.iloc[0].to_dict(), _unit_calibration(), 3)["backlash"]["detectable_from"] > 0
+
+
+def test_alpha_90_on_reversing_motions_reads_the_flank_share_where_the_campaign_has_it():
+    from ur5fault.health.diagnostics.limit_metrics import reversing_alpha_90
+
+    # backlash on J3, every run with a finite SE: six reverse the torque (share 0.1) and are flagged, three only
+    # approach zero (share 0.005) and are missed whatever their size
+    rows = [{"fault": "backlash", "fault_joint": 3, "fault_size": a, "twin_est_backlash_rad_se_j3": 0.001,
+             "twin_gear_flank_share_j3": s} for a, s in ((0.03, 0.1), (0.05, 0.1), (0.1, 0.1), (0.2, 0.1),
+                                                         (0.3, 0.1), (0.4, 0.1),
+                                                         (0.15, 0.005), (0.3, 0.005), (0.45, 0.005))]
+    test = _frame(rows)
+    for j in (1, 2, 4, 5, 6):
+        test[f"twin_gear_flank_share_j{j}"] = 0.5
+    out = reversing_alpha_90(test, np.array([True] * 6 + [False] * 3))["3"]
+    assert (out["n_test"], out["detected"], out["n_not_reversing"]) == (6, 6, 3)
+    assert out.get("alpha_90_bound") == "< 0.03"

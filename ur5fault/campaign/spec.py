@@ -19,8 +19,8 @@ Campaign YAML (see campaigns/default.yaml)::
     twin_residuals: false           # give every run its digital twin and the twin residual features
                                     # (ur5fault/health/twin_features.py); about twice the simulation
     twin_com_twins: false           # with twin_residuals: the current fit's payload CoM columns from noise-free
-                                    # twins with the CoM shifted (twin residuals format 4; about +10 % of the
-                                    # diagnostics campaign's run-steps); false: the CoM's gravity torque (format 3)
+                                    # twins with the CoM shifted (twin residuals format 6; about +10 % of the
+                                    # diagnostics campaign's run-steps); false: the CoM's gravity torque (format 5)
     motor_encoders: true            # false: log like a UR robot (no motor-side encoder): every feature of
                                     # the encoder mismatch is NaN (ur5fault/health/signals.py)
 
@@ -91,7 +91,7 @@ class Campaign:
     #: False: the runs are logged like a UR robot's, without the motor-side encoder (its features are NaN)
     motor_encoders: bool = True
     #: with ``twin_residuals``: the current fit's payload CoM columns from CoM-shifted noise-free twins
-    #: (health/twin_regressors.py; twin residuals format 4), else the CoM's gravity torque in closed form
+    #: (health/twin_regressors.py; twin residuals format 6), else the CoM's gravity torque in closed form
     twin_com_twins: bool = False
 
     @property

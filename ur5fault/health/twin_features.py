@@ -42,8 +42,8 @@ Features per joint ``j`` (units in the names):
   The current fit is made over all six joints at once (:mod:`ur5fault.health.twin_fit`), each joint weighted
   by its noise, with four more columns shared by the joints for the nuisance the robot does not know: the
   payload's centre-of-mass shift along the flange's x, y, z (the gravity torque of the shift through the twin's
-  kinematics, while the payload is held; with the campaign option ``twin_com_twins``, twin residuals format 4, the
-  motor current of noise-free twins with the CoM shifted minus the unshifted one's, per metre: gravity, the
+  kinematics, while the payload is held; with the campaign option ``twin_com_twins``, twin residuals format 4
+  (now 6), the motor current of noise-free twins with the CoM shifted minus the unshifted one's, per metre: gravity, the
   payload's inertia and what the loops make of them, :mod:`ur5fault.health.twin_regressors`) and the setpoint
   latency (``-di_twin/dt``).
   An offset is thus estimated with a CoM that puts a near-constant torque on the wrists held out: the CoM's torque is
@@ -55,6 +55,12 @@ Features per joint ``j`` (units in the names):
   t-statistic, estimate / SE - how many standard errors the signature stands out of the residual, on the
   same scale whatever the motion (standard normal on a healthy run with white noise).  SE and t are NaN
   where the motion does not identify the estimate (e.g. the CoM columns without a payload).
+* ``twin_gear_flank_share_j`` (-, twin residuals format 5): how far the motion reverses the joint's gear torque,
+  the twin's (noise-free) peak torque on its weaker flank as a share of its peak torque on either
+  (:func:`flank_share`; 0 where the torque keeps one sign).  A backlash is crossed, and so can be seen, only
+  where it exceeds :data:`FLANK_SHARE`, the share the mismatch fit's flank column counts as a flank: below it
+  the torque only approaches zero from one side, which the backlash estimate can still fit (its SE is finite)
+  but a clearance does not show (docs/diagnostics.md, "Backlash on the motions that reverse the gear torque").
 """
 
 from __future__ import annotations
@@ -102,6 +108,8 @@ def feature_units() -> dict[str, str]:
     for name, unit in NUISANCE_UNITS.items():
         out[f"twin_est_{name}"] = unit
         out[f"twin_est_{name}_t"] = "-"
+    for j in range(1, N_JOINTS + 1):  # twin residuals format 5
+        out[f"twin_gear_flank_share_j{j}"] = "-"
     return out
 
 
@@ -161,6 +169,16 @@ def _motion_for(t_s: NDArray, q_set_rad: NDArray, params: RobotParams, motion: C
         raise ValueError(f"commanded motion of shape {motion.qd.shape} given for joint angles of shape "
                          f"{np.shape(q_set_rad)}")
     return motion
+
+
+def flank_share(torque_Nm: NDArray) -> NDArray:
+    """Per joint ``(6,)``: the peak of the gear torque ``torque_Nm`` ``(n, 6)`` on its weaker flank over its peak on
+    either, ``min(max T, max -T) / max |T|`` clipped at 0 (0 for a joint that carries no torque): 0 where the
+    torque keeps one sign, 1 where it swings equally both ways."""
+    T = np.asarray(torque_Nm, dtype=float)
+    peak = np.abs(T).max(axis=0)
+    weaker = np.clip(np.minimum(T.max(axis=0), (-T).max(axis=0)), 0.0, None)
+    return np.divide(weaker, peak, out=np.zeros_like(peak), where=peak > 0)
 
 
 def projection_columns(t_s: NDArray, q_set_rad: NDArray, twin: dict[str, NDArray], params: RobotParams,
@@ -263,6 +281,8 @@ def twin_features(t_s: NDArray, q_set_rad: NDArray, meas: dict[str, NDArray], tw
     for name, (v, e) in zip(NUISANCE_UNITS, nuisance):
         f[f"twin_est_{name}"] = float(v)
         f[f"twin_est_{name}_t"] = _t(v, e)
+    for j, share in enumerate(flank_share(twin["T_gear_Nm"])):
+        f[f"twin_gear_flank_share_j{j + 1}"] = float(share)
     return f
 
 

@@ -27,7 +27,7 @@ of :mod:`ur5fault.sim.drive.kernel` in steady tracking; of the model only the vi
 temperature).  ``ur5fault diagnose`` replays one log at one payload: its noise-free twin is exact
 (:func:`ur5fault.health.diagnosis.replay_twin`).
 
-With the campaign option ``twin_com_twins`` (twin residuals format 4) the payload centre-of-mass columns of the
+With the campaign option ``twin_com_twins`` (twin residuals format 4, now 6) the payload centre-of-mass columns of the
 current fit come from noise-free twins too:
 at every grid mass above zero, three more noise-free twins with the payload's centre of mass moved by
 :data:`COM_STEP_M` along the flange's x, y and z (:func:`com_effects`); a column is the difference of the shifted

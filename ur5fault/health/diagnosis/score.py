@@ -45,7 +45,7 @@ from ...sim.axes import N_JOINTS
 from ..diagnostics import calibration, joint_kind
 from ..diagnostics.data import CONTEXT_COLUMNS, SIM_ONLY_PREFIX
 from ..diagnostics.kind_call import MERGED_KINDS
-from ..diagnostics.limits import DEFAULT_Z, ESTIMATE_OF, LimitCalibration, joint_limits
+from ..diagnostics.limits import DEFAULT_Z, ESTIMATE_OF, FLANK_COLUMN, LimitCalibration, joint_limits, reverses
 from ..diagnostics.saved import SCHEMA_FORMAT
 from ..features import FEATURE_UNITS
 from ..twin_features import FEATURE_UNITS as TWIN_FEATURE_UNITS
@@ -134,7 +134,8 @@ def cannot_tell(w: Window, j: int, has_motor_encoders: bool) -> dict[str, str]:
     if not has_motor_encoders:
         for k, why in NEEDS_MOTOR_ENCODERS.items():
             out[k] = f"the log has no motor encoders: {why}"
-    if "backlash" not in out and w.torque_reversals[j] == 0:
+    share = w.features.get(FLANK_COLUMN.format(j + 1), float("nan"))
+    if "backlash" not in out and not (np.isfinite(share) and reverses(share)):
         out["backlash"] = "no gear-torque reversal in this window: the clearance is never crossed"
     if w.share_moving[j] < MIN_SHARE_MOVING:
         out["coulomb_friction"] = (f"the joint moves in {100 * w.share_moving[j]:.0f} % of this window "

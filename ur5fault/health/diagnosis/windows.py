@@ -24,7 +24,7 @@ from ...twin import LogReplay, Replayed
 from ...twin.residuals import CONDITION_REST_SPEED_RAD_S
 from ..features import run_features
 from ..signals import needs_motor_encoders
-from ..twin_features import ESTIMATE_UNITS, FLANK_SHARE, projection_columns, twin_features
+from ..twin_features import ESTIMATE_UNITS, projection_columns, twin_features
 
 
 @dataclasses.dataclass(frozen=True)
@@ -33,9 +33,9 @@ class Window:
 
     start_s: float
     end_s: float
+    #: ``twin_gear_flank_share_j<k>`` among them: whether the twin's gear torque reverses (backlash is seen only
+    #: there, :func:`ur5fault.health.diagnostics.limits.reverses`)
     features: dict[str, float]
-    #: per joint (0-based), gear-torque reversals of the twin between both flanks (backlash is seen only there)
-    torque_reversals: tuple[int, ...]
     #: per joint, share of the window's samples where the commanded joint moves (faster than the twin's
     #: "at rest" speed; Coulomb friction is seen only in motion)
     share_moving: tuple[float, ...]
@@ -70,18 +70,6 @@ def window_length(window_s: float) -> MinLength:
     duration), nothing more - it fits nothing to the log."""
     return MinLength(window_s, MIN_WINDOW_SAMPLES, f"`ur5fault diagnose` needs at least one window of {window_s:g} s "
                                                    "(the detector's training runs' duration)")
-
-
-def torque_reversals(torque_Nm: NDArray) -> tuple[int, ...]:
-    """Per joint, how often the gear torque ``(n, 6)`` passes from one flank to the other (a flank: a torque
-    beyond :data:`FLANK_SHARE` of the joint's largest, the twin features' own definition)."""
-    out = []
-    for j in range(torque_Nm.shape[1]):
-        t = torque_Nm[:, j]
-        big = np.abs(t) > FLANK_SHARE * max(float(np.abs(t).max()), 1e-12)
-        s = np.sign(t[big])
-        out.append(int(np.count_nonzero(np.diff(s) != 0)) if s.size else 0)
-    return tuple(out)
 
 
 def inflation(cols: list[NDArray]) -> list[float]:
@@ -147,8 +135,8 @@ def window_features(log: MeasuredLog, replay: LogReplay, rep: Replayed, window_s
         vif = tuple(dict(zip(ESTIMATE_UNITS, inflation([c[:, j] for c in cur]) + inflation([c[:, j] for c in mis])))
                     for j in range(N_JOINTS))
         moving = np.abs(np.gradient(q_set[lo:hi], dt, axis=0)) > CONDITION_REST_SPEED_RAD_S
-        out.append(Window(float(t[lo]), float(t[hi - 1] + dt), f, torque_reversals(twin["T_gear_Nm"]),
-                          tuple(float(v) for v in moving.mean(axis=0)), halves, vif))
+        out.append(Window(float(t[lo]), float(t[hi - 1] + dt), f, tuple(float(v) for v in moving.mean(axis=0)),
+                          halves, vif))
     return out
 
 

@@ -2,6 +2,12 @@
 to the test runs whose fault size is above that run's detection limit on its joint (:mod:`.limits`), beside
 today's figures over every run (kept: they are the goal's literal figures).
 
+Issue 19 states the backlash goal "on the motions where its gear torque reverses": :func:`torque_reverses` reads
+that off each run's own twin (no label: the noise-free twin's gear torque on the joint takes both flanks,
+``twin_gear_flank_share_j<k>`` above the flank column's 2 %, :func:`.limits.reverses`, and the backlash estimate
+is identified), and the alpha_90 over those runs (z-independent) is reported beside the counts of the runs whose
+motion never reverses it.
+
 For every ``z`` of :data:`.limits.Z_VALUES`: per kind, the AUC over the upper half of its sizes (as
 :func:`.metrics.detection`) and over all its sizes, each over the faulty test runs above their limit only, with
 ``n`` kept of ``N`` (negatives: every healthy test run, as today); per joint, the backlash alpha_90 over the
@@ -29,6 +35,7 @@ from .limits import (
     LimitCalibration,
     detection_limits,
     has_estimates,
+    standard_errors,
 )
 from .metrics import MIN_BIN_RUNS, auc_vs_healthy, upper_half
 from .thresholds import backlash_thresholds
@@ -55,6 +62,33 @@ def detectable(test: pd.DataFrame, limits: dict[str, np.ndarray]) -> np.ndarray:
     lim = own_limit(test, limits)
     with np.errstate(invalid="ignore"):
         return np.isfinite(lim) & (test["fault_size"].to_numpy(float) > lim)
+
+
+def torque_reverses(test: pd.DataFrame) -> np.ndarray:
+    """``(n_runs, 6)``: whether the run's motion reverses each joint's gear torque, read off its twin: the flank
+    share above 2 % (:func:`.limits.reverses`; a campaign without the column: the SE alone) and the backlash
+    estimate's SE finite and positive.  The label is not read."""
+    se = standard_errors(test, ESTIMATE_OF["backlash"])
+    return np.isfinite(se) & (se > 0)
+
+
+def reversing_alpha_90(test: pd.DataFrame, run_detected: np.ndarray) -> dict[str, Any]:
+    """Per joint: the backlash alpha_90 (:func:`.thresholds.backlash_thresholds`, the run-level detector's flags as
+    the other alpha_90 figures) over the backlash test runs whose motion reverses that joint's gear torque, with
+    ``n_not_reversing``: the backlash test runs on the joint whose motion never does (no signal can show them)."""
+    rev = torque_reverses(test)
+    kinds = test["fault"].to_numpy(str)
+    joints = test["fault_joint"].to_numpy(int)
+    on = (kinds == "backlash") & (joints >= 1) & (joints <= N_JOINTS)
+    own = np.zeros(len(test), bool)
+    own[on] = rev[np.flatnonzero(on), joints[on] - 1]
+    keep = ~on | own
+    bl = backlash_thresholds(test[keep].reset_index(drop=True), run_detected[keep], pd.DataFrame())
+    out = {}
+    for j, v in bl["per_joint"].items():
+        out[j] = {key: v[key] for key in ALPHA_KEYS if key in v}
+        out[j]["n_not_reversing"] = int((on & ~own & (joints == int(j))).sum())
+    return out
 
 
 def _auc(score: np.ndarray, healthy: np.ndarray, pos: np.ndarray) -> float:
@@ -123,7 +157,8 @@ def limit_detection(test: pd.DataFrame, cal: LimitCalibration, upper: np.ndarray
     return {"z_default": DEFAULT_Z, "z_values": list(z_values),
             "score": "by-joint detector (p(fault) of `ur5fault diagnose`; the goal's per-kind figure); "
                      "`_run_level`: the run-level detector",
-            "calibration": cal.to_dict(), "cannot_tell": cannot, "by_z": by_z}
+            "calibration": cal.to_dict(), "cannot_tell": cannot, "by_z": by_z,
+            "backlash_alpha_90_torque_reverses": reversing_alpha_90(test, run_detected)}
 
 
 def for_dataset(ds: Dataset, schema: dict[str, Any] | None, score: np.ndarray, run_score: np.ndarray,
@@ -137,4 +172,4 @@ def for_dataset(ds: Dataset, schema: dict[str, Any] | None, score: np.ndarray, r
     return limit_detection(ds.test, cal, upper_half(ds), score, run_score, run_detected)
 
 
-__all__ = ["detectable", "for_dataset", "limit_detection", "own_limit"]
+__all__ = ["detectable", "for_dataset", "limit_detection", "own_limit", "reversing_alpha_90", "torque_reverses"]

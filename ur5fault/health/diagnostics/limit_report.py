@@ -67,6 +67,16 @@ def limit_lines(lim: dict[str, Any], literal: dict[str, Any]) -> list[str]:
     for z in zs:
         a = lim["by_z"][z]["backlash_alpha_90"]
         lines.append(f"| {z} | " + " | ".join(_alpha(a.get(str(j), {})) for j in range(1, len(joints) + 1)) + " |")
+    rev = lim.get("backlash_alpha_90_torque_reverses")
+    if rev:  # absent from a metrics.json written before it
+        lines += ["", "Backlash alpha_90 [deg] on the motions where the joint's gear torque reverses (the goal's "
+                      "wording; read off each run's twin, no label: the backlash estimate is identified there), "
+                      "flagged / kept; below, the backlash test runs whose motion never reverses it (gravity holds "
+                      "the gear on one flank: the clearance is never crossed and no signal can show it):", "",
+                  "| | " + " | ".join(joints) + " |", "| --- |" + " --- |" * len(joints),
+                  "| alpha_90 | " + " | ".join(_alpha(rev.get(str(j), {})) for j in range(1, len(joints) + 1)) + " |",
+                  "| runs never reversing | " + " | ".join(str(rev.get(str(j), {}).get("n_not_reversing", "-"))
+                                                      for j in range(1, len(joints) + 1)) + " |"]
     return lines
 
 

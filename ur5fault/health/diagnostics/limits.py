@@ -33,7 +33,7 @@ import pandas as pd
 
 from ...errors import ConfigFileError
 from ...sim.axes import N_JOINTS
-from ..twin_features import ESTIMATE_UNITS
+from ..twin_features import ESTIMATE_UNITS, FLANK_SHARE
 from .saved import MAD_SCALE
 
 #: each fault kind's size estimate (name of :data:`ur5fault.health.twin_features.ESTIMATE_UNITS`); a current-sensor
@@ -59,7 +59,8 @@ WHY_NOT_IDENTIFIED = {
     "mismatch_offset_rad": "no encoder mismatch to fit on this joint (no motor encoder, or its columns are mixed; "
                            "standard error undefined)",
     "backlash_rad": "the gear torque never changes flank on this joint in this motion: the clearance is never "
-                    "crossed (the flank column is constant; standard error undefined)",
+                    "crossed (the twin's torque on its weaker flank stays under 2 % of its peak, "
+                    "twin_gear_flank_share; standard error undefined or not read)",
     "compliance_err": "the gear torque's windup is a mix of the offset and flank columns on this motion (standard "
                       "error undefined)",
 }
@@ -159,14 +160,37 @@ class LimitCalibration:
                                   "again") from None
 
 
+#: the column of each joint's gear-torque flank share (twin residuals format 5); absent from older campaigns
+FLANK_COLUMN = "twin_gear_flank_share_j{}"
+
+
+def reverses(share: np.ndarray | float) -> np.ndarray:
+    """Whether a flank share (:func:`ur5fault.health.twin_features.flank_share`) means the gear torque reverses:
+    above :data:`~ur5fault.health.twin_features.FLANK_SHARE`, the share the backlash fit's flank column counts.
+    NaN (a campaign without the column) counts as reversing: the SE alone decides there, as before the column."""
+    x = np.asarray(share, dtype=float)
+    return np.isnan(x) | (x > FLANK_SHARE)
+
+
+def standard_errors(df: pd.DataFrame, est: str) -> np.ndarray:
+    """``(n_runs, 6)`` standard errors of ``est``; the backlash's as NaN where the gear torque does not reverse."""
+    se = df[_cols(est, "se")].apply(pd.to_numeric, errors="coerce").to_numpy(float)
+    if est == ESTIMATE_OF["backlash"]:
+        cols = [FLANK_COLUMN.format(j) for j in range(1, N_JOINTS + 1)]
+        if all(c in df.columns for c in cols):
+            se = np.where(reverses(df[cols].apply(pd.to_numeric, errors="coerce").to_numpy(float)), se, np.nan)
+    return se
+
+
 def estimate_limits(df: pd.DataFrame, cal: LimitCalibration, z: float = DEFAULT_Z) -> dict[str, np.ndarray]:
     """Per estimate, ``(n_runs, 6)``: ``z * spread * SE`` in the estimate's unit, inf where SE or spread is
-    undefined (not finite, or not positive)."""
+    undefined (not finite, or not positive) - for the backlash also where the run's gear torque does not reverse
+    on the joint (:func:`reverses`)."""
     if not z > 0:
         raise ValueError(f"z = {z!r} must be positive")
     out = {}
     for est in ESTIMATES:
-        se = df[_cols(est, "se")].apply(pd.to_numeric, errors="coerce").to_numpy(float)
+        se = standard_errors(df, est)
         c = np.asarray(cal.spread[est], float)[None, :]
         ok = np.isfinite(se) & (se > 0) & np.isfinite(c) & (c > 0)
         out[est] = np.where(ok, z * np.where(ok, c * se, 0.0), np.inf)
@@ -198,6 +222,9 @@ def joint_limits(features: Mapping[str, float], cal: LimitCalibration, joint: in
     for kind, est in ESTIMATE_OF.items():
         v = features.get(f"twin_est_{est}_se_j{joint}")
         se = math.nan if v is None else float(v)
+        share = features.get(FLANK_COLUMN.format(joint))
+        if kind == "backlash" and share is not None and not reverses(float(share)):
+            se = math.nan  # the torque never reverses: a finite SE there is the approach to zero, not a crossing
         spread = cal.spread[est][joint - 1]
         why = reason(kind, se, spread)
         if why is None:
@@ -208,4 +235,5 @@ def joint_limits(features: Mapping[str, float], cal: LimitCalibration, joint: in
 
 
 __all__ = ["DEFAULT_Z", "ESTIMATES", "ESTIMATE_OF", "SIZE_UNIT", "Z_VALUES", "LimitCalibration", "detection_limits",
-           "estimate_from_size", "estimate_limits", "has_estimates", "joint_limits", "reason", "size_from_estimate"]
+           "estimate_from_size", "estimate_limits", "has_estimates", "joint_limits", "reason", "reverses",
+           "size_from_estimate", "standard_errors"]
