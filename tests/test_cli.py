@@ -110,7 +110,7 @@ def _documented_run_configurations():
     import re
     import textwrap
 
-    from ur5fault.cli import RUN_CONFIG_HELP
+    from ur5fault.run_cli import RUN_CONFIG_HELP
 
     from conftest import REPO
 
