@@ -136,6 +136,8 @@ def summarise(d: dict, kind: str | None, joint: int | None) -> dict:
     top_kind = [j["kinds"][0]["kind"] for j in top_joint if j["kinds"]]
     row = {"log": d["log"], "injected": kind, "joint": None if joint is None else joint + 1,
            "n_windows": d["n_windows"], "n_flagged": d["n_flagged"],
+           "n_flagged_training_threshold": int(sum(training_flags(d))),
+           "flag_threshold": d["flag_threshold"],
            "n_flagged_run_level": int(sum(x["flagged_run_level"] for x in w)),
            "p_fault_median": float(np.median([x["p_fault"] for x in w])),
            "p_fault_max": float(max(x["p_fault"] for x in w)),
@@ -160,13 +162,25 @@ def size_delta(feats, healthy_feats, kind: str, joint: int) -> float:
     return float(np.nanmedian(d))
 
 
+def training_flags(d: dict) -> list[bool]:
+    """Each window flagged at the training runs' 5 % threshold alone (the diagnosis's own ``flagged`` is above
+    the robot's threshold too, where a baseline gave one)."""
+    thr = d["detector"]["threshold_5pct_false_alarms"]
+    return [x["p_fault_score"] > thr for x in d["windows"]]
+
+
 def flagged_on_joint(d: dict, joint: int) -> dict:
-    """Share of the windows flagged, and share where ``joint`` (0-based) is the likeliest faulty joint."""
+    """Share of the windows flagged, and share where ``joint`` (0-based) is the likeliest faulty joint (each also
+    at the training runs' threshold alone)."""
     w = d["windows"]
     top = [max(x["joints"], key=lambda j: j["p_fault_joint"] or 0.0)["joint"] for x in w]
+    train = training_flags(d)
     return {"share_flagged": float(np.mean([x["flagged"] for x in w])),
+            "share_flagged_training_threshold": float(np.mean(train)),
             "share_joint_likeliest": float(np.mean([t == joint + 1 for t in top])),
             "share_flagged_on_joint": float(np.mean([x["flagged"] and t == joint + 1 for x, t in zip(w, top)])),
+            "share_flagged_on_joint_training_threshold": float(np.mean([f and t == joint + 1
+                                                                        for f, t in zip(train, top)])),
             "p_fault_joint_median": float(np.median([x["joints"][joint]["p_fault_joint"] or 0.0 for x in w]))}
 
 
@@ -214,12 +228,14 @@ def run_pair(log, overlay: dict | None, detector: Path, spread: pd.DataFrame, ou
 
 
 def table_baseline(rows: list[dict]) -> str:
-    """Per diagnosed log and baseline: healthy windows flagged and inputs beyond 3 robust SD of the healthy
-    training runs, without -> with the baseline; each injected fault: share of windows flagged, and flagged with
-    its joint the likeliest, without -> with."""
-    lines = ["| log | baseline (windows) | healthy windows flagged | inputs beyond 3 robust SD | + 0.1 A offset J4: "
-             "flagged / flagged on J4 | + 10 % gain J2: flagged / flagged on J2 |",
-             "| --- | --- | --- | --- | --- | --- |"]
+    """Per diagnosed log and baseline: the robot's threshold; healthy windows flagged without the baseline, with
+    it at the training runs' threshold, and with it above the robot's threshold too; inputs beyond 3 robust SD of
+    the healthy training runs, without -> with the baseline; each injected fault: share of windows flagged, and
+    flagged with its joint the likeliest, with the baseline at the training threshold -> above the robot's."""
+    lines = ["| log | baseline (windows) | robot threshold: score (false-alarm bound) | healthy windows flagged: "
+             "no baseline / baseline / **baseline and robot threshold** | inputs beyond 3 robust SD | + 0.1 A offset "
+             "J4: flagged / flagged on J4 | + 10 % gain J2: flagged / flagged on J2 |",
+             "| --- | --- | --- | --- | --- | --- | --- |"]
     by: dict[tuple, dict] = {}
     for r in rows:
         by.setdefault((r["log"], r["baseline"]), {})[r["injected"]] = r
@@ -228,12 +244,16 @@ def table_baseline(rows: list[dict]) -> str:
         h = c[None]
         cells = []
         for kind in ("current_sensor_offset", "current_sensor_gain"):
-            a, b = c[kind]["without"], c[kind]["with"]
-            cells.append(f"{pct(100 * a['share_flagged'])} / {pct(100 * a['share_flagged_on_joint'])} -> "
+            b = c[kind]["with"]
+            cells.append(f"{pct(100 * b['share_flagged_training_threshold'])} / "
+                         f"{pct(100 * b['share_flagged_on_joint_training_threshold'])} -> "
                          f"**{pct(100 * b['share_flagged'])} / {pct(100 * b['share_flagged_on_joint'])}**")
-        lines.append(f"| {Path(name).name.split('.')[0]} | {base} ({h['baseline_windows']}) | "
-                     f"{h['without']['n_flagged']} of {h['n_windows']} -> **{h['with']['n_flagged']} of "
-                     f"{h['n_windows']}** | {pct(100 * h['outliers_without']['share_inputs_beyond_3'])} -> "
+        t = (h.get("baseline_summary") or {}).get("robot_threshold")
+        thr = "-" if t is None else f"{t['score']:.3f} ({t['false_alarm_bound']:.2f})"
+        lines.append(f"| {Path(name).name.split('.')[0]} | {base} ({h['baseline_windows']}) | {thr} | "
+                     f"{h['without']['n_flagged']} / {h['with']['n_flagged_training_threshold']} / "
+                     f"**{h['with']['n_flagged']}** of {h['n_windows']} | "
+                     f"{pct(100 * h['outliers_without']['share_inputs_beyond_3'])} -> "
                      f"{pct(100 * h['outliers_with']['share_inputs_beyond_3'])} | {cells[0]} | {cells[1]} |")
     return "\n".join(lines) + "\n"
 

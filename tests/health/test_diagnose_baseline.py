@@ -183,6 +183,15 @@ def test_baseline_logs_are_used_and_reported_and_without_them_nothing_changes(lo
     assert b["rules"]["scaled"]["n_inputs"] == 0
     assert b["rules"]["condition"]["inputs"] == ["payload_kg", "temperature_C"]
     assert any("healthy baseline (4 windows of 2 log(s))" in n for n in d["notes"])
+    # the robot's own threshold: each log's two windows held out against the other log; four scores, so the
+    # conformal rank ceil(0.95 * 5) = 5 does not exist and the largest is taken (a new window exceeds it with 1/5)
+    t = b["robot_threshold"]
+    assert t["n_held_out_windows"] == 4 and len(t["groups"]) == 2 and t["rank"] == 5
+    assert t["score"] == max(t["held_out_scores"]) and t["false_alarm_bound"] == pytest.approx(0.2)
+    assert plain["flag_threshold"]["score"] == plain["detector"]["threshold_5pct_false_alarms"]
+    flag = d["flag_threshold"]["score"]
+    assert flag == max(t["score"], d["detector"]["threshold_5pct_false_alarms"])
+    assert [w["flagged"] for w in d["windows"]] == [w["p_fault_score"] > flag for w in d["windows"]]
     report = (tmp_path / "with" / "report.md").read_text()
     assert "Baseline: 4 windows of 2 healthy log(s)" in report
     assert "No baseline of this robot" in (tmp_path / "plain" / "report.md").read_text()

@@ -23,6 +23,7 @@ from ...sim.effects import EffectSpec
 from ...twin import LogReplay, Replayed
 from ..diagnostics.limits import DEFAULT_Z, LimitCalibration
 from .baseline import MIN_SPREAD_WINDOWS, BaselineMap, fit_map, training_reference
+from .robot_threshold import threshold_from_baseline
 from .score import check_schema, score_windows
 from .windows import Window, window_features
 
@@ -69,11 +70,12 @@ def robot_baseline(healthy: Sequence[MeasuredLog], detector_dir: str | Path, par
                    base_effects: Sequence[EffectSpec] = (), *, seed: int = TWIN_SEED,
                    windows: Sequence[Sequence[Window]] | None = None) -> BaselineMap:
     """The robot's own healthy baseline (:mod:`.baseline`): ``healthy`` logs of the robot replayed through the
-    same twin (model overlay) and windowed as a diagnosed log is; ``windows``: their windows, when already
-    computed (one sequence per log, in order)."""
+    same twin (model overlay) and windowed as a diagnosed log is, with the robot's own false-alarm threshold read
+    off them held out (:mod:`.robot_threshold`); ``windows``: their windows, when already computed (one sequence
+    per log, in order)."""
     from ..diagnostics.saved import load_models
 
-    schema = load_models(detector_dir)[1]
+    models, schema = load_models(detector_dir)
     window_s = check_schema(schema, str(detector_dir))
     if not healthy:
         raise ParameterError("a baseline needs at least one healthy log of the robot")
@@ -85,8 +87,10 @@ def robot_baseline(healthy: Sequence[MeasuredLog], detector_dir: str | Path, par
         com = bool(schema.get("twin_com_twins", False))
         windows = [log_windows(g, window_s, replay_twin(g, params_overrides, base_effects, seed=seed, com_twins=com))
                    for g in healthy]
-    return fit_map(training_reference(detector_dir, schema), [(g.source, w) for g, w in zip(healthy, windows)],
-                   healthy[0].period_s, [g.content_sha256() for g in healthy])
+    reference = training_reference(detector_dir, schema)
+    by_log = [(g.source, w) for g, w in zip(healthy, windows)]
+    bmap = fit_map(reference, by_log, healthy[0].period_s, [g.content_sha256() for g in healthy])
+    return dataclasses.replace(bmap, threshold=threshold_from_baseline(models, reference, by_log, healthy[0].period_s))
 
 
 def diagnose(log: MeasuredLog, detector_dir: str | Path, params_overrides: dict | None = None,
@@ -125,9 +129,12 @@ def diagnose(log: MeasuredLog, detector_dir: str | Path, params_overrides: dict 
                                  f"{1e3 * baseline.period_s:g} ms; the features depend on the rate: give a baseline "
                                  "logged like the diagnosed log")
     cal = schema.get("detection_limit_calibration")
+    thr = float(schema["joint_kind_threshold_5pct_false_alarms"])
+    robot = None if baseline is None else baseline.threshold
+    flag_thr = thr if robot is None else max(thr, robot.score)
     scored = score_windows(models, schema, windows, log.q_motor_rad is not None,
                            None if baseline is None else baseline.apply,
-                           None if not cal else LimitCalibration.from_dict(cal))
+                           None if not cal else LimitCalibration.from_dict(cal), flag_thr)
     notes = list(log.assumptions(replay.params.joint_temperature_C))
     if not cal:
         notes.append("these classifiers were saved without the detection-limit calibration: no detection_limits "
@@ -150,15 +157,25 @@ def diagnose(log: MeasuredLog, detector_dir: str | Path, params_overrides: dict 
         notes.append(f"log sampled every {1e3 * log.period_s:g} ms, the training runs every {1e3 * trained:g} ms: "
                      "rate-dependent features (current spikes, kurtosis, crest factor, high-frequency energy, "
                      "residual RMS) are not on the scale the detector learned")
-    thr = float(schema["joint_kind_threshold_5pct_false_alarms"])
+    if baseline is not None and robot is None:
+        notes.append("the baseline has one window: no robot threshold could be read off it held out, so windows "
+                     "are flagged at the training runs' 5 % point alone")
+    elif robot is not None:
+        notes.append(f"flagged above the robot's own threshold too: read off its {robot.n} baseline windows, each "
+                     f"scored against a baseline of the others ({len(robot.groups)} groups); a healthy window like "
+                     f"them exceeds it with probability {robot.false_alarm_bound:.2g}"
+                     + ("" if robot.rank <= robot.n else
+                        f" (fewer than {int(round(1 / robot.alpha)) - 1} windows: the largest held-out score)")
+                     + ("; it is below the training runs' threshold, which is kept" if robot.score <= thr else ""))
     p_thr = thr
+    p_flag = flag_thr
     if models.calibrator is None:
         notes.append("these classifiers were saved without a calibration: p_fault is the fault-kind classifier by "
                      "joint's own score, not a calibrated frequency (run `ur5fault benchmark` again to calibrate it)")
     else:
         from ..diagnostics.calibration import apply
 
-        p_thr = float(apply(models.calibrator, np.array([thr]))[0])
+        p_thr, p_flag = (float(v) for v in apply(models.calibrator, np.array([thr, flag_thr])))
     flagged = [w for w in scored if w["flagged"]]
     return {
         "log": log.source,
@@ -175,6 +192,10 @@ def diagnose(log: MeasuredLog, detector_dir: str | Path, params_overrides: dict 
                      "run_level_threshold_5pct_false_alarms": float(schema["detector_threshold_5pct_false_alarms"]),
                      "p_fault_at_threshold": p_thr, "window_s": window_s,
                      "ur5fault_version": schema.get("ur5fault_version")},
+        # what a window is flagged above: the training runs' 5 % point, or the robot's own where it is higher
+        "flag_threshold": {"score": flag_thr, "p_fault": p_flag,
+                           "from": "the training runs' 5 % false-alarm point" if flag_thr == thr else
+                           "the robot's own healthy baseline windows, held out (baseline.robot_threshold)"},
         "conditions": context,
         # None: the inputs were scored as they are, against the simulated healthy runs only
         "baseline": None if baseline is None else baseline.summary(),

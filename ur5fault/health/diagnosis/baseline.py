@@ -29,6 +29,9 @@ its size in the input's own unit.  Handled explicitly, each named in the diagnos
   left as measured;
 * the operating conditions (:data:`~ur5fault.health.diagnostics.data.CONTEXT_COLUMNS`: payload, temperature):
   known for every log, not residuals, left as measured.
+
+A map also carries the robot's own false-alarm threshold (:class:`RobotThreshold`), read off the same windows,
+each held out from the map it is scored with (:mod:`.robot_threshold`).
 """
 
 from __future__ import annotations
@@ -122,6 +125,37 @@ def training_reference(detector_dir: str | Path, schema: dict[str, Any]) -> Refe
 
 
 @dataclasses.dataclass(frozen=True)
+class RobotThreshold:
+    """The robot's own threshold on the by-joint score (:mod:`.robot_threshold`), the held-out scores it was read
+    from (one per baseline window, in the groups' order), how the windows were grouped, and the rank taken
+    (``rank > n``: the largest held-out score)."""
+
+    score: float
+    held_out_scores: NDArray
+    groups: tuple[str, ...]
+    alpha: float
+    rank: int
+
+    @property
+    def n(self) -> int:
+        return int(self.held_out_scores.size)
+
+    @property
+    def false_alarm_bound(self) -> float:
+        """The probability that a new healthy window exchangeable with the held-out ones exceeds the threshold:
+        at most ``alpha`` where the rank exists, ``1 / (n + 1)`` where the largest score was taken."""
+        return self.alpha if self.rank <= self.n else 1.0 / (self.n + 1)
+
+    def summary(self) -> dict[str, Any]:
+        return {"score": self.score, "alpha": self.alpha, "n_held_out_windows": self.n, "rank": self.rank,
+                "false_alarm_bound": self.false_alarm_bound, "groups": list(self.groups),
+                "held_out_scores": [float(v) for v in self.held_out_scores],
+                "method": "each baseline group scored against a baseline of the other groups only; the "
+                          "split-conformal rank ceil((1 - alpha)(n + 1)) of the n held-out scores (the largest "
+                          "where it exceeds n)"}
+
+
+@dataclasses.dataclass(frozen=True)
 class BaselineMap:
     """Per input: the robot's healthy median ``robot_median``, spread ``robot_scale`` and number of baseline
     values ``robot_n``, the training reference, and the rule (:data:`RULES`) and factor it is mapped with."""
@@ -137,6 +171,8 @@ class BaselineMap:
     factor: NDArray
     #: :meth:`~ur5fault.logs.measured.MeasuredLog.content_sha256` of each baseline log (empty: not recorded)
     log_sha256: tuple[str, ...] = ()
+    #: the robot's own false-alarm threshold read off these windows held out (None: not computed, or too few)
+    threshold: RobotThreshold | None = None
 
     @property
     def n_windows(self) -> int:
@@ -167,7 +203,8 @@ class BaselineMap:
                           for r, v in by_rule.items()},
                 # None: not a finite ratio (such inputs are shifted only, never scaled)
                 "largest_spread_ratio": [{"input": names[k], "baseline_over_training":
-                                          float(ratio[k]) if np.isfinite(ratio[k]) else None} for k in order]}
+                                          float(ratio[k]) if np.isfinite(ratio[k]) else None} for k in order],
+                "robot_threshold": None if self.threshold is None else self.threshold.summary()}
 
 
 def fit_map(reference: Reference, windows_by_log: Sequence[tuple[str, Sequence[Window]]], period_s: float,
@@ -201,4 +238,5 @@ def fit_map(reference: Reference, windows_by_log: Sequence[tuple[str, Sequence[W
                        tuple(rule), factor, tuple(log_sha256))
 
 
-__all__ = ["BaselineMap", "MIN_SPREAD_WINDOWS", "Reference", "fit_map", "robust_spread", "training_reference"]
+__all__ = ["BaselineMap", "MIN_SPREAD_WINDOWS", "Reference", "RobotThreshold", "fit_map", "robust_spread",
+           "training_reference"]

@@ -21,8 +21,11 @@ def _figure(d: dict[str, Any]):
     fig = Figure(figsize=(8, 4.5), layout="constrained")
     ax = fig.add_subplot(2, 1, 1)
     ax.step(mid, [x["p_fault"] for x in w], where="mid", color="k", label="p(fault)")
-    ax.axhline(d["detector"]["p_fault_at_threshold"], color="r", ls="--", lw=1,
-               label="threshold at 5 % false alarms")
+    ft = d.get("flag_threshold") or {"p_fault": d["detector"]["p_fault_at_threshold"]}
+    robot = ft["p_fault"] != d["detector"]["p_fault_at_threshold"]
+    ax.axhline(ft["p_fault"], color="r", ls="--", lw=1,
+               label="robot's own threshold (healthy baseline held out)" if robot else
+               "threshold at 5 % false alarms (training runs)")
     ax.set_ylim(0, 1.02)
     ax.set_ylabel("p(fault)")
     ax.legend(loc="upper right", fontsize=7)
@@ -49,11 +52,19 @@ def _baseline(b: dict[str, Any] | None) -> str:
         return ("No baseline of this robot: the inputs are scored as they are, against the simulated healthy "
                 "training runs only (a real robot's model error then reads as a fault: `--baseline-logs`).")
     n = {r: v["n_inputs"] for r, v in b["rules"].items()}
+    t = b.get("robot_threshold")
+    robot = ("" if t is None else
+             f" The robot's own threshold: each of its {t['n_held_out_windows']} baseline windows scored against a "
+             f"baseline of the other {len(t['groups']) - 1} group(s) of windows, the "
+             + ("largest held-out score" if t["rank"] > t["n_held_out_windows"] else f"{t['rank']}-th smallest")
+             + f" ({t['score']:.3f}; a healthy window like them exceeds it with probability "
+             f"{t['false_alarm_bound']:.2g}); windows are flagged above it and the training runs' threshold.")
     return (f"Baseline: {b['n_windows']} windows of {len(b['logs'])} healthy log(s) of the robot "
             f"({', '.join(b['logs'])}); every input referred to it ({b['mapping']}): {n['scaled']} scaled, "
             f"{n['shifted']} shifted, {n['shifted_zero_spread']} shifted (zero spread in the baseline), "
             f"{n['shifted_few_windows']} shifted (too few baseline values), {n['left_as_measured']} left as measured "
-            f"(no value), {n['condition']} operating conditions left as they are; reference: {b['reference']}.")
+            f"(no value), {n['condition']} operating conditions left as they are; reference: {b['reference']}."
+            + robot)
 
 
 def _limit_lines(d: dict[str, Any]) -> list[str]:
@@ -87,7 +98,11 @@ def _report(d: dict[str, Any]) -> str:
              f"{d['conditions']['payload_kg']:g} kg, temperature {d['conditions']['temperature_C']:.1f} degC. "
              f"Detector: {det['folder']} ({det['feature_set']} features, training set "
              f"{str(det['training_set_sha256'])[:12]}), windows of {det['window_s']:g} s, flagged at "
-             f"p(fault) > {det['p_fault_at_threshold']:.3f} (5 % false alarms, {det['threshold_from']}; p(fault): the "
+             f"p(fault) > {det['p_fault_at_threshold']:.3f} (5 % false alarms, {det['threshold_from']}"
+             + (f"; and above {d['flag_threshold']['p_fault']:.3f}, the robot's own threshold"
+                if d.get("flag_threshold", {}).get("p_fault", det["p_fault_at_threshold"])
+                != det["p_fault_at_threshold"] else "")
+             + "; p(fault): the "
              "fault-kind classifier by joint's largest joint probability of a fault, "
              f"{'calibrated' if det['calibrated'] else 'NOT calibrated: the detector saved no calibration'}; "
              "the run-level detector's reading is in diagnosis.json).", "",

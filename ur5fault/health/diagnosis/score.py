@@ -34,7 +34,7 @@ it cannot tell gets none with that reason.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
@@ -171,27 +171,46 @@ def window_limits(w: Window, j: int, blind: dict[str, str], cal: LimitCalibratio
     return out
 
 
+def window_inputs(windows: Sequence[Window], names: Sequence[str]) -> np.ndarray:
+    """The classifier inputs ``names`` of ``windows``, ``(n_windows, n_inputs)`` (NaN where a window has none)."""
+    return np.array([[w.features.get(c, np.nan) for c in names] for w in windows], float).reshape(len(windows),
+                                                                                                   len(names))
+
+
+def joint_scores(models, names: Sequence[str], x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The saved classifiers on inputs ``x`` ``(n_windows, n_inputs)``: each joint's score of a fault ``(n_windows,
+    6)`` (1 - the kind classifier by joint's probability of none: the by-joint detector, whose largest is compared
+    with the threshold), the classifier by joint's probabilities ``(n_windows, 6, n_classes)`` and the run-level
+    detector's probability ``(n_windows,)``."""
+    from ..diagnostics.classifier import single_threaded
+
+    with single_threaded():
+        p_run = models.detector.predict_proba(x)[:, list(models.detector.classes_).index(1)]
+        by_joint = joint_kind.probabilities(models.joint_kind, pd.DataFrame(x, columns=list(names)), tuple(names))
+    cls = [str(c) for c in models.joint_kind.classes_]
+    return 1.0 - by_joint[:, :, cls.index(joint_kind.NONE)], by_joint, p_run
+
+
 def score_windows(models, schema: dict[str, Any], windows: list[Window], has_motor_encoders: bool,
                   inputs_map: Callable[[np.ndarray], np.ndarray] | None = None,
-                  limit_calibration: LimitCalibration | None = None) -> list[dict[str, Any]]:
+                  limit_calibration: LimitCalibration | None = None,
+                  threshold: float | None = None) -> list[dict[str, Any]]:
     """Per window: its times, ``p_fault``, ``flagged``, the run-level detector's reading, and per joint
     ``p_fault_joint``, the likeliest kinds with size estimates and intervals, and the kinds it cannot tell
     (module docstring).  ``inputs_map``: applied to the classifier inputs ``(n_windows, n_inputs)`` before they
     are scored (a robot's baseline, :mod:`.baseline`); the size estimates stay the window's own.
-    ``limit_calibration``: each joint also gets ``detection_limits`` (:func:`window_limits`); None: left out."""
-    from ..diagnostics.classifier import single_threaded
+    ``limit_calibration``: each joint also gets ``detection_limits`` (:func:`window_limits`); None: left out.
+    ``threshold``: the by-joint score above which a window is flagged (None: the schema's 5 % false-alarm point of
+    the training runs; a robot's own, :mod:`.robot_threshold`, is never below it)."""
 
     names = [c["name"] for c in schema["inputs"]]
-    x = pd.DataFrame([w.features for w in windows])[names].to_numpy(dtype=float)
+    x = window_inputs(windows, names)
     if inputs_map is not None:
         x = inputs_map(x)
-    thr = float(schema["joint_kind_threshold_5pct_false_alarms"])
+    thr = float(schema["joint_kind_threshold_5pct_false_alarms"]) if threshold is None else float(threshold)
     run_thr = float(schema["detector_threshold_5pct_false_alarms"])
-    with single_threaded():
-        p_run = models.detector.predict_proba(x)[:, list(models.detector.classes_).index(1)]
-        by_joint = joint_kind.probabilities(models.joint_kind, pd.DataFrame(x, columns=names), tuple(names))
+    score_joint, by_joint, p_run = joint_scores(models, names, x)
     cls = [str(c) for c in models.joint_kind.classes_]
-    score_joint = 1.0 - by_joint[:, :, cls.index(joint_kind.NONE)]  # (n_windows, 6)
     p_joint = score_joint if models.calibrator is None else calibration.apply(
         models.calibrator, score_joint.reshape(-1)).reshape(score_joint.shape)
     out = []

@@ -1,0 +1,74 @@
+"""The robot's own false-alarm threshold of ``ur5fault diagnose --baseline-logs``
+(ur5fault/health/diagnosis/robot_threshold.py).
+
+Expected values are worked out by hand from the definitions: the split-conformal rank ceil((1 - alpha)(n + 1)),
+and, for the held-out scores, the baseline map of a group of fewer than five windows, which shifts each input by
+that group's median (x' = m + x - b).  The classifiers are replaced by a score that is the mapped first input, so
+the test sees exactly which windows each held-out reference was fitted on.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import ur5fault.health.diagnosis.robot_threshold as rt
+from ur5fault.health.diagnosis.baseline import Reference
+from ur5fault.health.diagnosis.windows import Window
+
+
+def test_the_conformal_rank_by_hand():
+    scores = np.arange(1.0, 21.0)[::-1]  # 20 scores, given in any order
+    assert rt.conformal_threshold(scores, 0.05) == (20.0, 20)  # ceil(0.95 * 21) = 20
+    assert rt.conformal_threshold(np.arange(1.0, 40.0), 0.05) == (38.0, 38)  # n = 39: ceil(0.95 * 40) = 38
+    assert rt.conformal_threshold(np.arange(1.0, 20.0), 0.05) == (19.0, 19)  # n = 19: ceil(0.95 * 20) = 19
+    # five scores: the rank 6 does not exist, the largest is taken and the rank says so
+    assert rt.conformal_threshold([0.3, 0.1, 0.5, 0.2, 0.4], 0.05) == (0.5, 6)
+    assert rt.conformal_threshold([0.3, 0.1, 0.5, 0.2, 0.4], 0.5) == (0.3, 3)  # ceil(0.5 * 6) = 3
+    with pytest.raises(ValueError):
+        rt.conformal_threshold([], 0.05)
+    with pytest.raises(ValueError):
+        rt.conformal_threshold([0.1, np.nan], 0.05)
+
+
+def _w(v: float) -> Window:
+    return Window(0.0, 1.0, {"a": v, "payload_kg": 0.0}, (1.0,) * 6)
+
+
+def test_the_groups_are_the_logs_or_one_logs_two_halves():
+    two = rt.groups_of([("x", [_w(1), _w(2)]), ("empty", []), ("y", [_w(3)])])
+    assert [g for g, _ in two] == ["x", "y"]
+    one = rt.groups_of([("x", [_w(k) for k in range(5)]), ("empty", [])])
+    assert [g for g, _ in one] == ["x windows 1-2", "x windows 3-5"]
+    assert [[w.features["a"] for w in ws] for _, ws in one] == [[0, 1], [2, 3, 4]]
+    assert rt.groups_of([("x", [_w(1)])]) == []  # one window cannot be held out against anything
+
+
+def test_each_group_is_scored_against_the_others_only(monkeypatch):
+    # the score of a window: its first mapped input (training median 10, spread 1), the same on every joint
+    monkeypatch.setattr(rt, "joint_scores", lambda models, names, x: (np.repeat(x[:, :1], 6, axis=1), None, None))
+    ref = Reference(("a", "payload_kg"), np.array([10.0, 0.0]), np.array([1.0, 1.0]), "by hand")
+    logs = [("p", [_w(1.0), _w(2.0), _w(3.0)]),   # median 2
+            ("q", [_w(5.0), _w(7.0)]),            # median 6
+            ("r", [_w(0.0)])]                     # median 0
+    scores, groups = rt.held_out_scores(None, ref, logs, 0.008)
+    assert groups == ("p", "q", "r")
+    # p against q + r (0, 5, 7: median 5): 10 + x - 5;  q against p + r (0, 1, 2, 3: median 1.5): 10 + x - 1.5;
+    # r against p + q (1, 2, 3, 5, 7: five values, median 3, MAD 2 -> spread 2.9652 > 1: scaled by 1 / 2.9652)
+    np.testing.assert_allclose(scores, [6.0, 7.0, 8.0, 13.5, 15.5, 10.0 - 3.0 / (2 * 1.4826)])
+    t = rt.threshold_from_baseline(None, ref, logs, 0.008)
+    assert t.score == pytest.approx(15.5) and t.rank == 7 and t.n == 6  # ceil(0.95 * 7) = 7 > 6: the largest
+    assert t.false_alarm_bound == pytest.approx(1 / 7)
+    s = t.summary()
+    assert s["n_held_out_windows"] == 6 and s["groups"] == ["p", "q", "r"] and s["rank"] == 7
+    assert rt.threshold_from_baseline(None, ref, [("p", [_w(1.0)])], 0.008) is None
+
+
+def test_with_enough_windows_the_bound_is_alpha(monkeypatch):
+    monkeypatch.setattr(rt, "joint_scores", lambda models, names, x: (np.repeat(x[:, :1], 6, axis=1), None, None))
+    ref = Reference(("a", "payload_kg"), np.array([0.0, 0.0]), np.array([1e-6, 1.0]), "by hand")
+    rng = np.random.default_rng(0)
+    logs = [(f"log{k}", [_w(v) for v in rng.normal(size=10)]) for k in range(4)]  # 40 held-out windows
+    t = rt.threshold_from_baseline(None, ref, logs, 0.008)
+    assert t.n == 40 and t.rank == 39 and t.false_alarm_bound == 0.05  # ceil(0.95 * 41) = 39
+    assert t.score == pytest.approx(np.sort(t.held_out_scores)[38])
