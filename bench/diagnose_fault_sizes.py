@@ -15,8 +15,6 @@ injected joint the likeliest, at each threshold.  Writes ``OUT/sizes.json`` and 
 
 from __future__ import annotations
 
-import argparse
-import dataclasses
 import sys
 import time
 from pathlib import Path
@@ -69,31 +67,15 @@ def table(rows: list[dict]) -> str:
 def main(argv=None) -> int:
     from ur5fault.health.diagnosis import robot_baseline
     from ur5fault.health.diagnostics.saved import load_models
-    from ur5fault.identify import identify
-    from ur5fault.logs import read_nist
-    from ur5fault.sim.params import load_params
     from ur5fault.util.io import write_json_atomic, write_text_atomic
 
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--detector", default=str(REPO / "results" / "diagnostics_urlog" / "benchmark"))
-    ap.add_argument("--out", default=str(REPO / "results" / "diagnose_fault_sizes"))
-    ap.add_argument("--n-boot", type=int, default=50, help="bootstrap resamples of the identification")
-    args = ap.parse_args(argv)
-    detector, out = Path(args.detector), Path(args.out)
+    detector, out, n_boot = drl.arguments(__doc__, "diagnose_fault_sizes", argv)
     t0 = time.perf_counter()
     window_s = float(load_models(detector)[1]["window_s"])
-    nist = read_nist(drl.NIST_LOG)
-    halves = [dataclasses.replace(nist.window(a, b), source=f"{nist.source}[{a:g},{b:g})")
-              for a, b in ((0.0, drl.NIST_SPLIT_S), (drl.NIST_SPLIT_S, 1e9))]
-    base_tw = drl.twin_and_windows(halves[0], None, window_s)
-    diag_tw = drl.twin_and_windows(halves[1], None, window_s)
-    rows = sweep(halves[1], None, detector, robot_baseline([halves[0]], detector, windows=[base_tw[1]]), *diag_tw)
-    params = load_params()
-    fitted, held = drl.FOLDS
-    ident = identify([drl.read_kufieta(n) for n in fitted]
-                     + [drl.read_kufieta(drl.REST_RUN).window(drl.REST_FROM_S, 60.0)],
-                     params, sweep=False, n_boot=args.n_boot)
-    overlay = ident.overlay(params)["params"]
+    nist, nist_tw, nist_base = drl.nist_second_half(detector, window_s)
+    rows = sweep(nist, None, detector, nist_base, *nist_tw)
+    held = drl.FOLDS[1]
+    overlay = drl.fold_overlay(1, n_boot)  # identified on the first fold: the second is held out
     logs = {n: drl.read_kufieta(n) for f in drl.FOLDS for n in f}
     tw = {n: drl.twin_and_windows(lg, overlay, window_s) for n, lg in logs.items()}
     for name in held:

@@ -258,39 +258,58 @@ def table_baseline(rows: list[dict]) -> str:
     return "\n".join(lines) + "\n"
 
 
-def main(argv=None) -> int:
+def nist_second_half(detector: Path, window_s: float):
+    """The NIST log's second half (diagnosed), its twin and windows, and its baseline: the first half."""
     from ur5fault.health.diagnosis import robot_baseline
-    from ur5fault.health.diagnostics.saved import load_models
-    from ur5fault.identify import identify
     from ur5fault.logs import read_nist
-    from ur5fault.sim.params import load_params
-    from ur5fault.util.io import write_json_atomic, write_text_atomic
 
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--detector", default=str(REPO / "results" / "diagnostics_urlog" / "benchmark"))
-    ap.add_argument("--out", default=str(REPO / "results" / "diagnose_real_logs"))
-    ap.add_argument("--n-boot", type=int, default=50, help="bootstrap resamples of the identification")
-    args = ap.parse_args(argv)
-    detector, out = Path(args.detector), Path(args.out)
-    t0 = time.perf_counter()
-    _, schema = load_models(detector)
-    window_s = float(schema["window_s"])
-    spread = healthy_spread(detector, [c["name"] for c in schema["inputs"]])
     nist = read_nist(NIST_LOG)
     halves = [dataclasses.replace(nist.window(a, b), source=f"{nist.source}[{a:g},{b:g})")
               for a, b in ((0.0, NIST_SPLIT_S), (NIST_SPLIT_S, 1e9))]
     base_tw = twin_and_windows(halves[0], None, window_s)
-    diag_tw = twin_and_windows(halves[1], None, window_s)
-    nist_base = robot_baseline([halves[0]], detector, windows=[base_tw[1]])
-    rows = run_pair(halves[1], None, detector, spread, out, *diag_tw, {"first half": nist_base})
+    return (halves[1], twin_and_windows(halves[1], None, window_s),
+            robot_baseline([halves[0]], detector, windows=[base_tw[1]]))
+
+
+def fold_overlay(k: int, n_boot: int) -> dict:
+    """The overlay the runs of fold ``k`` are diagnosed under: ``ur5fault identify`` on the other fold's runs and
+    the standstill run's rest."""
+    from ur5fault.identify import identify
+    from ur5fault.sim.params import load_params
+
     params = load_params()
+    other = [n for f in FOLDS[:k] + FOLDS[k + 1:] for n in f]
+    print(f"identifying on {', '.join(other)}", file=sys.stderr, flush=True)
+    ident = identify([read_kufieta(n) for n in other] + [read_kufieta(REST_RUN).window(REST_FROM_S, 60.0)],
+                     params, sweep=False, n_boot=n_boot)
+    return ident.overlay(params)["params"]
+
+
+def arguments(doc: str, out_name: str, argv=None) -> tuple[Path, Path, int]:
+    """The detector folder, the output folder and the identification's bootstrap count of a real-log bench."""
+    ap = argparse.ArgumentParser(description=doc.splitlines()[0])
+    ap.add_argument("--detector", default=str(REPO / "results" / "diagnostics_urlog" / "benchmark"))
+    ap.add_argument("--out", default=str(REPO / "results" / out_name))
+    ap.add_argument("--n-boot", type=int, default=50, help="bootstrap resamples of the identification")
+    args = ap.parse_args(argv)
+    return Path(args.detector), Path(args.out), args.n_boot
+
+
+def main(argv=None) -> int:
+    from ur5fault.health.diagnosis import robot_baseline
+    from ur5fault.health.diagnostics.saved import load_models
+    from ur5fault.util.io import write_json_atomic, write_text_atomic
+
+    detector, out, n_boot = arguments(__doc__, "diagnose_real_logs", argv)
+    t0 = time.perf_counter()
+    _, schema = load_models(detector)
+    window_s = float(schema["window_s"])
+    spread = healthy_spread(detector, [c["name"] for c in schema["inputs"]])
+    nist, nist_tw, nist_base = nist_second_half(detector, window_s)
+    rows = run_pair(nist, None, detector, spread, out, *nist_tw, {"first half": nist_base})
     overlays = {}
     for k, fold in enumerate(FOLDS):
-        other = [n for f in FOLDS[:k] + FOLDS[k + 1:] for n in f]
-        print(f"identifying on {', '.join(other)}", file=sys.stderr, flush=True)
-        ident = identify([read_kufieta(n) for n in other] + [read_kufieta(REST_RUN).window(REST_FROM_S, 60.0)],
-                         params, sweep=False, n_boot=args.n_boot)
-        overlays[k] = ident.overlay(params)["params"]
+        overlays[k] = fold_overlay(k, n_boot)
         # every undisturbed run replayed under this fold's overlay: the fold's own (unseen by the overlay) and
         # the other fold's (the overlay was identified on them)
         logs = {n: read_kufieta(n) for f in FOLDS for n in f}
