@@ -10,7 +10,7 @@ baselines of that bench: the NIST log's second half (its first half the baseline
 Kufieta runs of the second fold (No2, No4_Acc, TEST; overlay identified on the first fold and the standstill
 run's rest, as there; baseline: all six other undisturbed runs).  The faults are written into the measured
 current by tests/real_hidden.py.  Per log, kind and size: share of windows flagged and flagged with the
-injected joint the likeliest, at each threshold.  Writes ``OUT/sizes.json`` and ``OUT/sizes.md``.
+injected joint the likeliest, at each threshold.  Writes ``OUT/sizes.json``, ``OUT/sizes.md`` and ``OUT/sizes.png``.
 """
 
 from __future__ import annotations
@@ -64,6 +64,35 @@ def table(rows: list[dict]) -> str:
     return "\n".join(lines) + "\n"
 
 
+def plot(rows: list[dict], path: Path) -> Path:
+    """Share of windows flagged on the injected joint against the fault's size, per log and kind, above the
+    robot's threshold (solid) and at the training runs' alone (dashed)."""
+    from matplotlib.figure import Figure
+
+    from ur5fault.util.io import write_figure_atomic
+
+    fig = Figure(figsize=(9, 4.0), layout="constrained")
+    axes = fig.subplots(1, 2, sharey=True)
+    for ax, (kind, sizes, unit) in zip(axes, (("current_sensor_offset", OFFSETS_A, "wrist-1 current offset [A]"),
+                                              ("current_sensor_gain", GAINS, "shoulder current gain"))):
+        for k, log in enumerate(dict.fromkeys(r["log"] for r in rows)):
+            sel = [r for r in rows if r["log"] == log and r["kind"] == kind]
+            c = f"C{k}"
+            ax.plot(sizes, [100 * r["share_flagged_on_joint"] for r in sel], "o-", color=c,
+                    label=log.replace("ur5testresult_halfspeed_payload1", "NIST 2nd half"))
+            ax.plot(sizes, [100 * r["share_flagged_on_joint_training_threshold"] for r in sel], "x--", color=c,
+                    alpha=0.5)
+        if kind == "current_sensor_offset":
+            ax.set_xscale("log")
+        ax.set_xlabel(unit)
+        ax.grid(alpha=0.3)
+    axes[0].set_ylabel("windows flagged on the joint [%]")
+    fig.legend(*axes[0].get_legend_handles_labels(), loc="outside lower center", ncol=4, fontsize=8,
+               title="solid: above the robot's threshold too; dashed: the training runs' threshold alone",
+               title_fontsize=8)
+    return write_figure_atomic(fig, path)
+
+
 def main(argv=None) -> int:
     from ur5fault.health.diagnosis import robot_baseline
     from ur5fault.health.diagnostics.saved import load_models
@@ -87,6 +116,7 @@ def main(argv=None) -> int:
                                            "gains": GAINS, "wall_s": time.perf_counter() - t0})
     md = table(rows)
     write_text_atomic(out / "sizes.md", md)
+    plot(rows, out / "sizes.png")
     print(md)
     print(f"wall {time.perf_counter() - t0:.0f} s; wrote {out}", file=sys.stderr)
     return 0
