@@ -82,6 +82,16 @@ def refuse_repeats(effects: Sequence[EffectSpec], where: str) -> None:
         seen[key] = i
 
 
+def repeats_of(base: Sequence[EffectSpec], added: Sequence[EffectSpec]) -> list[tuple[EffectSpec, EffectSpec]]:
+    """Pairs (``base`` effect, ``added`` effect) of the same kind on the same joint (as :func:`refuse_repeats`
+    counts them): a run's effect given on top of its model overlay's, which is allowed but worth a note."""
+    def key(e: EffectSpec) -> tuple:
+        return e.name, e.joint, dict(e.values).get("periods_per_rev")
+
+    first = {key(e): e for e in base}
+    return [(first[key(e)], e) for e in added if key(e) in first]
+
+
 def parse_trajectory(spec: Any, where: str) -> Trajectory:
     """``"name"`` or ``{name: ..., <option>: value}`` -> a :class:`Trajectory`.
 

@@ -34,7 +34,7 @@ elbow, wrist1, wrist2, wrist3.
 
 
 def cmd_simulate(args: argparse.Namespace) -> int:
-    from .config import Overlay, build_run_config
+    from .config import Overlay, build_run_config, repeats_of
     from .sim.engine import RunSpec, Simulator
     from .sim.params import read_yaml
 
@@ -58,6 +58,11 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     data["effects"] = effects
     overlay = Overlay.load(args.model) if args.model else None
     cfg = build_run_config(data, where, overlay)
+    if overlay is not None:
+        for base, added in repeats_of(overlay.effects, cfg.effects[len(overlay.effects):]):
+            print(f"note: {added.describe()} is given on top of the model overlay's {base.describe()}: an effect "
+                  "that sets a value (e.g. backlash) keeps the run's, one that scales compounds with it",
+                  file=sys.stderr)
     out = _check_out_file(Path(args.out), args.replace)  # before simulating, not after
     replaced = out.exists()
     sim = Simulator(cfg.params)
@@ -132,6 +137,9 @@ def cmd_show(args: argparse.Namespace) -> int:
     if target.suffix.lower() in OUT_SUFFIXES or target.is_file():
         import pandas as pd
 
+        if args.campaign is not None:
+            raise ConfigFileError(f"--campaign {args.campaign}: names the campaign of a run id; {target} is a file "
+                                  "and is shown as it is (drop --campaign, or give a run id)")
         if not target.is_file():
             raise ConfigFileError(f"{target}: no such file")
         png = Path(args.out) if args.out else target.with_suffix(".png")
@@ -145,6 +153,10 @@ def cmd_show(args: argparse.Namespace) -> int:
     else:
         from .campaign.result import CampaignResult
 
+        if target.is_dir():
+            raise ConfigFileError(f"{target}: a folder; show draws one run: give a run file, or a run id with its "
+                                  f"campaign folder (ur5fault show RUN_ID --campaign {target}; the run ids are in "
+                                  f"its features.parquet), or draw the whole campaign with ur5fault plot {target}")
         if args.campaign is None and not Path("features.parquet").is_file():
             raise ConfigFileError(f"{target}: no such file; to show a run of a campaign, give its folder: "
                                   f"ur5fault show {target} --campaign DIR")

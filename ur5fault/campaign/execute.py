@@ -214,10 +214,25 @@ def run_campaign(camp: Campaign, out: Path | None = None, *, jobs: int | None = 
             client.close()
 
 
+def _other_campaign(out: Path, name: str) -> str | None:
+    """The name of another campaign whose manifest ``out`` holds (None: none, this one's, or no readable name;
+    an unreadable manifest is rewritten by the run as before)."""
+    try:
+        recorded = json.loads((out / "manifest.json").read_text()).get("name")
+    except (OSError, ValueError, AttributeError):
+        return None
+    return recorded if isinstance(recorded, str) and recorded != name else None
+
+
 def _run_locked(camp: Campaign, out: Path, jobs: int, backend: str, client, progress, save_ts: bool,
                 replace_changed: bool, say: Callable[[str], None], capped: str | None) -> dict[str, Any]:
     with Lock(out):  # notes only from here: an error before is the one line a user sees
         _remove_stale_temporaries(out)
+        other = _other_campaign(out, camp.name)
+        if other and not replace_changed:
+            raise CampaignChangedError(
+                f"{out}: holds the results of campaign {other!r}, not {camp.name!r}; use another --out, or "
+                "--replace-changed to simulate this campaign there (the other's run files are then left as strays)")
         ids = Identities(camp)
         found = scan(out, camp, ids, save_ts)
         if found.changed and not replace_changed:

@@ -43,6 +43,9 @@ class CampaignResult:
     def load(cls, out: str | Path) -> CampaignResult:
         """Read ``OUT/features.parquet`` and ``OUT/manifest.json``."""
         out = Path(out)
+        if not (out / "features.parquet").exists() and (out / "inspections.parquet").exists():
+            raise ConfigFileError(f"{out}: a life campaign (inspections.parquet, no features.parquet): its results "
+                                  f"are read by ur5fault prognose {out}")
         for name in ("features.parquet", "manifest.json"):
             if not (out / name).exists():
                 raise ConfigFileError(f"{out}: no {name} (run the campaign to its end first)")

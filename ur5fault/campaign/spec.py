@@ -170,7 +170,9 @@ def build_campaign(data: Mapping[str, Any], where: str, text: str = "", path: Pa
     """
     if not isinstance(data, Mapping):
         raise ParameterError(f"{where}: expected a mapping of campaign keys, got {short(data)}")
-    check_keys(data, CAMPAIGN_KEYS, where)
+    # `life` is named among the valid keys (a file with it is a life campaign and never reaches here): a typo of it
+    # gets "did you mean" instead of a list without it
+    check_keys(data, (*CAMPAIGN_KEYS, "life"), where)
     base = check_mapping(data.get("base"), f"{where}: base")
     check_keys(base, BASE_KEYS, f"{where}: base")
     params = dict(check_mapping(base.get("params"), f"{where}: base.params"))

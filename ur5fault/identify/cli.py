@@ -50,7 +50,11 @@ def cmd_identify(args: argparse.Namespace) -> int:
     if args.json:
         check_new_output(args.json, replace=args.replace, suffixes=(".json",), option="--json")  # never --out
     check_files_length([e.path for e in log_entries(args)], "identify")  # an hour-long log: refused in seconds
-    logs, _ = read_log_options(args, allow_unknown=True)
+    logs, held = read_log_options(args, allow_unknown=True)
+    if not logs:
+        raise ParameterError("every log given is held out; name at least one log to fit")
+    if held:  # a manifest shared with discrepancy or monitor: its held-out runs stay unseen by the fit
+        print(f"note: held out, not fitted: {', '.join(g.source for g in held)}", file=sys.stderr)
     check_logs_length(logs, "identify")
     log = logs[0]
     say = None if args.quiet else (lambda msg: print(f"identify: {msg}...", file=sys.stderr, flush=True))

@@ -35,9 +35,11 @@ def cmd_benchmark(args: argparse.Namespace) -> int:
 
     from ...campaign.limits import effective_jobs
     from ...errors import ParameterError
+    from ...util.checks import check_int
     from . import run_benchmark
 
     t0 = time.perf_counter()
+    check_int(args.seed, "--seed", 0, 2**32 - 1, "an integer")  # scikit-learn's random_state range
     if args.test is not None and args.features is not None:
         raise ParameterError("--features chooses the inputs of new classifiers; --test scores saved ones with "
                              "their own inputs: use one of them")

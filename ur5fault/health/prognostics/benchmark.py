@@ -236,7 +236,11 @@ def run_prognose(folder: Path, out: Path | None = None, *, seed: int = 0, twin: 
                                   "effects itself; give them as params instead")
         setup = TwinSetup.from_manifest(manifest, seed, twin_model)
     cache = RadiusCache(twin_cache if twin_cache is not None else out / "twin_radii.json") if twin else None
-    pred, fitted, hi = predict(df, failure, seed, setup, twin_calibration, cache, twin_friction)
+    try:
+        pred, fitted, hi = predict(df, failure, seed, setup, twin_calibration, cache, twin_friction)
+    except ValueError as exc:  # the estimators' own "too few units or inspections to fit" (rul.py, twin_*.py)
+        raise ConfigFileError(f"{folder}: {exc} (a larger fleet, shorter inspection intervals or a longer "
+                              "max_cycles)") from None
     per_unit = df.groupby("unit_id").agg(split=("split", "first"), n=("inspection", "size"),
                                          eol=("eol_cycles", "first"))
     if set(per_unit[per_unit["split"] == "train"].index) & set(per_unit[per_unit["split"] == "test"].index):

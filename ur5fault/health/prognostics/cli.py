@@ -69,11 +69,12 @@ def cmd_life_run(args: argparse.Namespace) -> int:
 def cmd_prognose(args: argparse.Namespace) -> int:
     import time
 
-    from ...config import Overlay
+    from ...config import Overlay, check_seed
     from ...errors import ParameterError
     from .benchmark import run_prognose
 
     t0 = time.perf_counter()
+    check_seed(args.seed, "--seed")
     for flag, value in (("--model", args.model), ("--twin-calibration", args.twin_calibration),
                         ("--twin-cache", args.twin_cache), ("--twin-friction", args.twin_friction)):
         if value and not args.twin:
