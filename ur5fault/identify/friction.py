@@ -94,7 +94,8 @@ class FrictionFit:
         self.k_groups = {int(s): [int(j) for j in np.flatnonzero((sizes == s) & carries)] for s in np.unique(sizes)}
         self.lever_Nm = lever
         #: the unknown payloads (None: every payload stated), :class:`.payload.PayloadUnknowns`
-        self.payload = payload.PayloadUnknowns.of(self) if sig.payload_columns_Nm is not None else None
+        self.payload = (payload.PayloadUnknowns.of(sig, self.moving, self.ok, self.cols, self.cols_k, self.k_groups)
+                        if sig.payload_columns_Nm is not None else None)
         if self.payload is not None and not self.payload.k_identifiable:
             self.k_groups = {s: [] for s in self.k_groups}  # no log can separate a torque constant: the model's kept
 

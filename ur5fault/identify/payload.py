@@ -32,7 +32,7 @@ torque constant written to the overlay would then depend on a nuisance the log c
 from __future__ import annotations
 
 import dataclasses
-from typing import TYPE_CHECKING
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 from numpy.typing import NDArray
@@ -43,10 +43,8 @@ from ..logs import MeasuredLog
 from ..sim.effects import REGISTRY
 from ..twin.payload import PayloadRecord, com_in_range, share_explained
 from . import motor
+from .signals import LogSignals
 from .stats import interval
-
-if TYPE_CHECKING:
-    from .friction import FrictionFit
 
 #: the motor size whose joints weigh a payload: the shoulder's (J1-J3; a payload's gravity loads J2 and J3)
 WEIGHING_SIZE = motor.MOTOR_SIZE[1]
@@ -79,36 +77,40 @@ class PayloadUnknowns:
     k_group: bool = True
 
     @classmethod
-    def of(cls, fit: FrictionFit) -> PayloadUnknowns:
-        sig = fit.sig
+    def of(cls, sig: LogSignals, moving: NDArray, ok: NDArray, friction_cols: Sequence[NDArray],
+           k_cols: Sequence[NDArray], k_groups: Mapping[int, list[int]]) -> PayloadUnknowns:
+        """The unknowns of the logs ``sig`` from the friction fit's samples: ``moving`` (samples x joints) and
+        identifiable joints ``ok``, its design columns per joint (with and without the torque-constant fit's
+        variant) and the joints that carry each motor size's torque constant (:class:`.friction.FrictionFit`'s
+        ``moving``, ``ok``, ``cols``, ``cols_k``, ``k_groups``)."""
         cols = sig.payload_columns_Nm
         owner = np.asarray(sig.payload_owner)
         log_of_row = np.searchsorted(np.asarray(sig.log_starts), np.arange(sig.n), side="right") - 1
         sizes = np.asarray(motor.MOTOR_SIZE)
-        joints = fit.k_groups[WEIGHING_SIZE] or [int(j) for j in np.flatnonzero(fit.ok & (sizes == WEIGHING_SIZE))]
+        joints = k_groups[WEIGHING_SIZE] or [int(j) for j in np.flatnonzero(ok & (sizes == WEIGHING_SIZE))]
         if not joints:
             names = ", ".join(f"J{j + 1}" for j in np.flatnonzero(sizes == WEIGHING_SIZE))
             raise ParameterError(f"payload unknown, and none of {names} moves often and fast enough to weigh it: "
                                  "state it with --payload-kg and --tcp-offset-m")
         r2 = {}
         for u in np.unique(owner):
-            rows = [np.flatnonzero(fit.moving[:, j] & (log_of_row == u)) for j in joints]
+            rows = [np.flatnonzero(moving[:, j] & (log_of_row == u)) for j in joints]
             a = np.concatenate([cols[np.flatnonzero(owner == u)[0], r, j] for r, j in zip(rows, joints)])  # type: ignore[index]
-            width = 1 + sum(fit.cols[j].shape[1] for j in joints)
+            width = 1 + sum(friction_cols[j].shape[1] for j in joints)
             N = np.zeros((a.size, width))
             at, c = 0, 1
             for r, j in zip(rows, joints):
                 N[at : at + r.size, 0] = sig.model_torque_Nm[r, j]
-                m = fit.cols[j].shape[1]
-                N[at : at + r.size, c : c + m] = fit.cols[j][r]
+                m = friction_cols[j].shape[1]
+                N[at : at + r.size, c : c + m] = friction_cols[j][r]
                 at, c = at + r.size, c + m
             r2[int(u)] = share_explained(a, N) if a.size else 1.0
         separable = {u for u, v in r2.items() if v <= MAX_COLLINEARITY}
         anchor_logs = [i for i in range(len(sig.log_starts)) if i not in r2 or i in separable]
         # without a torque-constant group on J1-J3 every payload is fitted at the torque constants kept
-        anchored = np.isin(owner, list(separable)) if fit.k_groups[WEIGHING_SIZE] else np.zeros(owner.size, bool)
+        anchored = np.isin(owner, list(separable)) if k_groups[WEIGHING_SIZE] else np.zeros(owner.size, bool)
         return cls(cols, owner, log_of_row, tuple(joints), r2, np.isin(log_of_row, anchor_logs),  # type: ignore[arg-type]
-                   anchored, sig.current_A, tuple(fit.cols_k), bool(fit.k_groups[WEIGHING_SIZE]))
+                   anchored, sig.current_A, tuple(k_cols), bool(k_groups[WEIGHING_SIZE]))
 
     @property
     def n_unknowns(self) -> int:
