@@ -158,8 +158,8 @@ def diagnose(log: MeasuredLog, detector_dir: str | Path, params_overrides: dict 
                      "rate-dependent features (current spikes, kurtosis, crest factor, high-frequency energy, "
                      "residual RMS) are not on the scale the detector learned")
     if baseline is not None and robot is None:
-        notes.append("the baseline has one window: no robot threshold could be read off it held out, so windows "
-                     "are flagged at the training runs' 5 % point alone")
+        notes.append("the baseline carries no threshold of its own (a single window cannot be held out against "
+                     "another), so windows are flagged at the training runs' 5 % point alone")
     elif robot is not None:
         notes.append(f"flagged above the robot's own threshold too: read off its {robot.n} baseline windows, each "
                      f"scored against a baseline of the others ({len(robot.groups)} groups); a healthy window like "
