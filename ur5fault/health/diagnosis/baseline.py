@@ -47,7 +47,7 @@ from numpy.typing import NDArray
 from ...errors import ConfigFileError, ParameterError
 from ..diagnostics.data import CONTEXT_COLUMNS
 from ..diagnostics.saved import MAD_SCALE, healthy_reference
-from .windows import Window
+from .windows import Window, window_inputs
 
 #: the fewest baseline values of an input whose spread is estimated (a choice: the MAD of 5 normal values scatters
 #: by 58 % of its size, of 4 by 57 %, of 20 by 26 %; with fewer values a spread says little, and below it the
@@ -215,7 +215,7 @@ def fit_map(reference: Reference, windows_by_log: Sequence[tuple[str, Sequence[W
     counts = tuple(len(w) for _, w in windows_by_log)
     if not windows_by_log or sum(counts) == 0:
         raise ParameterError("the baseline logs give no whole window: each must be at least one window long")
-    x = np.array([[w.features.get(c, np.nan) for c in names] for _, ws in windows_by_log for w in ws], float)
+    x = window_inputs([w for _, ws in windows_by_log for w in ws], names)
     med, scale, n = robust_spread(x)
     rule, factor = [], np.ones(len(names))
     for k, c in enumerate(names):

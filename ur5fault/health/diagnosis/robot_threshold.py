@@ -30,8 +30,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .baseline import Reference, RobotThreshold, fit_map
-from .score import joint_scores, window_inputs
-from .windows import Window
+from .score import joint_scores
+from .windows import Window, window_inputs
 
 #: the false-alarm rate the robot's threshold is read at (the benchmark's operating point)
 ALPHA = 0.05
@@ -74,7 +74,7 @@ def held_out_scores(models, reference: Reference, windows_by_log: Sequence[tuple
 
 
 def threshold_from_baseline(models, reference: Reference, windows_by_log: Sequence[tuple[str, Sequence[Window]]],
-                    period_s: float, alpha: float = ALPHA) -> RobotThreshold | None:
+                            period_s: float, alpha: float = ALPHA) -> RobotThreshold | None:
     """The robot's threshold (module docstring); None where the baseline gives fewer than two groups (one log of
     one window)."""
     scores, groups = held_out_scores(models, reference, windows_by_log, period_s)

@@ -49,7 +49,7 @@ from ..diagnostics.limits import DEFAULT_Z, ESTIMATE_OF, FLANK_COLUMN, LimitCali
 from ..diagnostics.saved import SCHEMA_FORMAT
 from ..features import FEATURE_UNITS
 from ..twin_features import FEATURE_UNITS as TWIN_FEATURE_UNITS
-from .windows import Window
+from .windows import Window, window_inputs
 
 #: every input column ``ur5fault diagnose`` computes from a log
 COMPUTABLE = frozenset([c for c in FEATURE_UNITS if not c.startswith(SIM_ONLY_PREFIX)]
@@ -169,12 +169,6 @@ def window_limits(w: Window, j: int, blind: dict[str, str], cal: LimitCalibratio
         if kind in out and out[kind]["detectable_from"] is not None:
             out[kind] = {"detectable_from": None, "unit": out[kind]["unit"], "cannot_tell": why}
     return out
-
-
-def window_inputs(windows: Sequence[Window], names: Sequence[str]) -> np.ndarray:
-    """The classifier inputs ``names`` of ``windows``, ``(n_windows, n_inputs)`` (NaN where a window has none)."""
-    return np.array([[w.features.get(c, np.nan) for c in names] for w in windows], float).reshape(len(windows),
-                                                                                                   len(names))
 
 
 def joint_scores(models, names: Sequence[str], x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

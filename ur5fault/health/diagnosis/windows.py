@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import dataclasses
 import warnings
+from collections.abc import Sequence
 
 import numpy as np
 import pandas as pd
@@ -143,3 +144,9 @@ def window_features(log: MeasuredLog, replay: LogReplay, rep: Replayed, window_s
 def features_frame(windows: list[Window]) -> pd.DataFrame:
     """The windows' features as a table, one row per window."""
     return pd.DataFrame([w.features for w in windows])
+
+
+def window_inputs(windows: Sequence[Window], names: Sequence[str]) -> NDArray:
+    """The classifier inputs ``names`` of ``windows``, ``(n_windows, n_inputs)`` (NaN where a window has none)."""
+    return np.array([[w.features.get(c, np.nan) for c in names] for w in windows], float).reshape(len(windows),
+                                                                                                   len(names))
