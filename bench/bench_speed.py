@@ -1,15 +1,17 @@
 """Speed benchmark (not a timed test): figures are printed, never asserted.
 
 Measures in one process, on the same model, physics step and number of steps:
-  (a) bare mj_step of the UR5 model from a Python loop, no drive models;
-  (a0) bare mj_step from a compiled (numba) loop calling libmujoco by address: the true floor;
+  (a) bare mj_step of the UR5 model from a Python loop, no drive models, as the Python bindings run it: MuJoCo's
+      stage timers on (the bindings set ``mjcb_time``; the floor issue 21 names);
+  (a_off) the same with MuJoCo's stage timers off, as ur5fault steps (``sim/mjtimers.py``);
+  (a0) bare mj_step from a compiled (numba) loop calling libmujoco by address, timers off: the true floor;
   (a0d) the same with a damping on every joint, as the drive's friction slope sets it in every run: MuJoCo's Euler
       step then factorises M + h D once more per step (the floor of the model's physics);
   (b) the full-fidelity simulation of one run (batch of one), compiled step loop;
   (c) the same in batches of 8, 32 and 128 runs on one thread;
   (t) a batch of 32 spread over all cores: numba threads in one process against one process per core;
   (d) optionally (--campaign), the default campaign end to end on all cores, Parquet included.
-(a), (a0), (a0d) and (b) are measured --repeat times, interleaved; their ratios are reported as min and median;
+(a), (a_off), (a0), (a0d) and (b) are measured --repeat times, interleaved; their ratios are reported as min and median;
 each batch (c) is also reported against (a0d) measured right before and after it.
 Prints one JSON line: per-run-step cost of each in microseconds, ratios to (a) and (a0) per core,
 and peak memory per run.
@@ -33,9 +35,14 @@ import mujoco
 import numpy as np
 
 from ur5fault import RunSpec, Simulator, make_effect, pick_and_place
+from ur5fault.sim.mjtimers import timers_off
 
 
-def bare_mj_step_us(sim: Simulator, n_steps: int, clock=time.perf_counter) -> float:
+def bare_mj_step_us(sim: Simulator, n_steps: int, clock=time.perf_counter, timers: bool = True) -> float:
+    """(a) bare ``mj_step`` from a Python loop; ``timers=False``: (a_off), MuJoCo's stage timers off."""
+    if not timers:
+        with timers_off():
+            return bare_mj_step_us(sim, n_steps, clock)
     m = sim.model
     d = mujoco.MjData(m)
     d.qpos[:] = pick_and_place().q_set_rad[0]
@@ -70,9 +77,10 @@ def bare_compiled_us(sim: Simulator, n_steps: int, clock=time.perf_counter, damp
     d.qpos[:] = pick_and_place().q_set_rad[0]
     mujoco.mj_forward(m, d)
     loop(MJ_STEP_ADDRESS, m._address, d._address, 10)  # compile
-    t = clock()
-    loop(MJ_STEP_ADDRESS, m._address, d._address, n_steps)
-    return (clock() - t) / n_steps * 1e6
+    with timers_off():  # as ur5fault's loop steps
+        t = clock()
+        loop(MJ_STEP_ADDRESS, m._address, d._address, n_steps)
+        return (clock() - t) / n_steps * 1e6
 
 
 def runs_for(n: int) -> list[RunSpec]:
@@ -131,7 +139,7 @@ def main(argv=None) -> int:
     ap.add_argument("--quick", action="store_true", help="short durations; figures are rough")
     ap.add_argument("--campaign", action="store_true", help="also time the default campaign end to end")
     ap.add_argument("--drive", choices=("numba", "numpy"), default="numba", help="drive implementation")
-    ap.add_argument("--repeat", type=int, default=3, help="repetitions of (a), (a0) and (b)")
+    ap.add_argument("--repeat", type=int, default=3, help="repetitions of (a), (a_off), (a0), (a0d) and (b)")
     ap.add_argument("--duration-s", type=float, default=None, help="simulated seconds per run (default: 13, the "
                     "whole pick-and-place; 0.2 with --quick)")
     ap.add_argument("--cpu-time", action="store_true", help="time (a), (a0), (b) and (c) by the process's CPU time "
@@ -152,13 +160,15 @@ def main(argv=None) -> int:
     }
     sim.run(pick_and_place(), runs_for(1), duration_s=0.01)  # compile / load the kernels once
     bare_compiled_us(sim, 1000)
-    a, a0, a0d, b = [], [], [], []
-    for _ in range(args.repeat):  # interleaved: a load change on the shared machine hits all four alike
+    a, a_off, a0, a0d, b = [], [], [], [], []
+    for _ in range(args.repeat):  # interleaved: a load change on the shared machine hits all five alike
         a.append(bare_mj_step_us(sim, max(n_steps, 20000), clock))
+        a_off.append(bare_mj_step_us(sim, max(n_steps, 20000), clock, timers=False))
         a0.append(bare_compiled_us(sim, max(n_steps, 20000), clock))
         a0d.append(bare_compiled_us(sim, max(n_steps, 20000), clock, damping_Nms_per_rad=1.0))
         b.append(full_fidelity_us(sim, 1, dur, clock=clock))
     out["a_bare_mj_step_us"] = float(np.median(a))
+    out["a_off_bare_mj_step_timers_off_us"] = float(np.median(a_off))
     out["a0_bare_compiled_loop_us"] = float(np.median(a0))
     out["a0d_bare_compiled_damped_us"] = float(np.median(a0d))
     out["b_one_run_us_per_step"] = float(np.median(b))
@@ -167,6 +177,8 @@ def main(argv=None) -> int:
     rb0 = np.array(b) / np.array(a0)
     out["ratio_b_to_a_min"], out["ratio_b_to_a_median"] = float(rb.min()), float(np.median(rb))
     out["ratio_b_to_a0_min"], out["ratio_b_to_a0_median"] = float(rb0.min()), float(np.median(rb0))
+    out["ratio_b_to_a_off_median"] = float(np.median(np.array(b) / np.array(a_off)))
+    out["ratio_a_to_a_off_median"] = float(np.median(np.array(a) / np.array(a_off)))
     out["ratio_a_to_a0_median"] = float(np.median(np.array(a) / np.array(a0)))
     out["ratio_a0d_to_a0_median"] = float(np.median(np.array(a0d) / np.array(a0)))
     out["ratio_b_to_a0d_median"] = float(np.median(np.array(b) / np.array(a0d)))
@@ -180,6 +192,7 @@ def main(argv=None) -> int:
         out[f"c_batch{n}_us_per_run_step"] = us
         out[f"ratio_c_batch{n}_to_a0d_adjacent"] = 2.0 * us / (before + after)
         out[f"ratio_c_batch{n}_to_a"] = us / out["a_bare_mj_step_us"]
+        out[f"ratio_c_batch{n}_to_a_off"] = us / out["a_off_bare_mj_step_timers_off_us"]
         out[f"ratio_c_batch{n}_to_a0"] = us / out["a0_bare_compiled_loop_us"]
         out[f"ratio_c_batch{n}_to_a0d"] = us / out["a0d_bare_compiled_damped_us"]
         if best is None or us < best[1]:
@@ -192,6 +205,7 @@ def main(argv=None) -> int:
         out["t_batch32_processes_us_per_run_step"] = p_us
         out["ratio_t_threads_to_a_per_core"] = t_us * cores / out["a_bare_mj_step_us"]
         out["ratio_t_processes_to_a_per_core"] = p_us * cores / out["a_bare_mj_step_us"]
+        out["ratio_t_processes_to_a_off_per_core"] = p_us * cores / out["a_off_bare_mj_step_timers_off_us"]
     mem_dur = 0.2 if args.quick else 2.0
     out["memory_simulated_s"] = mem_dur
     for n in (1, 8, 32):
@@ -204,6 +218,8 @@ def main(argv=None) -> int:
         out.update(campaign_figures(out["a_bare_mj_step_us"]))
         out["ratio_d_to_a0_over_cores"] = out["ratio_d_to_a_over_cores"] * out["a_bare_mj_step_us"] / out[
             "a0_bare_compiled_loop_us"]
+        out["ratio_d_to_a_off_over_cores"] = out["ratio_d_to_a_over_cores"] * out["a_bare_mj_step_us"] / out[
+            "a_off_bare_mj_step_timers_off_us"]
     out["max_rss_MB"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     print(json.dumps({k: (float(f"{v:.4g}") if isinstance(v, float) else v) for k, v in out.items()}))
     return 0
