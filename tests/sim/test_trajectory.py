@@ -173,6 +173,48 @@ def test_random_speed_and_acceleration_within_limits(randoms):
         assert np.abs(qdd).max() <= random_pnp.ACCEL_RAD_S2[1] * 1.05  # a sample straddling a phase change
 
 
+TILT_DEG = 20.0
+
+
+def test_a_tilted_family_keeps_its_seed_and_turns_wrist_2(randoms):
+    """Straight down (tilt 0, the default) keeps wrist 2 at -90 deg; a tilt turns it, reproducibly."""
+    for tr in randoms:
+        np.testing.assert_allclose(tr.q_set_rad[:, 4], -np.pi / 2, atol=1e-6)
+    np.testing.assert_array_equal(random_pnp.random_pick_and_place(4, tool_tilt_deg=0.0).q_set_rad,
+                                  randoms[4].q_set_rad)
+    tilted = [random_pnp.random_pick_and_place(s, tool_tilt_deg=TILT_DEG) for s in RANDOM_SEEDS]
+    np.testing.assert_array_equal(random_pnp.random_pick_and_place(7, tool_tilt_deg=TILT_DEG).q_set_rad,
+                                  tilted[7].q_set_rad)
+    spans = np.degrees([np.ptp(tr.q_set_rad[:, 4]) for tr in tilted])
+    assert np.all(spans > 1.0) and np.median(spans) > 10.0, spans
+    reverses = [np.any(np.diff(np.sign(d[np.abs(d) > 1e-9])) != 0) for d in (np.diff(tr.q_set_rad[:, 4])
+                                                                           for tr in tilted)]
+    assert np.mean(reverses) >= 0.5, reverses  # the via point's own tilt: wrist 2 turns back in most motions
+    parse = parse_trajectory({"name": "random_pick_and_place", "seed": 2, "tool_tilt_deg": TILT_DEG}, "t")
+    np.testing.assert_array_equal(parse.q_set_rad, tilted[2].q_set_rad)
+    for bad in (-1.0, random_pnp.MAX_TOOL_TILT_DEG + 1, True, "20"):
+        with pytest.raises(ParameterError, match="tool_tilt_deg"):
+            random_pnp.random_pick_and_place(1, tool_tilt_deg=bad)
+
+
+def test_tilted_poses_lean_no_further_than_drawn():
+    """The tool axis at the pick and place, on the DH reference: off vertical by at most the two tilts combined,
+    and by more than IK round-off in most motions."""
+    bound = np.degrees(np.arccos(np.cos(np.radians(TILT_DEG)) ** 2))  # both axes at their largest
+    leans = []
+    for s in RANDOM_SEEDS:
+        pick, place = _grip_poses(random_pnp.random_pick_and_place(s, tool_tilt_deg=TILT_DEG))
+        for q in (pick, place):
+            t = tool_fk(q, TCP_OFFSET_M)
+            leans.append(np.degrees(np.arccos(np.clip(-t[2, 2], -1.0, 1.0))))
+            r, z = np.hypot(t[0, 3], t[1, 3]), t[2, 3]
+            assert random_pnp.REACH_RADIUS_M[0] - 1e-6 <= r <= random_pnp.REACH_RADIUS_M[1] + 1e-6
+            assert random_pnp.HEIGHT_M[0] - 1e-6 <= z <= random_pnp.HEIGHT_M[1] + 1e-6
+    leans = np.array(leans)
+    assert leans.max() <= bound + 1e-6, (leans.max(), bound)
+    assert np.mean(leans > 1.0) > 0.75, leans
+
+
 def test_ik_reaches_poses_of_the_reference_kinematics():
     """IK on the MJCF against forward kinematics typed in from UR's DH table (seeded poses)."""
     kin = TcpKinematics.load()

@@ -5,7 +5,12 @@
 * a pick and a place position of the TCP inside the UR5's reachable workspace
   (:data:`REACH_RADIUS_M` from the base axis, :data:`HEIGHT_M` in height, the place
   :data:`TRANSFER_ANGLE_RAD` round the base from the pick, either way), each with a tool yaw
-  (:data:`YAW_RAD` about the radial direction) and the gripper pointing straight down;
+  (:data:`YAW_RAD` about the radial direction) and the gripper pointing straight down - or, with
+  ``tool_tilt_deg`` > 0, tilted from straight down about the tool's own x and y axes by up to that
+  angle each, at the pick, the via point and the place (parts on inclined fixtures; drawn from a second stream,
+  ``default_rng([seed, 1])``, so the rest of the motion is the untilted seed's unless a tilted pose is
+  rejected).  Straight down keeps wrist 2 at -90 deg through the whole motion: a fault that shows only
+  when a joint turns or carries torque cannot show there;
 * an approach pose above each (:data:`APPROACH_HEIGHT_M`) and a via point above the middle
   of the transfer (:data:`VIA_LIFT_M` above the higher approach);
 * a joint speed and acceleration (:data:`SPEED_RAD_S`, :data:`ACCEL_RAD_S2`, within the UR5's
@@ -59,28 +64,38 @@ MAX_DRAWS = 200
 #: seed posture of the IK (the paper trajectory's pick approach; shoulder left, elbow up, wrist down)
 SEED_POSTURE = np.array([-0.4, -1.0, 1.6, -2.17, -math.pi / 2, 0.0])
 SEED_AZIMUTH_RAD = 2.908  # azimuth of the TCP at SEED_POSTURE
+#: largest ``tool_tilt_deg`` accepted [deg]: beyond it the wrist leaves the wrist-down branch of SEED_POSTURE
+MAX_TOOL_TILT_DEG = 30.0
+WRIST2_BRANCH_RAD = 0.3  # |q5 + pi/2| allowed with the tool straight down (IK round-off and yaw)
 
 
-def random_pick_and_place(seed: int = 0, payload_kg: float = 1.0) -> Trajectory:
+def random_pick_and_place(seed: int = 0, payload_kg: float = 1.0, tool_tilt_deg: float = 0.0) -> Trajectory:
     """The motion of seed ``seed`` (see the module docstring); about 5-8 s long.
 
     Args:
         seed: non-negative integer selecting the motion.
         payload_kg: mass gripped when a run does not set one [kg].
+        tool_tilt_deg: largest tilt of the tool from straight down about each of its x and y axes [deg]
+            (0: straight down, the family as it always was; at most :data:`MAX_TOOL_TILT_DEG`).
     """
     if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
         raise ParameterError(f"random_pick_and_place: seed = {seed!r} must be a non-negative integer")
     if isinstance(payload_kg, bool) or not isinstance(payload_kg, (int, float)) or not 0 <= payload_kg <= 5:
         raise ParameterError(f"random_pick_and_place: payload_kg = {payload_kg!r} is out of range [0, 5] kg")
-    return _build(seed, float(payload_kg))
+    if (isinstance(tool_tilt_deg, bool) or not isinstance(tool_tilt_deg, (int, float))
+            or not 0 <= tool_tilt_deg <= MAX_TOOL_TILT_DEG):
+        raise ParameterError(f"random_pick_and_place: tool_tilt_deg = {tool_tilt_deg!r} is out of range "
+                             f"[0, {MAX_TOOL_TILT_DEG:g}] deg")
+    return _build(seed, float(payload_kg), float(tool_tilt_deg))
 
 
 @functools.lru_cache(maxsize=256)
-def _build(seed: int, payload_kg: float) -> Trajectory:
+def _build(seed: int, payload_kg: float, tool_tilt_deg: float = 0.0) -> Trajectory:
     rng = np.random.default_rng(seed)
+    tilt_rng = np.random.default_rng([seed, 1]) if tool_tilt_deg > 0 else None
     kin = TcpKinematics.load()
     for _ in range(MAX_DRAWS):
-        poses = _draw_poses(rng, kin)
+        poses = _draw_poses(rng, kin, tilt_rng, math.radians(tool_tilt_deg))
         if poses is not None:
             break
     else:  # pragma: no cover - the acceptance rate is far above 1 / MAX_DRAWS
@@ -112,7 +127,8 @@ def _build(seed: int, payload_kg: float) -> Trajectory:
     return Trajectory("random_pick_and_place", ts, np.concatenate(parts), tuple(events), False, payload_kg)
 
 
-def _draw_poses(rng: np.random.Generator, kin: TcpKinematics) -> tuple[NDArray, ...] | None:
+def _draw_poses(rng: np.random.Generator, kin: TcpKinematics, tilt_rng: np.random.Generator | None = None,
+                tilt_rad: float = 0.0) -> tuple[NDArray, ...] | None:
     """Pick approach, pick, via, place approach, place joint angles; ``None`` if a pose is rejected."""
     phi_pick = rng.uniform(-math.pi, math.pi)
     phi_place = phi_pick + rng.choice([-1.0, 1.0]) * rng.uniform(*TRANSFER_ANGLE_RAD)
@@ -127,20 +143,22 @@ def _draw_poses(rng: np.random.Generator, kin: TcpKinematics) -> tuple[NDArray, 
 
     z_via = max(z_pick + h_pick, z_place + h_place) + lift
     phi_via, r_via = 0.5 * (phi_pick + phi_place), 0.5 * (r_pick + r_place)
+    tilt_pick, tilt_via, tilt_place = (tilt_rng.uniform(-tilt_rad, tilt_rad, size=(3, 2)) if tilt_rng is not None
+                                       else np.zeros((3, 2)))
     targets = [
-        (at(phi_pick, r_pick, z_pick + h_pick), phi_pick + yaw_pick),
-        (at(phi_pick, r_pick, z_pick), phi_pick + yaw_pick),
-        (at(phi_via, r_via, z_via), phi_via + 0.5 * (yaw_pick + yaw_place)),
-        (at(phi_place, r_place, z_place + h_place), phi_place + yaw_place),
-        (at(phi_place, r_place, z_place), phi_place + yaw_place),
+        (at(phi_pick, r_pick, z_pick + h_pick), phi_pick + yaw_pick, tilt_pick),
+        (at(phi_pick, r_pick, z_pick), phi_pick + yaw_pick, tilt_pick),
+        (at(phi_via, r_via, z_via), phi_via + 0.5 * (yaw_pick + yaw_place), tilt_via),
+        (at(phi_place, r_place, z_place + h_place), phi_place + yaw_place, tilt_place),
+        (at(phi_place, r_place, z_place), phi_place + yaw_place, tilt_place),
     ]
     seed_q = SEED_POSTURE.copy()
     out = []
-    for pos, yaw in targets:
+    for pos, yaw, tilt in targets:
         seed_q = seed_q.copy()
         seed_q[0] += _wrap(math.atan2(pos[1], pos[0]) - (seed_q[0] - SEED_POSTURE[0] + SEED_AZIMUTH_RAD))
-        q = kin.ik(pos, down_rotation(yaw), seed_q)
-        if q is None or not _on_branch(q):
+        q = kin.ik(pos, tilted(down_rotation(yaw), tilt), seed_q)
+        if q is None or not _on_branch(q, tilt_rad):
             return None
         out.append(q)
         seed_q = q
@@ -151,7 +169,19 @@ def _wrap(angle: float) -> float:
     return (angle + math.pi) % (2 * math.pi) - math.pi
 
 
-def _on_branch(q: NDArray) -> bool:
-    """Elbow up and bent (away from the stretched singularity), wrist down, within UR joint ranges."""
-    return (MIN_ELBOW_SIN < math.sin(q[2]) and q[2] > 0 and abs(q[4] + math.pi / 2) < 0.3
+def tilted(rot: NDArray, tilt_xy_rad: NDArray) -> NDArray:
+    """Tool frame ``rot`` (columns x, y, z in the base frame) turned about its own x axis by ``tilt_xy_rad[0]``,
+    then about its own y axis by ``tilt_xy_rad[1]`` [rad]."""
+    a, b = float(tilt_xy_rad[0]), float(tilt_xy_rad[1])
+    ca, sa, cb, sb = math.cos(a), math.sin(a), math.cos(b), math.sin(b)
+    rx = np.array([[1.0, 0.0, 0.0], [0.0, ca, -sa], [0.0, sa, ca]])
+    ry = np.array([[cb, 0.0, sb], [0.0, 1.0, 0.0], [-sb, 0.0, cb]])
+    return rot @ rx @ ry
+
+
+def _on_branch(q: NDArray, tilt_rad: float = 0.0) -> bool:
+    """Elbow up and bent (away from the stretched singularity), wrist down (within the tilt drawn), within UR
+    joint ranges."""
+    return (MIN_ELBOW_SIN < math.sin(q[2]) and q[2] > 0
+            and abs(q[4] + math.pi / 2) < WRIST2_BRANCH_RAD + math.sqrt(2.0) * tilt_rad
             and np.all(np.abs(q) < 2 * math.pi) and abs(q[2]) < math.pi)
