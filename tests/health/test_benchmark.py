@@ -5,7 +5,6 @@ simulated runs, and the files are written - in seconds on a few dozen runs."""
 from __future__ import annotations
 
 import json
-import time
 from pathlib import Path
 
 import numpy as np
@@ -104,9 +103,7 @@ def test_inputs_are_robot_signals_not_labels_or_twin_features():
 
 def test_pipeline_learns_what_is_there_and_leaks_nothing():
     df = synthetic()
-    t0 = time.perf_counter()
     m, figs = evaluate(df, with_figures=False, with_importance=False)
-    assert time.perf_counter() - t0 < 20
     assert m["detection"]["per_kind"]["backlash"]["auc"] > 0.85
     assert m["localisation"]["accuracy_detected"] > 0.8
     shuffled, _ = evaluate(df, shuffle_labels=True, with_figures=False, with_importance=False)
@@ -154,9 +151,7 @@ def simulated(tmp_path_factory):
 @pytest.mark.slow
 def test_large_backlash_detected_on_simulated_runs_and_shuffle_gives_chance(simulated):
     df = pd.read_parquet(simulated / "features.parquet")
-    t0 = time.perf_counter()
     m, _ = evaluate(df, with_figures=False)
-    assert time.perf_counter() - t0 < 30
     assert m["dataset"]["n_test"] >= 8 and m["dataset"]["n_groups_test"] == 2
     # a dozen test runs: judge by the AUC's standard error (Hanley-McNeil), not by a fixed margin
     bl = m["detection"]["per_kind"]["backlash"]
