@@ -64,7 +64,8 @@ MAX_DRAWS = 200
 #: seed posture of the IK (the paper trajectory's pick approach; shoulder left, elbow up, wrist down)
 SEED_POSTURE = np.array([-0.4, -1.0, 1.6, -2.17, -math.pi / 2, 0.0])
 SEED_AZIMUTH_RAD = 2.908  # azimuth of the TCP at SEED_POSTURE
-#: largest ``tool_tilt_deg`` accepted [deg]: beyond it the wrist leaves the wrist-down branch of SEED_POSTURE
+#: largest ``tool_tilt_deg`` accepted [deg] (an assumption: a tilted part, not a side approach; at 30 deg every seed
+#: 0-39 builds on the wrist-down branch, wrist 2 spanning 8-59 deg)
 MAX_TOOL_TILT_DEG = 30.0
 WRIST2_BRANCH_RAD = 0.3  # |q5 + pi/2| allowed with the tool straight down (IK round-off and yaw)
 
