@@ -142,8 +142,9 @@ def main(argv=None) -> int:
     ap.add_argument("--repeat", type=int, default=3, help="repetitions of (a), (a_off), (a0), (a0d) and (b)")
     ap.add_argument("--duration-s", type=float, default=None, help="simulated seconds per run (default: 13, the "
                     "whole pick-and-place; 0.2 with --quick)")
-    ap.add_argument("--cpu-time", action="store_true", help="time (a), (a0), (b) and (c) by the process's CPU time "
-                    "instead of wall time (steadier on a shared, loaded machine; (t) and (d) stay wall time)")
+    ap.add_argument("--cpu-time", action="store_true", help="time (a), (a_off), (a0), (a0d), (b) and (c) by the "
+                    "process's CPU time instead of wall time (steadier on a shared, loaded machine; (t) and (d) "
+                    "stay wall time)")
     args = ap.parse_args(argv)
     dur = args.duration_s or (0.2 if args.quick else 13.0)  # default: the whole 2 kg pick-and-place
     clock = time.process_time if args.cpu_time else time.perf_counter

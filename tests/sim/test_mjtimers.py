@@ -99,4 +99,3 @@ def test_the_physics_does_not_read_the_clock():
                 mujoco.mj_step(model, d)
         states.append(np.concatenate([d.qpos, d.qvel, d.qacc]))
     assert np.array_equal(states[0], states[1])
-

@@ -91,7 +91,7 @@ def random_pick_and_place(seed: int = 0, payload_kg: float = 1.0, tool_tilt_deg:
 
 
 @functools.lru_cache(maxsize=256)
-def _build(seed: int, payload_kg: float, tool_tilt_deg: float = 0.0) -> Trajectory:
+def _build(seed: int, payload_kg: float, tool_tilt_deg: float) -> Trajectory:
     rng = np.random.default_rng(seed)
     tilt_rng = np.random.default_rng([seed, 1]) if tool_tilt_deg > 0 else None
     kin = TcpKinematics.load()
@@ -128,8 +128,8 @@ def _build(seed: int, payload_kg: float, tool_tilt_deg: float = 0.0) -> Trajecto
     return Trajectory("random_pick_and_place", ts, np.concatenate(parts), tuple(events), False, payload_kg)
 
 
-def _draw_poses(rng: np.random.Generator, kin: TcpKinematics, tilt_rng: np.random.Generator | None = None,
-                tilt_rad: float = 0.0) -> tuple[NDArray, ...] | None:
+def _draw_poses(rng: np.random.Generator, kin: TcpKinematics, tilt_rng: np.random.Generator | None,
+                tilt_rad: float) -> tuple[NDArray, ...] | None:
     """Pick approach, pick, via, place approach, place joint angles; ``None`` if a pose is rejected."""
     phi_pick = rng.uniform(-math.pi, math.pi)
     phi_place = phi_pick + rng.choice([-1.0, 1.0]) * rng.uniform(*TRANSFER_ANGLE_RAD)
@@ -180,7 +180,7 @@ def tilted(rot: NDArray, tilt_xy_rad: NDArray) -> NDArray:
     return rot @ rx @ ry
 
 
-def _on_branch(q: NDArray, tilt_rad: float = 0.0) -> bool:
+def _on_branch(q: NDArray, tilt_rad: float) -> bool:
     """Elbow up and bent (away from the stretched singularity), wrist down (within the tilt drawn), within UR
     joint ranges."""
     return (MIN_ELBOW_SIN < math.sin(q[2]) and q[2] > 0
