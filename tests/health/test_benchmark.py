@@ -250,6 +250,14 @@ def test_saved_classifiers_round_trip_and_score_another_campaign(tmp_path):
     assert t["saved_models"]["training_set_sha256"] == schema["training_set_sha256"]
     assert t["dataset"]["n_test"] == len(other) and t["detection"]["auc_all"] > 0.85
     assert (other_dir / "benchmark_transfer" / "metrics.json").exists()
+    # against the training campaign's own test split: the saved by-joint detector there is the training report's
+    tr = t["transfer"]
+    assert tr["auc_training_test_split"] == pytest.approx(m["detection_by_joint"]["auc_all"], abs=1e-12)
+    assert tr["auc_other"] == pytest.approx(t["detection_by_joint"]["auc_all"], abs=1e-12)
+    lo, hi = tr["difference_interval"]
+    assert tr["n_groups_other"] == 6 and lo <= tr["difference"] <= hi
+    assert "## Against the training campaign's own test split" in (
+        other_dir / "benchmark_transfer" / "report.md").read_text()
 
 
 def test_benchmark_refuses_no_worker(tmp_path, capsys):

@@ -39,6 +39,7 @@ from .models import Models, fit_models
 from .report import write_report
 from .saved import MODELS_DIR, check_inputs, load_models, save_models
 from .thresholds import PAPER_TCP_MM, backlash_thresholds
+from .transfer import against_training_split
 
 
 def evaluate(features: pd.DataFrame, *, seed: int = 0, shuffle_labels: bool = False,
@@ -227,9 +228,12 @@ def run_benchmark(campaign_dir: str | Path, out: str | Path | None = None, *, se
             raise ParameterError("--shuffle-labels trains new classifiers; --test scores saved ones: use one of them")
         test_dir = Path(test_dir)
         saved = load_models(base / "benchmark")
+        other = load_features(test_dir)
         metrics, figures = evaluate(features, seed=seed, threshold_mm=thr, source=str(test_dir), saved=saved,
-                                    test_features=load_features(test_dir), with_importance=False)
+                                    test_features=other, with_importance=False)
         metrics.pop("_models")
+        if saved[0].joint_kind is not None:  # how far apart, against the motions drawn (transfer.py)
+            metrics["transfer"] = against_training_split(features, other, saved, seed, str(test_dir))
         write_report(metrics, figures, out_dir)
         metrics["out"] = str(out_dir)
         return metrics

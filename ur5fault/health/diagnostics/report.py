@@ -12,6 +12,7 @@ from ...util.io import remove_stale_temporaries, write_figure_atomic, write_json
 from .kind_call import PAIR
 from .limit_report import limit_lines
 from .metrics import FROM_TEST_SPLIT
+from .transfer import lines as transfer_lines
 
 
 def _f(v: Any, fmt: str = ".3f") -> str:
@@ -178,6 +179,8 @@ def markdown(m: dict[str, Any]) -> str:
         lines += calibration_lines(m["calibration"])
     if m.get("comparison"):
         lines += comparison_lines(m["comparison"])
+    if m.get("transfer"):
+        lines += transfer_lines(m["transfer"])
     lines += ["", f"Benchmark wall time {m['timing']['benchmark_wall_s']:.1f} s. Figures: "
               + ", ".join(f"`{f}`" for f in m["figures"]) + "."]
     return "\n".join(lines) + "\n"
