@@ -104,6 +104,11 @@ CAMPAIGN = [
     ("param-string", "base: {params: {gear: {ratio: '50'}}}\n" + GOOD, "gear.ratio[1] = '50' must be a number"),
     ("params-list", "base: {params: [1, 2]}\n" + GOOD, "base.params = [1, 2] must be a mapping"),
     ("effects-mapping", "base: {effects: {effect: backlash}}\n" + GOOD, "base.effects: expected a list of effects"),
+    # every run has a payload_kg (2 kg unless given), applied after the base effects: the effect would be lost
+    ("payload-effect-in-base", "base: {effects: [{effect: payload, mass_kg: 1}]}\n" + GOOD,
+     "base.effects[0]: payload (mass_kg=1) and payload_kg = 2.0 (every run has one"),
+    ("temperature-effect-in-base", "base: {temperature_C: 30, effects: [{effect: temperature, temperature_C: 40}]}\n"
+     + GOOD, "base.effects[0]: temperature (temperature_C=40) and temperature_C = 30"),
     ("trajectory-seconds-huge", "trajectory: {name: hold, seconds: 1e9}\nname: x\n",
      "trajectory.seconds = 1000000000.0 is out of range [0.01, 3600] s"),
     ("trajectory-option-bool", "trajectory: {name: joint_sweep, speed_scale: true}\nname: x\n",
@@ -151,6 +156,10 @@ SIMULATE = [
      "effects[1]: backlash on elbow_joint (backlash_deg=0.2) repeats command line: effects[0]"),
     ("effect-arg-repeated", ["--effect", "coulomb_friction@2:scale=1.5", "--effect", "coulomb_friction@2:scale=1.2"],
      "repeats command line: effects[0] (coulomb_friction on shoulder_lift_joint (scale=1.5)); give each effect once"),
+    ("payload-effect-and-option", ["--effect", "payload:mass_kg=1", "--payload-kg", "2"],
+     "command line: effects[0]: payload (mass_kg=1) and payload_kg = 2.0 both set the payload: give it once"),
+    ("temperature-effect-and-option", ["--effect", "temperature:temperature_C=40", "--temperature-C", "20"],
+     "effects[0]: temperature (temperature_C=40) and temperature_C = 20.0 both set the temperature"),
     ("out-arg-unwritable", ["--out", "/proc/ur5fault-test/run.parquet"], "cannot write in /proc"),
     ("out-arg-folder", ["--out", "{tmp}"], "is a folder; give a file name"),
     ("config-bomb", ["--config", "{tmp}/bomb.yaml"], "aliases expand to more than"),

@@ -30,6 +30,7 @@ from .sim.budget import MAX_DURATION_S, check_memory, sim_bytes
 from .sim.effects import REGISTRY, EffectSpec, make_effect
 from .sim.params import RobotParams, deep_merge, load_params, read_yaml
 from .sim.trajectories import TRAJECTORIES, Trajectory, get_trajectory
+from .sim.trajectories.base import MAX_SPEED_SCALE, MIN_SPEED_SCALE
 from .util.checks import check_int, check_number, short
 
 #: largest noise seed (a Parquet int64 column holds it)
@@ -39,7 +40,7 @@ MAX_SEED = 2**63 - 1
 #: dwell times up to the run-length limit; setpoint periods from the 0.1 ms servo period to 10 Hz
 TRAJECTORY_OPTIONS = {
     "payload_kg": (REGISTRY["payload"].param("mass_kg").lo, REGISTRY["payload"].param("mass_kg").hi, "kg"),
-    "speed_scale": (0.05, 3.0, "-"),
+    "speed_scale": (MIN_SPEED_SCALE, MAX_SPEED_SCALE, "-"),
     "seconds": (0.01, MAX_DURATION_S, "s"),
     "setpoint_period_s": (1e-4, 0.1, "s"),
 }
@@ -59,10 +60,6 @@ def parse_effects(items: Any, where: str) -> tuple[EffectSpec, ...]:
         if not isinstance(item, Mapping) or "effect" not in item:
             raise ParameterError(f"{loc}: each effect is a mapping with an 'effect' key (and its parameters)")
         values = {k: v for k, v in item.items() if k not in ("effect", "joint")}
-        eff = REGISTRY.get(str(item["effect"]))
-        if eff is not None and eff.params and not values:  # a fault of size 0 is no fault: say which size
-            sizes = ", ".join(f"{p.name} [{p.lo:g}..{p.hi:g} {p.unit}]" for p in eff.params)
-            raise ParameterError(f"{loc}: effect {eff.name!r} has no size; give {sizes}")
         out.append(make_effect(str(item["effect"]), item.get("joint"), where=loc, **values))
     return tuple(out)
 
@@ -80,6 +77,22 @@ def refuse_repeats(effects: Sequence[EffectSpec], where: str) -> None:
             raise ParameterError(f"{where}[{i}]: {e.describe()} repeats {where}[{seen[key]}] "
                                  f"({effects[seen[key]].describe()}); give each effect once per joint")
         seen[key] = i
+
+
+#: whole-robot effects that a run condition also sets, and the condition's key
+CONDITION_EFFECTS = {"payload": "payload_kg", "temperature": "temperature_C"}
+
+
+def refuse_condition_effects(effects: Sequence[EffectSpec], where: str, given: Mapping[str, Any],
+                             how: str = "") -> None:
+    """An effect in a run's list that a condition key given beside it (``payload_kg``, ``temperature_C``) would set
+    again: the condition is applied last and would silently win, so the pair is refused.  ``how`` names where the
+    condition key came from (e.g. the command-line option)."""
+    for i, e in enumerate(effects):
+        key = CONDITION_EFFECTS.get(e.name)
+        if key is not None and given.get(key) is not None:
+            raise ParameterError(f"{where}[{i}]: {e.describe()} and {key} = {given[key]!r}{how} both set the "
+                                 f"{e.name}: give it once (as {key})")
 
 
 def repeats_of(base: Sequence[EffectSpec], added: Sequence[EffectSpec]) -> list[tuple[EffectSpec, EffectSpec]]:
@@ -209,6 +222,7 @@ def build_run_config(data: Mapping[str, Any], where: str = "config", overlay: Ov
     params = load_params(overrides=overrides, where=f"{where}: params")
     effects = parse_effects(data.get("effects"), f"{where}: effects")
     refuse_repeats(effects, f"{where}: effects")
+    refuse_condition_effects(effects, f"{where}: effects", data)
     if overlay is not None:
         effects = overlay.effects + effects
     if data.get("payload_kg") is not None:

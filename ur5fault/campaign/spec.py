@@ -51,6 +51,7 @@ from ..config import (
     check_mapping,
     parse_effects,
     parse_trajectory,
+    refuse_condition_effects,
 )
 from ..errors import ParameterError
 from ..sim.effects import EffectSpec
@@ -179,6 +180,9 @@ def build_campaign(data: Mapping[str, Any], where: str, text: str = "", path: Pa
     robot = load_params(overrides=params, where=f"{where}: base.params")  # validate robot overrides now
     base_effects = parse_effects(base.get("effects"), f"{where}: base.effects")
     cond0 = _base_conditions(data, base, where)
+    # every run has a payload_kg and a temperature_C (2 kg and 28 degC unless given), applied after the base effects
+    refuse_condition_effects(base_effects, f"{where}: base.effects", cond0,
+                             " (every run has one: base.payload_kg 2 kg and base.temperature_C 28 degC unless given)")
     axes, swept = sweep_axes(data, where)
     sampled = data.get("sample") is not None  # a sampled campaign (campaign/sampling.py) instead of a grid
     if sampled and (axes or swept):
