@@ -24,6 +24,16 @@ def test_joint_required_and_validated():
         make_effect("temperature", 1, temperature_C=30)
 
 
+def test_a_sizeless_effect_is_refused_from_python_as_from_yaml():
+    """make_effect once filled every missing value with its absent one, so make_effect("backlash", 2) was a
+    backlash of 0 deg labelled as a fault; the command line and YAML refused it already."""
+    with pytest.raises(ParameterError) as e:
+        make_effect("backlash", "shoulder_lift_joint")
+    assert str(e.value) == "effect 'backlash' has no size; give backlash_deg [0..5 deg]"
+    with pytest.raises(ParameterError, match=r"^here: effect 'payload' has no size; give mass_kg \[0\.\.5 kg\]$"):
+        make_effect("payload", where="here")
+
+
 def test_range_and_unknown_parameter():
     with pytest.raises(ParameterError) as e:
         make_effect("backlash", "elbow", backlash_deg=-0.1)
@@ -50,7 +60,7 @@ def test_each_effect_changes_only_its_run_and_absent_means_no_change(name):
             if a.shape == (6,):
                 assert np.flatnonzero(a != b).tolist() == [2]
     if all(q.absent is not None for q in eff.params):
-        absent = make_effect(name, 3 if eff.per_joint else None)
+        absent = make_effect(name, 3 if eff.per_joint else None, **{q.name: q.absent for q in eff.params})
         same = build_run_arrays(p, [(), (absent,)], 2.0)
         for f in vars(same):
             np.testing.assert_array_equal(getattr(same, f)[1], getattr(base, f)[1])

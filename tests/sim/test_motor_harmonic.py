@@ -31,7 +31,7 @@ def test_applier_adds_one_period_per_joint_and_refuses_a_second():
     with pytest.raises(ParameterError, match="one period per joint"):
         build_run_arrays(p, [(make_effect("motor_harmonic", 4, sin_Nm=0.01, periods_per_rev=3),
                               make_effect("motor_harmonic", 4, sin_Nm=0.01, periods_per_rev=5))], 0.0)
-    assert make_effect("motor_harmonic", 2).is_absent
+    assert make_effect("motor_harmonic", 2, sin_Nm=0.0).is_absent
 
 
 def test_the_speed_loop_answers_the_ripple_with_minus_T_over_Kt_of_current():

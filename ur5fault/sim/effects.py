@@ -83,7 +83,8 @@ def make_effect(name: str, joint: int | str | None = None, where: str = "", **va
         name: registry key; an unknown one lists the registered effects.
         joint: 1-based number, name or alias for per-joint effects.
         where: context (file and key path) for error messages.
-        values: parameter values; missing ones take their "absent" value.
+        values: parameter values, at least one (a sizeless effect is refused: a fault of size 0 is no fault);
+            missing ones take their "absent" value.
     """
     if name not in REGISTRY:
         raise UnknownNameError("effect", name, REGISTRY, where)
@@ -97,6 +98,9 @@ def make_effect(name: str, joint: int | str | None = None, where: str = "", **va
         if joint is not None:
             raise ParameterError(f"{loc}effect {name!r} acts on the whole robot and takes no joint")
         j = None
+    if eff.params and not values:  # a fault of size 0 is no fault: say which size
+        sizes = ", ".join(f"{p.name} [{p.lo:g}..{p.hi:g} {p.unit}]" for p in eff.params)
+        raise ParameterError(f"{loc}effect {name!r} has no size; give {sizes}")
     known = {p.name: p for p in eff.params}
     out = []
     for key in values:
