@@ -164,6 +164,16 @@ def test_bad_arguments():
         sim.run(pick_and_place(), [RunSpec("a")], log_period_s=1.3e-4)
     with pytest.raises(ParameterError, match="at least one"):
         sim.run(pick_and_place(), [])
+    # refused before any step: two runs of one id (the result finds runs by id), a seed that is no seed
+    with pytest.raises(ParameterError, match=r"^runs\[1\]: run_id 'a' is given twice; give each run its own run_id$"):
+        sim.run(pick_and_place(), [RunSpec("a", seed=0), RunSpec("a", seed=1)], duration_s=0.01)
+    with pytest.raises(ParameterError, match=r"^RunSpec 'a': seed = -1 must be a non-negative integer$"):
+        sim.run(pick_and_place(), [RunSpec("a", seed=-1)], duration_s=0.01)
+    with pytest.raises(ParameterError, match="seed = 0.5"):
+        sim.run(pick_and_place(), [RunSpec("a", seed=0.5)], duration_s=0.01)
+    with pytest.raises(ParameterError, match=r"runs\[0\] = str: each run is a RunSpec"):
+        sim.run(pick_and_place(), ["a"], duration_s=0.01)
+    assert sim.run(pick_and_place(), [RunSpec("a", seed=np.int64(3))], duration_s=0.01).status == ("ok",)
     with pytest.raises(ParameterError, match="choose one of: compiled, batch, loop"):
         Simulator(stepper="fast")
     with pytest.raises(ParameterError, match="choose one of: numpy, numba"):

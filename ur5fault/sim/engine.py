@@ -14,6 +14,7 @@ The step order is in :mod:`ur5fault.sim.loops`.
 from __future__ import annotations
 
 import logging
+import numbers
 import time
 from collections.abc import Callable, Sequence
 from importlib import resources
@@ -169,6 +170,7 @@ class Simulator:
         """
         if not runs:
             raise ParameterError("run() needs at least one RunSpec")
+        _check_runs(runs)
         p = self.params
         dt = p.physics_dt_s
         log_every = round(log_period_s / dt)
@@ -193,6 +195,20 @@ class Simulator:
             if s != Status.OK.value:
                 _log.debug("run %s: %s (%s)", r, s, why)
         return res
+
+
+def _check_runs(runs: Sequence[RunSpec]) -> None:
+    """Each run a RunSpec with a non-negative integer seed and its own run_id (the result finds runs by id: a second
+    run of one id would be unreachable by name)."""
+    seen: set[str] = set()
+    for i, r in enumerate(runs):
+        if not isinstance(r, RunSpec):
+            raise ParameterError(f"runs[{i}] = {type(r).__name__}: each run is a RunSpec(run_id, seed, effects)")
+        if isinstance(r.seed, bool) or not isinstance(r.seed, numbers.Integral) or r.seed < 0:
+            raise ParameterError(f"RunSpec {r.run_id!r}: seed = {r.seed!r} must be a non-negative integer")
+        if r.run_id in seen:
+            raise ParameterError(f"runs[{i}]: run_id {r.run_id!r} is given twice; give each run its own run_id")
+        seen.add(r.run_id)
 
 
 def _integrate(sim: Simulator, traj: Trajectory, runs: list[RunSpec], a: RunArrays, n_steps: int,
