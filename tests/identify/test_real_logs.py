@@ -5,6 +5,7 @@ and nothing the log cannot give is written as if measured."""
 from __future__ import annotations
 
 import gzip
+import re
 import subprocess
 import sys
 
@@ -56,6 +57,21 @@ def test_identify_on_a_robot_that_never_rests_writes_no_invented_value(tmp_path)
     p = load_params()
     np.testing.assert_allclose(written["sensors"]["current_noise_A"], p.sensors.current_noise_A, rtol=1e-3)
     Overlay.load(out)  # the overlay is valid for --model
+
+
+def test_every_not_identifiable_value_says_why(tmp_path):
+    """Movement_No2 has too few starts from rest for a breakaway on any joint whose friction it identifies; the
+    header's reason was cut off after the joint ("...; J1: ") where it should say so."""
+    log = _kufieta(tmp_path, "Movement_No2.csv.gz")
+    out = tmp_path / "params.yaml"
+    r = subprocess.run([sys.executable, "-m", "ur5fault.cli", "identify", str(log), "--format", "rtde",
+                        "--payload-kg", "0", "--tcp-offset-m", "0", "0", "0", "--no-sweep", "--bootstrap", "20",
+                        "--quiet", "--out", str(out)], capture_output=True, text=True, timeout=600,
+                       env={"PYTHONPATH": str(REPO), "PATH": "/usr/bin:/bin"})
+    assert r.returncode == 0, r.stderr
+    text = out.read_text()
+    assert not re.search(r"J\d: *$", text, re.M), [ln for ln in text.splitlines() if re.search(r"J\d: *$", ln)]
+    assert "J1: fewer than 5 starts from rest in the log" in text
 
 
 def test_currents_in_milliamperes_are_named(tmp_path):

@@ -233,8 +233,12 @@ def _breakaway(sig, fit: friction.FrictionFit, full: NDArray, coulomb_A: NDArray
     for j in range(N_JOINTS):
         if j in good:
             continue
-        why = (f"the starts of J{j + 1} show no breakaway above zero (interval {brk[j].lo:.3f}..{brk[j].hi:.3f} A)"
-               if j in brk else _why_not(fit, j))
+        if j in brk:
+            why = f"the starts of J{j + 1} show no breakaway above zero (interval {brk[j].lo:.3f}..{brk[j].hi:.3f} A)"
+        elif fit.ok[j]:  # its friction was identified, but the log holds too few starts from rest to read one
+            why = f"J{j + 1}: fewer than {stickslip.MIN_STARTS} starts from rest in the log"
+        else:
+            why = _why_not(fit, j)
         out.append(fallback("friction.breakaway_A", j, ratio * coulomb_A[j],
                             f"[A] Coulomb level times the breakaway/Coulomb ratio {ratio:.2f} measured on {src}", why))
     return out
