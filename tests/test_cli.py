@@ -133,3 +133,16 @@ def test_documented_run_configuration_runs(where, tmp_path, capsys):
     rc = main(["simulate", "--config", str(cfg), "--duration-s", "0.05", "--quiet", "--out", str(tmp_path / "r.csv")])
     summary = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
     assert rc == 0 and summary["status"] == "ok", summary
+
+
+def test_discrepancy_held_out_line_says_the_figures_with_or_without_urs_model():
+    """A simulated log has no target currents: the line once stopped after "after the fit" with no figure."""
+    from ur5fault.discrepancy.cli import held_out_line
+
+    cur = {"shoulder_pan_joint": 0.0204, "shoulder_lift_joint": 0.0179, "elbow_joint": None}
+    assert held_out_line("a.parquet", {"role": "fit", "rms_after": {"current_A": cur}}) == (
+        "fit: a.parquet: held-out current RMS after the fit [A], J1..J3: 0.020 / 0.018 / -")
+    ur = {"shoulder_pan_joint": 0.04, "shoulder_lift_joint": 0.0, "elbow_joint": 0.1}
+    assert held_out_line("b.csv", {"role": "held_out", "rms_after": {"current_A": cur},
+                                   "rms_controller_model_current_A": ur}) == (
+        "held_out: b.csv: held-out current RMS after the fit, as a multiple of UR's own model: 0.51 / - / -")

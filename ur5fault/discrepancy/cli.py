@@ -34,6 +34,18 @@ def register(sub) -> None:
     d.set_defaults(func=cmd_discrepancy)
 
 
+
+def held_out_line(name: str, entry: dict) -> str:
+    """One log's held-out current RMS after the fit (``summary.json``'s ``per_log`` entry): as multiples of UR's
+    own model where the log has its target currents, else in amperes."""
+    cur = entry["rms_after"].get("current_A", {})
+    ur = entry.get("rms_controller_model_current_A")
+    head = f"{entry['role']}: {name}: held-out current RMS after the fit"
+    if ur:
+        return head + ", as a multiple of UR's own model: " + " / ".join(
+            f"{cur[j] / ur[j]:.2f}" if cur.get(j) and ur.get(j) else "-" for j in cur)
+    return head + f" [A], J1..J{len(cur)}: " + " / ".join("-" if v is None else f"{v:.3f}" for v in cur.values())
+
 def cmd_discrepancy(args: argparse.Namespace) -> int:
     from ..config import Overlay
     from ..errors import ParameterError
@@ -67,11 +79,7 @@ def cmd_discrepancy(args: argparse.Namespace) -> int:
     summ = summary(model)
     print(f"{log.source}: {log.t_s[-1]:.1f} s at {1 / log.period_s:.0f} Hz")
     for name, e in summ["per_log"].items():
-        cur = e["rms_after"].get("current_A", {})
-        ur = e.get("rms_controller_model_current_A")
-        ratio = " / ".join(f"{cur[j] / ur[j]:.2f}" if ur and cur.get(j) and ur[j] else "-" for j in cur)
-        print(f"{e['role']}: {name}: held-out current RMS after the fit" +
-              (f", as a multiple of UR's own model: {ratio}" if ur else ""))
+        print(held_out_line(name, e))
     nothing = ("nothing named: what the model leaves is listed as unexplained below" if summ["unexplained"]
                else "nothing explains the residual better than noise")
     for line in summ["named"] or [nothing]:
