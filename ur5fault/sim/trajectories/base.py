@@ -22,6 +22,10 @@ from ..axes import N_JOINTS
 CB3_SETPOINT_PERIOD_S = 0.008  # 125 Hz (ur5-facts.md)
 UR_DEFAULT_SPEED_RAD_S = 1.047  # controller default joint speed (ur5-facts.md)
 UR_DEFAULT_ACCEL_RAD_S2 = 1.396  # controller default joint acceleration (ur5-facts.md)
+UR_MAX_SPEED_RAD_S = np.pi  # the UR5's maximum joint speed, 180 deg/s (ur5-facts.md)
+#: the fastest a fixed motion may be scaled: the UR5's maximum joint speed over the controller default, 3.0
+MAX_SPEED_SCALE = UR_MAX_SPEED_RAD_S / UR_DEFAULT_SPEED_RAD_S
+MIN_SPEED_SCALE = 0.05
 
 
 @dataclasses.dataclass(frozen=True)

@@ -7,7 +7,16 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ...errors import ParameterError
-from .base import CB3_SETPOINT_PERIOD_S, UR_DEFAULT_ACCEL_RAD_S2, UR_DEFAULT_SPEED_RAD_S, Trajectory, dwell, movej
+from .base import (
+    CB3_SETPOINT_PERIOD_S,
+    MAX_SPEED_SCALE,
+    MIN_SPEED_SCALE,
+    UR_DEFAULT_ACCEL_RAD_S2,
+    UR_DEFAULT_SPEED_RAD_S,
+    Trajectory,
+    dwell,
+    movej,
+)
 
 # Pick-and-place waypoints [rad], tool pointing down (z axis of the TCP = -z of the base within 1e-3).
 # Found by numerical IK on ur5fault/models/ur5.xml with TCP offset 0.15 m: the TCP drops 0.12 m from each
@@ -17,6 +26,14 @@ PICK_APPROACH = (-0.4, -1.0, 1.6, -2.17, -1.5708, 0.0)
 PICK = (-0.4, -0.8132, 1.6555, -2.4131, -1.5708, 0.0)
 PLACE_APPROACH = (0.5, -2.2043, -1.4889, -1.0192, 1.5708, 0.9)
 PLACE = (0.5, -2.3794, -1.5444, -0.7885, 1.5708, 0.9)
+
+
+def check_speed_scale(speed_scale: float) -> None:
+    """A fixed motion's speed and acceleration factor: up to the UR5's maximum joint speed (3.0 x the default)."""
+    if not MIN_SPEED_SCALE <= speed_scale <= MAX_SPEED_SCALE:
+        raise ParameterError(f"speed_scale = {speed_scale} is out of range [{MIN_SPEED_SCALE:g}, "
+                             f"{MAX_SPEED_SCALE:.3g}] (the UR5's maximum joint speed, pi rad/s, over the controller "
+                             "default 1.047 rad/s)")
 
 
 def pick_and_place(
@@ -31,8 +48,7 @@ def pick_and_place(
     the shoulder and elbow (the base joint's axis is vertical, so it carries no gravity
     torque; its torque reverses through inertia).  About 14 s at ``speed_scale = 1``.
     """
-    if not 0.05 <= speed_scale <= 1.0:
-        raise ParameterError(f"speed_scale = {speed_scale} is out of range [0.05, 1]")
+    check_speed_scale(speed_scale)
     v, a, ts = UR_DEFAULT_SPEED_RAD_S * speed_scale, UR_DEFAULT_ACCEL_RAD_S2 * speed_scale, setpoint_period_s
     parts: list[NDArray] = [dwell(PICK_APPROACH, 0.5, ts)]
     events: list[tuple[float, bool]] = []
@@ -71,6 +87,7 @@ def joint_sweep(speed_scale: float = 1.0, payload_kg: float = 1.0) -> Trajectory
     change sign (-41 -> +20 N*m and -19 -> +2 N*m with 1 kg); every joint reverses its velocity.
     Used to test the discrepancy workflow on a motion it was not developed on.
     """
+    check_speed_scale(speed_scale)
     v, a, ts = UR_DEFAULT_SPEED_RAD_S * speed_scale, UR_DEFAULT_ACCEL_RAD_S2 * speed_scale, CB3_SETPOINT_PERIOD_S
     home = np.asarray(PICK_APPROACH)
     out_ = np.array([0.5, -2.0, 0.2, -1.5, -1.2, 0.9])
