@@ -147,7 +147,7 @@ def test_corrupted_run_file_is_named_and_simulated_again(tmp_path, done):
     data[mid:mid + 16] = b"\x00" * 16
     victim.write_bytes(bytes(data))
     info = status(out)
-    assert info["runs"]["bad"] == 1
+    assert info["runs"]["bad"] == 1 and info["state"].startswith("complete, with problems")
     assert any(victim.name in p and "checksum" in p for p in info["problems"]), info["problems"]
     r = subprocess.run([sys.executable, "-m", "ur5fault.cli", "campaign", "status", str(out)], capture_output=True,
                        text=True, timeout=120)
@@ -156,7 +156,7 @@ def test_corrupted_run_file_is_named_and_simulated_again(tmp_path, done):
     run_campaign(load_campaign(tiny(tmp_path)), out, jobs=1, progress=False, note=notes.append)
     assert any(victim.name in n and "simulating it again" in n for n in notes), notes
     pd.testing.assert_frame_equal(_results(pd.read_parquet(out / "features.parquet")), _results(ref))
-    assert status(out)["runs"]["ok"] == 3
+    assert status(out)["runs"]["ok"] == 3 and status(out)["state"] == "complete"
 
 
 def test_run_file_damaged_after_the_scan_is_simulated_again(tmp_path, done, monkeypatch):

@@ -138,6 +138,9 @@ def status(out: Path) -> dict[str, Any]:
                 problems.append(f"runs/{p.name}: {c.state}: {c.detail}")
         info["runs"] = counts
     info["problems"] = _listed(problems)
+    if info["state"] == "complete" and (problems or damaged or (info.get("features") or {}).get("state") not in (
+            None, "ok")):  # the campaign ran to its end, but what it left is not all sound now
+        info["state"] = "complete, with problems: `ur5fault campaign run` again simulates the damaged runs again"
     return info
 
 
