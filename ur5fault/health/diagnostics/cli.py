@@ -9,7 +9,8 @@ import sys
 
 def register(sub) -> None:
     b = sub.add_parser("benchmark", help="train baseline classifiers on a campaign's train split, report on its test "
-                                         "split (needs scikit-learn: pip install 'scikit-learn>=1.3')")
+                                         "split (needs scikit-learn and skops: pip install 'scikit-learn>=1.3' "
+                                         "'skops>=0.10', or the wheel's [ml] extra)")
     b.add_argument("dir", help="campaign output folder (with features.parquet), e.g. results/diagnostics")
     b.add_argument("--out", help="report folder (default: DIR/benchmark)")
     b.add_argument("--replace", action="store_true",
