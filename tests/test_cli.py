@@ -146,3 +146,30 @@ def test_discrepancy_held_out_line_says_the_figures_with_or_without_urs_model():
     assert held_out_line("b.csv", {"role": "held_out", "rms_after": {"current_A": cur},
                                    "rms_controller_model_current_A": ur}) == (
         "held_out: b.csv: held-out current RMS after the fit, as a multiple of UR's own model: 0.51 / - / -")
+
+
+def test_simulate_command_line_effects_replace_the_files_and_errors_name_their_source(tmp_path, capsys):
+    """"Command-line options override the file": a --backlash on a joint the file gives a backlash was refused as
+    a repeat of the file's entry, and a bad command-line value was reported as the file's effects[i]."""
+    import pandas as pd
+
+    from ur5fault.cli import main
+
+    cfg = tmp_path / "run.yaml"
+    cfg.write_text("effects: [{effect: backlash, joint: 2, backlash_deg: 0.1}, "
+                   "{effect: coulomb_friction, joint: 3, scale: 1.2}]\n")
+    out = tmp_path / "r.parquet"
+    assert main(["simulate", "--config", str(cfg), "--backlash", "shoulder_lift:0.3", "--duration-s", "0.05",
+                 "--quiet", "--out", str(out)]) == 0
+    err = capsys.readouterr().err
+    assert ("note: the command line's backlash on shoulder_lift_joint (backlash_deg=0.3) replaces run.yaml's "
+            "backlash on shoulder_lift_joint (backlash_deg=0.1)") in err
+    assert "effects: coulomb_friction on elbow_joint (scale=1.2); backlash on shoulder_lift_joint (backlash_deg=0.3)" \
+        in err
+    assert len(pd.read_parquet(out)) == 50
+    assert main(["simulate", "--config", str(cfg), "--backlash", "2:9", "--out", str(out), "--replace"]) == 2
+    assert capsys.readouterr().err.strip() == (
+        "ur5fault: error: command line: effects[0]: backlash.backlash_deg = 9.0 is out of range [0, 5] deg")
+    assert main(["simulate", "--effect", "payload:mass_kg=1", "--effect", "payload:mass_kg=2", "--out", str(out),
+                 "--replace"]) == 2
+    assert capsys.readouterr().err.strip().endswith("give each effect once")

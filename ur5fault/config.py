@@ -72,10 +72,11 @@ def refuse_repeats(effects: Sequence[EffectSpec], where: str) -> None:
     of the same kind on purpose.)"""
     seen: dict[tuple, int] = {}
     for i, e in enumerate(effects):
-        key = (e.name, e.joint, dict(e.values).get("periods_per_rev"))
+        key = effect_key(e)
         if key in seen:
             raise ParameterError(f"{where}[{i}]: {e.describe()} repeats {where}[{seen[key]}] "
-                                 f"({effects[seen[key]].describe()}); give each effect once per joint")
+                                 f"({effects[seen[key]].describe()}); give each effect once"
+                                 + (" per joint" if e.joint is not None else ""))
         seen[key] = i
 
 
@@ -95,14 +96,16 @@ def refuse_condition_effects(effects: Sequence[EffectSpec], where: str, given: M
                                  f"{e.name}: give it once (as {key})")
 
 
+def effect_key(e: EffectSpec) -> tuple:
+    """What makes two effects the same one (:func:`refuse_repeats`): kind, joint and, for harmonics, the period."""
+    return e.name, e.joint, dict(e.values).get("periods_per_rev")
+
+
 def repeats_of(base: Sequence[EffectSpec], added: Sequence[EffectSpec]) -> list[tuple[EffectSpec, EffectSpec]]:
     """Pairs (``base`` effect, ``added`` effect) of the same kind on the same joint (as :func:`refuse_repeats`
     counts them): a run's effect given on top of its model overlay's, which is allowed but worth a note."""
-    def key(e: EffectSpec) -> tuple:
-        return e.name, e.joint, dict(e.values).get("periods_per_rev")
-
-    first = {key(e): e for e in base}
-    return [(first[key(e)], e) for e in added if key(e) in first]
+    first = {effect_key(e): e for e in base}
+    return [(first[effect_key(e)], e) for e in added if effect_key(e) in first]
 
 
 def parse_trajectory(spec: Any, where: str) -> Trajectory:

@@ -45,7 +45,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
                      ("log_period_s", args.log_period_s)):
         if val is not None:
             data[key] = val
-    effects = list(data.get("effects") or [])
+    effects: list = []  # the command line's, validated apart from the file's so that errors name their source
     for spec in args.backlash or []:
         joint, _, deg = spec.partition(":")
         try:
@@ -55,7 +55,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         effects.append({"effect": "backlash", "joint": joint, "backlash_deg": value})
     for spec in args.effect or []:
         effects.append(_parse_effect_arg(spec))
-    data["effects"] = effects
+    data["effects"] = _over_file(data.get("effects"), effects, where) if args.config else effects
     overlay = Overlay.load(args.model) if args.model else None
     cfg = build_run_config(data, where, overlay)
     if overlay is not None:
@@ -92,6 +92,25 @@ def _check_out_file(out: Path, replace: bool) -> Path:
     from .util.io import check_new_output
 
     return check_new_output(out, replace=replace, suffixes=OUT_SUFFIXES)
+
+
+def _over_file(file_items, cli_items: list, where: str) -> list:
+    """The run file's effects with the command line's on top: a command-line effect replaces the file's effect of
+    the same kind on the same joint (command-line options override the file), said on stderr."""
+    from .config import effect_key, parse_effects, refuse_repeats
+
+    file_specs = parse_effects(file_items, f"{where}: effects")
+    cli_specs = parse_effects(cli_items, "command line: effects")
+    refuse_repeats(cli_specs, "command line: effects")
+    given = {effect_key(e): e for e in cli_specs}
+    kept = []
+    for item, spec in zip(file_items or [], file_specs):
+        if effect_key(spec) in given:
+            print(f"note: the command line's {given[effect_key(spec)].describe()} replaces {where}'s "
+                  f"{spec.describe()}", file=sys.stderr)
+        else:
+            kept.append(item)
+    return kept + cli_items
 
 
 def _parse_effect_arg(spec: str) -> dict:
