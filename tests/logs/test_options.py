@@ -49,6 +49,11 @@ def test_manifest_with_per_log_options(tmp_path):
     ("format: rtde\nlogs: [{path: a.csv, payload: 1}]\n", "logs[0]: unknown key 'payload'"),
     ("format: nist\nlogs: [{path: a.csv, payload_kg: 1}]\n", "logs[0]: --payload-kg applies to --format rtde only"),
     ("format: csv\nlogs: [a.csv]\n", "format 'csv' is not one of"),
+    # the manifest's key path named, as for every other key (was the bare payload range / "a.csv: no such file")
+    ("format: rtde\ntcp_offset_m: [0, 0, 0]\nlogs: [{path: a.csv, payload_kg: -0.5}]\n",
+     "robot.yaml: logs[0]: payload_kg: payload.mass_kg = -0.5 is out of range [0, 5] kg"),
+    ("format: rtde\npayload_kg: 0\ntcp_offset_m: [0, 0, 0]\nlogs: [a.csv]\n",
+     "robot.yaml: logs[0]: a.csv: no such file (a log's path is read from the manifest's folder, "),
 ])
 def test_bad_manifest_is_one_line(tmp_path, capsys, text, message):
     m = tmp_path / "robot.yaml"

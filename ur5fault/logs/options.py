@@ -131,6 +131,10 @@ def _entry(item: dict, data: dict, args: argparse.Namespace, path: Path, w: str,
     if tcp is not None and (not isinstance(tcp, (list, tuple)) or len(tcp) != 3):
         raise ParameterError(f"{w}tcp_offset_m = {tcp!r} must be 3 numbers [m]")
     _check_payload_options(fmt, payload, tcp, w)
+    if payload is not None and payload != UNKNOWN:  # the payload effect's range, named by the manifest's key path
+        from ..sim.effects import make_effect
+
+        make_effect("payload", where=f"{w}payload_kg", mass_kg=payload)
     return LogEntry(path, fmt, payload, None if tcp is None else tuple(tcp),  # type: ignore[arg-type]
                     check_bool(item.get("hold_out", False), f"{w}hold_out"))
 
@@ -168,7 +172,11 @@ def _manifest(path: Path, args: argparse.Namespace, held: Sequence[str], used: s
         bad = sorted(set(item) - set(LOG_KEYS))
         if bad:
             raise ParameterError(f"{w}unknown key {bad[0]!r} (keys: {', '.join(LOG_KEYS)})")
-        out.append(_entry(item, data, args, path.parent / str(item["path"]), w, used))
+        file = path.parent / str(item["path"])
+        out.append(_entry(item, data, args, file, w, used))  # the options first: they need no file
+        if not file.exists():
+            raise ParameterError(f"{w}{item['path']}: no such file (a log's path is read from the manifest's folder, "
+                                 f"{path.parent.resolve()})")
     return out + [_entry({"hold_out": True}, data, args, Path(p), f"--hold-out {p}: ", used) for p in held]
 
 
