@@ -61,7 +61,7 @@ def test_bad_yaml_files(tmp_path):
         "key.yaml": ("trajectori: pick_and_place\n",
                      "unknown key 'trajectori' (did you mean 'trajectory'?); valid: duration_s,"),
         "type.yaml": ("seed: -3\n", "seed = -3 must be a non-negative integer"),
-        "param.yaml": ("params: {gear: {stiffness_Nm_per_rad: -1}}\n", "gear.stiffness_Nm_per_rad[1] = -1"),
+        "param.yaml": ("params: {gear: {stiffness_Nm_per_rad: -1}}\n", "gear.stiffness_Nm_per_rad = -1"),
     }
     for name, (text, message) in cases.items():
         f = tmp_path / name

@@ -101,7 +101,7 @@ CAMPAIGN = [
     ("string-as-number", "base: {payload_kg: '2'}\n" + GOOD, "base.payload_kg = '2' must be a number in [0, 5] kg"),
     ("bool-as-number", "batch_size: true\n" + GOOD, "batch_size = True must be an integer in [1, 1024]"),
     ("bool-in-sweep", "sweep: {temperature_C: [yes]}\nname: x\n", "temperature_C = True must be a number"),
-    ("param-string", "base: {params: {gear: {ratio: '50'}}}\n" + GOOD, "gear.ratio[1] = '50' must be a number"),
+    ("param-string", "base: {params: {gear: {ratio: '50'}}}\n" + GOOD, "gear.ratio = '50' must be a number"),
     ("params-list", "base: {params: [1, 2]}\n" + GOOD, "base.params = [1, 2] must be a mapping"),
     ("effects-mapping", "base: {effects: {effect: backlash}}\n" + GOOD, "base.effects: expected a list of effects"),
     # every run has a payload_kg (2 kg unless given), applied after the base effects: the effect would be lost

@@ -63,7 +63,7 @@ BAD = [
     ("zip: [{seed: [0, 1], payload_kg: [1.0]}]\n", "zipped lists must have equal lengths, got [1, 2]"),
     ("trajectory: zigzag\n", "unknown trajectory 'zigzag'; valid: hold, joint_sweep, pick_and_place"),
     ("batch_size: 0\n", "batch_size = 0 must be an integer in [1, 1024]"),
-    ("base: {params: {gear: {ratio: 0}}}\n", "gear.ratio[1] = 0 is out of range"),
+    ("base: {params: {gear: {ratio: 0}}}\n", "gear.ratio = 0 is out of range"),
 ]
 
 

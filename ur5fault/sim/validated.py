@@ -92,7 +92,8 @@ class Validated:
             n = meta["length"]
             if n is not None:
                 if n == N_JOINTS and isinstance(value, (str, int, float)) and not isinstance(value, bool):
-                    value = (value,) * N_JOINTS  # a scalar applies to every joint
+                    # a scalar applies to every joint: checked once, under its own name (not as element [1])
+                    value = (_check_scalar(where, value, meta),) * N_JOINTS
                 if isinstance(value, (str, int, float)) or not hasattr(value, "__len__"):
                     raise ParameterError(f"{where} = {value!r} must be a list of {n} values")
                 value = tuple(value)
