@@ -76,6 +76,13 @@ def test_a_group_on_both_sides_is_refused():
         load_dataset(df)
 
 
+def test_a_campaign_without_a_split_is_named_as_such():
+    df = synthetic()
+    df["split"] = "train"  # a campaign without `split:` (make campaign's default)
+    with pytest.raises(ConfigFileError, match=rf"^no test split: all {len(df)} runs are on the train side"):
+        load_dataset(df)
+
+
 def test_an_all_nan_feature_is_left_out_and_said_so():
     df = synthetic()
     df["enc_mismatch_hyst_rad_j4"] = np.nan  # was: scikit-learn ValueError

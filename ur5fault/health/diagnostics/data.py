@@ -108,6 +108,10 @@ def load_dataset(features: pd.DataFrame | str | Path, feature_set: str = "paper"
     if both:
         raise ConfigFileError(f"split groups on both sides: {', '.join(sorted(both)[:5])}")
     train, test = df[df["split"] == "train"].reset_index(drop=True), df[df["split"] == "test"].reset_index(drop=True)
+    if test.empty:  # a campaign without `split:` puts every run on the train side
+        raise ConfigFileError(f"no test split: all {len(train)} runs are on the train side (a campaign without "
+                              "'split:'); benchmark a campaign that splits its runs, e.g. diagnostics_reduced or "
+                              "diagnostics")
     for name, side in (("train", train), ("test", test)):
         healthy = (side["fault"] == "healthy").sum()
         if healthy == 0 or healthy == len(side):
