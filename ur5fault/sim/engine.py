@@ -184,9 +184,12 @@ class Simulator:
         _log.info("simulating %d run(s) x %d physics steps of %g s on %s (drive %s, stepper %s, %d thread(s))",
                   len(runs), n_steps, dt, trajectory.name, self.drive, self.stepper, self.nthread)
         t0 = time.perf_counter()
+        from .mjlog import no_log_file
         from .mjtimers import timers_off
 
-        with timers_off():  # MuJoCo's stage timers cost a quarter of a step here and are never read
+        # MuJoCo's stage timers cost a quarter of a step here and are never read; its log file would put a
+        # MUJOCO_LOG.TXT in the user's folder for every unstable run, whose status the result records anyway
+        with timers_off(), no_log_file():
             res = _integrate(self, trajectory, list(runs), a, n_steps, log_every, progress)
         _log.info("simulated %d run(s) in %.2f s wall; status: %s", len(runs), time.perf_counter() - t0,
                   ", ".join(f"{r}={s}" for r, s in zip(res.run_ids, res.status)) if len(runs) <= 8
