@@ -57,6 +57,10 @@ def test_benchmark_files_and_the_model_beats_the_population_baseline(tmp_path, c
     test_ids = set(df.loc[df["split"] == "test", "unit_id"])
     assert set(pred["unit_id"]) == test_ids
     assert len(pred) == int(((df["split"] == "test") & (df["rul_cycles"] > 0)).sum())
+    # without --out the report goes inside the campaign folder, as `ur5fault benchmark DIR`'s (was DIR/..: a user's
+    # results/mylife wrote results/benchmark, shared by every life campaign there)
+    assert main(["prognose", str(fleet)]) == 0
+    assert (fleet / "benchmark" / "metrics.json").is_file() and not (tmp_path / "benchmark").exists()
 
 
 def test_benchmark_is_deterministic_under_its_seed(tmp_path):

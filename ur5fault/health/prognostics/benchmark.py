@@ -211,7 +211,8 @@ def run_prognose(folder: Path, out: Path | None = None, *, seed: int = 0, twin: 
                  twin_model: Overlay | None = None, twin_calibration: str = "pooled",
                  twin_cache: Path | None = None, twin_friction: str = "learned",
                  replace: bool = True) -> dict[str, Any]:
-    """The benchmark on a life-campaign folder; returns the metrics written to ``out/metrics.json``.
+    """The benchmark on a life-campaign folder; returns the metrics written to ``out/metrics.json`` (default ``out``:
+    ``folder/benchmark``).
     ``twin_model``: the overlay the twin runs instead of the packaged model (a model error the twin carries);
     ``twin_calibration``: one of twin_rul.CALIBRATIONS; ``twin_cache``: the file of the twin's
     radii (twin_cache.py), default ``out/twin_radii.json``; ``twin_friction``: one of :data:`TWIN_FRICTION`;
@@ -221,7 +222,7 @@ def run_prognose(folder: Path, out: Path | None = None, *, seed: int = 0, twin: 
         raise ConfigFileError(f"twin friction must be one of {', '.join(TWIN_FRICTION)}, not {twin_friction!r}")
     t0 = time.perf_counter()
     folder = Path(folder)
-    out = Path(out) if out is not None else folder.parent / "benchmark"
+    out = Path(out) if out is not None else folder / "benchmark"  # as `ur5fault benchmark DIR` writes DIR/benchmark
     check_new_output(out, folder=True, results=RESULT_FILES, replace=replace)  # before reading or simulating
     df, manifest = load_inspections(folder)
     failure = Failure(**manifest["failure"]) if isinstance(manifest.get("failure"), dict) else Failure()

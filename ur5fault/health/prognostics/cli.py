@@ -16,7 +16,7 @@ def register(sub) -> None:
     p = sub.add_parser("prognose", help="benchmark remaining-useful-life estimators on a life campaign's held-out "
                                         "units (report.md, metrics.json, figures)")
     p.add_argument("dir", help="life campaign folder (with inspections.parquet), e.g. results/prognostics/fleet")
-    p.add_argument("--out", help="report folder (default: DIR/../benchmark)")
+    p.add_argument("--out", help="report folder (default: DIR/benchmark)")
     p.add_argument("--replace", action="store_true",
                    help="replace an earlier report in the report folder (default: refused, nothing a user made is "
                         "lost silently; the twin's radius cache there is read and extended either way)")
