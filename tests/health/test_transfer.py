@@ -14,7 +14,7 @@ from ur5fault.health.diagnostics.transfer import (  # noqa: E402
     compare,
     group_bootstrap_auc,
     lines,
-    roc_auc,
+    rank_auc,
     subset_spread,
 )
 
@@ -25,8 +25,12 @@ def test_auc_is_scikit_learns_with_ties():
         y = rng.random(n) < 0.4
         y[0], y[1] = True, False
         s = np.round(rng.normal(size=n) + y, 1)  # rounded: many ties across the classes
-        assert roc_auc(y, s) == pytest.approx(roc_auc_score(y, s), abs=1e-12)
-    assert math.isnan(roc_auc(np.ones(5, bool), np.arange(5.0)))
+        assert rank_auc(y, s) == pytest.approx(roc_auc_score(y, s), abs=1e-12)
+    assert math.isnan(rank_auc(np.ones(5, bool), np.arange(5.0)))
+    # labels as 0/1 integers read as labels, not as indices (a bool-only ranking once gave 1.83 here)
+    assert rank_auc(np.array([0, 1, 0, 1, 1]), np.array([0.1, 0.9, 0.2, 0.8, 0.7])) == 1.0
+    with pytest.raises(ValueError, match="not finite"):
+        rank_auc(np.array([0, 1]), np.array([0.1, np.nan]))
 
 
 def runs(n_groups, rng, group_sd, shift=1.0, per_group=20):
@@ -59,12 +63,22 @@ def test_same_family_covers_zero_a_worse_family_does_not():
     w = compare(ref, worse, seed=0, tolerance=0.03, n_boot=500)
     assert w["difference_interval"][0] > 0.1 and w["share_within_tolerance"] < 0.01
     text = "\n".join(lines(w))
-    assert "outside the tolerance of 0.03" in text and "| 10 |" in text
+    assert "interval lies above the tolerance of 0.03" in text and "| 10 |" in text
 
 
 def test_subset_spread():
     rng = np.random.default_rng(2)
     y, s, g = runs(12, rng, group_sd=1.0)
     sub = subset_spread(y, s, g, 4, 200, rng)
-    assert sub["sd"] > 0 and sub["range_5_95"][0] < roc_auc(y, s) < sub["range_5_95"][1]
+    assert sub["sd"] > 0 and sub["range_5_95"][0] < rank_auc(y, s) < sub["range_5_95"][1]
     assert math.isnan(subset_spread(y, s, g, 12, 10, rng)["sd"])  # as many motions as there are: no spread
+
+
+def test_one_group_gives_no_interval_and_says_so():
+    rng = np.random.default_rng(4)
+    ref = runs(10, rng, group_sd=0.3)
+    one = runs(1, rng, group_sd=0.3, per_group=40)  # a campaign of one fixed motion
+    t = compare(ref, one, seed=0, tolerance=0.03, n_boot=200)
+    assert math.isfinite(t["auc_other"]) and all(math.isnan(v) for v in t["auc_other_interval"])
+    assert all(math.isnan(v) for v in t["difference_interval"]) and math.isnan(t["share_within_tolerance"])
+    assert "There is no interval: a side holds fewer than two groups" in "\n".join(lines(t))
