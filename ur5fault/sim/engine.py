@@ -13,6 +13,7 @@ The step order is in :mod:`ur5fault.sim.loops`.
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import numbers
 import time
@@ -43,7 +44,7 @@ from .multibody import BatchMultibody, LoopMultibody
 from .params import RobotParams, load_params
 from .result import SimResult
 from .run_arrays import RunArrays, build_run_arrays
-from .runspec import RunSpec  # noqa: F401  (engine.RunSpec stays importable: users build batches with it)
+from .runspec import MAX_SEED, RunSpec  # noqa: F401  (engine.RunSpec stays importable: users build batches with it)
 from .trajectories import Trajectory
 
 _log = logging.getLogger(__name__)
@@ -170,7 +171,7 @@ class Simulator:
         """
         if not runs:
             raise ParameterError("run() needs at least one RunSpec")
-        _check_runs(runs)
+        runs = _checked_runs(runs)
         p = self.params
         dt = p.physics_dt_s
         log_every = round(log_period_s / dt)
@@ -200,18 +201,22 @@ class Simulator:
         return res
 
 
-def _check_runs(runs: Sequence[RunSpec]) -> None:
-    """Each run a RunSpec with a non-negative integer seed and its own run_id (the result finds runs by id: a second
-    run of one id would be unreachable by name)."""
+def _checked_runs(runs: Sequence[RunSpec]) -> list[RunSpec]:
+    """The runs, each a RunSpec with its own run_id (the result finds runs by id: a second run of one id would be
+    unreachable by name) and an integer seed in [0, MAX_SEED], made a Python int (a numpy integer would not go
+    into the result file's JSON metadata)."""
     seen: set[str] = set()
+    out = []
     for i, r in enumerate(runs):
         if not isinstance(r, RunSpec):
             raise ParameterError(f"runs[{i}] = {type(r).__name__}: each run is a RunSpec(run_id, seed, effects)")
-        if isinstance(r.seed, bool) or not isinstance(r.seed, numbers.Integral) or r.seed < 0:
-            raise ParameterError(f"RunSpec {r.run_id!r}: seed = {r.seed!r} must be a non-negative integer")
+        if isinstance(r.seed, bool) or not isinstance(r.seed, numbers.Integral) or not 0 <= r.seed <= MAX_SEED:
+            raise ParameterError(f"RunSpec {r.run_id!r}: seed = {r.seed!r} must be an integer in [0, {MAX_SEED}]")
         if r.run_id in seen:
             raise ParameterError(f"runs[{i}]: run_id {r.run_id!r} is given twice; give each run its own run_id")
         seen.add(r.run_id)
+        out.append(r if type(r.seed) is int else dataclasses.replace(r, seed=int(r.seed)))
+    return out
 
 
 def _integrate(sim: Simulator, traj: Trajectory, runs: list[RunSpec], a: RunArrays, n_steps: int,

@@ -6,6 +6,9 @@ import dataclasses
 
 from .effects import EffectSpec
 
+#: the largest noise seed: what a Parquet int64 column (the run files' seed) holds
+MAX_SEED = 2**63 - 1
+
 
 @dataclasses.dataclass(frozen=True)
 class RunSpec:
