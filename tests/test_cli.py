@@ -173,3 +173,28 @@ def test_simulate_command_line_effects_replace_the_files_and_errors_name_their_s
     assert main(["simulate", "--effect", "payload:mass_kg=1", "--effect", "payload:mass_kg=2", "--out", str(out),
                  "--replace"]) == 2
     assert capsys.readouterr().err.strip().endswith("give each effect once")
+    # the file's own repeat is the file's error under its own indices, whatever the command line adds
+    rep = tmp_path / "rep.yaml"
+    rep.write_text("effects: [{effect: backlash, joint: 1, backlash_deg: 0.1}, {effect: coulomb_friction, joint: 2, "
+                   "scale: 1.1}, {effect: coulomb_friction, joint: 2, scale: 1.2}]\n")
+    assert main(["simulate", "--config", str(rep), "--backlash", "2:0.3", "--out", str(out), "--replace"]) == 2
+    assert "rep.yaml: effects[2]: coulomb_friction on shoulder_lift_joint (scale=1.2) repeats rep.yaml: effects[1]" \
+        in capsys.readouterr().err
+    # a payload from either side replaces the other side's, said so; both on one side is refused
+    pay = tmp_path / "pay.yaml"
+    pay.write_text("payload_kg: 1\n")
+    assert main(["simulate", "--config", str(pay), "--effect", "payload:mass_kg=3", "--duration-s", "0.05",
+                 "--quiet", "--out", str(out), "--replace"]) == 0
+    err = capsys.readouterr().err
+    assert "note: the command line's payload (mass_kg=3) replaces pay.yaml's payload_kg = 1" in err
+    assert "effects: payload (mass_kg=3)\n" in err
+    pay.write_text("effects: [{effect: payload, mass_kg: 1}]\n")
+    assert main(["simulate", "--config", str(pay), "--payload-kg", "2", "--duration-s", "0.05", "--quiet", "--out",
+                 str(out), "--replace"]) == 0
+    err = capsys.readouterr().err
+    assert "note: the command line's payload_kg = 2.0 replaces pay.yaml's payload (mass_kg=1)" in err
+    assert "effects: payload (mass_kg=2)\n" in err
+    pay.write_text("payload_kg: 1\neffects: [{effect: payload, mass_kg: 2}]\n")
+    assert main(["simulate", "--config", str(pay), "--out", str(out), "--replace"]) == 2
+    err = capsys.readouterr().err
+    assert "pay.yaml: effects[0]: payload (mass_kg=2) and payload_kg = 1 both set the payload" in err

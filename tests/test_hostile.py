@@ -157,9 +157,11 @@ SIMULATE = [
     ("effect-arg-repeated", ["--effect", "coulomb_friction@2:scale=1.5", "--effect", "coulomb_friction@2:scale=1.2"],
      "repeats command line: effects[0] (coulomb_friction on shoulder_lift_joint (scale=1.5)); give each effect once"),
     ("payload-effect-and-option", ["--effect", "payload:mass_kg=1", "--payload-kg", "2"],
-     "command line: effects[0]: payload (mass_kg=1) and payload_kg = 2.0 both set the payload: give it once"),
+     "command line: effects[0]: payload (mass_kg=1) and payload_kg = 2.0 (--payload-kg / --temperature-C) both set "
+     "the payload: give it once"),
     ("temperature-effect-and-option", ["--effect", "temperature:temperature_C=40", "--temperature-C", "20"],
-     "effects[0]: temperature (temperature_C=40) and temperature_C = 20.0 both set the temperature"),
+     "effects[0]: temperature (temperature_C=40) and temperature_C = 20.0 (--payload-kg / --temperature-C) both set "
+     "the temperature"),
     ("out-arg-unwritable", ["--out", "/proc/ur5fault-test/run.parquet"], "cannot write in /proc"),
     ("out-arg-folder", ["--out", "{tmp}"], "is a folder; give a file name"),
     ("config-bomb", ["--config", "{tmp}/bomb.yaml"], "aliases expand to more than"),

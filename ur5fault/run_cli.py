@@ -38,13 +38,12 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     from .sim.engine import RunSpec, Simulator
     from .sim.params import read_yaml
 
-    data = read_yaml(Path(args.config)) if args.config else {}
+    file_data = dict(read_yaml(Path(args.config))) if args.config else {}
     where = Path(args.config).name if args.config else "command line"
-    for key, val in (("trajectory", args.trajectory), ("seed", args.seed), ("payload_kg", args.payload_kg),
-                     ("temperature_C", args.temperature_C), ("duration_s", args.duration_s),
-                     ("log_period_s", args.log_period_s)):
-        if val is not None:
-            data[key] = val
+    given = {key: val for key, val in (("trajectory", args.trajectory), ("seed", args.seed),
+                                       ("payload_kg", args.payload_kg), ("temperature_C", args.temperature_C),
+                                       ("duration_s", args.duration_s), ("log_period_s", args.log_period_s))
+             if val is not None}
     effects: list = []  # the command line's, validated apart from the file's so that errors name their source
     for spec in args.backlash or []:
         joint, _, deg = spec.partition(":")
@@ -55,7 +54,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         effects.append({"effect": "backlash", "joint": joint, "backlash_deg": value})
     for spec in args.effect or []:
         effects.append(_parse_effect_arg(spec))
-    data["effects"] = _over_file(data.get("effects"), effects, where) if args.config else effects
+    data = _over_file(file_data, given, effects, where)
     overlay = Overlay.load(args.model) if args.model else None
     cfg = build_run_config(data, where, overlay)
     if overlay is not None:
@@ -94,23 +93,42 @@ def _check_out_file(out: Path, replace: bool) -> Path:
     return check_new_output(out, replace=replace, suffixes=OUT_SUFFIXES)
 
 
-def _over_file(file_items, cli_items: list, where: str) -> list:
-    """The run file's effects with the command line's on top: a command-line effect replaces the file's effect of
-    the same kind on the same joint (command-line options override the file), said on stderr."""
-    from .config import effect_key, parse_effects, refuse_repeats
+def _over_file(file_data: dict, given: dict, cli_items: list, where: str) -> dict:
+    """The run configuration: the file's keys and effects with the command line's options (``given``) and effects
+    on top. Each side is checked on its own first, so that an error names its source and index. A command-line
+    effect replaces the file's effect of the same kind on the same joint, a command-line ``--payload-kg`` the
+    file's payload effect and a command-line payload effect the file's ``payload_kg`` (temperature alike), each
+    said on stderr: command-line options override the file."""
+    from .config import CONDITION_EFFECTS, effect_key, parse_effects, refuse_condition_effects, refuse_repeats
 
+    file_items = file_data.get("effects")
     file_specs = parse_effects(file_items, f"{where}: effects")
+    refuse_repeats(file_specs, f"{where}: effects")
+    refuse_condition_effects(file_specs, f"{where}: effects", file_data)
     cli_specs = parse_effects(cli_items, "command line: effects")
     refuse_repeats(cli_specs, "command line: effects")
-    given = {effect_key(e): e for e in cli_specs}
+    refuse_condition_effects(cli_specs, "command line: effects", given, " (--payload-kg / --temperature-C)")
+    data = {**file_data, **given}
+    by_key = {effect_key(e): e for e in cli_specs}
     kept = []
     for item, spec in zip(file_items or [], file_specs):
-        if effect_key(spec) in given:
-            print(f"note: the command line's {given[effect_key(spec)].describe()} replaces {where}'s "
+        key = CONDITION_EFFECTS.get(spec.name)
+        if effect_key(spec) in by_key:
+            print(f"note: the command line's {by_key[effect_key(spec)].describe()} replaces {where}'s "
                   f"{spec.describe()}", file=sys.stderr)
+        elif key in given:
+            print(f"note: the command line's {key} = {given[key]!r} replaces {where}'s {spec.describe()}",
+                  file=sys.stderr)
         else:
             kept.append(item)
-    return kept + cli_items
+    for spec in cli_specs:
+        key = CONDITION_EFFECTS.get(spec.name)
+        if key is not None and file_data.get(key) is not None:
+            print(f"note: the command line's {spec.describe()} replaces {where}'s {key} = {file_data[key]!r}",
+                  file=sys.stderr)
+            data.pop(key)
+    data["effects"] = kept + cli_items
+    return data
 
 
 def _parse_effect_arg(spec: str) -> dict:
