@@ -107,6 +107,10 @@ CAMPAIGN = [
     # every run has a payload_kg (2 kg unless given), applied after the base effects: the effect would be lost
     ("payload-effect-in-base", "base: {effects: [{effect: payload, mass_kg: 1}]}\n" + GOOD,
      "base.effects[0]: payload (mass_kg=1) and payload_kg = 2.0 (every run has one"),
+    ("payload-effect-swept", "sweep: {payload.mass_kg: [0.5, 1.0]}\nname: x\n",
+     "sweep.payload.mass_kg: 'payload.mass_kg' is set by every run's payload_kg: sweep payload_kg instead"),
+    ("temperature-effect-zipped", "zip: [{temperature.temperature_C: [20, 30], seed: [0, 1]}]\nname: x\n",
+     "'temperature.temperature_C' is set by every run's temperature_C: sweep temperature_C instead"),
     ("temperature-effect-in-base", "base: {temperature_C: 30, effects: [{effect: temperature, temperature_C: 40}]}\n"
      + GOOD, "base.effects[0]: temperature (temperature_C=40) and temperature_C = 30"),
     ("trajectory-seconds-huge", "trajectory: {name: hold, seconds: 1e9}\nname: x\n",

@@ -13,7 +13,7 @@ import json
 from collections.abc import Iterable, Mapping, Sequence
 from typing import Any
 
-from ..config import check_mapping, check_seed, parse_trajectory
+from ..config import CONDITION_EFFECTS, check_mapping, check_seed, parse_trajectory
 from ..errors import ParameterError, UnknownNameError
 from ..sim.axes import joint_index
 from ..sim.effect_types import EffectKey
@@ -86,6 +86,9 @@ def check_value(key: Any, value: Any, where: str) -> Any:
         valid = list(CONDITION_KEYS) + [f"{e}.<param>" for e in REGISTRY]
         raise UnknownNameError("sweep key", key if isinstance(key, str) else short(key), valid, where)
     eff = REGISTRY[ek.effect]
+    if ek.effect in CONDITION_EFFECTS:  # every run's own payload_kg / temperature_C would be applied after it
+        raise ParameterError(f"{where}: {key!r} is set by every run's {CONDITION_EFFECTS[ek.effect]}: sweep "
+                             f"{CONDITION_EFFECTS[ek.effect]} instead")
     if ek.param == "joint":
         if not eff.per_joint:
             raise ParameterError(f"{where}: effect {ek.effect!r} acts on the whole robot and takes no joint")
