@@ -78,8 +78,10 @@ def test_a_group_on_both_sides_is_refused():
 
 def test_a_campaign_without_a_split_is_named_as_such():
     df = synthetic()
-    df["split"] = "train"  # a campaign without `split:` (make campaign's default)
-    with pytest.raises(ConfigFileError, match=rf"^no test split: all {len(df)} runs are on the train side"):
+    df["split"] = "train"  # one motion, as make campaign's default: the split by motion has one group to give
+    with pytest.raises(ConfigFileError, match=rf"^no test runs: the {len(df)} runs with status ok are in "
+                                              rf"{df['split_group'].nunique()} split group\(s\), all on the train side "
+                                              r"\(a campaign of one motion"):
         load_dataset(df)
 
 

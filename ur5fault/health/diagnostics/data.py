@@ -108,10 +108,14 @@ def load_dataset(features: pd.DataFrame | str | Path, feature_set: str = "paper"
     if both:
         raise ConfigFileError(f"split groups on both sides: {', '.join(sorted(both)[:5])}")
     train, test = df[df["split"] == "train"].reset_index(drop=True), df[df["split"] == "test"].reset_index(drop=True)
-    if test.empty:  # a campaign without `split:` puts every run on the train side
-        raise ConfigFileError(f"no test split: all {len(train)} runs are on the train side (a campaign without "
-                              "'split:'); benchmark a campaign that splits its runs, e.g. diagnostics_reduced or "
-                              "diagnostics")
+    if test.empty:  # e.g. one fixed motion: the split by motion puts its one group on the train side
+        n_groups = train["split_group"].nunique()
+        failed = int((features["split"] == "test").sum())
+        raise ConfigFileError(f"no test runs: the {len(train)} runs with status ok are in {n_groups} split group(s), "
+                              "all on the train side"
+                              + (f", and the {failed} test run(s) did not finish ok" if failed else
+                                 " (a campaign of one motion cannot be split by motion)")
+                              + "; benchmark a campaign that splits its runs, e.g. diagnostics_reduced or diagnostics")
     for name, side in (("train", train), ("test", test)):
         healthy = (side["fault"] == "healthy").sum()
         if healthy == 0 or healthy == len(side):
