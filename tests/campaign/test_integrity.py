@@ -147,7 +147,8 @@ def test_corrupted_run_file_is_named_and_simulated_again(tmp_path, done):
     data[mid:mid + 16] = b"\x00" * 16
     victim.write_bytes(bytes(data))
     info = status(out)
-    assert info["runs"]["bad"] == 1 and info["state"].startswith("complete, with problems")
+    assert info["runs"]["bad"] == 1 and info["state"] == "complete" and info["sound"] is False
+    assert info["advice"] == "1 damaged run file(s): `ur5fault campaign run` on the campaign again simulates them"
     assert any(victim.name in p and "checksum" in p for p in info["problems"]), info["problems"]
     r = subprocess.run([sys.executable, "-m", "ur5fault.cli", "campaign", "status", str(out)], capture_output=True,
                        text=True, timeout=120)
@@ -156,7 +157,7 @@ def test_corrupted_run_file_is_named_and_simulated_again(tmp_path, done):
     run_campaign(load_campaign(tiny(tmp_path)), out, jobs=1, progress=False, note=notes.append)
     assert any(victim.name in n and "simulating it again" in n for n in notes), notes
     pd.testing.assert_frame_equal(_results(pd.read_parquet(out / "features.parquet")), _results(ref))
-    assert status(out)["runs"]["ok"] == 3 and status(out)["state"] == "complete"
+    assert status(out)["runs"]["ok"] == 3 and status(out)["sound"] is True and status(out)["advice"] is None
 
 
 def test_run_file_damaged_after_the_scan_is_simulated_again(tmp_path, done, monkeypatch):

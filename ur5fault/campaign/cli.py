@@ -108,7 +108,7 @@ def cmd_status(args: argparse.Namespace) -> int:
     print(json.dumps(info, indent=2, default=str))
     runs = info.get("runs") or info.get("inspections") or {}   # a life campaign's files are inspections
     table = info.get("inspections_table" if info.get("kind") == "life" else "features") or {}
-    stale = str(info.get("state")).startswith("complete") and table.get("state") != "ok"
+    stale = info.get("state") == "complete" and table.get("state") != "ok"
     damaged = (info.get("manifest") or {}).get("state") == "bad"
     return 1 if runs.get("bad") or runs.get("changed") or stale or damaged else 0
 

@@ -138,10 +138,25 @@ def status(out: Path) -> dict[str, Any]:
                 problems.append(f"runs/{p.name}: {c.state}: {c.detail}")
         info["runs"] = counts
     info["problems"] = _listed(problems)
-    if info["state"] == "complete" and (problems or damaged or (info.get("features") or {}).get("state") not in (
-            None, "ok")):  # the campaign ran to its end, but what it left is not all sound now
-        info["state"] = "complete, with problems: `ur5fault campaign run` again simulates the damaged runs again"
+    runs = info.get("runs") or {}
+    info["sound"], info["advice"] = _advice(info, runs.get("bad", 0), runs.get("changed", 0), bool(damaged))
     return info
+
+
+def _advice(info: dict[str, Any], bad: int, changed: int, damaged: bool) -> tuple[bool, str | None]:
+    """Whether everything the folder holds is sound now (a ``complete`` state says only that the campaign ran to
+    its end), and what to do where it is not."""
+    todo = []
+    if bad:
+        todo.append(f"{bad} damaged run file(s): `ur5fault campaign run` on the campaign again simulates them")
+    if changed:
+        todo.append(f"{changed} run file(s) made under other settings: `campaign run --replace-changed` "
+                    "simulates them again with the campaign's (without it they are kept and the run refused)")
+    if damaged:
+        todo.append("manifest.json fails its checksum: `ur5fault campaign run` on the campaign rewrites it")
+    if info.get("state") == "complete" and (info.get("features") or {}).get("state") not in (None, "ok"):
+        todo.append("features.parquet does not hold the stored runs: `ur5fault campaign run` rebuilds it from them")
+    return not todo, "; ".join(todo) or None
 
 
 def _check_features(out: Path, identities: dict[str, str]) -> dict[str, Any]:
