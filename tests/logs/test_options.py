@@ -52,6 +52,8 @@ def test_manifest_with_per_log_options(tmp_path):
     # the manifest's key path named, as for every other key (was the bare payload range / "a.csv: no such file")
     ("format: rtde\ntcp_offset_m: [0, 0, 0]\nlogs: [{path: a.csv, payload_kg: -0.5}]\n",
      "robot.yaml: logs[0]: payload_kg: payload.mass_kg = -0.5 is out of range [0, 5] kg"),
+    ("format: rtde\npayload_kg: 7\ntcp_offset_m: [0, 0, 0]\nlogs: [a.csv]\n",
+     "robot.yaml: logs[0]: payload_kg (from robot.yaml: payload_kg): payload.mass_kg = 7 is out of range [0, 5] kg"),
     ("format: rtde\npayload_kg: 0\ntcp_offset_m: [0, 0, 0]\nlogs: [a.csv]\n",
      "robot.yaml: logs[0]: a.csv: no such file (a log's path is read from the manifest's folder, "),
 ])

@@ -108,15 +108,22 @@ CLI_DEFAULTS = (("fmt", "--format", "format"), ("payload_kg", "--payload-kg", "p
                 ("tcp_offset_m", "--tcp-offset-m", "tcp_offset_m"))
 
 
-def _entry(item: dict, data: dict, args: argparse.Namespace, path: Path, w: str, used: set[str]) -> LogEntry:
+def _entry(item: dict, data: dict, args: argparse.Namespace, path: Path, w: str, used: set[str],
+           top: str) -> LogEntry:
     """One log of a manifest (``data``; ``item`` its own options, ``path`` its file): the log's own value of each
-    option, else the manifest's, else the command line's; ``used`` collects the command-line options it took."""
+    option, else the manifest's, else the command line's; ``used`` collects the command-line options it took.
+    ``w``: the log's place in the manifest, ``top``: the manifest's, for messages."""
+    source: dict[str, str] = {}  # where each option's value came from, for its error message
+
     def value(attr: str, key: str):
         if key in item:
+            source[key] = f"{w}{key}"
             return item[key]
         if key in data:
+            source[key] = f"{w}{key} (from {top}{key})"
             return data[key]
         used.add(attr)
+        source[key] = f"{w}{key} (from {dict((a, f) for a, f, _ in CLI_DEFAULTS)[attr]})"
         return getattr(args, attr)
 
     fmt = value("fmt", "format")
@@ -134,7 +141,7 @@ def _entry(item: dict, data: dict, args: argparse.Namespace, path: Path, w: str,
     if payload is not None and payload != UNKNOWN:  # the payload effect's range, named by the manifest's key path
         from ..sim.effects import make_effect
 
-        make_effect("payload", where=f"{w}payload_kg", mass_kg=payload)
+        make_effect("payload", where=source["payload_kg"], mass_kg=payload)
     return LogEntry(path, fmt, payload, None if tcp is None else tuple(tcp),  # type: ignore[arg-type]
                     check_bool(item.get("hold_out", False), f"{w}hold_out"))
 
@@ -173,11 +180,12 @@ def _manifest(path: Path, args: argparse.Namespace, held: Sequence[str], used: s
         if bad:
             raise ParameterError(f"{w}unknown key {bad[0]!r} (keys: {', '.join(LOG_KEYS)})")
         file = path.parent / str(item["path"])
-        out.append(_entry(item, data, args, file, w, used))  # the options first: they need no file
+        out.append(_entry(item, data, args, file, w, used, f"{path.name}: "))  # the options first: they need no file
         if not file.exists():
             raise ParameterError(f"{w}{item['path']}: no such file (a log's path is read from the manifest's folder, "
                                  f"{path.parent.resolve()})")
-    return out + [_entry({"hold_out": True}, data, args, Path(p), f"--hold-out {p}: ", used) for p in held]
+    return out + [_entry({"hold_out": True}, data, args, Path(p), f"--hold-out {p}: ", used, f"{path.name}: ")
+                  for p in held]
 
 
 def _resolve(args: argparse.Namespace) -> tuple[list[LogEntry], set[str], Path | None]:
