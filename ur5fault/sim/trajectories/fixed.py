@@ -13,6 +13,7 @@ from .base import (
     MIN_SPEED_SCALE,
     UR_DEFAULT_ACCEL_RAD_S2,
     UR_DEFAULT_SPEED_RAD_S,
+    UR_MAX_SPEED_RAD_S,
     Trajectory,
     dwell,
     movej,
@@ -29,11 +30,11 @@ PLACE = (0.5, -2.3794, -1.5444, -0.7885, 1.5708, 0.9)
 
 
 def check_speed_scale(speed_scale: float) -> None:
-    """A fixed motion's speed and acceleration factor: up to the UR5's maximum joint speed (3.0 x the default)."""
+    """A fixed motion's speed and acceleration factor: up to the UR5's maximum joint speed (3.0006 x the default)."""
     if not MIN_SPEED_SCALE <= speed_scale <= MAX_SPEED_SCALE:
         raise ParameterError(f"speed_scale = {speed_scale} is out of range [{MIN_SPEED_SCALE:g}, "
-                             f"{MAX_SPEED_SCALE:.3g}] (the UR5's maximum joint speed, pi rad/s, over the controller "
-                             "default 1.047 rad/s)")
+                             f"{MAX_SPEED_SCALE:.4g}] (the UR5's maximum joint speed, {UR_MAX_SPEED_RAD_S:.4g} rad/s, "
+                             f"over the controller default {UR_DEFAULT_SPEED_RAD_S:g} rad/s)")
 
 
 def pick_and_place(
