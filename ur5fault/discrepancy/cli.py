@@ -34,7 +34,6 @@ def register(sub) -> None:
     d.set_defaults(func=cmd_discrepancy)
 
 
-
 def held_out_line(name: str, entry: dict) -> str:
     """One log's held-out current RMS after the fit (``summary.json``'s ``per_log`` entry): as multiples of UR's
     own model where the log has its target currents, else in amperes."""
@@ -43,8 +42,9 @@ def held_out_line(name: str, entry: dict) -> str:
     head = f"{entry['role']}: {name}: held-out current RMS after the fit"
     if ur:
         return head + ", as a multiple of UR's own model: " + " / ".join(
-            f"{cur[j] / ur[j]:.2f}" if cur.get(j) and ur.get(j) else "-" for j in cur)
+            f"{cur[j] / ur[j]:.2f}" if cur.get(j) is not None and ur.get(j) else "-" for j in cur)
     return head + f" [A], J1..J{len(cur)}: " + " / ".join("-" if v is None else f"{v:.3f}" for v in cur.values())
+
 
 def cmd_discrepancy(args: argparse.Namespace) -> int:
     from ..config import Overlay
