@@ -109,7 +109,11 @@ def status(out: Path) -> dict[str, Any]:
     if manifest.get("kind") == "life":  # a fleet run to failure (issue 20): inspections, not runs
         from ..health.prognostics.life_status import life_status
 
-        return life_status(out, manifest, info)
+        info = life_status(out, manifest, info)
+        ins = info.get("inspections") or {}
+        info["sound"], info["advice"] = _advice(info, ins.get("bad", 0), ins.get("changed", 0), bool(damaged),
+                                                table_key="inspections_table", what="inspection")
+        return info
     camp = None
     data = manifest.get("campaign_data")
     if isinstance(data, dict):
@@ -143,19 +147,21 @@ def status(out: Path) -> dict[str, Any]:
     return info
 
 
-def _advice(info: dict[str, Any], bad: int, changed: int, damaged: bool) -> tuple[bool, str | None]:
+def _advice(info: dict[str, Any], bad: int, changed: int, damaged: bool, table_key: str = "features",
+            what: str = "run") -> tuple[bool, str | None]:
     """Whether everything the folder holds is sound now (a ``complete`` state says only that the campaign ran to
     its end), and what to do where it is not."""
     todo = []
     if bad:
-        todo.append(f"{bad} damaged run file(s): `ur5fault campaign run` on the campaign again simulates them")
+        todo.append(f"{bad} damaged {what} file(s): `ur5fault campaign run` on the campaign again simulates them")
     if changed:
-        todo.append(f"{changed} run file(s) made under other settings: `campaign run --replace-changed` "
+        todo.append(f"{changed} {what} file(s) made under other settings: `campaign run --replace-changed` "
                     "simulates them again with the campaign's (without it they are kept and the run refused)")
     if damaged:
         todo.append("manifest.json fails its checksum: `ur5fault campaign run` on the campaign rewrites it")
-    if info.get("state") == "complete" and (info.get("features") or {}).get("state") not in (None, "ok"):
-        todo.append("features.parquet does not hold the stored runs: `ur5fault campaign run` rebuilds it from them")
+    if info.get("state") == "complete" and (info.get(table_key) or {}).get("state") not in (None, "ok"):
+        todo.append(f"the {table_key.replace('_table', '')} table does not hold the stored {what}s: `ur5fault "
+                    "campaign run` rebuilds it from them")
     return not todo, "; ".join(todo) or None
 
 

@@ -33,6 +33,7 @@ def test_status_of_a_life_folder_interrupted_complete_and_damaged(tmp_path, caps
     m = run_life(camp, tmp_path, jobs=1, progress=False, note=None)
     rc, info = _status(tmp_path, capsys)
     assert rc == 0 and info["state"] == "complete" and info["problems"] == []
+    assert info["sound"] is True and info["advice"] is None
     assert info["units"]["finished"] == 2 and info["units"]["running"] == 0
     assert info["inspections"]["ok"] == m["n_inspections"]
     assert info["inspections_table"] == {"state": "ok", "rows": m["n_inspections"]}
@@ -49,6 +50,9 @@ def test_status_of_a_life_folder_interrupted_complete_and_damaged(tmp_path, caps
     later = len(list((tmp_path / "runs").glob("u00001_i*.parquet"))) - 2
     assert info["inspections"]["not_reachable"] == later
     assert info["inspections_table"]["state"] == "stale"
+    assert info["state"] == "complete" and info["sound"] is False
+    assert info["advice"].startswith("1 damaged inspection file(s): `ur5fault campaign run` on the campaign again")
+    assert "the inspections table does not hold the stored inspections" in info["advice"]
 
 
 @pytest.mark.slow
