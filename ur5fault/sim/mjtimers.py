@@ -7,48 +7,37 @@ Measured on the Intel 2-core host (``bench/bench_speed.py``, docs/performance.md
 The physics does not read the clock: every state is the same bit for bit either way
 (``tests/sim/test_mjtimers.py``).
 
-``mjcb_time`` is one pointer for the whole process, so the switch counts its users: the first saves the pointer and
-clears it, the last puts it back.  Threads that simulate at once leave the timers off until all are done; a
-viewer's profiler in the same process shows no stage times meanwhile.
+``mjcb_time`` is one pointer for the whole process, so the switch counts its users
+(:class:`.switch.CountedSwitch`): the first saves the pointer and clears it, the last puts it back. Threads that
+simulate at once leave the timers off until all are done; a viewer's profiler in the same process shows no stage
+times meanwhile.
 """
 
 from __future__ import annotations
 
 import ctypes
-import threading
-from collections.abc import Iterator
-from contextlib import contextmanager
 
 from .mjlib import LIB
+from .switch import CountedSwitch
 
 
-class TimerSwitch:
-    """Counts the users of the switched-off timers of one loaded MuJoCo library (``lib``: its ``ctypes.CDLL``)."""
+class TimerSwitch(CountedSwitch):
+    """The switched-off timers of one loaded MuJoCo library (``lib``: its ``ctypes.CDLL``)."""
+
+    _OFF = None  # no clock: MuJoCo skips the timing
 
     def __init__(self, lib: ctypes.CDLL | None) -> None:
+        super().__init__()
         self._pointer = ctypes.c_void_p.in_dll(lib, "mjcb_time") if lib is not None else None
-        self._lock = threading.Lock()
-        self._users = 0
-        self._saved: int | None = None
 
-    @contextmanager
-    def off(self) -> Iterator[None]:
-        """MuJoCo's timers off inside the block, back as they were after the last user leaves."""
-        if self._pointer is None:
-            yield
-            return
-        with self._lock:
-            if self._users == 0:
-                self._saved = self._pointer.value
-                self._pointer.value = None
-            self._users += 1
-        try:
-            yield
-        finally:
-            with self._lock:
-                self._users -= 1
-                if self._users == 0:
-                    self._pointer.value = self._saved
+    def _available(self) -> bool:
+        return self._pointer is not None
+
+    def _read(self) -> int | None:
+        return self._pointer.value  # type: ignore[union-attr]
+
+    def _write(self, value: int | None) -> None:
+        self._pointer.value = value  # type: ignore[union-attr]
 
     def is_on(self) -> bool:
         """Whether ``mjcb_time`` is set now (MuJoCo's timers run)."""
