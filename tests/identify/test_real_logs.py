@@ -40,17 +40,22 @@ def _kufieta(tmp_path, name="Movement_No1.csv.gz", edit=None):
     return out
 
 
-def test_identify_on_a_robot_that_never_rests_writes_no_invented_value(tmp_path):
-    """Movement_No1 never rests long enough (was `ValueError: no rest segment`): exit 0; the noise is
-    the packaged value, and the file's header says so."""
-    log = _kufieta(tmp_path)
-    out = tmp_path / "params.yaml"
+def _identify(log, out) -> str:
+    """`ur5fault identify` on a Kufieta copy as a user calls it (payload 0 kg at the flange); the overlay's text."""
     r = subprocess.run([sys.executable, "-m", "ur5fault.cli", "identify", str(log), "--format", "rtde",
                         "--payload-kg", "0", "--tcp-offset-m", "0", "0", "0", "--no-sweep", "--bootstrap", "20",
                         "--quiet", "--out", str(out)], capture_output=True, text=True, timeout=600,
                        env={"PYTHONPATH": str(REPO), "PATH": "/usr/bin:/bin"})
     assert r.returncode == 0, r.stderr
-    text = out.read_text()
+    return out.read_text()
+
+
+def test_identify_on_a_robot_that_never_rests_writes_no_invented_value(tmp_path):
+    """Movement_No1 never rests long enough (was `ValueError: no rest segment`): exit 0; the noise is
+    the packaged value, and the file's header says so."""
+    log = _kufieta(tmp_path)
+    out = tmp_path / "params.yaml"
+    text = _identify(log, out)
     assert "# Not identifiable on this log, so the model's own (packaged) value is written" in text
     assert "sensors.current_noise_A (J1, J2, J3, J4, J5, J6)" in text
     written = yaml.safe_load(text)["params"]
@@ -64,12 +69,7 @@ def test_every_not_identifiable_value_says_why(tmp_path):
     header's reason was cut off after the joint ("...; J1: ") where it should say so."""
     log = _kufieta(tmp_path, "Movement_No2.csv.gz")
     out = tmp_path / "params.yaml"
-    r = subprocess.run([sys.executable, "-m", "ur5fault.cli", "identify", str(log), "--format", "rtde",
-                        "--payload-kg", "0", "--tcp-offset-m", "0", "0", "0", "--no-sweep", "--bootstrap", "20",
-                        "--quiet", "--out", str(out)], capture_output=True, text=True, timeout=600,
-                       env={"PYTHONPATH": str(REPO), "PATH": "/usr/bin:/bin"})
-    assert r.returncode == 0, r.stderr
-    text = out.read_text()
+    text = _identify(log, out)
     assert not re.search(r"J\d: *$", text, re.M), [ln for ln in text.splitlines() if re.search(r"J\d: *$", ln)]
     assert "J1: fewer than 5 starts from rest in the log" in text
 
