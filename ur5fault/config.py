@@ -34,7 +34,6 @@ from .sim.trajectories import TRAJECTORIES, Trajectory, get_trajectory
 from .sim.trajectories.base import MAX_SPEED_SCALE, MIN_SPEED_SCALE
 from .util.checks import check_int, check_number, short
 
-#: largest noise seed (a Parquet int64 column holds it)
 #: numeric trajectory options and their valid ranges: the payload effect's range; speed up to
 #: UR's maximum joint speed (pi rad/s, ur5-facts.md) over the controller default 1.047 rad/s;
 #: dwell times up to the run-length limit; setpoint periods from the 0.1 ms servo period to 10 Hz

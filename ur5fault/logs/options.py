@@ -106,6 +106,8 @@ def _check_payload_options(fmt: str, payload_kg, tcp_offset_m, where: str) -> No
 #: key of the manifest and of a log)
 CLI_DEFAULTS = (("fmt", "--format", "format"), ("payload_kg", "--payload-kg", "payload_kg"),
                 ("tcp_offset_m", "--tcp-offset-m", "tcp_offset_m"))
+#: the flag of each of them
+CLI_FLAGS = {attr: flag for attr, flag, _ in CLI_DEFAULTS}
 
 
 def _entry(item: dict, data: dict, args: argparse.Namespace, path: Path, w: str, used: set[str],
@@ -123,7 +125,7 @@ def _entry(item: dict, data: dict, args: argparse.Namespace, path: Path, w: str,
             source[key] = f"{w}{key} (from {top}{key})"
             return data[key]
         used.add(attr)
-        source[key] = f"{w}{key} (from {dict((a, f) for a, f, _ in CLI_DEFAULTS)[attr]})"
+        source[key] = f"{w}{key} (from {CLI_FLAGS[attr]})"
         return getattr(args, attr)
 
     fmt = value("fmt", "format")

@@ -191,7 +191,7 @@ class Simulator:
         # MuJoCo's stage timers cost a quarter of a step here and are never read; its log file would put a
         # MUJOCO_LOG.TXT in the user's folder for every unstable run, whose status the result records anyway
         with timers_off(), no_log_file():
-            res = _integrate(self, trajectory, list(runs), a, n_steps, log_every, progress)
+            res = _integrate(self, trajectory, runs, a, n_steps, log_every, progress)
         _log.info("simulated %d run(s) in %.2f s wall; status: %s", len(runs), time.perf_counter() - t0,
                   ", ".join(f"{r}={s}" for r, s in zip(res.run_ids, res.status)) if len(runs) <= 8
                   else {s: res.status.count(s) for s in set(res.status)})
