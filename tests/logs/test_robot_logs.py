@@ -160,3 +160,30 @@ def test_rtde_without_payload_is_refused_not_defaulted(capsys, tmp_path, command
     assert log.payload_kg is None and not log.payload_known
     with pytest.raises(ParameterError, match="payload and tool offset unknown"):
         log.to_trajectory()
+
+
+def test_a_cb2_target_at_rest_that_follows_the_reading_is_said():
+    """Where every target speed is 0, the CB2 runs log the previous reading as the target (counted here from the
+    files with pandas); the reader says so once per log, and not for NIST's CB3 log, whose setpoint at rest is
+    fixed, nor for a log whose target at rest holds a pose while the reading wanders."""
+    from ur5fault.logs.readers import rest_target_is_reading
+
+    path = KUFIETA_DIR / "TEST.csv.gz"
+    df = pd.read_csv(path)
+    cols = lambda p: df[[f"{p}_{j}" for j in range(6)]].to_numpy()  # noqa: E731
+    rest = (cols("target_qd")[1:] == 0.0).all(axis=1)
+    follows = (cols("target_q")[1:] == cols("actual_q")[:-1]).all(axis=1)
+    assert rest.sum() > 1000 and follows[rest].mean() > 0.99  # the fact the note rests on
+    note = [s for s in read_rtde(path, 0.0, (0.0, 0.0, 0.0)).notes if "at rest" in s]
+    assert len(note) == 1 and note[0].startswith("TEST.csv.gz: at rest (every target speed 0) the logged target is "
+                                                 "the previous measured position")
+    assert not any("at rest" in s for s in read_nist(NIST_LOG).notes)
+    # the same rows with the target at rest held at the pose the move ended on: no note
+    t = df["time"].to_numpy()
+    held = cols("target_q").copy()
+    for i in range(1, held.shape[0]):
+        if rest[i - 1]:
+            held[i] = held[i - 1]
+    assert rest_target_is_reading(t, cols("target_q"), cols("actual_q"), cols("target_qd"))
+    assert not rest_target_is_reading(t, held, cols("actual_q"), cols("target_qd"))
+    assert not rest_target_is_reading(t, cols("target_q"), cols("actual_q"), None)  # no target speeds: cannot say
