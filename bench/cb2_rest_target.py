@@ -3,9 +3,10 @@
 
     python bench/cb2_rest_target.py [--overlay OVERLAY.json] [--runs TEST ...] [--follow-passes 8]
 
-1. *The logs*: per run, the share of the samples with every target speed exactly 0 ("at rest") whose target
-   position equals the previous sample's measured position on every joint (to 1e-9 rad), and the same on the NIST
-   (CB3) log.
+1. *The logs*: per run, the rows with every target speed exactly 0 ("at rest"), those one controller tick after
+   the previous row (``regular.ticks``, the reader's rule; a row after a gap has no previous reading to equal), the
+   share of those whose target position equals the previous row's measured position on every joint (to 1e-9 rad),
+   and how many of the others are the first row of a stretch at rest; the same on the NIST (CB3) log.
 2. *Three replays* of each run under the Kufieta robot's identified model (``--overlay``: the parameter overlay
    written by ``bench/residual_bins.py`` as ``kufieta_overlay.json``; without it, ``identify`` is run here on
    ``cross_robot.FIT_RUNS`` plus the standstill run's rest, as that script does):
@@ -13,9 +14,10 @@
    * *as logged*: the log's targets (the twin is commanded to the robot's own reading while it stands);
    * *commanded end pose*: over each stretch at rest the target of its first sample (the pose the motion was
      commanded to, before the controller's target takes the reading), held;
-   * *own reading*: over each stretch at rest the twin's own resolver reading one sample earlier, as the CB2
-     logs its target; made by fixed-point passes (each pass replays with the previous pass's readings; the
-     replays are deterministic, so the passes agree up to the first changed sample).
+   * *own reading*: over each stretch at rest after its first row (which keeps the commanded end pose, as in the
+     log) the twin's own resolver reading one sample earlier, as the CB2 logs its target; made by fixed-point
+     passes (each pass replays with the previous pass's readings; the replays are deterministic, so the passes
+     agree up to the first changed sample).
 
    Current RMS [A] of measured minus simulated, and in brackets as a multiple of UR's own model (``actual -
    target_current``) on the same samples, per joint: over all samples, at rest, moving; the first 0.5 s left out.
@@ -42,34 +44,52 @@ NIST = REPO / "data" / "nist-ur5" / "ur5testresult_halfspeed_payload1.6lb_1.csv.
 RUNS = ("Movement_No1", "Movement_No2", "Movement_No3_Acc", "Movement_No4_Acc",
         "Movement_No5_Acc_slow_no_disturbance", "Movement_No5_Acc_slow_w_disturbance",
         "Movement_No8_Singularity_Free_1", "Movement_No10_Standstill_WDist", "TEST")
-SAME_RAD = 1e-9  # the CSV's positions carry 6-7 decimals: equal means equal to the file's precision
+SAME_RAD = 1e-9  # the CB2 files write 6 decimals of a radian: equal means equal to the file's precision
 SKIP_S = 0.5
 
 
-def follows_reading(target: np.ndarray, actual: np.ndarray, target_speed: np.ndarray) -> tuple[float, int]:
-    """Share of the at-rest samples (every target speed exactly 0) whose target equals the previous reading on
-    every joint, and their number."""
+def follows_reading(t: np.ndarray, target: np.ndarray, actual: np.ndarray, target_speed: np.ndarray) -> dict:
+    """Rows at rest (every target speed exactly 0, after the first row): how many, how many of them one tick after
+    the previous row (the reader's rule, ``regular.ticks``), the share of those whose target equals the previous
+    reading on every joint, and how many of those that do not are the first row of a stretch at rest."""
+    from ur5fault.logs.regular import ticks
+
     rest = np.all(target_speed == 0.0, axis=1)
-    rest[0] = False
+    k, _ = ticks(t)
+    one_tick = np.zeros(rest.shape, dtype=bool)
+    one_tick[1:] = np.diff(k) == 1
     same = np.zeros(rest.shape, dtype=bool)
     same[1:] = np.all(np.abs(target[1:] - actual[:-1]) < SAME_RAD, axis=1)
-    n = int(rest.sum())
-    return (float(same[rest].mean()) if n else float("nan")), n
+    first = rest.copy()
+    first[1:] &= ~rest[:-1]
+    rest[0] = False
+    sel = rest & one_tick
+    other = sel & ~same
+    return {"rest": int(rest.sum()), "one_tick": int(sel.sum()),
+            "share": float(same[sel].mean()) if sel.any() else float("nan"),
+            "other": int(other.sum()), "other_first": int((other & first).sum())}
 
 
 def log_table() -> None:
-    print("| log | samples at rest | target = previous reading |")
-    print("| --- | --- | --- |")
+    print("| log | rows at rest | of them one tick after the previous row | target = previous reading there | "
+          "other rows (of them the first of a stretch at rest) |")
+    print("| --- | --- | --- | --- | --- |")
+
+    def line(name, f):
+        if not f["one_tick"]:
+            print(f"| {name} | {f['rest']} | - | - | - |")
+        else:
+            print(f"| {name} | {f['rest']} | {f['one_tick']} | {f['share']:.1%} | {f['other']} ({f['other_first']}) |")
+
     for name in RUNS:
         raw = pd.read_csv(KUFIETA / f"{name}.csv.gz")
         q, a, w = (raw[[f"{p}_{j}" for j in range(6)]].to_numpy() for p in ("target_q", "actual_q", "target_qd"))
-        share, n = follows_reading(q, a, w)
-        print(f"| {name} | {n} | {share:.1%} |")
+        line(name, follows_reading(raw["time"].to_numpy(), q, a, w))
     raw = pd.read_csv(NIST)
-    q, a, w = (raw[[f"ROBOT_{p} (J{j})" for j in range(1, 7)]].to_numpy()
+    q, a, w = (np.radians(raw[[f"ROBOT_{p} (J{j})" for j in range(1, 7)]].to_numpy()) if "POSITIONS" in p
+               else raw[[f"ROBOT_{p} (J{j})" for j in range(1, 7)]].to_numpy()
                for p in ("TARGET_JOINT_POSITIONS", "ACTUAL_JOINT_POSITIONS", "TARGET_JOINT_VELOCITIES"))
-    share, n = follows_reading(q, a, w)
-    print(f"| NIST (CB3) | {n} | {share:.1%} |")
+    line("NIST (CB3)", follows_reading(raw["ROBOT_TIME"].to_numpy(), q, a, w))
 
 
 def rest_stretches(speed: np.ndarray) -> list[tuple[int, int]]:
@@ -150,7 +170,8 @@ def replays(name: str, over: dict, passes: int) -> None:
         end_pose[s:e] = tq[s]
     row("commanded end pose", run(end_pose))
     own = tq.copy()
-    idx = np.flatnonzero(np.all(speed == 0.0, axis=1))
+    rest_rows = np.all(speed == 0.0, axis=1)
+    idx = np.flatnonzero(rest_rows[1:] & rest_rows[:-1]) + 1  # the first row of a stretch keeps the end pose
     idx = idx[idx >= 2]
     res = run(own)
     for _ in range(passes):

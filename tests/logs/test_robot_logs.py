@@ -178,7 +178,7 @@ def test_a_cb2_target_at_rest_that_follows_the_reading_is_said():
     assert len(note) == 1 and note[0].startswith("TEST.csv.gz: at rest (every target speed 0) the logged target is "
                                                  "the previous measured position")
     assert not any("at rest" in s for s in read_nist(NIST_LOG).notes)
-    # the same rows with the target at rest held at the pose the move ended on: no note
+    # the same rows with the target at rest held at the last moving row's target (within 10 urad of the end pose)
     t = df["time"].to_numpy()
     held = cols("target_q").copy()
     for i in range(1, held.shape[0]):
@@ -187,3 +187,20 @@ def test_a_cb2_target_at_rest_that_follows_the_reading_is_said():
     assert rest_target_is_reading(t, cols("target_q"), cols("actual_q"), cols("target_qd"))
     assert not rest_target_is_reading(t, held, cols("actual_q"), cols("target_qd"))
     assert not rest_target_is_reading(t, cols("target_q"), cols("actual_q"), None)  # no target speeds: cannot say
+
+
+def test_the_rest_target_note_compares_only_rows_one_tick_apart():
+    """Movement_No3_Acc's merge dropped rows: after a gap the previous row is not the previous tick's reading, so
+    only 328 of its 629 rows at rest are compared (all of them follow the reading: the note is given); No1 never
+    holds every target speed at 0 (no note)."""
+    df = pd.read_csv(KUFIETA_DIR / "Movement_No3_Acc.csv.gz")
+    cols = lambda p: df[[f"{p}_{j}" for j in range(6)]].to_numpy()  # noqa: E731
+    rest = (cols("target_qd")[1:] == 0.0).all(axis=1)
+    follows = (cols("target_q")[1:] == cols("actual_q")[:-1]).all(axis=1)
+    one_tick = np.diff(df["time"].to_numpy()) < 0.012
+    assert rest.sum() == 629 and follows[rest].mean() < 0.7  # counted over every row at rest: no note would be due
+    assert (rest & one_tick).sum() == 328 and follows[rest & one_tick].all()
+    notes = read_rtde(KUFIETA_DIR / "Movement_No3_Acc.csv.gz", 0.0, (0.0, 0.0, 0.0)).notes
+    assert sum("at rest (every target speed 0)" in s for s in notes) == 1
+    no1 = read_rtde(KUFIETA_DIR / "Movement_No1.csv.gz", 0.0, (0.0, 0.0, 0.0))
+    assert not any("at rest" in s for s in no1.notes)

@@ -56,7 +56,8 @@ def _stack(data: Mapping[str, NDArray], cols: Sequence[str]) -> NDArray | None:
 
 
 #: a log whose target at rest follows its reading: at least this many rows at rest, and this share of them
-#: (the CB2 runs of data/kufieta-ur5: 99.0-100 % of 328-1,872 rows; NIST's CB3 log: 0 of 2,523)
+#: (the CB2 runs of data/kufieta-ur5: 99.0-100 % of 328-1,872 rows, every one but the first of each stretch at
+#: rest; NIST's CB3 log: 0 of 2,523)
 REST_TARGET_MIN_ROWS, REST_TARGET_MIN_SHARE = 25, 0.9
 #: positions equal to the file's precision (the CB2 files write 6 decimals of a radian)
 SAME_POSITION_RAD = 1e-9
@@ -64,13 +65,15 @@ SAME_POSITION_RAD = 1e-9
 
 def rest_target_is_reading(t: NDArray, target_q: NDArray, actual_q: NDArray, target_qd: NDArray | None) -> bool:
     """Whether the log's target, where every target speed is exactly 0, is the previous tick's measured position on
-    every joint (CB2 controllers log it so; their internal setpoint there is the held pose, which the log does not
-    carry: docs/validation.md, "A CB2 log's target at rest").  Rows after a gap (more than 1.5 median periods)
-    are not compared.  Needs the target speeds."""
+    every joint, as in the CB2 runs of data/kufieta-ur5 (there the first row of each stretch at rest carries the
+    pose the move was commanded to, and every later one the previous reading; the controller holds the pose:
+    docs/validation.md, "A CB2 log's target at rest").  Only rows one tick after the previous one are compared
+    (the tick grid of :func:`.regular.ticks`; a row after a gap has no previous reading to equal).  Needs the target
+    speeds."""
     if target_qd is None or target_q.shape[0] < 3:
         return False
-    dt = np.diff(t)
-    rest = np.all(target_qd[1:] == 0.0, axis=1) & (dt < 1.5 * np.median(dt))
+    k, _ = regular.ticks(t)
+    rest = np.all(target_qd[1:] == 0.0, axis=1) & (np.diff(k) == 1)
     n = int(rest.sum())
     if n < REST_TARGET_MIN_ROWS:
         return False
@@ -105,8 +108,8 @@ def _assemble(src: str, t: NDArray, required: Mapping[str, NDArray], optional: M
     plausible.check_units(src, t, req["actual_q"], opt["actual_qd"], labels[1], declared)
     if rest_target_is_reading(t, req["target_q"], req["actual_q"], opt["target_qd"]):
         notes.append(f"{src}: at rest (every target speed 0) the logged target is the previous measured position, "
-                     "as CB2 controllers log it: the twin is commanded there to the robot's own reading, not to a "
-                     "held pose (docs/validation.md)")
+                     "as in the CB2 runs of data/kufieta-ur5: the twin is commanded there to the robot's own reading, "
+                     "not to the pose the robot holds (docs/validation.md)")
     keep = {**req, **{k: v for k, v in opt.items() if k not in ("target_qd", "actual_qd")}}
     grid, a, logged = regular.on_ticks(src, t, keep, notes)
     cur_t = a["target_current"]
