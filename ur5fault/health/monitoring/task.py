@@ -55,7 +55,8 @@ CHUNK_S = 2.0
 #: (:data:`~.events.LEVEL_S` / 2), the span each judged sample's transient looks at on either side
 CONTEXT_S = 1.0
 #: the joint targets' jitter between repeats of one commanded motion [rad]: the CB2 controller's targets at rest
-#: wander by up to 3e-4 rad (bench/monitor_labels.py, START_MOVE_RAD's note); measured between the Kufieta
+#: wander by up to 3e-4 rad (bench/monitor_labels.py, START_MOVE_RAD's note; at rest a CB2 logs the previous
+#: reading as its target, so this is the arm's own wander: docs/validation.md); measured between the Kufieta
 #: robot's repeats of one task after the best lag, 1.6e-5 .. 4.4e-4 rad plus the sub-sample timing (docs)
 TARGET_JITTER_RAD = 3e-4
 #: the most repeats a chunk is paired with in one reference run, those of the smallest squared difference: the
