@@ -44,28 +44,21 @@ NIST = REPO / "data" / "nist-ur5" / "ur5testresult_halfspeed_payload1.6lb_1.csv.
 RUNS = ("Movement_No1", "Movement_No2", "Movement_No3_Acc", "Movement_No4_Acc",
         "Movement_No5_Acc_slow_no_disturbance", "Movement_No5_Acc_slow_w_disturbance",
         "Movement_No8_Singularity_Free_1", "Movement_No10_Standstill_WDist", "TEST")
-SAME_RAD = 1e-9  # the CB2 files write 6 decimals of a radian: equal means equal to the file's precision
 SKIP_S = 0.5
 
 
 def follows_reading(t: np.ndarray, target: np.ndarray, actual: np.ndarray, target_speed: np.ndarray) -> dict:
     """Rows at rest (every target speed exactly 0, after the first row): how many, how many of them one tick after
-    the previous row (the reader's rule, ``regular.ticks``), the share of those whose target equals the previous
-    reading on every joint, and how many of those that do not are the first row of a stretch at rest."""
-    from ur5fault.logs.regular import ticks
+    the previous row (the reader's rule, ``logs.readers.rest_target_rows``), the share of those whose target equals
+    the previous reading on every joint, and how many of those that do not are the first row of a stretch at
+    rest."""
+    from ur5fault.logs.readers import rest_target_rows
 
-    rest = np.all(target_speed == 0.0, axis=1)
-    k, _ = ticks(t)
-    one_tick = np.zeros(rest.shape, dtype=bool)
-    one_tick[1:] = np.diff(k) == 1
-    same = np.zeros(rest.shape, dtype=bool)
-    same[1:] = np.all(np.abs(target[1:] - actual[:-1]) < SAME_RAD, axis=1)
-    first = rest.copy()
-    first[1:] &= ~rest[:-1]
-    rest[0] = False
-    sel = rest & one_tick
+    at_rest = np.all(target_speed == 0.0, axis=1)
+    sel, same = rest_target_rows(t, target, actual, target_speed)  # rows 1..n-1
+    first = at_rest[1:] & ~at_rest[:-1]
     other = sel & ~same
-    return {"rest": int(rest.sum()), "one_tick": int(sel.sum()),
+    return {"rest": int(at_rest[1:].sum()), "one_tick": int(sel.sum()),
             "share": float(same[sel].mean()) if sel.any() else float("nan"),
             "other": int(other.sum()), "other_first": int((other & first).sum())}
 
@@ -146,7 +139,8 @@ def replays(name: str, over: dict, passes: int) -> None:
 
     t = log.t_s[1:] - log.t_s[0]
     keep = log.logged_rows()[1:] & (t >= SKIP_S)
-    rest = np.all(speed == 0.0, axis=1)[1:]
+    rest_rows = np.all(speed == 0.0, axis=1)
+    rest = rest_rows[1:]
     meas, ur = log.current_A[1:], log.target_current_A[1:]
 
     def rms(x):
@@ -170,7 +164,6 @@ def replays(name: str, over: dict, passes: int) -> None:
         end_pose[s:e] = tq[s]
     row("commanded end pose", run(end_pose))
     own = tq.copy()
-    rest_rows = np.all(speed == 0.0, axis=1)
     idx = np.flatnonzero(rest_rows[1:] & rest_rows[:-1]) + 1  # the first row of a stretch keeps the end pose
     idx = idx[idx >= 2]
     res = run(own)

@@ -63,21 +63,26 @@ REST_TARGET_MIN_ROWS, REST_TARGET_MIN_SHARE = 25, 0.9
 SAME_POSITION_RAD = 1e-9
 
 
-def rest_target_is_reading(t: NDArray, target_q: NDArray, actual_q: NDArray, target_qd: NDArray | None) -> bool:
-    """Whether the log's target, where every target speed is exactly 0, is the previous tick's measured position on
-    every joint, as in the CB2 runs of data/kufieta-ur5 (there the first row of each stretch at rest carries the
-    pose the move was commanded to, and every later one the previous reading; the controller holds the pose:
-    docs/validation.md, "A CB2 log's target at rest").  Only rows one tick after the previous one are compared
-    (the tick grid of :func:`.regular.ticks`; a row after a gap has no previous reading to equal).  Needs the target
-    speeds."""
-    if target_qd is None or target_q.shape[0] < 3:
-        return False
+def rest_target_rows(t: NDArray, target_q: NDArray, actual_q: NDArray, target_qd: NDArray) -> tuple[NDArray, NDArray]:
+    """``(rest, same)``, each ``(n - 1,)`` for rows ``1..n-1``: the row is at rest (every target speed exactly 0)
+    and one tick after the previous row (the tick grid of :func:`.regular.ticks`; a row after a gap has no previous
+    reading to equal), and its target equals the previous row's measured position on every joint."""
     k, _ = regular.ticks(t)
     rest = np.all(target_qd[1:] == 0.0, axis=1) & (np.diff(k) == 1)
-    n = int(rest.sum())
-    if n < REST_TARGET_MIN_ROWS:
-        return False
     same = np.all(np.abs(target_q[1:] - actual_q[:-1]) < SAME_POSITION_RAD, axis=1)
+    return rest, same
+
+
+def rest_target_is_reading(t: NDArray, target_q: NDArray, actual_q: NDArray, target_qd: NDArray | None) -> bool:
+    """Whether the log's target, where every target speed is exactly 0, is the previous tick's measured position on
+    every joint (:func:`rest_target_rows`), as in the CB2 runs of data/kufieta-ur5 (there the first row of each
+    stretch at rest carries the pose the move was commanded to, and every later one the previous reading; the
+    controller holds the pose: docs/validation.md, "A CB2 log's target at rest").  Needs the target speeds."""
+    if target_qd is None or target_q.shape[0] < 3:
+        return False
+    rest, same = rest_target_rows(t, target_q, actual_q, target_qd)
+    if int(rest.sum()) < REST_TARGET_MIN_ROWS:
+        return False
     return bool(same[rest].mean() >= REST_TARGET_MIN_SHARE)
 
 
