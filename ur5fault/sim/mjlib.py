@@ -93,6 +93,20 @@ def as_f64ptr(typingctx, addr):
     return sig, codegen
 
 
+@njit(cache=True, inline="always")
+def uncounted(a):
+    """A view of the C-contiguous array ``a`` that numba does not reference-count (as ``numba.carray`` of its
+    address: no meminfo). Passing a counted array into an inlined function costs an atomic increment and decrement
+    per call that numba's pruning leaves in; in the step loop that was 16 % of a batch's time (perf, batch of 32).
+    The caller keeps ``a`` alive while the view is used, and ``a`` must come from outside the compiled function:
+    views of a copy the loop allocated itself made one run of a threaded batch diverge (``tests/sim/
+    test_steploop.py``), presumably because LLVM takes a fresh allocation to be reachable through no other pointer
+    and an address made from an integer is such another pointer."""
+    if not a.flags.c_contiguous:
+        raise ValueError("uncounted: the array is not C-contiguous")
+    return numba.carray(as_voidptr(a.ctypes.data), a.shape, a.dtype)
+
+
 @njit(cache=True)
 def _site_positions(fn, model, data, qpos_adr, site_xpos_adr, nq, nsite, site, q, out):
     qpos = numba.carray(as_f64ptr(qpos_adr), (nq,))

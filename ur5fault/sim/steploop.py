@@ -29,14 +29,14 @@ from .drive import kernel
 from .drive.kernel import Q_FB, S_L, physics_rj, sensors_rj, servo_rj
 from .drive.layout import PARAM_NAMES, STATE_NAMES
 from .gravity import gravity_moment_j
-from .mjlib import as_f64ptr, call_step
+from .mjlib import as_f64ptr, call_step, uncounted
 from .terms import load_torque_rj
 
 #: CRC-32 of everything compiled into this module's cached functions besides this file: numba's cache checks only
 #: this file's time stamp, so a change of the drive kernel, the term functions, the pointer helpers or the row
 #: layout would otherwise reuse stale machine code.  A change stops here until this number is updated (which
 #: changes this file and so recompiles); see LAYOUT_CRC32 in ``drive/kernel.py``.
-SOURCES_CRC32 = 1334033685
+SOURCES_CRC32 = 2378207239
 
 
 def sources_crc32() -> int:
@@ -76,8 +76,15 @@ def _advance(r, s0, s1, si0, noise, bt, tm):
     (fn, adr, sizes, X, P, q_set_s, qd_set_s, delay, sps, dt, ts, stribeck, has_cogging, limits, model_damping,
      payload_kg, cube2, gripped, change, log, src, log_every, active, status, event) = bt
     nv, n_m, nbody, njnt, pb = sizes[0], sizes[1], sizes[2], sizes[3], sizes[4]
-    link, grav_on, m_diag, subtree, up = tm[0], tm[1], tm[2], tm[3], tm[4]
+    # every array the inlined functions take is used through a view numba does not reference-count (``uncounted``:
+    # otherwise an atomic increment and decrement per array and call); the owners outlive this call
+    link, grav_on, m_diag, subtree, up = tm[0], tm[1], uncounted(tm[2]), uncounted(tm[3]), uncounted(tm[4])
     amp_j, per_j, coul, coul_w, strib, strib_v, visc, quad, grav_scale, sign_w, hold, hold_w, last_sign = tm[5]
+    amp_j, per_j, coul, coul_w = uncounted(amp_j), uncounted(per_j), uncounted(coul), uncounted(coul_w)
+    strib, strib_v, visc, quad = uncounted(strib), uncounted(strib_v), uncounted(visc), uncounted(quad)
+    grav_scale, hold, hold_w = uncounted(grav_scale), uncounted(hold), uncounted(hold_w)
+    last_sign = uncounted(last_sign)
+    q_set_s, qd_set_s, noise = uncounted(q_set_s), uncounted(qd_set_s), uncounted(noise)
     qpos = numba.carray(as_f64ptr(adr[r, QPOS]), (nv,))
     qvel = numba.carray(as_f64ptr(adr[r, QVEL]), (nv,))
     qfrc = numba.carray(as_f64ptr(adr[r, QFRC]), (nv,))
@@ -88,25 +95,26 @@ def _advance(r, s0, s1, si0, noise, bt, tm):
     xaxis = numba.carray(as_f64ptr(adr[r, XAXIS]), (njnt, 3))
     body_mass = numba.carray(as_f64ptr(adr[r, BODY_MASS]), (nbody,))
     body_inertia = numba.carray(as_f64ptr(adr[r, BODY_INERTIA]), (nbody, 3))
-    # the run's drive state and parameters as one contiguous block for the chunk (run index 0 of ``x``, ``p``):
-    # in the batch layout ``(rows, n_runs, 6)`` a run's rows lie n_runs * 48 bytes apart, and at 128 runs they
-    # fall into a few cache sets and evict each other (measured, 128 runs: 4.3 us per run-step against 3.1 us)
-    x = X[:, r:r + 1, :].copy()
-    p = P[:, r:r + 1, :].copy()
-    nj = X.shape[2]
+    # the run's drive state and parameters: one contiguous block each (``run`` passes them run-major, ``(n_runs,
+    # rows, 6)``: in the batch layout ``(rows, n_runs, 6)`` a run's rows lie n_runs * 48 bytes apart, and at 128
+    # runs they fall into a few cache sets and evict each other; measured, 128 runs: 4.3 us per run-step against
+    # 3.1 us), viewed as the kernels' ``(rows, 1, 6)`` of run index 0 without numba's reference count (``uncounted``)
+    x_rows, p_rows, nj = X.shape[1], P.shape[1], X.shape[2]
+    xs = numba.carray(as_f64ptr(X.ctypes.data + r * x_rows * nj * 8), (x_rows, 1, nj))
+    ps = numba.carray(as_f64ptr(P.ctypes.data + r * p_rows * nj * 8), (p_rows, 1, nj))
     for step in range(s0, s1):
         if step % sps == 0:
             si = step // sps
             k = max(si - delay[r], 0)
             nz = noise[r, si - si0]
             for j in range(nj):
-                servo_rj(x, p, 0, j, q_set_s[k, j], qd_set_s[k, j], nz, ts)
+                servo_rj(xs, ps, 0, j, q_set_s[k, j], qd_set_s[k, j], nz, ts)
             # run health: a diverged or tripped run stops here and its remaining log stays NaN
             bad, trip, worst, jw = False, False, -1.0, 0
             for j in range(nj):
                 if not np.isfinite(qpos[j]) or abs(qpos[j]) > limits[0]:
                     bad = True
-                e = abs(q_set_s[k, j] - x[Q_FB, 0, j])
+                e = abs(q_set_s[k, j] - xs[Q_FB, 0, j])
                 if e > limits[1]:
                     trip = True
                 if e > worst:
@@ -117,7 +125,7 @@ def _advance(r, s0, s1, si0, noise, bt, tm):
                 event[r, 0], event[r, 1] = step, jw
                 break
         for j in range(nj):
-            tau = physics_rj(x, p, 0, j, qpos[j], qvel[j], dt, stribeck, has_cogging)
+            tau = physics_rj(xs, ps, 0, j, qpos[j], qvel[j], dt, stribeck, has_cogging)
             if link:
                 g = gravity_moment_j(j, body_mass, xipos, xanchor, xaxis, subtree, up) if grav_on else 0.0
                 tau = tau - load_torque_rj(r, j, qpos[j], qvel[j], mass_matrix[m_diag[j]], dt, g, amp_j, per_j, coul,
@@ -126,7 +134,7 @@ def _advance(r, s0, s1, si0, noise, bt, tm):
             qfrc[j] = tau
             # the friction's slope on top of the model's own joint damping: MuJoCo's Euler step applies both
             # implicitly
-            damping[j] = model_damping[j] + x[S_L, 0, j]
+            damping[j] = model_damping[j] + xs[S_L, 0, j]
         if change[step]:
             mass = payload_kg[r] * gripped[step]
             body_mass[pb] = mass
@@ -134,14 +142,13 @@ def _advance(r, s0, s1, si0, noise, bt, tm):
                 body_inertia[pb, c] = mass * cube2 / 6.0  # multibody.payload_inertia
         call_step(fn, adr[r, MODEL], adr[r, DATA])
         for j in range(nj):
-            sensors_rj(x, p, 0, j, qpos[j], qvel[j], dt, stribeck)
+            sensors_rj(xs, ps, 0, j, qpos[j], qvel[j], dt, stribeck)
         if (step + 1) % log_every == 0:
             li = (step + 1) // log_every - 1
             for s in range(src.shape[0]):
                 row = src[s]
                 for j in range(nj):
-                    log[s, r, li, j] = qpos[j] if row < 0 else x[row, 0, j]
-    X[:, r, :] = x[:, 0, :]
+                    log[s, r, li, j] = qpos[j] if row < 0 else xs[row, 0, j]
 
 
 @njit(cache=True)
@@ -183,9 +190,11 @@ def terms_tuple(hook, mb, n_runs: int) -> tuple:
     ids = mb.ids
     a = hook.a
     last_sign = hook.last_sign if hook.last_sign is not None else np.zeros((n_runs, a.term_coulomb_Nm.shape[1]))
+    last_sign = np.ascontiguousarray(last_sign, dtype=np.float64)  # the loop views every array as C-contiguous
     hook.last_sign = last_sign  # the loop updates it in place
     return (bool(hook.link_torque), bool(hook.gravity), np.asarray(ids.m_diag, dtype=np.intp), ids.subtree,
-            np.ascontiguousarray(ids.up * float(np.linalg.norm(mb.models[0].opt.gravity))), term_arrays(a, last_sign))
+            np.ascontiguousarray(ids.up * float(np.linalg.norm(mb.models[0].opt.gravity))),
+            tuple(np.ascontiguousarray(f) if isinstance(f, np.ndarray) else f for f in term_arrays(a, last_sign)))
 
 
 def run(mb, X, P, setpoints, delay_k, rngs, timing, payload, logging, hook, progress, nthread: int,
@@ -215,13 +224,17 @@ def run(mb, X, P, setpoints, delay_k, rngs, timing, payload, logging, hook, prog
     n_steps, sps, dt, ts, stribeck, has_cogging = timing
     log_every, n_log, src = logging
     n = X.shape[1]
+    # run-major copies for the loop (each run's rows contiguous, ``_advance``), written back at the end
+    X_runs = np.ascontiguousarray(X.transpose(1, 0, 2), dtype=np.float64)
+    P_runs = np.ascontiguousarray(P.transpose(1, 0, 2), dtype=np.float64)
     m0 = mb.models[0]
     sizes = np.array([m0.nv, m0.nM, m0.nbody, m0.njnt, mb.ids.payload], dtype=np.intp)
     log = np.full((len(src), n, n_log, X.shape[2]), np.nan)
     active = np.ones(n, dtype=np.bool_)
     status = np.zeros(n, dtype=np.int8)
     event = np.zeros((n, 2), dtype=np.intp)
-    bt = (mjlib.MJ_STEP_ADDRESS, addresses(mb.models, mb.datas), sizes, X, P, setpoints[0], setpoints[1],
+    bt = (mjlib.MJ_STEP_ADDRESS, addresses(mb.models, mb.datas), sizes, X_runs, P_runs,
+          np.ascontiguousarray(setpoints[0], dtype=np.float64), np.ascontiguousarray(setpoints[1], dtype=np.float64),
           np.asarray(delay_k, dtype=np.intp), int(sps), float(dt), float(ts), float(stribeck), bool(has_cogging),
           np.asarray(limits, dtype=float), np.asarray(mb.model_damping, dtype=float), np.asarray(payload[0], float),
           float(PAYLOAD_CUBE_M**2), np.asarray(payload[1], float), np.asarray(payload[2], np.bool_), log,
@@ -250,6 +263,7 @@ def run(mb, X, P, setpoints, delay_k, rngs, timing, payload, logging, hook, prog
             end = min(end, max(s + sps, -(-int(np.ceil(next_progress * n_steps)) // sps) * sps))
         advance(s, end, si0, noise, bt, tm)
         s = end
+    X[...] = X_runs.transpose(1, 0, 2)
     return log, status, event
 
 
