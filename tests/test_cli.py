@@ -87,6 +87,33 @@ def test_discrepancy_bad_input(tmp_path):
     assert r.returncode == 2 and "missing required column 'target_q_1'" in r.stderr
 
 
+def _one_line_error(r, text):
+    assert r.returncode == 2, r.stderr
+    assert len(r.stderr.strip().splitlines()) == 1 and text in r.stderr, r.stderr
+
+
+def test_refusals_name_what_the_user_typed(tmp_path):
+    """Found by trying the commands as a newcomer with the wheel: each refusal names the user's option or column,
+    not an internal keyword or a file the user never wrote."""
+    log = tmp_path / "log.csv"
+    log.write_text("Time," + ",".join(f"{k}_{j}" for k in ("target_q", "actual_q", "actual_current")
+                                       for j in range(6)) + "\n" + ",".join(["0"] * 19) + "\n")
+    out = str(tmp_path / "o")
+    _one_line_error(run("identify", str(log), "--format", "rtde", "--payload-kg", "0", "--tcp-offset-m", "0", "0",
+                        "0", "--out", str(tmp_path / "p.yaml")),
+                    "log.csv: missing required column 'timestamp' (or 'time')")
+    _one_line_error(run("discrepancy", str(log), "--format", "rtde", "--payload-kg", "-1", "--tcp-offset-m", "0",
+                        "0", "0", "--out", out), "--payload-kg = -1.0 is out of range [0, 5] kg")
+    _one_line_error(run("discrepancy", str(log), "--format", "rtde", "--payload-kg", "1", "--tcp-offset-m", "0",
+                        "0", "3", "--out", out), "--tcp-offset-m (value 3) = 3.0 is out of range [-2, 2] m")
+    _one_line_error(run("campaign", "run", "paper", "--duration-s", "-1", "--out", out),
+                    "command line: --duration-s = -1.0 is out of range (0, 3600] s")
+    sim_csv = tmp_path / "run.csv"
+    sim_csv.write_text("t_s\n0\n")
+    _one_line_error(run("discrepancy", str(sim_csv), "--format", "sim", "--out", out),
+                    "run.csv: the sim format reads the Parquet file")
+
+
 def test_version_matches_installed_metadata():
     from importlib.metadata import version
 

@@ -157,6 +157,7 @@ def load_campaign(path: str | Path, out: str | Path | None = None, overlay: str 
         data = {**data, "base": base}
         text = yaml.safe_dump(dict(data), sort_keys=False)
     if duration_s is not None:
+        check_duration(duration_s, "command line: --duration-s")  # refused naming its source, not the file
         data = {**data, "duration_s": duration_s}
         text = yaml.safe_dump(dict(data), sort_keys=False)
     return build_campaign(data, path.name, text, path, out)

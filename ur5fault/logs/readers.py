@@ -160,6 +160,8 @@ def read_nist(path: str | Path, length: plausible.MinLength | None = None) -> Me
 #: names of the time column an RTDE-style log may carry (UR's recorder writes ``timestamp``; older
 #: tools and the CB2 recordings of data/kufieta-ur5 ``time``); the first present is used
 RTDE_TIME_COLUMNS = ("timestamp", "time")
+#: the largest tool offset a log may state, per axis [m] (a plausibility bound: the UR5 reaches 0.85 m)
+TCP_OFFSET_LIMIT_M = 2.0
 
 
 def read_rtde(path: str | Path, payload_kg: float | None = None,
@@ -183,15 +185,19 @@ def read_rtde(path: str | Path, payload_kg: float | None = None,
     if tcp_offset_m is not None:
         if len(tcp_offset_m) != 3:
             raise LogFormatError(f"tcp_offset_m = {tcp_offset_m!r} must be 3 numbers [m]")
-        tcp_offset_m = tuple(check_number(v, f"tcp_offset_m[{k + 1}]", -2.0, 2.0, "m")  # type: ignore[assignment]
+        tcp_offset_m = tuple(check_number(v, f"tcp_offset_m[{k + 1}]", -TCP_OFFSET_LIMIT_M,  # type: ignore[assignment]
+                                          TCP_OFFSET_LIMIT_M, "m")
                              for k, v in enumerate(tcp_offset_m))
     layout = sniff(path, src)
     cols = layout.columns
     qt = [f"target_q_{j}" for j in range(6)]
     qa = [f"actual_q_{j}" for j in range(6)]
     ia = [f"actual_current_{j}" for j in range(6)]
-    time_col = next((c for c in RTDE_TIME_COLUMNS if c in cols), RTDE_TIME_COLUMNS[0])
-    _require(cols, [time_col, *qt, *qa, *ia], src)
+    time_col = next((c for c in RTDE_TIME_COLUMNS if c in cols), None)
+    if time_col is None:
+        raise LogFormatError(f"{src}: missing required column {RTDE_TIME_COLUMNS[0]!r} (or "
+                             f"{' or '.join(repr(c) for c in RTDE_TIME_COLUMNS[1:])}): the time [s]")
+    _require(cols, [*qt, *qa, *ia], src)
     plausible.check_joint_count(src, _joint_numbers(cols, r"actual_q_(\d+)"), 0)
     ct = _have(cols, [f"target_current_{j}" for j in range(6)])
     temp = _have(cols, [f"joint_temperatures_{j}" for j in range(6)])
@@ -218,6 +224,9 @@ def read_sim(path: str | Path, length: plausible.MinLength | None = None) -> Mea
 
     path = Path(path)
     src = path.name
+    if path.suffix.lower() == ".csv" or path.name.lower().endswith(".csv.gz"):
+        raise LogFormatError(f"{src}: the sim format reads the Parquet file `ur5fault simulate --out FILE.parquet` "
+                             "writes; a CSV of it has no place for the run's payload, tool and temperatures")
     try:
         pf = pq.ParquetFile(path)
         schema, n_rows = pf.schema_arrow, pf.metadata.num_rows
