@@ -180,6 +180,7 @@ def test_resume_after_sigkill_gives_identical_table(tmp_path, small_reference):
 
     assert json.loads((out / "manifest.json").read_text())["state"] == "running"
     assert status(out)["state"] == "interrupted" and status(out)["lock"] is None  # not "running": nothing runs
+    assert status(out)["sound"] is True and "resumes it" in status(out)["advice"]  # what to do, said
     r = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
     assert r.returncode == 0, r.stderr
     got = pd.read_parquet(out / "features.parquet")

@@ -24,6 +24,7 @@ from ur5fault.cli import main
 from ur5fault.config import Overlay
 from ur5fault.identify import friction, loop, sensors, stats
 from ur5fault.identify.signals import LogSignals
+from ur5fault.sim.axes import JOINT_NAMES
 from ur5fault.sim.params import DEFAULT_PARAMS_PATH, load_params
 
 DT = 0.008
@@ -250,8 +251,10 @@ def nist_identified(nist_path, tmp_path_factory):
 
 
 def _estimate(summary: dict, key: str, joint) -> dict:
+    """The estimate of ``key`` on ``joint`` (0-based index, or None) from identify's JSON, which names joints."""
+    name = None if joint is None else JOINT_NAMES[joint]
     for e in summary["estimates"]:
-        if e["key"] == key and e["joint"] == joint:
+        if e["key"] == key and e["joint"] == name:
             return e
     raise KeyError((key, joint))
 
@@ -376,7 +379,8 @@ def test_presliding_written_per_joint_with_the_models_value_where_not_identified
 def test_estimate_contains_and_json():
     e = stats.Estimate("k", 0, 1.0, 0.9, 1.1, "m")
     assert e.contains(1.14, rel_tol=0.05) and not e.contains(1.16, rel_tol=0.05)
-    assert dataclasses.asdict(e) == e.to_json()
+    assert e.to_json() == {**dataclasses.asdict(e), "joint": "shoulder_pan_joint"}  # joints named, as every output
+    assert stats.Estimate("k", None, 1.0, 0.9, 1.1, "m").to_json()["joint"] is None  # robot-wide
 
 
 def test_quantised_log_gets_a_consistent_noise_and_resolution_pair():

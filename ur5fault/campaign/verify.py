@@ -162,7 +162,11 @@ def _advice(info: dict[str, Any], bad: int, changed: int, damaged: bool, table_k
     if info.get("state") == "complete" and (info.get(table_key) or {}).get("state") not in (None, "ok"):
         todo.append(f"the {table_key.replace('_table', '')} table does not hold the stored {what}s: `ur5fault "
                     "campaign run` rebuilds it from them")
-    return not todo, "; ".join(todo) or None
+    sound = not todo  # of the files stored; an interrupted campaign's are sound, it only has more to make
+    if info.get("state") == "interrupted":
+        todo.append(f"the campaign stopped before its end: `ur5fault campaign run` with the same campaign and --out "
+                    f"resumes it (the {what}s made are kept)")
+    return sound, "; ".join(todo) or None
 
 
 def _check_features(out: Path, identities: dict[str, str]) -> dict[str, Any]:

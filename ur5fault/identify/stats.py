@@ -57,7 +57,10 @@ class Estimate:
         return bool(self.lo - pad <= x <= self.hi + pad)
 
     def to_json(self) -> dict:
-        return dataclasses.asdict(self)
+        """As JSON data, the joint by its name (as every output names joints; ``None``: robot-wide)."""
+        from ..sim.axes import JOINT_NAMES
+
+        return {**dataclasses.asdict(self), "joint": None if self.joint is None else JOINT_NAMES[self.joint]}
 
 
 def fallback(key: str, joint: int | None, value: float, method: str, note: str) -> Estimate:

@@ -29,6 +29,7 @@ def test_status_of_a_life_folder_interrupted_complete_and_damaged(tmp_path, caps
     assert info["inspections"]["ok"] == 4 and info["inspections"]["bad"] == 0
     assert info["inspections_table"] == {"state": "not expected yet"}
     assert "n_runs_expected" not in info and "campaign_error" not in info   # no `life:` unknown-key complaint
+    assert info["sound"] is True and "resumes it (the inspections made are kept)" in info["advice"]
 
     m = run_life(camp, tmp_path, jobs=1, progress=False, note=None)
     rc, info = _status(tmp_path, capsys)
