@@ -37,3 +37,27 @@ def test_bins_with_too_few_samples_are_not_judged():
     r = np.r_[np.zeros(100), np.full(3, 9.0)]
     bins = rms_by_angle(r, q)
     assert [b[:2] for b in bins] == [(10.0, 15.0)]
+
+
+def test_gear_reversals_are_told_apart_by_part_of_the_log():
+    """A gear torque that stays on one side over the fitted part and crosses zero after it: a backlash can show
+    in the held-out part only (the report says so)."""
+    from ur5fault.twin.residuals import gear_reversals
+
+    t = np.r_[np.full(600, 20.0) + np.sin(np.linspace(0, 9, 600)), 20.0 * np.cos(np.linspace(0, 6, 400))]
+    assert gear_reversals(t, 600) == {"fitted": False, "held_out": True}
+    assert gear_reversals(t, 1000) == {"fitted": True, "held_out": False}
+    assert gear_reversals(np.full(100, 3.0), 50) == {"fitted": False, "held_out": False}
+    assert gear_reversals(np.zeros(10), 5) == {"fitted": False, "held_out": False}  # no load: no reversal
+    # a swing under 5 % of the peak to the other side is not a reversal
+    assert gear_reversals(np.r_[np.full(50, 20.0), np.full(50, -0.5)], 50)["held_out"] is False
+
+
+def test_the_report_says_when_the_fitted_part_could_not_show_it():
+    from ur5fault.discrepancy.report import _why_not_fitted
+
+    u = {"rms_fit": 3e-5, "held_out_only": True, "gear_reverses": {"fitted": False, "held_out": True}}
+    text = _why_not_fitted(u)
+    assert "Not in the fitted part" in text and "reverses in the held-out part only" in text
+    assert "reverses" not in _why_not_fitted({**u, "gear_reverses": {"fitted": True, "held_out": True}})
+    assert _why_not_fitted({**u, "held_out_only": False}) == ""

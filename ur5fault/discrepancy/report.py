@@ -264,7 +264,7 @@ def _markdown(model: DiscrepancyModel, summ: dict[str, Any], figs: list[Path]) -
             local = (f"; between {reg['from_deg']:g} and {reg['to_deg']:g} deg of the joint's travel {reg['rms']:.4g} "
                      f"(elsewhere {reg['rms_elsewhere']:.4g})") if reg else ""
             lines.append(f"- {u['signal']} on {u['joint']}: held-out RMS {u['rms_held_out']:.4g} against a noise "
-                         f"floor of {u['noise_floor']:.3g}, largest {u['largest_where']}{local}")
+                         f"floor of {u['noise_floor']:.3g}, largest {u['largest_where']}{local}{_why_not_fitted(u)}")
     else:
         lines.append(f"- nothing above {UNEXPLAINED_FACTOR:g} times the noise floor")
     lines += ["", "## Residual plots", ""] + [f"![{p.stem}]({p.name})" for p in figs]
@@ -272,3 +272,18 @@ def _markdown(model: DiscrepancyModel, summ: dict[str, Any], figs: list[Path]) -
               f"simulated runs ({summ['simulated_s']:.0f} s simulated) in {summ['wall_s']:.0f} s "
               f"({summ['wall_over_mj_steps']:.2f} bare mj_step times per simulated run-step)."]
     return "\n".join(lines) + "\n"
+
+
+def _why_not_fitted(u: dict) -> str:
+    """What the report adds to an unexplained entry whose residual the fitted part does not show: the search sees
+    only that part, so nothing there could explain it (e.g. a clearance crossed only after the split)."""
+    if not u.get("held_out_only"):
+        return ""
+    text = (f". Not in the fitted part (RMS {u['rms_fit']:.3g} there, under {UNEXPLAINED_FACTOR:g} x the floor): "
+            "the search, which fits that part only, could not see it")
+    rev = u.get("gear_reverses") or {}
+    if rev.get("held_out") and not rev.get("fitted"):
+        text += ("; the joint's gear torque reverses in the held-out part only, where a backlash (or any effect at "
+                 "the gear's clearance) shows: fit a part that reverses it (a larger --fit-fraction, or a log that "
+                 "does)")
+    return text

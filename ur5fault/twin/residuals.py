@@ -40,6 +40,10 @@ ANGLE_BIN_DEG = 5.0
 #: independent samples lies within 0.7..1.3 of its true value at 95 % (chi distribution), far below the
 #: UNEXPLAINED_FACTOR a region must exceed
 MIN_BIN_SAMPLES = 25
+#: a joint's gear torque "reverses" when it passes this share of its largest magnitude over the log on both sides
+#: (assumption: a swing of 5 % of the joint's peak load each way takes the gear across its clearance; the
+#: simulated gear torque is noise-free)
+REVERSAL_TORQUE_SHARE = 0.05
 #: a region of the travel stands out when its RMS exceeds this multiple of the median bin's (assumption: a
 #: local effect, e.g. a worn region of a gear, at least half as large again as the joint's residual elsewhere)
 REGION_FACTOR = 1.5
@@ -204,6 +208,24 @@ def unexplained(rp: LogReplay, residual: NDArray, torque: NDArray, n_fit: int) -
                 where, worst = rms_by_condition(residual[:, i, j], masks, j)
                 if rms <= UNEXPLAINED_FACTOR * floor:
                     worst = f"between {region['from_deg']:g} and {region['to_deg']:g} deg of its travel"
+                fit = residual[:n_fit, i, j]
+                rms_fit = float(np.sqrt(np.nanmean(fit**2))) if np.isfinite(fit).any() else float("nan")
                 out.append({"signal": s, "joint": JOINT_NAMES[j], "rms_held_out": rms, "noise_floor": floor,
-                            "rms_by_condition": where, "largest_where": worst, "angle_region": region})
+                            "rms_by_condition": where, "largest_where": worst, "angle_region": region,
+                            "rms_fit": rms_fit, "held_out_only": bool(rms_fit <= UNEXPLAINED_FACTOR * floor),
+                            "gear_reverses": gear_reversals(torque[:n, j], n_fit)})
     return out
+
+
+def gear_reversals(torque: NDArray, n_fit: int) -> dict[str, bool]:
+    """Whether a joint's gear torque ``(n,)`` reverses (passes :data:`REVERSAL_TORQUE_SHARE` of its largest
+    magnitude on both sides) in the fitted part (samples before ``n_fit``) and in the held-out part: a backlash, or
+    anything else that acts where the gear crosses its clearance, shows only where it reverses."""
+    t = np.asarray(torque, float)
+    peak = float(np.nanmax(np.abs(t))) if np.isfinite(t).any() else 0.0
+    level = REVERSAL_TORQUE_SHARE * peak
+
+    def reverses(part: NDArray) -> bool:
+        return bool(peak > 0 and np.any(part > level) and np.any(part < -level))
+
+    return {"fitted": reverses(t[:n_fit]), "held_out": reverses(t[n_fit:])}
