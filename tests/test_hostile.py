@@ -442,9 +442,9 @@ def test_files_are_group_readable(tmp_path):
 
 
 @pytest.mark.parametrize("args, message", [
-    (["--payload-kg", "nan"], "payload_kg = nan must be a finite number in [0, 5] kg"),
-    (["--payload-kg", "-1"], "payload_kg = -1.0 is out of range [0, 5] kg"),
-    (["--tcp-offset-m", "0", "0", "inf"], "tcp_offset_m[3] = inf must be a finite number in [-2, 2] m"),
+    (["--payload-kg", "nan"], "--payload-kg = nan must be a finite number in [0, 5] kg"),
+    (["--payload-kg", "-1"], "--payload-kg = -1.0 is out of range [0, 5] kg"),
+    (["--tcp-offset-m", "0", "0", "inf"], "--tcp-offset-m (value 3) = inf must be a finite number in [-2, 2] m"),
     (["--fit-fraction", "nan"], "fit_fraction = nan is out of range [0.2, 0.9]"),
     (["--max-terms", "-1"], "max_terms = -1 must be a whole number >= 0"),
     (["--jobs", "0"], "jobs = 0 must be a whole number >= 1"),

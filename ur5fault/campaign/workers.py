@@ -108,8 +108,7 @@ def dask_client(scheduler: str, timeout_s: float | None = None):
         from dask.distributed import Client
     except ImportError:  # depends on the installation: say how to get it, no traceback
         raise ParameterError("--backend dask needs dask.distributed: pip install 'dask[distributed]>=2024.1' "
-                             "(or the package's extra: pip install 'ur5fault[cluster]', from a checkout "
-                             "pip install '.[cluster]')") from None
+                             "(from a checkout: pip install '.[cluster]')") from None
 
     timeout_s = DASK_CONNECT_TIMEOUT_S if timeout_s is None else timeout_s
 
