@@ -210,9 +210,12 @@ def unexplained(rp: LogReplay, residual: NDArray, torque: NDArray, n_fit: int) -
                     worst = f"between {region['from_deg']:g} and {region['to_deg']:g} deg of its travel"
                 fit = residual[:n_fit, i, j]
                 rms_fit = float(np.sqrt(np.nanmean(fit**2))) if np.isfinite(fit).any() else float("nan")
+                # the fitted part shows it neither overall nor (for an entry found in a region) in a region
+                held_only = bool(rms_fit <= UNEXPLAINED_FACTOR * floor) and (
+                    region is None or angle_region(fit, q[:n_fit, j], UNEXPLAINED_FACTOR * floor) is None)
                 out.append({"signal": s, "joint": JOINT_NAMES[j], "rms_held_out": rms, "noise_floor": floor,
                             "rms_by_condition": where, "largest_where": worst, "angle_region": region,
-                            "rms_fit": rms_fit, "held_out_only": bool(rms_fit <= UNEXPLAINED_FACTOR * floor),
+                            "rms_fit": rms_fit, "held_out_only": held_only,
                             "gear_reverses": gear_reversals(torque[:n, j], n_fit)})
     return out
 
