@@ -31,11 +31,11 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from ..errors import ParameterError
-from ..util.checks import check_bool, check_number
+from ..util.checks import check_bool
 from ..util.yamlsafe import read_yaml
 from .measured import UNKNOWN_PAYLOAD, MeasuredLog
 from .plausible import MinLength
-from .readers import TCP_OFFSET_LIMIT_M, read_log
+from .readers import check_payload_and_tool, read_log
 
 MANIFEST_SUFFIXES = (".yaml", ".yml")
 MANIFEST_KEYS = ("format", "payload_kg", "tcp_offset_m", "logs")
@@ -213,13 +213,8 @@ def _resolve(args: argparse.Namespace) -> tuple[list[LogEntry], set[str], Path |
 def _check_cli_values(args: argparse.Namespace) -> None:
     """The command line's payload and tool offset in range, refused naming the flag (the reader's own checks name
     the API's keyword, which the user never typed)."""
-    from ..sim.effects import REGISTRY
-
-    if args.payload_kg is not None and args.payload_kg != UNKNOWN:
-        mass = REGISTRY["payload"].param("mass_kg")
-        check_number(args.payload_kg, "--payload-kg", mass.lo, mass.hi, mass.unit)
-    for k, v in enumerate(args.tcp_offset_m or ()):
-        check_number(v, f"--tcp-offset-m (value {k + 1})", -TCP_OFFSET_LIMIT_M, TCP_OFFSET_LIMIT_M, "m")
+    check_payload_and_tool(None if args.payload_kg == UNKNOWN else args.payload_kg, args.tcp_offset_m,
+                           "--payload-kg", "--tcp-offset-m (value {k})")
 
 
 def log_entries(args: argparse.Namespace, *others: argparse.Namespace) -> list[LogEntry]:

@@ -164,6 +164,20 @@ RTDE_TIME_COLUMNS = ("timestamp", "time")
 TCP_OFFSET_LIMIT_M = 2.0
 
 
+def check_payload_and_tool(payload_kg: float | None, tcp_offset_m, payload_name: str = "payload_kg",
+                           tcp_name: str = "tcp_offset_m[{k}]") -> tuple[float | None, tuple[float, ...] | None]:
+    """A stated payload [kg] and tool offset [m] (either None: not stated) in range, each refused in one line under
+    its name (``tcp_name`` formatted with the axis ``k``, 1..3): the API's keywords by default, the command line's
+    flags from ``ur5fault`` commands."""
+    if payload_kg is not None:
+        mass = REGISTRY["payload"].param("mass_kg")
+        payload_kg = check_number(payload_kg, payload_name, mass.lo, mass.hi, mass.unit)
+    if tcp_offset_m is not None:
+        tcp_offset_m = tuple(check_number(v, tcp_name.format(k=k + 1), -TCP_OFFSET_LIMIT_M, TCP_OFFSET_LIMIT_M, "m")
+                             for k, v in enumerate(tcp_offset_m))
+    return payload_kg, tcp_offset_m
+
+
 def read_rtde(path: str | Path, payload_kg: float | None = None,
               tcp_offset_m: tuple[float, float, float] | None = None,
               length: plausible.MinLength | None = None) -> MeasuredLog:
@@ -179,15 +193,9 @@ def read_rtde(path: str | Path, payload_kg: float | None = None,
     """
     path = Path(path)
     src = path.name
-    if payload_kg is not None:
-        mass = REGISTRY["payload"].param("mass_kg")
-        payload_kg = check_number(payload_kg, "payload_kg", mass.lo, mass.hi, mass.unit)
-    if tcp_offset_m is not None:
-        if len(tcp_offset_m) != 3:
-            raise LogFormatError(f"tcp_offset_m = {tcp_offset_m!r} must be 3 numbers [m]")
-        tcp_offset_m = tuple(check_number(v, f"tcp_offset_m[{k + 1}]", -TCP_OFFSET_LIMIT_M,  # type: ignore[assignment]
-                                          TCP_OFFSET_LIMIT_M, "m")
-                             for k, v in enumerate(tcp_offset_m))
+    if tcp_offset_m is not None and len(tcp_offset_m) != 3:
+        raise LogFormatError(f"tcp_offset_m = {tcp_offset_m!r} must be 3 numbers [m]")
+    payload_kg, tcp_offset_m = check_payload_and_tool(payload_kg, tcp_offset_m)  # type: ignore[assignment]
     layout = sniff(path, src)
     cols = layout.columns
     qt = [f"target_q_{j}" for j in range(6)]
