@@ -51,9 +51,12 @@ def test_manifest_with_per_log_options(tmp_path):
     ("format: csv\nlogs: [a.csv]\n", "format 'csv' is not one of"),
     # the manifest's key path named, as for every other key (was the bare payload range / "a.csv: no such file")
     ("format: rtde\ntcp_offset_m: [0, 0, 0]\nlogs: [{path: a.csv, payload_kg: -0.5}]\n",
-     "robot.yaml: logs[0]: payload_kg: payload.mass_kg = -0.5 is out of range [0, 5] kg"),
+     "robot.yaml: logs[0]: payload_kg = -0.5 is out of range [0, 5] kg"),
     ("format: rtde\npayload_kg: 7\ntcp_offset_m: [0, 0, 0]\nlogs: [a.csv]\n",
-     "robot.yaml: logs[0]: payload_kg (from robot.yaml: payload_kg): payload.mass_kg = 7 is out of range [0, 5] kg"),
+     "robot.yaml: logs[0]: payload_kg (from robot.yaml: payload_kg) = 7 is out of range [0, 5] kg"),
+    # the tool offset too (was left to the reader, which named the API's keyword and not the manifest)
+    ("format: rtde\npayload_kg: 0\nlogs: [{path: a.csv, tcp_offset_m: [0, 0, 5]}]\n",
+     "robot.yaml: logs[0]: tcp_offset_m[3] = 5 is out of range [-2, 2] m"),
     ("format: rtde\npayload_kg: 0\ntcp_offset_m: [0, 0, 0]\nlogs: [a.csv]\n",
      "robot.yaml: logs[0]: a.csv: no such file (a log's path is read from the manifest's folder, "),
 ])
@@ -63,6 +66,15 @@ def test_bad_manifest_is_one_line(tmp_path, capsys, text, message):
     rc = main(["discrepancy", str(m), "--out", str(tmp_path / "o")])
     err = capsys.readouterr().err.strip().splitlines()
     assert rc == 2 and len(err) == 1 and message in err[0], err
+
+
+def test_manifest_takes_the_command_lines_values_under_the_flags_names(tmp_path, capsys):
+    """A manifest's log that takes its tool offset from the command line is refused naming the flag."""
+    m = tmp_path / "robot.yaml"
+    m.write_text("format: rtde\npayload_kg: 0\nlogs: [a.csv]\n")
+    rc = main(["discrepancy", str(m), "--tcp-offset-m", "0", "0", "3", "--out", str(tmp_path / "o")])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 2 and len(err) == 1 and "--tcp-offset-m (value 3) = 3.0 is out of range [-2, 2] m" in err[0], err
 
 
 def test_format_required_without_a_manifest(tmp_path, capsys):

@@ -140,10 +140,15 @@ def _entry(item: dict, data: dict, args: argparse.Namespace, path: Path, w: str,
     if tcp is not None and (not isinstance(tcp, (list, tuple)) or len(tcp) != 3):
         raise ParameterError(f"{w}tcp_offset_m = {tcp!r} must be 3 numbers [m]")
     _check_payload_options(fmt, payload, tcp, w)
-    if payload is not None and payload != UNKNOWN:  # the payload effect's range, named by the manifest's key path
-        from ..sim.effects import make_effect
+    # the manifest's payload and tool in range, named by their key paths; values taken from the command line were
+    # checked under the flags' names before any log was read (_resolve)
+    def stated(key: str, value):
+        from_cli = source.get(key, "").endswith(f"(from {CLI_FLAGS[key]})")
+        return None if from_cli or value in (None, UNKNOWN) else value
 
-        make_effect("payload", where=source["payload_kg"], mass_kg=payload)
+    check_payload_and_tool(stated("payload_kg", payload), stated("tcp_offset_m", tcp),
+                           payload_name=source.get("payload_kg", ""),
+                           tcp_name=source.get("tcp_offset_m", "").replace("{", "{{").replace("}", "}}") + "[{k}]")
     return LogEntry(path, fmt, payload, None if tcp is None else tuple(tcp),  # type: ignore[arg-type]
                     check_bool(item.get("hold_out", False), f"{w}hold_out"))
 
@@ -199,6 +204,7 @@ def _resolve(args: argparse.Namespace) -> tuple[list[LogEntry], set[str], Path |
         raise ParameterError(f"{manifests[0]}: a manifest of logs must be the only log given (list the others in "
                              "it, or give log files only)")
     if manifests:
+        _check_cli_values(args)
         used: set[str] = set()
         return _manifest(Path(paths[0]), args, held, used), used, Path(paths[0])
     if args.fmt is None:
