@@ -28,6 +28,7 @@ from . import metrics as M
 from .clearance_rul import ClearanceRUL
 from .figures import health_index_paths, rul_alpha_cone
 from .joint_index import JOINTS, JointHealthIndex
+from .life_store import life_stats
 from .report import markdown
 from .rul import LinearRUL, PopulationRUL, TaskHealthIndex, WienerRUL
 from .spec import Failure
@@ -239,6 +240,8 @@ def run_prognose(folder: Path, out: Path | None = None, *, seed: int = 0, twin: 
     cache = RadiusCache(twin_cache if twin_cache is not None else out / "twin_radii.json") if twin else None
     try:
         pred, fitted, hi = predict(df, failure, seed, setup, twin_calibration, cache, twin_friction)
+    except ConfigFileError as exc:  # predict's own refusal (too few failed units) already says what to change
+        raise ConfigFileError(f"{folder}: {exc}") from None
     except ValueError as exc:  # the estimators' own "too few units or inspections to fit" (rul.py, twin_*.py)
         raise ConfigFileError(f"{folder}: {exc} (a larger fleet, shorter inspection intervals or a longer "
                               "max_cycles)") from None
@@ -254,8 +257,7 @@ def run_prognose(folder: Path, out: Path | None = None, *, seed: int = 0, twin: 
             "n_inspections": int(len(df)), "split_by": "unit",
             "inspections_per_unit": {"min": int(per_unit["n"].min()), "mean": float(per_unit["n"].mean()),
                                      "max": int(per_unit["n"].max())},
-            "eol_cycles": {"median": float(per_unit["eol"].median()), "min": float(per_unit["eol"].min()),
-                           "max": float(per_unit["eol"].max())},
+            "eol_cycles": life_stats(per_unit["eol"]),
             "failure": {"feature": failure.feature, "threshold": failure.threshold},
             "fleet_wall_s": manifest.get("wall_s_this_invocation"),
         },

@@ -61,7 +61,8 @@ def cmd_life_run(args: argparse.Namespace) -> int:
     ipu = m["inspections_per_unit"]
     print(f"{m['n_units']} units: {m['n_failed']} failed, {m['n_censored']} censored at {m['max_cycles']} cycles; "
           f"{m['n_inspections']} inspections ({ipu['min']}-{ipu['max']} per unit, mean {ipu['mean']:.1f}); "
-          f"median life {m['eol_cycles']['median']:.4g} cycles")
+          + (f"median life {m['eol_cycles']['median']:.4g} cycles" if m["n_failed"] else
+             f"no unit failed within {m['max_cycles']} cycles"))
     print(f"wrote {camp.out}/inspections.parquet and manifest.json in {m['wall_s_this_invocation']:.1f} s")
     return 0
 

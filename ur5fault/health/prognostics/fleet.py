@@ -37,6 +37,7 @@ from .life_store import (
     check_inspection,
     check_reference,
     consolidate_life,
+    life_stats,
     read_inspection,
     read_reference,
     run_id,
@@ -309,8 +310,8 @@ def _manifest(camp: LifeCampaign, ids: LifeIdentities, state: str, backend: str,
             "n_censored": int(per_unit["eol"].isna().sum()),
             "inspections_per_unit": {"min": int(per_unit["n"].min()), "mean": float(per_unit["n"].mean()),
                                      "max": int(per_unit["n"].max())},
-            "eol_cycles": {"median": float(per_unit["eol"].median()), "min": float(per_unit["eol"].min()),
-                           "max": float(per_unit["eol"].max())},
+            "eol_cycles": life_stats(per_unit["eol"]),
             "status_counts": {str(k): int(v) for k, v in df["status"].value_counts().items()},
         })
     return m
+

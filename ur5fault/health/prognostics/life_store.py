@@ -155,3 +155,11 @@ def consolidate_life(out: Path, ids: LifeIdentities, done: Mapping[Unit, int]) -
     write_parquet_atomic(df, Path(out) / "inspections.parquet", {"ur5fault": json.dumps(meta, sort_keys=True)},
                          checksum=True)
     return df
+
+def life_stats(eol: pd.Series) -> dict[str, float | None]:
+    """Median, least and largest end of life [cycles] of the units that failed; None each when none did (strict
+    JSON has no NaN, and a fleet censored at max_cycles has no life to state)."""
+    failed = eol.dropna()
+    if failed.empty:
+        return {"median": None, "min": None, "max": None}
+    return {"median": float(failed.median()), "min": float(failed.min()), "max": float(failed.max())}

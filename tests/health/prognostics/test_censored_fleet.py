@@ -1,0 +1,40 @@
+"""A life campaign in which no unit reaches its failure criterion: every unit censored at max_cycles. Its manifest
+stays strict JSON (no NaN for the life of units that did not fail) and the command line says no unit failed."""
+
+from __future__ import annotations
+
+import json
+
+import pandas as pd
+import yaml
+
+from ur5fault.cli import main
+from ur5fault.health.prognostics.life_store import life_stats
+
+from tiny_fleet import TINY
+
+
+def _strict(text):
+    def refuse(name):
+        raise ValueError(f"{name} in strict JSON")
+
+    return json.loads(text, parse_constant=refuse)
+
+
+def test_life_stats_of_failed_units_only():
+    assert life_stats(pd.Series([float("nan"), float("nan")])) == {"median": None, "min": None, "max": None}
+    assert life_stats(pd.Series([3.0e5, float("nan"), 5.0e5])) == {"median": 4.0e5, "min": 3.0e5, "max": 5.0e5}
+
+
+def test_a_fleet_with_no_failure_writes_strict_json(tmp_path, capsys):
+    # two inspections per unit and a 5 mm criterion that 100 000 cycles of wear at this rate cannot reach
+    spec = {**TINY, "out": str(tmp_path / "fleet"),
+            "life": {**TINY["life"], "units": 2, "max_cycles": 100_000,
+                     "failure": {"feature": "tcp_dev_max_mm", "threshold": 5.0}}}
+    path = tmp_path / "life.yaml"
+    path.write_text(yaml.safe_dump(spec))
+    assert main(["campaign", "run", str(path), "--quiet", "--jobs", "1"]) == 0
+    out = capsys.readouterr().out
+    assert "2 failed" not in out and "0 failed, 2 censored" in out and "no unit failed within 100000 cycles" in out
+    m = _strict((tmp_path / "fleet" / "manifest.json").read_text())
+    assert m["n_failed"] == 0 and m["eol_cycles"] == {"median": None, "min": None, "max": None}
