@@ -282,8 +282,16 @@ def test_scoring_needs_saved_classifiers_and_their_columns(tmp_path, capsys):
     assert main(["benchmark", str(d), "--test", str(d)]) == 2
     err = capsys.readouterr().err
     assert err.startswith("ur5fault: error: ") and err.count("\n") == 1 and "no saved classifiers" in err
-    with_twin(synthetic()).to_parquet(d / "features.parquet")
+    trained = with_twin(synthetic())
+    trained["run_id"] = [f"r{k:04d}" for k in range(len(trained))]
+    trained.to_parquet(d / "features.parquet")
     assert main(["benchmark", str(d), "--features", "twin"]) == 0
+    capsys.readouterr()
+    # the training campaign given as the other one: its training runs would be scored as if held out
+    assert main(["benchmark", str(d), "--test", str(d)]) == 2
+    err = capsys.readouterr().err
+    n_train = int((trained["split"] == "train").sum())
+    assert err.count("\n") == 1 and f"{n_train} of its {len(trained)} runs are training runs of" in err
     synthetic().to_parquet(tmp_path / "plain.parquet")
     assert main(["benchmark", str(d), "--test", str(tmp_path / "plain.parquet")]) == 2
     assert "lacks" in capsys.readouterr().err.splitlines()[-1]

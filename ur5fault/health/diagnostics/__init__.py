@@ -39,7 +39,7 @@ from .models import Models, fit_models
 from .report import write_report
 from .saved import MODELS_DIR, check_inputs, load_models, save_models
 from .thresholds import PAPER_TCP_MM, backlash_thresholds
-from .transfer import against_training_split
+from .transfer import against_training_split, refuse_training_runs
 
 
 def evaluate(features: pd.DataFrame, *, seed: int = 0, shuffle_labels: bool = False,
@@ -229,6 +229,7 @@ def run_benchmark(campaign_dir: str | Path, out: str | Path | None = None, *, se
         test_dir = Path(test_dir)
         saved = load_models(base / "benchmark")
         other = load_features(test_dir)
+        refuse_training_runs(features, other, campaign_dir, test_dir)
         metrics, figures = evaluate(features, seed=seed, threshold_mm=thr, source=str(test_dir), saved=saved,
                                     test_features=other, with_importance=False)
         metrics.pop("_models")

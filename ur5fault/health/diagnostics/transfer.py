@@ -12,12 +12,13 @@ as many motions as the training test split holds spreads over subsets of the oth
 from __future__ import annotations
 
 import math
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pandas as pd
 
-from ...errors import ConfigFileError
+from ...errors import ConfigFileError, ParameterError
 from . import joint_kind
 from .saved import check_inputs
 
@@ -133,6 +134,17 @@ def compare(reference: tuple[np.ndarray, np.ndarray, np.ndarray], other: tuple[n
         "resampled": f"whole {grouped_by}, with replacement, each campaign on its own",
         "other_subsets": subset_spread(*other, n_ref_groups, n_boot, rng),
     }
+
+
+def refuse_training_runs(features: pd.DataFrame, other: pd.DataFrame, campaign_dir: Path, test_dir: Path) -> None:
+    """``--test``: scores of the saved classifiers on runs they were fitted on would read as held out."""
+    if "run_id" not in features or "run_id" not in other or "split" not in features:
+        return
+    shared = set(other["run_id"]) & set(features.loc[features["split"] == "train", "run_id"])
+    if shared:
+        raise ParameterError(f"--test {test_dir}: {len(shared)} of its {len(other)} runs are training runs of "
+                             f"{campaign_dir} (the saved classifiers were fitted on them): give a campaign of other "
+                             "runs; the training campaign's own test split is scored in its benchmark report")
 
 
 def against_training_split(features: pd.DataFrame, other: pd.DataFrame, saved: tuple[Any, dict[str, Any]],
