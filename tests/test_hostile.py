@@ -488,7 +488,13 @@ def test_dask_scheduler_that_does_not_answer(support_files, capsys, monkeypatch)
     (["campaign", "run", "paper", "--jobs", "1", "--jobs", "2"], "--jobs given twice; give it once"),
     (["discrepancy", "x.csv", "--format", "rtde", "--tcp-offset-m", "0", "0", "0", "--tcp-offset-m", "0", "0", "1",
       "--out", "d"], "--tcp-offset-m given twice"),
-], ids=["simulate-seed", "simulate-out-equals", "abbreviation", "identify-format", "campaign-jobs", "tcp-offset"])
+    # options of an argument group (monitor's baseline source): argparse adds them past add_argument
+    (["monitor", "x.csv", "--format", "rtde", "--baseline", "m.yaml", "--baseline-logs", "a.csv", "--baseline-logs",
+      "b.csv", "--out", "mo"], "--baseline-logs given twice"),
+    (["monitor", "x.csv", "--format", "rtde", "--baseline", "m.yaml", "--baseline-stats", "a.json",
+      "--baseline-stats", "b.json", "--out", "mo"], "--baseline-stats given twice"),
+], ids=["simulate-seed", "simulate-out-equals", "abbreviation", "identify-format", "campaign-jobs", "tcp-offset",
+        "monitor-baseline-logs", "monitor-baseline-stats"])
 def test_option_given_twice_refused(args, message, tmp_path, capsys, monkeypatch):
     """argparse keeps the last of two values silently; the first would be an option accepted and ignored."""
     monkeypatch.chdir(tmp_path)

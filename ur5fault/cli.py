@@ -29,13 +29,12 @@ class _Parser(argparse.ArgumentParser):
         self.add_argument("-v", "--verbose", action="count", default=argparse.SUPPRESS,
                           help="log what the library does (-v: INFO, -vv: DEBUG)")
 
-    def add_argument(self, *args, **kwargs):
-        action = super().add_argument(*args, **kwargs)
-        if action.option_strings and not isinstance(action, _REPEATABLE):
-            action.__class__ = _once(type(action))  # a second --out, --seed, ... would silently win
-        return action
-
     def parse_known_args(self, args=None, namespace=None):
+        # every option, those of argument groups too (a group adds its actions past add_argument): a second --out,
+        # --seed, --baseline-logs ... would silently win
+        for action in self._actions:
+            if action.option_strings and not isinstance(action, _REPEATABLE) and not getattr(action, "once", False):
+                action.__class__ = _once(type(action))
         self._given: dict[str, str] = {}  # dest -> the option string that set it, in this parse
         return super().parse_known_args(args, namespace)
 
@@ -55,6 +54,8 @@ def _once(cls: type) -> type:
     one such class per action class, not one per option."""
 
     class Once(cls):  # type: ignore[valid-type, misc]
+        once = True
+
         def __call__(self, parser, namespace, values, option_string=None):
             given = getattr(parser, "_given", None)
             if given is not None:
