@@ -149,7 +149,12 @@ def test_commands_that_cannot_fit_it_refuse_an_unknown_payload(tmp_path, capsys,
     rc = main([command, str(RUN1), "--format", "rtde", *extra])
     err = capsys.readouterr().err.strip().splitlines()
     assert rc == 2 and len(err) == 1, err
-    assert "payload unknown (no --payload-kg): this command needs the payload stated" in err[0], err
+    assert "payload unknown (no --payload-kg, or --payload-kg unknown): this command needs the payload stated" \
+        in err[0], err
+    # a stated mass without its position: the advice does not offer the unknown payload this command refuses
+    rc = main([command, str(RUN1), "--format", "rtde", "--payload-kg", "0", *extra])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 2 and len(err) == 1 and err[0].endswith("needs its position (0 0 0 for a bare flange)"), err
 
 
 def test_hold_out_beside_a_manifest_takes_its_defaults(tmp_path):

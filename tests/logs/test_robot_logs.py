@@ -145,8 +145,9 @@ def test_payload_for_a_format_that_carries_its_own_is_refused(capsys, tmp_path):
 
 
 @pytest.mark.parametrize("command, extra, text", [
-    ("identify", ("--payload-kg", "0"), "--tcp-offset-m (tcp_offset_m) missing: a stated payload needs"),
-    ("discrepancy", ("--payload-kg", "0"), "--tcp-offset-m (tcp_offset_m) missing: a stated payload needs"),
+    ("identify", ("--payload-kg", "0"), "--tcp-offset-m missing (a manifest's tcp_offset_m): a stated payload "
+                                        "needs its position (0 0 0 for a bare flange), or give --payload-kg unknown"),
+    ("discrepancy", ("--payload-kg", "0"), "--tcp-offset-m missing (a manifest's tcp_offset_m): a stated payload"),
 ])
 def test_rtde_without_payload_is_refused_not_defaulted(capsys, tmp_path, command, extra, text):
     """A stated mass without its position is refused by every command (an unknown payload is fitted by discrepancy

@@ -260,10 +260,13 @@ def read_entry(e: LogEntry, length: MinLength | None = None, *, allow_unknown: b
         if e.payload_unknown:
             log = dataclasses.replace(log, payload_kg=None, tcp_offset_m=e.tcp_offset_m)
     if log.payload_kg is not None and log.tcp_offset_m is None:
-        raise ParameterError(f"{log.source}: --tcp-offset-m (tcp_offset_m) missing: a stated payload needs its "
-                             "position (0 0 0 for a bare flange), or give --payload-kg unknown to fit both")
+        # the alternative of an unknown payload only where this command fits one
+        raise ParameterError(f"{log.source}: --tcp-offset-m missing (a manifest's tcp_offset_m): a stated payload "
+                             "needs its position (0 0 0 for a bare flange)"
+                             + (", or give --payload-kg unknown to fit both" if allow_unknown else ""))
     if not log.payload_known and not allow_unknown:
-        raise ParameterError(f"{log.source}: payload unknown (no --payload-kg): {UNKNOWN_PAYLOAD}")
+        raise ParameterError(f"{log.source}: payload unknown (no --payload-kg, or --payload-kg unknown): "
+                             f"{UNKNOWN_PAYLOAD}")
     return log
 
 
