@@ -221,6 +221,12 @@ def test_bad_baselines_are_one_line(logs, detector, tmp_path, capsys):
         rc, err = _run([*base, "--baseline-logs", *extra], capsys)
         assert rc == 2 and err.startswith("ur5fault: error:") and words in err and len(err.splitlines()) == 1, err
         assert not (tmp_path / "o").exists()
+    # the diagnosed log marked hold_out in its manifest: refused as in a baseline, not dropped without a word
+    scored = tmp_path / "scored.yaml"
+    shutil.copy(logs["diagnosed"], tmp_path / "diagnosed.parquet")
+    scored.write_text("format: sim\nlogs:\n  - {path: diagnosed.parquet, hold_out: true}\n")
+    rc, err = _run(["diagnose", str(scored), *base[2:], "--baseline-logs", str(logs["healthy_a"])], capsys)
+    assert rc == 2 and "hold_out has no meaning in the log diagnose scores" in err and len(err.splitlines()) == 1
     capsys.readouterr()
     with pytest.raises(SystemExit) as exc:  # the option without a log: argparse's own one line
         main([*base, "--baseline-logs"])

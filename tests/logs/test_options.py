@@ -157,6 +157,22 @@ def test_commands_that_cannot_fit_it_refuse_an_unknown_payload(tmp_path, capsys,
     assert rc == 2 and len(err) == 1 and err[0].endswith("needs its position (0 0 0 for a bare flange)"), err
 
 
+@pytest.mark.parametrize("which", ["judged", "baseline"])
+def test_monitor_refuses_hold_out_in_a_manifest(tmp_path, capsys, which):
+    """monitor judges every log it is given and builds its baseline from every baseline log: a manifest's hold_out
+    would be dropped without a word (a monitored log marked so gave an empty monitor.json)."""
+    (tmp_path / "b.yaml").write_text("params: {}\n")
+    m = tmp_path / "logs.yaml"
+    m.write_text(f"format: rtde\npayload_kg: 0\ntcp_offset_m: [0, 0, 0]\nlogs:\n  - {{path: {RUN1}, hold_out: true}}\n")
+    judged, base = (str(m), str(RUN2)) if which == "judged" else (str(RUN2), str(m))
+    rc = main(["monitor", judged, "--format", "rtde", "--payload-kg", "0", "--tcp-offset-m", "0", "0", "0",
+               "--baseline", str(tmp_path / "b.yaml"), "--baseline-logs", base, "--out", str(tmp_path / "o")])
+    err = capsys.readouterr().err.strip().splitlines()
+    where = "the logs monitor judges" if which == "judged" else "a monitor baseline"
+    assert rc == 2 and len(err) == 1 and f"{RUN1.name}: hold_out has no meaning in {where}" in err[0], err
+    assert not (tmp_path / "o").exists()
+
+
 def test_hold_out_beside_a_manifest_takes_its_defaults(tmp_path):
     """`--hold-out LOG` next to a manifest: the held log is read with the manifest's format, payload and tool
     (it had no format at all, `unknown log format None`)."""

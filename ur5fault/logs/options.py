@@ -247,6 +247,15 @@ def _tcp(args: argparse.Namespace):
     return None if args.tcp_offset_m is None else tuple(args.tcp_offset_m)
 
 
+def refuse_hold_out(entries: Sequence[LogEntry], where: str) -> None:
+    """A command that uses every log it is given (``where``: e.g. "a monitor baseline") refuses a manifest's
+    ``hold_out``, which would otherwise be dropped without a word."""
+    held = [e.path.name for e in entries if e.hold_out]
+    if held:
+        raise ParameterError(f"{held[0]}: hold_out has no meaning in {where} (every log is used); remove it from "
+                             "the manifest")
+
+
 def read_entry(e: LogEntry, length: MinLength | None = None, *, allow_unknown: bool = False) -> MeasuredLog:
     """Read one log (at least ``length`` long, default what fitting needs). A log whose payload is unknown
     (:attr:`LogEntry.payload_unknown`) comes back with ``payload_kg`` ``None`` (and ``tcp_offset_m`` ``None``

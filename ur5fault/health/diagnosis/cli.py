@@ -34,7 +34,7 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
     from ...config import Overlay
     from ...errors import ParameterError
     from ...logs.length import check_files_length, check_logs_length
-    from ...logs.options import log_entries, read_entry
+    from ...logs.options import log_entries, read_entry, refuse_hold_out
     from ...util.io import check_new_output
     from ..diagnostics.classifier import require_sklearn
     from ..diagnostics.saved import load_models
@@ -50,13 +50,11 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
     entries = log_entries(args, *([base_args] if base_args else []))  # the command line's options serve both
     if len(entries) != 1:
         raise ParameterError(f"diagnose reads one log; the manifest names {len(entries)}")
+    refuse_hold_out(entries, "the log diagnose scores")
     base = []
     if base_args is not None:
         base = log_entries(base_args, args)
-        held = [e.path.name for e in base if e.hold_out]
-        if held:
-            raise ParameterError(f"{held[0]}: hold_out has no meaning in a diagnose baseline (every baseline log is "
-                                 "used); remove it from the manifest")
+        refuse_hold_out(base, "a diagnose baseline")
         names = [e.path.resolve() for e in base]
         dup = sorted({str(n) for n in names if names.count(n) > 1})
         if dup:

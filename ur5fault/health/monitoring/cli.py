@@ -46,7 +46,7 @@ def cmd_monitor(args: argparse.Namespace) -> int:
     from ...errors import ParameterError
     from ...logs.length import check_files_length, check_logs_length
     from ...logs.measured import assumption_notes
-    from ...logs.options import log_entries, read_log_options
+    from ...logs.options import log_entries, read_log_options, refuse_hold_out
     from ...sim.params import load_params
     from ...util.io import check_new_output
     from .baseline import Baseline, fit_baseline, overlay_sha256
@@ -71,8 +71,10 @@ def cmd_monitor(args: argparse.Namespace) -> int:
         base_args = copy.copy(args)
         base_args.log = args.baseline_logs
     groups = [args] if base_args is None else [args, base_args]  # the command line's options are shared by both
-    check_files_length([e.path for a in groups for e in log_entries(a, *(g for g in groups if g is not a))],
-                       "monitor")
+    entries = {id(a): log_entries(a, *(g for g in groups if g is not a)) for a in groups}
+    for a, where in zip(groups, ("the logs monitor judges", "a monitor baseline")):
+        refuse_hold_out(entries[id(a)], where)
+    check_files_length([e.path for a in groups for e in entries[id(a)]], "monitor")
     logs, _ = read_log_options(args, others=groups[1:])
     healthy = read_log_options(base_args, others=[args])[0] if base_args is not None else []
     check_logs_length([*logs, *healthy], "monitor")
