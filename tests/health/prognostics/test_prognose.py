@@ -71,3 +71,24 @@ def test_benchmark_is_deterministic_under_its_seed(tmp_path):
     b = run_prognose(fleet, tmp_path / "b", seed=3)
     assert a["estimators"] == b["estimators"]
     assert a["goals"]["baseline"] == "wiener"  # without the twin, the feature-only baseline is judged
+
+
+def test_a_folder_without_inspections_gets_advice_it_can_follow(tmp_path, capsys):
+    """A fault campaign's folder, an unfinished life campaign's and a plain file: each refused in one line that says
+    what the folder holds (the advice to run a life campaign into it was refused by `campaign run` there)."""
+    fault = tmp_path / "fault"
+    fault.mkdir()
+    (fault / "manifest.json").write_text(json.dumps({"name": "default", "kind": "fault", "state": "complete"}))
+    life = tmp_path / "life"
+    life.mkdir()
+    (life / "manifest.json").write_text(json.dumps({"name": "lt", "kind": "life", "state": "running",
+                                                    "campaign_file": "lt.yaml"}))
+    (tmp_path / "afile").write_text("x")
+    for folder, words in ((fault, "holds the fault campaign 'default', not a life campaign"),
+                          (life, f"the life campaign 'lt' in {life} has not finished (state 'running'): resume it "
+                                 f"with `ur5fault campaign run lt.yaml --out {life}`"),
+                          (tmp_path / "afile", "afile: a file, not a folder"),
+                          (tmp_path / "empty", "run a life campaign into")):
+        assert main(["prognose", str(folder), "--out", str(tmp_path / "o")]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and words in err[0], err

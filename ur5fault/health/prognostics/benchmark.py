@@ -55,8 +55,7 @@ def load_inspections(folder: Path) -> tuple[pd.DataFrame, dict[str, Any]]:
     """The inspections table and manifest of a life-campaign folder (one-line errors)."""
     path = Path(folder) / "inspections.parquet"
     if not path.is_file():
-        raise ConfigFileError(f"{path}: not found; run a life campaign into {folder} first (a shipped one: "
-                              f"`ur5fault campaign run prognostics --out {folder}`, or prognostics_small)")
+        raise ConfigFileError(f"{path}: not found; {_what_is_there(Path(folder))}")
     remake = f"run the life campaign into {folder} again (`ur5fault campaign run CAMPAIGN.yaml --out DIR`)"
     df = read_parquet_stored(path, remake)
     missing = [c for c in NEEDED if c not in df.columns]
@@ -70,6 +69,24 @@ def load_inspections(folder: Path) -> tuple[pd.DataFrame, dict[str, Any]]:
     except (OSError, ValueError):
         manifest = {}
     return df, manifest
+
+
+def _what_is_there(folder: Path) -> str:
+    """What to do about a folder without an inspections table, from what its manifest says it holds."""
+    try:
+        m = json.loads((folder / "manifest.json").read_text())
+    except (OSError, ValueError):
+        m = None
+    if not isinstance(m, dict):  # nothing ran here (or not ur5fault)
+        return (f"run a life campaign into {folder} first (a shipped one: `ur5fault campaign run prognostics --out "
+                f"{folder}`, or prognostics_small)")
+    name, campaign = m.get("name", "?"), m.get("campaign_file") or "its campaign file"
+    if m.get("kind") != "life":
+        return (f"{folder} holds the fault campaign {name!r}, not a life campaign; run one into another folder "
+                "(`ur5fault campaign run prognostics --out NEW_DIR`)")
+    return (f"the life campaign {name!r} in {folder} has not finished (state {m.get('state', '?')!r}): resume it "
+            f"with `ur5fault campaign run {campaign} --out {folder}` (`ur5fault campaign status {folder}` shows "
+            "how far it got)")
 
 
 #: where the twin's friction rise per degree of clearance and per 10^6 cycles comes from: "learned" from the
@@ -223,6 +240,8 @@ def run_prognose(folder: Path, out: Path | None = None, *, seed: int = 0, twin: 
         raise ConfigFileError(f"twin friction must be one of {', '.join(TWIN_FRICTION)}, not {twin_friction!r}")
     t0 = time.perf_counter()
     folder = Path(folder)
+    if folder.exists() and not folder.is_dir():  # before the output folder inside it is checked
+        raise ConfigFileError(f"{folder}: a file, not a folder: give the folder a life campaign ran into")
     out = Path(out) if out is not None else folder / "benchmark"  # as `ur5fault benchmark DIR` writes DIR/benchmark
     check_new_output(out, folder=True, results=RESULT_FILES, replace=replace)  # before reading or simulating
     df, manifest = load_inspections(folder)
