@@ -221,6 +221,19 @@ def test_a_changed_feature_table_is_never_read_and_a_rerun_rebuilds_it(tmp_path,
     pd.testing.assert_frame_equal(CampaignResult.load(out).features, ref)
 
 
+def test_run_files_deleted_from_a_finished_campaign_are_said(tmp_path, done):
+    """Every run file deleted by hand, their checksum sidecars left: the feature table still holds the rows (the
+    folder stays sound), but the advice says the files are gone and the sidecars are listed, not passed over."""
+    out = _copy(done, tmp_path)
+    for p in (out / "runs").glob("*.parquet"):
+        p.unlink()
+    info = status(out)
+    assert info["state"] == "complete" and info["runs"]["missing"] == 3 and info["runs"]["stray"] == 3
+    assert info["sound"] is True and info["features"]["state"] == "ok"
+    assert info["advice"].startswith("3 run file(s) of the finished campaign are gone")
+    assert all(line.endswith(".parquet.sha256: a checksum whose run file is gone") for line in info["ignored"])
+
+
 def test_a_changed_manifest_is_reported_by_status_and_repaired_by_a_rerun(tmp_path, done):
     out = _copy(done, tmp_path)
     path = out / "manifest.json"

@@ -62,6 +62,8 @@ def scan(out: Path, camp: Campaign, ids: Identities, save_timeseries: bool = Fal
     d = runs_dir(out)
     if d.is_dir():
         s.stray = sorted(p.name for p in d.glob("*.parquet") if p.stem not in wanted)
+        # a checksum sidecar whose run file is gone (deleted by hand): listed, as a stray is
+        s.stray += sorted(p.name for p in d.glob("*.parquet.sha256") if not p.with_suffix("").exists())
     return s
 
 
@@ -131,7 +133,8 @@ def status(out: Path) -> dict[str, Any]:
         info["runs"] = s.counts()
         problems += [f"runs/{rid}.parquet: bad: {why}" for rid, why in s.bad]
         problems += [f"runs/{rid}.parquet: made under other settings: {why}" for rid, why in s.changed]
-        info["ignored"] = _listed([f"runs/{name}: not a run of this campaign (stray)" for name in s.stray])
+        info["ignored"] = _listed([f"runs/{name}: " + ("a checksum whose run file is gone" if name.endswith(".sha256")
+                                                      else "not a run of this campaign (stray)") for name in s.stray])
         info["features"] = _check_features(out, {rc.run_id: ids.identity(rc) for rc in camp.runs})
     else:
         counts = {"ok": 0, "bad": 0, "changed": 0}
@@ -163,6 +166,10 @@ def _advice(info: dict[str, Any], bad: int, changed: int, damaged: bool, table_k
         todo.append(f"the {table_key.replace('_table', '')} table does not hold the stored {what}s: `ur5fault "
                     "campaign run` rebuilds it from them")
     sound = not todo  # of the files stored; an interrupted campaign's are sound, it only has more to make
+    missing = (info.get("runs") or {}).get("missing", 0) if what == "run" else 0
+    if info.get("state") == "complete" and missing:
+        todo.append(f"{missing} run file(s) of the finished campaign are gone (the feature table keeps their rows): "
+                    "`ur5fault campaign run` on the campaign simulates them again")
     if info.get("state") == "interrupted":
         todo.append(f"the campaign stopped before its end: `ur5fault campaign run` with the same campaign and --out "
                     f"resumes it (the {what}s made are kept)")
