@@ -486,3 +486,14 @@ def test_merged_kind_accuracy_counts_gain_for_torque_constant():
     assert balanced_accuracy_score(y, pred) == pytest.approx(0.5)
     assert balanced_accuracy_score(merge_kinds(y), merge_kinds(pred)) == pytest.approx(1.0)
     assert list(merge_kinds(y)[[0, 3]]) == ["healthy", "backlash"]
+
+
+def test_scoring_another_log_period_is_noted(tmp_path):
+    """--test on a campaign logged at another period than the training runs: said (diagnose says it of a log)."""
+    from ur5fault.health.diagnostics.transfer import setup_notes
+
+    (tmp_path / "manifest.json").write_text(json.dumps({"log_period_s": 0.001}))
+    note = setup_notes({"log_period_s": 0.008}, tmp_path)
+    assert len(note) == 1 and note[0].startswith(f"{tmp_path} logs every 1 ms, the training runs every 8 ms")
+    assert setup_notes({"log_period_s": 0.001}, tmp_path) == [] and setup_notes({}, tmp_path) == []
+    assert setup_notes({"log_period_s": 0.008}, tmp_path / "none") == []

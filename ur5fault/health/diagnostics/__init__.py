@@ -39,7 +39,7 @@ from .models import Models, fit_models
 from .report import write_report
 from .saved import MODELS_DIR, check_inputs, load_models, save_models
 from .thresholds import PAPER_TCP_MM, backlash_thresholds
-from .transfer import against_training_split, refuse_training_runs
+from .transfer import against_training_split, refuse_training_runs, setup_notes
 
 
 def evaluate(features: pd.DataFrame, *, seed: int = 0, shuffle_labels: bool = False,
@@ -233,6 +233,7 @@ def run_benchmark(campaign_dir: str | Path, out: str | Path | None = None, *, se
         metrics, figures = evaluate(features, seed=seed, threshold_mm=thr, source=str(test_dir), saved=saved,
                                     test_features=other, with_importance=False)
         metrics.pop("_models")
+        metrics["notes"] = setup_notes(saved[1], test_dir)
         if saved[0].joint_kind is not None:  # how far apart, against the motions drawn (transfer.py)
             metrics["transfer"] = against_training_split(features, other, saved, seed, str(test_dir))
         write_report(metrics, figures, out_dir)

@@ -48,6 +48,8 @@ def cmd_benchmark(args: argparse.Namespace) -> int:
     m = run_benchmark(args.dir, args.out, seed=args.seed, shuffle_labels=args.shuffle_labels,
                       feature_set=args.features, test_dir=args.test,
                       jobs=jobs, replace=args.replace)  # the report folder checked before any training
+    for note in m.get("notes", []):
+        print(f"ur5fault: note: {note}", file=sys.stderr)
     det, loc, kind = m["detection"], m["localisation"], m["kind"]
     print(f"{m['dataset']['n_train']} train / {m['dataset']['n_test']} test runs, features {m['feature_set']}"
           + (" (training labels shuffled)" if m["shuffled_labels"] else ""))

@@ -30,7 +30,8 @@ def markdown(m: dict[str, Any]) -> str:
         f"left out (not ok). Inputs: {len(d['inputs'])} ({d['n_features']} health features from the robot's own "
         f"signals and {', '.join(d['context'])}). Classifier: gradient-boosted trees, fixed hyper-parameters."
         + "".join(f" Left out: {c} ({why})." for c, why in d.get("inputs_left_out", {}).items())
-        + (" **Control run: training labels shuffled.**" if m["shuffled_labels"] else ""),
+        + (" **Control run: training labels shuffled.**" if m["shuffled_labels"] else "")
+        + "".join(f" **Note:** {n}." for n in m.get("notes", [])),
         "",
         "## Detection (healthy vs faulty)",
         f"ROC AUC over all faults: **{_f(det['auc_all'])}**; at its {det['false_alarm_rate']:.0%} false-alarm "

@@ -11,6 +11,7 @@ as many motions as the training test split holds spreads over subsets of the oth
 
 from __future__ import annotations
 
+import json
 import math
 from pathlib import Path
 from typing import Any
@@ -145,6 +146,21 @@ def refuse_training_runs(features: pd.DataFrame, other: pd.DataFrame, campaign_d
         raise ParameterError(f"--test {test_dir}: {len(shared)} of its {len(other)} runs are training runs of "
                              f"{campaign_dir} (the saved classifiers were fitted on them): give a campaign of other "
                              "runs; the training campaign's own test split is scored in its benchmark report")
+
+
+def setup_notes(schema: dict[str, Any], test_dir: Path) -> list[str]:
+    """What differs between the saved classifiers' training runs and another campaign's, from its manifest: the
+    log period (``diagnose`` says the same of a log)."""
+    try:
+        m = json.loads((Path(test_dir) / "manifest.json").read_text())
+    except (OSError, ValueError):
+        return []
+    trained, other = schema.get("log_period_s"), m.get("log_period_s") if isinstance(m, dict) else None
+    if trained and other and abs(float(other) - float(trained)) > 1e-9:
+        return [f"{test_dir} logs every {1e3 * float(other):g} ms, the training runs every {1e3 * float(trained):g} "
+                "ms: rate-dependent features (current spikes, kurtosis, crest factor, high-frequency energy, residual "
+                "RMS) are not on the scale the classifiers learned"]
+    return []
 
 
 def against_training_split(features: pd.DataFrame, other: pd.DataFrame, saved: tuple[Any, dict[str, Any]],
