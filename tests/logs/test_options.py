@@ -232,3 +232,15 @@ def test_a_manifest_is_the_only_log(tmp_path, capsys):
     rc = main(["discrepancy", str(m), str(RUN2), "--format", "rtde", "--out", str(tmp_path / "o")])
     err = capsys.readouterr().err.strip().splitlines()
     assert rc == 2 and len(err) == 1 and "robot.yaml: a manifest of logs must be the only log given" in err[0], err
+
+
+def test_a_baseline_of_plain_files_beside_a_manifest_is_named_without_a_format(tmp_path, capsys):
+    """The monitored logs' manifest names its format; the baseline's plain files have none: the refusal names the
+    baseline (it said '--format is required', which the manifest had seemed to give)."""
+    (tmp_path / "b.yaml").write_text("params: {}\n")
+    m = tmp_path / "logs.yaml"
+    m.write_text(f"format: rtde\npayload_kg: 0\ntcp_offset_m: [0, 0, 0]\nlogs: [{RUN1}]\n")
+    rc = main(["monitor", str(m), "--baseline", str(tmp_path / "b.yaml"), "--baseline-logs", str(RUN2),
+               "--out", str(tmp_path / "o")])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 2 and len(err) == 1 and f"--baseline-logs {RUN2}: no format: give --format" in err[0], err

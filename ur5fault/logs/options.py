@@ -208,7 +208,10 @@ def _resolve(args: argparse.Namespace) -> tuple[list[LogEntry], set[str], Path |
         used: set[str] = set()
         return _manifest(Path(paths[0]), args, held, used), used, Path(paths[0])
     if args.fmt is None:
-        raise ParameterError("--format is required (or a YAML manifest of logs that names it)")
+        group = getattr(args, "log_group", None)  # a command's other logs (a baseline): named, they lack it
+        raise ParameterError((f"{group} {' '.join(map(str, paths))}: no format: give --format (a manifest's format "
+                              "is its own logs')") if group else
+                             "--format is required (or a YAML manifest of logs that names it)")
     _check_payload_options(args.fmt, args.payload_kg, args.tcp_offset_m, "")
     _check_cli_values(args)
     entries = [LogEntry(Path(p), args.fmt, args.payload_kg, _tcp(args), False) for p in paths] + \

@@ -47,6 +47,7 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
     if args.baseline_logs:
         base_args = copy.copy(args)
         base_args.log = args.baseline_logs
+        base_args.log_group = "--baseline-logs"  # named in its refusals
     entries = log_entries(args, *([base_args] if base_args else []))  # the command line's options serve both
     if len(entries) != 1:
         raise ParameterError(f"diagnose reads one log; the manifest names {len(entries)}")

@@ -70,6 +70,7 @@ def cmd_monitor(args: argparse.Namespace) -> int:
     if args.baseline_logs:
         base_args = copy.copy(args)
         base_args.log = args.baseline_logs
+        base_args.log_group = "--baseline-logs"  # named in its refusals
     groups = [args] if base_args is None else [args, base_args]  # the command line's options are shared by both
     entries = {id(a): log_entries(a, *(g for g in groups if g is not a)) for a in groups}
     for a, where in zip(groups, ("the logs monitor judges", "a monitor baseline")):
