@@ -6,6 +6,7 @@ from __future__ import annotations
 import copy
 import json
 import math
+import re
 
 import numpy as np
 import pandas as pd
@@ -302,3 +303,23 @@ def test_the_cost_estimate_counts_every_run_the_campaign_simulates(tmp_path, mon
     run_campaign(camp, tmp_path, jobs=1, progress=False)
     assert sum(asked) > len(camp.runs) * round(0.2 / 50e-6)  # twins simulated beside the runs
     assert estimate(camp, 1).run_steps == sum(asked)
+
+
+def test_equal_draws_collapsing_into_one_run_are_said(camp):
+    """Draws with nothing to tell them apart (a fixed size, no conditions) are one run each: said in a note that
+    `campaign run` prints, not a shorter table without a word; the shipped-size design keeps every draw."""
+    spec = {"name": "few", "sample": {"n": 4, "seed": 0, "joints": [2], "faults": {"backlash": {"size": 0.1}}}}
+    few = build_campaign(spec, "f.yaml")
+    assert len(few.runs) == 2 and few.notes == (  # the run and its healthy twin
+        "f.yaml: sample: 4 draws gave 1 distinct runs (equal draws are one run; draw the sensor-noise seed among the "
+        "conditions, e.g. seed: {integers: [0, 999999]}, for repeats)",)
+    assert camp.notes == ()
+
+
+def test_a_swept_value_given_twice_is_refused():
+    for sweep, message in (({"backlash.joint": [1, 1], "backlash.backlash_deg": [0.1]},
+                            "sweep.backlash.joint[1]: 1 repeats [0] (1); give each value once"),
+                           ({"backlash.joint": ["shoulder_lift_joint", 2], "backlash.backlash_deg": [0.1]},
+                            "sweep.backlash.joint[1]: 2 repeats [0] ('shoulder_lift_joint')")):
+        with pytest.raises(ParameterError, match=re.escape(message)):
+            build_campaign({"name": "dup", "sweep": sweep}, "d.yaml")

@@ -250,6 +250,8 @@ def _run_locked(camp: Campaign, out: Path, jobs: int, backend: str, client, prog
         todo = [rc for rc in camp.runs if rc.run_id in redo]
         if capped:
             say(capped)
+        for line in camp.notes:
+            say(line)
         say(f"campaign {camp.name}: {len(camp.runs)} runs (twins included), {len(todo)} to simulate -> {out}")
         t0 = time.perf_counter()
         started = build_manifest(camp, ids, None, "running", backend, jobs, save_ts, t0)

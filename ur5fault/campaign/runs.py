@@ -106,6 +106,12 @@ def sweep_axes(data: Mapping[str, Any], where: str) -> tuple[list[list[dict[str,
     for key, values in sweep.items():
         loc = f"{where}: sweep.{key}"
         vals = [check_value(key, v, loc) for v in as_list(values, loc)]
+        first: dict[str, int] = {}
+        for i, v in enumerate(vals):  # the same value twice is the same run, kept once: the grid would shrink silently
+            i0 = first.setdefault(json.dumps(v, sort_keys=True, default=str), i)
+            if i0 != i:
+                raise ParameterError(f"{loc}[{i}]: {short(values[i])} repeats [{i0}] ({short(values[i0])}); give each "
+                                     "value once")
         axes.append([{key: v} for v in vals])
         swept.append(key)
     zips = data.get("zip") or []

@@ -94,6 +94,8 @@ class Campaign:
     #: with ``twin_residuals``: the current fit's payload CoM columns from CoM-shifted noise-free twins
     #: (health/twin_regressors.py; twin residuals format 6), else the CoM's gravity torque in closed form
     twin_com_twins: bool = False
+    #: what the user should know before it runs, said by ``campaign run`` (e.g. equal draws collapsed into one run)
+    notes: tuple[str, ...] = ()
 
     @property
     def sha256(self) -> str:
@@ -188,8 +190,9 @@ def build_campaign(data: Mapping[str, Any], where: str, text: str = "", path: Pa
     sampled = data.get("sample") is not None  # a sampled campaign (campaign/sampling.py) instead of a grid
     if sampled and (axes or swept):
         raise ParameterError(f"{where}: sample cannot be combined with sweep or zip; use one of them")
+    notes: tuple[str, ...] = ()
     if sampled:
-        runs, swept = _sampled_runs(data["sample"], cond0, where)
+        runs, swept, notes = _sampled_runs(data["sample"], cond0, where)
     else:
         runs = grid_runs(axes, cond0)
     thr = check_number(data.get("threshold_mm", 0.5), f"{where}: threshold_mm", 0.0, MAX_THRESHOLD_MM, "mm",
@@ -214,7 +217,7 @@ def build_campaign(data: Mapping[str, Any], where: str, text: str = "", path: Pa
     resolved = {**dict(data), "base": {**dict(base), "params": params}}
     return Campaign(name, path, text or yaml.safe_dump(dict(data)), out_dir, base_effects, params,
                     tuple(runs.values()), tuple(swept), thr, bs, lp, save_ts, dur, resolved,
-                    parse_split(data.get("split"), where), twin_res, motor_enc, com_twins)
+                    parse_split(data.get("split"), where), twin_res, motor_enc, com_twins, notes)
 
 
 def _base_conditions(data: Mapping[str, Any], base: Mapping[str, Any], where: str) -> dict[str, Any]:
@@ -228,12 +231,19 @@ def _base_conditions(data: Mapping[str, Any], base: Mapping[str, Any], where: st
     }
 
 
-def _sampled_runs(spec: Any, cond0: Mapping[str, Any], where: str) -> tuple[dict[str, CampaignRun], list[str]]:
-    """The drawn runs (with their twins where wanted) by run_id, and the drawn keys."""
+def _sampled_runs(spec: Any, cond0: Mapping[str, Any], where: str
+                  ) -> tuple[dict[str, CampaignRun], list[str], tuple[str, ...]]:
+    """The drawn runs (with their twins where wanted) by run_id, the drawn keys, and a note when equal draws
+    collapsed into one run."""
     runs: dict[str, CampaignRun] = {}
     drawn, swept = sample_runs(spec, cond0, where)
+    distinct = set()
     for cond, faults, wants_twin in drawn:
         rc = CampaignRun(tuple(sorted(cond.items())), tuple(sorted(faults.items())))  # validates them
+        distinct.add(rc.run_id)
         for r in (rc, rc.twin()) if wants_twin else (rc,):
             runs.setdefault(r.run_id, r)
-    return runs, swept
+    notes = () if len(distinct) == len(drawn) else (
+        f"{where}: sample: {len(drawn)} draws gave {len(distinct)} distinct runs (equal draws are one run; draw the "
+        "sensor-noise seed among the conditions, e.g. seed: {integers: [0, 999999]}, for repeats)",)
+    return runs, swept, notes
