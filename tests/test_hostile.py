@@ -146,6 +146,9 @@ CAMPAIGN_ARGS = [
      "--scheduler tcp://127.0.0.1:8786 is for --backend dask"),
     ("model-duplicate-key", GOOD, ["--model", "{tmp}/dup.yaml"], "duplicate key 'params'"),
     ("model-empty", GOOD, ["--model", "{tmp}/empty.yaml"], "the file is empty"),
+    # the overlay's own effect named, not the campaign file's base.effects, which does not hold it
+    ("model-sets-a-condition", GOOD, ["--model", "{tmp}/warm.yaml"], "warm.yaml: effects[0]: temperature "
+     "(temperature_C=40): every campaign run sets its temperature_C (base.temperature_C of c.yaml, or its default)"),
     ("campaign-missing", None, [], "cannot read (No such file or directory)"),
     ("campaign-is-a-folder", None, ["{tmp}"], "cannot read (Is a directory)"),
 ]
@@ -264,6 +267,7 @@ def _assert_one_line(rc: int, err: str, peak_mb: float, message: str) -> None:
 def support_files(tmp_path):
     _write(tmp_path, "bomb.yaml", BOMB)
     _write(tmp_path, "empty.yaml", "")
+    _write(tmp_path, "warm.yaml", "effects:\n  - {effect: temperature, temperature_C: 40}\n")
     _write(tmp_path, "dup.yaml", "params: {}\nparams: {gear: {ratio: 50}}\n")
     _write(tmp_path, "long.yaml", "trajectory: {name: hold, seconds: 3500}\nlog_period_s: 0.00005\n")
     _write(tmp_path, "seed.yaml", "seed: 1.5\n")

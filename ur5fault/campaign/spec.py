@@ -44,6 +44,7 @@ from typing import Any
 import yaml
 
 from ..config import (
+    CONDITION_EFFECTS,
     Overlay,
     check_duration,
     check_keys,
@@ -147,7 +148,12 @@ def load_campaign(path: str | Path, out: str | Path | None = None, overlay: str 
     text = path.read_text()
     if overlay is not None:
         ov_path = Path(overlay)
-        Overlay.load(ov_path)  # validated with its own file name in messages
+        for i, e in enumerate(Overlay.load(ov_path).effects):  # validated with its own file name in messages
+            key = CONDITION_EFFECTS.get(e.name)
+            if key is not None:  # else refused below as the campaign file's base.effects, which it does not hold
+                raise ParameterError(f"{ov_path.name}: effects[{i}]: {e.describe()}: every campaign run sets its "
+                                     f"{key} (base.{key} of {path.name}, or its default): give it there, not in "
+                                     "the model overlay")
         ov = read_yaml(ov_path)
         base = dict(check_mapping(data.get("base"), f"{path.name}: base"))
         own = dict(check_mapping(base.get("params"), f"{path.name}: base.params"))
