@@ -6,6 +6,7 @@ file takes seconds; memory is the traced Python/numpy peak of the call."""
 from __future__ import annotations
 
 import gzip
+import json
 import os
 import tracemalloc
 from pathlib import Path
@@ -121,7 +122,7 @@ CAMPAIGN = [
      "unknown option of trajectory 'hold' 'speed'; valid: payload_kg, q_rad, seconds"),
     ("log-period-not-multiple", "log_period_s: 0.00007\n" + GOOD, "must be a whole multiple of physics_dt_s"),
     ("log-period-beyond-run", "log_period_s: 2.0\nduration_s: 0.5\n" + GOOD,
-     "log_period_s = 2.0 is out of range [5e-05, 0.5] s"),
+     "log_period_s = 2.0 is longer than the run (0.5 s): a run holds at least one logged sample"),
     ("grid-too-large", "name: x\nsweep: {seed: [" + ", ".join(map(str, range(1001))) + "], payload_kg: ["
      + ", ".join(f"{i / 1000:.3f}" for i in range(1001)) + "]}\n", "expands to 1e+06 runs, above the limit"),
     ("large-needs-yes", "name: x\nduration_s: 0.5\nsweep: {seed: [" + ", ".join(map(str, range(1200))) + "]}\n",
@@ -153,10 +154,13 @@ CAMPAIGN_ARGS = [
     ("campaign-is-a-folder", None, ["{tmp}"], "cannot read (Is a directory)"),
 ]
 SIMULATE = [
-    ("duration-arg-nan", ["--duration-s", "nan"], "duration_s = nan must be a finite number in (0, 3600] s"),
-    ("duration-arg-huge", ["--duration-s", "1e5"], "duration_s = 100000.0 is out of range (0, 3600] s"),
-    ("log-period-arg-zero", ["--log-period-s", "0"], "log_period_s = 0.0 is out of range"),
-    ("payload-arg-inf", ["--payload-kg", "inf"], "payload.mass_kg = inf must be a number"),
+    # the flags' names, not the run configuration's keys (which a command-line user never typed)
+    ("duration-arg-nan", ["--duration-s", "nan"], "--duration-s = nan must be a finite number in (0, 3600] s"),
+    ("duration-arg-huge", ["--duration-s", "1e5"], "--duration-s = 100000.0 is out of range (0, 3600] s"),
+    ("log-period-arg-zero", ["--log-period-s", "0"], "--log-period-s = 0.0 is out of range (0, inf] s"),
+    ("payload-arg-inf", ["--payload-kg", "inf"], "--payload-kg = inf must be a finite number in [0, 5] kg"),
+    ("duration-below-log-period", ["--duration-s", "0.00005"],
+     "--duration-s 5e-05 is shorter than the log period 0.001 s: a run holds at least one logged sample"),
     ("backlash-arg-nan", ["--backlash", "elbow:nan"], "backlash.backlash_deg = nan must be a number"),
     ("effect-arg-nan", ["--effect", "coulomb_friction@2:scale=nan"], "coulomb_friction.scale = nan must be a number"),
     ("backlash-arg-repeated", ["--backlash", "elbow:0.1", "--backlash", "3:0.2"],
@@ -164,10 +168,10 @@ SIMULATE = [
     ("effect-arg-repeated", ["--effect", "coulomb_friction@2:scale=1.5", "--effect", "coulomb_friction@2:scale=1.2"],
      "repeats command line: effects[0] (coulomb_friction on shoulder_lift_joint (scale=1.5)); give each effect once"),
     ("payload-effect-and-option", ["--effect", "payload:mass_kg=1", "--payload-kg", "2"],
-     "command line: effects[0]: payload (mass_kg=1) and payload_kg = 2.0 (--payload-kg / --temperature-C) both set "
+     "command line: effects[0]: payload (mass_kg=1) and payload_kg = 2.0 (--payload-kg) both set "
      "the payload: give it once"),
     ("temperature-effect-and-option", ["--effect", "temperature:temperature_C=40", "--temperature-C", "20"],
-     "effects[0]: temperature (temperature_C=40) and temperature_C = 20.0 (--payload-kg / --temperature-C) both set "
+     "effects[0]: temperature (temperature_C=40) and temperature_C = 20.0 (--temperature-C) both set "
      "the temperature"),
     ("out-arg-unwritable", ["--out", "/proc/ur5fault-test/run.parquet"], "cannot write in /proc"),
     ("out-arg-folder", ["--out", "{tmp}"], "is a folder; give a file name"),
@@ -562,3 +566,14 @@ def test_campaign_status_of_a_folder_that_holds_no_campaign(tmp_path, capsys):
     (tmp_path / "notes.txt").write_text("x")
     rc, err, peak = _run(["campaign", "status", str(tmp_path)], tmp_path, capsys)
     _assert_one_line(rc, err, peak, "not a campaign folder (no manifest.json, runs/ or feature table in it)")
+
+
+def test_a_run_cut_to_its_last_logged_sample_is_said(tmp_path, capsys):
+    """A duration that is not a whole number of log periods ends at the last logged sample: said, not silent."""
+    out = tmp_path / "r.parquet"
+    assert main(["simulate", "--duration-s", "0.0105", "--quiet", "--out", str(out)]) == 0
+    cap = capsys.readouterr()
+    assert "note: the run ends at 0.01 s, its last logged sample (0.0105 s is not a whole number" in cap.err
+    assert json.loads(cap.out)["duration_s"] == pytest.approx(0.01)
+    assert main(["simulate", "--duration-s", "0.01", "--quiet", "--out", str(out), "--replace"]) == 0
+    assert "note:" not in capsys.readouterr().err

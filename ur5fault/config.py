@@ -163,7 +163,10 @@ def check_duration(value: Any, where: str) -> float:
 
 def check_log_period(value: Any, where: str, physics_dt_s: float, duration_s: float) -> float:
     """Log period [s]: a whole multiple of the physics step, at most the run's duration."""
-    lp = check_number(value, where, physics_dt_s, max(duration_s, physics_dt_s), "s")
+    lp = check_number(value, where, physics_dt_s, math.inf, "s")
+    if lp > max(duration_s, physics_dt_s):  # said as what it is, not as a range the user never set
+        raise ParameterError(f"{where} = {short(value)} is longer than the run ({duration_s:g} s): a run holds at "
+                             "least one logged sample; lengthen the run or log more often")
     k = round(lp / physics_dt_s)
     if abs(k * physics_dt_s - lp) > 1e-12:
         raise ParameterError(f"{where} = {short(value)} must be a whole multiple of physics_dt_s = {physics_dt_s:g} s")

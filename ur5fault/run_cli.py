@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 from pathlib import Path
 
@@ -40,6 +41,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
 
     file_data = dict(read_yaml(Path(args.config))) if args.config else {}
     where = Path(args.config).name if args.config else "command line"
+    _check_flags(args, file_data)
     given = {key: val for key, val in (("trajectory", args.trajectory), ("seed", args.seed),
                                        ("payload_kg", args.payload_kg), ("temperature_C", args.temperature_C),
                                        ("duration_s", args.duration_s), ("log_period_s", args.log_period_s))
@@ -62,6 +64,11 @@ def cmd_simulate(args: argparse.Namespace) -> int:
             print(f"note: {added.describe()} is given on top of the model overlay's {base.describe()}: an effect "
                   "that sets a value (e.g. backlash) keeps the run's, one that scales compounds with it",
                   file=sys.stderr)
+    duration = cfg.duration_s if cfg.duration_s is not None else cfg.trajectory.duration_s
+    n_log = math.floor(duration / cfg.log_period_s + 1e-9)
+    if duration - n_log * cfg.log_period_s > 1e-9:  # the run is logged, and reported, to its last whole sample
+        print(f"note: the run ends at {n_log * cfg.log_period_s:g} s, its last logged sample ({duration:g} s is not a "
+              f"whole number of log periods of {cfg.log_period_s:g} s)", file=sys.stderr)
     out = _check_out_file(Path(args.out), args.replace)  # before simulating, not after
     replaced = out.exists()
     sim = Simulator(cfg.params)
@@ -79,6 +86,30 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     sys.stderr.write("effects: " + ("; ".join(res.effects[0]) or "none (healthy)") + "\n")
     print(json.dumps(res.summary(0), indent=None, allow_nan=False))  # strict JSON: jq reads it
     return 0 if res.status[0] == "ok" else 1
+
+
+def _check_flags(args: argparse.Namespace, file_data: dict) -> None:
+    """The command line's values in range, refused under the flags' names (the run configuration's checks name its
+    keys, which a command-line user never typed)."""
+    from .config import check_duration, check_seed
+    from .sim.effects import REGISTRY
+    from .util.checks import check_number
+
+    if args.seed is not None:
+        check_seed(args.seed, "--seed")
+    for value, flag, effect, param in ((args.payload_kg, "--payload-kg", "payload", "mass_kg"),
+                                       (args.temperature_C, "--temperature-C", "temperature", "temperature_C")):
+        if value is not None:
+            p = REGISTRY[effect].param(param)
+            check_number(value, flag, p.lo, p.hi, p.unit)
+    if args.duration_s is not None:
+        check_duration(args.duration_s, "--duration-s")
+        log_period = args.log_period_s if args.log_period_s is not None else file_data.get("log_period_s", 1e-3)
+        if isinstance(log_period, (int, float)) and args.duration_s < log_period:
+            raise Ur5FaultError(f"--duration-s {args.duration_s:g} is shorter than the log period {log_period:g} s: "
+                                "a run holds at least one logged sample; give a longer run or --log-period-s")
+    if args.log_period_s is not None:
+        check_number(args.log_period_s, "--log-period-s", 0.0, math.inf, "s", lo_open=True)
 
 
 #: output formats of `simulate --out`, by file suffix
@@ -107,7 +138,8 @@ def _over_file(file_data: dict, given: dict, cli_items: list, where: str) -> dic
     refuse_condition_effects(file_specs, f"{where}: effects", file_data)
     cli_specs = parse_effects(cli_items, "command line: effects")
     refuse_repeats(cli_specs, "command line: effects")
-    refuse_condition_effects(cli_specs, "command line: effects", given, " (--payload-kg / --temperature-C)")
+    for key, flag in (("payload_kg", "--payload-kg"), ("temperature_C", "--temperature-C")):  # the one typed
+        refuse_condition_effects(cli_specs, "command line: effects", {key: given.get(key)}, f" ({flag})")
     data = {**file_data, **given}
     by_key = {effect_key(e): e for e in cli_specs}
     kept = []
