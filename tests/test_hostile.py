@@ -196,6 +196,9 @@ LOGS = [
     ("log-non-numeric", "rtde", "log.csv", "NONNUMERIC",
      "non-numeric value 'abc' in column 'actual_q_2' at data row 6"),
     ("log-ragged-line", "rtde", "log.csv", "RAGGED", "line 12 has 26 fields, the header 25"),
+    ("log-column-twice", "rtde", "log.csv", "DUPCOL", "column 'actual_q_0' appears 2 times in the header"),
+    ("log-parquet-as-rtde", "rtde", "run.parquet", b"PAR1" + bytes(200) + b"PAR1",
+     "binary data, not a text log (a NUL byte at offset 4); a Parquet file: --format sim reads a run of"),
     ("log-three-rows", "rtde", "log.csv", rtde_frame(3), "fitting needs at least 5 s and 250 samples"),
     ("log-broken-sim", "sim", "log.parquet", b"PAR1" + bytes(range(256)) + b"PAR1", "cannot read as Parquet"),
     ("log-sim-wrong-columns", "sim", "log.parquet", pd.DataFrame({"t_s": [0.0, 1.0]}), "missing required column"),
@@ -224,6 +227,12 @@ def _materialise(tmp: Path, content, name: str, nist_small) -> Path:
         p = _write(tmp, name, rtde_frame())
         lines = p.read_text().splitlines()
         lines[11] += ",7"
+        p.write_text("\n".join(lines) + "\n")
+        return p
+    if content == "DUPCOL":  # the header names a column twice (the second was read as 'actual_q_0.1')
+        p = _write(tmp, name, rtde_frame())
+        lines = p.read_text().splitlines()
+        lines[0] = lines[0].replace("actual_q_1", "actual_q_0")
         p.write_text("\n".join(lines) + "\n")
         return p
     if content == "DEGREES":
@@ -577,3 +586,22 @@ def test_a_run_cut_to_its_last_logged_sample_is_said(tmp_path, capsys):
     assert json.loads(cap.out)["duration_s"] == pytest.approx(0.01)
     assert main(["simulate", "--duration-s", "0.01", "--quiet", "--out", str(out), "--replace"]) == 0
     assert "note:" not in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("args, message", [
+    (["simulate", "--out", ""], "--out: an empty value"),
+    (["campaign", "run", ""], "FILE|NAME: an empty value"),
+    (["campaign", "status", "afile"], "afile: a file, not a campaign folder"),
+], ids=["simulate-out-empty", "campaign-file-empty", "status-of-a-file"])
+def test_empty_paths_and_files_for_folders(args, message, tmp_path, capsys, monkeypatch):
+    """An empty path is not the current folder ('.: is a folder' named a path the user never gave), and a file
+    given for a campaign folder exists (it was 'no such campaign folder')."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "afile").write_text("x")
+    try:
+        rc = main(args)
+    except SystemExit as exc:
+        rc = exc.code
+    err = capsys.readouterr().err
+    assert rc == 2 and err.startswith("ur5fault: error: ") and len(err.strip().splitlines()) == 1, err
+    assert message in err and sorted(p.name for p in tmp_path.iterdir()) == ["afile"]

@@ -36,7 +36,13 @@ class _Parser(argparse.ArgumentParser):
             if action.option_strings and not isinstance(action, _REPEATABLE) and not getattr(action, "once", False):
                 action.__class__ = _once(type(action))
         self._given: dict[str, str] = {}  # dest -> the option string that set it, in this parse
-        return super().parse_known_args(args, namespace)
+        namespace, extras = super().parse_known_args(args, namespace)
+        for action in self._actions:  # an empty path or name ('--out ""') would be read as the current folder
+            value = getattr(namespace, action.dest, None) if action.dest != argparse.SUPPRESS else None
+            if value == "" or (isinstance(value, list) and "" in value):
+                name = "/".join(action.option_strings) or action.metavar or action.dest
+                self.error(f"{name}: an empty value; give a path or a value")
+        return namespace, extras
 
     def error(self, message: str):  # one line, exit 2
         self.exit(EXIT_USAGE, f"ur5fault: error: {message}\n")

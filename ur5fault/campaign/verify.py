@@ -88,7 +88,8 @@ def status(out: Path) -> dict[str, Any]:
     whether ``features.parquet`` holds exactly the campaign's runs."""
     out = Path(out)
     if not out.is_dir():
-        raise ConfigFileError(f"{out}: no such campaign folder")
+        raise ConfigFileError(f"{out}: " + ("a file, not a campaign folder" if out.exists() else
+                                            "no such campaign folder"))
     # a wrong folder (other files, no trace of a campaign) is not "all ok"; an empty one may be a campaign that
     # failed before writing anything (a full disk), and is reported as such
     if any(out.iterdir()) and not runs_dir(out).is_dir() and lock_holder(out) is None and not any(

@@ -98,7 +98,9 @@ def sniff(path: Path, src: str) -> CsvLayout:
         raise _damage(src, exc) from None
     nul = sample.find(b"\0")
     if nul >= 0:
-        raise LogFormatError(f"{src}: binary data, not a text log (a NUL byte at offset {nul})")
+        parquet = sample[:4] == b"PAR1"  # e.g. a simulated run written by `ur5fault simulate`
+        raise LogFormatError(f"{src}: binary data, not a text log (a NUL byte at offset {nul})"
+                             + ("; a Parquet file: --format sim reads a run of `ur5fault simulate`" if parquet else ""))
     cut = sample if not more else sample[: sample.rfind(b"\n") + 1] or sample
     try:
         text = cut.decode("utf-8-sig")
@@ -110,6 +112,9 @@ def sniff(path: Path, src: str) -> CsvLayout:
     header = lines[0]
     sep = next((s for s in ("\t", ",", ";") if s in header), None)
     columns = tuple(c.strip() for c in (header.split(sep) if sep else header.split()))
+    twice = sorted({c for c in columns if c and columns.count(c) > 1})
+    if twice:  # a reader would rename the second and then miss a column it needs, or read the wrong one
+        raise LogFormatError(f"{src}: column {twice[0]!r} appears {columns.count(twice[0])} times in the header")
     if len(lines) < 2:
         raise LogFormatError(f"{src}: header only, no data rows")
     data = lines[1:]
