@@ -115,6 +115,9 @@ def test_run_figure_draws_into_given_axes_and_checks_input(run_pair):
         run_figure(run_pair.to_pandas(0), axes=axes[:2])
     with pytest.raises(ParameterError, match="time series lacks column 'q_set_rad_j1'"):
         run_figure(pd.DataFrame({"t_s": [0.0, 1.0]}))
+    # a campaign's run file (one row of features, given to `ur5fault show` as a file): what to give instead
+    with pytest.raises(ParameterError, match=r"a campaign's run file .* give `ur5fault show r0123 --campaign DIR`"):
+        run_figure(pd.DataFrame({"run_id": ["r0123"], "tcp_dev_max_mm": [0.1]}))
 
 
 # ----------------------------------------------------------------------------- campaigns
@@ -181,6 +184,10 @@ def test_per_joint_feature_read_on_the_faulty_joint(two):
                                       "coulomb_friction size"
     with pytest.raises(UnknownNameError, match="unknown feature 'nope'; valid: .*current_spike_max_A"):
         severity_table(sweep, "nope")
+    # a label, condition or timing column of the table is not a health feature (fault_joint drew flat lines 1..6)
+    for column in ("fault_joint", "wall_s_batch", "backlash_deg", "payload_kg"):
+        with pytest.raises(UnknownNameError, match=f"unknown feature '{column}'"):
+            severity_table(sweep, column)
 
 
 def test_angle_features_are_drawn_in_degrees(two):

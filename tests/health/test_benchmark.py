@@ -497,3 +497,11 @@ def test_scoring_another_log_period_is_noted(tmp_path):
     assert len(note) == 1 and note[0].startswith(f"{tmp_path} logs every 1 ms, the training runs every 8 ms")
     assert setup_notes({"log_period_s": 0.001}, tmp_path) == [] and setup_notes({}, tmp_path) == []
     assert setup_notes({"log_period_s": 0.008}, tmp_path / "none") == []
+
+
+def test_a_time_series_given_for_a_feature_table_is_named(tmp_path, capsys):
+    pd.DataFrame({"t_s": [0.0, 0.001], "q_FB_rad_j1": [0.0, 0.0]}).to_parquet(tmp_path / "run.parquet")
+    assert main(["benchmark", str(tmp_path / "run.parquet"), "--out", str(tmp_path / "b")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "a run's time series (`ur5fault simulate`), not a campaign's feature table" in err
+

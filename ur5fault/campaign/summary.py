@@ -114,19 +114,27 @@ def joint_feature(df: pd.DataFrame, feature: str) -> pd.Series:
     """Values of ``feature`` per row: a column of the table, or a per-joint feature given without its
     ``_j{j}`` suffix (``current_spike_max_A``), read on each row's ``fault_joint`` (the maximum over the
     joints for rows without one, e.g. healthy or robot-level faults)."""
-    if feature in df.columns:
+    known = health_features(df.columns)  # not a label, condition or timing column (fault_joint, wall_s_batch)
+    if feature in known:
         return df[feature].astype(float)
     cols = [f"{feature}_j{j}" for j in range(1, N_JOINTS + 1)]
-    if not all(c in df.columns for c in cols):
-        generic = {c[:-3] for c in df.columns if c[-3:-1] == "_j" and c[-1].isdigit()}
-        numeric = [c for c in df.columns if df[c].dtype.kind == "f"]
-        raise UnknownNameError("feature", feature, sorted(set(numeric) | generic))
+    if not all(c in known for c in cols):
+        generic = {c[:-3] for c in known if c[-3:-1] == "_j" and c[-1].isdigit()}
+        raise UnknownNameError("feature", feature, sorted(set(known) | generic))
     values = df[cols].to_numpy(float)
     fj = pd.to_numeric(df.get("fault_joint", pd.Series(0, index=df.index)), errors="coerce").fillna(0).astype(int)
     fj = fj.to_numpy()
     on_joint = (fj >= 1) & (fj <= N_JOINTS)
     out = np.where(on_joint, values[np.arange(len(df)), np.clip(fj - 1, 0, N_JOINTS - 1)], values.max(axis=1))
     return pd.Series(out, index=df.index, name=feature)
+
+
+def health_features(columns: Sequence[str]) -> list[str]:
+    """The health features among a feature table's ``columns``: the paper's and the twin residuals'."""
+    from ..health.features import FEATURE_UNITS
+    from ..health.twin_features import FEATURE_UNITS as TWIN_UNITS
+
+    return [c for c in columns if c in FEATURE_UNITS or c in TWIN_UNITS]
 
 
 def joint_label(j: int) -> str:

@@ -42,6 +42,10 @@ def run_figure(series: pd.DataFrame, twin: pd.DataFrame | None = None, *, gear_r
     """
     need = ["t_s", *_joint_cols("q_set_rad"), *_joint_cols("q_FB_rad"), *_joint_cols("i_FB_A")]
     missing = [c for c in need if c not in series.columns]
+    if missing and len(series) == 1 and "run_id" in series.columns:  # a campaign's run file: one row of features
+        raise ParameterError(f"a campaign's run file (one row of features), not a time series: give `ur5fault show "
+                             f"{series['run_id'].iloc[0]} --campaign DIR` (DIR: the campaign's folder; the run is "
+                             "simulated again if its time series was not saved)")
     if missing:
         raise ParameterError(f"time series lacks column {missing[0]!r} (a ur5fault time series has {need[0]}, "
                              "q_set_rad_j1.., q_FB_rad_j1.., i_FB_A_j1..: a table of `ur5fault simulate` or "

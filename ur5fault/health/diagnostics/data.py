@@ -98,6 +98,9 @@ def load_dataset(features: pd.DataFrame | str | Path, feature_set: str = "paper"
     if not isinstance(features, pd.DataFrame):
         features = load_features(Path(features))
     missing = [c for c in LABEL_COLUMNS + ("status",) if c not in features and c != "fault_size_unit"]
+    if missing and "t_s" in features:  # a run's time series, not a campaign's table of features
+        raise ConfigFileError("a run's time series (`ur5fault simulate`), not a campaign's feature table: give a "
+                              "campaign folder, e.g. results/diagnostics")
     if missing:
         raise ConfigFileError(f"feature table lacks {', '.join(missing)}: made before the label columns; "
                               f"rerun the campaign into a new folder")
