@@ -37,7 +37,7 @@ def test_fleet_draws_are_deterministic_and_do_not_depend_on_fleet_size():
     ({"units": 1}, "life.units"),
     ({"interval_cycles": 0}, "life.interval_cycles"),
     ({"max_cycles": 10}, "life.max_cycles"),
-    ({"failure": {"feature": "tcp_dev_max_m"}}, "life.failure.feature"),
+    ({"failure": {"feature": "tcp_dev_max_m"}}, r"life.failure.feature: unknown feature 'tcp_dev_max_m' "),
     ({"failure": {"threshold": -1}}, "life.failure.threshold"),
     ({"wear": {"unit_sigma": -1}}, "life.wear.unit_sigma"),
     ({"wear": {"backlash_rate_deg_per_MJ": float("nan")}}, r"^t: life.wear.backlash_rate_deg_per_MJ = nan"),

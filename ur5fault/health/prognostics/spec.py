@@ -169,7 +169,8 @@ def build_life(data: Mapping[str, Any], where: str, text: str = "", path: Path |
     check_keys(fail, ("feature", "threshold"), f"{where}: life.failure")
     feature = fail.get("feature", Failure.feature)
     if feature not in FEATURE_UNITS:
-        raise UnknownNameError("feature", short(feature), FEATURE_UNITS, f"{where}: life.failure.feature")
+        raise UnknownNameError("feature", feature if isinstance(feature, str) else short(feature), FEATURE_UNITS,
+                               f"{where}: life.failure.feature")  # the error quotes a name itself
     thr = check_number(fail.get("threshold", PAPER_THRESHOLD_MM), f"{where}: life.failure.threshold", 0.0, 1e6,
                        FEATURE_UNITS[feature], lo_open=True)
     try:
