@@ -77,6 +77,9 @@ def _nist_variant(frame: pd.DataFrame, kind: str) -> pd.DataFrame:
 # ------------------------------------------------------------------------------ the cases
 # (id, kind, content, extra arguments, expected part of the message)
 CAMPAIGN = [
+    # a parameter group given a number: its keys named, not the class behind them (was "GearParams keys")
+    ("params-group-not-a-mapping", "base: {params: {gear: 3}}\n" + GOOD,
+     "base.params.gear = 3: expected a mapping of its keys (ratio, stiffness_Nm_per_rad, "),
     ("duration-nan", "duration_s: .nan\n" + GOOD, "duration_s = nan must be a finite number"),
     ("log-period-nan", "log_period_s: .nan\n" + GOOD, "log_period_s = nan must be a finite number"),
     ("name-list", "name: [a, b]\nduration_s: 0.5\n", "name = ['a', 'b'] must be a non-empty one-line text"),

@@ -124,7 +124,8 @@ class Validated:
             ftype = _nested_type(cls, key)
             if ftype is not None:
                 if not isinstance(value, Mapping):
-                    raise ParameterError(f"{path}: expected a mapping of {ftype.__name__} keys")
+                    keys = ", ".join(f.name for f in dataclasses.fields(ftype))  # the keys, not the class's name
+                    raise ParameterError(f"{path} = {short(value)}: expected a mapping of its keys ({keys})")
                 kwargs[key] = ftype.from_dict(value, path)
             else:
                 kwargs[key] = value
