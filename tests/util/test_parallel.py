@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import sys
 import threading
 import time
 from concurrent.futures import ThreadPoolExecutor
@@ -251,3 +252,23 @@ def test_blas_one_thread_decorator_limits_blas_while_the_function_runs_and_resto
     assert inside.__name__ == "inside"
     # the discrepancy fit runs under it (its Gram products, docs/performance.md)
     assert DiscrepancyModel.fit.__wrapped__.__name__ == "fit"
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="glibc's malloc_trim; elsewhere a no-op")
+def test_freed_memory_goes_back_to_the_system():
+    """Arrays freed below a live allocation stay in glibc's heap (the resident size does not fall) until
+    return_freed_memory hands them back: what keeps a campaign worker's size flat from batch to batch."""
+    import numpy as np
+
+    from ur5fault.util.parallel import return_freed_memory
+
+    def resident_mib():
+        return int(Path("/proc/self/statm").read_text().split()[1]) * os.sysconf("SC_PAGE_SIZE") / 2**20
+
+    arrays = [np.ones(8000) for _ in range(4000)]  # 64 kB each: below the mmap threshold, from the heap
+    held = resident_mib()
+    del arrays[::2]  # holes between live arrays: nothing the heap can give back from its top
+    kept = resident_mib()
+    assert return_freed_memory() is True
+    after = resident_mib()
+    assert kept > held - 60 and after < kept - 80, (held, kept, after)  # 125 MiB freed in the holes

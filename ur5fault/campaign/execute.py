@@ -27,7 +27,7 @@ import numpy as np
 from ..config import parse_trajectory
 from ..sim.params import load_params
 from ..util.io import check_writable, remove_stale_temporaries, write_json_atomic, write_parquet_atomic
-from ..util.parallel import one_blas_thread
+from ..util.parallel import one_blas_thread, return_freed_memory
 from ..util.progress import campaign_progress
 from .batches import plan_batches
 from .digital_twin import regressor_runs, twin_id, twin_runs
@@ -57,7 +57,9 @@ def run_batch(camp: Campaign, batch: Sequence[CampaignRun], ts_dir: str | None,
     """
     exit_with_parent(parent_pid)
     with one_blas_thread():  # a batch is one core's work: the campaign's processes fill the cores
-        return _simulate_batch(camp, batch, ts_dir, identities)
+        rows = _simulate_batch(camp, batch, ts_dir, identities)
+    return_freed_memory()  # the batch's arrays, freed on return, back to the system (not kept by the allocator)
+    return rows
 
 
 def _simulate_batch(camp: Campaign, batch: Sequence[CampaignRun], ts_dir: str | None,
