@@ -11,7 +11,6 @@ as many motions as the training test split holds spreads over subsets of the oth
 
 from __future__ import annotations
 
-import json
 import math
 from pathlib import Path
 from typing import Any
@@ -151,11 +150,9 @@ def refuse_training_runs(features: pd.DataFrame, other: pd.DataFrame, campaign_d
 def setup_notes(schema: dict[str, Any], test_dir: Path) -> list[str]:
     """What differs between the saved classifiers' training runs and another campaign's, from its manifest: the
     log period (``diagnose`` says the same of a log)."""
-    try:
-        m = json.loads((Path(test_dir) / "manifest.json").read_text())
-    except (OSError, ValueError):
-        return []
-    trained, other = schema.get("log_period_s"), m.get("log_period_s") if isinstance(m, dict) else None
+    from ...campaign.store import read_manifest
+
+    trained, other = schema.get("log_period_s"), read_manifest(Path(test_dir))[0].get("log_period_s")
     if trained and other and abs(float(other) - float(trained)) > 1e-9:
         return [f"{test_dir} logs every {1e3 * float(other):g} ms, the training runs every {1e3 * float(trained):g} "
                 "ms: rate-dependent features (current spikes, kurtosis, crest factor, high-frequency energy, residual "

@@ -73,11 +73,10 @@ def load_inspections(folder: Path) -> tuple[pd.DataFrame, dict[str, Any]]:
 
 def _what_is_there(folder: Path) -> str:
     """What to do about a folder without an inspections table, from what its manifest says it holds."""
-    try:
-        m = json.loads((folder / "manifest.json").read_text())
-    except (OSError, ValueError):
-        m = None
-    if not isinstance(m, dict):  # nothing ran here (or not ur5fault)
+    from ...campaign.store import read_manifest
+
+    m = read_manifest(folder)[0]
+    if not m:  # nothing ran here (or not ur5fault, or a manifest that fails its checksum)
         return (f"run a life campaign into {folder} first (a shipped one: `ur5fault campaign run prognostics --out "
                 f"{folder}`, or prognostics_small)")
     name, campaign = m.get("name", "?"), m.get("campaign_file") or "its campaign file"
