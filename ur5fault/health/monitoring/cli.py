@@ -72,10 +72,10 @@ def cmd_monitor(args: argparse.Namespace) -> int:
         base_args.log = args.baseline_logs
         base_args.log_group = "--baseline-logs"  # named in its refusals
     groups = [args] if base_args is None else [args, base_args]  # the command line's options are shared by both
-    entries = {id(a): log_entries(a, *(g for g in groups if g is not a)) for a in groups}
-    for a, where in zip(groups, ("the logs monitor judges", "a monitor baseline")):
-        refuse_hold_out(entries[id(a)], where)
-    check_files_length([e.path for a in groups for e in entries[id(a)]], "monitor")
+    entries = [log_entries(a, *(g for g in groups if g is not a)) for a in groups]
+    for group, where in zip(entries, ("the logs monitor judges", "a monitor baseline")):
+        refuse_hold_out(group, where)
+    check_files_length([e.path for group in entries for e in group], "monitor")
     logs, _ = read_log_options(args, others=groups[1:])
     healthy = read_log_options(base_args, others=[args])[0] if base_args is not None else []
     check_logs_length([*logs, *healthy], "monitor")
