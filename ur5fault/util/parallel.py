@@ -47,14 +47,10 @@ def return_freed_memory() -> bool:
     loky, with psutil installed, restarts a worker whose resident size has grown 300 MB past its first task's and
     warns of a memory leak. Returns whether the call was made."""
     import ctypes
-    import ctypes.util
 
-    name = ctypes.util.find_library("c")
-    if name is None:
-        return False
-    try:
-        trim = ctypes.CDLL(name).malloc_trim
-    except (OSError, AttributeError):  # not glibc (macOS, musl, Windows)
+    try:  # the symbols the process has loaded (libc among them), without find_library's subprocess
+        trim = ctypes.CDLL(None).malloc_trim
+    except (OSError, AttributeError, TypeError):  # not glibc (macOS, musl), or no process handle (Windows)
         return False
     trim.argtypes, trim.restype = [ctypes.c_size_t], ctypes.c_int
     trim(0)
