@@ -372,10 +372,11 @@ def test_identity_covers_the_simulator_revision(tmp_path, tiny_done, monkeypatch
     """A run stored before a change of what the simulator computes is not mixed with new ones: the revision
     (raised by hand with such a change) is named as the difference."""
     from ur5fault.campaign import CampaignChangedError, identity
+    from ur5fault.sim import SIM_REVISION
 
     out = _copy_done(tiny_done, tmp_path)
     monkeypatch.setattr(identity, "SIM_REVISION", 99)
-    with pytest.raises(CampaignChangedError, match="sim_revision: 2 in the file, 99 now"):
+    with pytest.raises(CampaignChangedError, match=f"sim_revision: {SIM_REVISION} in the file, 99 now"):
         run_quiet(load_campaign(tiny(tmp_path)), out)
 
 

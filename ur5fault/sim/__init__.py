@@ -12,5 +12,8 @@ typed results a batch returns.
 
 #: revision of what a run simulates, in every campaign run's identity: raised when a change of the simulator
 #: alters some run's result under the same inputs, so a folder made before it is re-simulated, not mixed (2: a
-#: resolver offset starts held, the link at setpoint - offset, instead of as a step at t = 0)
-SIM_REVISION = 2
+#: resolver offset starts held, the link at setpoint - offset, instead of as a step at t = 0; 3: the motions' inverse
+#: kinematics and the sensors' filter coefficients computed without BLAS, ur5fault/util/portable.py, so that a run
+#: is the same bit for bit whichever BLAS kernel the machine picks: their last bits, and from them some quantised
+#: readings a step apart, moved before)
+SIM_REVISION = 3

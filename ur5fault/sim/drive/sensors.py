@@ -11,19 +11,22 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ...util.portable import matmul
+
 
 def _expm(a: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Matrix exponential of a small matrix (scaling and squaring with a Taylor series)."""
+    """Matrix exponential of a small matrix (scaling and squaring with a Taylor series; the products through
+    :func:`ur5fault.util.portable.matmul`, so the coefficients are the same on every machine)."""
     norm = float(np.max(np.sum(np.abs(a), axis=1)))
     s = max(0, int(np.ceil(np.log2(norm))) + 1) if norm > 0.5 else 0
     x = a / (2.0**s)
     out = np.eye(a.shape[0])
     term = np.eye(a.shape[0])
     for k in range(1, 20):
-        term = term @ x / k
+        term = matmul(term, x) / k
         out = out + term
     for _ in range(s):
-        out = out @ out
+        out = matmul(out, out)
     return out
 
 

@@ -5,16 +5,22 @@ Jacobian, so a solution is exact for the model the simulator steps (``ur5fault/m
 which is UR's DH kinematics).  Starting from a seed configuration, it converges to the
 solution on the seed's branch (shoulder, elbow and wrist configuration), which is how a
 pick-and-place cell keeps its arm in one posture family.
+
+Its products and solves go through :mod:`ur5fault.util.portable`, not BLAS or LAPACK: the IK iterates to a
+tolerance, so a kernel's own rounding moved the last bits of a motion's joint targets with the machine.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import math
 from importlib import resources
 
 import mujoco
 import numpy as np
 from numpy.typing import NDArray
+
+from ...util.portable import solve_spd, sq_norm
 
 IK_TOL = 1e-14  # squared pose error at convergence [m^2 + rad^2]: 0.1 um, 0.1 urad
 IK_MAX_ITER = 200
@@ -29,7 +35,7 @@ def model_path() -> str:
 
 def down_rotation(yaw_rad: float) -> NDArray[np.float64]:
     """Tool frame (columns x, y, z in the base frame) pointing down, x axis at ``yaw_rad`` about vertical."""
-    c, s = np.cos(yaw_rad), np.sin(yaw_rad)
+    c, s = math.cos(yaw_rad), math.sin(yaw_rad)
     return np.array([[c, s, 0.0], [s, -c, 0.0], [0.0, 0.0, -1.0]])
 
 
@@ -64,13 +70,15 @@ class TcpKinematics:
         jp, jr = np.zeros((3, self.model.nv)), np.zeros((3, self.model.nv))
         for _ in range(IK_MAX_ITER):
             e = self.pose_error(q, pos, rot)
-            if e @ e < IK_TOL:
+            if sq_norm(e) < IK_TOL:
                 return q
             mujoco.mj_comPos(self.model, self.data)  # the Jacobian reads cdof, which mj_kinematics leaves stale
             mujoco.mj_jacSite(self.model, self.data, jp, jr, self.site)
             jac = np.vstack([jp, jr])
-            dq = jac.T @ np.linalg.solve(jac @ jac.T + IK_DAMPING * np.eye(6), e)
+            jjt = (jac[:, None, :] * jac[None, :, :]).sum(axis=2) + IK_DAMPING * np.eye(6)
+            dq = (jac * solve_spd(jjt, e)[:, None]).sum(axis=0)
             big = np.max(np.abs(dq))
             q += dq * min(1.0, IK_MAX_STEP_RAD / big) if big > 0 else 0.0
         e = self.pose_error(q, pos, rot)
-        return q if e @ e < IK_TOL else None
+        return q if sq_norm(e) < IK_TOL else None
+

@@ -33,6 +33,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ...errors import ParameterError
+from ...util.portable import matmul
 from .base import CB3_SETPOINT_PERIOD_S, Trajectory, dwell, movej
 from .ik import TcpKinematics, down_rotation
 
@@ -177,7 +178,7 @@ def tilted(rot: NDArray, tilt_xy_rad: NDArray) -> NDArray:
     ca, sa, cb, sb = math.cos(a), math.sin(a), math.cos(b), math.sin(b)
     rx = np.array([[1.0, 0.0, 0.0], [0.0, ca, -sa], [0.0, sa, ca]])
     ry = np.array([[cb, 0.0, sb], [0.0, 1.0, 0.0], [-sb, 0.0, cb]])
-    return rot @ rx @ ry
+    return matmul(matmul(rot, rx), ry)  # not rot @ rx @ ry: util/portable.py
 
 
 def _on_branch(q: NDArray, tilt_rad: float) -> bool:
