@@ -488,7 +488,7 @@ def test_manifest_takes_provenance_once_per_invocation(tmp_path, monkeypatch):
 
     from ur5fault.util import provenance
 
-    calls = {"dependency_versions": 0, "git_revision": 0}
+    calls = {"dependency_versions": 0, "git_revision": 0, "numerics": 0}
 
     def counted(name, real):
         def f(*a, **k):
@@ -500,9 +500,11 @@ def test_manifest_takes_provenance_once_per_invocation(tmp_path, monkeypatch):
         monkeypatch.setattr(provenance, name, counted(name, getattr(provenance, name)))
     out = tmp_path / "out"
     run_quiet(load_campaign(tiny(tmp_path, dur=0.05, levels="0.1")), out)
-    assert calls == {"dependency_versions": 1, "git_revision": 1}
+    assert calls == {"dependency_versions": 1, "git_revision": 1, "numerics": 1}
     m = json.loads((out / "manifest.json").read_text())
     assert m["state"] == "complete" and m["dependencies"].get("numpy") and "git_revision" in m
+    # the BLAS numpy loaded, with the kernel it picked: the twin fits' last bits depend on it
+    assert m["numerics"]["blas"] and all(lib["internal_api"] and lib["architecture"] for lib in m["numerics"]["blas"])
 
 
 def test_timeseries_asked_for_later_are_made(tmp_path, tiny_done):

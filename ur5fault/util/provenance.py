@@ -1,5 +1,6 @@
-"""Provenance recorded beside results: the git revision of the source (when it is a checkout) and
-the installed version of every package ur5fault depends on, directly or not."""
+"""Provenance recorded beside results: the git revision of the source (when it is a checkout), the
+installed version of every package ur5fault depends on, directly or not, and the machine's numerics (CPU and
+BLAS kernel)."""
 
 from __future__ import annotations
 
@@ -74,3 +75,32 @@ def dependency_versions(root: str = "ur5fault") -> dict[str, str | None]:
                 continue
             todo.append((name, False))
     return dict(sorted(versions.items()))
+
+
+def numerics() -> dict[str, Any]:
+    """``{"cpu", "blas"}``: the CPU's model name (None where the platform does not say) and every BLAS library
+    loaded in this process with the kernel it picked for this CPU (threadpoolctl's ``internal_api``,
+    ``version``, ``architecture``; OpenBLAS picks by the CPU unless ``OPENBLAS_CORETYPE`` says).
+
+    Since simulator revision 3 a run's simulation does not depend on them (:mod:`.portable`); the twin residual
+    features' least-squares fits still go through LAPACK, and their estimates of columns that a motion nearly
+    mixes differ in the last bits - or more, where the fit is ill-conditioned - from one kernel to another
+    (docs/diagnostics.md, "The same campaign on another machine")."""
+    from threadpoolctl import threadpool_info
+
+    blas = [{k: lib.get(k) for k in ("internal_api", "version", "architecture")}
+            for lib in threadpool_info() if lib.get("user_api") == "blas"]
+    return {"cpu": _cpu_model(), "blas": blas}
+
+
+def _cpu_model() -> str | None:
+    try:
+        with open("/proc/cpuinfo", encoding="utf-8", errors="replace") as f:
+            for line in f:
+                if line.startswith("model name"):
+                    return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    import platform
+
+    return platform.processor() or None
