@@ -2,7 +2,7 @@
 (ur5fault/util/portable.py) against numpy's own, and whole runs simulated under different OpenBLAS kernels
 (``OPENBLAS_CORETYPE``, read when the library loads: one process each), compared bit for bit.
 
-Before the setup code went through util/portable.py, 10 motions of ``random_pick_and_place`` gave four different
+Before the setup code went through util/portable.py, 20 motions of ``random_pick_and_place`` gave four different
 setpoint hashes under five kernels, and a 7.4 s run's quantised current readings differed by a step from 2.4 s on
 under Prescott against Haswell (docs/diagnostics.md, "The same campaign on another machine")."""
 
