@@ -1,5 +1,6 @@
-"""Small dense linear algebra that rounds the same on every machine: products summed in index order in
-elementwise numpy, a Cholesky solve in Python floats - never BLAS or LAPACK.
+"""Small dense linear algebra that rounds the same on every machine: elementwise products summed by numpy's own
+reduction loops (in an order fixed by numpy, not by the CPU), a Cholesky solve in Python floats - never BLAS or
+LAPACK.
 
 numpy hands ``@``, ``np.dot`` and ``np.linalg`` to its BLAS (OpenBLAS in the numpy wheels), which picks a kernel
 by the CPU it runs on (Prescott, Sandybridge, Haswell, SkylakeX, Zen, ...; ``OPENBLAS_CORETYPE`` overrides it),
@@ -19,12 +20,12 @@ from numpy.typing import NDArray
 
 
 def sq_norm(v: NDArray) -> float:
-    """``v @ v`` summed in index order."""
+    """``v @ v``, without BLAS."""
     return float((v * v).sum())
 
 
 def matmul(a: NDArray, b: NDArray) -> NDArray:
-    """``a @ b`` of two small matrices, each entry summed in index order."""
+    """``a @ b`` of two small matrices, without BLAS (each entry's products summed along an axis by numpy)."""
     return (np.asarray(a, float)[:, :, None] * np.asarray(b, float)[None, :, :]).sum(axis=1)
 
 

@@ -20,7 +20,7 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
-from ...util.portable import solve_spd, sq_norm
+from ...util.portable import matmul, solve_spd, sq_norm
 
 IK_TOL = 1e-14  # squared pose error at convergence [m^2 + rad^2]: 0.1 um, 0.1 urad
 IK_MAX_ITER = 200
@@ -75,8 +75,8 @@ class TcpKinematics:
             mujoco.mj_comPos(self.model, self.data)  # the Jacobian reads cdof, which mj_kinematics leaves stale
             mujoco.mj_jacSite(self.model, self.data, jp, jr, self.site)
             jac = np.vstack([jp, jr])
-            jjt = (jac[:, None, :] * jac[None, :, :]).sum(axis=2) + IK_DAMPING * np.eye(6)
-            dq = (jac * solve_spd(jjt, e)[:, None]).sum(axis=0)
+            jjt = matmul(jac, jac.T) + IK_DAMPING * np.eye(6)
+            dq = matmul(jac.T, solve_spd(jjt, e)[:, None])[:, 0]
             big = np.max(np.abs(dq))
             q += dq * min(1.0, IK_MAX_STEP_RAD / big) if big > 0 else 0.0
         e = self.pose_error(q, pos, rot)
