@@ -54,7 +54,7 @@ def build_manifest(camp: Campaign, ids: Identities, features, state: str, backen
         "python": sys.version.split()[0],
         "dependencies": earlier["dependencies"] if earlier is not None else dependency_versions(),
         # the machine's CPU and BLAS kernel: the twin residual fits' last bits depend on them (provenance.numerics)
-        "numerics": earlier["numerics"] if earlier is not None and "numerics" in earlier else provenance.numerics(),
+        "numerics": earlier["numerics"] if earlier is not None else provenance.numerics(),
         "n_runs": len(camp.runs) if features is None else int(len(features)),
         "physics_dt_s": p.physics_dt_s,
         "duration_s": max(durations),
