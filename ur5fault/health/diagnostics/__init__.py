@@ -45,8 +45,8 @@ from .transfer import against_training_split, refuse_training_runs, setup_notes
 def evaluate(features: pd.DataFrame, *, seed: int = 0, shuffle_labels: bool = False,
              threshold_mm: float = PAPER_TCP_MM, source: str = "features", with_figures: bool = True,
              with_importance: bool = True, feature_set: str = "paper", saved: tuple[Models, dict] | None = None,
-             test_features: pd.DataFrame | None = None, calibrate: bool = False, with_limits: bool = True
-             ) -> tuple[dict[str, Any], dict[str, Any]]:
+             test_features: pd.DataFrame | None = None, calibrate: bool = False, with_limits: bool = True,
+             fitted: Models | None = None) -> tuple[dict[str, Any], dict[str, Any]]:
     """Train on the train split, score on the test split.
 
     Args:
@@ -62,6 +62,8 @@ def evaluate(features: pd.DataFrame, *, seed: int = 0, shuffle_labels: bool = Fa
             (:mod:`.calibration`; not with shuffled labels) and report its reliability on the test split.
         with_limits: also report detection over the runs above their detection limit (:mod:`.limit_metrics`;
             needs the twin estimates' SE and t columns).
+        fitted: classifiers already trained on this split, inputs and seed (the chosen set's, for its row of the
+            comparison): scored instead of training them again.
 
     Returns:
         ``(metrics, figures)``: every number (JSON-able) and the matplotlib Figures by name.
@@ -70,20 +72,21 @@ def evaluate(features: pd.DataFrame, *, seed: int = 0, shuffle_labels: bool = Fa
 
     with single_threaded():
         return _evaluate(features, seed, shuffle_labels, threshold_mm, source, with_figures, with_importance,
-                         feature_set, saved, test_features, calibrate, with_limits)
+                         feature_set, saved, test_features, calibrate, with_limits, fitted)
 
 
 def _evaluate(features: pd.DataFrame, seed: int, shuffle_labels: bool, threshold_mm: float, source: str,
               with_figures: bool, with_importance: bool, feature_set: str = "paper",
               saved: tuple[Models, dict] | None = None, test_features: pd.DataFrame | None = None,
-              calibrate: bool = False, with_limits: bool = True) -> tuple[dict[str, Any], dict[str, Any]]:
+              calibrate: bool = False, with_limits: bool = True, fitted: Models | None = None
+              ) -> tuple[dict[str, Any], dict[str, Any]]:
     t0 = time.perf_counter()
     ds: Dataset = load_dataset(features, feature_set if saved is None else saved[1]["feature_set"])
     if test_features is not None:
         names = check_inputs(test_features, saved[1], source) if saved is not None else list(ds.inputs)
         other = test_features[test_features["status"] == "ok"].reset_index(drop=True)
         ds = dataclasses.replace(ds, test=other, inputs=tuple(names))
-    models = fit_models(ds, seed, shuffle_labels) if saved is None else saved[0]
+    models = saved[0] if saved is not None else fitted if fitted is not None else fit_models(ds, seed, shuffle_labels)
     cal_fit: dict[str, Any] = {}
     if calibrate and saved is None and not shuffle_labels:
         models.calibrator, cal_fit = fit_calibration(ds, seed)
@@ -240,13 +243,22 @@ def run_benchmark(campaign_dir: str | Path, out: str | Path | None = None, *, se
         metrics["out"] = str(out_dir)
         return metrics
     compare = compare and has_twin_features(features)
-    pending = _start_comparison(features, seed, thr, str(campaign_dir), jobs) if compare and jobs > 1 else None
+    # the chosen set's classifiers are its trained row of the comparison: trained once, here
+    reused = None if shuffle_labels else feature_set
+    pending = (_start_comparison(features, seed, thr, str(campaign_dir), jobs, reused) if compare and jobs > 1
+               else None)
     metrics, figures = evaluate(features, seed=seed, shuffle_labels=shuffle_labels, threshold_mm=thr,
                                 source=str(campaign_dir), feature_set=feature_set, calibrate=not shuffle_labels)
     models = metrics.pop("_models")
     if compare:
-        metrics["comparison"] = (compare_feature_sets(features, seed, thr, str(campaign_dir)) if pending is None
-                                 else {fs: {k: f.result() for k, f in row.items()} for fs, row in pending.items()})
+        fitted = None if reused is None else (reused, dataclasses.replace(models, calibrator=None))
+        if pending is None:
+            metrics["comparison"] = compare_feature_sets(features, seed, thr, str(campaign_dir), fitted)
+        else:
+            rows = {fs: {k: f.result() for k, f in row.items()} for fs, row in pending.items()}
+            if fitted is not None:
+                rows[reused]["trained"] = _compared(features, seed, False, thr, str(campaign_dir), reused, fitted[1])
+            metrics["comparison"] = {fs: {k: rows[fs][k] for k in ("trained", "shuffled")} for fs in FEATURE_SETS}
     write_report(metrics, figures, out_dir)
     if not shuffle_labels:
         save_models(models, load_dataset(features, feature_set), feature_set,
@@ -270,33 +282,40 @@ def mean_run_duration_s(manifest: dict[str, Any]) -> float | None:
         return None
 
 
-def compare_feature_sets(features: pd.DataFrame, seed: int, threshold_mm: float, source: str) -> dict[str, Any]:
-    """Headline figures of every feature set on the same split, each with its shuffled-label control."""
-    return {fs: {"shuffled" if shuffled else "trained": _compared(features, seed, shuffled, threshold_mm, source, fs)
-                 for shuffled in (False, True)} for fs in FEATURE_SETS}
+def compare_feature_sets(features: pd.DataFrame, seed: int, threshold_mm: float, source: str,
+                         fitted: tuple[str, Models] | None = None) -> dict[str, Any]:
+    """Headline figures of every feature set on the same split, each with its shuffled-label control.
+    ``fitted``: ``(feature_set, models)`` trained on that set with this seed: its trained row scores them."""
+    return {fs: {"shuffled" if shuffled else "trained": _compared(
+        features, seed, shuffled, threshold_mm, source, fs,
+        fitted[1] if fitted is not None and fs == fitted[0] and not shuffled else None)
+        for shuffled in (False, True)} for fs in FEATURE_SETS}
 
 
 def _compared(features: pd.DataFrame, seed: int, shuffled: bool, threshold_mm: float, source: str,
-              feature_set: str) -> dict[str, Any]:
+              feature_set: str, fitted: Models | None = None) -> dict[str, Any]:
     """One row of :func:`compare_feature_sets`: the headline figures of one feature set, trained or shuffled."""
     m, _ = evaluate(features, seed=seed, shuffle_labels=shuffled, threshold_mm=threshold_mm, source=source,
-                    with_figures=False, with_importance=False, feature_set=feature_set, with_limits=False)
+                    with_figures=False, with_importance=False, feature_set=feature_set, with_limits=False,
+                    fitted=fitted)
     return summary(m)
 
 
-def _start_comparison(features: pd.DataFrame, seed: int, threshold_mm: float, source: str, jobs: int
-                      ) -> dict[str, dict[str, Any]]:
-    """Submit :func:`compare_feature_sets`' evaluations to ``jobs`` worker processes; futures by set and row.
+def _start_comparison(features: pd.DataFrame, seed: int, threshold_mm: float, source: str, jobs: int,
+                      reused: str | None = None) -> dict[str, dict[str, Any]]:
+    """Submit :func:`compare_feature_sets`' evaluations to ``jobs`` worker processes; futures by set and row
+    (``reused``: a set whose trained row the caller scores with the classifiers it trains itself: not submitted).
 
     Each evaluation is deterministic given the seed and single-threaded (:func:`.classifier.single_threaded`),
     so a worker returns what this process would; the workers run while this process scores the chosen set
-    (the comparison is about 70 % of a full benchmark's CPU: 340 of 477 s on the 2,546-run dataset)."""
+    (the comparison was about 70 % of a full benchmark's CPU: 340 of 477 s on the 2,546-run dataset, when it also
+    trained the chosen set's classifiers a second time)."""
     from joblib.externals.loky import get_reusable_executor
 
     pool = get_reusable_executor(max_workers=jobs)
     return {fs: {"shuffled" if shuffled else "trained": pool.submit(_compared, features, seed, shuffled,
                                                                     threshold_mm, source, fs)
-                 for shuffled in (False, True)} for fs in FEATURE_SETS}
+                 for shuffled in (False, True) if shuffled or fs != reused} for fs in FEATURE_SETS}
 
 
 def summary(m: dict[str, Any]) -> dict[str, Any]:
