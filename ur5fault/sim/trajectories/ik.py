@@ -81,4 +81,3 @@ class TcpKinematics:
             q += dq * min(1.0, IK_MAX_STEP_RAD / big) if big > 0 else 0.0
         e = self.pose_error(q, pos, rot)
         return q if sq_norm(e) < IK_TOL else None
-
