@@ -100,19 +100,27 @@ def hac_fit(x: NDArray, y: NDArray, rcond: float = 1e-8) -> Fit:
     live = scale > ZERO_COLUMN * scale.max(initial=0.0)
     if int(ok.sum()) <= int(live.sum()) or not live.any():
         return Fit(coef, se)
-    while True:  # the normal equations of unit-norm columns: cheap on long logs
-        a = flat[:, live] / scale[live]
-        gram, rhs = a.T @ a, a.T @ yz.reshape(-1)
-        ev, vec = np.linalg.eigh(gram)
-        if ev[0] > rcond**2 * ev[-1]:
+    a_all = flat / np.where(live, scale, 1.0)
+    # one Householder QR of [columns | y] (backward stable): the columns of R are the columns of A rotated, so
+    # any subset of them has A's singular values, and |A_live b - y| = |R_live b - R_y|.  The singular values
+    # are then resolved down to rounding (~1e-16 of the largest), where the normal matrix A'A resolves only
+    # its eigenvalues, the squares: at ``rcond`` 1e-8 a column the data cannot tell from the others (e.g. a
+    # flank column that is a constant because the gear torque never reverses) was kept or left out by the
+    # last bits of the BLAS kernel's sums (docs/diagnostics.md, "The same campaign on another machine")
+    r_aug = np.linalg.qr(np.column_stack([a_all, yz.reshape(-1)]), mode="r")
+    r_cols, r_y = r_aug[:, :p], r_aug[:, p]
+    while True:
+        u, sv, vt = np.linalg.svd(r_cols[:, live], full_matrices=False)
+        if sv[-1] > rcond * sv[0]:
             break
         # the motion mixes columns: leave out the last one in the weakest direction (callers put nuisance last)
-        weak = np.abs(vec[:, 0]) > 1e-3 * np.abs(vec[:, 0]).max()
+        weak = np.abs(vt[-1]) > 1e-3 * np.abs(vt[-1]).max()
         live[np.flatnonzero(live)[np.flatnonzero(weak)[-1]]] = False
         if not live.any():
             return Fit(coef, se)
-    bread = (vec / ev) @ vec.T  # (A'A)^-1
-    b_scaled = bread @ rhs
+    a = a_all[:, live]
+    bread = (vt.T / sv**2) @ vt  # (A'A)^-1
+    b_scaled = vt.T @ ((u.T @ r_y) / sv)
     resid = (yz.reshape(-1) - a @ b_scaled).reshape(n, m)
     g = (a.reshape(n, m, -1) * resid[..., None]).sum(axis=1)  # score of each instant, (n, p_live)
     meat = g.T @ g
