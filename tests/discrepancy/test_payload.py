@@ -68,7 +68,7 @@ def _write_rtde(log, path):
     pd.DataFrame(cols).to_csv(path, index=False)
 
 
-#: the one false finding the stated-payload run keeps beyond the fitted-payload run's since simulator revision 3
+#: the one false finding known on this log (since simulator revision 3, with the true payload stated)
 KNOWN_FALSE_FINDING = {("breakaway_friction", "shoulder_pan_joint")}
 
 
@@ -76,10 +76,11 @@ KNOWN_FALSE_FINDING = {("breakaway_friction", "shoulder_pan_joint")}
 def test_discrepancy_fits_an_unknown_payload_and_names_nothing_the_stated_one_does_not(simulated, tmp_path, capsys):
     """An RTDE CSV of the simulated log (with its joint temperatures, which the replays take), its payload not
     given: the payload is fitted (stderr, summary.json, report), the overlay carries no payload, and the library
-    names exactly what it names with the true payload stated (on this log: a wrist_3 current-sensor gain below 1,
-    the replay's own sensor noise on a joint whose current is about its noise level; nothing on J1-J5), leaving
-    out the library's payload candidates, which a fitted payload replaces. Since simulator revision 3 the stated run
-    also keeps a false base breakaway friction on this log: the known failure below."""
+    names nothing the stated one does not, leaving out the library's payload candidates, which a fitted payload
+    replaces. The log is the model's own, so every finding is false: neither run may name anything but the one
+    false finding known on this log (a base breakaway friction, the known failure below). Before a current-sensor
+    gain was screened between noise-free replays (discrepancy/library.py) both also kept a wrist_3 current gain
+    of 0.6-0.7, the replay's own sensor noise on a joint whose current is about its noise level."""
     csv = tmp_path / "sim.csv"
     _write_rtde(simulated, csv)
     runs = {}
@@ -103,10 +104,11 @@ def test_discrepancy_fits_an_unknown_payload_and_names_nothing_the_stated_one_do
     def named(s):  # the library's payload candidates are left out where the payload is fitted (by design)
         return sorted((f["name"], f["joint"]) for f in s["findings"] if f["kept"] and f["name"] not in PAYLOAD_KINDS)
 
-    assert all(j == "wrist_3_joint" for _, j in named(summ)), named(summ)
-    stated = named(runs["stated"][2])
-    if set(stated) - set(named(summ)) == KNOWN_FALSE_FINDING and set(named(summ)) <= set(stated):
-        pytest.xfail("known failure (docs/discrepancy.md, 'Findings on a log of the model itself'): with the true "
-                     "payload stated the workflow keeps a base breakaway friction x1.006 at z 5.2 on this log of "
-                     "the model itself (z 3.5 with the payload fitted); its z overstates the evidence (issue 18)")
-    assert named(summ) == stated
+    fitted, stated = named(summ), named(runs["stated"][2])
+    assert set(fitted) <= KNOWN_FALSE_FINDING and set(stated) <= KNOWN_FALSE_FINDING, (fitted, stated)
+    assert set(fitted) <= set(stated)
+    if stated:
+        pytest.xfail("known failure (docs/discrepancy.md, 'Findings on a log of the model itself'): the workflow "
+                     "keeps a base breakaway friction x1.005 at z 5-9 on this log of the model itself; its z "
+                     "overstates the evidence (issue 18)")
+    assert fitted == stated == []
