@@ -251,13 +251,13 @@ def run_benchmark(campaign_dir: str | Path, out: str | Path | None = None, *, se
                                 source=str(campaign_dir), feature_set=feature_set, calibrate=not shuffle_labels)
     models = metrics.pop("_models")
     if compare:
-        fitted = None if reused is None else (reused, dataclasses.replace(models, calibrator=None))
+        reuse = None if reused is None else (reused, dataclasses.replace(models, calibrator=None))
         if pending is None:
-            metrics["comparison"] = compare_feature_sets(features, seed, thr, str(campaign_dir), fitted)
+            metrics["comparison"] = compare_feature_sets(features, seed, thr, str(campaign_dir), reuse)
         else:
             rows = {fs: {k: f.result() for k, f in row.items()} for fs, row in pending.items()}
-            if fitted is not None:
-                rows[reused]["trained"] = _compared(features, seed, False, thr, str(campaign_dir), reused, fitted[1])
+            if reuse is not None:
+                rows[reused]["trained"] = _compared(features, seed, False, thr, str(campaign_dir), *reuse)
             metrics["comparison"] = {fs: {k: rows[fs][k] for k in ("trained", "shuffled")} for fs in FEATURE_SETS}
     write_report(metrics, figures, out_dir)
     if not shuffle_labels:
@@ -283,12 +283,12 @@ def mean_run_duration_s(manifest: dict[str, Any]) -> float | None:
 
 
 def compare_feature_sets(features: pd.DataFrame, seed: int, threshold_mm: float, source: str,
-                         fitted: tuple[str, Models] | None = None) -> dict[str, Any]:
+                         reuse: tuple[str, Models] | None = None) -> dict[str, Any]:
     """Headline figures of every feature set on the same split, each with its shuffled-label control.
-    ``fitted``: ``(feature_set, models)`` trained on that set with this seed: its trained row scores them."""
+    ``reuse``: ``(feature_set, models)`` trained on that set with this seed: its trained row scores them."""
     return {fs: {"shuffled" if shuffled else "trained": _compared(
         features, seed, shuffled, threshold_mm, source, fs,
-        fitted[1] if fitted is not None and fs == fitted[0] and not shuffled else None)
+        reuse[1] if reuse is not None and fs == reuse[0] and not shuffled else None)
         for shuffled in (False, True)} for fs in FEATURE_SETS}
 
 
