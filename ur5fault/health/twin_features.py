@@ -61,6 +61,17 @@ Features per joint ``j`` (units in the names):
   where it exceeds :data:`FLANK_SHARE`, the share the mismatch fit's flank column counts as a flank: below it
   the torque only approaches zero from one side, which the backlash estimate can still fit (its SE is finite)
   but a clearance does not show (docs/diagnostics.md, "Backlash on the motions that reverse the gear torque").
+* ``twin_current_noise_ratio_<all|rest>_j`` (-, twin residuals format 9): the RMS of the measured current reading's
+  second difference over the twin reading's, over all samples and at rest (:func:`noise_ratio`).  The second
+  difference of a 1 kHz reading is its white noise (the motion's current changes far less from one millisecond
+  to the next), so the ratio is how much louder the robot's current sensor is than the twin's.  A current-sensor
+  gain ``g`` multiplies the sensor's noise with its signal (assumption, as the simulator's sensor model: the
+  noise enters before the gain, as a shunt's and its amplifier's do), so the ratio reads about ``g``; a
+  torque-constant loss that raises the reading by the same factor leaves the sensor's noise alone (ratio about
+  1).  Their current residuals are otherwise the same shape (``twin_est_current_gain_err`` above): this is what
+  tells them apart (docs/diagnostics.md, "A current gain told from a torque-constant loss").  At speed a joint's
+  current carries the loops' own millisecond ripple, which a torque-constant loss scales too: the ``rest``
+  ratio is the cleaner.
 """
 
 from __future__ import annotations
@@ -89,6 +100,11 @@ NUISANCE_UNITS = {"payload_com_x_m": "m", "payload_com_y_m": "m", "payload_com_z
 #: smallest gear-torque magnitude whose sign counts as a flank, as a share of the joint's largest
 #: (assumption: a gear torque within 2 % of its peak may sit in the clearance either way)
 FLANK_SHARE = 0.02
+#: the samples the noise ratios are taken over, short name -> the motion condition's key (None: every sample)
+NOISE_CONDITIONS = {"all": None, "rest": "at rest"}
+#: fewest second differences a noise ratio is taken from (assumption: below ~100 its relative standard error,
+#: about 1/sqrt(n), exceeds the 10 % a gain must reach to matter)
+MIN_NOISE_SAMPLES = 100
 
 
 def feature_units() -> dict[str, str]:
@@ -110,6 +126,9 @@ def feature_units() -> dict[str, str]:
         out[f"twin_est_{name}_t"] = "-"
     for j in range(1, N_JOINTS + 1):  # twin residuals format 5
         out[f"twin_gear_flank_share_j{j}"] = "-"
+    for j in range(1, N_JOINTS + 1):  # twin residuals format 9
+        for cond in NOISE_CONDITIONS:
+            out[f"twin_current_noise_ratio_{cond}_j{j}"] = "-"
     return out
 
 
@@ -179,6 +198,24 @@ def flank_share(torque_Nm: NDArray) -> NDArray:
     peak = np.abs(T).max(axis=0)
     weaker = np.clip(np.minimum(T.max(axis=0), (-T).max(axis=0)), 0.0, None)
     return np.divide(weaker, peak, out=np.zeros_like(peak), where=peak > 0)
+
+
+def noise_ratio(meas_A: NDArray, twin_A: NDArray, mask: NDArray | None = None) -> NDArray:
+    """Per joint ``(6,)``: RMS of the second difference of the current reading ``meas_A`` ``(n, 6)`` over that of
+    the twin's reading ``twin_A``, over the samples whose three-sample stencil lies where ``mask`` ``(n, 6)`` is
+    true (None: everywhere) and both readings are finite; NaN where fewer than :data:`MIN_NOISE_SAMPLES`
+    differences remain or the twin's reading has no noise."""
+    m2, t2 = np.diff(meas_A, 2, axis=0), np.diff(twin_A, 2, axis=0)
+    ok = np.isfinite(m2) & np.isfinite(t2)
+    if mask is not None:
+        ok &= mask[2:] & mask[1:-1] & mask[:-2]
+    n = ok.sum(axis=0)
+    num = np.sqrt(np.sum(np.where(ok, m2, 0.0) ** 2, axis=0))
+    den = np.sqrt(np.sum(np.where(ok, t2, 0.0) ** 2, axis=0))
+    out = np.full(m2.shape[1], np.nan)
+    good = (n >= MIN_NOISE_SAMPLES) & (den > 0)
+    out[good] = num[good] / den[good]
+    return out
 
 
 def projection_columns(t_s: NDArray, q_set_rad: NDArray, twin: dict[str, NDArray], params: RobotParams,
@@ -283,6 +320,11 @@ def twin_features(t_s: NDArray, q_set_rad: NDArray, meas: dict[str, NDArray], tw
         f[f"twin_est_{name}_t"] = _t(v, e)
     for j, share in enumerate(flank_share(twin["T_gear_Nm"])):
         f[f"twin_gear_flank_share_j{j + 1}"] = float(share)
+    ratios = {cond: noise_ratio(meas["i_FB_A"], twin["i_FB_A"], None if key is None else masks[key])
+              for cond, key in NOISE_CONDITIONS.items()}
+    for j in range(N_JOINTS):
+        for cond, r in ratios.items():
+            f[f"twin_current_noise_ratio_{cond}_j{j + 1}"] = float(r[j])
     return f
 
 
