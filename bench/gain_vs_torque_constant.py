@@ -8,7 +8,11 @@ loop then raises ``i_ref`` by ``g``: the reading is ``g`` times a healthy robot'
 (``K_t`` and ``K_e``) needs ``g`` times the current for the same torque: the reading is again ``g`` times.  They
 differ only through the loops' dynamics and the back-EMF.  Three runs of one motion with the same noise seed
 (healthy, the gain, the torque constant), one healthy run with another noise seed; on the chosen joint, the RMS of
-each pair's difference in the logged current (raw and over 50 ms) and motor-encoder angle.  Prints one JSON line.
+each pair's difference in the logged current (raw and over 50 ms) and motor-encoder angle.  Then the current-noise
+ratio of the twin features (``health/twin_features.noise_ratio``: RMS of the reading's second difference over a
+twin's, here the healthy run of the other noise seed) on the chosen joint, at rest and over all samples, for the
+three runs and for a healthy run with ``--latency-ms`` of setpoint latency (what the all-samples ratio also
+answers to).  Prints one JSON line.
 """
 
 from __future__ import annotations
@@ -19,7 +23,9 @@ import json
 import numpy as np
 
 from ur5fault import RunSpec, Simulator, get_trajectory, make_effect
+from ur5fault.health.twin_features import noise_ratio
 from ur5fault.sim.axes import JOINT_NAMES
+from ur5fault.twin.residuals import command_conditions
 
 
 def _rms(x: np.ndarray) -> float:
@@ -36,6 +42,7 @@ def main() -> None:
     ap.add_argument("--gain", type=float, default=1.2)
     ap.add_argument("--seed", type=int, default=3, help="random_pick_and_place motion")
     ap.add_argument("--payload-kg", type=float, default=1.0)
+    ap.add_argument("--latency-ms", type=float, default=1.5)
     a = ap.parse_args()
     traj = get_trajectory("random_pick_and_place", seed=a.seed)
     pay = make_effect("payload", mass_kg=a.payload_kg)
@@ -43,7 +50,8 @@ def main() -> None:
              RunSpec("gain", seed=1, effects=(pay, make_effect("current_sensor_gain", joint=a.joint, gain=a.gain))),
              RunSpec("torque_constant", seed=1,
                      effects=(pay, make_effect("torque_constant", joint=a.joint, scale=1.0 / a.gain))),
-             RunSpec("healthy_other_noise", seed=2, effects=(pay,))]
+             RunSpec("healthy_other_noise", seed=2, effects=(pay,)),
+             RunSpec("healthy_latency", seed=1, effects=(pay, make_effect("delay", delay_ms=a.latency_ms)))]
     res = Simulator().run(traj, specs)
     j = JOINT_NAMES.index(a.joint)
     i, qm = res["i_FB_A"][:, :, j], res["q_M_FB_rad"][:, :, j]
@@ -52,6 +60,14 @@ def main() -> None:
     for name, (p, q) in pairs.items():
         out[name] = {"current_A": _rms(i[p] - i[q]), "current_50ms_A": _rms(_smooth(i[p] - i[q])),
                      "motor_angle_rad": _rms(qm[p] - qm[q])}
+    cond = command_conditions(np.gradient(res.q_set_rad, res.t_s, axis=0),
+                              np.gradient(np.gradient(res.q_set_rad, res.t_s, axis=0), res.t_s, axis=0),
+                              float(res.t_s[1] - res.t_s[0]))
+    twin = res["i_FB_A"][3]
+    for where, mask in (("rest", cond["at rest"]), ("all", None)):
+        out[f"noise_ratio_{where}"] = {name: round(float(noise_ratio(res["i_FB_A"][k], twin, mask)[j]), 4)
+                                       for k, name in ((0, "healthy"), (1, "gain"), (2, "torque_constant"),
+                                                       (4, "healthy_latency"))}
     print(json.dumps(out))
 
 

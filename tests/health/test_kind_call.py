@@ -43,6 +43,24 @@ def test_without_the_gain_estimate_among_the_inputs_the_pair_is_always_one_call(
     assert tell_pair(np.array(["current_sensor_gain"]), df, np.array([2]), ["payload_kg"]).tolist() == [PAIR]
 
 
+NOISE = [f"twin_current_noise_ratio_rest_j{k}" for k in range(1, 7)]
+
+
+def test_a_noise_ratio_on_the_called_joint_keeps_the_classifiers_call():
+    df = _runs([(2, 0.3), (2, 0.3), (4, 0.2), (2, -0.1)])
+    for c in NOISE:
+        df[c] = 1.0
+    df.loc[1, NOISE[1]] = np.nan  # run 2: joint 2 never rests
+    df.loc[2, NOISE[4]] = np.nan  # run 3: only another joint lacks it
+    calls = np.array(["torque_constant", "current_sensor_gain", "current_sensor_gain", "torque_constant"])
+    joint = np.array([2, 2, 4, 2])
+    out = tell_pair(calls, df, joint, EST + NOISE)
+    # a ratio on the called joint: the classifier's call stands; a negative estimate is a gain whatever (run 4)
+    assert out.tolist() == ["torque_constant", PAIR, "current_sensor_gain", "current_sensor_gain"]
+    # the ratio not among the inputs: the rules without it
+    assert tell_pair(calls, df, joint, EST).tolist() == [PAIR, PAIR, PAIR, "current_sensor_gain"]
+
+
 def test_a_pair_call_is_right_for_either_kind_and_scored_per_true_kind():
     y = np.array(["healthy", "current_sensor_gain", "torque_constant", "torque_constant", "backlash", "backlash"])
     c = np.array(["healthy", PAIR, PAIR, "current_sensor_gain", "backlash", PAIR])

@@ -85,16 +85,16 @@ def test_current_noise_ratio_tells_a_gain_from_a_torque_constant_loss(batch):
     """The sensor's noise enters before its gain: a gain of 1.1 makes the reading's noise 1.1 times louder, a
     torque-constant loss that raises the reading as much leaves the sensor's noise as it was.  The two runs share
     their noise stream, so their ratio is sharp; each against the twin's independent stream is within the
-    estimate's sampling error (2,500 second differences: about 3 % of the ratio)."""
-    key = "twin_current_noise_ratio_all_j{}"
+    estimate's sampling error (the joints rest for a few hundred of the 2,500 samples: about 5 % of the ratio)."""
+    key = "twin_current_noise_ratio_rest_j{}"
     gain, torque = batch["gain"][key.format(2)], batch["torque"][key.format(2)]
     assert gain / torque == pytest.approx(1.1, abs=0.02)
-    assert gain == pytest.approx(1.1, abs=0.1) and torque == pytest.approx(1.0, abs=0.1)
+    assert gain == pytest.approx(1.1, abs=0.15) and torque == pytest.approx(1.0, abs=0.15)
     # the two faults' current residuals are the same shape: their gain estimates agree
     assert batch["torque"]["twin_est_current_gain_err_j2"] == pytest.approx(0.1, abs=0.02)
     for j in (1, 3, 4, 5, 6):
         for run in ("healthy", "gain", "torque"):
-            assert batch[run][key.format(j)] == pytest.approx(1.0, abs=0.1), (run, j)
+            assert batch[run][key.format(j)] == pytest.approx(1.0, abs=0.15), (run, j)
 
 
 def test_resolver_offset_lowers_the_mismatch_by_its_size(batch):

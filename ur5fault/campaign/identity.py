@@ -48,8 +48,8 @@ INPUT_ORDER = ("identity_format", "ur5fault_version", "sim_revision", "mujoco_ve
 #: ``twin_gear_flank_share_j<k>``: where the motion reverses the gear torque; 7 (8 with ``twin_com_twins``):
 #: format 5 (6) with the fits' columns kept or left out by their singular values from a QR factorisation, not by
 #: the eigenvalues of the normal matrix, which rounding decided at the mismatch fit's ``rcond``: health/twin_fit.py;
-#: 9 (10 with ``twin_com_twins``): format 7 (8) plus each joint's current-noise ratios,
-#: ``twin_current_noise_ratio_<all|rest>_j<k>``, which tell a current-sensor gain from a torque-constant loss)
+#: 9 (10 with ``twin_com_twins``): format 7 (8) plus each joint's current-noise ratio at rest,
+#: ``twin_current_noise_ratio_rest_j<k>``, which tell a current-sensor gain from a torque-constant loss)
 TWIN_RESIDUALS_FORMAT = 9
 TWIN_RESIDUALS_FORMAT_COM_TWINS = 10
 #: the simulator configuration campaigns run with: passed to the engine by every campaign kind

@@ -13,8 +13,9 @@ calibrated ``p_fault`` against the mapped threshold).  Per joint, ``p_fault_join
 of a fault through the same map (the largest of the six is ``p_fault``; each is a frequency only as far as the
 map fitted on the largest carries over).  Kinds: the classifier by joint's probabilities for that joint (each
 joint's own evidence), renormalised without ``none`` (the probability of each kind given a fault on that
-joint; not calibrated); ``same_signature_as`` names the kinds it cannot be told from in any window (a
-current-sensor gain and a torque-constant loss).  The run-level detector is kept as an auxiliary reading:
+joint; not calibrated); ``same_signature_as`` names the kinds whose current residual has the same shape (a
+current-sensor gain and a torque-constant loss), which only the current-noise ratio at rest tells apart (twin
+residuals format 9: a window where the joint never rests cannot tell them apart, whatever the split says).  The run-level detector is kept as an auxiliary reading:
 ``p_fault_run_level`` (its own probability, not calibrated) and ``flagged_run_level`` (against its threshold at
 5 % false alarms).
 
@@ -149,10 +150,10 @@ def cannot_tell(w: Window, j: int, has_motor_encoders: bool) -> dict[str, str]:
 
 
 def same_signature(kind: str) -> list[str]:
-    """The kinds whose signature is the same as ``kind``'s in every signal the features read (a current-sensor
-    gain and a torque-constant loss: both a current residual proportional to the current,
-    :data:`ur5fault.health.diagnostics.kind_call.MERGED_KINDS`): a window cannot tell them apart, whatever the
-    classifier's split of the probability between them says."""
+    """The kinds whose current residual has the same shape as ``kind``'s (a current-sensor gain and a torque-constant
+    loss: both a residual proportional to the current, :data:`ur5fault.health.diagnostics.kind_call.MERGED_KINDS`).
+    Only the sensor's noise tells them apart (the current-noise ratio at rest, :mod:`ur5fault.health.twin_features`):
+    where the joint never rests in the window the classifier's split between them is not evidence."""
     group = MERGED_KINDS.get(kind)
     return sorted(k for k, g in MERGED_KINDS.items() if group is not None and g == group and k != kind)
 
