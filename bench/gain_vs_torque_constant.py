@@ -9,7 +9,7 @@ loop then raises ``i_ref`` by ``g``: the reading is ``g`` times a healthy robot'
 differ only through the loops' dynamics and the back-EMF.  Three runs of one motion with the same noise seed
 (healthy, the gain, the torque constant), one healthy run with another noise seed; on the chosen joint, the RMS of
 each pair's difference in the logged current (raw and over 50 ms) and motor-encoder angle.  Then the current-noise
-ratio of the twin features (``health/twin_features.noise_ratio``: RMS of the reading's second difference over a
+ratio of the twin features (``twin/residuals.noise_ratio``: RMS of the reading's second difference over a
 twin's, here the healthy run of the other noise seed) on the chosen joint, at rest and over all samples, for the
 three runs and for a healthy run with ``--latency-ms`` of setpoint latency (what the all-samples ratio also
 answers to).  Prints one JSON line.
@@ -23,9 +23,8 @@ import json
 import numpy as np
 
 from ur5fault import RunSpec, Simulator, get_trajectory, make_effect
-from ur5fault.health.twin_features import noise_ratio
 from ur5fault.sim.axes import JOINT_NAMES
-from ur5fault.twin.residuals import command_conditions
+from ur5fault.twin.residuals import command_conditions, noise_ratio
 
 
 def _rms(x: np.ndarray) -> float:

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from ur5fault.discrepancy.candidates import LibraryCandidate
-from ur5fault.discrepancy.rivals import MAX_RIVALS, differ_most, held_out_delta_bic, in_place, judge_rival
+from ur5fault.discrepancy.rivals import MAX_RIVALS, differ_most, held_out_delta_bic, in_place, judge_rival, noise_hint
 from ur5fault.discrepancy.search import columns_of
 from ur5fault.discrepancy.statistics import MIN_DELTA_BIC
 
@@ -120,3 +120,40 @@ def test_what_tells_two_shapes_apart_is_where_they_differ_most():
     b = np.where(t[1:] < 4.0, 1.0, 0.2)  # a shape equal to it at rest, different at speed
     assert "at speed" in differ_most(log, n, np.zeros((n, 6)), a, b, 0)
     assert differ_most(log, n, np.zeros((n, 6)), a, b, None) == ""
+
+
+def _readings(gain_truth: float, named_gain: float = 1.2, n: int = 6000, seed: int = 3):
+    """Joint 1 at rest throughout: the measured reading (a current-sensor gain ``gain_truth`` on a unit-noise
+    sensor; 1: none) and the replay with a named gain ``named_gain`` (its sensor that much louder)."""
+    rng = np.random.default_rng(seed)
+    base = 2.0 * np.ones((n, 6))  # a held load: the reading's second difference is its noise
+    sigma = 0.01
+    meas = gain_truth * (base + sigma * rng.standard_normal((n, 6)))
+    named = named_gain * (base + sigma * rng.standard_normal((n, 6)))
+    return np.ones((n, 6), bool), meas, named
+
+
+GAIN, TORQUE = "current_sensor_gain", "torque_constant"
+
+
+def test_the_sensors_noise_tells_a_current_gain_from_a_torque_constant_loss():
+    rest, meas, named = _readings(1.2)
+    hint = noise_hint(rest, meas, named, 1, (GAIN, 1.2), (TORQUE, 1 / 1.2))
+    # the rival's replay: the model's own sensor, 1 / 1.2 as loud as the named gain's
+    assert "x1.0" in hint and "x1.2" in hint and "the current sensor gain fits" in hint, hint
+    rest, meas, named = _readings(1.0)  # the truth a torque constant: the sensor as loud as the model's
+    hint = noise_hint(rest, meas, named, 1, (GAIN, 1.2), (TORQUE, 1 / 1.2))
+    assert "the torque constant fits" in hint, hint
+    # the torque constant named, the gain its rival: the same answer
+    rest, meas, named = _readings(1.2, named_gain=1.0)
+    assert "the current sensor gain fits" in noise_hint(rest, meas, named, 1, (TORQUE, 1 / 1.2), (GAIN, 1.2))
+    # other pairs get no such hint; a joint that never rests gets none
+    assert noise_hint(rest, meas, named, 1, (GAIN, 1.2), ("current_sensor_offset", 0.1)) == ""
+    assert noise_hint(np.zeros_like(rest), meas, named, 1, (GAIN, 1.2), (TORQUE, 1 / 1.2)) == ""
+
+
+def test_a_gain_within_the_noise_ratios_error_is_too_close_to_tell():
+    # a named gain of 1.01: the two models' sensors one sampling error apart (about 1.8 % at 6,000 samples)
+    rest, meas, named = _readings(1.0, named_gain=1.01)
+    hint = noise_hint(rest, meas, named, 1, (GAIN, 1.01), (TORQUE, 1 / 1.01))
+    assert hint.endswith("too close to tell on this log"), hint

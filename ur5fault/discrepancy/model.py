@@ -38,7 +38,7 @@ from .multilog import MultiReplay, per_log
 from .payload import PAYLOAD_KINDS, resolve_payloads
 from .refinement import FindingSet, Refined, polish
 from .rescreen import rescreen
-from .rivals import list_rivals
+from .rivals import list_rivals, noise_hints
 from .search import columns_of
 from .stage_bar import StageBar
 from .weighting import OwnVariance, VarianceGroups
@@ -198,6 +198,7 @@ class DiscrepancyModel:
             # every finding of the final model with the library effects the held-out part cannot tell from it
             list_rivals(rp, lib.X, lib.drift, lib.candidates, jr.findings, ref.first.J if ref.first else None,
                         ref.found, after, n_scr, n_fit, drift, skip=again.findings, progress=prog, own_variance=own)
+            noise_hints(rp, after, jr.findings)  # a current gain told from a torque constant by the sensor's noise
             self._results(rp, ref.nominal, after, n_fit, n_all)
         finally:  # an exception or an interruption: the prefetched replays' worker stops with the fit
             rp.close()

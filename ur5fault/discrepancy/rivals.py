@@ -20,6 +20,11 @@ For a finding ``f`` of the final model:
 3. *What tells them apart* (:func:`differ_most`): the operating condition where the two changes of the joint's
    current differ most, as a share of the finding's own change.
 
+For a current-sensor gain named with a torque-constant loss among its alternatives, or the other way round
+(:data:`NOISE_PAIR`: their changes of the current are the same shape), the finding's ``tell_apart`` also says what
+the sensor's noise at rest says (:func:`noise_hints`): a gain scales the sensor's noise, a torque-constant loss
+does not.
+
 The re-screen of freed joints (``rescreen.py``) judges its own rivals with the same :func:`judge_rival`.
 """
 
@@ -34,7 +39,7 @@ from numpy.typing import NDArray
 
 from ..sim.axes import N_JOINTS
 from ..twin.replay import LogReplay, Replayed
-from ..twin.residuals import conditions
+from ..twin.residuals import conditions, noise_ratio
 from .candidates import Candidate
 from .drift import Drift
 from .judging import Finding, channels
@@ -48,6 +53,12 @@ MAX_RIVALS = 2
 #: bound and assumption: on logs of thousands of samples 10 % less improvement than a finding that lowers BIC
 #: by 100 or more is itself more than MIN_DELTA_BIC, so the held-out check would not list it
 RIVAL_SHARE = 0.9
+#: the library pair that only the sensor's noise tells apart (:func:`noise_hint`)
+NOISE_PAIR = frozenset({"current_sensor_gain", "torque_constant"})
+#: sum of the squared autocorrelations of white noise's second difference (1 + 2 (4/9 + 1/36)): the relative
+#: variance of a mean of its squares is 2 * this / n, so the ratio of two independent RMS values has a relative
+#: standard error of about sqrt(this / n)
+D2_CORRELATION = 1.9444
 
 
 @dataclasses.dataclass(frozen=True)
@@ -124,6 +135,63 @@ def differ_most(log, n: int, torque: NDArray, a: NDArray, b: NDArray, joint: int
     where = max(by, key=by.__getitem__)
     return (f"on this log they differ most {where} ({100 * by[where]:.0f} % of the effect); a motion with more "
             f"time {where} on this joint would tell them apart")
+
+
+def sensor_scale(effect: str, value: float) -> float:
+    """The factor a finding of ``effect`` with parameter ``value`` puts on the current sensor's noise: the gain of a
+    current-sensor gain (the noise enters before the gain, as in the simulator's sensor), 1 for anything else."""
+    return float(value) if effect == "current_sensor_gain" else 1.0
+
+
+def noise_hint(rest: NDArray, meas_A: NDArray, named_A: NDArray, joint: int, named: tuple[str, float],
+               rival: tuple[str, float]) -> str:
+    """What the sensor's noise says between a named finding and its rival when they are a current-sensor gain and a
+    torque-constant loss (:data:`NOISE_PAIR`; "" otherwise or when the joint rests for too few samples).
+
+    ``meas_A``, ``named_A``: the measured current reading and the replay's with the finding, ``(n, 6)``; ``rest``:
+    ``(n, 6)`` where the joint's target is at rest; ``named``, ``rival``: each one's effect and parameter value.
+    The ratio of the measured reading's noise to the replay's (:func:`ur5fault.twin.residuals.noise_ratio`: RMS of
+    the second difference at rest) is 1 for the model whose sensor is as loud as the robot's; the rival's replay
+    has the finding's sensor noise times ``sensor_scale(rival) / sensor_scale(named)``.  This assumes the model's
+    current noise is the robot's healthy sensor's (as ``identify`` measures it on the robot's own logs)."""
+    if {named[0], rival[0]} != NOISE_PAIR:
+        return ""
+    r_named = float(noise_ratio(meas_A, named_A, rest)[joint])
+    n = int((rest[2:] & rest[1:-1] & rest[:-2])[:, joint].sum())
+    if not np.isfinite(r_named):
+        return ""
+    r_rival = r_named * sensor_scale(*named) / sensor_scale(*rival)
+    se = math.sqrt(D2_CORRELATION / n)
+    name_n, name_r = named[0].replace("_", " "), rival[0].replace("_", " ")
+    text = (f"the current reading's noise at rest is x{r_named:.3f} the model's with the {name_n} and "
+            f"x{r_rival:.3f} with the {name_r} ({n} samples, about +-{se:.3f}); a current-sensor gain scales the "
+            "sensor's noise, a torque-constant loss does not")
+    d_named, d_rival = abs(math.log(r_named)), abs(math.log(r_rival))
+    if abs(d_named - d_rival) < 2 * se:
+        return text + ": too close to tell on this log"
+    better = name_n if d_named < d_rival else name_r
+    return (text + f": the {better} fits the sensor's noise (if the model's current noise is this robot's healthy "
+            "sensor's, as identify measures it)")
+
+
+def noise_hints(rp: LogReplay, after: Replayed, findings: Sequence[Finding]) -> None:
+    """Add :func:`noise_hint` to ``tell_apart`` of every kept finding of :data:`NOISE_PAIR` that has the other kind
+    of the pair on its joint among its alternatives (``after``: the replay of the final model)."""
+    if "current_A" not in rp.signals:
+        return
+    k, n = rp.signals.index("current_A"), rp.n_samples
+    rest = conditions(rp.log, n, after.torque_gear_Nm)["at rest"]
+    meas = rp.measured(n)[:, k]
+    for f in findings:
+        c = f.candidate
+        if not f.kept or c.joint is None or c.effect not in NOISE_PAIR:
+            continue
+        for alt, th in f.alternatives:
+            if alt.effect in NOISE_PAIR - {c.effect} and alt.joint == c.joint:
+                hint = noise_hint(rest, meas, after.y[:, k], c.joint, (c.effect, c.value(f.theta)),
+                                  (alt.effect, alt.value(th)))
+                f.tell_apart = "; ".join(h for h in (f.tell_apart, hint) if h)
+                break
 
 
 def current_channel(signals: Sequence[str], joint: int) -> int:

@@ -63,12 +63,12 @@ Features per joint ``j`` (units in the names):
   but a clearance does not show (docs/diagnostics.md, "Backlash on the motions that reverse the gear torque").
 * ``twin_current_noise_ratio_rest_j`` (-, twin residuals format 9): the RMS of the measured current reading's
   second difference over the twin reading's, over the samples where the joint's target is at rest
-  (:func:`noise_ratio`).  At rest the second difference of a 1 kHz reading is its white noise, so the ratio is
-  how much louder the robot's current sensor is than the twin's.  A current-sensor gain ``g`` multiplies the
-  sensor's noise with its signal (assumption, as the simulator's sensor model: the noise enters before the gain,
-  as a shunt's and its amplifier's do), so the ratio reads about ``g``; a torque-constant loss that raises the
-  reading by the same factor leaves the sensor's noise alone (ratio about 1).  Their current residuals are
-  otherwise the same shape (``twin_est_current_gain_err`` above): this is what tells them apart
+  (:func:`ur5fault.twin.residuals.noise_ratio`).  At rest the second difference of a 1 kHz reading is its white
+  noise, so the ratio is how much louder the robot's current sensor is than the twin's.  A current-sensor gain
+  ``g`` multiplies the sensor's noise with its signal (assumption, as the simulator's sensor model: the noise
+  enters before the gain, as a shunt's and its amplifier's do), so the ratio reads about ``g``; a torque-constant
+  loss that raises the reading by the same factor leaves the sensor's noise alone (ratio about 1).  Their current
+  residuals are otherwise the same shape (``twin_est_current_gain_err`` above): this is what tells them apart
   (docs/diagnostics.md, "A current gain told from a torque-constant loss").  Only at rest: in motion the
   reading's millisecond-to-millisecond change also carries the loops' answer to the setpoints' steps, which the
   run's unknown latency changes (a healthy run with 1.5 ms of latency read 2.6 on the base over all samples).
@@ -85,7 +85,7 @@ from numpy.typing import NDArray
 from ..sim.axes import N_JOINTS
 from ..sim.drive.friction import stribeck_level
 from ..sim.params import RobotParams
-from ..twin.residuals import command_conditions
+from ..twin.residuals import command_conditions, noise_ratio
 from .twin_fit import RCOND_NUISANCE, com_columns, flange_kinematics, hac_fit, latency_column, noise_scale
 
 #: motion conditions used, short name -> the key of :func:`ur5fault.twin.motion_conditions`
@@ -102,9 +102,6 @@ NUISANCE_UNITS = {"payload_com_x_m": "m", "payload_com_y_m": "m", "payload_com_z
 FLANK_SHARE = 0.02
 #: the motion condition the noise ratio is taken in (module docstring: only at rest is it the sensor's noise)
 NOISE_CONDITION = "at rest"
-#: fewest second differences a noise ratio is taken from (assumption: below ~100 its relative standard error,
-#: about 1/sqrt(n), exceeds the 10 % a gain must reach to matter)
-MIN_NOISE_SAMPLES = 100
 
 
 def feature_units() -> dict[str, str]:
@@ -197,24 +194,6 @@ def flank_share(torque_Nm: NDArray) -> NDArray:
     peak = np.abs(T).max(axis=0)
     weaker = np.clip(np.minimum(T.max(axis=0), (-T).max(axis=0)), 0.0, None)
     return np.divide(weaker, peak, out=np.zeros_like(peak), where=peak > 0)
-
-
-def noise_ratio(meas_A: NDArray, twin_A: NDArray, mask: NDArray | None = None) -> NDArray:
-    """Per joint ``(6,)``: RMS of the second difference of the current reading ``meas_A`` ``(n, 6)`` over that of
-    the twin's reading ``twin_A``, over the samples whose three-sample stencil lies where ``mask`` ``(n, 6)`` is
-    true (None: everywhere) and both readings are finite; NaN where fewer than :data:`MIN_NOISE_SAMPLES`
-    differences remain or the twin's reading has no noise."""
-    m2, t2 = np.diff(meas_A, 2, axis=0), np.diff(twin_A, 2, axis=0)
-    ok = np.isfinite(m2) & np.isfinite(t2)
-    if mask is not None:
-        ok &= mask[2:] & mask[1:-1] & mask[:-2]
-    n = ok.sum(axis=0)
-    num = np.sqrt(np.sum(np.where(ok, m2, 0.0) ** 2, axis=0))
-    den = np.sqrt(np.sum(np.where(ok, t2, 0.0) ** 2, axis=0))
-    out = np.full(m2.shape[1], np.nan)
-    good = (n >= MIN_NOISE_SAMPLES) & (den > 0)
-    out[good] = num[good] / den[good]
-    return out
 
 
 def projection_columns(t_s: NDArray, q_set_rad: NDArray, twin: dict[str, NDArray], params: RobotParams,

@@ -24,6 +24,9 @@ if TYPE_CHECKING:  # pragma: no cover
 FIT_FRACTION = 0.6
 #: a held-out residual above this multiple of the noise floor is reported as unexplained
 UNEXPLAINED_FACTOR = 3.0
+#: fewest second differences a noise ratio is taken from (assumption: below ~100 its relative standard error,
+#: about 1.4/sqrt(n), exceeds the 10 % a current gain must reach to matter)
+MIN_NOISE_SAMPLES = 100
 #: a condition's window around a velocity reversal [s]
 REVERSAL_WINDOW_S = 0.25
 #: a joint whose target speed is at most this is "at rest" for the conditions [rad/s] (the target
@@ -232,3 +235,21 @@ def gear_reversals(torque: NDArray, n_fit: int) -> dict[str, bool]:
         return bool(peak > 0 and np.any(part > level) and np.any(part < -level))
 
     return {"fitted": reverses(t[:n_fit]), "held_out": reverses(t[n_fit:])}
+
+
+def noise_ratio(meas_A: NDArray, twin_A: NDArray, mask: NDArray | None = None) -> NDArray:
+    """Per joint ``(6,)``: RMS of the second difference of the current reading ``meas_A`` ``(n, 6)`` over that of
+    the twin's reading ``twin_A``, over the samples whose three-sample stencil lies where ``mask`` ``(n, 6)`` is
+    true (None: everywhere) and both readings are finite; NaN where fewer than :data:`MIN_NOISE_SAMPLES`
+    differences remain or the twin's reading has no noise."""
+    m2, t2 = np.diff(meas_A, 2, axis=0), np.diff(twin_A, 2, axis=0)
+    ok = np.isfinite(m2) & np.isfinite(t2)
+    if mask is not None:
+        ok &= mask[2:] & mask[1:-1] & mask[:-2]
+    n = ok.sum(axis=0)
+    num = np.sqrt(np.sum(np.where(ok, m2, 0.0) ** 2, axis=0))
+    den = np.sqrt(np.sum(np.where(ok, t2, 0.0) ** 2, axis=0))
+    out = np.full(m2.shape[1], np.nan)
+    good = (n >= MIN_NOISE_SAMPLES) & (den > 0)
+    out[good] = num[good] / den[good]
+    return out

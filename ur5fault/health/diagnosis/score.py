@@ -15,9 +15,9 @@ map fitted on the largest carries over).  Kinds: the classifier by joint's proba
 joint's own evidence), renormalised without ``none`` (the probability of each kind given a fault on that
 joint; not calibrated); ``same_signature_as`` names the kinds whose current residual has the same shape (a
 current-sensor gain and a torque-constant loss), which only the current-noise ratio at rest tells apart (twin
-residuals format 9: a window where the joint never rests cannot tell them apart, whatever the split says).  The run-level detector is kept as an auxiliary reading:
-``p_fault_run_level`` (its own probability, not calibrated) and ``flagged_run_level`` (against its threshold at
-5 % false alarms).
+residuals format 9: a window where the joint never rests cannot tell them apart, whatever the split says).  The
+run-level detector is kept as an auxiliary reading: ``p_fault_run_level`` (its own probability, not calibrated)
+and ``flagged_run_level`` (against its threshold at 5 % false alarms).
 
 Size estimates are the twin features' least-squares projections (:mod:`ur5fault.health.twin_features`),
 converted to the unit of the campaign's ``fault_size``; the interval is the range of the same estimate on the

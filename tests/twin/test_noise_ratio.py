@@ -1,4 +1,4 @@
-"""The current-noise ratio of the twin features (ur5fault/health/twin_features.py, :func:`noise_ratio`) on
+"""The current-noise ratio of the twin features (ur5fault/twin/residuals.py, :func:`noise_ratio`) on
 synthetic readings whose noise is known: a smooth motion plus white noise of chosen size."""
 
 from __future__ import annotations
@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ur5fault.health.twin_features import MIN_NOISE_SAMPLES, noise_ratio
+from ur5fault.twin.residuals import MIN_NOISE_SAMPLES, noise_ratio
 
 
 def _readings(sigma_meas: float, sigma_twin: float, n: int = 20_000, seed: int = 0):
