@@ -111,6 +111,9 @@ def test_healthy_log_runs_and_writes_the_schema(logs, detector, tmp_path):
         assert max(j["p_fault_joint"] for j in w["joints"]) == pytest.approx(w["p_fault"])
         assert isinstance(w["flagged_run_level"], bool) and 0.0 <= w["p_fault_run_level"] <= 1.0
         for j in w["joints"]:
+            # the window's current-noise ratio at rest: a healthy log's sensor is the twin's (null: too little rest)
+            r = j["current_noise_ratio_rest"]
+            assert r is None or 0.8 < r < 1.25, (j["joint"], r)
             for k in j["kinds"]:
                 assert set(k) == {"kind", "p_given_fault", "size", "unit", "interval", "cannot_tell",
                                   "variance_inflation", "confounded", "same_signature_as"}

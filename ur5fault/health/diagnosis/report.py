@@ -121,6 +121,10 @@ def _report(d: dict[str, Any]) -> str:
                                                             (f", {k['interval'][0]:.3g}..{k['interval'][1]:.3g})"
                                                              if k["interval"] else ")"))
                 for k in top["kinds"])
+            noise = top.get("current_noise_ratio_rest")
+            if noise is not None and any(k["same_signature_as"] for k in top["kinds"]):
+                kinds += (f"; current noise at rest x{noise:.2f} the twin's (a gain reads about its gain, a torque "
+                          "constant 1)")
         where = f"J{top['joint']} {top['p_fault_joint']:.2f}" if top else "-"
         lines.append(f"| {w['start_s']:.1f}-{w['end_s']:.1f} | {w['p_fault']:.3f} | {'yes' if w['flagged'] else 'no'}"
                      f" | {where} | {kinds} |")

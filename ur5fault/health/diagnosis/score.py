@@ -15,9 +15,11 @@ map fitted on the largest carries over).  Kinds: the classifier by joint's proba
 joint's own evidence), renormalised without ``none`` (the probability of each kind given a fault on that
 joint; not calibrated); ``same_signature_as`` names the kinds whose current residual has the same shape (a
 current-sensor gain and a torque-constant loss), which only the current-noise ratio at rest tells apart (twin
-residuals format 9: a window where the joint never rests cannot tell them apart, whatever the split says).  The
-run-level detector is kept as an auxiliary reading: ``p_fault_run_level`` (its own probability, not calibrated)
-and ``flagged_run_level`` (against its threshold at 5 % false alarms).
+residuals format 9: a window where the joint never rests cannot tell them apart, whatever the split says); each
+joint's ``current_noise_ratio_rest`` is that ratio (about g for a current gain g, 1 for a torque-constant loss;
+null where the joint rests for under 100 samples of the window).  The run-level detector is kept as an auxiliary
+reading: ``p_fault_run_level`` (its own probability, not calibrated) and ``flagged_run_level`` (against its
+threshold at 5 % false alarms).
 
 Size estimates are the twin features' least-squares projections (:mod:`ur5fault.health.twin_features`),
 converted to the unit of the campaign's ``fault_size``; the interval is the range of the same estimate on the
@@ -45,7 +47,7 @@ from ...errors import ConfigFileError
 from ...sim.axes import N_JOINTS
 from ..diagnostics import calibration, joint_kind
 from ..diagnostics.data import CONTEXT_COLUMNS, SIM_ONLY_PREFIX
-from ..diagnostics.kind_call import MERGED_KINDS
+from ..diagnostics.kind_call import MERGED_KINDS, NOISE_RATIO
 from ..diagnostics.limits import DEFAULT_Z, ESTIMATE_OF, FLANK_COLUMN, LimitCalibration, joint_limits, reverses
 from ..diagnostics.saved import SCHEMA_FORMAT
 from ..features import FEATURE_UNITS
@@ -227,8 +229,9 @@ def score_windows(models, schema: dict[str, Any], windows: list[Window], has_mot
                               "interval": [_finite(min(halves)), _finite(max(halves))]
                               if ok and all(np.isfinite(halves)) else None,
                               "cannot_tell": c in blind, "same_signature_as": same_signature(c)})
+            noise = w.features.get(f"{NOISE_RATIO}_j{j + 1}", math.nan)
             joints.append({"joint": j + 1, "p_fault_joint": float(p_joint[i, j]), "kinds": kinds,
-                           "cannot_tell": blind,
+                           "cannot_tell": blind, "current_noise_ratio_rest": _finite(noise),
                            **({} if limit_calibration is None else
                               {"detection_limits": window_limits(w, j, blind, limit_calibration)})})
         score = float(score_joint[i].max())
