@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from ur5fault.logs import read_log
-from ur5fault.twin.residuals import MIN_NOISE_SAMPLES, conditions
+from ur5fault.twin.residuals import MIN_NOISE_SAMPLES, conditions, stencils
 
 DATA = Path(__file__).resolve().parents[1] / "data"
 
@@ -66,7 +66,7 @@ def main() -> None:
         n = len(log.t_s) - 2
         rest = conditions(log, n, np.zeros((n, 6)))["at rest"]
         d2 = np.diff(log.current_A[1 : n + 1], 2, axis=0)
-        m = rest[2:] & rest[1:-1] & rest[:-2]
+        m = stencils(rest)
         rms = [float(np.sqrt(np.mean(d2[m[:, j], j] ** 2))) if m[:, j].sum() >= MIN_NOISE_SAMPLES else float("nan")
                for j in range(6)]
         print(f"{path.name} | {int(m.sum(axis=0).min())} | " + " ".join(f"{1e3 * r:.1f}" for r in rms))

@@ -59,9 +59,8 @@ def main() -> None:
     for name, (p, q) in pairs.items():
         out[name] = {"current_A": _rms(i[p] - i[q]), "current_50ms_A": _rms(_smooth(i[p] - i[q])),
                      "motor_angle_rad": _rms(qm[p] - qm[q])}
-    cond = command_conditions(np.gradient(res.q_set_rad, res.t_s, axis=0),
-                              np.gradient(np.gradient(res.q_set_rad, res.t_s, axis=0), res.t_s, axis=0),
-                              float(res.t_s[1] - res.t_s[0]))
+    qd = np.gradient(res.q_set_rad, res.t_s, axis=0)
+    cond = command_conditions(qd, np.gradient(qd, res.t_s, axis=0), float(res.t_s[1] - res.t_s[0]))
     twin = res["i_FB_A"][3]
     for where, mask in (("rest", cond["at rest"]), ("all", None)):
         out[f"noise_ratio_{where}"] = {name: round(float(noise_ratio(res["i_FB_A"][k], twin, mask)[j]), 4)

@@ -39,7 +39,7 @@ from numpy.typing import NDArray
 
 from ..sim.axes import N_JOINTS
 from ..twin.replay import LogReplay, Replayed
-from ..twin.residuals import conditions, noise_ratio
+from ..twin.residuals import conditions, noise_ratio, stencils
 from .candidates import Candidate
 from .drift import Drift
 from .judging import Finding, channels
@@ -157,7 +157,7 @@ def noise_hint(rest: NDArray, meas_A: NDArray, named_A: NDArray, joint: int, nam
     if {named[0], rival[0]} != NOISE_PAIR:
         return ""
     r_named = float(noise_ratio(meas_A, named_A, rest)[joint])
-    n = int((rest[2:] & rest[1:-1] & rest[:-2])[:, joint].sum())
+    n = int(stencils(rest)[:, joint].sum())
     if not np.isfinite(r_named):
         return ""
     r_rival = r_named * sensor_scale(*named) / sensor_scale(*rival)

@@ -237,6 +237,11 @@ def gear_reversals(torque: NDArray, n_fit: int) -> dict[str, bool]:
     return {"fitted": reverses(t[:n_fit]), "held_out": reverses(t[n_fit:])}
 
 
+def stencils(mask: NDArray) -> NDArray:
+    """``(n - 2, 6)``: where a second difference's three-sample stencil lies wholly inside ``mask`` ``(n, 6)``."""
+    return mask[2:] & mask[1:-1] & mask[:-2]
+
+
 def noise_ratio(meas_A: NDArray, twin_A: NDArray, mask: NDArray | None = None) -> NDArray:
     """Per joint ``(6,)``: RMS of the second difference of the current reading ``meas_A`` ``(n, 6)`` over that of
     the twin's reading ``twin_A``, over the samples whose three-sample stencil lies where ``mask`` ``(n, 6)`` is
@@ -245,7 +250,7 @@ def noise_ratio(meas_A: NDArray, twin_A: NDArray, mask: NDArray | None = None) -
     m2, t2 = np.diff(meas_A, 2, axis=0), np.diff(twin_A, 2, axis=0)
     ok = np.isfinite(m2) & np.isfinite(t2)
     if mask is not None:
-        ok &= mask[2:] & mask[1:-1] & mask[:-2]
+        ok &= stencils(mask)
     n = ok.sum(axis=0)
     num = np.sqrt(np.sum(np.where(ok, m2, 0.0) ** 2, axis=0))
     den = np.sqrt(np.sum(np.where(ok, t2, 0.0) ** 2, axis=0))

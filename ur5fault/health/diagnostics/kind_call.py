@@ -7,7 +7,7 @@ with the position and encoder signals held by the loops (docs/diagnostics.md).  
 
 * the sensor's noise (twin residuals format 9): a gain multiplies the sensor's noise with its signal, a
   torque-constant loss leaves it alone, so the current-noise ratio at rest (:data:`NOISE_RATIO`,
-  :func:`ur5fault.health.twin_features.noise_ratio`) reads about g for a gain and 1 for a torque-constant loss.
+  :func:`ur5fault.twin.residuals.noise_ratio`) reads about g for a gain and 1 for a torque-constant loss.
   Where that ratio is among the classifier's inputs and has a value on the called joint (the joint rests
   somewhere in the run), the classifier's call between the two stands;
 * their sign, one way: a torque-constant loss (demagnetisation, s <= 1: the campaign draws it
