@@ -68,19 +68,16 @@ def _write_rtde(log, path):
     pd.DataFrame(cols).to_csv(path, index=False)
 
 
-#: the one false finding known on this log (since simulator revision 3, with the true payload stated)
-KNOWN_FALSE_FINDING = {("breakaway_friction", "shoulder_pan_joint")}
-
-
 @pytest.mark.slow  # two whole library-only discrepancy fits of a 12 s log
 def test_discrepancy_fits_an_unknown_payload_and_names_nothing_the_stated_one_does_not(simulated, tmp_path, capsys):
     """An RTDE CSV of the simulated log (with its joint temperatures, which the replays take), its payload not
     given: the payload is fitted (stderr, summary.json, report), the overlay carries no payload, and the library
     names nothing the stated one does not, leaving out the library's payload candidates, which a fitted payload
-    replaces. The log is the model's own, so every finding is false: neither run may name anything but the one
-    false finding known on this log (a base breakaway friction, the known failure below). Before a current-sensor
-    gain was screened between noise-free replays (discrepancy/library.py) both also kept a wrist_3 current gain
-    of 0.6-0.7, the replay's own sensor noise on a joint whose current is about its noise level."""
+    replaces. The log is the model's own, so every finding is false: neither run may name anything. Before a
+    current-sensor gain was screened between noise-free replays (discrepancy/library.py) both also kept a wrist_3
+    current gain of 0.6-0.7, the replay's own sensor noise on a joint whose current is about its noise level; before
+    the final check asked for the scatter of the model's own replays (discrepancy/replay_noise.py) both kept a base
+    breakaway friction x 1.005 at z 5-9."""
     csv = tmp_path / "sim.csv"
     _write_rtde(simulated, csv)
     runs = {}
@@ -105,10 +102,6 @@ def test_discrepancy_fits_an_unknown_payload_and_names_nothing_the_stated_one_do
         return sorted((f["name"], f["joint"]) for f in s["findings"] if f["kept"] and f["name"] not in PAYLOAD_KINDS)
 
     fitted, stated = named(summ), named(runs["stated"][2])
-    assert set(fitted) <= KNOWN_FALSE_FINDING and set(stated) <= KNOWN_FALSE_FINDING, (fitted, stated)
-    assert set(fitted) <= set(stated)
-    if stated:
-        pytest.xfail("known failure (docs/discrepancy.md, 'Findings on a log of the model itself'): the workflow "
-                     "keeps a base breakaway friction x1.005 at z 5-9 on this log of the model itself; its z "
-                     "overstates the evidence (issue 18)")
-    assert fitted == stated == []
+    assert fitted == stated == [], (fitted, stated)
+    dropped = [f for f in runs["stated"][2]["findings"] if "scatter of the model's own replays" in f["reason"]]
+    assert all(f["replay_scatter"] is not None for f in dropped)

@@ -14,9 +14,10 @@ from ..sim.effects import EffectSpec
 from .candidates import Candidate
 from .drift import Drift
 from .refinement import FindingSet, Refined
+from .replay_noise import replay_scatter, with_scatter
 from .search import Verdict, backward, columns_of, forward, judge
-from .statistics import Z_95, BlockGram, Generalisation, generalisation, rss_of
-from .weighting import OwnVariance, per_channel
+from .statistics import MIN_Z, Z_95, BlockGram, Generalisation, amplitude_z, generalisation, rss_of
+from .weighting import OwnVariance, per_channel, rescaled
 
 
 @dataclasses.dataclass
@@ -45,6 +46,10 @@ class Finding:
     reason: str = ""
     tell_apart: str = ""
     rivals: list = dataclasses.field(default_factory=list)
+    #: the RMS of its estimate on replays of the model under other noise seeds (``replay_noise.py``; None: not
+    #: measured), added to ``se``; ``within_scatter``: dropped because it does not stand out of it
+    replay_scatter: NDArray | None = None
+    within_scatter: bool = False
 
     def spec(self) -> EffectSpec:
         return self.candidate.spec(self.theta)
@@ -180,21 +185,34 @@ def alternatives(fs: FindingSet, kept: list[int], k: int, ref: Refined, J_fit: N
 
 
 def final_verdicts(kept: list[Finding], pol: Refined, n_fit: int, drift: Drift | None = None,
-                   own_variance: OwnVariance = False) -> list[Finding]:
+                   own_variance: OwnVariance = False, nulls: Sequence[NDArray] = ()) -> list[Finding]:
     """Each kept finding judged against the others once more, linearised at the polished coefficients (beside
-    the ``drift``); returns those that fail now."""
+    the ``drift``); returns those that fail now.  ``nulls``: weighted residuals of the polished model's replays
+    under other noise seeds over the fitting part (``replay_noise.py``): each finding's estimate must also stand
+    out of the scatter they give it, else it fails as ``within_scatter``."""
     cands = [f.candidate for f in kept]
     cols = columns_of(cands)
     J_fit = pol.J[:, :n_fit]
     e_pseudo = pol.e[:n_fit] + np.tensordot(pol.theta, J_fit, axes=1)
     if drift is not None:
         J_fit, e_pseudo = drift.remove(J_fit), drift.remove(e_pseudo)
-    J_fit, e_pseudo, _ = per_channel(J_fit, e_pseudo, own_variance)  # each channel its own variance (statistics.py)
+        nulls = [drift.remove(e) for e in nulls]
+    J_fit, e_pseudo, s = per_channel(J_fit, e_pseudo, own_variance)  # each channel its own variance (statistics.py)
+    scatter = replay_scatter(J_fit, [rescaled(e, s, own_variance) for e in nulls], cols)
     bg = BlockGram.build(J_fit, e_pseudo)
     failed = []
     for k, f in enumerate(kept):
-        f.verdict = judge(bg, e_pseudo, J_fit, cands, cols, [o for o in range(len(kept)) if o != k], k)
-        f.se = np.asarray(f.verdict.se)
+        v = judge(bg, e_pseudo, J_fit, cands, cols, [o for o in range(len(kept)) if o != k], k)
+        f.replay_scatter = scatter[k]
+        if scatter[k] is not None:
+            se = with_scatter(np.asarray(v.se), scatter[k])
+            z = amplitude_z(np.asarray(v.theta), se)
+            f.within_scatter = v.accepted and z < MIN_Z
+            v = dataclasses.replace(v, se=tuple(float(x) for x in se), z=z, accepted=v.accepted and z >= MIN_Z,
+                                    reason=v.reason or (f"z {z:.1f} < {MIN_Z:g} with the scatter of its replays under "
+                                                        f"other noise seeds ({v.z:.1f} without)" if z < MIN_Z else ""))
+        f.verdict = v
+        f.se = np.asarray(v.se)
         if not f.verdict.accepted or f.candidate.range_problem(f.theta):
             failed.append(f)
     return failed

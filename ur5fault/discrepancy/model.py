@@ -37,6 +37,7 @@ from .library import kinds as library_kinds
 from .multilog import MultiReplay, per_log
 from .payload import PAYLOAD_KINDS, resolve_payloads
 from .refinement import FindingSet, Refined, polish
+from .replay_noise import null_residuals
 from .rescreen import rescreen
 from .rivals import list_rivals, noise_hints
 from .search import columns_of
@@ -237,11 +238,14 @@ class DiscrepancyModel:
         self.refinement_ += pol.steps
         for f, th in zip(kept, kfs.split(pol.theta)):
             f.theta = th
-        failed = final_verdicts(kept, pol, self.n_fit_, drift, self._variance(rp))
+        # the polished model under other noise seeds: the scatter its findings' estimates must stand out of
+        nulls = null_residuals(rp, kfs.specs(pol.theta), pol.sim.y, self.n_fit_, progress)
+        failed = final_verdicts(kept, pol, self.n_fit_, drift, self._variance(rp), nulls)
         for f in failed:
             f.kept = False
             f.reason = (f.candidate.range_problem(f.theta)
-                        or f"explains nothing the others do not once refined ({f.verdict.reason})")
+                        or (f"within the scatter of the model's own replays ({f.verdict.reason})" if f.within_scatter
+                            else f"explains nothing the others do not once refined ({f.verdict.reason})"))
             self.search_.append(SearchStep.of("final check", dataclasses.replace(f.verdict, reason=f.reason)))
         if failed:
             rest = tuple(f.spec() for f in kept if f.kept)

@@ -71,6 +71,7 @@ class MultiReplay:
         self.names = _names([*logs, *hold_out])
         self.roles = ["fit"] * len(logs) + ["held_out"] * len(hold_out)
         self.jobs = max(1, int(jobs))
+        self.seed = seed
         self.replays = [LogReplay(log, params_overrides, base_effects, seed=seed, jobs=self.jobs)
                         for log in (*logs, *hold_out)]
         first = self.replays[0]
@@ -192,6 +193,27 @@ class MultiReplay:
         for name in ("y", "q_rad", "q_motor_rad", "current_true_A", "torque_gear_Nm"):
             fields[name] = np.concatenate([getattr(r, name)[s.start - 1 : s.stop - 1] for s, r in pieces])[:n]
         return Replayed(status, **fields)
+
+    def run_seeds(self, effects: Sequence[EffectSpec], n: int, seeds: Sequence[int], progress=None
+                  ) -> list[Replayed]:
+        """:meth:`LogReplay.run_seeds` on the joint axis: one replay of ``effects`` per noise seed, every log's
+        runs spread over the processes together."""
+        need = self._need(n)
+        reqs, where, src = [], [], []
+        for seed in seeds:
+            where.append({})
+            for k, m in enumerate(need):
+                if m:
+                    where[-1][k] = len(reqs)
+                    reqs.append((self.replays[k]._reseeded(seed), tuple(effects), m))
+                    src.append(self.replays[k])
+        flat = simulate_requests(reqs, self.jobs, progress)
+        for (other, _, _), rp in zip(reqs, src):
+            rp.n_simulated += other.n_simulated
+            rp.simulated_s += other.simulated_s
+        return [self._joined({k: self.replays[k]._with_log_temperature(
+            dataclasses.replace(flat[i], y=flat[i].y[:, : len(self.signals)]), effects) for k, i in idx.items()}, n)
+            for idx in where]
 
     def prefetch(self, effect_sets: Sequence[Sequence[EffectSpec]], n: int) -> None:
         """:meth:`LogReplay.prefetch` of every log as far as axis samples ``1..n`` reach."""

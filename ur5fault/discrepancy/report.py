@@ -141,6 +141,8 @@ def finding_json(f: Finding) -> dict[str, Any]:
            "parameters": params, "sentence": sentence(f), "size": size(f), "kept": f.kept,
            "reason": f.reason, "z": f.verdict.z, "delta_bic": f.verdict.delta_bic,
            "block_ratios": list(f.verdict.stability.ratios),
+           # the RMS of its estimate on the model's replays under other noise seeds (in se, z and the interval)
+           "replay_scatter": None if f.replay_scatter is None else list(map(float, np.ravel(f.replay_scatter))),
            "held_out": None if f.held_out is None else {"testable": f.held_out.testable, "ratio": f.held_out.ratio,
                                                        "energy": f.held_out.energy},
            "indistinguishable_from": [{"candidate": a.label, "coefficients": list(map(float, np.ravel(th)))}

@@ -67,7 +67,7 @@ def freed_joints(findings: Sequence[Finding], max_effects: int) -> list[int | No
     are kept: each has a place for another library effect."""
     out: list[int | None] = []
     for f in findings:
-        if f.kept:
+        if f.kept or f.within_scatter:  # a residual within the model's own replay scatter frees nothing
             continue
         # a robot-wide finding (a payload) acts on every joint: beside it the joints' own effects were not chosen
         for j in [f.candidate.joint] if f.candidate.joint is not None else [None, *range(N_JOINTS)]:

@@ -127,3 +127,11 @@ def per_channel(X: NDArray, e: NDArray, own_variance: OwnVariance = False) -> tu
         return X / s, e / s, s
     d = own_variance.drift(e.shape[0])
     return d.remove_weighted(X / s, s), d.remove_weighted(e / s, s), s
+
+
+def rescaled(e: NDArray, s: NDArray, own_variance: OwnVariance = False) -> NDArray:
+    """Another residual ``e`` of the same problem in the metric :func:`per_channel` gave it (its scale ``s``, and
+    for variance groups with a drift that drift projected out again): e.g. a replay's scatter about the model."""
+    if isinstance(own_variance, VarianceGroups) and own_variance.drift is not None:
+        return own_variance.drift(e.shape[0]).remove_weighted(e / s, s)
+    return e / s

@@ -16,6 +16,7 @@ array of a replay is ``(n_samples, n_signals, 6)``:
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 from collections.abc import Sequence
 
@@ -180,6 +181,25 @@ class LogReplay:
                         for r, e in zip(flat[i : i + len(rs)], sets)])
             i += len(rs)
         return out
+
+    def run_seeds(self, effects: Sequence[EffectSpec], n: int | None, seeds: Sequence[int], progress=None
+                  ) -> list[Replayed]:
+        """Replay samples ``1..n`` of one effect set once per sensor-noise seed in ``seeds`` (not this replay's own
+        seed): the model's own scatter, which a finding's estimate must stand out of (``discrepancy/replay_noise.py``).
+        Spread over the processes as :meth:`run_batches`; counted among this replay's runs."""
+        n = self._n(n)
+        others = [self._reseeded(s) for s in seeds]
+        flat = simulate_requests([(o, tuple(effects), n) for o in others], self.jobs, progress)
+        self.n_simulated += sum(o.n_simulated for o in others)
+        self.simulated_s += sum(o.simulated_s for o in others)
+        k = len(self.signals)
+        return [self._with_log_temperature(dataclasses.replace(r, y=r.y[:, :k]), effects) for r in flat]
+
+    def _reseeded(self, seed: int) -> LogReplay:
+        """This replay on another noise seed: the same log and model, no prefetched replays, no runs counted."""
+        other = copy.copy(self)
+        other.seed, other._held, other.n_simulated, other.simulated_s = int(seed), {}, 0, 0.0
+        return other
 
     def prefetch(self, effect_sets: Sequence[Sequence[EffectSpec]], n: int | None = None) -> None:
         """Start replays that a later :meth:`run` will ask for on a worker process now (``jobs > 1``), so that
