@@ -9,6 +9,7 @@ import pytest
 
 from ur5fault.discrepancy.candidates import LibraryCandidate
 from ur5fault.discrepancy.judging import Finding
+from ur5fault.discrepancy.replay_noise import NULL_REPLAYS
 from ur5fault.discrepancy.rescreen import freed_joints, indistinguishable_held_out, select_on_freed
 from ur5fault.discrepancy.search import columns_of
 from ur5fault.discrepancy.statistics import effective_n
@@ -101,11 +102,13 @@ class _LinearReplay:
 
     signals = ("current_A", "position_rad")
 
-    def __init__(self, log, cands, shapes, meas):
+    def __init__(self, log, cands, shapes, meas, seed_noise=1.0):
         self.log, self.cands, self.shapes, self._meas = log, cands, shapes, meas
+        self.seed_noise = seed_noise  # the replays' scatter under other noise seeds, in sensor sigmas
         self.n_samples = meas.shape[0]
         self.sigma = np.ones((2, 6))
         self.asked: list[list[tuple]] = []
+        self.seeded: list[tuple] = []  # (effects, seeds) of every replay under other noise seeds
 
     def measured(self, n=None):
         return self._meas[: n or self.n_samples]
@@ -125,6 +128,17 @@ class _LinearReplay:
         self.asked.append([tuple(e) for e in effect_sets])
         z = np.zeros((self.n_samples, 6))
         return [Replayed("ok", self.y(e), z, z, z, z) for e in effect_sets]
+
+    seed = 0
+
+    def run_seeds(self, effects, n, seeds, progress=None):
+        """The replay under other noise seeds: its readings plus unit white noise of each seed (as ``meas``)."""
+        from ur5fault.twin.replay import Replayed
+
+        self.seeded.append((tuple(effects), tuple(seeds)))
+        z = np.zeros((self.n_samples, 6))
+        return [Replayed("ok", self.y(effects) + self.seed_noise * np.random.default_rng(s).normal(
+            size=(self.n_samples, 2, 6)), z, z, z, z) for s in seeds]
 
 
 def test_rivals_of_a_re_screened_effect_are_simulated_only_when_it_is_kept(nist_path):
@@ -176,3 +190,41 @@ def test_rivals_of_a_re_screened_effect_are_simulated_only_when_it_is_kept(nist_
     asked = [e for batch in rp.asked for effects in batch for e in effects]
     assert not any((e.name, e.joint_index) == (rival_j1.effect, 1) for e in asked)
     assert sum(len(b) for b in rp.asked[1:]) in (1, 2)
+    # the kept one's estimate stood out of the scatter of its model's replays under other noise seeds (white
+    # noise of one sigma here: its scatter is a least-squares standard error), asked once for that model only
+    assert len(rp.seeded) == 1 and len(rp.seeded[0][1]) == NULL_REPLAYS
+    assert [(e.name, e.joint_index) for e in rp.seeded[0][0]] == [(by_joint[0].candidate.effect, 0)]
+    assert 0 < by_joint[0].replay_scatter[0] < 0.01 * abs(by_joint[0].theta[0]) and not by_joint[0].within_scatter
+
+
+def test_a_re_screened_effect_within_its_replays_scatter_is_dropped_and_the_model_left_as_it_was(nist_path):
+    """One freed joint whose residual holds a Coulomb-like shape on both parts, judged significant by the block
+    jackknife; but the model's replays under other noise seeds scatter by 2,000 sensor sigmas: the effect is dropped
+    as within that scatter, with no rivals, and the final model is the one the re-screen started from."""
+    from ur5fault.discrepancy.rescreen import rescreen
+    from ur5fault.logs import read_nist
+    from ur5fault.twin.replay import Replayed
+
+    log = read_nist(nist_path).window(0.0, 32.0)
+    n = log.t_s.size - 1
+    n_fit, n_scr = int(0.6 * n), int(0.4 * n)
+    t = np.arange(n) * log.period_s
+    shape = 200.0 * np.tanh((np.sin(2 * np.pi * t / 7.0) + 0.3 * np.sin(2 * np.pi * t / 2.3)) / 0.05)
+    cands = [LibraryCandidate("coulomb_friction", 0, param="scale", x0=1.0, probe=1.5)]
+    meas = np.random.default_rng(11).normal(size=(n, 2, 6))
+    meas[:, 0, 0] += 0.05 * shape
+    X = np.zeros((1, n_scr, 12))
+    X[0, :, 0] = shape[:n_scr]
+    z = np.zeros((n, 6))
+    after = Replayed("ok", np.zeros((n, 2, 6)), z, z, z, z)
+    dropped = [_finding(LibraryCandidate("viscous_friction", 0, param="scale", x0=1.0, probe=1.5), kept=False)]
+    quiet = rescreen(_LinearReplay(log, cands, [shape], meas), X, None, cands, dropped, after, n_scr, n_fit, None,
+                     max_effects=1)
+    assert quiet.findings[0].kept and quiet.findings[0].verdict.z > 10
+    rp = _LinearReplay(log, cands, [shape], meas, seed_noise=2000.0)
+    rec = rescreen(rp, X, None, cands, dropped, after, n_scr, n_fit, None, max_effects=1)
+    f, = rec.findings
+    assert not f.kept and f.within_scatter and "scatter of the model's own replays" in f.reason
+    assert f.verdict.z < 4 < quiet.findings[0].verdict.z and f.rivals == []
+    assert f.replay_scatter[0] > 10 * quiet.findings[0].replay_scatter[0]
+    assert rec.after is after

@@ -17,7 +17,8 @@ the same columns as the measured residual.  The RMS of those estimates about zer
 from the errors in the columns) is the estimate's replay scatter; a finding is judged by ``|theta| / sqrt(se^2 +
 scatter^2)`` against the same bar (``statistics.MIN_Z``), and its interval widened by the scatter.  A finding
 that then fails is dropped as within its replays' scatter, and its joint is not offered to the re-screen
-(``rescreen.freed_joints``): by this test the residual it was chosen for is the model's own.
+(``rescreen.freed_joints``): by this test the residual it was chosen for is the model's own.  An effect the
+re-screen names is checked the same way, on its own columns and the model it is named in (``rescreen.rescreen``).
 """
 
 from __future__ import annotations

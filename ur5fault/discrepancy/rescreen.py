@@ -41,10 +41,11 @@ from ..twin.replay import LogReplay, Replayed
 from .candidates import Candidate
 from .drift import Drift
 from .judging import Finding, SearchStep, channels
+from .replay_noise import null_residuals, replay_scatter, with_scatter
 from .rivals import MAX_RIVALS, Rival, current_channel, differ_most, in_place, indistinguishable_held_out, judge_rival
 from .search import backward, columns_of, forward, judge
-from .statistics import BlockGram, generalisation, rss_of, weighted
-from .weighting import OwnVariance, per_channel
+from .statistics import MIN_Z, BlockGram, generalisation, rss_of, weighted
+from .weighting import OwnVariance, per_channel, rescaled
 
 __all__ = ["MAX_RIVALS", "freed_joints", "indistinguishable_held_out", "rescreen", "rivals_of", "select_on_freed"]
 
@@ -165,7 +166,7 @@ def rescreen(rp: LogReplay, lib_X: NDArray, lib_drift: Drift | None, candidates:
     names = [c for c, _ in new]
     scaled = [_Scaled(c, th) for c, th in new]
     one = [[i] for i in range(len(new))]
-    J_fit, e_fit, _ = per_channel(J_fit, e_fit, own_variance)  # each channel its own variance (statistics.py)
+    J_fit, e_fit, scale = per_channel(J_fit, e_fit, own_variance)  # each channel its own variance (statistics.py)
     bg = BlockGram.build(J_fit, e_fit)
     G, g, ee = bg.total()
     keep, _, gone = backward(bg, e_fit, J_fit, scaled, one, [i for i in range(len(new)) if ok[i]])
@@ -218,6 +219,27 @@ def rescreen(rp: LogReplay, lib_X: NDArray, lib_drift: Drift | None, candidates:
                                     [(candidates[k], th, s) for (pos, k, th), s in zip(wanted, rival_sims)
                                      if pos == i and s.ok], after.torque_gear_Nm, names[i])
         f.alternatives = [(r.candidate, r.theta) for r in f.rivals]
+    # as every kept finding: its estimate must stand out of the scatter of the model's own replays
+    nulls = null_residuals(rp, kept_specs + tuple(f.spec() for f in named), final.y, n_fit, progress)
+    nulls = [rescaled(e if drift is None else drift.remove(e), scale, own_variance) for e in nulls]
+    for f, i, sc in zip(named, keep, replay_scatter(J_fit, nulls, [[i] for i in keep])):
+        if sc is None:
+            continue
+        v, lin = f.verdict, np.abs(np.ravel(new[i][1]))  # v: in the candidate's coefficients (_finding)
+        k = int(np.argmax(lin))
+        a_i, se_i = float(a[keep.index(i)]), float(np.hypot(v.se[k] / lin[k], sc[0]))  # in multiples of lin
+        z = abs(a_i) / se_i if se_i > 0 else 0.0
+        f.replay_scatter = np.abs(np.asarray(new[i][1], dtype=float)) * sc[0]
+        f.se = with_scatter(f.se, f.replay_scatter)
+        f.within_scatter = z < MIN_Z
+        f.verdict = dataclasses.replace(v, se=tuple(float(x) for x in f.se), z=z, accepted=z >= MIN_Z)
+        if f.within_scatter:
+            f.kept, f.rivals, f.alternatives = False, [], []
+            f.reason = (f"within the scatter of the model's own replays (z {z:.1f} < {MIN_Z:g} with the scatter of its "
+                        f"replays under other noise seeds, {v.z:.1f} without)")
+    if any(f.within_scatter for f in named):
+        rest = kept_specs + tuple(f.spec() for f in named if f.kept)
+        final = rp.run([rest], rp.n_samples, progress)[0] if len(rest) > len(kept_specs) else after
     trace += [SearchStep.of("re-screened joint, whole log", dataclasses.replace(f.verdict, accepted=f.kept,
                                                                                 reason=f.reason))
               for f in named + out]
