@@ -103,5 +103,8 @@ def test_discrepancy_fits_an_unknown_payload_and_names_nothing_the_stated_one_do
 
     fitted, stated = named(summ), named(runs["stated"][2])
     assert fitted == stated == [], (fitted, stated)
-    dropped = [f for f in runs["stated"][2]["findings"] if "scatter of the model's own replays" in f["reason"]]
-    assert all(f["replay_scatter"] is not None for f in dropped)
+    # the one false finding the jackknife alone kept on this log is dropped by the replay-scatter check
+    dropped = {(f["name"], f["joint"]): f for f in runs["stated"][2]["findings"]
+               if "scatter of the model's own replays" in f["reason"]}
+    gone = dropped[("breakaway_friction", "shoulder_pan_joint")]
+    assert gone["z"] < 4 and gone["replay_scatter"][0] > 0

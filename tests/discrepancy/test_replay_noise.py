@@ -60,10 +60,11 @@ def replay():
 
 
 def test_a_replay_under_its_own_seed_is_the_workflows_replay(replay):
+    before = replay.n_simulated
     own = replay.run([()], 200)[0]
     again = replay.run_seeds((), 200, [replay.seed])[0]
     np.testing.assert_array_equal(again.y, own.y)
-    assert replay.n_simulated == 2
+    assert replay.n_simulated - before == 2
 
 
 def test_replays_under_other_seeds_differ_from_it_by_the_sensor_noise(replay):
@@ -95,3 +96,52 @@ def test_a_joint_fit_of_two_logs_replays_each_under_the_other_seeds():
     np.testing.assert_array_equal(again.y, own.y)
     assert other.y.shape == own.y.shape and not np.array_equal(other.y, own.y)
     assert mr.n_simulated == 6  # two logs, three replays each
+
+
+def _polished(theta: float, rng):
+    """A polished fit of one finding (a Coulomb-like column on joint 0's current, 10 sensor sigmas per unit)
+    whose residual is white noise: what ``judging.final_verdicts`` reads."""
+    from ur5fault.discrepancy.candidates import LibraryCandidate
+    from ur5fault.discrepancy.judging import Finding
+    from ur5fault.discrepancy.refinement import Refined
+
+    t = np.arange(N) * 0.008
+    J = np.zeros((1, N, 12))
+    J[0, :, 0] = 10.0 * np.tanh(np.sin(2 * np.pi * t / 5.0) / 0.05)
+    e = rng.normal(size=(N, 12))  # what the finding at theta leaves
+    cand = LibraryCandidate("coulomb_friction", 0, param="scale", x0=1.0, probe=1.5)
+    return Refined(np.array([theta]), J, None, e, None, None, []), [Finding(cand, np.array([theta]),
+                                                                            np.zeros(1), None)]
+
+
+def test_the_final_check_drops_a_finding_within_its_replays_scatter_and_keeps_one_beyond_it():
+    from ur5fault.discrepancy.judging import final_verdicts
+
+    rng = np.random.default_rng(4)
+    pol, kept = _polished(0.05, rng)
+    n_fit = 2000
+    quiet = [rng.normal(size=(n_fit, 12)) for _ in range(NULL_REPLAYS)]  # replays differing by sensor noise only
+    assert final_verdicts(kept, pol, n_fit, nulls=quiet) == []
+    f = kept[0]
+    assert f.verdict.accepted and not f.within_scatter and f.verdict.z > 10 and 0 < f.replay_scatter[0] < 0.005
+    assert final_verdicts(kept, pol, n_fit) == [] and f.replay_scatter is None  # without nulls: the jackknife alone
+    se_jackknife = f.se.copy()
+    # replays that scatter the estimate by 0.05 (their residuals hold the finding's own shape at +-0.05)
+    loud = [e + s * pol.J[0, :n_fit] for e, s in zip(quiet, (0.05, -0.05, 0.05, -0.05))]
+    failed = final_verdicts(kept, pol, n_fit, nulls=loud)
+    assert failed == kept and f.within_scatter and not f.verdict.accepted
+    assert f.replay_scatter[0] == pytest.approx(0.05, rel=0.05)
+    assert f.se[0] == pytest.approx(np.hypot(se_jackknife[0], f.replay_scatter[0]), rel=1e-6)
+    assert "with the scatter of its replays under other noise seeds" in f.verdict.reason
+
+
+def test_a_finding_dropped_within_its_replays_scatter_frees_no_place_for_the_re_screen():
+    from ur5fault.discrepancy.candidates import LibraryCandidate
+    from ur5fault.discrepancy.judging import Finding
+    from ur5fault.discrepancy.rescreen import freed_joints
+
+    gone = Finding(LibraryCandidate("breakaway_friction", 0, param="scale", x0=1.0, probe=1.5), np.array([0.005]),
+                   np.array([0.002]), None, kept=False, reason="within the scatter", within_scatter=True)
+    other = Finding(LibraryCandidate("coulomb_friction", 2, param="scale", x0=1.0, probe=1.5), np.array([0.3]),
+                    np.array([0.01]), None, kept=False, reason="does not generalise")
+    assert freed_joints([gone], 1) == [] and freed_joints([gone, other], 1) == [2]

@@ -239,10 +239,11 @@ class DiscrepancyModel:
         for f, th in zip(kept, kfs.split(pol.theta)):
             f.theta = th
         # the polished model under other noise seeds: the scatter its findings' estimates must stand out of
-        nulls = null_residuals(rp, kfs.specs(pol.theta), pol.sim.y, self.n_fit_, progress)
+        nulls = null_residuals(rp, kfs.specs(pol.theta), pol.sim.y, self.n_fit_, progress) if pol.sim.ok else []
         failed = final_verdicts(kept, pol, self.n_fit_, drift, self._variance(rp), nulls)
         for f in failed:
             f.kept = False
+            f.within_scatter = f.within_scatter and not f.candidate.range_problem(f.theta)  # the reason it is given
             f.reason = (f.candidate.range_problem(f.theta)
                         or (f"within the scatter of the model's own replays ({f.verdict.reason})" if f.within_scatter
                             else f"explains nothing the others do not once refined ({f.verdict.reason})"))

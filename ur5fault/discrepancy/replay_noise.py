@@ -48,7 +48,23 @@ def null_residuals(rp, specs: Sequence[EffectSpec], reference_y: NDArray, n: int
     workflow's own replay of it (``reference_y``), weighted by the sensor sigma as every residual of the fit
     ``(n, n_channels)``; replays that fail are left out."""
     sims = rp.run_seeds(tuple(specs), n, null_seeds(rp.seed), progress)
-    return [((s.y[:n] - reference_y[:n]) / rp.sigma).reshape(n, -1) for s in sims if s.ok]
+    out = [((s.y[:n] - reference_y[:n]) / rp.sigma).reshape(n, -1) for s in sims if s.ok]
+    return [e for e in out if np.all(np.isfinite(e))]
+
+
+def scatter_of(rp, specs: Sequence[EffectSpec], reference, n: int, X: NDArray, cols: Sequence[Sequence[int]],
+               scale: NDArray, own_variance, drift=None, progress=None) -> list[NDArray | None]:
+    """:func:`replay_scatter` of the findings whose model ``specs`` the workflow replayed as ``reference`` (a
+    ``Replayed``), on columns ``X`` in the metric of the fit: the null residuals with the fit's ``drift`` removed and
+    scaled by its channel scale ``scale`` (``weighting.per_channel``).  None for every finding when the reference
+    replay is not ok (its readings would make every null residual meaningless)."""
+    from .weighting import rescaled
+
+    if not reference.ok:
+        return [None] * len(cols)
+    nulls = null_residuals(rp, specs, reference.y, n, progress)
+    nulls = [rescaled(e if drift is None else drift.remove(e), scale, own_variance) for e in nulls]
+    return replay_scatter(X, nulls, cols)
 
 
 def replay_scatter(X: NDArray, nulls: Sequence[NDArray], cols: Sequence[Sequence[int]]) -> list[NDArray | None]:

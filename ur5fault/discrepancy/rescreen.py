@@ -26,6 +26,11 @@ rivals are judged by).  The rivals are chosen on the screened part with the effe
 effects that are kept after the whole-log checks, in the batch that re-simulates the final model: the rivals of a
 dropped one would be judged against nothing (its replays do not depend on the batch they are simulated in, so
 what is listed is the same).
+
+Last, every effect kept here must stand out of the scatter of the model's own replays under other noise seeds
+(``replay_noise.py``), as every finding of the final check; one that does not is dropped and the model simulated
+again without it.  The others keep the sizes and rivals fitted beside it: effects named on different joints act
+on different channels, so the drop hardly moves them (two on one joint, ``--max-effects`` 2, could move more).
 """
 
 from __future__ import annotations
@@ -41,11 +46,11 @@ from ..twin.replay import LogReplay, Replayed
 from .candidates import Candidate
 from .drift import Drift
 from .judging import Finding, SearchStep, channels
-from .replay_noise import null_residuals, replay_scatter, with_scatter
+from .replay_noise import scatter_of, with_scatter
 from .rivals import MAX_RIVALS, Rival, current_channel, differ_most, in_place, indistinguishable_held_out, judge_rival
 from .search import backward, columns_of, forward, judge
 from .statistics import MIN_Z, BlockGram, generalisation, rss_of, weighted
-from .weighting import OwnVariance, per_channel, rescaled
+from .weighting import OwnVariance, per_channel
 
 __all__ = ["MAX_RIVALS", "freed_joints", "indistinguishable_held_out", "rescreen", "rivals_of", "select_on_freed"]
 
@@ -219,10 +224,13 @@ def rescreen(rp: LogReplay, lib_X: NDArray, lib_drift: Drift | None, candidates:
                                     [(candidates[k], th, s) for (pos, k, th), s in zip(wanted, rival_sims)
                                      if pos == i and s.ok], after.torque_gear_Nm, names[i])
         f.alternatives = [(r.candidate, r.theta) for r in f.rivals]
-    # as every kept finding: its estimate must stand out of the scatter of the model's own replays
-    nulls = null_residuals(rp, kept_specs + tuple(f.spec() for f in named), final.y, n_fit, progress)
-    nulls = [rescaled(e if drift is None else drift.remove(e), scale, own_variance) for e in nulls]
-    for f, i, sc in zip(named, keep, replay_scatter(J_fit, nulls, [[i] for i in keep])):
+    # as every kept finding: its estimate must stand out of the scatter of the model's own replays (the model
+    # ``final`` was simulated with: at the linearised size when it was not simulated again)
+    final_specs = (kept_specs + tuple(f.spec() for f in named) if again
+                   else kept_specs + (names[keep[0]].spec(new[keep[0]][1]),))
+    scatter = scatter_of(rp, final_specs, final, n_fit, J_fit, [[i] for i in keep], scale, own_variance, drift,
+                         progress)
+    for f, i, sc in zip(named, keep, scatter):
         if sc is None:
             continue
         v, lin = f.verdict, np.abs(np.ravel(new[i][1]))  # v: in the candidate's coefficients (_finding)
@@ -231,8 +239,8 @@ def rescreen(rp: LogReplay, lib_X: NDArray, lib_drift: Drift | None, candidates:
         z = abs(a_i) / se_i if se_i > 0 else 0.0
         f.replay_scatter = np.abs(np.asarray(new[i][1], dtype=float)) * sc[0]
         f.se = with_scatter(f.se, f.replay_scatter)
-        f.within_scatter = z < MIN_Z
-        f.verdict = dataclasses.replace(v, se=tuple(float(x) for x in f.se), z=z, accepted=z >= MIN_Z)
+        f.within_scatter = v.accepted and z < MIN_Z
+        f.verdict = dataclasses.replace(v, se=tuple(float(x) for x in f.se), z=z, accepted=v.accepted and z >= MIN_Z)
         if f.within_scatter:
             f.kept, f.rivals, f.alternatives = False, [], []
             f.reason = (f"within the scatter of the model's own replays (z {z:.1f} < {MIN_Z:g} with the scatter of its "
