@@ -64,6 +64,8 @@ def test_same_family_covers_zero_a_worse_family_does_not():
     assert w["difference_interval"][0] > 0.1 and w["share_within_tolerance"] < 0.01
     text = "\n".join(lines(w))
     assert "interval lies above the tolerance of 0.03" in text and "| 10 |" in text
+    # 10 of 40 motions drawn without replacement: the spread over new motions is about 1 / sqrt(1 - 10/40) wider
+    assert "from these 40 groups, so narrower than over new motions, by about 0.87" in text
 
 
 def test_subset_spread():
@@ -71,6 +73,7 @@ def test_subset_spread():
     y, s, g = runs(12, rng, group_sd=1.0)
     sub = subset_spread(y, s, g, 4, 200, rng)
     assert sub["sd"] > 0 and sub["range_5_95"][0] < rank_auc(y, s) < sub["range_5_95"][1]
+    assert sub["n_of"] == len(np.unique(g)) == 12
     assert math.isnan(subset_spread(y, s, g, 12, 10, rng)["sd"])  # as many motions as there are: no spread
 
 

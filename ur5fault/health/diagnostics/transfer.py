@@ -1,7 +1,7 @@
 """Saved classifiers on another campaign against the training campaign's own test split: how far apart the two
 detection AUCs are, and how far apart they would be by the motions drawn alone.
 
-A test split holds a few motions (``campaigns/diagnostics.yaml``: 10), and the runs of one motion share what the
+A test split holds a few motions (``campaigns/diagnostics.yaml``: 20), and the runs of one motion share what the
 motion shows of a fault. So an AUC read off a test split moves with the motions drawn, by more than its per-run
 standard error says. :func:`compare` resamples whole motions (split groups) of both sets with replacement, each on
 its own, and reads the AUCs' difference at every resample: a 90 % interval of the difference that counts the
@@ -76,16 +76,25 @@ def group_bootstrap_auc(faulty: np.ndarray, score: np.ndarray, groups: np.ndarra
 def subset_spread(faulty: np.ndarray, score: np.ndarray, groups: np.ndarray, n_groups: int, n_draws: int,
                   rng: np.random.Generator) -> dict[str, Any]:
     """The AUC over ``n_draws`` subsets of ``n_groups`` groups drawn without replacement: its standard deviation and
-    5-95 % range (what a test split of that many motions could read off this campaign's motions)."""
+    5-95 % range (what a test split of that many motions could read off this campaign's motions), and ``n_of``, the
+    groups drawn from: subsets of a finite set spread less than new motions would, by about
+    ``sqrt(1 - n_groups / n_of)`` (the finite-population correction)."""
     rows = _groups(np.asarray(groups))
     faulty, score = np.asarray(faulty, bool), np.asarray(score, float)
     if n_groups >= len(rows):
-        return {"n_groups": n_groups, "sd": math.nan, "range_5_95": [math.nan, math.nan]}
+        return {"n_groups": n_groups, "n_of": len(rows), "sd": math.nan, "range_5_95": [math.nan, math.nan]}
     aucs = np.array([rank_auc(faulty[p], score[p]) for p in (
         np.concatenate([rows[i] for i in rng.choice(len(rows), n_groups, replace=False)]) for _ in range(n_draws))])
     aucs = aucs[np.isfinite(aucs)]
-    return {"n_groups": n_groups, "sd": float(np.std(aucs)) if aucs.size else math.nan,
+    return {"n_groups": n_groups, "n_of": len(rows), "sd": float(np.std(aucs)) if aucs.size else math.nan,
             "range_5_95": [float(x) for x in np.percentile(aucs, [5, 95])] if aucs.size else [math.nan, math.nan]}
+
+
+def _fpc(sub: dict[str, Any]) -> float:
+    """The finite-population factor of a subset spread, ``sqrt(1 - n_groups / n_of)`` (NaN without ``n_of``: a
+    metrics.json written before it was recorded)."""
+    n_of = sub.get("n_of")
+    return math.sqrt(max(0.0, 1.0 - sub["n_groups"] / n_of)) if n_of else math.nan
 
 
 def compare(reference: tuple[np.ndarray, np.ndarray, np.ndarray], other: tuple[np.ndarray, np.ndarray, np.ndarray],
@@ -197,9 +206,9 @@ def lines(t: dict[str, Any]) -> list[str]:
                    f"worse by more than it; {t['share_within_tolerance']:.0%} of the resamples at or under it).")
     spread = ("" if not math.isfinite(sub["sd"]) else
               f" An AUC read off {sub['n_groups']} of these runs' groups spreads by {sub['sd']:.3f} (s.d.; 5-95 % "
-              f"{sub['range_5_95'][0]:.3f}-{sub['range_5_95'][1]:.3f}; drawn without replacement from these groups, "
-              "so slightly narrower than over new ones): what a test split of that size can read by the groups drawn "
-              "alone.")
+              f"{sub['range_5_95'][0]:.3f}-{sub['range_5_95'][1]:.3f}; drawn without replacement from these "
+              f"{sub.get('n_of', '')} groups, so narrower than over new motions, by about "
+              f"{_fpc(sub):.2f}): what a test split of that size can read by the groups drawn alone.")
     return [
         "",
         "## Against the training campaign's own test split",
