@@ -14,10 +14,10 @@ from ..sim.effects import EffectSpec
 from .candidates import Candidate
 from .drift import Drift
 from .refinement import FindingSet, Refined
-from .replay_noise import replay_scatter, with_scatter
+from .replay_noise import in_metric, replay_scatter, with_scatter
 from .search import Verdict, backward, columns_of, forward, judge
 from .statistics import MIN_Z, Z_95, BlockGram, Generalisation, amplitude_z, generalisation, rss_of
-from .weighting import OwnVariance, per_channel, rescaled
+from .weighting import OwnVariance, per_channel
 
 
 @dataclasses.dataclass
@@ -196,9 +196,8 @@ def final_verdicts(kept: list[Finding], pol: Refined, n_fit: int, drift: Drift |
     e_pseudo = pol.e[:n_fit] + np.tensordot(pol.theta, J_fit, axes=1)
     if drift is not None:
         J_fit, e_pseudo = drift.remove(J_fit), drift.remove(e_pseudo)
-        nulls = [drift.remove(e) for e in nulls]
     J_fit, e_pseudo, s = per_channel(J_fit, e_pseudo, own_variance)  # each channel its own variance (statistics.py)
-    scatter = replay_scatter(J_fit, [rescaled(e, s, own_variance) for e in nulls], cols)
+    scatter = replay_scatter(J_fit, in_metric(nulls, s, own_variance, drift), cols)
     bg = BlockGram.build(J_fit, e_pseudo)
     failed = []
     for k, f in enumerate(kept):

@@ -58,13 +58,18 @@ def scatter_of(rp, specs: Sequence[EffectSpec], reference, n: int, X: NDArray, c
     ``Replayed``), on columns ``X`` in the metric of the fit: the null residuals with the fit's ``drift`` removed and
     scaled by its channel scale ``scale`` (``weighting.per_channel``).  None for every finding when the reference
     replay is not ok (its readings would make every null residual meaningless)."""
-    from .weighting import rescaled
-
     if not reference.ok:
         return [None] * len(cols)
-    nulls = null_residuals(rp, specs, reference.y, n, progress)
-    nulls = [rescaled(e if drift is None else drift.remove(e), scale, own_variance) for e in nulls]
-    return replay_scatter(X, nulls, cols)
+    return replay_scatter(X, in_metric(null_residuals(rp, specs, reference.y, n, progress), scale, own_variance,
+                                       drift), cols)
+
+
+def in_metric(nulls: Sequence[NDArray], scale: NDArray, own_variance, drift=None) -> list[NDArray]:
+    """Null residuals in the metric of the fit their columns belong to: its ``drift`` removed, then its channel
+    scale (``weighting.per_channel``'s ``s``, and a variance group's drift again: ``weighting.rescaled``)."""
+    from .weighting import rescaled
+
+    return [rescaled(e if drift is None else drift.remove(e), scale, own_variance) for e in nulls]
 
 
 def replay_scatter(X: NDArray, nulls: Sequence[NDArray], cols: Sequence[Sequence[int]]) -> list[NDArray | None]:
