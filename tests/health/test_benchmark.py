@@ -438,6 +438,16 @@ def test_the_operating_point_is_read_off_the_training_runs_and_the_test_split_on
     assert bj["oracle_test_split"]["false_alarm_rate_measured"] <= 0.05
     text = (tmp_path / "benchmark" / "report.md").read_text()
     assert "training runs out of fold" in text and "oracle" in text
+    # every test run's call, one row each, in the test split's order: the flags the headline rates count
+    pred = pd.read_parquet(tmp_path / "benchmark" / "predictions.parquet")
+    assert len(pred) == len(ds.test) and (pred["fault"].to_numpy() == ds.test["fault"].to_numpy()).all()
+    np.testing.assert_allclose(pred["p_fault"], score)
+    assert (pred["flagged"].to_numpy() == (score > oof)).all()
+    assert pred.loc[~pred["flagged"], "kind_called"].eq("healthy").all()
+    assert pred.loc[pred["flagged"], "kind_called"].ne("healthy").all() and pred["joint_called"].between(1, 6).all()
+    faulty = pred["fault"] != "healthy"
+    assert pred.loc[faulty, "flagged_run"].mean() == pytest.approx(m["detection"]["detection_rate_all"])
+    assert pred.loc[~faulty, "flagged_run"].mean() == pytest.approx(m["detection"]["false_alarm_rate_measured"])
     # classifiers saved before the schema said where the threshold came from held the test split's: they load
     # with the out-of-fold threshold of their calibration record, the old one kept beside it
     path = tmp_path / "benchmark" / "models" / SCHEMA_FILE

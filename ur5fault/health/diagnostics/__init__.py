@@ -36,6 +36,8 @@ from .metrics import (
     localisation,
 )
 from .models import Models, fit_models
+from .predictions import FILE as PREDICTIONS_FILE
+from .predictions import test_predictions
 from .report import write_report
 from .saved import MODELS_DIR, check_inputs, load_models, save_models
 from .thresholds import PAPER_TCP_MM, backlash_thresholds
@@ -99,7 +101,7 @@ def _evaluate(features: pd.DataFrame, seed: int, shuffle_labels: bool, threshold
     detected = score > thr
     det = detection(ds, models, saved_thr, None, None if saved is None else "saved with the classifiers")
     loc = localisation(ds, models, detected)
-    by_joint, joint_score = None, None
+    by_joint, joint_score, joint_thr = None, None, None
     if models.joint_kind is not None:  # the kind classifier by joint as a detector: p(fault on any joint)
         # its operating point is fixed before the test runs are scored: the saved one, or the training runs' out-
         # of-fold 5 % threshold (the one saved for `ur5fault diagnose`); the test split's own is the oracle beside it
@@ -172,6 +174,8 @@ def _evaluate(features: pd.DataFrame, seed: int, shuffle_labels: bool, threshold
             out_figs["reliability"] = figs.reliability_diagram(calib["test"])
     metrics["timing"]["benchmark_wall_s"] = time.perf_counter() - t0
     metrics["_models"] = models  # taken out before writing (run_benchmark saves them)
+    # every scored run's call (predictions.py); write_report writes it as predictions.parquet
+    metrics["_predictions"] = test_predictions(te, score, thr, models, ds.inputs, joint_thr)
     return metrics, out_figs
 
 
@@ -181,7 +185,7 @@ def _split_by(te: pd.DataFrame) -> str:
 
 
 #: what a benchmark writes into its report folder; one of them there is an earlier result
-RESULT_FILES = ("report.md", "metrics.json", MODELS_DIR)
+RESULT_FILES = ("report.md", "metrics.json", PREDICTIONS_FILE, MODELS_DIR)
 
 
 def run_benchmark(campaign_dir: str | Path, out: str | Path | None = None, *, seed: int = 0,

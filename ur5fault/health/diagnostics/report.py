@@ -8,10 +8,17 @@ from pathlib import Path
 from typing import Any
 
 from ...sim.axes import JOINT_NAMES
-from ...util.io import remove_stale_temporaries, write_figure_atomic, write_json_atomic, write_text_atomic
+from ...util.io import (
+    remove_stale_temporaries,
+    write_figure_atomic,
+    write_json_atomic,
+    write_parquet_atomic,
+    write_text_atomic,
+)
 from .kind_call import PAIR
 from .limit_report import limit_lines
 from .metrics import FROM_TEST_SPLIT
+from .predictions import FILE as PREDICTIONS_FILE
 from .transfer import lines as transfer_lines
 
 
@@ -251,11 +258,15 @@ def comparison_lines(cmp: dict[str, Any]) -> list[str]:
 
 
 def write_report(m: dict[str, Any], figures: dict[str, Any], out: Path) -> list[Path]:
-    """Write ``<name>.png`` for each figure, ``metrics.json`` (NaN as null) and ``report.md``, each
-    atomically; return the paths."""
+    """Write ``<name>.png`` for each figure, ``metrics.json`` (NaN as null), ``report.md`` and, where ``m`` holds
+    them (``"_predictions"``, taken out of ``m``), the scored runs' calls as ``predictions.parquet``
+    (:mod:`.predictions`), each atomically; return the paths."""
     out.mkdir(parents=True, exist_ok=True)
     remove_stale_temporaries(out)  # of a writer killed mid-write over an hour ago
     paths = []
+    predictions = m.pop("_predictions", None)
+    if predictions is not None:
+        paths.append(write_parquet_atomic(predictions, out / PREDICTIONS_FILE))
     for name, fig in figures.items():
         paths.append(write_figure_atomic(fig, out / f"{name}.png"))
     m = clean({**m, "figures": [p.name for p in paths]})
