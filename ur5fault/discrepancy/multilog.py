@@ -179,11 +179,16 @@ class MultiReplay:
         for (sets, n), at in zip(batches, where):
             res = []
             for e, idx in zip(sets, at):
-                per = {k: self.replays[k]._with_log_temperature(
-                    dataclasses.replace(flat[i], y=flat[i].y[:, : len(self.signals)]), e) for k, i in idx.items()}
-                res.append(self._joined(per, n))
+                res.append(self._assembled(flat, idx, e, n))
             out.append(res)
         return out
+
+    def _assembled(self, flat: Sequence[Replayed], idx: dict[int, int], effects: Sequence[EffectSpec], n: int
+                   ) -> Replayed:
+        """The joined replay of one effect set from the flat results ``flat`` of its logs' requests (``idx``: log ->
+        position in ``flat``): each log's signals cut to the axis' and its temperature recorded, then joined."""
+        return self._joined({k: self.replays[k]._with_log_temperature(
+            dataclasses.replace(flat[i], y=flat[i].y[:, : len(self.signals)]), effects) for k, i in idx.items()}, n)
 
     def _joined(self, per: dict[int, Replayed], n: int) -> Replayed:
         """One replay on the axis from each log's replay."""
@@ -211,9 +216,7 @@ class MultiReplay:
         for (other, _, _), rp in zip(reqs, src):
             rp.n_simulated += other.n_simulated
             rp.simulated_s += other.simulated_s
-        return [self._joined({k: self.replays[k]._with_log_temperature(
-            dataclasses.replace(flat[i], y=flat[i].y[:, : len(self.signals)]), effects) for k, i in idx.items()}, n)
-            for idx in where]
+        return [self._assembled(flat, idx, effects, n) for idx in where]
 
     def prefetch(self, effect_sets: Sequence[Sequence[EffectSpec]], n: int) -> None:
         """:meth:`LogReplay.prefetch` of every log as far as axis samples ``1..n`` reach."""
