@@ -105,7 +105,8 @@ def with_flags(out: pd.DataFrame, predictions: Path) -> pd.DataFrame:
 def alpha_table(out: pd.DataFrame) -> str:
     """Per joint, the benchmark's alpha_90 rule (``thresholds.backlash_thresholds``: logistic fit in log alpha,
     the run-level flags) over the runs whose gear torque reverses, read three ways: all runs, the twin's flank
-    share (what the benchmark and ``diagnose`` read, no label) and the run's own (the truth, nuisance included)."""
+    share as the feature table has it (what the benchmark and ``diagnose`` read, no label) and the run's own (the
+    truth, nuisance included)."""
     from ur5fault.health.diagnostics.thresholds import backlash_thresholds
     from ur5fault.health.twin_features import FLANK_SHARE
 
@@ -118,11 +119,15 @@ def alpha_table(out: pd.DataFrame) -> str:
         return f"{text} ({v['detected']}/{v['n_test']})"
 
     lines = ["", "alpha_90 [deg] (flagged / runs) over the runs whose gear torque reverses:", "",
-             "| joint | all runs | twin's flank share > 2 % | run's own flank share > 2 % "
+             "| joint | all runs | the table's (twin's) flank share > 2 % | run's own flank share > 2 % "
              "| runs: twin reverses, the run not |",
              "| --- | --- | --- | --- | --- |"]
     for j, rows in out.groupby("joint"):
-        twin, truth = rows["twin_share"] > FLANK_SHARE, rows["truth_share"] > FLANK_SHARE
+        # the feature table's share where it has one (what the benchmark reads: since twin format 11 with the
+        # payload CoM the current fit found fed back), else the twin simulated here (no CoM fed back)
+        table = rows["share_in_table"].astype(float)
+        twin = (table if table.notna().all() else rows["twin_share"]) > FLANK_SHARE
+        truth = rows["truth_share"] > FLANK_SHARE
         lines.append(f"| {j} | {a90(rows, j)} | {a90(rows[twin], j)} | {a90(rows[truth], j)} | "
                      f"{int((twin & ~truth).sum())} |")
     return "\n".join(lines)

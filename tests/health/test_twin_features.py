@@ -155,3 +155,37 @@ def test_standard_errors_and_t_values_are_consistent(com_batch):
         assert f[f"twin_est_current_offset_A_se_j{j}"] > 0  # the constant column is always identified
     # the tool keeps pointing down: a CoM shift along it moves no joint torque, so it is not identified
     assert math.isnan(f["twin_est_payload_com_z_m_t"]) and f["twin_est_payload_com_z_m"] == 0.0
+
+
+def test_the_payload_com_fed_back_puts_the_twins_gear_torque_where_the_robots_is():
+    """The twin's gear torque with a known payload CoM shift fed back (twin_fit.com_corrected_torque, the closed-form
+    gravity columns) against MuJoCo's: the same run simulated with the shift, both without sensor noise.  While the
+    payload is held the fed-back torque takes up most of what the shift does on the joints it loads (the gravity
+    moment; not the drive's transient when the payload's weight steps in at the grasp, nor the shift's inertial
+    torque: about a quarter of it is left on the shoulder and elbow, an eighth on wrist 2).  A wrong sign would leave
+    twice the change, a wrong scale (current for torque) all of it.  An estimate within two standard errors of zero
+    is not fed back."""
+    from ur5fault.config import parse_trajectory
+    from ur5fault.health.twin_features import flank_share
+    from ur5fault.health.twin_fit import com_columns, com_corrected_torque
+
+    traj = parse_trajectory({"name": "random_pick_and_place", "seed": 3}, "trajectory")
+    load = (make_effect("payload", mass_kg=COM_KG), make_effect("temperature", temperature_C=30.0))
+    shift = make_effect("payload_com", dx_m=COM_DX_M, dy_m=-COM_DX_M)
+    sim = Simulator()
+    res = sim.run(traj, [RunSpec("twin", 12345, load + REGRESSOR_EFFECTS),
+                         RunSpec("shifted", 12345, load + (shift,) + REGRESSOR_EFFECTS)], duration_s=COM_DURATION_S)
+    assert all(s == "ok" for s in res.status)
+    twin, truth = res["T_gear_Nm"][0], res["T_gear_Nm"][1]
+    held = traj.gripped(res.t_s)
+    cols = com_columns(res.q_set_rad, COM_KG, sim.params, held)
+    fed = com_corrected_torque(twin, cols, np.array([COM_DX_M, -COM_DX_M, 0.0]), np.full(3, 1e-3), sim.params)
+    change = np.sqrt(np.mean((truth - twin)[held] ** 2, axis=0))  # what the shift does to each joint's torque
+    left = np.sqrt(np.mean((truth - fed)[held] ** 2, axis=0))
+    loaded = change > 0.1  # N*m: the joints the shift loads (the wrists and the parallel axes)
+    assert loaded.sum() >= 3 and np.all(left[loaded] < 0.35 * change[loaded]), (change, left)
+    assert abs(flank_share(fed) - flank_share(truth)).max() < abs(flank_share(twin) - flank_share(truth)).max()
+    # components within two standard errors of zero are not fed back (nor NaN ones): the twin's torque unchanged
+    weak = com_corrected_torque(twin, cols, np.array([COM_DX_M, np.nan, 1.0]), np.array([0.02, 1e-3, np.nan]),
+                                sim.params)
+    assert weak is twin

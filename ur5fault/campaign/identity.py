@@ -49,9 +49,11 @@ INPUT_ORDER = ("identity_format", "ur5fault_version", "sim_revision", "mujoco_ve
 #: format 5 (6) with the fits' columns kept or left out by their singular values from a QR factorisation, not by
 #: the eigenvalues of the normal matrix, which rounding decided at the mismatch fit's ``rcond``: health/twin_fit.py;
 #: 9 (10 with ``twin_com_twins``): format 7 (8) plus each joint's current-noise ratio at rest,
-#: ``twin_current_noise_ratio_rest_j<k>``, which tell a current-sensor gain from a torque-constant loss)
-TWIN_RESIDUALS_FORMAT = 9
-TWIN_RESIDUALS_FORMAT_COM_TWINS = 10
+#: ``twin_current_noise_ratio_rest_j<k>``, which tell a current-sensor gain from a torque-constant loss;
+#: 11 (12 with ``twin_com_twins``): format 9 (10) with the mismatch fit's columns and the flank shares read off the
+#: twin's gear torque with the payload CoM the current fit found fed back, twin_fit.com_corrected_torque)
+TWIN_RESIDUALS_FORMAT = 11
+TWIN_RESIDUALS_FORMAT_COM_TWINS = 12
 #: the simulator configuration campaigns run with: passed to the engine by every campaign kind
 #: (campaign/execute.py, health/prognostics/fleet.py) and recorded here, so the identity names what ran
 DRIVE, STEPPER = "numba", "compiled"

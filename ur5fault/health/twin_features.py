@@ -33,7 +33,9 @@ Features per joint ``j`` (units in the names):
     1/s times the current, b = 1/s - 1: the two are the same shape in the current and told apart only
     by the rest of the signals); ``twin_est_coulomb_scale_err`` = c (Coulomb scale - 1);
   - mismatch residual ~ ``d`` * 1 + ``e`` * sign(T_twin) / 2 + ``f`` * T_twin / k, with T_twin the twin's
-    gear torque (also simulated without sensor noise) and k the gear stiffness: ``twin_est_mismatch_offset_rad``
+    gear torque (also simulated without sensor noise; since twin residuals format 11 with the payload CoM shift the
+    current fit below finds fed back, :func:`ur5fault.health.twin_fit.com_corrected_torque`: on wrist 2 that shift
+    decides which flank the gear is on) and k the gear stiffness: ``twin_est_mismatch_offset_rad``
     = d (a resolver offset o reads the link o too high, the position loop moves the link back by o and the motor
     with it, so the mismatch falls by o: d = -o); ``twin_est_backlash_rad`` = e (a clearance alpha swaps flanks
     with the sign of the gear torque: the mismatch jumps by alpha); ``twin_est_compliance_err`` = f (a
@@ -56,7 +58,7 @@ Features per joint ``j`` (units in the names):
   same scale whatever the motion (standard normal on a healthy run with white noise).  SE and t are NaN
   where the motion does not identify the estimate (e.g. the CoM columns without a payload).
 * ``twin_gear_flank_share_j`` (-, twin residuals format 5): how far the motion reverses the joint's gear torque,
-  the twin's (noise-free) peak torque on its weaker flank as a share of its peak torque on either
+  the twin's (noise-free, CoM fed back as above) peak torque on its weaker flank as a share of its peak torque on either
   (:func:`flank_share`; 0 where the torque keeps one sign).  A backlash is crossed, and so can be seen, only
   where it exceeds :data:`FLANK_SHARE`, the share the mismatch fit's flank column counts as a flank: below it
   the torque only approaches zero from one side, which the backlash estimate can still fit (its SE is finite)
@@ -86,7 +88,15 @@ from ..sim.axes import N_JOINTS
 from ..sim.drive.friction import stribeck_level
 from ..sim.params import RobotParams
 from ..twin.residuals import command_conditions, noise_ratio
-from .twin_fit import RCOND_NUISANCE, com_columns, flange_kinematics, hac_fit, latency_column, noise_scale
+from .twin_fit import (
+    RCOND_NUISANCE,
+    com_columns,
+    com_corrected_torque,
+    flange_kinematics,
+    hac_fit,
+    latency_column,
+    noise_scale,
+)
 
 #: motion conditions used, short name -> the key of :func:`ur5fault.twin.motion_conditions`
 CONDITIONS = {"rest": "at rest", "speed": "at speed", "reversal": "near velocity reversals", "accel": "accelerating"}
@@ -222,11 +232,7 @@ def current_fit(t_s: NDArray, q_set_rad: NDArray, residual_A: NDArray, twin: dic
     motion = _motion_for(t_s, q_set_rad, params, motion)
     cols, _ = projection_columns(t_s, q_set_rad, twin, params, motion)
     n = residual_A.shape[0]
-    com = twin.get("com_A_per_m")
-    if com is None:  # the CoM's gravity torque in closed form (no CoM twins given)
-        com = com_columns(q_set_rad, payload_kg, params, payload_held, lambda: motion.flange)
-    elif payload_kg <= 0:
-        com = np.zeros_like(com)
+    com = payload_com_columns(q_set_rad, twin, params, payload_kg, payload_held, motion)
     nuisance = np.concatenate([com, latency_column(twin["i_q_A"], motion.dt_s)[:, :, None]], axis=2)  # (n, 6, 4)
     per_joint = np.zeros((n, N_JOINTS, 3 * N_JOINTS))
     for j in range(N_JOINTS):
@@ -238,6 +244,16 @@ def current_fit(t_s: NDArray, q_set_rad: NDArray, residual_A: NDArray, twin: dic
     k = 3 * N_JOINTS
     return (fit.coef[:k].reshape(N_JOINTS, 3), fit.se[:k].reshape(N_JOINTS, 3),
             np.stack([fit.coef[k:], fit.se[k:]], axis=1))
+
+
+def payload_com_columns(q_set_rad: NDArray, twin: dict[str, NDArray], params: RobotParams, payload_kg: float,
+                        payload_held: NDArray | None, motion: CommandedMotion) -> NDArray:
+    """The current fit's payload centre-of-mass columns ``(n, 6, 3)`` [A/m] (:func:`current_fit`): the twin's
+    ``com_A_per_m`` where given (zero without a payload), else the CoM's gravity torque in closed form."""
+    com = twin.get("com_A_per_m")
+    if com is None:  # the CoM's gravity torque in closed form (no CoM twins given)
+        return com_columns(q_set_rad, payload_kg, params, payload_held, lambda: motion.flange)
+    return np.zeros_like(com) if payload_kg <= 0 else com
 
 
 def twin_features(t_s: NDArray, q_set_rad: NDArray, meas: dict[str, NDArray], twin: dict[str, NDArray],
@@ -269,9 +285,13 @@ def twin_features(t_s: NDArray, q_set_rad: NDArray, meas: dict[str, NDArray], tw
     res = {"current": meas["i_FB_A"] - twin["i_FB_A"], "position": meas["q_FB_rad"] - twin["q_FB_rad"],
            "mismatch": mis_m - mis_t}
     masks = motion.masks
-    _, mismatch_cols = projection_columns(t_s, q_set_rad, twin, params, motion)
-    cur_coef, cur_se, nuisance = current_fit(t_s, q_set_rad, res["current"], twin, params, payload_kg, payload_held,
-                                             motion)
+    com = payload_com_columns(q_set_rad, twin, params, payload_kg, payload_held, motion)
+    cur_coef, cur_se, nuisance = current_fit(t_s, q_set_rad, res["current"], {**twin, "com_A_per_m": com}, params,
+                                             payload_kg, payload_held, motion)
+    # the gear torque the mismatch fit and the flank shares read: the twin's, with the payload CoM the current fit
+    # found fed back (twin residuals format 11; twin_fit.com_corrected_torque)
+    torque = com_corrected_torque(twin["T_gear_Nm"], com, nuisance[:3, 0], nuisance[:3, 1], params)
+    _, mismatch_cols = projection_columns(t_s, q_set_rad, {**twin, "T_gear_Nm": torque}, params, motion)
     f: dict[str, float] = {}
     estimates = []
     for j in range(N_JOINTS):
@@ -296,7 +316,7 @@ def twin_features(t_s: NDArray, q_set_rad: NDArray, meas: dict[str, NDArray], tw
     for name, (v, e) in zip(NUISANCE_UNITS, nuisance):
         f[f"twin_est_{name}"] = float(v)
         f[f"twin_est_{name}_t"] = _t(v, e)
-    for j, share in enumerate(flank_share(twin["T_gear_Nm"])):
+    for j, share in enumerate(flank_share(torque)):
         f[f"twin_gear_flank_share_j{j + 1}"] = float(share)
     for j, r in enumerate(noise_ratio(meas["i_FB_A"], twin["i_FB_A"], masks[NOISE_CONDITION])):
         f[f"twin_current_noise_ratio_rest_j{j + 1}"] = float(r)

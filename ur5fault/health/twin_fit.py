@@ -13,6 +13,9 @@ robot does not know them (docs/diagnostics.md): its payload's centre of mass and
   current-sensor offset - but it is the SAME shift on every joint: on the parallel axes J2, J3 and J4 a
   sideways shift adds the same torque to all three, while a sensor offset sits on one joint.  Fitted over
   all joints at once, the two are told apart.
+  The gear torque the twin's mismatch fit reads (its backlash flank and windup columns, the flank share) is the
+  twin's with this shift fed back (:func:`com_corrected_torque`): the robot does not know its payload's CoM, and
+  on wrist 2, whose torque is small and set mostly by it, the twin otherwise puts the gear on the wrong flank.
 * **Latency.**  Setpoints that arrive ``tau`` late give a measured current ``i(t - tau) ~ i(t) - tau di/dt``:
   one column ``-di_twin/dt`` shared by all joints, whose coefficient is ``tau`` in seconds.
 
@@ -46,6 +49,10 @@ from ..sim.trajectories.ik import model_path
 #: nothing); the mismatch fit keeps the default 1e-8, whose flank column may differ from a constant in a few
 #: samples only - the few reversals that show a backlash
 RCOND_NUISANCE = 1e-4
+#: a payload CoM component is fed back into the twin's gear torque (:func:`com_corrected_torque`) where its estimate
+#: stands at least this many standard errors out of zero (two-sided 95 %); an unidentified one - the shift along a
+#: tool that points down, whose estimate is arbitrary and its t about 0 - stays at the twin's own value, zero
+COM_FEEDBACK_MIN_T = 2.0
 #: a column whose norm is below this share of the largest column's is zero up to rounding (e.g. the payload
 #: CoM shift along a tool axis that stays parallel to gravity: its torque is zero but for the last bits)
 ZERO_COLUMN = 1e-9
@@ -180,10 +187,27 @@ def com_columns(q_rad: NDArray, payload_kg: float, params: RobotParams, held: ND
     return out * hold[:, None, None]
 
 
+def com_corrected_torque(torque_Nm: NDArray, com_A_per_m: NDArray, estimate_m: NDArray, se_m: NDArray,
+                         params: RobotParams) -> NDArray:
+    """The twin's gear torque ``torque_Nm`` ``(n, 6)`` with the payload centre-of-mass shift the current fit found
+    fed back: ``torque + K_t N (com_A_per_m @ delta)``, ``com_A_per_m`` ``(n, 6, 3)`` the current fit's CoM columns
+    [A/m] and ``delta`` the estimates ``estimate_m`` ``(3,)`` [m] (standard errors ``se_m``) of the components that
+    stand :data:`COM_FEEDBACK_MIN_T` standard errors out of zero (the others 0).  A column of motor current per
+    metre times ``K_t N`` is link torque per metre (the closed-form columns are exactly that; a CoM twin's current
+    difference also carries the loops' share).  ``torque_Nm`` itself where no component qualifies."""
+    c, e = np.asarray(estimate_m, dtype=float), np.asarray(se_m, dtype=float)
+    with np.errstate(invalid="ignore"):
+        use = np.isfinite(c) & np.isfinite(e) & (e > 0) & (np.abs(c) >= COM_FEEDBACK_MIN_T * e)
+    if not use.any():
+        return torque_Nm
+    per_amp = np.asarray(params.motor.torque_constant_Nm_per_A) * np.asarray(params.gear.ratio)
+    return torque_Nm + (np.asarray(com_A_per_m)[:, :, use] @ c[use]) * per_amp
+
+
 def latency_column(i_twin_A: NDArray, dt_s: float) -> NDArray:
     """``-di_twin/dt`` ``(n, 6)`` [A/s]: the current residual per second of setpoint latency."""
     return -np.gradient(i_twin_A, dt_s, axis=0)
 
 
-__all__ = ["RCOND_NUISANCE", "Fit", "bartlett_lag", "com_columns", "flange_kinematics", "hac_fit", "latency_column",
-           "noise_scale"]
+__all__ = ["COM_FEEDBACK_MIN_T", "RCOND_NUISANCE", "Fit", "bartlett_lag", "com_columns", "com_corrected_torque",
+           "flange_kinematics", "hac_fit", "latency_column", "noise_scale"]
