@@ -38,7 +38,7 @@ def test_simulate_from_yaml(tmp_path):
 @pytest.mark.parametrize(
     "args, message",
     [
-        (["--backlash", "knee:0.1"], "unknown joint 'knee'; valid: 1..6, elbow_joint,"),
+        (["--backlash", "knee:0.1"], "unknown joint 'knee'; valid: 1..6, base, elbow, elbow_joint,"),
         (["--backlash", "elbow:-0.1"], "backlash.backlash_deg = -0.1 is out of range [0, 5] deg"),
         (["--backlash", "elbow"], "expected JOINT:DEGREES"),
         (["--effect", "rust@1:scale=2"], "unknown effect 'rust'; valid: backlash,"),
@@ -112,6 +112,21 @@ def test_refusals_name_what_the_user_typed(tmp_path):
     sim_csv.write_text("t_s\n0\n")
     _one_line_error(run("discrepancy", str(sim_csv), "--format", "sim", "--out", out),
                     "run.csv: the sim format reads the Parquet file")
+    # the discrepancy workflow's own settings, named as typed (were `fit_fraction = 1.5`, `jobs = 0`)
+    for opt, text in ((("--fit-fraction", "1.5"), "--fit-fraction = 1.5 is out of range [0.2, 0.9]"),
+                      (("--max-effects", "-1"), "--max-effects -1: must be a whole number of at least 0"),
+                      (("--jobs", "0"), "--jobs 0: must be a whole number of at least 1")):
+        _one_line_error(run("discrepancy", str(log), "--format", "rtde", "--payload-kg", "1", "--tcp-offset-m",
+                            "0", "0", "0", *opt, "--out", out), text)
+
+
+@pytest.mark.parametrize("args, commands", [((), "(simulate, effects, show, campaign,"),
+                                            (("campaign",), "(run, status)")])
+def test_a_group_without_its_command_ends_its_help_with_one_error_line(args, commands):
+    r = run(*args)
+    assert r.returncode == 2 and "usage:" in r.stderr
+    last = r.stderr.strip().splitlines()[-1]
+    assert last.startswith("ur5fault: error: ") and "name a command" in last and commands in last, r.stderr
 
 
 def test_version_matches_installed_metadata():

@@ -149,11 +149,11 @@ def _on_sigterm(signum, frame) -> None:
 
 
 def _usage(parser: argparse.ArgumentParser):
-    """The action of a command group given without its subcommand: its help on stderr, exit 2."""
+    """The action of a command group given without its subcommand (:func:`.util.usage.missing_command`)."""
+    from .util.usage import missing_command
 
     def show(args: argparse.Namespace) -> int:
-        parser.print_help(sys.stderr)
-        return EXIT_USAGE
+        return missing_command(parser)
 
     return show
 

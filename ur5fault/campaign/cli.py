@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import sys
 from pathlib import Path
 
 from .spec import shipped_campaigns
@@ -52,9 +51,10 @@ def register(sub) -> None:
 
 
 def _usage(parser: argparse.ArgumentParser) -> int:
-    """``ur5fault campaign`` without run or status: its help on stderr, exit 2."""
-    parser.print_help(sys.stderr)
-    return 2
+    """``ur5fault campaign`` without run or status (:func:`..util.usage.missing_command`)."""
+    from ..util.usage import missing_command
+
+    return missing_command(parser)
 
 
 def cmd_run(args: argparse.Namespace) -> int:

@@ -53,12 +53,17 @@ def cmd_discrepancy(args: argparse.Namespace) -> int:
     from ..logs.measured import assumption_notes
     from ..logs.options import log_entries, read_log_options
     from ..sim.params import load_params
+    from ..util.checks import check_count, check_number
     from ..util.io import check_new_output
-    from .model import DiscrepancyModel
+    from .model import FIT_FRACTION_RANGE, DiscrepancyModel
     from .report import summary, write_report
 
+    # everything that can be checked before minutes of fitting is checked first, in the options' own names
+    check_number(args.fit_fraction, "--fit-fraction", *FIT_FRACTION_RANGE)
+    for option, value, least in (("--max-effects", args.max_effects, 0), ("--max-terms", args.max_terms, 0),
+                                 ("--jobs", args.jobs if args.jobs is not None else 1, 1)):
+        check_count(value, option, least)
     jobs = (os.cpu_count() or 1) if args.jobs is None else args.jobs
-    # everything that can be checked before minutes of fitting is checked first
     model = DiscrepancyModel(fit_fraction=args.fit_fraction, max_effects=args.max_effects,
                              max_terms=args.max_terms, jobs=jobs, progress=not args.quiet)
     check_new_output(args.out, folder=True, results=RESULT_FILES, replace=args.replace)

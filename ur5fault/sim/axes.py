@@ -39,6 +39,12 @@ JOINT_ALIASES: dict[str, int] = {
 }
 
 
+#: what an unknown joint's error lists as valid: the names, UR's short names and the numbers (every alias but the
+#: names without ``_joint``, which the list would only double)
+VALID_JOINTS: tuple[str, ...] = JOINT_NAMES + ("base", "shoulder", "elbow", "wrist1", "wrist2", "wrist3", "1..6",
+                                               "j1..j6")
+
+
 def joint_index(joint: int | str, where: str = "") -> int:
     """Return the 0-based index of ``joint``.
 
@@ -51,14 +57,14 @@ def joint_index(joint: int | str, where: str = "") -> int:
         UnknownNameError: ``joint`` names no joint; the message lists the valid names.
     """
     if isinstance(joint, bool):
-        raise UnknownNameError("joint", joint, JOINT_NAMES + ("1..6",), where)
+        raise UnknownNameError("joint", joint, VALID_JOINTS, where)
     if isinstance(joint, int):
         if 1 <= joint <= N_JOINTS:
             return joint - 1
-        raise UnknownNameError("joint", joint, JOINT_NAMES + ("1..6",), where)
+        raise UnknownNameError("joint", joint, VALID_JOINTS, where)
     key = str(joint).strip().lower()
     if key.isdigit():
         return joint_index(int(key), where)
     if key in JOINT_ALIASES:
         return JOINT_ALIASES[key]
-    raise UnknownNameError("joint", joint, JOINT_NAMES + ("1..6",), where)
+    raise UnknownNameError("joint", joint, VALID_JOINTS, where)

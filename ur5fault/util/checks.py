@@ -52,6 +52,14 @@ def check_int(value: Any, where: str, lo: int, hi: int, what: str = "an integer"
     return value
 
 
+def check_count(value: Any, option: str, least: int) -> int:
+    """A command-line count (``--jobs``, ``--max-effects``): a whole number of at least ``least``, refused in the
+    campaign commands' words, ``--jobs 0: must be a whole number of at least 1``."""
+    if isinstance(value, bool) or not isinstance(value, int) or value < least:
+        raise ParameterError(f"{option} {value!r}: must be a whole number of at least {least}")
+    return value
+
+
 def check_bool(value: Any, where: str) -> bool:
     """``true`` or ``false`` (YAML also reads ``yes``/``no`` as these); never a string or a number."""
     if not isinstance(value, bool):
