@@ -448,6 +448,18 @@ def test_the_operating_point_is_read_off_the_training_runs_and_the_test_split_on
     faulty = pred["fault"] != "healthy"
     assert pred.loc[faulty, "flagged_run"].mean() == pytest.approx(m["detection"]["detection_rate_all"])
     assert pred.loc[~faulty, "flagged_run"].mean() == pytest.approx(m["detection"]["false_alarm_rate_measured"])
+    # the backlash alpha_90 on reversing motions read with either detector's flags: the same runs (those the
+    # reversal rule keeps, limit_metrics.torque_reverses), each with its own flags
+    from ur5fault.health.diagnostics.limit_metrics import torque_reverses
+
+    lim = m["detection_limits"]
+    for key, flags in (("backlash_alpha_90_torque_reverses", "flagged_run"),
+                       ("backlash_alpha_90_torque_reverses_by_joint_detector", "flagged")):
+        for j in (2, 3):
+            on = (pred["fault"] == "backlash") & (pred["fault_joint"] == j) & torque_reverses(ds.test)[:, j - 1]
+            assert lim[key][str(j)]["n_test"] == on.sum() > 0
+            assert lim[key][str(j)]["detected"] == pred.loc[on, flags].sum()
+    assert "by-joint detector at its saved operating point" in text
     # classifiers saved before the schema said where the threshold came from held the test split's: they load
     # with the out-of-fold threshold of their calibration record, the old one kept beside it
     path = tmp_path / "benchmark" / "models" / SCHEMA_FILE

@@ -126,8 +126,10 @@ def _evaluate(features: pd.DataFrame, seed: int, shuffle_labels: bool, threshold
     ok_rows = features[features["status"] == "ok"] if "status" in features else features
     bl = backlash_thresholds(te, detected, ok_rows, threshold_mm, seed)
     imp = importance(ds, models, seed) if with_importance else []
+    joint_detected = None if joint_score is None or joint_thr is None else joint_score > float(joint_thr)
     limits = None if not with_limits else for_dataset(
-        ds, None if saved is None else saved[1], score if joint_score is None else joint_score, score, detected)
+        ds, None if saved is None else saved[1], score if joint_score is None else joint_score, score, detected,
+        joint_detected)
     metrics = {
         "dataset": {
             "source": source,

@@ -96,8 +96,8 @@ def _auc(score: np.ndarray, healthy: np.ndarray, pos: np.ndarray) -> float:
 
 
 def limit_detection(test: pd.DataFrame, cal: LimitCalibration, upper: np.ndarray, score: np.ndarray,
-                    run_score: np.ndarray, run_detected: np.ndarray, z_values: tuple[float, ...] = Z_VALUES
-                    ) -> dict[str, Any]:
+                    run_score: np.ndarray, run_detected: np.ndarray, z_values: tuple[float, ...] = Z_VALUES,
+                    joint_detected: np.ndarray | None = None) -> dict[str, Any]:
     """The figures of the module docstring.
 
     Args:
@@ -106,6 +106,8 @@ def limit_detection(test: pd.DataFrame, cal: LimitCalibration, upper: np.ndarray
         upper: :func:`.metrics.upper_half` of the test rows.
         score: the by-joint detector's score (the goal's figure); ``run_score``: the run-level detector's.
         run_detected: the run-level detector's flags at its operating point (today's backlash alpha_90).
+        joint_detected: the by-joint detector's flags at its saved operating point (the flags of ``ur5fault
+            diagnose`` and of the headline rates), or None: the reversing motions' alpha_90 also read with them.
     """
     healthy = (test["fault"] == "healthy").to_numpy()
     kinds_all = test["fault"].to_numpy(str)
@@ -158,18 +160,21 @@ def limit_detection(test: pd.DataFrame, cal: LimitCalibration, upper: np.ndarray
             "score": "by-joint detector (p(fault) of `ur5fault diagnose`; the goal's per-kind figure); "
                      "`_run_level`: the run-level detector",
             "calibration": cal.to_dict(), "cannot_tell": cannot, "by_z": by_z,
-            "backlash_alpha_90_torque_reverses": reversing_alpha_90(test, run_detected)}
+            "backlash_alpha_90_torque_reverses": reversing_alpha_90(test, run_detected),
+            "backlash_alpha_90_torque_reverses_by_joint_detector": (
+                None if joint_detected is None else reversing_alpha_90(test, np.asarray(joint_detected, bool)))}
 
 
 def for_dataset(ds: Dataset, schema: dict[str, Any] | None, score: np.ndarray, run_score: np.ndarray,
-                run_detected: np.ndarray) -> dict[str, Any] | None:
+                run_detected: np.ndarray, joint_detected: np.ndarray | None = None) -> dict[str, Any] | None:
     """:func:`limit_detection` of a benchmark's test runs, calibrated on its training runs (or with the calibration
     saved in ``schema``, a saved detector's); None when the table has no twin estimates' SE and t columns."""
     if not (has_estimates(ds.test) and has_estimates(ds.train)):
         return None
     saved = (schema or {}).get("detection_limit_calibration")
     cal = LimitCalibration.from_dict(saved) if saved else LimitCalibration.from_training(ds.train)
-    return limit_detection(ds.test, cal, upper_half(ds), score, run_score, run_detected)
+    return limit_detection(ds.test, cal, upper_half(ds), score, run_score, run_detected,
+                           joint_detected=joint_detected)
 
 
 __all__ = ["detectable", "for_dataset", "limit_detection", "own_limit", "reversing_alpha_90", "torque_reverses"]

@@ -71,10 +71,17 @@ def limit_lines(lim: dict[str, Any], literal: dict[str, Any]) -> list[str]:
     if rev:  # absent from a metrics.json written before it
         lines += ["", "Backlash alpha_90 [deg] on the motions where the joint's gear torque reverses (the goal's "
                       "wording; read off each run's twin, no label: the backlash estimate is identified there), "
-                      "flagged / kept; below, the backlash test runs whose motion never reverses it (gravity holds "
+                      "flagged / kept, with the run-level detector's flags as the tables above and, where the "
+                      "benchmark has it, with the by-joint detector's at its saved operating point (the flags of "
+                      "`ur5fault diagnose` and of the headline rates); below, the backlash test runs whose motion "
+                      "never reverses it (gravity holds "
                       "the gear on one flank: the clearance is never crossed and no signal can show it):", "",
                   "| | " + " | ".join(joints) + " |", "| --- |" + " --- |" * len(joints),
                   "| alpha_90 | " + " | ".join(_alpha(rev.get(str(j), {})) for j in range(1, len(joints) + 1)) + " |",
+                  *([] if not lim.get("backlash_alpha_90_torque_reverses_by_joint_detector") else [
+                      "| alpha_90, by-joint detector at its saved operating point | " + " | ".join(
+                          _alpha(lim["backlash_alpha_90_torque_reverses_by_joint_detector"].get(str(j), {}))
+                          for j in range(1, len(joints) + 1)) + " |"]),
                   "| runs never reversing | " + " | ".join(str(rev.get(str(j), {}).get("n_not_reversing", "-"))
                                                       for j in range(1, len(joints) + 1)) + " |"]
     return lines
