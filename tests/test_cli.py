@@ -240,3 +240,13 @@ def test_simulate_command_line_effects_replace_the_files_and_errors_name_their_s
     assert main(["simulate", "--config", str(pay), "--out", str(out), "--replace"]) == 2
     err = capsys.readouterr().err
     assert "pay.yaml: effects[0]: payload (mass_kg=2) and payload_kg = 1 both set the payload" in err
+
+
+def test_a_run_past_its_trajectory_is_noted_and_plot_of_a_file_is_named(tmp_path):
+    """Found trying the wheel as a newcomer: a --duration-s past the trajectory's end ran silently (the robot holds
+    its last setpoint), and `plot RUN.parquet` called the file a campaign folder without a features table."""
+    out = tmp_path / "run.parquet"
+    r = run("simulate", "--trajectory", "pick_and_place", "--duration-s", "13.05", "--out", str(out), "--quiet")
+    assert r.returncode == 0, r.stderr
+    assert "note: the trajectory ends at 13 s; the robot holds its last setpoint for the remaining 0.05 s" in r.stderr
+    _one_line_error(run("plot", str(out)), "run.parquet: a file, not a campaign folder")

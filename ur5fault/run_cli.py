@@ -65,6 +65,9 @@ def cmd_simulate(args: argparse.Namespace) -> int:
                   "that sets a value (e.g. backlash) keeps the run's, one that scales compounds with it",
                   file=sys.stderr)
     duration = cfg.duration_s if cfg.duration_s is not None else cfg.trajectory.duration_s
+    if duration > cfg.trajectory.duration_s + 1e-9:
+        print(f"note: the trajectory ends at {cfg.trajectory.duration_s:g} s; the robot holds its last setpoint for "
+              f"the remaining {duration - cfg.trajectory.duration_s:g} s", file=sys.stderr)
     n_log = math.floor(duration / cfg.log_period_s + 1e-9)
     if duration - n_log * cfg.log_period_s > 1e-9:  # the run is logged, and reported, to its last whole sample
         print(f"note: the run ends at {n_log * cfg.log_period_s:g} s, its last logged sample ({duration:g} s is not a "
