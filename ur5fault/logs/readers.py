@@ -113,8 +113,8 @@ def _assemble(src: str, t: NDArray, required: Mapping[str, NDArray], optional: M
     plausible.check_units(src, t, req["actual_q"], opt["actual_qd"], labels[1], declared)
     if rest_target_is_reading(t, req["target_q"], req["actual_q"], opt["target_qd"]):
         notes.append(f"{src}: at rest (every target speed 0) the logged target is the previous measured position, "
-                     "as in the CB2 runs of data/kufieta-ur5: the twin is commanded there to the robot's own reading, "
-                     "not to the pose the robot holds (docs/validation.md)")
+                     "as a CB2 controller logs it: the twin is commanded there to the robot's own reading, not to the "
+                     "pose the robot holds (ur5fault's docs/validation.md, \"A CB2 log's target at rest\")")
     keep = {**req, **{k: v for k, v in opt.items() if k not in ("target_qd", "actual_qd")}}
     grid, a, logged = regular.on_ticks(src, t, keep, notes)
     cur_t = a["target_current"]
