@@ -189,3 +189,27 @@ def test_the_payload_com_fed_back_puts_the_twins_gear_torque_where_the_robots_is
     weak = com_corrected_torque(twin, cols, np.array([COM_DX_M, np.nan, 1.0]), np.array([0.02, 1e-3, np.nan]),
                                 sim.params)
     assert weak is twin
+
+
+def test_the_torque_rebuilt_from_the_features_is_the_one_their_flank_shares_read():
+    """``fed_back_torque`` (diagnose's variance inflation) rebuilds from a run's features the gear torque the
+    features' own mismatch fit and flank shares read: on a run with a payload CoM shift the current fit finds (fed
+    back), its flank shares equal the features' to rounding, and differ from the bare twin's."""
+    from ur5fault.config import parse_trajectory
+    from ur5fault.health.twin_features import fed_back_torque, flank_share
+
+    traj = parse_trajectory({"name": "random_pick_and_place", "seed": 3}, "trajectory")
+    load = (make_effect("payload", mass_kg=COM_KG), make_effect("temperature", temperature_C=30.0))
+    sim = Simulator()
+    res = sim.run(traj, [RunSpec("run", 11, load + (make_effect("payload_com", dx_m=COM_DX_M, dy_m=-COM_DX_M),)),
+                         RunSpec("twin", 12345, load), RunSpec("quiet twin", 12345, load + REGRESSOR_EFFECTS)],
+                  duration_s=COM_DURATION_S)
+    names = ("q_FB_rad", "q_M_FB_rad", "i_FB_A")
+    twin = {**{n: res[n][1] for n in names}, **{n: res[n][2] for n in ("i_q_A", "T_gear_Nm")}}
+    held = traj.gripped(res.t_s)
+    f = twin_features(res.t_s, res.q_set_rad, {n: res[n][0] for n in names}, twin, sim.params, COM_KG, held)
+    assert abs(f["twin_est_payload_com_x_m_t"]) >= 2 and abs(f["twin_est_payload_com_y_m_t"]) >= 2  # fed back
+    shares = np.array([f[f"twin_gear_flank_share_j{j}"] for j in range(1, 7)])
+    rebuilt = flank_share(fed_back_torque(res.t_s, res.q_set_rad, twin, sim.params, f, COM_KG, held))
+    np.testing.assert_allclose(rebuilt, shares, rtol=0, atol=1e-12)
+    assert np.abs(flank_share(twin["T_gear_Nm"]) - shares).max() > 0.01

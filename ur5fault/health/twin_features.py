@@ -323,6 +323,21 @@ def twin_features(t_s: NDArray, q_set_rad: NDArray, meas: dict[str, NDArray], tw
     return f
 
 
+def fed_back_torque(t_s: NDArray, q_set_rad: NDArray, twin: dict[str, NDArray], params: RobotParams,
+                    features: dict[str, float], payload_kg: float = 0.0, payload_held: NDArray | None = None,
+                    motion: CommandedMotion | None = None) -> NDArray:
+    """The gear torque :func:`twin_features` read for the mismatch fit and the flank shares, rebuilt from the CoM
+    estimates and t values in its ``features`` (SE = |estimate / t|), for a caller that needs the same columns
+    (``ur5fault diagnose``'s variance inflation); the arguments as :func:`twin_features` took them."""
+    motion = _motion_for(t_s, q_set_rad, params, motion)
+    est = np.array([features[f"twin_est_payload_com_{a}_m"] for a in "xyz"], dtype=float)
+    t = np.array([features[f"twin_est_payload_com_{a}_m_t"] for a in "xyz"], dtype=float)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        se = np.abs(est / t)
+    com = payload_com_columns(q_set_rad, twin, params, payload_kg, payload_held, motion)
+    return com_corrected_torque(twin["T_gear_Nm"], com, est, se, params)
+
+
 def _t(value: float, se: float) -> float:
     """estimate / SE; NaN where the SE is NaN or zero (the estimate not identified)."""
     return float(value / se) if np.isfinite(se) and se > 0 else float("nan")

@@ -25,7 +25,7 @@ from ...twin import LogReplay, Replayed
 from ...twin.residuals import CONDITION_REST_SPEED_RAD_S
 from ..features import run_features
 from ..signals import needs_motor_encoders
-from ..twin_features import ESTIMATE_UNITS, projection_columns, twin_features
+from ..twin_features import ESTIMATE_UNITS, fed_back_torque, projection_columns, twin_features
 
 
 @dataclasses.dataclass(frozen=True)
@@ -132,7 +132,9 @@ def window_features(log: MeasuredLog, replay: LogReplay, rep: Replayed, window_s
         if log.q_motor_rad is None:
             f.update({k: float("nan") for k in f if needs_motor_encoders(k)})
         f.update(context)
-        cur, mis = projection_columns(t[lo:hi], q_set[lo:hi], twin, replay.params)
+        # the columns the window's fits used: the mismatch fit's gear torque with the CoM it found fed back
+        torque = fed_back_torque(t[lo:hi], q_set[lo:hi], twin, replay.params, f, payload, hw)
+        cur, mis = projection_columns(t[lo:hi], q_set[lo:hi], {**twin, "T_gear_Nm": torque}, replay.params)
         vif = tuple(dict(zip(ESTIMATE_UNITS, inflation([c[:, j] for c in cur]) + inflation([c[:, j] for c in mis])))
                     for j in range(N_JOINTS))
         moving = np.abs(np.gradient(q_set[lo:hi], dt, axis=0)) > CONDITION_REST_SPEED_RAD_S
