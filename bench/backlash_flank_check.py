@@ -30,7 +30,10 @@ def campaign_spec(folder: Path) -> Path:
     """The campaign YAML a campaign folder's manifest names (relative to the repository where it is relative)."""
     import json
 
-    name = Path(json.loads((folder / "manifest.json").read_text())["campaign_file"])
+    name = json.loads((folder / "manifest.json").read_text()).get("campaign_file")
+    if not name:
+        raise SystemExit(f"{folder}: its manifest names no campaign file; give --spec")
+    name = Path(name)
     return name if name.is_absolute() else REPO / name
 
 

@@ -465,9 +465,9 @@ def test_files_are_group_readable(tmp_path):
     (["--payload-kg", "nan"], "--payload-kg = nan must be a finite number in [0, 5] kg"),
     (["--payload-kg", "-1"], "--payload-kg = -1.0 is out of range [0, 5] kg"),
     (["--tcp-offset-m", "0", "0", "inf"], "--tcp-offset-m (value 3) = inf must be a finite number in [-2, 2] m"),
-    (["--fit-fraction", "nan"], "fit_fraction = nan is out of range [0.2, 0.9]"),
-    (["--max-terms", "-1"], "max_terms = -1 must be a whole number >= 0"),
-    (["--jobs", "0"], "jobs = 0 must be a whole number >= 1"),
+    (["--fit-fraction", "nan"], "--fit-fraction = nan must be a finite number in [0.2, 0.9]"),
+    (["--max-terms", "-1"], "--max-terms -1: must be a whole number of at least 0"),
+    (["--jobs", "0"], "--jobs 0: must be a whole number of at least 1"),
 ], ids=["payload-nan", "payload-negative", "tcp-offset-inf", "fit-fraction-nan", "max-terms-negative", "jobs-zero"])
 def test_discrepancy_log_arguments(args, message, tmp_path, capsys):
     log = _write(tmp_path, "log.csv", rtde_frame())

@@ -18,8 +18,8 @@ import sys
 from collections.abc import Sequence
 
 from .errors import Ur5FaultError
+from .util.usage import EXIT_USAGE
 
-EXIT_USAGE = 2
 
 class _Parser(argparse.ArgumentParser):
     def __init__(self, *args, **kwargs) -> None:

@@ -460,6 +460,15 @@ def test_the_operating_point_is_read_off_the_training_runs_and_the_test_split_on
             assert lim[key][str(j)]["n_test"] == on.sum() > 0
             assert lim[key][str(j)]["detected"] == pred.loc[on, flags].sum()
     assert "by-joint detector at its saved operating point" in text
+    # each reading takes its own flags (here they agree on every backlash run: told apart with flags that differ)
+    from ur5fault.health.diagnostics.limit_metrics import for_dataset
+
+    none, every = np.zeros(len(ds.test), bool), np.ones(len(ds.test), bool)
+    both = for_dataset(ds, None, score, score, none, every)
+    for j in (2, 3):
+        run_level = both["backlash_alpha_90_torque_reverses"][str(j)]
+        by_joint = both["backlash_alpha_90_torque_reverses_by_joint_detector"][str(j)]
+        assert run_level["detected"] == 0 and by_joint["detected"] == by_joint["n_test"] == run_level["n_test"] > 0
     # classifiers saved before the schema said where the threshold came from held the test split's: they load
     # with the out-of-fold threshold of their calibration record, the old one kept beside it
     path = tmp_path / "benchmark" / "models" / SCHEMA_FILE

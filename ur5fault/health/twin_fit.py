@@ -50,8 +50,9 @@ from ..sim.trajectories.ik import model_path
 #: samples only - the few reversals that show a backlash
 RCOND_NUISANCE = 1e-4
 #: a payload CoM component is fed back into the twin's gear torque (:func:`com_corrected_torque`) where its estimate
-#: stands at least this many standard errors out of zero (two-sided 95 %); an unidentified one - the shift along a
-#: tool that points down, whose estimate is arbitrary and its t about 0 - stays at the twin's own value, zero
+#: stands at least this many standard errors out of zero (two-sided, about 95 %); one the fit cannot identify - the
+#: shift along a tool that points down, whose column is zero (estimate 0, SE and t undefined) - or that stands within
+#: the noise stays at the twin's own value, zero
 COM_FEEDBACK_MIN_T = 2.0
 #: a column whose norm is below this share of the largest column's is zero up to rounding (e.g. the payload
 #: CoM shift along a tool axis that stays parallel to gravity: its torque is zero but for the last bits)

@@ -14,8 +14,9 @@ def missing_command(parser: argparse.ArgumentParser) -> int:
     """Print ``parser``'s help and ``ur5fault: error: PROG: name a command (...)`` on stderr; return 2."""
     parser.print_help(sys.stderr)
     names = next((list(a.choices) for a in parser._actions if isinstance(a, argparse._SubParsersAction)), [])
-    print(f"ur5fault: error: {parser.prog}: name a command" + (f" ({', '.join(names)})" if names else ""),
-          file=sys.stderr)
+    group = parser.prog.removeprefix("ur5fault").strip()
+    print("ur5fault: error: " + (f"{group}: " if group else "") + "name a command"
+          + (f" ({', '.join(names)})" if names else ""), file=sys.stderr)
     return EXIT_USAGE
 
 

@@ -48,7 +48,7 @@ def evaluate(features: pd.DataFrame, *, seed: int = 0, shuffle_labels: bool = Fa
              threshold_mm: float = PAPER_TCP_MM, source: str = "features", with_figures: bool = True,
              with_importance: bool = True, feature_set: str = "paper", saved: tuple[Models, dict] | None = None,
              test_features: pd.DataFrame | None = None, calibrate: bool = False, with_limits: bool = True,
-             fitted: Models | None = None) -> tuple[dict[str, Any], dict[str, Any]]:
+             fitted: Models | None = None, with_predictions: bool = True) -> tuple[dict[str, Any], dict[str, Any]]:
     """Train on the train split, score on the test split.
 
     Args:
@@ -66,6 +66,8 @@ def evaluate(features: pd.DataFrame, *, seed: int = 0, shuffle_labels: bool = Fa
             needs the twin estimates' SE and t columns).
         fitted: classifiers already trained on this split, inputs and seed (the chosen set's, for its row of the
             comparison): scored instead of training them again.
+        with_predictions: also every scored run's call (``metrics["_predictions"]``, :mod:`.predictions`; what
+            ``write_report`` writes as ``predictions.parquet``).
 
     Returns:
         ``(metrics, figures)``: every number (JSON-able) and the matplotlib Figures by name.
@@ -74,14 +76,14 @@ def evaluate(features: pd.DataFrame, *, seed: int = 0, shuffle_labels: bool = Fa
 
     with single_threaded():
         return _evaluate(features, seed, shuffle_labels, threshold_mm, source, with_figures, with_importance,
-                         feature_set, saved, test_features, calibrate, with_limits, fitted)
+                         feature_set, saved, test_features, calibrate, with_limits, fitted, with_predictions)
 
 
 def _evaluate(features: pd.DataFrame, seed: int, shuffle_labels: bool, threshold_mm: float, source: str,
               with_figures: bool, with_importance: bool, feature_set: str = "paper",
               saved: tuple[Models, dict] | None = None, test_features: pd.DataFrame | None = None,
-              calibrate: bool = False, with_limits: bool = True, fitted: Models | None = None
-              ) -> tuple[dict[str, Any], dict[str, Any]]:
+              calibrate: bool = False, with_limits: bool = True, fitted: Models | None = None,
+              with_predictions: bool = True) -> tuple[dict[str, Any], dict[str, Any]]:
     t0 = time.perf_counter()
     ds: Dataset = load_dataset(features, feature_set if saved is None else saved[1]["feature_set"])
     if test_features is not None:
@@ -176,8 +178,8 @@ def _evaluate(features: pd.DataFrame, seed: int, shuffle_labels: bool, threshold
             out_figs["reliability"] = figs.reliability_diagram(calib["test"])
     metrics["timing"]["benchmark_wall_s"] = time.perf_counter() - t0
     metrics["_models"] = models  # taken out before writing (run_benchmark saves them)
-    # every scored run's call (predictions.py); write_report writes it as predictions.parquet
-    metrics["_predictions"] = test_predictions(te, score, thr, models, ds.inputs, joint_thr)
+    if with_predictions:  # every scored run's call (predictions.py); write_report writes it as predictions.parquet
+        metrics["_predictions"] = test_predictions(te, score, thr, models, ds.inputs, joint_thr)
     return metrics, out_figs
 
 
@@ -303,7 +305,7 @@ def _compared(features: pd.DataFrame, seed: int, shuffled: bool, threshold_mm: f
     """One row of :func:`compare_feature_sets`: the headline figures of one feature set, trained or shuffled."""
     m, _ = evaluate(features, seed=seed, shuffle_labels=shuffled, threshold_mm=threshold_mm, source=source,
                     with_figures=False, with_importance=False, feature_set=feature_set, with_limits=False,
-                    fitted=fitted)
+                    fitted=fitted, with_predictions=False)
     return summary(m)
 
 

@@ -65,17 +65,19 @@ def detectable(test: pd.DataFrame, limits: dict[str, np.ndarray]) -> np.ndarray:
 
 
 def torque_reverses(test: pd.DataFrame) -> np.ndarray:
-    """``(n_runs, 6)``: whether the run's motion reverses each joint's gear torque, read off its twin: the flank
-    share above 2 % (:func:`.limits.reverses`; a campaign without the column: the SE alone) and the backlash
-    estimate's SE finite and positive.  The label is not read."""
+    """``(n_runs, 6)``: whether the run's motion reverses each joint's gear torque, read off its twin (since twin
+    format 11 with the payload CoM its current fit finds fed back): the flank share above 2 % (:func:`.limits.reverses`;
+    a campaign without the column: the SE alone) and the backlash estimate's SE finite and positive.  The label is
+    not read."""
     se = standard_errors(test, ESTIMATE_OF["backlash"])
     return np.isfinite(se) & (se > 0)
 
 
-def reversing_alpha_90(test: pd.DataFrame, run_detected: np.ndarray) -> dict[str, Any]:
-    """Per joint: the backlash alpha_90 (:func:`.thresholds.backlash_thresholds`, the run-level detector's flags as
-    the other alpha_90 figures) over the backlash test runs whose motion reverses that joint's gear torque, with
-    ``n_not_reversing``: the backlash test runs on the joint whose motion never does (no signal can show them)."""
+def reversing_alpha_90(test: pd.DataFrame, detected: np.ndarray) -> dict[str, Any]:
+    """Per joint: the backlash alpha_90 (:func:`.thresholds.backlash_thresholds`) with the flags ``detected`` (the
+    run-level detector's, as the other alpha_90 figures, or the by-joint detector's) over the backlash test runs
+    whose motion reverses that joint's gear torque, with ``n_not_reversing``: the backlash test runs on the joint
+    whose motion never does (no signal can show them)."""
     rev = torque_reverses(test)
     kinds = test["fault"].to_numpy(str)
     joints = test["fault_joint"].to_numpy(int)
@@ -83,7 +85,7 @@ def reversing_alpha_90(test: pd.DataFrame, run_detected: np.ndarray) -> dict[str
     own = np.zeros(len(test), bool)
     own[on] = rev[np.flatnonzero(on), joints[on] - 1]
     keep = ~on | own
-    bl = backlash_thresholds(test[keep].reset_index(drop=True), run_detected[keep], pd.DataFrame())
+    bl = backlash_thresholds(test[keep].reset_index(drop=True), detected[keep], pd.DataFrame())
     out = {}
     for j, v in bl["per_joint"].items():
         out[j] = {key: v[key] for key in ALPHA_KEYS if key in v}

@@ -70,7 +70,8 @@ def limit_lines(lim: dict[str, Any], literal: dict[str, Any]) -> list[str]:
     rev = lim.get("backlash_alpha_90_torque_reverses")
     if rev:  # absent from a metrics.json written before it
         lines += ["", "Backlash alpha_90 [deg] on the motions where the joint's gear torque reverses (the goal's "
-                      "wording; read off each run's twin, no label: the backlash estimate is identified there), "
+                      "wording; read off each run's twin with the payload CoM its current fit finds, no label: the "
+                      "backlash estimate is identified there), "
                       "flagged / kept, with the run-level detector's flags as the tables above and, where the "
                       "benchmark has it, with the by-joint detector's at its saved operating point (the flags of "
                       "`ur5fault diagnose` and of the headline rates); below, the backlash test runs whose motion "

@@ -13,7 +13,9 @@ Columns (one row per scored test run, in the order of the test split):
 - ``p_fault`` (-): the fault-kind classifier by joint's probability of a fault on any joint (the p(fault) of
   ``ur5fault diagnose``); ``flagged`` (bool): above its saved operating point; ``kind_called``: the kind it calls
   there (``healthy`` where not flagged); ``joint_called`` (1-6): the joint with the largest probability of a fault.
-  NaN, False, ``""`` and 0 where the benchmark has no classifier by joint (the paper's features alone).
+  NaN, False, ``""`` and 0 where the benchmark has no classifier by joint (the paper's features alone); with the
+  classifier but no operating point (a shuffled-label control) ``p_fault`` and ``joint_called`` are filled,
+  ``flagged`` is False and ``kind_called`` ``""``.
 """
 
 from __future__ import annotations

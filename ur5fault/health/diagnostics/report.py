@@ -263,13 +263,11 @@ def write_report(m: dict[str, Any], figures: dict[str, Any], out: Path) -> list[
     (:mod:`.predictions`), each atomically; return the paths."""
     out.mkdir(parents=True, exist_ok=True)
     remove_stale_temporaries(out)  # of a writer killed mid-write over an hour ago
-    paths = []
     predictions = m.pop("_predictions", None)
+    paths = [write_figure_atomic(fig, out / f"{name}.png") for name, fig in figures.items()]
+    m = clean({**m, "figures": [p.name for p in paths]})
     if predictions is not None:
         paths.append(write_parquet_atomic(predictions, out / PREDICTIONS_FILE))
-    for name, fig in figures.items():
-        paths.append(write_figure_atomic(fig, out / f"{name}.png"))
-    m = clean({**m, "figures": [p.name for p in paths]})
     paths.append(write_json_atomic(out / "metrics.json", m))
     paths.append(write_text_atomic(out / "report.md", markdown(m)))
     return paths
