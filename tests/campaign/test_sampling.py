@@ -279,7 +279,11 @@ def test_runs_logged_without_motor_encoders_have_no_mismatch_features(tmp_path):
     # per joint: 3 paper features, 8 mismatch residual statistics, 3 mismatch-fit estimates with their SE and t
     assert len(blind) == 6 * 3 + 6 * (8 + 3 * 3) and df[blind].isna().all().all()
     assert len(seen) > 18 and np.isfinite(df[seen].to_numpy()).all()
-    assert json.loads((tmp_path / "manifest.json").read_text())["motor_encoders"] is False
+    man = json.loads((tmp_path / "manifest.json").read_text())
+    assert man["motor_encoders"] is False
+    from ur5fault.campaign.identity import TWIN_RESIDUALS_FORMAT
+
+    assert man["twin_residuals_format"] == TWIN_RESIDUALS_FORMAT  # what a detector trained on it records
     with pytest.raises(ParameterError, match="motor_encoders"):
         build_campaign({**copy.deepcopy(TINY), "motor_encoders": "no"}, "tiny.yaml")
 

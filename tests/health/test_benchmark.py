@@ -545,3 +545,20 @@ def test_a_time_series_given_for_a_feature_table_is_named(tmp_path, capsys):
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "a run's time series (`ur5fault simulate`), not a campaign's feature table" in err
 
+
+
+def test_a_detector_trained_on_other_twin_features_is_noted():
+    """Saved classifiers record the twin features' format their campaign computed (from its manifest); scoring
+    features of another format (``diagnose`` with this version, ``benchmark --test`` on another campaign) is said
+    in a note, and nothing is said where either side did not record it."""
+    from ur5fault.campaign.identity import TWIN_RESIDUALS_FORMAT, TWIN_RESIDUALS_FORMAT_COM_TWINS
+    from ur5fault.health.diagnostics.saved import twin_format_notes
+
+    assert twin_format_notes({"twin_residuals_format": TWIN_RESIDUALS_FORMAT}) == []
+    assert twin_format_notes({"twin_residuals_format": TWIN_RESIDUALS_FORMAT_COM_TWINS, "twin_com_twins": True}) == []
+    (note,) = twin_format_notes({"twin_residuals_format": 9})
+    assert f"format 9, this version of ur5fault computes format {TWIN_RESIDUALS_FORMAT}" in note
+    assert twin_format_notes({}) == [] and twin_format_notes({"twin_residuals_format": None}) == []
+    (note,) = twin_format_notes({"twin_residuals_format": TWIN_RESIDUALS_FORMAT}, 9, "other/")
+    assert "other/ computes format 9" in note
+    assert twin_format_notes({"twin_residuals_format": 9}, None, "other/") == []  # the other campaign's not recorded

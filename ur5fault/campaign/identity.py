@@ -54,6 +54,13 @@ INPUT_ORDER = ("identity_format", "ur5fault_version", "sim_revision", "mujoco_ve
 #: twin's gear torque with the payload CoM the current fit found fed back, twin_fit.com_corrected_torque)
 TWIN_RESIDUALS_FORMAT = 11
 TWIN_RESIDUALS_FORMAT_COM_TWINS = 12
+
+
+def twin_format(camp: Campaign) -> int | None:
+    """The twin residual features' version a campaign computes (with or without CoM twins); None without them."""
+    if not camp.twin_residuals:
+        return None
+    return TWIN_RESIDUALS_FORMAT_COM_TWINS if camp.twin_com_twins else TWIN_RESIDUALS_FORMAT
 #: the simulator configuration campaigns run with: passed to the engine by every campaign kind
 #: (campaign/execute.py, health/prognostics/fleet.py) and recorded here, so the identity names what ran
 DRIVE, STEPPER = "numba", "compiled"
@@ -105,8 +112,7 @@ class Identities:
             "params": load_params(overrides=dict(camp.base_params)).to_dict(),
         }
         if camp.twin_residuals:  # only then: the identities of campaigns without twins stay as they were
-            self.common["twin_residuals"] = (TWIN_RESIDUALS_FORMAT_COM_TWINS if camp.twin_com_twins
-                                             else TWIN_RESIDUALS_FORMAT)
+            self.common["twin_residuals"] = twin_format(camp)
         if not camp.motor_encoders:  # likewise: recorded only when the runs are logged without them
             self.common["motor_encoders"] = False
         self._common_digest = digest(self.common)

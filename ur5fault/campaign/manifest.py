@@ -13,7 +13,7 @@ import numpy as np
 
 from ..sim.params import load_params
 from ..util import provenance
-from .identity import Identities, file_sha256
+from .identity import Identities, file_sha256, twin_format
 from .spec import Campaign
 
 
@@ -61,6 +61,8 @@ def build_manifest(camp: Campaign, ids: Identities, features, state: str, backen
         "n_steps_total": int(sum(round(d / p.physics_dt_s) for d in durations)),
         "log_period_s": camp.log_period_s,
         "motor_encoders": camp.motor_encoders,
+        # the version of the twin residual features (identity.TWIN_RESIDUALS_FORMAT); None without them
+        "twin_residuals_format": twin_format(camp),
         "threshold_mm": camp.threshold_mm,
         "swept_keys": list(camp.swept_keys),
         "save_timeseries": save_ts,

@@ -103,7 +103,7 @@ def diagnose(log: MeasuredLog, detector_dir: str | Path, params_overrides: dict 
     signals), reused instead of replayed again; ``windows``: the log's :func:`log_windows` under that twin,
     reused likewise; ``baseline``: the robot's own healthy baseline (:func:`robot_baseline`), which every input
     is referred to before it is scored (None: the inputs are scored as they are)."""
-    from ..diagnostics.saved import load_models
+    from ..diagnostics.saved import load_models, twin_format_notes
 
     models, schema = load_models(detector_dir)
     window_s = check_schema(schema, str(detector_dir))
@@ -152,6 +152,7 @@ def diagnose(log: MeasuredLog, detector_dir: str | Path, params_overrides: dict 
     if log.q_motor_rad is None:
         notes.append("no motor encoders in the log: every encoder-mismatch feature is missing (NaN) and the "
                      "detector scores without them; backlash, resolver offset and gear stiffness cannot be told")
+    notes.extend(twin_format_notes(schema))
     trained = schema.get("log_period_s")
     if trained and abs(log.period_s - trained) > 1e-9:
         notes.append(f"log sampled every {1e3 * log.period_s:g} ms, the training runs every {1e3 * trained:g} ms: "

@@ -276,7 +276,8 @@ def run_benchmark(campaign_dir: str | Path, out: str | Path | None = None, *, se
                     calibration=None if metrics["calibration"] is None else {
                         k: v for k, v in metrics["calibration"].items() if k != "test"},
                     limit_calibration=(metrics["detection_limits"] or {}).get("calibration"),
-                    twin_com_twins=bool((man.get("campaign_data") or {}).get("twin_com_twins", False)))
+                    twin_com_twins=bool((man.get("campaign_data") or {}).get("twin_com_twins", False)),
+                    twin_residuals_format=man.get("twin_residuals_format"))
     metrics["out"] = str(out_dir)
     return metrics
 

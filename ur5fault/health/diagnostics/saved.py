@@ -100,14 +100,15 @@ def save_models(models: Models, ds: Dataset, feature_set: str, threshold_score: 
                 window_s: float | None = None, log_period_s: float | None = None,
                 calibration: dict[str, Any] | None = None, joint_kind_threshold: float | None = None,
                 joint_kind_threshold_from: str | None = None, limit_calibration: dict[str, Any] | None = None,
-                twin_com_twins: bool = False) -> Path:
+                twin_com_twins: bool = False, twin_residuals_format: int | None = None) -> Path:
     """Write the classifiers and their schema into ``out/models``; return that folder (``window_s``,
     ``log_period_s``: the training runs' simulated duration and log period, from the campaign manifest;
     ``calibration``: how ``models.calibrator`` was fitted, recorded in the schema; ``joint_kind_threshold_from``:
     where the by-joint operating point was read, :data:`.metrics.FROM_OUT_OF_FOLD` for ``ur5fault benchmark``;
     ``limit_calibration``: :meth:`.limits.LimitCalibration.to_dict` of the training runs, for the detection limits
     of ``ur5fault diagnose``; ``twin_com_twins``: the campaign's twin fits took their payload CoM columns from
-    CoM-shifted noise-free twins, which ``ur5fault diagnose`` must then replay too)."""
+    CoM-shifted noise-free twins, which ``ur5fault diagnose`` must then replay too; ``twin_residuals_format``: the
+    version of the twin residual features the campaign computed, from its manifest, None where not recorded)."""
     import sklearn
     import skops
     import skops.io as sio
@@ -146,6 +147,9 @@ def save_models(models: Models, ds: Dataset, feature_set: str, threshold_score: 
         # the twin fits' payload CoM columns: from CoM-shifted noise-free twins (true; the campaign's twin_com_twins)
         # or the CoM's gravity torque (false, and absent in files saved before the option)
         "twin_com_twins": bool(twin_com_twins),
+        # the version of the twin features trained on (campaign identity.TWIN_RESIDUALS_FORMAT); absent or None: not
+        # recorded (campaigns before 2026-11-30's format 11); twin_format_notes compares it with this version's
+        "twin_residuals_format": twin_residuals_format,
         # None: p(fault) is the detector's own probability, not calibrated (classifiers saved before calibration)
         "calibration": None if models.calibrator is None else (calibration or {"method": "unrecorded"}),
         # the reference a robot's own healthy baseline is referred to (ur5fault diagnose --baseline-logs)
@@ -214,6 +218,23 @@ def load_models(folder: str | Path) -> tuple[Models, dict[str, Any]]:
     return Models(objs.get("detector"), objs.get("localiser"), objs.get("kind"),
                   bool(schema.get("shuffled_labels")), objs.get("calibrator"), objs.get("joint_kind")), \
         operating_point(schema)
+
+
+def twin_format_notes(schema: dict[str, Any], other: int | None = None, where: str = "this version of ur5fault"
+                      ) -> list[str]:
+    """A note where the twin residual features the saved classifiers were trained on are of another version than
+    those they are about to score: ``other`` (another campaign's, from its manifest) or, by default, the ones this
+    version computes (``ur5fault diagnose``).  None where either side did not record it (then nothing is said)."""
+    from ...campaign.identity import TWIN_RESIDUALS_FORMAT, TWIN_RESIDUALS_FORMAT_COM_TWINS
+
+    trained = schema.get("twin_residuals_format")
+    if other is None and where == "this version of ur5fault":
+        other = TWIN_RESIDUALS_FORMAT_COM_TWINS if schema.get("twin_com_twins") else TWIN_RESIDUALS_FORMAT
+    if trained is None or other is None or int(trained) == int(other):
+        return []
+    return [f"the classifiers were trained on twin residual features of format {trained}, {where} computes format "
+            f"{other}: inputs of the same name may be computed differently (campaign/identity.py lists the formats); "
+            "re-run the training campaign with --replace-changed and `ur5fault benchmark` to train on the same"]
 
 
 def operating_point(schema: dict[str, Any]) -> dict[str, Any]:

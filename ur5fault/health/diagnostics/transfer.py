@@ -158,15 +158,18 @@ def refuse_training_runs(features: pd.DataFrame, other: pd.DataFrame, campaign_d
 
 def setup_notes(schema: dict[str, Any], test_dir: Path) -> list[str]:
     """What differs between the saved classifiers' training runs and another campaign's, from its manifest: the
-    log period (``diagnose`` says the same of a log)."""
+    log period (``diagnose`` says the same of a log) and the twin residual features' version."""
     from ...campaign.store import read_manifest
+    from .saved import twin_format_notes
 
-    trained, other = schema.get("log_period_s"), read_manifest(Path(test_dir))[0].get("log_period_s")
+    man = read_manifest(Path(test_dir))[0]
+    trained, other = schema.get("log_period_s"), man.get("log_period_s")
+    notes = twin_format_notes(schema, man.get("twin_residuals_format"), f"{test_dir}")
     if trained and other and abs(float(other) - float(trained)) > 1e-9:
-        return [f"{test_dir} logs every {1e3 * float(other):g} ms, the training runs every {1e3 * float(trained):g} "
-                "ms: rate-dependent features (current spikes, kurtosis, crest factor, high-frequency energy, residual "
-                "RMS) are not on the scale the classifiers learned"]
-    return []
+        notes.append(f"{test_dir} logs every {1e3 * float(other):g} ms, the training runs every "
+                     f"{1e3 * float(trained):g} ms: rate-dependent features (current spikes, kurtosis, crest factor, "
+                     "high-frequency energy, residual RMS) are not on the scale the classifiers learned")
+    return notes
 
 
 def against_training_split(features: pd.DataFrame, other: pd.DataFrame, saved: tuple[Any, dict[str, Any]],
