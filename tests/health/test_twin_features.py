@@ -196,7 +196,8 @@ def test_the_torque_rebuilt_from_the_features_is_the_one_their_flank_shares_read
     features' own mismatch fit and flank shares read: on a run with a payload CoM shift the current fit finds (fed
     back), its flank shares equal the features' to rounding, and differ from the bare twin's."""
     from ur5fault.config import parse_trajectory
-    from ur5fault.health.twin_features import fed_back_torque, flank_share
+    from ur5fault.health.twin_features import flank_share
+    from ur5fault.health.twin_fit import fed_back_torque
 
     traj = parse_trajectory({"name": "random_pick_and_place", "seed": 3}, "trajectory")
     load = (make_effect("payload", mass_kg=COM_KG), make_effect("temperature", temperature_C=30.0))
@@ -210,6 +211,6 @@ def test_the_torque_rebuilt_from_the_features_is_the_one_their_flank_shares_read
     f = twin_features(res.t_s, res.q_set_rad, {n: res[n][0] for n in names}, twin, sim.params, COM_KG, held)
     assert abs(f["twin_est_payload_com_x_m_t"]) >= 2 and abs(f["twin_est_payload_com_y_m_t"]) >= 2  # fed back
     shares = np.array([f[f"twin_gear_flank_share_j{j}"] for j in range(1, 7)])
-    rebuilt = flank_share(fed_back_torque(res.t_s, res.q_set_rad, twin, sim.params, f, COM_KG, held))
+    rebuilt = flank_share(fed_back_torque(res.q_set_rad, twin, sim.params, f, COM_KG, held))
     np.testing.assert_allclose(rebuilt, shares, rtol=0, atol=1e-12)
     assert np.abs(flank_share(twin["T_gear_Nm"]) - shares).max() > 0.01

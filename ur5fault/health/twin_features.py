@@ -90,12 +90,12 @@ from ..sim.params import RobotParams
 from ..twin.residuals import command_conditions, noise_ratio
 from .twin_fit import (
     RCOND_NUISANCE,
-    com_columns,
     com_corrected_torque,
     flange_kinematics,
     hac_fit,
     latency_column,
     noise_scale,
+    payload_com_columns,
 )
 
 #: motion conditions used, short name -> the key of :func:`ur5fault.twin.motion_conditions`
@@ -232,7 +232,7 @@ def current_fit(t_s: NDArray, q_set_rad: NDArray, residual_A: NDArray, twin: dic
     motion = _motion_for(t_s, q_set_rad, params, motion)
     cols, _ = projection_columns(t_s, q_set_rad, twin, params, motion)
     n = residual_A.shape[0]
-    com = payload_com_columns(q_set_rad, twin, params, payload_kg, payload_held, motion)
+    com = payload_com_columns(q_set_rad, twin, params, payload_kg, payload_held, lambda: motion.flange)
     nuisance = np.concatenate([com, latency_column(twin["i_q_A"], motion.dt_s)[:, :, None]], axis=2)  # (n, 6, 4)
     per_joint = np.zeros((n, N_JOINTS, 3 * N_JOINTS))
     for j in range(N_JOINTS):
@@ -244,16 +244,6 @@ def current_fit(t_s: NDArray, q_set_rad: NDArray, residual_A: NDArray, twin: dic
     k = 3 * N_JOINTS
     return (fit.coef[:k].reshape(N_JOINTS, 3), fit.se[:k].reshape(N_JOINTS, 3),
             np.stack([fit.coef[k:], fit.se[k:]], axis=1))
-
-
-def payload_com_columns(q_set_rad: NDArray, twin: dict[str, NDArray], params: RobotParams, payload_kg: float,
-                        payload_held: NDArray | None, motion: CommandedMotion) -> NDArray:
-    """The current fit's payload centre-of-mass columns ``(n, 6, 3)`` [A/m] (:func:`current_fit`): the twin's
-    ``com_A_per_m`` where given (zero without a payload), else the CoM's gravity torque in closed form."""
-    com = twin.get("com_A_per_m")
-    if com is None:  # the CoM's gravity torque in closed form (no CoM twins given)
-        return com_columns(q_set_rad, payload_kg, params, payload_held, lambda: motion.flange)
-    return np.zeros_like(com) if payload_kg <= 0 else com
 
 
 def twin_features(t_s: NDArray, q_set_rad: NDArray, meas: dict[str, NDArray], twin: dict[str, NDArray],
@@ -285,7 +275,7 @@ def twin_features(t_s: NDArray, q_set_rad: NDArray, meas: dict[str, NDArray], tw
     res = {"current": meas["i_FB_A"] - twin["i_FB_A"], "position": meas["q_FB_rad"] - twin["q_FB_rad"],
            "mismatch": mis_m - mis_t}
     masks = motion.masks
-    com = payload_com_columns(q_set_rad, twin, params, payload_kg, payload_held, motion)
+    com = payload_com_columns(q_set_rad, twin, params, payload_kg, payload_held, lambda: motion.flange)
     cur_coef, cur_se, nuisance = current_fit(t_s, q_set_rad, res["current"], {**twin, "com_A_per_m": com}, params,
                                              payload_kg, payload_held, motion)
     # the gear torque the mismatch fit and the flank shares read: the twin's, with the payload CoM the current fit
@@ -321,21 +311,6 @@ def twin_features(t_s: NDArray, q_set_rad: NDArray, meas: dict[str, NDArray], tw
     for j, r in enumerate(noise_ratio(meas["i_FB_A"], twin["i_FB_A"], masks[NOISE_CONDITION])):
         f[f"twin_current_noise_ratio_rest_j{j + 1}"] = float(r)
     return f
-
-
-def fed_back_torque(t_s: NDArray, q_set_rad: NDArray, twin: dict[str, NDArray], params: RobotParams,
-                    features: dict[str, float], payload_kg: float = 0.0, payload_held: NDArray | None = None,
-                    motion: CommandedMotion | None = None) -> NDArray:
-    """The gear torque :func:`twin_features` read for the mismatch fit and the flank shares, rebuilt from the CoM
-    estimates and t values in its ``features`` (SE = |estimate / t|), for a caller that needs the same columns
-    (``ur5fault diagnose``'s variance inflation); the arguments as :func:`twin_features` took them."""
-    motion = _motion_for(t_s, q_set_rad, params, motion)
-    est = np.array([features[f"twin_est_payload_com_{a}_m"] for a in "xyz"], dtype=float)
-    t = np.array([features[f"twin_est_payload_com_{a}_m_t"] for a in "xyz"], dtype=float)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        se = np.abs(est / t)
-    com = payload_com_columns(q_set_rad, twin, params, payload_kg, payload_held, motion)
-    return com_corrected_torque(twin["T_gear_Nm"], com, est, se, params)
 
 
 def _t(value: float, se: float) -> float:

@@ -205,10 +205,36 @@ def com_corrected_torque(torque_Nm: NDArray, com_A_per_m: NDArray, estimate_m: N
     return torque_Nm + (np.asarray(com_A_per_m)[:, :, use] @ c[use]) * per_amp
 
 
+def payload_com_columns(q_set_rad: NDArray, twin: dict[str, NDArray], params: RobotParams, payload_kg: float,
+                        payload_held: NDArray | None = None,
+                        kinematics: Callable[[], tuple[NDArray, NDArray]] | None = None) -> NDArray:
+    """The current fit's payload centre-of-mass columns ``(n, 6, 3)`` [A/m] (``twin_features.current_fit``): the
+    twin's ``com_A_per_m`` where given (zero without a payload), else the CoM's gravity torque in closed form
+    (:func:`com_columns`; ``kinematics`` as it takes it)."""
+    com = twin.get("com_A_per_m")
+    if com is None:  # the CoM's gravity torque in closed form (no CoM twins given)
+        return com_columns(q_set_rad, payload_kg, params, payload_held, kinematics)
+    return np.zeros_like(com) if payload_kg <= 0 else com
+
+
+def fed_back_torque(q_set_rad: NDArray, twin: dict[str, NDArray], params: RobotParams, features: dict[str, float],
+                    payload_kg: float = 0.0, payload_held: NDArray | None = None,
+                    kinematics: Callable[[], tuple[NDArray, NDArray]] | None = None) -> NDArray:
+    """The gear torque ``twin_features`` read for the mismatch fit and the flank shares, rebuilt from the CoM
+    estimates and t values in its ``features`` (SE = |estimate / t|), for a caller that needs the same columns
+    (``ur5fault diagnose``'s variance inflation); the other arguments as ``twin_features`` took them."""
+    est = np.array([features[f"twin_est_payload_com_{a}_m"] for a in "xyz"], dtype=float)
+    t = np.array([features[f"twin_est_payload_com_{a}_m_t"] for a in "xyz"], dtype=float)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        se = np.abs(est / t)
+    com = payload_com_columns(q_set_rad, twin, params, payload_kg, payload_held, kinematics)
+    return com_corrected_torque(twin["T_gear_Nm"], com, est, se, params)
+
+
 def latency_column(i_twin_A: NDArray, dt_s: float) -> NDArray:
     """``-di_twin/dt`` ``(n, 6)`` [A/s]: the current residual per second of setpoint latency."""
     return -np.gradient(i_twin_A, dt_s, axis=0)
 
 
 __all__ = ["COM_FEEDBACK_MIN_T", "RCOND_NUISANCE", "Fit", "bartlett_lag", "com_columns", "com_corrected_torque",
-           "flange_kinematics", "hac_fit", "latency_column", "noise_scale"]
+           "fed_back_torque", "flange_kinematics", "hac_fit", "latency_column", "noise_scale", "payload_com_columns"]

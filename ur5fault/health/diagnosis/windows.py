@@ -25,7 +25,8 @@ from ...twin import LogReplay, Replayed
 from ...twin.residuals import CONDITION_REST_SPEED_RAD_S
 from ..features import run_features
 from ..signals import needs_motor_encoders
-from ..twin_features import ESTIMATE_UNITS, fed_back_torque, projection_columns, twin_features
+from ..twin_features import ESTIMATE_UNITS, projection_columns, twin_features
+from ..twin_fit import fed_back_torque
 
 
 @dataclasses.dataclass(frozen=True)
@@ -133,7 +134,7 @@ def window_features(log: MeasuredLog, replay: LogReplay, rep: Replayed, window_s
             f.update({k: float("nan") for k in f if needs_motor_encoders(k)})
         f.update(context)
         # the columns the window's fits used: the mismatch fit's gear torque with the CoM it found fed back
-        torque = fed_back_torque(t[lo:hi], q_set[lo:hi], twin, replay.params, f, payload, hw)
+        torque = fed_back_torque(q_set[lo:hi], twin, replay.params, f, payload, hw)
         cur, mis = projection_columns(t[lo:hi], q_set[lo:hi], {**twin, "T_gear_Nm": torque}, replay.params)
         vif = tuple(dict(zip(ESTIMATE_UNITS, inflation([c[:, j] for c in cur]) + inflation([c[:, j] for c in mis])))
                     for j in range(N_JOINTS))
