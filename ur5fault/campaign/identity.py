@@ -56,11 +56,14 @@ TWIN_RESIDUALS_FORMAT = 11
 TWIN_RESIDUALS_FORMAT_COM_TWINS = 12
 
 
+def twin_format_of(com_twins: bool) -> int:
+    """The twin residual features' version this ur5fault computes, with or without CoM twins."""
+    return TWIN_RESIDUALS_FORMAT_COM_TWINS if com_twins else TWIN_RESIDUALS_FORMAT
+
+
 def twin_format(camp: Campaign) -> int | None:
-    """The twin residual features' version a campaign computes (with or without CoM twins); None without them."""
-    if not camp.twin_residuals:
-        return None
-    return TWIN_RESIDUALS_FORMAT_COM_TWINS if camp.twin_com_twins else TWIN_RESIDUALS_FORMAT
+    """The twin residual features' version a campaign computes; None without them."""
+    return twin_format_of(camp.twin_com_twins) if camp.twin_residuals else None
 #: the simulator configuration campaigns run with: passed to the engine by every campaign kind
 #: (campaign/execute.py, health/prognostics/fleet.py) and recorded here, so the identity names what ran
 DRIVE, STEPPER = "numba", "compiled"

@@ -220,16 +220,16 @@ def load_models(folder: str | Path) -> tuple[Models, dict[str, Any]]:
         operating_point(schema)
 
 
-def twin_format_notes(schema: dict[str, Any], other: int | None = None, where: str = "this version of ur5fault"
-                      ) -> list[str]:
+def twin_format_notes(schema: dict[str, Any], other: int | None = None, where: str | None = None) -> list[str]:
     """A note where the twin residual features the saved classifiers were trained on are of another version than
-    those they are about to score: ``other`` (another campaign's, from its manifest) or, by default, the ones this
-    version computes (``ur5fault diagnose``).  None where either side did not record it (then nothing is said)."""
-    from ...campaign.identity import TWIN_RESIDUALS_FORMAT, TWIN_RESIDUALS_FORMAT_COM_TWINS
+    those they are about to score: ``other``, another campaign's from its manifest (``where``: that campaign), or,
+    without ``where``, the ones this version computes (``ur5fault diagnose``).  Nothing is said where either side
+    did not record it."""
+    from ...campaign.identity import twin_format_of
 
     trained = schema.get("twin_residuals_format")
-    if other is None and where == "this version of ur5fault":
-        other = TWIN_RESIDUALS_FORMAT_COM_TWINS if schema.get("twin_com_twins") else TWIN_RESIDUALS_FORMAT
+    if where is None:
+        other, where = twin_format_of(bool(schema.get("twin_com_twins"))), "this version of ur5fault"
     if trained is None or other is None or int(trained) == int(other):
         return []
     return [f"the classifiers were trained on twin residual features of format {trained}, {where} computes format "
