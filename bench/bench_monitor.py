@@ -278,7 +278,15 @@ def main(argv=None) -> int:
     ap.add_argument("--cache", help="pickle of the replayed parts: written if absent, reused if present")
     ap.add_argument("--no-pairing", action="store_true",
                     help="judge every log by the motion's spread alone (the monitor before the task pairing)")
+    ap.add_argument("--held-pose", action="store_true",
+                    help="replay each CB2 log's rest stretches at the pose the controller holds "
+                         "(cb2_rest_target.held_pose), identification included; the push labels from the logs as read")
     args = ap.parse_args(argv)
+    from cb2_rest_target import held_pose
+
+    def read_replayed(name):
+        return held_pose(read(name))[0] if args.held_pose else read(name)
+
     t0 = time.perf_counter()
     cached = None
     if args.cache and Path(args.cache).exists():
@@ -288,6 +296,8 @@ def main(argv=None) -> int:
             cached = pickle.load(f)
         if cached["no_identify"] != args.no_identify:
             ap.error(f"{args.cache} was written with{'' if cached['no_identify'] else 'out'} --no-identify")
+        if cached.get("held_pose", False) != args.held_pose:
+            ap.error(f"{args.cache} was written with{'' if cached.get('held_pose') else 'out'} --held-pose")
     params = {}
     if cached is not None:
         params = cached["params"]
@@ -295,10 +305,11 @@ def main(argv=None) -> int:
         from ur5fault.identify import identify
 
         print("identifying on", ", ".join(BASE_RUNS), file=sys.stderr, flush=True)
-        params = identify([read(n) for n in BASE_RUNS], load_params(), sweep=False, n_boot=20).overlay(
+        params = identify([read_replayed(n) for n in BASE_RUNS], load_params(), sweep=False, n_boot=20).overlay(
             load_params())["params"]
     t_ident = time.perf_counter() - t0
-    logs = {n: read(n) for n in BASE_RUNS + OTHER_RUNS}
+    read_logs = {n: read(n) for n in BASE_RUNS + OTHER_RUNS}  # the push labels' (never replayed)
+    logs = {n: read_replayed(n) for n in BASE_RUNS + OTHER_RUNS}
     injected = [inject(logs["TEST"], j, g) for j, g in GAINS]
     nist = read_nist(NIST_LOG)
     span = float(nist.t_s[-1] - nist.t_s[0])
@@ -322,7 +333,8 @@ def main(argv=None) -> int:
 
             from ur5fault.util.io import write_bytes_atomic
 
-            write_bytes_atomic(Path(args.cache), pickle.dumps({"no_identify": args.no_identify, "params": params,
+            write_bytes_atomic(Path(args.cache), pickle.dumps({"no_identify": args.no_identify,
+                                                               "held_pose": args.held_pose, "params": params,
                                                                "obs": obs, "identify_s": t_ident}))
     # parts replayed before Observed kept its current weights get them from the same overlay
     obs = [with_sigma(o, lg, p) for o, (lg, p, _) in zip(obs, tasks)]
@@ -335,7 +347,8 @@ def main(argv=None) -> int:
 
             from ur5fault.util.io import write_bytes_atomic
 
-            write_bytes_atomic(Path(args.cache), pickle.dumps({"no_identify": args.no_identify, "params": params,
+            write_bytes_atomic(Path(args.cache), pickle.dumps({"no_identify": args.no_identify,
+                                                               "held_pose": args.held_pose, "params": params,
                                                                "obs": obs, "identify_s": t_ident,
                                                                "quiet_tail": quiet_tail}))
     quiet_tail = with_sigma(quiet_tail, logs[QUIET], params)
@@ -376,12 +389,12 @@ def main(argv=None) -> int:
                                ("kufieta, quiet No5's last part vs its first + the five", split_base, quiet_tail,
                                 logs[QUIET]),
                                ("nist, rest vs first part", nb, nist_rest, nist)])
-    quiet = ur_smoothed(logs[QUIET])
-    label_sets = {PUSHED: labels(logs[PUSHED], quiet),
-                  f"{PUSHED} (own cycles)": cycle_labels(logs[PUSHED], logs[QUIET]),
+    quiet = ur_smoothed(read_logs[QUIET])
+    label_sets = {PUSHED: labels(read_logs[PUSHED], quiet),
+                  f"{PUSHED} (own cycles)": cycle_labels(read_logs[PUSHED], read_logs[QUIET]),
                   STANDSTILL: accel_labels(STANDSTILL),
-                  f"{STANDSTILL} (UR residual labels, earlier)": labels(logs[STANDSTILL],
-                                                                         quiet[standing_start(logs[QUIET])])}
+                  f"{STANDSTILL} (UR residual labels, earlier)": labels(read_logs[STANDSTILL],
+                                                                         quiet[standing_start(read_logs[QUIET])])}
     by_name = {o.name: (b, o) for _, b, o in judged}
     print("\nPer channel alone: the largest transient as a multiple of its limit (>= 1: an event)")
     separation: dict = {}

@@ -47,6 +47,41 @@ RUNS = ("Movement_No1", "Movement_No2", "Movement_No3_Acc", "Movement_No4_Acc",
 SKIP_S = 0.5
 
 
+def previous_written(log) -> np.ndarray:
+    """``(n,)`` int: the last row before each row that the robot wrote (-1 where there is none)."""
+    idx = np.where(log.logged_rows(), np.arange(log.t_s.size), -1)
+    return np.concatenate(([-1], np.maximum.accumulate(idx)[:-1]))
+
+
+def reading_rows(log) -> np.ndarray:
+    """``(n,)`` bool: rows written by the robot whose target is the measured position of the last row written
+    before them, on every joint (to the files' precision, the reader's ``SAME_POSITION_RAD``; the ticks the reader
+    filled in, ``MeasuredLog.logged``, skipped: a recorder that dropped rows). Found on the log as read, which
+    keeps no target speeds."""
+    from ur5fault.logs.readers import SAME_POSITION_RAD
+
+    prev = previous_written(log)
+    same = np.all(np.abs(log.q_target_rad - log.q_actual_rad[np.maximum(prev, 0)]) < SAME_POSITION_RAD, axis=1)
+    return log.logged_rows() & (prev >= 0) & same
+
+
+def held_pose(log):
+    """``(log, n_rows)``: ``log`` (a ``MeasuredLog``) with the targets of its reading rows (:func:`reading_rows`),
+    and of the filled-in ticks before each, held at the pose the controller holds: each stretch takes the target of
+    the last written row before it (the stretch's first row at rest, which carries the commanded pose; already held
+    when that row is itself a reading row). ``n_rows``: the rows changed (0: ``log`` itself, e.g. NIST's CB3 log).
+    The "commanded end pose" replay below, and ``bench_monitor.py --held-pose``."""
+    rows = reading_rows(log)
+    if not rows.any():
+        return log, 0
+    prev = previous_written(log)
+    q = np.array(log.q_target_rad, copy=True)
+    for i in np.flatnonzero(rows):  # in time order: q[prev[i]] is already held when that row is a reading row
+        q[prev[i] + 1 : i + 1] = q[prev[i]]
+    changed = int(np.any(q != log.q_target_rad, axis=1).sum())
+    return dataclasses.replace(log, q_target_rad=q), changed
+
+
 def follows_reading(t: np.ndarray, target: np.ndarray, actual: np.ndarray, target_speed: np.ndarray) -> dict:
     """Rows at rest (every target speed exactly 0, after the first row): how many, how many of them one tick after
     the previous row (the reader's rule, ``logs.readers.rest_target_rows``), the share of those whose target equals
@@ -159,10 +194,7 @@ def replays(name: str, over: dict, passes: int) -> None:
     print("| --- " * 8 + "|")
     tq = np.asarray(log.q_target_rad)
     row("as logged", run(tq))
-    end_pose = tq.copy()
-    for s, e in stretches:
-        end_pose[s:e] = tq[s]
-    row("commanded end pose", run(end_pose))
+    row("commanded end pose", run(held_pose(log)[0].q_target_rad))
     own = tq.copy()
     idx = np.flatnonzero(rest_rows[1:] & rest_rows[:-1]) + 1  # the first row of a stretch keeps the end pose
     idx = idx[idx >= 2]
