@@ -135,7 +135,8 @@ def enough(cond: NDArray, ok: NDArray, period_s: float) -> NDArray:
 
 
 def motion_limit(feats: NDArray, cond: NDArray, judged: NDArray, coef: NDArray, tail: NDArray, cond_coef: NDArray,
-                 cond_tail: NDArray, period_s: float, p_log: float, floor: NDArray | float = 0.0) -> NDArray:
+                 cond_tail: NDArray, period_s: float, p_log: float, floor: NDArray | float = 0.0,
+                 chances_share: float = 1.0) -> NDArray:
     """The limit ``(n, 6)`` of one channel where it is judged by the motion (not a paired baseline run): per
     sample and joint the spread and tail of its condition (``cond_coef`` ``(4, 6, 4)``, ``cond_tail``
     ``(4, 6, 3)``), a moving joint the wider of its condition's and that fitted on all samples
@@ -145,7 +146,8 @@ def motion_limit(feats: NDArray, cond: NDArray, judged: NDArray, coef: NDArray, 
     sample without moving statistics: the all-motions fit, which was fitted on the moving samples among others):
     a condition the baseline did not show is judged no tighter than any it did. The multiplier: every
     (window of :data:`~.events.WINDOW_S`, joint, statistics used) a log holds is one chance of a false alarm,
-    each at ``p_log`` over their number (union bound: at most ``p_log`` for the log)."""
+    each at ``p_log`` over their number (union bound: at most ``p_log`` for the log). ``chances_share``: the
+    chances counted are that share of the log's (the joints named within one event: :func:`.events.name_joints`)."""
     n = feats.shape[0]
     cond = cond.astype(int)
     have = np.isfinite(cond_coef).all(axis=2) & np.isfinite(cond_tail).all(axis=2)  # (k, 6)
@@ -157,7 +159,7 @@ def motion_limit(feats: NDArray, cond: NDArray, judged: NDArray, coef: NDArray, 
     for a in range(0, n, step):
         w = which[a : a + step][judged[a : a + step]]
         chances += sum(np.unique(w[:, j]).size for j in range(N_JOINTS))
-    per_log_windows = max(chances, 1) / N_JOINTS  # multiplier() divides by joints x windows
+    per_log_windows = max(chances * chances_share, 1) / N_JOINTS  # multiplier() divides by joints x windows
     models = [(cond_coef[k], cond_tail[k]) for k in range(len(CONDITIONS))]
     lims = np.stack([sigma(feats, np.nan_to_num(c, nan=0.0), floor) * multiplier(np.nan_to_num(t, nan=0.0),
                                                                                   per_log_windows, p_log)

@@ -31,7 +31,11 @@ false-alarm probability evenly.
 
 An event is a stretch where some joint's ``|h|`` exceeds ``multiplier x sigma`` on a judged channel; stretches
 closer than :data:`MERGE_S` (on any joints and channels) are one event, ``peak_A`` / ``peak_rad`` the largest
-``|h|`` of each channel on its joints. The first :data:`SETTLE_S` of a replay is not judged (it starts from the
+``|h|`` of each channel on its joints. *Which joints* (:func:`name_joints`): once an event is found, a joint is
+named in it where its ``|h|`` exceeds the multiplier for the event's own windows (its joints x windows the
+chances of naming a joint the disturbance did not reach, at the same probability), not the log's: a push by hand
+loads several joints at once, and the log's bar, made for finding the event anywhere in the log, names only the
+one it loads most. The first :data:`SETTLE_S` of a replay is not judged (it starts from the
 log's first sample with the model's own friction state).
 Shapes: ``(n, 6)`` per sample and joint; scale coefficients ``(6, 4)``; tail ``(6, 3)`` ``(u0, beta, p0)`` per
 channel.
@@ -39,7 +43,7 @@ channel.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 import numpy as np
 from numpy.typing import NDArray
@@ -246,10 +250,43 @@ def find_events(t_s: NDArray, h: dict[str, NDArray], limits: dict[str, NDArray],
     events = []
     for a, b in groups:
         sl = slice(a, b + 1)
-        js = [j for j in range(N_JOINTS) if over[sl, j].any()]
-        ev = {"t_start_s": float(t_s[a]), "t_end_s": float(t_s[b]), "joints": [JOINT_NAMES[j] for j in js],
+        ev = {"t_start_s": float(t_s[a]), "t_end_s": float(t_s[b]),
               "channels": [c for c in CHANNELS if c in over_c and over_c[c][sl].any()]}
-        for c in CHANNELS:
-            ev[f"peak_{UNITS[c]}"] = float(np.abs(h[c][sl][:, js]).max())
-        events.append(ev)
+        events.append(_with_joints(ev, sl, over, h))
     return events, over
+
+
+def _with_joints(ev: dict, sl: slice, over: NDArray, h: dict[str, NDArray]) -> dict:
+    """``ev`` with ``joints`` (those with an exceedance in ``over`` over ``sl``) and each channel's peak on them."""
+    js = [j for j in range(N_JOINTS) if over[sl, j].any()]
+    out = {**ev, "joints": [JOINT_NAMES[j] for j in js]}
+    for c in CHANNELS:
+        out[f"peak_{UNITS[c]}"] = float(np.abs(h[c][sl][:, js]).max())
+    return {k: out[k] for k in ("t_start_s", "t_end_s", "joints", "channels", *(f"peak_{UNITS[c]}" for c in CHANNELS))}
+
+
+def name_joints(events: list[dict], t_s: NDArray, h: dict[str, NDArray],
+                limits_at: Callable[[float], dict[str, NDArray]], judged: NDArray) -> list[dict]:
+    """The events with every joint named whose ``|h|`` exceeds, within the event, the limit for the event's own
+    windows: ``limits_at(share)`` gives the limits ``(n, 6)`` per judged channel when the multiplier counts that
+    share of the log's chances of a false alarm (``1``: the log's, which found the event), and an event of ``k``
+    windows of :data:`WINDOW_S` counts ``k`` of the log's judged windows. The joints named at the log's limit stay
+    named; the channels are those that found the event."""
+    if not events:
+        return events
+    period = float(np.median(np.diff(t_s)))
+    nw = max(n_windows(judged, period), 1)
+    out = []
+    for ev in events:
+        rows = np.flatnonzero((t_s >= ev["t_start_s"]) & (t_s <= ev["t_end_s"]))
+        sl = slice(int(rows[0]), int(rows[-1]) + 1)
+        k = max(1, int(np.ceil(rows.size * period / WINDOW_S)))
+        lims = limits_at(min(1.0, k / nw))
+        over = np.zeros((rows.size, N_JOINTS), bool)
+        for c, lim in lims.items():
+            over |= (np.abs(h[c][sl]) > lim[sl]) & judged[sl, None]
+        named = over.any(axis=0) | np.isin(np.array(JOINT_NAMES), ev["joints"])
+        mask = np.zeros((t_s.size, N_JOINTS), bool)
+        mask[sl] = named
+        out.append(_with_joints(ev, sl, mask, h))
+    return out

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
@@ -22,6 +22,7 @@ from .events import (
     find_events,
     multiplier,
     n_windows,
+    name_joints,
     quantum_sigma,
     sigma,
 )
@@ -32,24 +33,56 @@ VERDICTS = ("consistent", "changed", "anomaly")
 
 
 def limits(baseline: Baseline, obs: Observed, feats: NDArray, judged: NDArray, cond: NDArray,
-           channels: Sequence[str] = CHANNELS) -> dict[str, NDArray]:
+           channels: Sequence[str] = CHANNELS, chances_share: float = 1.0) -> dict[str, NDArray]:
     """The event limit ``(n, 6)`` of a log part per judged channel ([A], [rad]): the baseline's spread at its
     motion times the multiplier for its length at the channel's share of :data:`~.events.FALSE_ALARM_PER_LOG`
     (split evenly: the probability that either channel raises a false alarm is at most the sum, whatever their
     dependence); the position spread never below the rounding error of the baseline's or the log's own readings'
     quantum, the limit never below :data:`~.events.QUANTUM_FLOOR` quanta (:mod:`.events`). The spread and tail
-    are those of each sample's motion condition ``cond`` ``(n, 6)`` (:mod:`.conditions`)."""
+    are those of each sample's motion condition ``cond`` ``(n, 6)`` (:mod:`.conditions`). ``chances_share``: the
+    multiplier counts that share of the log's chances of a false alarm (:func:`.conditions.motion_limit`)."""
     out = {}
     for c in channels:
         i = CHANNELS.index(c)
         q = np.fmax(baseline.quantum_rad, obs.position_quantum_rad)
         floor = quantum_sigma(q) if c == "position" else 0.0
         lim = motion_limit(feats, cond, judged, baseline.scale[i], baseline.tail[i], baseline.cond_scale[i],
-                           baseline.cond_tail[i], baseline.period_s, FALSE_ALARM_PER_LOG / len(channels), floor)
+                           baseline.cond_tail[i], baseline.period_s, FALSE_ALARM_PER_LOG / len(channels), floor,
+                           chances_share)
         if c == "position":
             lim = np.maximum(lim, QUANTUM_FLOOR * np.nan_to_num(q, nan=0.0))
         out[c] = lim
     return out
+
+
+def transients_and_limits(baseline: Baseline, obs: Observed, channels: Sequence[str] = DEFAULT_CHANNELS
+                          ) -> tuple[dict[str, NDArray], Callable[[float], dict[str, NDArray]], NDArray, NDArray]:
+    """:func:`judged_transients`, with its limits as a function of the share of the log's chances of a false
+    alarm the multiplier counts (``1``: the log's events; an event's own share: the joints named within it,
+    :func:`.events.name_joints`). The transients are made once."""
+    h, feats, judged, cond = segment(obs, baseline.slow_rad_s)
+    hs = dict(zip(CHANNELS, h))
+    paired = np.zeros(judged.shape, bool)
+    runs, matched = (), ()
+    if baseline.pairs and "current" in channels:
+        runs = baseline.task_runs
+        refs = [(baseline.task_target_rad[i], baseline.task_residual_A[i]) for i in runs]
+        h_task, paired, matched = paired_transient(obs.target_rad, obs.residual_A, refs, obs.period_s)
+        hs["current"] = np.where(paired[:, None], h_task, hs["current"])
+    nw = n_windows(judged, baseline.period_s)
+
+    def limits_at(share: float) -> dict[str, NDArray]:
+        lims = limits(baseline, obs, feats, judged, cond, channels, share)
+        if runs:
+            lim_task = np.zeros(hs["current"].shape)
+            for k, i in enumerate(runs):  # the widest limit of the runs paired with each sample
+                mult = multiplier(baseline.task_tail[i], nw * share, FALSE_ALARM_PER_LOG / len(channels))
+                lim_task = np.where(matched[k][:, None],
+                                    np.maximum(lim_task, sigma(feats, baseline.task_scale[i]) * mult), lim_task)
+            lims["current"] = np.where(paired[:, None], lim_task, lims["current"])
+        return lims
+
+    return hs, limits_at, judged, paired
 
 
 def judged_transients(baseline: Baseline, obs: Observed, channels: Sequence[str] = DEFAULT_CHANNELS
@@ -64,23 +97,8 @@ def judged_transients(baseline: Baseline, obs: Observed, channels: Sequence[str]
     paired; elsewhere both are the motion's (:func:`limits`). Every window is judged
     once, by one of the two, each at the share of the false-alarm probability for the log's whole length: the
     probability of a false alarm anywhere stays at most that share."""
-    h, feats, judged, cond = segment(obs, baseline.slow_rad_s)
-    hs = dict(zip(CHANNELS, h))
-    lims = limits(baseline, obs, feats, judged, cond, channels)
-    paired = np.zeros(judged.shape, bool)
-    if baseline.pairs and "current" in channels:
-        runs = baseline.task_runs
-        refs = [(baseline.task_target_rad[i], baseline.task_residual_A[i]) for i in runs]
-        h_task, paired, matched = paired_transient(obs.target_rad, obs.residual_A, refs, obs.period_s)
-        nw = n_windows(judged, baseline.period_s)
-        lim_task = np.zeros(hs["current"].shape)
-        for k, i in enumerate(runs):  # the widest limit of the runs paired with each sample
-            mult = multiplier(baseline.task_tail[i], nw, FALSE_ALARM_PER_LOG / len(channels))
-            lim_task = np.where(matched[k][:, None], np.maximum(lim_task, sigma(feats, baseline.task_scale[i]) * mult),
-                                lim_task)
-        hs["current"] = np.where(paired[:, None], h_task, hs["current"])
-        lims["current"] = np.where(paired[:, None], lim_task, lims["current"])
-    return hs, lims, judged, paired
+    hs, limits_at, judged, paired = transients_and_limits(baseline, obs, channels)
+    return hs, limits_at(1.0), judged, paired
 
 
 def judge_changes(baseline: Baseline, obs: Observed, over: NDArray) -> list[dict]:
@@ -161,8 +179,9 @@ def assess(baseline: Baseline, obs: Observed, channels: Sequence[str] = DEFAULT_
         raise ParameterError(f"{obs.name} is one of the baseline's runs ({run}: the same samples); judged against "
                              f"itself it pairs at lag 0 and can never change: monitor it against a baseline "
                              f"without it")
-    hs, lims, judged, _ = judged_transients(baseline, obs, channels)
-    events, over = find_events(obs.t_s, hs, lims, judged)
+    hs, limits_at, judged, _ = transients_and_limits(baseline, obs, channels)
+    events, over = find_events(obs.t_s, hs, limits_at(1.0), judged)
+    events = name_joints(events, obs.t_s, hs, limits_at, judged)
     changes = judge_changes(baseline, obs, over)
     verdict = "changed" if changes else "anomaly" if events else "consistent"
     return {"log": obs.name, "verdict": verdict, "changes": changes, "events": events}
