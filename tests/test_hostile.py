@@ -161,6 +161,9 @@ SIMULATE = [
     ("duration-arg-nan", ["--duration-s", "nan"], "--duration-s = nan must be a finite number in (0, 3600] s"),
     ("duration-arg-huge", ["--duration-s", "1e5"], "--duration-s = 100000.0 is out of range (0, 3600] s"),
     ("log-period-arg-zero", ["--log-period-s", "0"], "--log-period-s = 0.0 is out of range (0, inf] s"),
+    # checked against the physics step with the run configuration, still under the flag's name
+    ("log-period-arg-below-the-step", ["--log-period-s", "3e-5"], "--log-period-s = 3e-05 is out of range [5e-05"),
+    ("log-period-arg-off-the-step", ["--log-period-s", "7e-5"], "--log-period-s = 7e-05 must be a whole multiple"),
     ("payload-arg-inf", ["--payload-kg", "inf"], "--payload-kg = inf must be a finite number in [0, 5] kg"),
     ("duration-below-log-period", ["--duration-s", "0.00005"],
      "--duration-s 5e-05 is shorter than the log period 0.001 s: a run holds at least one logged sample"),

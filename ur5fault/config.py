@@ -217,9 +217,16 @@ class RunConfig:
     log_period_s: float = 1e-3
 
 
-def build_run_config(data: Mapping[str, Any], where: str = "config", overlay: Overlay | None = None) -> RunConfig:
-    """Validate a run-configuration mapping (see the module docstring)."""
+def build_run_config(data: Mapping[str, Any], where: str = "config", overlay: Overlay | None = None,
+                     labels: Mapping[str, str] | None = None) -> RunConfig:
+    """Validate a run-configuration mapping (see the module docstring). ``labels``: the name an error gives a key
+    whose value came from elsewhere (``simulate``'s flags: ``{"log_period_s": "--log-period-s"}``), instead of
+    ``where: key``."""
     check_keys(data, RUN_KEYS, where)
+
+    def label(key: str) -> str:
+        return (labels or {}).get(key) or f"{where}: {key}"
+
     traj = parse_trajectory(data.get("trajectory", "pick_and_place"), f"{where}: trajectory")
     overrides = dict(check_mapping(data.get("params"), f"{where}: params"))
     if overlay is not None:
@@ -231,13 +238,13 @@ def build_run_config(data: Mapping[str, Any], where: str = "config", overlay: Ov
     if overlay is not None:
         effects = overlay.effects + effects
     if data.get("payload_kg") is not None:
-        effects += (make_effect("payload", where=f"{where}: payload_kg", mass_kg=data["payload_kg"]),)
+        effects += (make_effect("payload", where=label("payload_kg"), mass_kg=data["payload_kg"]),)
     if data.get("temperature_C") is not None:
-        effects += (make_effect("temperature", where=f"{where}: temperature_C", temperature_C=data["temperature_C"]),)
-    seed = check_seed(data.get("seed", 0), f"{where}: seed")
+        effects += (make_effect("temperature", where=label("temperature_C"), temperature_C=data["temperature_C"]),)
+    seed = check_seed(data.get("seed", 0), label("seed"))
     dur = data.get("duration_s")
-    duration = traj.duration_s if dur is None else check_duration(dur, f"{where}: duration_s")
-    lp = check_log_period(data.get("log_period_s", 1e-3), f"{where}: log_period_s", params.physics_dt_s, duration)
+    duration = traj.duration_s if dur is None else check_duration(dur, label("duration_s"))
+    lp = check_log_period(data.get("log_period_s", 1e-3), label("log_period_s"), params.physics_dt_s, duration)
     check_memory(sim_bytes(1, int(duration / lp)), f"{where}: a run of {duration:g} s logged every {lp:g} s",
                  "raise log_period_s or shorten duration_s")
     return RunConfig(traj, params, effects, seed, None if dur is None else duration, lp)

@@ -58,7 +58,8 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         effects.append(_parse_effect_arg(spec))
     data = _over_file(file_data, given, effects, where)
     overlay = Overlay.load(args.model) if args.model else None
-    cfg = build_run_config(data, where, overlay)
+    flags = {key: "--" + key.replace("_", "-") for key in given if key != "trajectory"}  # --temperature-C kept
+    cfg = build_run_config(data, where, overlay, labels=flags)
     if overlay is not None:
         for base, added in repeats_of(overlay.effects, cfg.effects[len(overlay.effects):]):
             print(f"note: {added.describe()} is given on top of the model overlay's {base.describe()}: an effect "
