@@ -247,22 +247,19 @@ def find_events(t_s: NDArray, h: dict[str, NDArray], limits: dict[str, NDArray],
             groups.append((start, a))
             start = b
     groups.append((start, rows[-1]))
-    events = []
-    for a, b in groups:
-        sl = slice(a, b + 1)
-        ev = {"t_start_s": float(t_s[a]), "t_end_s": float(t_s[b]),
-              "channels": [c for c in CHANNELS if c in over_c and over_c[c][sl].any()]}
-        events.append(_with_joints(ev, sl, over, h))
-    return events, over
+    channels = [[c for c in CHANNELS if c in over_c and over_c[c][a : b + 1].any()] for a, b in groups]
+    return [_event(t_s, slice(a, b + 1), ch, over, h) for (a, b), ch in zip(groups, channels)], over
 
 
-def _with_joints(ev: dict, sl: slice, over: NDArray, h: dict[str, NDArray]) -> dict:
-    """``ev`` with ``joints`` (those with an exceedance in ``over`` over ``sl``) and each channel's peak on them."""
+def _event(t_s: NDArray, sl: slice, channels: list[str], over: NDArray, h: dict[str, NDArray]) -> dict:
+    """The event over the samples ``sl``: its joints those with an exceedance in ``over`` ``(n, 6)`` there, each
+    channel's peak on them."""
     js = [j for j in range(N_JOINTS) if over[sl, j].any()]
-    out = {**ev, "joints": [JOINT_NAMES[j] for j in js]}
+    ev = {"t_start_s": float(t_s[sl.start]), "t_end_s": float(t_s[sl.stop - 1]), "joints": [JOINT_NAMES[j] for j in js],
+          "channels": channels}
     for c in CHANNELS:
-        out[f"peak_{UNITS[c]}"] = float(np.abs(h[c][sl][:, js]).max())
-    return {k: out[k] for k in ("t_start_s", "t_end_s", "joints", "channels", *(f"peak_{UNITS[c]}" for c in CHANNELS))}
+        ev[f"peak_{UNITS[c]}"] = float(np.abs(h[c][sl][:, js]).max())
+    return ev
 
 
 def name_joints(events: list[dict], t_s: NDArray, h: dict[str, NDArray],
@@ -288,5 +285,5 @@ def name_joints(events: list[dict], t_s: NDArray, h: dict[str, NDArray],
         named = over.any(axis=0) | np.isin(np.array(JOINT_NAMES), ev["joints"])
         mask = np.zeros((t_s.size, N_JOINTS), bool)
         mask[sl] = named
-        out.append(_with_joints(ev, sl, mask, h))
+        out.append(_event(t_s, sl, ev["channels"], mask, h))
     return out
