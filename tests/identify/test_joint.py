@@ -41,3 +41,13 @@ def test_no_rest_or_start_spans_two_logs(parts):
     for j in range(6):
         for s in stickslip.starts(joint, j):
             assert joint.same_log(s - int(round(stickslip.MIN_REST_S / joint.period_s)), s)
+
+
+def test_several_logs_with_the_bandwidth_sweep(parts):
+    """``ur5fault identify LOG LOG`` sweeps by default: the sweep replays the first log (it was handed the list of
+    logs and failed with an AttributeError unless a payload was fitted)."""
+    from ur5fault.identify import identify
+
+    ident = identify(parts, sweep=True, bandwidths_Hz=(4.0, 8.0), sweep_window_s=1.0, n_boot=5)
+    assert ident.sweep is not None and ident.sweep.window_s == pytest.approx(1.0, abs=0.01)
+    assert ident.sweep.best_Hz in (4.0, 8.0)

@@ -55,6 +55,7 @@ def identify(log: MeasuredLog | Sequence[MeasuredLog], params: RobotParams | Non
     logs = [log] if isinstance(log, MeasuredLog) else list(log)
     if not logs:
         raise ParameterError("identify needs at least one log")
+    log = logs[0]  # the one the bandwidth sweep replays
     p = params if params is not None else load_params()
     say = progress or (lambda _msg: None)
     say("inverse dynamics of the log's motion" if len(logs) == 1 else f"inverse dynamics of {len(logs)} logs")
