@@ -10,6 +10,7 @@ from typing import Any
 
 import numpy as np
 from matplotlib.figure import Figure
+from numpy.typing import NDArray
 
 from ...sim.axes import JOINT_NAMES, N_JOINTS
 from ...util.io import (
@@ -44,7 +45,9 @@ def figure(baseline: Baseline, obs: Observed, entry: dict[str, Any], channels: S
             ax.plot(obs.t_s, dev[:, j], lw=0.7, color="tab:blue", label=f"|{c} transient| (residual - its running "
                                                                          "median)")
             if c in thr:
-                ax.plot(obs.t_s, thr[c][:, j] * k, lw=0.9, color="tab:red", label="limit")
+                lim = thr[c][:, j] * k
+                ax.plot(obs.t_s, lim, lw=0.9, color="tab:red", label="limit")
+                _clip_to_the_transient(ax, dev[:, j], np.where(judged, lim, np.nan), unit)
             if c == "current" and paired.any():
                 ax.fill_between(obs.t_s, 0, 1, where=paired, transform=ax.get_xaxis_transform(), color="tab:green",
                                 alpha=0.08, lw=0, label="against a baseline run repeating the task")
@@ -56,6 +59,20 @@ def figure(baseline: Baseline, obs: Observed, entry: dict[str, Any], channels: S
         axes[-1, i].set_xlabel("log time [s]")
     fig.suptitle(f"{obs.name}: {entry['verdict']} (events shaded)")
     return fig
+
+
+def _clip_to_the_transient(ax, dev: NDArray, lim: NDArray, unit: str) -> None:
+    """Where a few stretches' limit dwarfs the rest (a motion condition the baseline held little of is judged
+    by its widest statistics), the axis shows the transient and the typical limit, and says how far the limit
+    goes beyond it."""
+    if not np.isfinite(lim).any():
+        return
+    top = 1.5 * max(float(np.nanmax(dev)) if np.isfinite(dev).any() else 0.0, float(np.nanmedian(lim)))
+    peak = float(np.nanmax(lim))
+    if top > 0 and peak > 2.0 * top:
+        ax.set_ylim(0.0, top)
+        ax.text(0.01, 0.95, f"limit up to {peak:.3g} {unit} (off the axis)", transform=ax.transAxes, fontsize=7,
+                va="top", color="tab:red")
 
 
 def markdown(baseline: Baseline, entries: Sequence[dict[str, Any]], figs: Sequence[str], model: str,
