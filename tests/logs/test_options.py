@@ -86,8 +86,34 @@ def test_format_required_without_a_manifest(tmp_path, capsys):
 def test_a_log_named_twice_is_refused():
     args = _args([str(RUN1), "--format", "rtde", "--payload-kg", "0", "--tcp-offset-m", "0", "0", "0",
                   "--hold-out", str(RUN1)])
-    with pytest.raises(ParameterError, match="given twice"):
+    with pytest.raises(ParameterError, match=f"{RUN1.name} is both fitted and held out: one recording counts once"):
         read_log_options(args)
+
+
+STATED = ["--format", "rtde", "--payload-kg", "0", "--tcp-offset-m", "0", "0", "0"]
+
+
+def test_one_recording_under_two_names_is_refused(tmp_path):
+    """A copy of a log is the same recording: fitted twice it counts twice; held out, its score is on the samples it
+    was fitted on."""
+    copy = tmp_path / "copy.csv.gz"
+    copy.write_bytes(TEST.read_bytes())
+    with pytest.raises(ParameterError, match="copy.csv.gz and TEST.csv.gz hold the same samples \\(fitted twice\\)"):
+        read_log_options(_args([str(TEST), str(copy), *STATED]))
+    with pytest.raises(ParameterError, match="hold the same samples \\(both fitted and held out\\)"):
+        read_log_options(_args([str(TEST), *STATED, "--hold-out", str(copy)]))
+
+
+def test_logs_of_one_file_name_in_two_folders_are_named_by_their_folders(tmp_path):
+    """Recorders write one file name per session folder: two recordings, named apart, notes included."""
+    for folder, src in (("day1", RUN1), ("day2", TEST)):
+        (tmp_path / folder).mkdir()
+        (tmp_path / folder / "robot.csv.gz").write_bytes(src.read_bytes())
+    fit, held = read_log_options(_args([str(tmp_path / "day1" / "robot.csv.gz"), *STATED, "--hold-out",
+                                        str(tmp_path / "day2" / "robot.csv.gz")]))
+    assert [g.source for g in fit] == ["day1/robot.csv.gz"] and [g.source for g in held] == ["day2/robot.csv.gz"]
+    notes = [n for n in held[0].notes if "robot.csv.gz" in n]  # TEST's: its target at rest is its reading
+    assert notes and all(n.startswith("day2/robot.csv.gz: ") for n in notes), held[0].notes
 
 
 def test_payload_unknown_and_omitted_are_equal():

@@ -282,16 +282,58 @@ def read_entry(e: LogEntry, length: MinLength | None = None, *, allow_unknown: b
     return log
 
 
+def names_of(paths: Sequence[Path]) -> dict[Path, str]:
+    """Each log's name: its file name, or where files of one name lie in several folders, as many of its last
+    folders as tell them apart (``day1/robot.csv.gz``, ``day2/robot.csv.gz``): recorders often write one file name
+    per session folder."""
+    full = {p: Path(p).resolve().parts for p in paths}
+    out = {}
+    for p, parts in full.items():
+        k = 1
+        while k < len(parts) and sum(q[-k:] == parts[-k:] for q in full.values()) > 1:
+            k += 1
+        out[p] = "/".join(parts[-k:])
+    return out
+
+
+def _named(log: MeasuredLog, name: str) -> MeasuredLog:
+    """``log`` named ``name`` (its notes too), where its file name alone is not its name (:func:`names_of`)."""
+    if name == log.source:
+        return log
+    notes = tuple(name + n[len(log.source):] if n.startswith(log.source + ":") else n for n in log.notes)
+    return dataclasses.replace(log, source=name, notes=notes)
+
+
+def refuse_same_samples(groups: Sequence[tuple[str, Sequence[MeasuredLog]]]) -> None:
+    """Logs holding the same samples (one recording under two names or paths: fitted twice, or scored as held out
+    on the samples it was fitted on) refused with one line; ``groups``: ``(role, logs)``, e.g. ``("fitted",
+    logs)``, ``("held out", held)``."""
+    seen: dict[str, tuple[str, str]] = {}
+    for role, logs in groups:
+        for log in logs:
+            sha = log.content_sha256()
+            if sha in seen:
+                name, other = seen[sha]
+                both = f"{role} twice" if other == role else f"both {other} and {role}"
+                what = f"{log.source} is {both}" if name == log.source else \
+                    f"{log.source} and {name} hold the same samples ({both})"
+                raise ParameterError(f"{what}: one recording counts once; give it once")
+            seen[sha] = (log.source, role)
+
+
 def read_log_options(args: argparse.Namespace, *, allow_unknown: bool = False,
-                     others: Sequence[argparse.Namespace] = ()) -> tuple[list[MeasuredLog], list[MeasuredLog]]:
+                     others: Sequence[argparse.Namespace] = (), role: str = "fitted"
+                     ) -> tuple[list[MeasuredLog], list[MeasuredLog]]:
     """The logs to fit and the logs held out whole, read and checked; ``allow_unknown``: logs whose payload is
     unknown are returned as such (:func:`read_entry`), for a caller that fits it; ``others``: as
-    :func:`log_entries`'s."""
+    :func:`log_entries`'s (their files take part in the logs' names, :func:`names_of`). One recording given twice
+    (under two names, or ``role`` and held out) is refused (:func:`refuse_same_samples`)."""
     entries = log_entries(args, *others)
-    names = [e.path.name for e in entries]
-    dup = sorted({n for n in names if names.count(n) > 1})
-    if dup:
-        raise ParameterError(f"log {dup[0]!r} given twice (a log is named by its file name)")
-    logs = [(read_entry(e, allow_unknown=allow_unknown), e.hold_out) for e in entries]
-    return [g for g, h in logs if not h], [g for g, h in logs if h]
-
+    paths = [e.path for e in entries]
+    for other in others:
+        paths += [e.path for e in _resolve(other)[0]]
+    names = names_of(paths)
+    logs = [(_named(read_entry(e, allow_unknown=allow_unknown), names[e.path]), e.hold_out) for e in entries]
+    fitted, held = [g for g, h in logs if not h], [g for g, h in logs if h]
+    refuse_same_samples([(role, fitted), ("held out", held)])
+    return fitted, held

@@ -46,7 +46,7 @@ def cmd_monitor(args: argparse.Namespace) -> int:
     from ...errors import ParameterError
     from ...logs.length import check_files_length, check_logs_length
     from ...logs.measured import assumption_notes
-    from ...logs.options import log_entries, read_log_options, refuse_hold_out
+    from ...logs.options import log_entries, read_log_options, refuse_hold_out, refuse_same_samples
     from ...sim.params import load_params
     from ...util.io import check_new_output
     from .baseline import Baseline, fit_baseline, overlay_sha256
@@ -76,12 +76,10 @@ def cmd_monitor(args: argparse.Namespace) -> int:
     for group, where in zip(entries, ("the logs monitor judges", "a monitor baseline")):
         refuse_hold_out(group, where)
     check_files_length([e.path for group in entries for e in group], "monitor")
-    logs, _ = read_log_options(args, others=groups[1:])
-    healthy = read_log_options(base_args, others=[args])[0] if base_args is not None else []
+    logs, _ = read_log_options(args, others=groups[1:], role="monitored")
+    healthy = read_log_options(base_args, others=[args], role="a baseline log")[0] if base_args is not None else []
     check_logs_length([*logs, *healthy], "monitor")
-    clash = sorted({g.source for g in logs} & {g.source for g in healthy})
-    if clash:
-        raise ParameterError(f"log {clash[0]!r} is both monitored and a baseline log; a run cannot judge itself")
+    refuse_same_samples([("monitored", logs), ("a baseline log", healthy)])  # a run cannot judge itself
     temps = load_params(overrides=dict(overlay.params)).joint_temperature_C
     for line in assumption_notes([*healthy, *logs], temps):
         print(f"note: {line}", file=sys.stderr)
