@@ -540,7 +540,9 @@ def test_repeatable_options_and_flags_still_repeat(tmp_path, capsys):
     (["--out", "{tmp}"], "is a folder; give a file name for the output"),
     (["--out", "{tmp}/afile/p.yaml"], "is a file and not a folder"),
     (["--json", "{tmp}/afile/x.json"], "is a file and not a folder"),
-], ids=["sweep-window-nan", "out-folder", "out-under-a-file", "json-under-a-file"])
+    # an option that applies to nothing is refused, not dropped
+    (["--no-sweep", "--sweep-window-s", "10"], "--sweep-window-s applies to the bandwidth sweep, which --no-sweep"),
+], ids=["sweep-window-nan", "out-folder", "out-under-a-file", "json-under-a-file", "sweep-window-without-sweep"])
 def test_identify_arguments_refused_before_the_fit(args, message, tmp_path, capsys):
     """identify checked its output only after the fit (seconds to minutes), and a NaN window crashed in it."""
     log = _write(tmp_path, "log.csv", rtde_frame())

@@ -51,3 +51,17 @@ def test_several_logs_with_the_bandwidth_sweep(parts):
     ident = identify(parts, sweep=True, bandwidths_Hz=(4.0, 8.0), sweep_window_s=1.0, n_boot=5)
     assert ident.sweep is not None and ident.sweep.window_s == pytest.approx(1.0, abs=0.01)
     assert ident.sweep.best_Hz in (4.0, 8.0)
+
+
+def test_a_best_bandwidth_at_the_end_of_the_candidates_is_said_to_be_there():
+    """On the Kufieta runs every resample picks the highest candidate, 3 Hz, an interval [3, 3] that reads as
+    certainty: the note says the best may lie beyond, and which log the sweep replayed."""
+    from ur5fault.identify.loop import Sweep, sweep_estimate
+
+    def sweep(best):
+        return Sweep((1.0, 2.0, 3.0), (0.3, 0.1, 0.02), best, best, best, (1, 2), 16.0, np.zeros((3, 6)), np.zeros(6))
+
+    assert "the highest candidate: the best may lie beyond it" in sweep_estimate(sweep(3.0), "TEST.csv.gz").method
+    assert "of TEST.csv.gz" in sweep_estimate(sweep(3.0), "TEST.csv.gz").method
+    assert "lowest candidate" in sweep_estimate(sweep(1.0)).method
+    assert "beyond" not in sweep_estimate(sweep(2.0)).method

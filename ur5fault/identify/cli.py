@@ -24,8 +24,9 @@ def register(sub) -> None:
                                                           "(default: not written)")
     d.add_argument("--no-sweep", action="store_true",
                    help="skip the position-loop bandwidth sweep (it replays the log once per candidate)")
-    d.add_argument("--sweep-window-s", type=float, default=SWEEP_WINDOW_S,
-                   help=f"the part of the log the sweep replays, from its start (default {SWEEP_WINDOW_S:g})")
+    d.add_argument("--sweep-window-s", type=float,
+                   help=f"the part of the log the sweep replays, from its start; of several logs, the first "
+                        f"(default {SWEEP_WINDOW_S:g})")
     d.add_argument("--bootstrap", type=int, default=N_BOOT,
                    help=f"resamples per interval, 20..{MAX_BOOT} (default {N_BOOT})")
     d.add_argument("--quiet", action="store_true", help="no progress messages")
@@ -43,8 +44,11 @@ def cmd_identify(args: argparse.Namespace) -> int:
 
     if not 20 <= args.bootstrap <= MAX_BOOT:
         raise ParameterError(f"--bootstrap = {args.bootstrap} must be 20..{MAX_BOOT} resamples")
-    if not math.isfinite(args.sweep_window_s) or args.sweep_window_s <= 0:
-        raise ParameterError(f"--sweep-window-s = {args.sweep_window_s} must be a positive number of seconds")
+    if args.sweep_window_s is not None and args.no_sweep:
+        raise ParameterError("--sweep-window-s applies to the bandwidth sweep, which --no-sweep skips: give one")
+    window_s = SWEEP_WINDOW_S if args.sweep_window_s is None else args.sweep_window_s
+    if not math.isfinite(window_s) or window_s <= 0:
+        raise ParameterError(f"--sweep-window-s = {window_s} must be a positive number of seconds")
     # before the fit, not after it: a folder or an earlier result in the way, or a name that is no YAML, refused now
     check_new_output(args.out, replace=args.replace, suffixes=(".yaml", ".yml"))
     if args.json:
@@ -63,7 +67,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
     for line in assumption_notes(logs, params.joint_temperature_C):
         print(f"note: {line}", file=sys.stderr)
     result = identify(logs if len(logs) > 1 else log, params, sweep=not args.no_sweep,
-                      sweep_window_s=args.sweep_window_s,
+                      sweep_window_s=window_s,
                       n_boot=args.bootstrap, progress=say)
     for rec in result.payloads:
         if not rec.known:

@@ -122,7 +122,7 @@ def identify(log: MeasuredLog | Sequence[MeasuredLog], params: RobotParams | Non
     if sweep:
         sw = loop.bandwidth_sweep(log, overlay_params(result, p), lag, lag_ok, ff_prior, bandwidths_Hz,
                                   sweep_window_s, n_boot, seed, progress=say)
-        est.append(loop.sweep_estimate(sw))
+        est.append(loop.sweep_estimate(sw, log.source))
         bw = sw.best_Hz
     else:
         sw = None

@@ -136,11 +136,18 @@ def bandwidth_sweep(log: MeasuredLog, base_overrides: dict, lag_s: NDArray, lag_
                  np.sqrt(sq_meas.mean(axis=0)))
 
 
-def sweep_estimate(s: Sweep) -> Estimate:
+def sweep_estimate(s: Sweep, source: str = "the log") -> Estimate:
+    """The sweep as an estimate; ``source``: the log it replayed (of several, the first). A best bandwidth at an
+    end of the candidates is said to be there: the best may lie beyond it, and the interval says only that the
+    resamples chose the same end."""
     scores = ", ".join(f"{f:g} Hz: {v:.2f}" for f, v in zip(s.bandwidths_Hz, s.scores))
     joints = ", ".join(f"J{j + 1}" for j in s.joints)
+    edge = ""
+    if len(s.bandwidths_Hz) > 1 and s.best_Hz in (min(s.bandwidths_Hz), max(s.bandwidths_Hz)):
+        side = "highest" if s.best_Hz == max(s.bandwidths_Hz) else "lowest"
+        edge = f"; the {side} candidate: the best may lie beyond it"
     return Estimate("controller.position_bw_Hz", None, s.best_Hz, s.lo_Hz, s.hi_Hz,
-                    f"replay of the first {s.window_s:.0f} s, score sum over {joints} of ln^2(sim/measured "
-                    f"tracking RMS): {scores}")
+                    f"replay of the first {s.window_s:.0f} s of {source}, score sum over {joints} of "
+                    f"ln^2(sim/measured tracking RMS): {scores}{edge}")
 
 
