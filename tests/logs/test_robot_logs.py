@@ -205,3 +205,19 @@ def test_the_rest_target_note_compares_only_rows_one_tick_apart():
     assert sum("at rest (every target speed 0)" in s for s in notes) == 1
     no1 = read_rtde(KUFIETA_DIR / "Movement_No1.csv.gz", 0.0, (0.0, 0.0, 0.0))
     assert not any("at rest" in s for s in no1.notes)
+
+
+def test_logs_of_two_controllers_under_one_model_are_said():
+    """A CB2 logs the previous reading as its target at rest, a CB3 a fixed setpoint: logs of both under one
+    command are most likely two robots, which one identify or one monitor baseline would mix without a word."""
+    from ur5fault.logs.measured import assumption_notes
+
+    cb2 = [read_rtde(KUFIETA_DIR / f"{n}.csv.gz", payload_kg=0.0, tcp_offset_m=(0.0, 0.0, 0.0))
+           for n in ("TEST", "Movement_No1")]
+    cb3 = read_nist(NIST_LOG)
+    assert [g.rest_target for g in (*cb2, cb3)] == ["reading", None, "setpoint"]  # No1 never stands
+    mixed = [n for n in assumption_notes([*cb2, cb3], [28.0] * 6) if "two controllers" in n]
+    assert mixed == [f"the target at rest is the previous reading in TEST.csv.gz (as a CB2 controller logs it) and "
+                     f"a fixed setpoint in {cb3.source} (as a CB3's): logs of two controllers, likely two robots, "
+                     "under one model"]
+    assert not [n for n in assumption_notes(cb2, [28.0] * 6) if "two controllers" in n]

@@ -52,6 +52,10 @@ class MeasuredLog:
     #: ``(n_samples,)`` bool: whether the gripper holds the payload at each sample (ur5fault's own logs record
     #: it); ``None``: the log does not say, and the payload is taken as held throughout
     payload_held: NDArray | None = None
+    #: what the log's target is while the arm stands (:func:`.readers.rest_target_style`): ``"reading"`` (the
+    #: previous measured position, as a CB2 controller logs it), ``"setpoint"`` (a fixed pose, as a CB3), ``None``
+    #: (not seen); logs of one robot's controller share it
+    rest_target: str | None = None
 
     @property
     def payload_known(self) -> bool:
@@ -138,4 +142,9 @@ def assumption_notes(logs: Sequence[MeasuredLog], joint_temperature_C) -> list[s
             out.append(f"{named[0]}: {text}")
         else:
             out.append(f"{len(named)} logs ({', '.join(named)}): {text}")
+    styles = {s: [lg.source for lg in logs if lg.rest_target == s] for s in ("reading", "setpoint")}
+    if all(styles.values()):
+        out.append(f"the target at rest is the previous reading in {', '.join(styles['reading'])} (as a CB2 "
+                   f"controller logs it) and a fixed setpoint in {', '.join(styles['setpoint'])} (as a CB3's): logs "
+                   "of two controllers, likely two robots, under one model")
     return out

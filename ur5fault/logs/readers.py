@@ -73,17 +73,25 @@ def rest_target_rows(t: NDArray, target_q: NDArray, actual_q: NDArray, target_qd
     return rest, same
 
 
-def rest_target_is_reading(t: NDArray, target_q: NDArray, actual_q: NDArray, target_qd: NDArray | None) -> bool:
-    """Whether the log's target, where every target speed is exactly 0, is the previous tick's measured position on
-    every joint (:func:`rest_target_rows`), as in the CB2 runs of data/kufieta-ur5 (there the first row of each
-    stretch at rest carries the pose the move was commanded to, and every later one the previous reading; the
-    controller holds the pose: docs/validation.md, "A CB2 log's target at rest").  Needs the target speeds."""
+def rest_target_style(t: NDArray, target_q: NDArray, actual_q: NDArray, target_qd: NDArray | None) -> str | None:
+    """What the log's target is where every target speed is exactly 0 (:func:`rest_target_rows`): ``"reading"``,
+    the previous tick's measured position on every joint, as in the CB2 runs of data/kufieta-ur5 (there the first
+    row of each stretch at rest carries the pose the move was commanded to, and every later one the previous
+    reading; the controller holds the pose: docs/validation.md, "A CB2 log's target at rest"); ``"setpoint"``, a
+    fixed pose, as NIST's CB3 log; ``None``: too few rows at rest to tell, or no target speeds."""
     if target_qd is None or target_q.shape[0] < 3:
-        return False
+        return None
     rest, same = rest_target_rows(t, target_q, actual_q, target_qd)
     if int(rest.sum()) < REST_TARGET_MIN_ROWS:
-        return False
-    return bool(same[rest].mean() >= REST_TARGET_MIN_SHARE)
+        return None
+    share = float(same[rest].mean())
+    return "reading" if share >= REST_TARGET_MIN_SHARE else "setpoint" if share <= 1.0 - REST_TARGET_MIN_SHARE \
+        else None
+
+
+def rest_target_is_reading(t: NDArray, target_q: NDArray, actual_q: NDArray, target_qd: NDArray | None) -> bool:
+    """Whether the log's target at rest is the previous tick's reading (:func:`rest_target_style`)."""
+    return rest_target_style(t, target_q, actual_q, target_qd) == "reading"
 
 
 def _assemble(src: str, t: NDArray, required: Mapping[str, NDArray], optional: Mapping[str, NDArray | None],
@@ -111,7 +119,8 @@ def _assemble(src: str, t: NDArray, required: Mapping[str, NDArray], optional: M
     plausible.check_sampling(src, t, length)
     plausible.check_units(src, t, req["target_q"], opt["target_qd"], labels[0], declared)
     plausible.check_units(src, t, req["actual_q"], opt["actual_qd"], labels[1], declared)
-    if rest_target_is_reading(t, req["target_q"], req["actual_q"], opt["target_qd"]):
+    rest_target = rest_target_style(t, req["target_q"], req["actual_q"], opt["target_qd"])
+    if rest_target == "reading":
         notes.append(f"{src}: at rest (every target speed 0) the logged target is the previous measured position, "
                      "as a CB2 controller logs it: the twin is commanded there to the robot's own reading, not to the "
                      "pose the robot holds (ur5fault's docs/validation.md, \"A CB2 log's target at rest\")")
@@ -122,7 +131,8 @@ def _assemble(src: str, t: NDArray, required: Mapping[str, NDArray], optional: M
         source=src, t_s=grid, q_target_rad=a["target_q"], q_actual_rad=a["actual_q"],
         current_A=a["actual_current"] * UR_CURRENT_SIGN,
         target_current_A=None if cur_t is None else cur_t * UR_CURRENT_SIGN, temperature_C=a["temperature"],
-        tcp_m=a["tcp"], target_torque_Nm=a["target_torque"], logged=logged, notes=tuple(notes), **fields)
+        tcp_m=a["tcp"], target_torque_Nm=a["target_torque"], logged=logged, notes=tuple(notes),
+        rest_target=rest_target, **fields)
 
 
 def read_nist(path: str | Path, length: plausible.MinLength | None = None) -> MeasuredLog:
