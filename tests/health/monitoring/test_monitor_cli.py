@@ -86,6 +86,12 @@ def test_baseline_stats_reused_and_refused_under_another_overlay(monitored):
     assert r.returncode == 0, r.stderr
     first = json.loads((out / "monitor.json").read_text())["logs"][0]
     assert json.loads((again / "monitor.json").read_text())["logs"][0] == first
+    assert "read unverified" not in r.stderr
+    bare = tmp / "bare.json"  # copied without its checksum file, or edited by hand: used, and said so
+    bare.write_bytes((out / "baseline.json").read_bytes())
+    r = run(str(logs[0]), *RTDE, "--baseline", str(model), "--baseline-stats", str(bare), "--out", str(tmp / "b"),
+            "--jobs", "2")
+    assert r.returncode == 0 and "bare.json: no bare.json.sha256 beside it; read unverified" in r.stderr, r.stderr
     other = tmp / "other.yaml"
     other.write_text("params: {}\neffects:\n  - {effect: coulomb_friction, joint: 1, scale: 1.1}\n")
     r = run(str(logs[0]), *RTDE, "--baseline", str(other), "--baseline-stats", str(out / "baseline.json"),

@@ -48,7 +48,7 @@ def cmd_monitor(args: argparse.Namespace) -> int:
     from ...logs.measured import assumption_notes
     from ...logs.options import log_entries, read_log_options, refuse_hold_out, refuse_same_samples
     from ...sim.params import load_params
-    from ...util.io import check_new_output
+    from ...util.io import check_new_output, checksum_path
     from .baseline import Baseline, fit_baseline, overlay_sha256
     from .observe import BASELINE_SCREEN_S, observe
     from .report import write
@@ -63,6 +63,9 @@ def cmd_monitor(args: argparse.Namespace) -> int:
     stats = None
     if args.baseline_stats:
         stats = Baseline.load(args.baseline_stats)
+        sidecar = checksum_path(Path(args.baseline_stats))
+        if not sidecar.exists():  # edited by hand, or copied without it
+            print(f"note: {args.baseline_stats}: no {sidecar.name} beside it; read unverified", file=sys.stderr)
         if stats.overlay_sha256 != sha:
             raise ParameterError(f"{args.baseline_stats}: was built under another model overlay than "
                                  f"{args.baseline}; rebuild it with --baseline-logs")
