@@ -181,7 +181,7 @@ def assess(baseline: Baseline, obs: Observed, channels: Sequence[str] = DEFAULT_
                              f"without it")
     hs, limits_at, judged, _ = transients_and_limits(baseline, obs, channels)
     events, over = find_events(obs.t_s, hs, limits_at(1.0), judged)
-    events = name_joints(events, obs.t_s, hs, limits_at, judged)
+    events = name_joints(events, obs.t_s, hs, limits_at, judged, baseline.period_s)
     changes = judge_changes(baseline, obs, over)
     verdict = "changed" if changes else "anomaly" if events else "consistent"
     return {"log": obs.name, "verdict": verdict, "changes": changes, "events": events}
