@@ -79,7 +79,8 @@ def held_pose(log):
     for i in np.flatnonzero(rows):  # in time order: q[prev[i]] is already held when that row is a reading row
         q[prev[i] + 1 : i + 1] = q[prev[i]]
     changed = int(np.any(q != log.q_target_rad, axis=1).sum())
-    return dataclasses.replace(log, q_target_rad=q), changed
+    notes = tuple(n for n in log.notes if "the logged target is the previous measured position" not in n)
+    return dataclasses.replace(log, q_target_rad=q, rest_target="setpoint", notes=notes), changed
 
 
 def follows_reading(t: np.ndarray, target: np.ndarray, actual: np.ndarray, target_speed: np.ndarray) -> dict:

@@ -81,5 +81,5 @@ def test_per_log_summary_scores_each_log_on_its_own_rows(windows):
 
 
 def test_a_log_given_twice_is_refused(windows):
-    with pytest.raises(ParameterError, match="given twice"):
+    with pytest.raises(ParameterError, match="two logs named .*: give each log its own name"):
         MultiReplay([windows[0]], [windows[0]], 0.6, seed=WORKFLOW_SEED)

@@ -114,6 +114,19 @@ def test_logs_of_one_file_name_in_two_folders_are_named_by_their_folders(tmp_pat
     assert [g.source for g in fit] == ["day1/robot.csv.gz"] and [g.source for g in held] == ["day2/robot.csv.gz"]
     notes = [n for n in held[0].notes if "robot.csv.gz" in n]  # TEST's: its target at rest is its reading
     assert notes and all(n.startswith("day2/robot.csv.gz: ") for n in notes), held[0].notes
+    # a refusal while reading names it so too
+    with pytest.raises(ParameterError, match="^day1/robot.csv.gz: --tcp-offset-m missing"):
+        read_log_options(_args([str(tmp_path / "day1" / "robot.csv.gz"), "--format", "rtde", "--payload-kg", "0",
+                                "--hold-out", str(tmp_path / "day2" / "robot.csv.gz")]))
+
+
+def test_a_link_keeps_its_own_name_and_two_spellings_of_one_file_are_one_log(tmp_path, monkeypatch):
+    (tmp_path / "latest.csv.gz").symlink_to(TEST)
+    fit, _ = read_log_options(_args([str(tmp_path / "latest.csv.gz"), *STATED]))
+    assert [g.source for g in fit] == ["latest.csv.gz"]
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(ParameterError, match="^latest.csv.gz is fitted twice"):
+        read_log_options(_args(["latest.csv.gz", str(tmp_path / "latest.csv.gz"), *STATED]))
 
 
 def test_payload_unknown_and_omitted_are_equal():

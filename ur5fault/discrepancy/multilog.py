@@ -54,7 +54,7 @@ def _names(logs: Sequence[MeasuredLog]) -> list[str]:
     names = [log.source for log in logs]
     dup = sorted({n for n in names if names.count(n) > 1})
     if dup:
-        raise ParameterError(f"log {dup[0]!r} given twice (logs are named by their file name)")
+        raise ParameterError(f"two logs named {dup[0]!r}: give each log its own name")
     return names
 
 

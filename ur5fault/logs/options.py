@@ -27,10 +27,11 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import os
 from collections.abc import Sequence
 from pathlib import Path
 
-from ..errors import ParameterError
+from ..errors import LogFormatError, ParameterError
 from ..util.checks import check_bool
 from ..util.yamlsafe import read_yaml
 from .measured import UNKNOWN_PAYLOAD, MeasuredLog
@@ -286,11 +287,12 @@ def names_of(paths: Sequence[Path]) -> dict[Path, str]:
     """Each log's name: its file name, or where files of one name lie in several folders, as many of its last
     folders as tell them apart (``day1/robot.csv.gz``, ``day2/robot.csv.gz``): recorders often write one file name
     per session folder."""
-    full = {p: Path(p).resolve().parts for p in paths}
+    full = {p: Path(os.path.abspath(p)).parts[1:] for p in paths}  # as given: a link keeps its own name
+    distinct = set(full.values())  # one file given twice (or by two spellings) is one name
     out = {}
     for p, parts in full.items():
         k = 1
-        while k < len(parts) and sum(q[-k:] == parts[-k:] for q in full.values()) > 1:
+        while k < len(parts) and sum(q[-k:] == parts[-k:] for q in distinct) > 1:
             k += 1
         out[p] = "/".join(parts[-k:])
     return out
@@ -302,6 +304,17 @@ def _named(log: MeasuredLog, name: str) -> MeasuredLog:
         return log
     notes = tuple(name + n[len(log.source):] if n.startswith(log.source + ":") else n for n in log.notes)
     return dataclasses.replace(log, source=name, notes=notes)
+
+
+def _read_named(e: LogEntry, name: str, allow_unknown: bool) -> MeasuredLog:
+    """:func:`read_entry`, its refusal naming the log by ``name`` (:func:`names_of`), not its bare file name."""
+    try:
+        return read_entry(e, allow_unknown=allow_unknown)
+    except (ParameterError, LogFormatError) as exc:  # messages that start with the file's name
+        text = str(exc)
+        if name == e.path.name or not text.startswith(e.path.name):
+            raise
+        raise type(exc)(name + text[len(e.path.name):]) from None
 
 
 def refuse_same_samples(groups: Sequence[tuple[str, Sequence[MeasuredLog]]]) -> None:
@@ -326,14 +339,11 @@ def read_log_options(args: argparse.Namespace, *, allow_unknown: bool = False,
                      ) -> tuple[list[MeasuredLog], list[MeasuredLog]]:
     """The logs to fit and the logs held out whole, read and checked; ``allow_unknown``: logs whose payload is
     unknown are returned as such (:func:`read_entry`), for a caller that fits it; ``others``: as
-    :func:`log_entries`'s (their files take part in the logs' names, :func:`names_of`). One recording given twice
+    :func:`log_entries`'s. The logs are named among this group's files (:func:`names_of`). One recording given twice
     (under two names, or ``role`` and held out) is refused (:func:`refuse_same_samples`)."""
     entries = log_entries(args, *others)
-    paths = [e.path for e in entries]
-    for other in others:
-        paths += [e.path for e in _resolve(other)[0]]
-    names = names_of(paths)
-    logs = [(_named(read_entry(e, allow_unknown=allow_unknown), names[e.path]), e.hold_out) for e in entries]
+    names = names_of([e.path for e in entries])  # among this group's files: a log's name is the same whatever else
+    logs = [(_named(_read_named(e, names[e.path], allow_unknown), names[e.path]), e.hold_out) for e in entries]
     fitted, held = [g for g, h in logs if not h], [g for g, h in logs if h]
     refuse_same_samples([(role, fitted), ("held out", held)])
     return fitted, held
