@@ -167,7 +167,7 @@ def test_a_cb2_target_at_rest_that_follows_the_reading_is_said():
     """Where every target speed is 0, the CB2 runs log the previous reading as the target (counted here from the
     files with pandas); the reader says so once per log, and not for NIST's CB3 log, whose setpoint at rest is
     fixed, nor for a log whose target at rest holds a pose while the reading wanders."""
-    from ur5fault.logs.readers import rest_target_is_reading
+    from ur5fault.logs.readers import rest_target_style
 
     path = KUFIETA_DIR / "TEST.csv.gz"
     df = pd.read_csv(path)
@@ -185,9 +185,9 @@ def test_a_cb2_target_at_rest_that_follows_the_reading_is_said():
     for i in range(1, held.shape[0]):
         if rest[i - 1]:
             held[i] = held[i - 1]
-    assert rest_target_is_reading(t, cols("target_q"), cols("actual_q"), cols("target_qd"))
-    assert not rest_target_is_reading(t, held, cols("actual_q"), cols("target_qd"))
-    assert not rest_target_is_reading(t, cols("target_q"), cols("actual_q"), None)  # no target speeds: cannot say
+    assert rest_target_style(t, cols("target_q"), cols("actual_q"), cols("target_qd")) == "reading"
+    assert rest_target_style(t, held, cols("actual_q"), cols("target_qd")) != "reading"
+    assert rest_target_style(t, cols("target_q"), cols("actual_q"), None) is None  # no target speeds: cannot say
 
 
 def test_the_rest_target_note_compares_only_rows_one_tick_apart():

@@ -89,11 +89,6 @@ def rest_target_style(t: NDArray, target_q: NDArray, actual_q: NDArray, target_q
         else None
 
 
-def rest_target_is_reading(t: NDArray, target_q: NDArray, actual_q: NDArray, target_qd: NDArray | None) -> bool:
-    """Whether the log's target at rest is the previous tick's reading (:func:`rest_target_style`)."""
-    return rest_target_style(t, target_q, actual_q, target_qd) == "reading"
-
-
 def _assemble(src: str, t: NDArray, required: Mapping[str, NDArray], optional: Mapping[str, NDArray | None],
               declared: str, labels: tuple[str, str] = ("target_q", "actual_q"),
               length: plausible.MinLength | None = None, **fields) -> MeasuredLog:
