@@ -209,6 +209,39 @@ def test_a_push_names_every_joint_it_loads_above_the_events_own_bar():
     assert assess(b, part("wrist_1 alone", alone))["events"] == []
 
 
+def test_the_figure_draws_the_event_limit_that_named_each_joint():
+    """The monitor figure shows, over an event on each joint it names, the limit for the event's own windows (the
+    bar that named it, below the log's): a joint named between the two bars no longer shows its transient under
+    the only red line. Not on the joints the event does not name."""
+    from ur5fault.health.monitoring.events import WINDOW_S, n_windows
+    from ur5fault.health.monitoring.report import figure
+    from ur5fault.health.monitoring.verdict import transients_and_limits
+
+    b = fit_baseline([part(f"r{k}", noise(k)) for k in range(3)], "sha")
+    r = noise(11)
+    rows = slice(1000, 1060)
+    _, limits_at, judged, _ = transients_and_limits(b, part("quiet", noise(10)))
+    share = np.ceil(0.48 / WINDOW_S) / n_windows(judged, PERIOD)
+    log_bar, event_bar = (float(limits_at(s)["current"][1030, 3]) for s in (1.0, share))
+    r[rows, 2] += 1.0
+    r[rows, 3] += 0.5 * (log_bar + event_bar)
+    log = part("pushed", r)
+    entry = assess(b, log)
+    assert entry["events"][0]["joints"] == ["elbow_joint", "wrist_1_joint"]
+    fig = figure(b, log, entry, ("current",))
+    label = "limit for the event's own windows"
+    axes = np.array(fig.axes).reshape(6, 2)
+    for j in range(6):
+        own = [ln for ln in axes[j, 0].get_lines() if ln.get_label() == label]
+        assert len(own) == (1 if j in (2, 3) else 0), j
+        if own:
+            lim = np.asarray(own[0].get_ydata())
+            full = [ln for ln in axes[j, 0].get_lines() if ln.get_label() == "limit"][0].get_ydata()
+            start = int(np.flatnonzero(np.asarray(own[0].get_xdata())[0] == log.t_s)[0])
+            assert np.all(lim < 0.8 * np.asarray(full)[start : start + lim.size])  # the event's bar, not the log's
+    assert label in [t.get_text() for t in axes[0, 0].get_legend().get_texts()]  # in the column's one legend
+
+
 def test_joints_the_push_does_not_load_are_seldom_named():
     """40 logs with 1 A on the elbow for 0.48 s and noise on the other five joints: a joint named beside the
     elbow in the push's event is a false naming, each event's at most 1 % by the bar's design (binomial: 3 or

@@ -262,26 +262,35 @@ def _event(t_s: NDArray, sl: slice, channels: list[str], over: NDArray, h: dict[
     return ev
 
 
-def name_joints(events: list[dict], t_s: NDArray, h: dict[str, NDArray],
-                limits_at: Callable[[float], dict[str, NDArray]], judged: NDArray, period_s: float) -> list[dict]:
-    """The events with every joint named whose ``|h|`` exceeds, within the event and on a channel that found it,
-    the limit for the event's own windows: ``limits_at(share)`` gives the limits ``(n, 6)`` per judged channel when
-    the multiplier counts that share of the log's chances of a false alarm (``1``: the log's, which found the
-    event), and an event of ``k`` windows of :data:`WINDOW_S` counts ``k`` of the log's judged windows
-    (``period_s``: the baseline's sample period, with which the log's windows are counted). The joints named at
-    the log's limit stay named; the channels are those that found the event."""
+def event_limits(events: list[dict], t_s: NDArray, limits_at: Callable[[float], dict[str, NDArray]],
+                 judged: NDArray, period_s: float) -> list[tuple[slice, dict[str, NDArray]]]:
+    """Per event its samples and the limits ``(n, 6)`` per judged channel for the event's own windows:
+    ``limits_at(share)`` gives the limits when the multiplier counts that share of the log's chances of a false
+    alarm (``1``: the log's, which found the event), and an event of ``k`` windows of :data:`WINDOW_S` counts ``k``
+    of the log's judged windows (``period_s``: the baseline's sample period, with which the log's windows are
+    counted). Events of one length share their limits (one computation each)."""
     nw = max(n_windows(judged, period_s), 1)
-    by_k: dict[int, dict[str, NDArray]] = {}  # events of one length share their limits
+    by_k: dict[int, dict[str, NDArray]] = {}
     out = []
     for ev in events:
         rows = np.flatnonzero((t_s >= ev["t_start_s"]) & (t_s <= ev["t_end_s"]))
-        sl = slice(int(rows[0]), int(rows[-1]) + 1)
         k = max(1, int(np.ceil(rows.size * period_s / WINDOW_S)))
         if k not in by_k:
             by_k[k] = limits_at(min(1.0, k / nw))
-        over = np.zeros((rows.size, N_JOINTS), bool)
+        out.append((slice(int(rows[0]), int(rows[-1]) + 1), by_k[k]))
+    return out
+
+
+def name_joints(events: list[dict], t_s: NDArray, h: dict[str, NDArray],
+                limits_at: Callable[[float], dict[str, NDArray]], judged: NDArray, period_s: float) -> list[dict]:
+    """The events with every joint named whose ``|h|`` exceeds, within the event and on a channel that found it,
+    the limit for the event's own windows (:func:`event_limits`). The joints named at the log's limit stay named;
+    the channels are those that found the event."""
+    out = []
+    for ev, (sl, lims) in zip(events, event_limits(events, t_s, limits_at, judged, period_s)):
+        over = np.zeros((sl.stop - sl.start, N_JOINTS), bool)
         for c in ev["channels"]:
-            over |= (np.abs(h[c][sl]) > by_k[k][c][sl]) & judged[sl, None]
+            over |= (np.abs(h[c][sl]) > lims[c][sl]) & judged[sl, None]
         named = over.any(axis=0) | np.isin(np.array(JOINT_NAMES), ev["joints"])
         mask = np.zeros((t_s.size, N_JOINTS), bool)
         mask[sl] = named

@@ -22,17 +22,21 @@ from ...util.io import (
 )
 from .baseline import Baseline
 from .changes import sentence
-from .events import CHANNELS, FALSE_ALARM_PER_LOG, FEATURES, UNITS, WINDOW_S, multiplier
+from .events import CHANNELS, FALSE_ALARM_PER_LOG, FEATURES, UNITS, WINDOW_S, event_limits, multiplier
 from .observe import Observed
-from .verdict import judged_transients
+from .verdict import transients_and_limits
 
 
 def figure(baseline: Baseline, obs: Observed, entry: dict[str, Any], channels: Sequence[str],
            judged_as: tuple | None = None) -> Figure:
     """Per joint and channel (current [A] left, position [mrad] right): the residual's transient ``|h|`` and, for
     the ``channels`` judged, its limit (the baseline's spread at the log's motion times the multiplier for its
-    length); the events shaded."""
-    hs, thr, judged, paired = judged_as or judged_transients(baseline, obs, channels)
+    length); the events shaded, and over each event, on the joints it names, the limit for the event's own
+    windows that named them (:func:`.events.name_joints`: below the log's where the event is shorter than the log).
+    ``judged_as``: :func:`.verdict.transients_and_limits` of the log, when already made."""
+    hs, limits_at, judged, paired = judged_as or transients_and_limits(baseline, obs, channels)
+    thr = limits_at(1.0)
+    own = event_limits(entry["events"], obs.t_s, limits_at, judged, baseline.period_s)
     h = [hs[c] for c in CHANNELS]
     fig = Figure(figsize=(13, 9), layout="constrained")
     axes = fig.subplots(N_JOINTS, len(CHANNELS), sharex=True)
@@ -51,11 +55,18 @@ def figure(baseline: Baseline, obs: Observed, entry: dict[str, Any], channels: S
             if c == "current" and paired.any():
                 ax.fill_between(obs.t_s, 0, 1, where=paired, transform=ax.get_xaxis_transform(), color="tab:green",
                                 alpha=0.08, lw=0, label="against a baseline run repeating the task")
-            for ev in entry["events"]:
+            for ev, (sl, lims) in zip(entry["events"], own):
                 mine = JOINT_NAMES[j] in ev["joints"] and c in ev.get("channels", ())
                 ax.axvspan(ev["t_start_s"], ev["t_end_s"], color="orange", alpha=0.35 if mine else 0.1, lw=0)
+                if mine and c in lims:
+                    ax.plot(obs.t_s[sl], lims[c][sl, j] * k, lw=0.9, ls="--", color="tab:red",
+                            label="limit for the event's own windows")
             ax.set_ylabel(f"J{j + 1} [{unit}]")
-        axes[0, i].legend(loc="upper right", fontsize=7)
+        handles = {}  # every label of the column once (an event's own limit is drawn on the joints it names)
+        for ax in axes[:, i]:
+            for hnd, lab in zip(*ax.get_legend_handles_labels()):
+                handles.setdefault(lab, hnd)
+        axes[0, i].legend(handles.values(), handles.keys(), loc="upper right", fontsize=7)
         axes[-1, i].set_xlabel("log time [s]")
     fig.suptitle(f"{obs.name}: {entry['verdict']} (events shaded)")
     return fig
@@ -121,7 +132,7 @@ def write(out: Path, baseline: Baseline, observed: Sequence[Observed], entries: 
     figs, paired_s = [], []
     for k, (obs, e) in enumerate(zip(observed, entries)):
         name = f"monitor_{k + 1}.png"
-        judged_as = judged_transients(baseline, obs, channels)
+        judged_as = transients_and_limits(baseline, obs, channels)
         paired_s.append((float((judged_as[3] & judged_as[2]).sum() * obs.period_s),
                          float(judged_as[2].sum() * obs.period_s)))
         paths.append(write_figure_atomic(figure(baseline, obs, e, channels, judged_as), out / name))
