@@ -188,12 +188,16 @@ def test_baseline_logs_are_used_and_reported_and_without_them_nothing_changes(lo
     t = b["robot_threshold"]
     assert t["n_held_out_windows"] == 4 and len(t["groups"]) == 2 and t["rank"] == 5
     assert t["score"] == max(t["held_out_scores"]) and t["false_alarm_bound"] == pytest.approx(0.2)
+    # the largest held-out score is some joint's largest: that joint is named as setting the threshold
+    assert max(t["held_out_max_by_joint"].values()) == t["score"]
+    assert t["held_out_max_by_joint"][t["set_by_joint"]] == t["score"]
     assert plain["flag_threshold"]["score"] == plain["detector"]["threshold_5pct_false_alarms"]
     flag = d["flag_threshold"]["score"]
     assert flag == max(t["score"], d["detector"]["threshold_5pct_false_alarms"])
     assert [w["flagged"] for w in d["windows"]] == [w["p_fault_score"] > flag for w in d["windows"]]
     report = (tmp_path / "with" / "report.md").read_text()
     assert "Baseline: 4 windows of 2 healthy log(s)" in report
+    assert f"the threshold is set by {t['set_by_joint']}'s healthy windows" in report
     assert "No baseline of this robot" in (tmp_path / "plain" / "report.md").read_text()
     # the size estimates are the window's own, whatever the baseline
     for w0, w1 in zip(plain["windows"], d["windows"]):

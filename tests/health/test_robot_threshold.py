@@ -72,3 +72,28 @@ def test_with_enough_windows_the_bound_is_alpha(monkeypatch):
     t = rt.threshold_from_baseline(None, ref, logs, 0.008)
     assert t.n == 40 and t.rank == 39 and t.false_alarm_bound == 0.05  # ceil(0.95 * 41) = 39
     assert t.score == pytest.approx(np.sort(t.held_out_scores)[38])
+
+
+def test_the_joint_whose_healthy_windows_set_the_threshold_is_named(monkeypatch):
+    """A window's score is its joints' largest, so one joint's healthy windows can set the bar for all: the
+    threshold records each joint's largest held-out score and the joint at the threshold, and says so."""
+    from ur5fault.health.diagnosis.baseline import set_by_sentence
+
+    # the elbow (joint 3) scores the window's first mapped input, every other joint a tenth of it
+    def scores(models, names, x):
+        s = np.repeat(0.1 * x[:, :1], 6, axis=1)
+        s[:, 2] = x[:, 0]
+        return s, None, None
+
+    monkeypatch.setattr(rt, "joint_scores", scores)
+    ref = Reference(("a", "payload_kg"), np.array([10.0, 0.0]), np.array([1.0, 1.0]), "by hand")
+    logs = [("p", [_w(1.0), _w(2.0), _w(3.0)]), ("q", [_w(5.0), _w(7.0)]), ("r", [_w(0.0)])]
+    t = rt.threshold_from_baseline(None, ref, logs, 0.008)  # held-out elbow scores as in the test above
+    assert t.score == pytest.approx(15.5) and t.set_by_joint == 2
+    np.testing.assert_allclose(t.held_out_max_by_joint, [1.55, 1.55, 15.5, 1.55, 1.55, 1.55])
+    s = t.summary()
+    assert s["set_by_joint"] == "elbow_joint" and s["held_out_max_by_joint"]["wrist_1_joint"] == pytest.approx(1.55)
+    text = set_by_sentence(s)
+    assert text.startswith("the threshold is set by elbow_joint's healthy windows (its largest held-out score "
+                           "15.500)") and "wrist_3_joint 1.55" in text and "elbow_joint 15" not in text
+    assert set_by_sentence({"score": 1.0}) == ""  # a summary without the joints (written before) says nothing

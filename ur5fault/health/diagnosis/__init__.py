@@ -22,7 +22,7 @@ from ...logs import MeasuredLog
 from ...sim.effects import EffectSpec
 from ...twin import LogReplay, Replayed
 from ..diagnostics.limits import DEFAULT_Z, LimitCalibration
-from .baseline import MIN_SPREAD_WINDOWS, BaselineMap, fit_map, training_reference
+from .baseline import MIN_SPREAD_WINDOWS, BaselineMap, fit_map, set_by_sentence, training_reference
 from .robot_threshold import threshold_from_baseline
 from .score import check_schema, score_windows
 from .windows import Window, window_features
@@ -167,7 +167,8 @@ def diagnose(log: MeasuredLog, detector_dir: str | Path, params_overrides: dict 
                      f"them exceeds it with probability {robot.false_alarm_bound:.2g}"
                      + ("" if robot.rank <= robot.n else
                         f" (fewer than {int(round(1 / robot.alpha)) - 1} windows: the largest held-out score)")
-                     + ("; it is below the training runs' threshold, which is kept" if robot.score <= thr else ""))
+                     + ("; it is below the training runs' threshold, which is kept" if robot.score <= thr else
+                        f"; {set_by}" if (set_by := set_by_sentence(robot.summary())) else ""))
     p_thr = thr
     p_flag = flag_thr
     if models.calibrator is None:

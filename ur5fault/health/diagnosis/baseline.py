@@ -45,6 +45,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ...errors import ConfigFileError, ParameterError
+from ...sim.axes import JOINT_NAMES
 from ..diagnostics.data import CONTEXT_COLUMNS
 from ..diagnostics.saved import MAD_SCALE, healthy_reference
 from .windows import Window, window_inputs
@@ -128,13 +129,18 @@ def training_reference(detector_dir: str | Path, schema: dict[str, Any]) -> Refe
 class RobotThreshold:
     """The robot's own threshold on the by-joint score (:mod:`.robot_threshold`), the held-out scores it was read
     from (one per baseline window, in the groups' order), how the windows were grouped, and the rank taken
-    (``rank > n``: the largest held-out score)."""
+    (``rank > n``: the largest held-out score); per joint the largest held-out score, and the joint (0-based) whose
+    score in the window at the threshold is the threshold. A window's score is its joints' largest, so the joint
+    whose healthy windows score highest sets the bar for all: a fault on a joint whose own healthy windows stay far
+    below it is flagged only once its score passes that joint's healthy level (said in the report)."""
 
     score: float
     held_out_scores: NDArray
     groups: tuple[str, ...]
     alpha: float
     rank: int
+    held_out_max_by_joint: tuple[float, ...] = ()
+    set_by_joint: int | None = None
 
     @property
     def n(self) -> int:
@@ -150,9 +156,23 @@ class RobotThreshold:
         return {"score": self.score, "alpha": self.alpha, "n_held_out_windows": self.n, "rank": self.rank,
                 "false_alarm_bound": self.false_alarm_bound, "groups": list(self.groups),
                 "held_out_scores": [float(v) for v in self.held_out_scores],
+                "held_out_max_by_joint": {JOINT_NAMES[j]: v for j, v in enumerate(self.held_out_max_by_joint)},
+                "set_by_joint": None if self.set_by_joint is None else JOINT_NAMES[self.set_by_joint],
                 "method": "each baseline group scored against a baseline of the other groups only; the "
                           "split-conformal rank ceil((1 - alpha)(n + 1)) of the n held-out scores (the largest "
                           "where it exceeds n)"}
+
+
+def set_by_sentence(threshold: dict[str, Any]) -> str:
+    """Which joint's healthy windows set the robot's threshold and how high each other joint's reached, from
+    :meth:`RobotThreshold.summary` (empty where it does not say)."""
+    by_joint, joint = threshold.get("held_out_max_by_joint") or {}, threshold.get("set_by_joint")
+    if not by_joint or joint is None:
+        return ""
+    others = ", ".join(f"{n} {v:.2f}" for n, v in by_joint.items() if n != joint)
+    return (f"the threshold is set by {joint}'s healthy windows (its largest held-out score {by_joint[joint]:.3f}); "
+            f"the other joints' reached at most {others}: a fault on one of them is flagged only once its score "
+            f"passes {joint}'s healthy level")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -239,4 +259,4 @@ def fit_map(reference: Reference, windows_by_log: Sequence[tuple[str, Sequence[W
 
 
 __all__ = ["BaselineMap", "MIN_SPREAD_WINDOWS", "Reference", "RobotThreshold", "fit_map", "robust_spread",
-           "training_reference"]
+           "set_by_sentence", "training_reference"]

@@ -8,6 +8,7 @@ from typing import Any
 import numpy as np
 
 from ...util.io import remove_stale_temporaries, write_figure_atomic, write_json_atomic, write_text_atomic
+from .baseline import set_by_sentence
 
 JSON_FILE, REPORT_FILE, FIGURE_FILE = "diagnosis.json", "report.md", "diagnosis.png"
 
@@ -58,7 +59,8 @@ def _baseline(b: dict[str, Any] | None) -> str:
              f"baseline of the other {len(t['groups']) - 1} group(s) of windows, the "
              + ("largest held-out score" if t["rank"] > t["n_held_out_windows"] else f"{t['rank']}-th smallest")
              + f" ({t['score']:.3f}; a healthy window like them exceeds it with probability "
-             f"{t['false_alarm_bound']:.2g}); windows are flagged above it and the training runs' threshold.")
+             f"{t['false_alarm_bound']:.2g}); windows are flagged above it and the training runs' threshold."
+             + (f" As a window's score is its joints' largest, {set_by}." if (set_by := set_by_sentence(t)) else ""))
     return (f"Baseline: {b['n_windows']} windows of {len(b['logs'])} healthy log(s) of the robot "
             f"({', '.join(b['logs'])}); every input referred to it ({b['mapping']}): {n['scaled']} scaled, "
             f"{n['shifted']} shifted, {n['shifted_zero_spread']} shifted (zero spread in the baseline), "

@@ -29,6 +29,7 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
+from ...sim.axes import N_JOINTS
 from .baseline import Reference, RobotThreshold, fit_map
 from .score import joint_scores
 from .windows import Window, window_inputs
@@ -57,31 +58,44 @@ def groups_of(windows_by_log: Sequence[tuple[str, Sequence[Window]]]) -> list[tu
     return [(f"{source} windows 1-{h}", ws[:h]), (f"{source} windows {h + 1}-{len(ws)}", ws[h:])] if h else []
 
 
-def held_out_scores(models, reference: Reference, windows_by_log: Sequence[tuple[str, Sequence[Window]]],
-                    period_s: float) -> tuple[NDArray, tuple[str, ...]]:
-    """Every baseline window's by-joint score (its joints' largest), its inputs referred to a baseline fitted on
-    the other groups (:func:`groups_of`) only; and the groups' names.  Fewer than two groups: no scores."""
+def held_out_joint_scores(models, reference: Reference, windows_by_log: Sequence[tuple[str, Sequence[Window]]],
+                          period_s: float) -> tuple[NDArray, tuple[str, ...]]:
+    """Every baseline window's score on each joint ``(n, 6)``, its inputs referred to a baseline fitted on the
+    other groups (:func:`groups_of`) only; and the groups' names.  Fewer than two groups: no scores."""
     groups = groups_of(windows_by_log)
     if len(groups) < 2:
-        return np.zeros(0), tuple(g for g, _ in groups)
+        return np.zeros((0, N_JOINTS)), tuple(g for g, _ in groups)
     out = []
     for i, (_, ws) in enumerate(groups):
         others = [g for k, g in enumerate(groups) if k != i]
         bmap = fit_map(reference, others, period_s)
         x = bmap.apply(window_inputs(ws, reference.names))
-        out.append(joint_scores(models, reference.names, x)[0].max(axis=1))
+        out.append(joint_scores(models, reference.names, x)[0])
     return np.concatenate(out), tuple(g for g, _ in groups)
+
+
+def held_out_scores(models, reference: Reference, windows_by_log: Sequence[tuple[str, Sequence[Window]]],
+                    period_s: float) -> tuple[NDArray, tuple[str, ...]]:
+    """Every baseline window's by-joint score (its joints' largest, :func:`held_out_joint_scores`); and the
+    groups' names."""
+    scores, groups = held_out_joint_scores(models, reference, windows_by_log, period_s)
+    return scores.max(axis=1), groups
 
 
 def threshold_from_baseline(models, reference: Reference, windows_by_log: Sequence[tuple[str, Sequence[Window]]],
                             period_s: float, alpha: float = ALPHA) -> RobotThreshold | None:
-    """The robot's threshold (module docstring); None where the baseline gives fewer than two groups (one log of
-    one window)."""
-    scores, groups = held_out_scores(models, reference, windows_by_log, period_s)
-    if scores.size == 0:
+    """The robot's threshold (module docstring), with each joint's largest held-out score (which joint's healthy
+    windows set the threshold, and how far below it the others stay); None where the baseline gives fewer than
+    two groups (one log of one window)."""
+    by_joint, groups = held_out_joint_scores(models, reference, windows_by_log, period_s)
+    if by_joint.shape[0] == 0:
         return None
+    scores = by_joint.max(axis=1)
     value, rank = conformal_threshold(scores, alpha)
-    return RobotThreshold(value, scores, groups, float(alpha), rank)
+    at = int(np.flatnonzero(scores == value)[0])  # a window whose score is the threshold
+    return RobotThreshold(value, scores, groups, float(alpha), rank, tuple(map(float, by_joint.max(axis=0))),
+                          int(np.argmax(by_joint[at])))
 
 
-__all__ = ["ALPHA", "conformal_threshold", "groups_of", "held_out_scores", "threshold_from_baseline"]
+__all__ = ["ALPHA", "conformal_threshold", "groups_of", "held_out_joint_scores", "held_out_scores",
+           "threshold_from_baseline"]
