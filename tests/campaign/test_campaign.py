@@ -576,3 +576,40 @@ def test_a_run_validates_its_faults_once_when_built():
     assert rc.fault_effects()[0].joint == 1 and not rc.is_healthy()
     absent = CampaignRun(cond, (("backlash.backlash_deg", 0.0), ("backlash.joint", 2)))
     assert absent.is_healthy() and absent != rc and len({rc, CampaignRun(cond, rc.faults)}) == 1
+
+
+def test_a_rerun_stopped_before_its_end_leaves_no_table_to_read_as_its_result(tmp_path, tiny_done):
+    """A rerun of a changed campaign rewrites the manifest when it starts; killed before its end it leaves the
+    earlier campaign's feature table beside it, sound by its checksum. Every reader refuses that table in one line
+    (it is not the result the manifest describes) until the rerun has finished; so is a table copied in from
+    another campaign's folder."""
+    import shutil
+
+    from ur5fault.campaign import CampaignResult
+    from ur5fault.health.diagnostics.data import load_features
+    from ur5fault.util.io import StoredFileError
+
+    class Killed(Exception):
+        pass
+
+    def kill(done, total, eta_s):
+        raise Killed
+
+    out = _copy_done(tiny_done, tmp_path)
+    CampaignResult.load(out)  # the finished campaign reads
+    camp = load_campaign(tiny(tmp_path, dur=0.2))
+    with pytest.raises(Killed):
+        run_campaign(camp, out, jobs=1, progress=kill, note=None, replace_changed=True)
+    assert json.loads((out / "manifest.json").read_text())["state"] == "running"
+    for read in (CampaignResult.load, load_features):
+        with pytest.raises(StoredFileError, match=r"features.parquet: not the result of the campaign .*manifest.json "
+                                                  r"describes \(a rerun of a changed campaign started and stopped "
+                                                  r"before its end\); run the campaign again into this folder"):
+            read(out)
+    run_quiet(camp, out, replace_changed=True)  # the rerun finished: its own table reads
+    assert CampaignResult.load(out).manifest["duration_s"] == 0.2
+    # another campaign's sound table copied in beside a finished manifest
+    for name in ("features.parquet", "features.parquet.sha256"):
+        shutil.copy(tiny_done / "out" / name, out / name)
+    with pytest.raises(StoredFileError, match=r"\(the table was written for another campaign\)"):
+        CampaignResult.load(out)

@@ -18,7 +18,7 @@ from ..errors import ConfigFileError, UnknownNameError
 from ..sim.effects import REGISTRY
 from ..util import provenance, yamlsafe
 from ..util.io import read_json_stored, read_parquet_stored
-from .store import REBUILD_FEATURES
+from .store import REBUILD_FEATURES, check_table_of_manifest
 from .summary import EffectSweep, acceptable_backlash, effect_sweep, severity_table, swept_effects, tcp_table
 
 _log = logging.getLogger(__name__)
@@ -52,8 +52,10 @@ class CampaignResult:
         for name in ("features.parquet", "manifest.json"):
             if not (out / name).exists():
                 raise ConfigFileError(f"{out}: no {name} (run the campaign to its end first)")
-        return cls(out, read_parquet_stored(out / "features.parquet", REBUILD_FEATURES),
-                   read_json_stored(out / "manifest.json", REBUILD_FEATURES))
+        features = read_parquet_stored(out / "features.parquet", REBUILD_FEATURES)
+        manifest = read_json_stored(out / "manifest.json", REBUILD_FEATURES)
+        check_table_of_manifest(out / "features.parquet", REBUILD_FEATURES)
+        return cls(out, features, manifest)
 
     # ------------------------------------------------------------------ what the campaign was
     @property

@@ -222,6 +222,46 @@ def read_manifest(out: Path) -> tuple[dict[str, Any], str | None]:
     return (m if isinstance(m, dict) else {}), None
 
 
+def check_table_of_manifest(table: Path, remake: str) -> None:
+    """Refuse (:class:`~ur5fault.util.io.StoredFileError`, naming ``remake``) a consolidated table that is not the
+    result of the campaign its folder's ``manifest.json`` describes.  A rerun rewrites the manifest when it starts,
+    so a rerun of a changed campaign that was killed before its end leaves the earlier campaign's table beside
+    the new manifest, both sound by their checksums; a table copied in from another folder is sound too.  A fault
+    campaign's table records the identity of its runs, the manifest that of the campaign's: they must be equal.
+    A life campaign's table is read only once its manifest says it is complete (each invocation writes it
+    ``running`` first).  Nothing to compare (no manifest beside the table, or no identity recorded): passes; a
+    manifest that fails its checksum is refused."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    from ..util.io import StoredFileError
+
+    manifest, damaged = read_manifest(table.parent)
+    if damaged:
+        raise StoredFileError(f"{table.parent / 'manifest.json'}: {damaged}; {remake}")
+    if not manifest:
+        return
+    state = manifest.get("state")
+    if manifest.get("kind") == "life":
+        if state != "complete":
+            raise StoredFileError(f"{table}: the life campaign in {table.parent} has not finished (its manifest says "
+                                  f"{state!r}: a rerun started and stopped), so this table may be an earlier "
+                                  f"campaign's; {remake}")
+        return
+    try:
+        raw = (pq.read_schema(table).metadata or {}).get(b"ur5fault")
+        recorded = json.loads(raw).get("campaign_identity") if raw else None
+    except (OSError, ValueError, AttributeError, pa.ArrowException):
+        return  # unreadable: the reader's own check names it
+    expected = manifest.get("campaign_identity")
+    if recorded is None or expected is None or recorded == expected:
+        return
+    why = ("a rerun of a changed campaign started and stopped before its end" if state != "complete" else
+           "the table was written for another campaign")
+    raise StoredFileError(f"{table}: not the result of the campaign {table.parent / 'manifest.json'} describes "
+                          f"({why}); {remake}")
+
+
 def read_consolidated(path: Path) -> tuple[Any, str | None, dict[str, Any] | None]:
     """A consolidated table (``features.parquet``, ``inspections.parquet``) read as a resume would trust it:
     ``(table, recorded campaign identity, None)``, or ``(None, None, state)`` with ``state`` ``{"state":

@@ -66,3 +66,22 @@ def test_a_second_writer_is_refused(tmp_path):
     camp = build_life(TINY, "tiny")
     with Lock(tmp_path), pytest.raises(CampaignLockedError):
         run_life(camp, tmp_path, jobs=1, progress=False, note=None)
+
+
+@pytest.mark.slow
+def test_a_fleet_rerun_stopped_before_its_end_is_not_read_as_its_result(tmp_path):
+    """A rerun of a changed life campaign writes its manifest ``running`` first; stopped before its end, the
+    earlier fleet's inspections table (sound by its checksum) is refused by `prognose`'s reader, not benchmarked
+    under the new wear law."""
+    from ur5fault.health.prognostics.benchmark import load_inspections
+    from ur5fault.util.io import StoredFileError
+
+    camp = build_life(TINY, "tiny")
+    assert run_life(camp, tmp_path, jobs=1, progress=False, note=None)["state"] == "complete"
+    assert len(load_inspections(tmp_path)[0])
+    changed = build_life({**TINY, "life": {**TINY["life"], "wear": {"backlash_rate_deg_per_MJ": 0.02}}}, "tiny")
+    m = run_life(changed, tmp_path, jobs=1, progress=False, note=None, max_rounds=1, replace_changed=True)
+    assert m["state"] == "running" and (tmp_path / "inspections.parquet").exists()
+    with pytest.raises(StoredFileError, match=r"inspections.parquet: the life campaign in .* has not finished "
+                                              r"\(its manifest says 'running'"):
+        load_inspections(tmp_path)

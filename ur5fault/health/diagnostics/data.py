@@ -51,13 +51,14 @@ def load_features(path: Path) -> pd.DataFrame:
     """A campaign folder's (or a file's) feature table."""
     import pyarrow as pa
 
-    from ...campaign.store import REBUILD_FEATURES
+    from ...campaign.store import REBUILD_FEATURES, check_table_of_manifest
     from ...util.io import DAMAGED_PARQUET_ERRORS, check_stored
 
     p = path / "features.parquet" if path.is_dir() else path
     if not p.exists():
         raise ConfigFileError(f"{p}: no such feature table (run `ur5fault campaign run` first)")
     check_stored(p, REBUILD_FEATURES)  # a changed byte would change features silently: refused before reading
+    check_table_of_manifest(p, REBUILD_FEATURES)  # an earlier campaign's table left by a rerun that stopped
     try:
         return pd.read_parquet(p)
     except (*DAMAGED_PARQUET_ERRORS, pa.ArrowException) as exc:

@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pandas as pd
 
+from ...campaign.store import check_table_of_manifest
 from ...errors import ConfigFileError
 from ...util.io import (
     check_new_output,
@@ -64,6 +65,7 @@ def load_inspections(folder: Path) -> tuple[pd.DataFrame, dict[str, Any]]:
     mpath = Path(folder) / "manifest.json"
     if mpath.exists():  # a manifest that changed on disk would give a wrong wear law and inputs: refused
         check_stored(mpath, remake)
+    check_table_of_manifest(path, remake)  # an earlier fleet's table left by a rerun that stopped
     try:
         manifest = json.loads(mpath.read_text())
     except (OSError, ValueError):
