@@ -217,13 +217,20 @@ def build_campaign(data: Mapping[str, Any], where: str, text: str = "", path: Pa
         raise ParameterError(f"{where}: twin_com_twins needs twin_residuals: true (they are the twin fits' columns)")
     name = check_text(data["name"], f"{where}: name") if data.get("name") is not None else (
         path.stem if path else "campaign")
-    file_out = check_text(data["out"], f"{where}: out", max_len=4096) if data.get("out") is not None else None
-    out = out if out is not None else file_out
-    out_dir = Path(out) if out is not None else Path("results") / name
+    out_dir = out_folder(data, where, out, name)
     resolved = {**dict(data), "base": {**dict(base), "params": params}}
     return Campaign(name, path, text or yaml.safe_dump(dict(data)), out_dir, base_effects, params,
                     tuple(runs.values()), tuple(swept), thr, bs, lp, save_ts, dur, resolved,
                     parse_split(data.get("split"), where), twin_res, motor_enc, com_twins, notes)
+
+
+def out_folder(data: Mapping[str, Any], where: str, out: str | Path | None, name: str) -> Path:
+    """The folder a campaign (or life campaign) file runs into: ``out`` given on the command line, else the file's
+    ``out:`` (a non-empty one-line text: a number, a list or ``""``, the working folder itself, refused), else
+    ``results/NAME``."""
+    file_out = check_text(data["out"], f"{where}: out", max_len=4096) if data.get("out") is not None else None
+    out = out if out is not None else file_out
+    return Path(out) if out is not None else Path("results") / name
 
 
 def _base_conditions(data: Mapping[str, Any], base: Mapping[str, Any], where: str) -> dict[str, Any]:

@@ -51,6 +51,16 @@ def test_bad_life_files_are_refused_naming_the_key(life, match):
         build_life(_with(**life), "t")
 
 
+@pytest.mark.parametrize("out", [5, ["a", "b"], ""])
+def test_a_life_files_out_must_be_a_folder_name(out):
+    """As a campaign file's: a number or a list was a traceback deep in the path handling, and an empty ``out``
+    wrote the whole fleet into the working folder among the user's files."""
+    with pytest.raises(ParameterError, match=r"^t: out = .* must be a non-empty one-line text"):
+        build_life({**BASE, "out": out}, "t")
+    assert str(build_life({**BASE, "out": "fleets/a"}, "t").out) == "fleets/a"
+    assert str(build_life({**BASE, "out": "fleets/a"}, "t", out="cli").out) == "cli"  # the command line first
+
+
 def test_cli_bad_life_file_is_one_line_exit_2(tmp_path, capsys):
     f = tmp_path / "life.yaml"
     f.write_text("name: x\nlife:\n  units: 1\n")

@@ -39,6 +39,7 @@ from typing import Any
 import numpy as np
 import yaml
 
+from ...campaign.spec import out_folder
 from ...config import check_duration, check_keys, check_log_period, check_mapping, check_seed, parse_trajectory
 from ...errors import ParameterError, UnknownNameError
 from ...sim.params import load_params, read_yaml
@@ -157,7 +158,7 @@ def build_life(data: Mapping[str, Any], where: str, text: str = "", path: Path |
     life = check_mapping(data.get("life"), f"{where}: life")
     check_keys(life, LIFE_KEYS, f"{where}: life")
     name = check_text(data.get("name", "life"), f"{where}: name")
-    out_dir = Path(out) if out is not None else Path(data.get("out", f"results/{name}"))
+    out_dir = out_folder(data, where, out, name)
     n_units = check_int(life.get("units", 100), f"{where}: life.units", 2, MAX_UNITS)
     seed = check_seed(life.get("seed", 0), f"{where}: life.seed")
     interval = check_int(life.get("interval_cycles", 80_000), f"{where}: life.interval_cycles", 1, 10**9)
