@@ -199,8 +199,9 @@ def cmd_effects(args: argparse.Namespace) -> int:
 
 def cmd_show(args: argparse.Namespace) -> int:
     from .errors import ConfigFileError
+    from .logs.readers import RESIMULATE
     from .plotting import run_figure
-    from .util.io import check_writable, write_figure_atomic
+    from .util.io import check_stored, check_writable, write_figure_atomic
 
     target = Path(args.target)
     if args.out is not None:  # before reading or re-simulating anything
@@ -218,6 +219,7 @@ def cmd_show(args: argparse.Namespace) -> int:
         png = Path(args.out) if args.out else target.with_suffix(".png")
         check_writable(png)  # the default place too: a folder in the way is one line, before reading
         csv = target.suffix.lower() == ".csv"
+        check_stored(target, RESIMULATE)  # a campaign's time series carries its checksum: never drawn damaged
         try:
             series = pd.read_csv(target) if csv else pd.read_parquet(target)
         except (OSError, ValueError) as exc:

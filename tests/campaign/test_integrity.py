@@ -256,3 +256,25 @@ def test_a_killed_writers_temporaries_are_cleared_by_the_next_run(tmp_path, done
         p.write_bytes(b"PAR1 half")
     run_campaign(load_campaign(tiny(tmp_path)), out, jobs=1, progress=False, note=None)
     assert not any(p.exists() for p in left)
+
+
+def test_a_damaged_time_series_is_never_read_as_a_log_or_drawn(tmp_path, capsys):
+    """A campaign's time series carries its checksum: read as a log (`diagnose`, `identify`, `discrepancy`,
+    `monitor` with --format sim) or drawn by `show`, a changed byte is refused in one line, as the campaign's own
+    readers refuse it, never fitted or drawn."""
+    from ur5fault.cli import main
+    from ur5fault.logs import read_sim
+    from ur5fault.util.io import StoredFileError
+
+    run_campaign(load_campaign(tiny(tmp_path, dur=6.0)), tmp_path / "out", jobs=1, progress=False, note=None,
+                 save_timeseries=True)  # 6 s: longer than the 5 s a log must hold to be fitted
+    f = sorted((tmp_path / "out" / "timeseries").glob("*.parquet"))[0]
+    assert read_sim(f).t_s.size > 100  # sound: read
+    b = bytearray(f.read_bytes())
+    b[len(b) // 2] ^= 0x01
+    f.write_bytes(bytes(b))
+    with pytest.raises(StoredFileError, match=r"its bytes differ from the checksum .*; simulate it again"):
+        read_sim(f)
+    assert main(["show", str(f), "--out", str(tmp_path / "s.png")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "differ from the checksum" in err and not (tmp_path / "s.png").exists()

@@ -226,6 +226,11 @@ def read_rtde(path: str | Path, payload_kg: float | None = None,
                      tcp_offset_m=tcp_offset_m)
 
 
+#: what to do about a run's time series that fails its checksum
+RESIMULATE = ("simulate it again: run its campaign again into its folder (the bad file is named and re-simulated), "
+              "or `ur5fault simulate` it")
+
+
 def read_sim(path: str | Path, length: plausible.MinLength | None = None) -> MeasuredLog:
     """Read a time series written by ``ur5fault simulate`` (or a campaign's ``timeseries/``).
 
@@ -235,11 +240,15 @@ def read_sim(path: str | Path, length: plausible.MinLength | None = None) -> Mea
     import pyarrow as pa
     import pyarrow.parquet as pq
 
+    from ..util.io import check_stored
+
     path = Path(path)
     src = path.name
     if path.suffix.lower() == ".csv" or path.name.lower().endswith(".csv.gz"):
         raise LogFormatError(f"{src}: the sim format reads the Parquet file `ur5fault simulate --out FILE.parquet` "
                              "writes; a CSV of it has no place for the run's payload, tool and temperatures")
+    if path.is_file():  # a campaign's time series carries its checksum: a changed byte is refused, not fitted
+        check_stored(path, RESIMULATE)
     try:
         pf = pq.ParquetFile(path)
         schema, n_rows = pf.schema_arrow, pf.metadata.num_rows
