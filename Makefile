@@ -47,7 +47,7 @@ diagnostics: $(STAMP)
 PROGNOSTICS ?= campaigns/prognostics.yaml
 prognostics: $(STAMP)
 	@start=$$(date +%s); \
-	$(BIN)/ur5fault campaign run $(PROGNOSTICS) --out results/prognostics/fleet --quiet && \
+	$(BIN)/ur5fault campaign run $(PROGNOSTICS) --out results/prognostics/fleet --quiet --yes && \
 	$(BIN)/ur5fault prognose results/prognostics/fleet --out results/prognostics/benchmark --twin --replace && \
 	end=$$(date +%s) && \
 	echo "make prognostics: $$((end - start)) s end to end (fleet + benchmark)"

@@ -77,9 +77,34 @@ def test_cli_refuses_campaign_options_a_life_campaign_does_not_take(tmp_path, ca
     assert "--threshold-mm does not apply to a life campaign" in capsys.readouterr().err
 
 
+def test_a_life_campaign_that_could_run_for_days_starts_only_with_yes(tmp_path, capsys):
+    """As a fault campaign over 2e9 physics steps: the bound (every unit inspected to max_cycles, and its reference
+    run) is given in one line before anything runs; past a fault campaign's hard limit (1e12 steps) not even --yes
+    starts it."""
+    f = tmp_path / "big.yaml"
+    f.write_text("name: big\nlife:\n  units: 10000\n  interval_cycles: 1000\n  max_cycles: 999000\n")
+    out = tmp_path / "o"
+    assert main(["campaign", "run", str(f), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    # 10000 units x (1000 inspections + a reference) of the 13 s pick-and-place at 50 us: 2.6e5 steps each
+    assert err.count("\n") == 1 and "up to 10010000 runs (10000 units x up to 1000 inspections" in err, err
+    assert "2.6e+12 physics steps" in err and "above the limit of 1e+12 physics steps" in err and not out.exists()
+    f.write_text("name: big\nlife:\n  units: 2000\n  interval_cycles: 1000\n  max_cycles: 99000\n")
+    assert main(["campaign", "run", str(f), "--out", str(out)]) == 2
+    err = capsys.readouterr().err  # 2000 x 101 x 2.6e5 = 5.25e10 steps: below the limit, above 2e9
+    assert err.count("\n") == 1 and "5.25e+10 physics steps" in err and "needs --yes to start" in err, err
+    assert not out.exists()
+    small = tmp_path / "small.yaml"  # the shipped 30-unit bound, 2.1e8 steps, needs nothing
+    small.write_text("name: s\nlife:\n  units: 2\n  interval_cycles: 1000\n  max_cycles: 1000\n  duty: "
+                     "{payload_kg: [0.5, 0.6]}\nduration_s: 0.2\n")
+    from ur5fault.health.prognostics.spec import load_life, upper_bound
+    runs, steps = upper_bound(load_life(small))
+    assert runs == 2 * 3 and steps == 6 * 4000  # 2 units x (2 inspections + a reference), 0.2 s / 50 us
+
+
 def test_cli_prognose_without_inspections_is_one_line_exit_2(tmp_path, capsys):
     assert main(["prognose", str(tmp_path / "nowhere")]) == 2
     err = capsys.readouterr().err
     assert err.startswith("ur5fault: error: ") and err.count("\n") == 1 and "inspections.parquet" in err
     # the command it names works from an installed wheel (a shipped campaign by name, no checkout path)
-    assert f"`ur5fault campaign run prognostics --out {tmp_path / 'nowhere'}`" in err and "campaigns/" not in err
+    assert f"`ur5fault campaign run prognostics --out {tmp_path / 'nowhere'} --yes`" in err and "campaigns/" not in err

@@ -80,11 +80,11 @@ def _what_is_there(folder: Path) -> str:
     m = read_manifest(folder)[0]
     if not m:  # nothing ran here (or not ur5fault, or a manifest that fails its checksum)
         return (f"run a life campaign into {folder} first (a shipped one: `ur5fault campaign run prognostics --out "
-                f"{folder}`, or prognostics_small)")
+                f"{folder} --yes`, or prognostics_small)")
     name, campaign = m.get("name", "?"), m.get("campaign_file") or "its campaign file"
     if m.get("kind") != "life":
         return (f"{folder} holds the fault campaign {name!r}, not a life campaign; run one into another folder "
-                "(`ur5fault campaign run prognostics --out NEW_DIR`)")
+                "(`ur5fault campaign run prognostics --out NEW_DIR --yes`)")
     return (f"the life campaign {name!r} in {folder} has not finished (state {m.get('state', '?')!r}): resume it "
             f"with `ur5fault campaign run {campaign} --out {folder}` (`ur5fault campaign status {folder}` shows "
             "how far it got)")

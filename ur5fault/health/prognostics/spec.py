@@ -115,6 +115,19 @@ class LifeCampaign:
         return self.max_cycles // self.interval_cycles + 1
 
 
+def upper_bound(camp: LifeCampaign) -> tuple[int, float]:
+    """The most a life campaign can cost: ``(runs, physics steps)`` when no unit fails before ``max_cycles`` (every
+    unit inspected :attr:`LifeCampaign.max_inspections` times, plus its healthy reference run)."""
+    dt = load_params().physics_dt_s
+    runs, steps = 0, 0.0
+    for u in camp.units:
+        d = parse_trajectory(u.trajectory, "trajectory").duration_s
+        d = min(d, camp.duration_s) if camp.duration_s is not None else d
+        runs += camp.max_inspections + 1
+        steps += (camp.max_inspections + 1) * round(d / dt)
+    return runs, steps
+
+
 def is_life_file(path: str | Path) -> bool:
     """True when a campaign YAML (a path or a shipped campaign's name) has a top-level ``life:``
     section.  Read through the one strict, bounded loader (an alias bomb or a deeply nested file must not
