@@ -85,3 +85,23 @@ def test_a_fleet_rerun_stopped_before_its_end_is_not_read_as_its_result(tmp_path
     with pytest.raises(StoredFileError, match=r"inspections.parquet: the life campaign in .* has not finished "
                                               r"\(its manifest says 'running'"):
         load_inspections(tmp_path)
+
+
+def test_a_criterion_the_unworn_robot_meets_is_said_and_not_benchmarked(tmp_path, capsys):
+    """Every unit fails at its first inspection when the healthy robot already meets the failure criterion: the
+    run says so, and `prognose` refuses in one line naming the criterion (it ended in numpy's "need at least one
+    array to concatenate" after a RuntimeWarning)."""
+    import yaml
+
+    from ur5fault.cli import main
+
+    f = tmp_path / "unworn.yaml"
+    f.write_text(yaml.safe_dump({**TINY, "life": {**TINY["life"], "failure": {"feature": "tcp_track_max_mm",
+                                                                              "threshold": 0.01}}}))
+    assert main(["campaign", "run", str(f), "--out", str(tmp_path / "fleet"), "--jobs", "1", "--quiet"]) == 0
+    err = capsys.readouterr().err
+    assert "note: 3 of 3 units met the failure criterion tcp_track_max_mm >= 0.01 at their first inspection" in err
+    assert main(["prognose", str(tmp_path / "fleet"), "--out", str(tmp_path / "pg")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "every failed unit (3) met the failure criterion tcp_track_max_mm >= 0.01 at " \
+                                    "its first inspection, unworn" in err, err

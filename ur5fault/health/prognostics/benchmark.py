@@ -257,6 +257,12 @@ def run_prognose(folder: Path, out: Path | None = None, *, seed: int = 0, twin: 
             raise ConfigFileError(f"the twin's model overlay carries {', '.join(worn)}: the wear law sets those "
                                   "effects itself; give them as params instead")
         setup = TwinSetup.from_manifest(manifest, seed, twin_model)
+    eol = df.groupby("unit_id")["eol_cycles"].first().dropna()
+    if len(eol) and (eol == 0).all():  # each failed at its first inspection: no degradation path to learn
+        raise ConfigFileError(f"{folder}: every failed unit ({len(eol)}) met the failure criterion "
+                              f"{failure.feature} >= {failure.threshold:g} at its first inspection, unworn: the "
+                              "healthy robot meets it on its task; raise life.failure.threshold and run the life "
+                              "campaign again into a new folder")
     cache = RadiusCache(twin_cache if twin_cache is not None else out / "twin_radii.json") if twin else None
     try:
         pred, fitted, hi = predict(df, failure, seed, setup, twin_calibration, cache, twin_friction)

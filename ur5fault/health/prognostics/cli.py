@@ -74,6 +74,10 @@ def cmd_life_run(args: argparse.Namespace) -> int:
           + (f"median life {m['eol_cycles']['median']:.4g} cycles" if m["n_failed"] else
              f"no unit failed within {m['max_cycles']} cycles"))
     print(f"wrote {camp.out}/inspections.parquet and manifest.json in {m['wall_s_this_invocation']:.1f} s")
+    if m["n_failed_unworn"]:
+        print(f"note: {m['n_failed_unworn']} of {m['n_units']} units met the failure criterion "
+              f"{camp.failure.feature} >= {camp.failure.threshold:g} at their first inspection, unworn: the healthy "
+              "robot meets it on their task (raise life.failure.threshold)", file=sys.stderr)
     return 0
 
 

@@ -308,6 +308,8 @@ def _manifest(camp: LifeCampaign, ids: LifeIdentities, state: str, backend: str,
         m.update({
             "n_inspections": int(len(df)), "n_failed": int(per_unit["eol"].notna().sum()),
             "n_censored": int(per_unit["eol"].isna().sum()),
+            # failed at the first inspection, unworn: the failure criterion is met by the healthy robot's task
+            "n_failed_unworn": int((per_unit["eol"] == 0).sum()),
             "inspections_per_unit": {"min": int(per_unit["n"].min()), "mean": float(per_unit["n"].mean()),
                                      "max": int(per_unit["n"].max())},
             "eol_cycles": life_stats(per_unit["eol"]),
