@@ -55,6 +55,15 @@ def test_status_of_a_life_folder_interrupted_complete_and_damaged(tmp_path, caps
     assert info["advice"].startswith("1 damaged inspection file(s): `ur5fault campaign run` on the campaign again")
     assert "the inspections table does not hold the stored inspections" in info["advice"]
 
+    # a damaged reference run is named as itself (it was named as the unit's sound first inspection)
+    (tmp_path / "runs" / "u00001_i0001.parquet").unlink()
+    ref = tmp_path / "reference" / "u00000.parquet"
+    b = bytearray(ref.read_bytes())
+    b[len(b) // 2] ^= 0x01
+    ref.write_bytes(bytes(b))
+    rc, info = _status(tmp_path, capsys)
+    assert rc == 1 and info["problems"][0].startswith("reference/u00000.parquet: bad: its bytes differ"), info
+
 
 @pytest.mark.slow
 def test_life_campaign_on_dask_equals_loky(tmp_path):

@@ -144,12 +144,12 @@ def _resume(camp: LifeCampaign, out: Path, ids: LifeIdentities, n_log: int) -> t
         ref = read_reference(out, ids, unit, n_log)
         k = 0
         while job is not None:
-            check = check_inspection(out, ids, unit, k)
+            check, where = check_inspection(out, ids, unit, k), f"runs/{run_id(unit, k)}.parquet"
             if check.state == "ok" and ref is None:  # the reference is missing, bad or changed: start again
-                check = check_reference(out, ids, unit, n_log)
+                check, where = check_reference(out, ids, unit, n_log), f"reference/{unit.unit_id}.parquet"
             if check.state != "ok":
                 if check.state != "missing":
-                    unusable.append((run_id(unit, k), check.state, check.detail))
+                    unusable.append((run_id(unit, k), check.state, check.detail, where))
                 break
             job = next_job(camp, unit, read_inspection(out, unit, k))
             if job is None:
@@ -210,12 +210,12 @@ def _run_locked(camp, out: Path, n_jobs: int, client, progress, say, max_rounds,
     pending, finished, refs, unusable = resume_state(camp, out, ids)
     changed = [u for u in unusable if u[1] == "changed"]
     if changed and not replace_changed:
-        rid, _, why = changed[0]
+        _, _, why, where = changed[0]
         raise CampaignChangedError(
-            f"{out / 'runs' / rid}.parquet: made under other settings ({why}); {len(changed)} unit(s) differ from this "
+            f"{out / where}: made under other settings ({why}); {len(changed)} unit(s) differ from this "
             "life campaign: use another --out, or --replace-changed to simulate them again")
-    for rid, state, why in unusable[:5]:
-        say(f"{out / 'runs' / rid}.parquet: {why or state}; simulating the unit again from there")
+    for _, state, why, where in unusable[:5]:
+        say(f"{out / where}: {why or state}; simulating the unit again from there")
     say(f"life campaign {camp.name}: {len(camp.units)} units, {len(finished)} finished, {len(pending)} to run -> {out}")
     write_json_atomic(out / "manifest.json", _manifest(camp, ids, "running", backend, n_jobs, t0, None),
                       checksum=True)
@@ -273,7 +273,8 @@ def log_lengths(camp: LifeCampaign) -> dict[str, int]:
 
 def resume_state(camp: LifeCampaign, out: Path, ids: LifeIdentities) -> tuple[dict, dict, dict, list]:
     """What the stored files of ``out`` say (read only): each running unit's next job, each finished
-    unit's last inspection, the reference paths, and the (run_id, state, detail) of every unusable file."""
+    unit's last inspection, the reference paths, and the (run_id, state, detail, file relative to ``out``) of
+    every unusable file (the unit's inspection ``run_id``, or its reference) where the unit starts again."""
     n_log = log_lengths(camp)
     pending, finished, refs, unusable = {}, {}, {}, []
     by_traj: dict[str, list[Unit]] = {}

@@ -38,18 +38,18 @@ def life_status(out: Path, manifest: dict[str, Any], info: dict[str, Any]) -> di
     pending, finished, _refs, unusable = resume_state(camp, out, ids)
     ok = {run_id(u, k) for u, last in finished.items() for k in range(last + 1)}
     ok |= {run_id(job.unit, k) for job in pending.values() for k in range(job.inspection)}
-    bad = [(rid, why) for rid, state, why in unusable if state == "bad"]
-    changed = [(rid, why) for rid, state, why in unusable if state == "changed"]
+    bad = [(rid, why, where) for rid, state, why, where in unusable if state == "bad"]
+    changed = [(rid, why, where) for rid, state, why, where in unusable if state == "changed"]
     known = {u.unit_id for u in camp.units}
     stored = sorted(p.stem for p in runs_dir(out).glob("*.parquet")) if runs_dir(out).is_dir() else []
     stray = [s for s in stored if not _ours(s, known, camp.max_inspections)]
-    unused = [s for s in stored if s not in ok and s not in stray and s not in {r for r, _ in bad + changed}]
+    unused = [s for s in stored if s not in ok and s not in stray and s not in {r for r, _, _ in bad + changed}]
     info["units"] = {"expected": len(camp.units), "finished": len(finished), "running": len(pending)}
     info["inspections"] = {"ok": len(ok), "bad": len(bad), "changed": len(changed),
                            # stored after an unusable inspection of their unit: simulated again on resume
                            "not_reachable": len(unused), "stray": len(stray)}
-    problems = [f"runs/{rid}.parquet: bad: {why}" for rid, why in bad]
-    problems += [f"runs/{rid}.parquet: made under other settings: {why}" for rid, why in changed]
+    problems = [f"{where}: bad: {why}" for _, why, where in bad]
+    problems += [f"{where}: made under other settings: {why}" for _, why, where in changed]
     info["problems"] = _listed(problems)
     info["ignored"] = _listed([f"runs/{s}.parquet: not an inspection of this fleet (stray)" for s in stray]
                               + [f"runs/{s}.parquet: after an unusable inspection of its unit" for s in unused])
