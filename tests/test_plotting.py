@@ -336,3 +336,20 @@ def test_plot_default_folder_with_a_file_in_the_way(tmp_path, two, capsys):
     err = capsys.readouterr().err
     assert err.startswith("ur5fault: error: ") and len(err.strip().splitlines()) == 1, err
     assert "plots: exists and is not a folder" in err
+
+
+def test_a_feature_missing_in_every_run_is_one_line_not_blank_figures(two):
+    """A feature NaN in every run (the encoder mismatch of a campaign without motor encoders) drew empty axes in
+    every figure and said nothing; now one line naming it, before any figure."""
+    import dataclasses
+
+    from ur5fault.errors import ConfigFileError
+    from ur5fault.plotting import campaign_figures
+
+    df = two.features.copy()
+    df[[f"enc_mismatch_p2p_rad_j{j}" for j in range(1, 7)]] = np.nan
+    blind = dataclasses.replace(two, features=df, manifest={**two.manifest, "motor_encoders": False})
+    with pytest.raises(ConfigFileError, match=r"^enc_mismatch_p2p_rad is missing \(NaN\) in every run of .* \(the "
+                                              r"campaign has motor_encoders: false\): nothing to draw"):
+        campaign_figures(blind, "enc_mismatch_p2p_rad")
+    assert campaign_figures(two, "enc_mismatch_p2p_rad")[0]  # with its values: drawn

@@ -12,11 +12,12 @@ from __future__ import annotations
 import logging
 from pathlib import Path
 
+import numpy as np
 from matplotlib.figure import Figure
 
 from ..campaign.result import CampaignResult
 from ..campaign.summary import HEALTHY, joint_feature
-from ..errors import Ur5FaultError
+from ..errors import ConfigFileError, Ur5FaultError
 from ._figure import save
 from .paper import fig3_tcp_deviation, fig4_shoulder_current
 from .run import run_figure
@@ -37,9 +38,13 @@ def campaign_figures(result: CampaignResult, feature: str = "tcp_dev_max_mm") ->
     Backlash gets the paper's Fig. 3 and Fig. 4; every swept effect gets ``feature`` against its fault size
     and, when it sits on joints, a joint x size heat map of ``feature``.
     """
-    joint_feature(result.features, feature)  # an unknown feature is an error before any work
+    values = joint_feature(result.features, feature)  # an unknown feature is an error before any work
     figures: dict[str, Figure] = {}
     messages: list[str] = []
+    if not np.isfinite(values).any():  # e.g. the encoder mismatch of a campaign without motor encoders
+        encoders = "" if result.manifest.get("motor_encoders", True) else " (the campaign has motor_encoders: false)"
+        raise ConfigFileError(f"{feature} is missing (NaN) in every run of {result.out}{encoders}: nothing to draw; "
+                              "choose another --feature")
     sweeps, skipped = result.sweeps()
     messages += [f"no figure for {why}" for why in skipped.values()]
     if "backlash" in sweeps:
