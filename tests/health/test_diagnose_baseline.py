@@ -183,6 +183,8 @@ def test_baseline_logs_are_used_and_reported_and_without_them_nothing_changes(lo
     assert b["rules"]["scaled"]["n_inputs"] == 0
     assert b["rules"]["condition"]["inputs"] == ["payload_kg", "temperature_C"]
     assert any("healthy baseline (4 windows of 2 log(s))" in n for n in d["notes"])
+    # a 5.2 s log in windows of 2.5 s: its last 0.2 s are not scored, and the notes say so
+    assert [n for n in d["notes"] if n.startswith("only whole windows are scored: the last 0.2")], d["notes"]
     # the robot's own threshold: each log's two windows held out against the other log; four scores, so the
     # conformal rank ceil(0.95 * 5) = 5 does not exist and the largest is taken (a new window exceeds it with 1/5)
     t = b["robot_threshold"]

@@ -136,6 +136,10 @@ def diagnose(log: MeasuredLog, detector_dir: str | Path, params_overrides: dict 
                            None if baseline is None else baseline.apply,
                            None if not cal else LimitCalibration.from_dict(cal), flag_thr)
     notes = list(log.assumptions(replay.params.joint_temperature_C))
+    unscored = float(log.t_s[-1] - log.t_s[0]) - (windows[-1].end_s - windows[0].start_s)
+    if unscored > log.period_s * 1.5:  # whole windows only: the rest of the log is left out, and said so
+        notes.append(f"only whole windows are scored: the last {unscored:.2g} s of the log (less than a "
+                     f"{window_s:.3g} s window) are not")
     if not cal:
         notes.append("these classifiers were saved without the detection-limit calibration: no detection_limits "
                      "per joint (run `ur5fault benchmark` again with this version to add them)")

@@ -83,7 +83,7 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
     for n in d["notes"]:
         print(f"note: {n}", file=sys.stderr)
     paths = write_diagnosis(d, args.out)
-    print(f"{d['log']}: {d['n_flagged']} of {d['n_windows']} windows of {d['detector']['window_s']:g} s flagged "
+    print(f"{d['log']}: {d['n_flagged']} of {d['n_windows']} windows of {d['detector']['window_s']:.3g} s flagged "
           f"(p(fault) > {d['flag_threshold']['p_fault']:.3f}: {d['flag_threshold']['from']}); largest p(fault) "
           f"{max(w['p_fault'] for w in d['windows']):.3f}")
     if baseline is not None:

@@ -30,7 +30,7 @@ def _figure(d: dict[str, Any]):
     ax.set_ylim(0, 1.02)
     ax.set_ylabel("p(fault)")
     ax.legend(loc="upper right", fontsize=7)
-    ax.set_title(f"{d['log']}: {d['n_flagged']} of {d['n_windows']} windows of {d['detector']['window_s']:g} s "
+    ax.set_title(f"{d['log']}: {d['n_flagged']} of {d['n_windows']} windows of {d['detector']['window_s']:.3g} s "
                  "flagged", fontsize=9)
     ax2 = fig.add_subplot(2, 1, 2, sharex=ax)
     pj = np.array([[j["p_fault_joint"] or 0.0 for j in x["joints"]] for x in w])
@@ -99,7 +99,7 @@ def _report(d: dict[str, Any]) -> str:
              f"{d['duration_s']:.1f} s sampled every {1e3 * d['log_period_s']:g} ms; payload "
              f"{d['conditions']['payload_kg']:g} kg, temperature {d['conditions']['temperature_C']:.1f} degC. "
              f"Detector: {det['folder']} ({det['feature_set']} features, training set "
-             f"{str(det['training_set_sha256'])[:12]}), windows of {det['window_s']:g} s, flagged at "
+             f"{str(det['training_set_sha256'])[:12]}), windows of {det['window_s']:.3g} s, flagged at "
              f"p(fault) > {det['p_fault_at_threshold']:.3f} (5 % false alarms, {det['threshold_from']}"
              + (f"; and above {d['flag_threshold']['p_fault']:.3f}, the robot's own threshold"
                 if d.get("flag_threshold", {}).get("p_fault", det["p_fault_at_threshold"])
