@@ -353,3 +353,24 @@ def test_a_feature_missing_in_every_run_is_one_line_not_blank_figures(two):
                                               r"campaign has motor_encoders: false\): nothing to draw"):
         campaign_figures(blind, "enc_mismatch_p2p_rad")
     assert campaign_figures(two, "enc_mismatch_p2p_rad")[0]  # with its values: drawn
+
+
+def test_figures_not_redrawn_are_said_to_be_an_earlier_plots(tmp_path, two, capsys):
+    """A damaged time series stops Fig. 3 and Fig. 4: the reason is printed once (both read the same runs; it was
+    printed twice), and the earlier plot's Fig. 3 and Fig. 4 left in the folder are named as not redrawn."""
+    from ur5fault.cli import main
+
+    copy = tmp_path / "c"
+    shutil.copytree(two.out, copy)
+    assert main(["plot", str(copy)]) == 0
+    capsys.readouterr()
+    f = sorted((copy / "timeseries").glob("*.parquet"))[0]
+    b = bytearray(f.read_bytes())
+    b[len(b) // 2] ^= 0x01
+    f.write_bytes(bytes(b))
+    assert main(["plot", str(copy)]) == 0
+    out = capsys.readouterr().out.splitlines()
+    bad = [line for line in out if f.name in line]
+    assert len(bad) == 1 and "differ from the checksum" in bad[0], out
+    stale = sorted(line for line in out if line.endswith("from an earlier plot, not redrawn now"))
+    assert [s.split("/")[-1].split(".png")[0][:4] for s in stale] == ["fig3", "fig4"], out

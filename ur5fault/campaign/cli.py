@@ -125,8 +125,11 @@ def cmd_plot(args: argparse.Namespace) -> int:
     plot_dir = Path(args.out) if args.out else result.out / "plots"
     check_writable(plot_dir, folder=True)  # the default place too
     figures, messages = campaign_figures(result, args.feature)
-    for path in save(figures, plot_dir):
+    written = save(figures, plot_dir)
+    for path in written:
         print(f"wrote {path}")
-    for message in messages:
+    for message in dict.fromkeys(messages):  # Fig. 3 and Fig. 4 read the same runs: one reason, said once
         print(message)
+    for path in sorted(set(plot_dir.glob("*.png")) - set(written)):  # not redrawn: do not pass them for this one
+        print(f"{path}: from an earlier plot, not redrawn now")
     return 0
