@@ -218,7 +218,8 @@ def test_bad_baselines_are_one_line(logs, detector, tmp_path, capsys):
     copy = tmp_path / "renamed_copy_of_the_diagnosed.parquet"  # another name, the same recording
     shutil.copy(logs["diagnosed"], copy)
     for extra, words in (([str(logs["diagnosed"])], "is both diagnosed and a baseline log"),
-                         ([str(copy)], "is both diagnosed and a baseline log"),
+                         ([str(copy)], "renamed_copy_of_the_diagnosed.parquet and diagnosed.parquet hold the same "
+                                       "samples (both diagnosed and a baseline log)"),  # named as given, before replay
                          ([str(tmp_path / "missing.parquet")], "missing.parquet"),
                          ([str(garbage)], "garbage.parquet"),
                          ([str(logs["short"])], f"one window of {WINDOW_S:g} s"),

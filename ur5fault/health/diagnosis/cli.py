@@ -34,7 +34,7 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
     from ...config import Overlay
     from ...errors import ParameterError
     from ...logs.length import check_files_length, check_logs_length
-    from ...logs.options import log_entries, read_entry, refuse_hold_out
+    from ...logs.options import log_entries, read_entry, refuse_hold_out, refuse_same_samples
     from ...util.io import check_new_output
     from ..diagnostics.classifier import require_sklearn
     from ..diagnostics.saved import load_models
@@ -70,6 +70,7 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
     log = read_entry(entries[0], window_length(window_s))
     healthy = [read_entry(e, window_length(window_s)) for e in base]
     check_logs_length([log, *healthy], "diagnose")
+    refuse_same_samples([("diagnosed", [log]), ("a baseline log", healthy)])  # a copy under another name too
     overlay = Overlay.load(args.model) if args.model else None
     params, effects = (dict(overlay.params), overlay.effects) if overlay else (None, ())
     if healthy:  # what the baseline logs assume (the diagnosed log's notes come with its diagnosis)
