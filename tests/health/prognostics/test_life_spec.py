@@ -41,6 +41,8 @@ def test_fleet_draws_are_deterministic_and_do_not_depend_on_fleet_size():
     ({"failure": {"threshold": -1}}, "life.failure.threshold"),
     ({"wear": {"unit_sigma": -1}}, "life.wear.unit_sigma"),
     ({"wear": {"backlash_rate_deg_per_MJ": float("nan")}}, r"^t: life.wear.backlash_rate_deg_per_MJ = nan"),
+    ({"wear": {"backlash_rate_deg_per_MJ": "fast"}}, r"^t: life.wear.backlash_rate_deg_per_MJ = 'fast' must be a "
+                                                     r"number in \(0, 1\]$"),
     ({"wear": {"rate": 1}}, "life.wear"),
     ({"duty": {"payload_kg": [2, 1]}}, "life.duty.payload_kg"),
     ({"duty": {"trajectories": ["nowhere"]}}, "trajector"),

@@ -78,11 +78,12 @@ class WearLaw:
     def __post_init__(self) -> None:
         for name, (lo, hi, lo_closed) in self.RANGES.items():
             v = getattr(self, name)
-            ok = isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
-            ok = ok and (lo <= v if lo_closed else lo < v) and v <= hi
+            number = isinstance(v, (int, float)) and not isinstance(v, bool)
+            ok = number and math.isfinite(v) and (lo <= v if lo_closed else lo < v) and v <= hi
             if not ok:
-                left = "[" if lo_closed else "("
-                raise ParameterError(f"life.wear.{name} = {v!r} is out of range {left}{lo:g}, {hi:g}]")
+                span = f"{'[' if lo_closed else '('}{lo:g}, {hi:g}]"
+                raise ParameterError(f"life.wear.{name} = {v!r} "
+                                     + (f"is out of range {span}" if number else f"must be a number in {span}"))
 
     @classmethod
     def from_mapping(cls, data: Mapping[str, Any] | None, where: str = "life.wear") -> WearLaw:
