@@ -603,8 +603,8 @@ def test_a_rerun_stopped_before_its_end_leaves_no_table_to_read_as_its_result(tm
     assert json.loads((out / "manifest.json").read_text())["state"] == "running"
     for read in (CampaignResult.load, load_features):
         with pytest.raises(StoredFileError, match=r"features.parquet: not the result of the campaign .*manifest.json "
-                                                  r"describes \(a rerun of a changed campaign started and stopped "
-                                                  r"before its end\); run the campaign again into this folder"):
+                                                  r"describes \(a rerun of a changed campaign started and has not "
+                                                  r"finished\); run the campaign again into this folder"):
             read(out)
     run_quiet(camp, out, replace_changed=True)  # the rerun finished: its own table reads
     assert CampaignResult.load(out).manifest["duration_s"] == 0.2
@@ -613,3 +613,6 @@ def test_a_rerun_stopped_before_its_end_leaves_no_table_to_read_as_its_result(tm
         shutil.copy(tiny_done / "out" / name, out / name)
     with pytest.raises(StoredFileError, match=r"\(the table was written for another campaign\)"):
         CampaignResult.load(out)
+    # the same table under another name is a table given as a file, not this folder's result: read
+    shutil.copy(out / "features.parquet", out / "kept.parquet")
+    assert len(load_features(out / "kept.parquet")) == 3

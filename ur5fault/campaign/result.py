@@ -54,7 +54,7 @@ class CampaignResult:
                 raise ConfigFileError(f"{out}: no {name} (run the campaign to its end first)")
         features = read_parquet_stored(out / "features.parquet", REBUILD_FEATURES)
         manifest = read_json_stored(out / "manifest.json", REBUILD_FEATURES)
-        check_table_of_manifest(out / "features.parquet", REBUILD_FEATURES)
+        check_table_of_manifest(out / "features.parquet", REBUILD_FEATURES, manifest)
         return cls(out, features, manifest)
 
     # ------------------------------------------------------------------ what the campaign was

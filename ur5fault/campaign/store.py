@@ -222,41 +222,49 @@ def read_manifest(out: Path) -> tuple[dict[str, Any], str | None]:
     return (m if isinstance(m, dict) else {}), None
 
 
-def check_table_of_manifest(table: Path, remake: str) -> None:
-    """Refuse (:class:`~ur5fault.util.io.StoredFileError`, naming ``remake``) a consolidated table that is not the
-    result of the campaign its folder's ``manifest.json`` describes.  A rerun rewrites the manifest when it starts,
-    so a rerun of a changed campaign that was killed before its end leaves the earlier campaign's table beside
-    the new manifest, both sound by their checksums; a table copied in from another folder is sound too.  A fault
-    campaign's table records the identity of its runs, the manifest that of the campaign's: they must be equal.
-    A life campaign's table is read only once its manifest says it is complete (each invocation writes it
-    ``running`` first).  Nothing to compare (no manifest beside the table, or no identity recorded): passes; a
-    manifest that fails its checksum is refused."""
+#: the consolidated tables a campaign folder holds (:func:`check_table_of_manifest`)
+CONSOLIDATED = ("features.parquet", "inspections.parquet")
+
+
+def check_table_of_manifest(table: Path, remake: str, manifest: Mapping[str, Any] | None = None) -> None:
+    """Refuse (:class:`~ur5fault.util.io.StoredFileError`, naming ``remake``) a campaign folder's consolidated table
+    (:data:`CONSOLIDATED`) that is not the result of the campaign its ``manifest.json`` describes.  A rerun
+    rewrites the manifest when it starts, so a rerun of a changed campaign that was killed before its end leaves
+    the earlier campaign's table beside the new manifest, both sound by their checksums; a table copied in from
+    another folder is sound too.  A fault campaign's table records the identity of its runs, the manifest that of
+    the campaign's: they must be equal.  A life campaign's table is read only while its manifest says it is
+    complete (each invocation writes it ``running`` first: the table beside it may be the earlier fleet's until the
+    invocation ends).  Nothing to compare (another file name, no manifest beside the table, no identity recorded):
+    passes; a manifest that fails its checksum is refused.  ``manifest``: the folder's, when already read and
+    verified."""
     import pyarrow as pa
     import pyarrow.parquet as pq
 
     from ..util.io import StoredFileError
 
-    manifest, damaged = read_manifest(table.parent)
-    if damaged:
-        raise StoredFileError(f"{table.parent / 'manifest.json'}: {damaged}; {remake}")
+    if table.name not in CONSOLIDATED:
+        return
+    if manifest is None:
+        manifest, damaged = read_manifest(table.parent)
+        if damaged:
+            raise StoredFileError(f"{table.parent / 'manifest.json'}: {damaged}; {remake}")
     if not manifest:
         return
     state = manifest.get("state")
     if manifest.get("kind") == "life":
         if state != "complete":
-            raise StoredFileError(f"{table}: the life campaign in {table.parent} has not finished (its manifest says "
-                                  f"{state!r}: a rerun started and stopped), so this table may be an earlier "
-                                  f"campaign's; {remake}")
+            raise StoredFileError(f"{table}: the life campaign in {table.parent} is not complete (its manifest says "
+                                  f"{state!r}: a run into the folder is under way or stopped before its end), so "
+                                  f"this table may be an earlier fleet's; {remake}")
         return
     try:
-        raw = (pq.read_schema(table).metadata or {}).get(b"ur5fault")
-        recorded = json.loads(raw).get("campaign_identity") if raw else None
-    except (OSError, ValueError, AttributeError, pa.ArrowException):
+        recorded = (_read_meta(pq.read_schema(table)) or {}).get("campaign_identity")
+    except (OSError, pa.ArrowException):
         return  # unreadable: the reader's own check names it
     expected = manifest.get("campaign_identity")
     if recorded is None or expected is None or recorded == expected:
         return
-    why = ("a rerun of a changed campaign started and stopped before its end" if state != "complete" else
+    why = ("a rerun of a changed campaign started and has not finished" if state != "complete" else
            "the table was written for another campaign")
     raise StoredFileError(f"{table}: not the result of the campaign {table.parent / 'manifest.json'} describes "
                           f"({why}); {remake}")
