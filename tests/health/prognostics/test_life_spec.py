@@ -96,12 +96,16 @@ def test_a_life_campaign_that_could_run_for_days_starts_only_with_yes(tmp_path, 
     err = capsys.readouterr().err  # 2000 x 101 x 2.6e5 = 5.25e10 steps: below the limit, above 2e9
     assert err.count("\n") == 1 and "5.25e+10 physics steps" in err and "needs --yes to start" in err, err
     assert not out.exists()
-    small = tmp_path / "small.yaml"  # the shipped 30-unit bound, 2.1e8 steps, needs nothing
+    from ur5fault.health.prognostics.spec import load_life, upper_bound
+
+    small = tmp_path / "small.yaml"
     small.write_text("name: s\nlife:\n  units: 2\n  interval_cycles: 1000\n  max_cycles: 1000\n  duty: "
                      "{payload_kg: [0.5, 0.6]}\nduration_s: 0.2\n")
-    from ur5fault.health.prognostics.spec import load_life, upper_bound
     runs, steps = upper_bound(load_life(small))
     assert runs == 2 * 3 and steps == 6 * 4000  # 2 units x (2 inspections + a reference), 0.2 s / 50 us
+    # duration_s past the trajectory's 13 s: the whole duration is simulated (the robot holds its last setpoint)
+    small.write_text(small.read_text().replace("duration_s: 0.2", "duration_s: 600"))
+    assert upper_bound(load_life(small)) == (6, 6 * 12_000_000)
 
 
 def test_cli_prognose_without_inspections_is_one_line_exit_2(tmp_path, capsys):

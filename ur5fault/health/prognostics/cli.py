@@ -44,24 +44,17 @@ def register(sub) -> None:
 
 def cmd_life_run(args: argparse.Namespace) -> int:
     """``campaign run`` of a life campaign file."""
-    from ...campaign.limits import CONFIRM_RUN_STEPS, MAX_RUN_STEPS
+    from ...campaign.limits import CONFIRM_RUN_STEPS
     from ...errors import ParameterError
-    from ...sim.budget import core_hours
     from .fleet import run_life
-    from .spec import load_life, upper_bound
+    from .spec import check_life_limits, load_life
 
     for attr, flag in _NOT_FOR_LIFE.items():
         if getattr(args, attr, None):
             raise ParameterError(f"{flag} does not apply to a life campaign ({args.file} has a `life:` section)")
     camp = load_life(args.file, args.out)
-    runs, steps = upper_bound(camp)
-    bound = (f"life campaign {camp.name}: up to {runs} runs ({len(camp.units)} units x up to "
-             f"{camp.max_inspections} inspections and a reference each, if none fails early), {steps:.3g} physics "
-             f"steps (about {core_hours(steps):.3g} core-hours)")
-    if steps > MAX_RUN_STEPS:  # the limits of a fault campaign (campaign/limits.py)
-        raise ParameterError(f"{bound}; above the limit of {MAX_RUN_STEPS:g} physics steps: fewer units, a longer "
-                             "interval_cycles or a lower max_cycles")
-    if steps > CONFIRM_RUN_STEPS and not args.yes:  # a typo more likely than intent
+    bound, steps = check_life_limits(camp)
+    if steps > CONFIRM_RUN_STEPS and not args.yes:  # as a fault campaign: a typo more likely than intent
         raise ParameterError(f"{bound}; more than {CONFIRM_RUN_STEPS:g} steps needs --yes to start")
     m = run_life(camp, camp.out, jobs=args.jobs, backend=args.backend, scheduler=args.scheduler,
                  progress=not args.quiet, replace_changed=args.replace_changed)

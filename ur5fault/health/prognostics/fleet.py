@@ -25,7 +25,7 @@ import numpy as np
 
 from ...campaign.identity import DRIVE, STEPPER
 from ...campaign.lock import Lock
-from ...campaign.store import CampaignChangedError
+from ...campaign.store import CampaignChangedError, run_path
 from ...campaign.workers import check_backend, dask_client, dispatch, exit_with_parent, note_stderr
 from ...config import parse_trajectory
 from ...sim.axes import N_JOINTS
@@ -40,11 +40,12 @@ from .life_store import (
     life_stats,
     read_inspection,
     read_reference,
+    reference_path,
     run_id,
     write_inspection,
     write_reference,
 )
-from .spec import LifeCampaign, Unit
+from .spec import LifeCampaign, Unit, check_life_limits
 from .wear import (
     STREAM_NOISE,
     advance_backlash_deg,
@@ -144,9 +145,9 @@ def _resume(camp: LifeCampaign, out: Path, ids: LifeIdentities, n_log: int) -> t
         ref = read_reference(out, ids, unit, n_log)
         k = 0
         while job is not None:
-            check, where = check_inspection(out, ids, unit, k), f"runs/{run_id(unit, k)}.parquet"
+            check, where = check_inspection(out, ids, unit, k), run_path(out, run_id(unit, k)).relative_to(out)
             if check.state == "ok" and ref is None:  # the reference is missing, bad or changed: start again
-                check, where = check_reference(out, ids, unit, n_log), f"reference/{unit.unit_id}.parquet"
+                check, where = check_reference(out, ids, unit, n_log), reference_path(out, unit).relative_to(out)
             if check.state != "ok":
                 if check.state != "missing":
                     unusable.append((run_id(unit, k), check.state, check.detail, where))
@@ -188,6 +189,7 @@ def run_life(camp: LifeCampaign, out: Path | None = None, *, jobs: int | None = 
     """
     out = Path(out) if out is not None else camp.out
     say = note or (lambda m: None)
+    check_life_limits(camp)  # the hard limit, as run_campaign's check_limits (--yes is the command line's)
     n_jobs, capped = check_backend(backend, scheduler, jobs)
     check_writable(out, folder=True)
     client = dask_client(str(scheduler)) if backend == "dask" else None
@@ -261,14 +263,7 @@ def log_lengths(camp: LifeCampaign) -> dict[str, int]:
     from ...sim.params import load_params
 
     dt = load_params().physics_dt_s
-    n_log = {}
-    for unit in camp.units:
-        key = json.dumps(unit.trajectory, sort_keys=True)
-        if key not in n_log:
-            d = parse_trajectory(unit.trajectory, "trajectory").duration_s
-            d = d if camp.duration_s is None else camp.duration_s
-            n_log[key] = int(round(d / dt)) // int(round(camp.log_period_s / dt))
-    return n_log
+    return {key: int(round(d / dt)) // int(round(camp.log_period_s / dt)) for key, d in camp.inspection_s().items()}
 
 
 def resume_state(camp: LifeCampaign, out: Path, ids: LifeIdentities) -> tuple[dict, dict, dict, list]:

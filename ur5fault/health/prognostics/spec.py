@@ -114,18 +114,41 @@ class LifeCampaign:
     def max_inspections(self) -> int:
         return self.max_cycles // self.interval_cycles + 1
 
+    def inspection_s(self) -> dict[str, float]:
+        """Simulated seconds of one inspection per task (keyed by its trajectory's JSON): ``duration_s`` where set
+        (past the trajectory's end the robot holds its last setpoint), else the trajectory's length."""
+        out: dict[str, float] = {}
+        for u in self.units:
+            key = json.dumps(u.trajectory, sort_keys=True)
+            if key not in out:
+                out[key] = (parse_trajectory(u.trajectory, "trajectory").duration_s if self.duration_s is None
+                            else self.duration_s)
+        return out
+
 
 def upper_bound(camp: LifeCampaign) -> tuple[int, float]:
     """The most a life campaign can cost: ``(runs, physics steps)`` when no unit fails before ``max_cycles`` (every
     unit inspected :attr:`LifeCampaign.max_inspections` times, plus its healthy reference run)."""
     dt = load_params().physics_dt_s
-    runs, steps = 0, 0.0
-    for u in camp.units:
-        d = parse_trajectory(u.trajectory, "trajectory").duration_s
-        d = min(d, camp.duration_s) if camp.duration_s is not None else d
-        runs += camp.max_inspections + 1
-        steps += (camp.max_inspections + 1) * round(d / dt)
-    return runs, steps
+    seconds = camp.inspection_s()
+    steps = sum(round(seconds[json.dumps(u.trajectory, sort_keys=True)] / dt) for u in camp.units)
+    return len(camp.units) * (camp.max_inspections + 1), float(steps * (camp.max_inspections + 1))
+
+
+def check_life_limits(camp: LifeCampaign) -> tuple[str, float]:
+    """The campaign's :func:`upper_bound` as a sentence and its steps; above a fault campaign's hard limit
+    (``campaign.limits.MAX_RUN_STEPS``) refused."""
+    from ...campaign.limits import MAX_RUN_STEPS
+    from ...sim.budget import core_hours
+
+    runs, steps = upper_bound(camp)
+    bound = (f"life campaign {camp.name}: up to {runs} runs ({len(camp.units)} units x up to "
+             f"{camp.max_inspections} inspections and a reference each, if none fails early), {steps:.3g} physics "
+             f"steps (about {core_hours(steps):.3g} core-hours)")
+    if steps > MAX_RUN_STEPS:
+        raise ParameterError(f"{bound}; above the limit of {MAX_RUN_STEPS:g} physics steps: fewer units, a longer "
+                             "interval_cycles or a lower max_cycles")
+    return bound, steps
 
 
 def is_life_file(path: str | Path) -> bool:
