@@ -65,11 +65,12 @@ def load_inspections(folder: Path) -> tuple[pd.DataFrame, dict[str, Any]]:
     mpath = Path(folder) / "manifest.json"
     if mpath.exists():  # a manifest that changed on disk would give a wrong wear law and inputs: refused
         check_stored(mpath, remake)
-    check_table_of_manifest(path, remake)  # an earlier fleet's table left by a rerun that stopped
     try:
         manifest = json.loads(mpath.read_text())
     except (OSError, ValueError):
         manifest = {}
+    manifest = manifest if isinstance(manifest, dict) else {}
+    check_table_of_manifest(path, remake, manifest)  # an earlier fleet's table left by a rerun that stopped
     return df, manifest
 
 
@@ -86,8 +87,8 @@ def _what_is_there(folder: Path) -> str:
         return (f"{folder} holds the fault campaign {name!r}, not a life campaign; run one into another folder "
                 "(`ur5fault campaign run prognostics --out NEW_DIR --yes`)")
     return (f"the life campaign {name!r} in {folder} has not finished (state {m.get('state', '?')!r}): resume it "
-            f"with `ur5fault campaign run {campaign} --out {folder}` (`ur5fault campaign status {folder}` shows "
-            "how far it got)")
+            f"with `ur5fault campaign run {campaign} --out {folder}` (with --yes for a fleet that could take over 2e9 "
+            f"steps; `ur5fault campaign status {folder}` shows how far it got)")
 
 
 #: where the twin's friction rise per degree of clearance and per 10^6 cycles comes from: "learned" from the
@@ -106,10 +107,16 @@ def predict(df: pd.DataFrame, failure: Failure, seed: int = 0, twin: TwinSetup |
     """
     failed = df[~df["censored"]]
     train, test = failed[failed["split"] == "train"], failed[failed["split"] == "test"]
-    n_tr, n_te = train["unit_id"].nunique(), test["unit_id"].nunique()
+    # a unit failed at its first inspection (unworn) shows no degradation to fit or predict
+    unworn = set(failed.loc[failed["eol_cycles"] == 0, "unit_id"])
+    n_tr = train.loc[~train["unit_id"].isin(unworn), "unit_id"].nunique()
+    n_te = test.loc[~test["unit_id"].isin(unworn), "unit_id"].nunique()
     if n_tr < 3 or n_te < 1:
-        raise ConfigFileError(f"{n_tr} failed training and {n_te} failed test units: need at least 3 and 1 "
-                              "(a larger fleet or a longer max_cycles)")
+        raise ConfigFileError(
+            f"{n_tr} failed training and {n_te} failed test units with a degradation path: need at least 3 and 1 "
+            + (f"({len(unworn)} units met the failure criterion {failure.feature} >= {failure.threshold:g} at their "
+               "first inspection, unworn: the healthy robot meets it on their task; raise life.failure.threshold)"
+               if unworn else "(a larger fleet or a longer max_cycles)"))
     hi_model = TaskHealthIndex(failure.feature, failure.threshold).fit(train)
     hi_all = hi_model.transform(df)
     hi_of = pd.Series(hi_all, index=df.index)
@@ -257,12 +264,6 @@ def run_prognose(folder: Path, out: Path | None = None, *, seed: int = 0, twin: 
             raise ConfigFileError(f"the twin's model overlay carries {', '.join(worn)}: the wear law sets those "
                                   "effects itself; give them as params instead")
         setup = TwinSetup.from_manifest(manifest, seed, twin_model)
-    eol = df.groupby("unit_id")["eol_cycles"].first().dropna()
-    if len(eol) and (eol == 0).all():  # each failed at its first inspection: no degradation path to learn
-        raise ConfigFileError(f"{folder}: every failed unit ({len(eol)}) met the failure criterion "
-                              f"{failure.feature} >= {failure.threshold:g} at its first inspection, unworn: the "
-                              "healthy robot meets it on its task; raise life.failure.threshold and run the life "
-                              "campaign again into a new folder")
     cache = RadiusCache(twin_cache if twin_cache is not None else out / "twin_radii.json") if twin else None
     try:
         pred, fitted, hi = predict(df, failure, seed, setup, twin_calibration, cache, twin_friction)
