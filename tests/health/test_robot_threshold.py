@@ -94,6 +94,27 @@ def test_the_joint_whose_healthy_windows_set_the_threshold_is_named(monkeypatch)
     s = t.summary()
     assert s["set_by_joint"] == "elbow_joint" and s["held_out_max_by_joint"]["wrist_1_joint"] == pytest.approx(1.55)
     text = set_by_sentence(s)
-    assert text.startswith("the threshold is set by elbow_joint's healthy windows (its largest held-out score "
-                           "15.500)") and "wrist_3_joint 1.55" in text and "elbow_joint 15" not in text
+    assert text.startswith("the threshold 15.500 is elbow_joint's score in a held-out healthy window; each joint's "
+                           "largest held-out healthy score: shoulder_pan_joint 1.55,") and "elbow_joint 15.50" in text
     assert set_by_sentence({"score": 1.0}) == ""  # a summary without the joints (written before) says nothing
+
+
+def test_with_enough_windows_the_joint_at_the_conformal_rank_is_named(monkeypatch):
+    """40 held-out windows: the threshold is the 39th smallest score, not the largest; the joint named is the one
+    whose score that window's is, and the sentence gives the threshold itself (the largest scores lie above it)."""
+    from ur5fault.health.diagnosis.baseline import set_by_sentence
+
+    def scores(models, names, x):  # wrist 1 scores the input, every other joint half of it
+        s = np.repeat(0.5 * x[:, :1], 6, axis=1)
+        s[:, 3] = x[:, 0]
+        return s, None, None
+
+    monkeypatch.setattr(rt, "joint_scores", scores)
+    ref = Reference(("a", "payload_kg"), np.array([0.0, 0.0]), np.array([1e-6, 1.0]), "by hand")
+    rng = np.random.default_rng(0)
+    logs = [(f"log{k}", [_w(v) for v in rng.normal(size=10)]) for k in range(4)]
+    t = rt.threshold_from_baseline(None, ref, logs, 0.008)
+    assert t.rank == 39 and t.score == pytest.approx(np.sort(t.held_out_scores)[38])
+    assert t.score < max(t.held_out_scores)
+    assert t.set_by_joint == 3 and t.held_out_max_by_joint[3] > t.score
+    assert set_by_sentence(t.summary()).startswith(f"the threshold {t.score:.3f} is wrist_1_joint's score")

@@ -22,7 +22,14 @@ from ...logs import MeasuredLog
 from ...sim.effects import EffectSpec
 from ...twin import LogReplay, Replayed
 from ..diagnostics.limits import DEFAULT_Z, LimitCalibration
-from .baseline import MIN_SPREAD_WINDOWS, BaselineMap, fit_map, set_by_sentence, training_reference
+from .baseline import (
+    MIN_SPREAD_WINDOWS,
+    ROBOT_THRESHOLD_FROM,
+    BaselineMap,
+    fit_map,
+    set_by_sentence,
+    training_reference,
+)
 from .robot_threshold import threshold_from_baseline
 from .score import check_schema, score_windows
 from .windows import Window, window_features
@@ -201,7 +208,7 @@ def diagnose(log: MeasuredLog, detector_dir: str | Path, params_overrides: dict 
         # what a window is flagged above: the training runs' 5 % point, or the robot's own where it is higher
         "flag_threshold": {"score": flag_thr, "p_fault": p_flag,
                            "from": "the training runs' 5 % false-alarm point" if flag_thr == thr else
-                           "the robot's own healthy baseline windows, held out (baseline.robot_threshold)"},
+                           ROBOT_THRESHOLD_FROM},
         "conditions": context,
         # None: the inputs were scored as they are, against the simulated healthy runs only
         "baseline": None if baseline is None else baseline.summary(),

@@ -163,16 +163,20 @@ class RobotThreshold:
                           "where it exceeds n)"}
 
 
+#: ``diagnosis.json``'s ``flag_threshold.from`` where the robot's own threshold is the bar (above the training runs')
+ROBOT_THRESHOLD_FROM = "the robot's own healthy baseline windows, held out (baseline.robot_threshold)"
+
+
 def set_by_sentence(threshold: dict[str, Any]) -> str:
-    """Which joint's healthy windows set the robot's threshold and how high each other joint's reached, from
+    """Which joint's healthy window the robot's threshold is, and each joint's largest held-out healthy score, from
     :meth:`RobotThreshold.summary` (empty where it does not say)."""
     by_joint, joint = threshold.get("held_out_max_by_joint") or {}, threshold.get("set_by_joint")
     if not by_joint or joint is None:
         return ""
-    others = ", ".join(f"{n} {v:.2f}" for n, v in by_joint.items() if n != joint)
-    return (f"the threshold is set by {joint}'s healthy windows (its largest held-out score {by_joint[joint]:.3f}); "
-            f"the other joints' reached at most {others}: a fault on one of them is flagged only once its score "
-            f"passes {joint}'s healthy level")
+    listed = ", ".join(f"{n} {v:.2f}" for n, v in by_joint.items())
+    return (f"the threshold {threshold['score']:.3f} is {joint}'s score in a held-out healthy window; each joint's "
+            f"largest held-out healthy score: {listed}; on a joint whose healthy windows stay far below the threshold "
+            "a fault is flagged only once its score passes it")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -259,4 +263,4 @@ def fit_map(reference: Reference, windows_by_log: Sequence[tuple[str, Sequence[W
 
 
 __all__ = ["BaselineMap", "MIN_SPREAD_WINDOWS", "Reference", "RobotThreshold", "fit_map", "robust_spread",
-           "set_by_sentence", "training_reference"]
+           "ROBOT_THRESHOLD_FROM", "set_by_sentence", "training_reference"]

@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 
 from ...util.io import remove_stale_temporaries, write_figure_atomic, write_json_atomic, write_text_atomic
-from .baseline import set_by_sentence
+from .baseline import ROBOT_THRESHOLD_FROM, set_by_sentence
 
 JSON_FILE, REPORT_FILE, FIGURE_FILE = "diagnosis.json", "report.md", "diagnosis.png"
 
@@ -47,8 +47,9 @@ def _fmt(v: float | None, unit: str) -> str:
     return "-" if v is None else f"{v:.3g} {unit}"
 
 
-def _baseline(b: dict[str, Any] | None) -> str:
-    """The sentence saying which baseline the inputs were referred to (or that there was none)."""
+def _baseline(b: dict[str, Any] | None, robot_bar: bool = False) -> str:
+    """The sentence saying which baseline the inputs were referred to (or that there was none); ``robot_bar``: the
+    robot's own threshold is the one windows are flagged above (not the training runs', which is higher)."""
     if b is None:
         return ("No baseline of this robot: the inputs are scored as they are, against the simulated healthy "
                 "training runs only (a real robot's model error then reads as a fault: `--baseline-logs`).")
@@ -60,7 +61,8 @@ def _baseline(b: dict[str, Any] | None) -> str:
              + ("largest held-out score" if t["rank"] > t["n_held_out_windows"] else f"{t['rank']}-th smallest")
              + f" ({t['score']:.3f}; a healthy window like them exceeds it with probability "
              f"{t['false_alarm_bound']:.2g}); windows are flagged above it and the training runs' threshold."
-             + (f" As a window's score is its joints' largest, {set_by}." if (set_by := set_by_sentence(t)) else ""))
+             + (f" As a window's score is its joints' largest, {set_by}."
+                if robot_bar and (set_by := set_by_sentence(t)) else ""))
     return (f"Baseline: {b['n_windows']} windows of {len(b['logs'])} healthy log(s) of the robot "
             f"({', '.join(b['logs'])}); every input referred to it ({b['mapping']}): {n['scaled']} scaled, "
             f"{n['shifted']} shifted, {n['shifted_zero_spread']} shifted (zero spread in the baseline), "
@@ -108,7 +110,7 @@ def _report(d: dict[str, Any]) -> str:
              "fault-kind classifier by joint's largest joint probability of a fault, "
              f"{'calibrated' if det['calibrated'] else 'NOT calibrated: the detector saved no calibration'}; "
              "the run-level detector's reading is in diagnosis.json).", "",
-             _baseline(d.get("baseline")), "",
+             _baseline(d.get("baseline"), d["flag_threshold"]["from"] == ROBOT_THRESHOLD_FROM), "",
              f"**{d['n_flagged']} of {d['n_windows']} windows flagged.**", "",
              "| window [s] | p(fault) | flagged | likeliest joint | likeliest kinds there (size, interval) |",
              "| --- | --- | --- | --- | --- |"]
