@@ -115,7 +115,7 @@ def cmd_status(args: argparse.Namespace) -> int:
 
 
 def cmd_plot(args: argparse.Namespace) -> int:
-    from ..plotting import campaign_figures, save
+    from ..plotting import FIGURE_STEMS, campaign_figures, save
     from ..util.io import check_writable
     from .result import CampaignResult
 
@@ -130,6 +130,7 @@ def cmd_plot(args: argparse.Namespace) -> int:
         print(f"wrote {path}")
     for message in dict.fromkeys(messages):  # Fig. 3 and Fig. 4 read the same runs: one reason, said once
         print(message)
-    for path in sorted(set(plot_dir.glob("*.png")) - set(written)):  # not redrawn: do not pass them for this one
+    ours = {p for stem in FIGURE_STEMS for p in plot_dir.glob(f"{stem}*.png")}  # not `show`'s, nor a user's
+    for path in sorted(ours - set(written)):  # not redrawn: not to be taken for this plot's
         print(f"{path}: from an earlier plot, not redrawn now")
     return 0

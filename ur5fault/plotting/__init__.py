@@ -23,13 +23,17 @@ from .paper import fig3_tcp_deviation, fig4_shoulder_current
 from .run import run_figure
 from .severity import heatmap, severity_figure
 
-__all__ = ["campaign_figures", "fig3_tcp_deviation", "fig4_shoulder_current", "heatmap", "plot_campaign",
-           "run_figure", "save", "severity_figure"]
+__all__ = ["FIGURE_STEMS", "campaign_figures", "fig3_tcp_deviation", "fig4_shoulder_current", "heatmap",
+           "plot_campaign", "run_figure", "save", "severity_figure"]
 
 _log = logging.getLogger(__name__)
 
 #: backlash size of the paper's Fig. 3 [deg]
 FIG3_BACKLASH_DEG = 0.1
+
+
+#: the beginnings of the file names of :func:`campaign_figures`' figures
+FIGURE_STEMS = ("fig3_", "fig4_", "severity_", "heatmap_")
 
 
 def campaign_figures(result: CampaignResult, feature: str = "tcp_dev_max_mm") -> tuple[dict[str, Figure], list[str]]:
