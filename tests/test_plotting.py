@@ -374,3 +374,24 @@ def test_figures_not_redrawn_are_said_to_be_an_earlier_plots(tmp_path, two, caps
     assert len(bad) == 1 and "differ from the checksum" in bad[0], out
     stale = sorted(line for line in out if line.endswith("from an earlier plot, not redrawn now"))
     assert [s.split("/")[-1].split(".png")[0][:4] for s in stale] == ["fig3", "fig4"], out
+
+
+def test_sampled_sizes_are_points_not_a_line_through_other_motions(two):
+    """A sampled campaign draws each run's size on its own motion and conditions: a line through them in size order
+    zig-zagged between motions. Past MANY_SIZES distinct sizes the points stand alone; a swept grid keeps its line."""
+    import dataclasses
+
+    from ur5fault.campaign.summary import MANY_SIZES
+
+    def joint_lines(fig):
+        return [ln for ln in fig.axes[0].get_lines() if ln.get_label().startswith("J")]
+
+    sweep = effect_sweep(two.features, "backlash", ["backlash_deg"])
+    grid = joint_lines(severity_figure(sweep))
+    assert grid and all(ln.get_linestyle() == "-" for ln in grid)
+    rows = sweep.rows[sweep.rows["fault_joint"] == 2]
+    n = MANY_SIZES + 5
+    sampled = pd.concat([rows.iloc[[k % len(rows)]] for k in range(n)], ignore_index=True)
+    sampled["size"] = np.linspace(0.01, 0.5, n)  # continuous sizes, one run each
+    lines = joint_lines(severity_figure(dataclasses.replace(sweep, rows=sampled)))
+    assert len(lines) == 1 and lines[0].get_linestyle() == "None" and len(lines[0].get_xdata()) == n

@@ -65,6 +65,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     from . import acceptable_backlash, load_campaign, run_campaign, tcp_table
     from .limits import confirmation_needed, effective_jobs, estimate
     from .spec import MAX_THRESHOLD_MM
+    from .summary import MANY_SIZES
 
     if is_life_file(args.file):  # a life campaign (issue 20): units run to failure
         from ..health.prognostics.cli import cmd_life_run
@@ -87,7 +88,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     features = read_parquet_stored(Path(camp.out) / "features.parquet", REBUILD_FEATURES)
     thr = args.threshold_mm if args.threshold_mm is not None else camp.threshold_mm
     table = tcp_table(features, camp.swept_keys)
-    if table.shape[1] > 20:  # a sampled campaign's continuous backlash sizes: no readable grid
+    if table.shape[1] > MANY_SIZES:  # a sampled campaign's continuous backlash sizes: no readable grid
         print(f"\n{len(features)} runs with {table.shape[1]} distinct backlash sizes: see `ur5fault benchmark`")
     elif not table.empty:
         print("\nmax TCP deviation from the healthy twin [mm], fault joint x backlash [deg]:")

@@ -110,6 +110,11 @@ def effect_sweep(features: pd.DataFrame, effect: str, params: Sequence[str] | No
     return EffectSweep(effect, params[0], reg.param(params[0]).unit, reg.per_joint, ok.assign(size=ok[col]), n_bad)
 
 
+#: above this many distinct fault sizes an effect's sizes were sampled, not swept: one run each, on its own motion
+#: and conditions (``campaign run`` prints no grid of them; the severity figure joins no line through them)
+MANY_SIZES = 20
+
+
 def joint_feature(df: pd.DataFrame, feature: str) -> pd.Series:
     """Values of ``feature`` per row: a column of the table, or a per-joint feature given without its
     ``_j{j}`` suffix (``current_spike_max_A``), read on each row's ``fault_joint`` (the maximum over the

@@ -8,7 +8,7 @@ import pandas as pd
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
-from ..campaign.summary import EffectSweep, joint_feature, severity_table
+from ..campaign.summary import MANY_SIZES, EffectSweep, joint_feature, severity_table
 from ..health.features import feature_label
 from ._figure import figure_and_axes
 
@@ -49,7 +49,10 @@ def severity_figure(sweep: EffectSweep, feature: str = "tcp_dev_max_mm", *, heal
     for k, (label, line) in enumerate(table.iterrows()):
         color = f"C{k % 10}"
         line = line.dropna()
-        ax.plot(line.index, line.to_numpy(), "o-", color=color, ms=4, lw=1.2, label=f"J{label}" if sweep.per_joint
+        # a sampled campaign's sizes are continuous, one run each on its own motion and conditions: a line through
+        # them in size order zig-zags between motions, so its points stand alone
+        style = "o" if len(line) > MANY_SIZES else "o-"
+        ax.plot(line.index, line.to_numpy(), style, color=color, ms=4, lw=1.2, label=f"J{label}" if sweep.per_joint
                 else "robot")
         if sweep.per_joint:
             j = int(str(label).split()[0])
