@@ -234,8 +234,8 @@ def check_table_of_manifest(table: Path, remake: str, manifest: Mapping[str, Any
     another folder is sound too.  A fault campaign's table records the identity of its runs, the manifest that of
     the campaign's: they must be equal.  A life campaign's table is read only while its manifest says it is
     complete (each invocation writes it ``running`` first: the table beside it may be the earlier fleet's until the
-    invocation ends).  Nothing to compare (another file name, no manifest beside the table, no identity recorded):
-    passes; a manifest that fails its checksum is refused.  ``manifest``: the folder's, when already read and
+    invocation ends).  Nothing to compare (another file name, no manifest beside the table, no identity or state
+    recorded): passes; a manifest that fails its checksum is refused.  ``manifest``: the folder's, when already read and
     verified."""
     import pyarrow as pa
     import pyarrow.parquet as pq
@@ -252,7 +252,7 @@ def check_table_of_manifest(table: Path, remake: str, manifest: Mapping[str, Any
         return
     state = manifest.get("state")
     if manifest.get("kind") == "life":
-        if state != "complete":
+        if state is not None and state != "complete":  # a manifest recording no state (made by hand): nothing said
             raise StoredFileError(f"{table}: the life campaign in {table.parent} is not complete (its manifest says "
                                   f"{state!r}: a run into the folder is under way or stopped before its end), so "
                                   f"this table may be an earlier fleet's; {remake}")
