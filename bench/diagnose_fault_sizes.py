@@ -36,13 +36,14 @@ def cases():
         yield "current_sensor_gain", "current_sensor_gain", drl.GAIN_JOINT, {"gain": g}, f"x {g:g}"
 
 
-def sweep(log, overlay, detector, baseline, twin, windows) -> list[dict]:
+def sweep(log, model, detector, baseline, twin, windows) -> list[dict]:
     from ur5fault.health.diagnosis import diagnose
 
     rows = []
     for label, kind, joint, values, size in cases():
         lg = log if kind is None else drl.inject(log, kind, joint, **values)
-        d = diagnose(lg, detector, overlay, twin=twin, windows=windows if kind is None else None, baseline=baseline)
+        d = diagnose(lg, detector, model.params, model.effects, twin=twin, windows=windows if kind is None else None,
+                     baseline=baseline)
         j = drl.OFFSET_JOINT if joint is None else joint
         row = {"log": Path(log.source).name.split(".")[0], "kind": label, "size": size,
                "joint": None if joint is None else joint + 1, **drl.flagged_on_joint(d, j),
@@ -98,18 +99,19 @@ def main(argv=None) -> int:
     from ur5fault.health.diagnostics.saved import load_models
     from ur5fault.util.io import write_json_atomic, write_text_atomic
 
-    detector, out, n_boot = drl.arguments(__doc__, "diagnose_fault_sizes", argv)
+    detector, out, n_boot, params_only = drl.arguments(__doc__, "diagnose_fault_sizes", argv)
     t0 = time.perf_counter()
     window_s = float(load_models(detector)[1]["window_s"])
     nist, nist_tw, nist_base = drl.nist_second_half(detector, window_s)
-    rows = sweep(nist, None, detector, nist_base, *nist_tw)
+    rows = sweep(nist, drl.PACKAGED, detector, nist_base, *nist_tw)
     held = drl.FOLDS[1]
-    overlay = drl.fold_overlay(1, n_boot)  # identified on the first fold: the second is held out
+    overlay = drl.fold_overlay(1, n_boot, params_only)  # identified on the first fold: the second is held out
     logs = {n: drl.read_kufieta(n) for f in drl.FOLDS for n in f}
     tw = {n: drl.twin_and_windows(lg, overlay, window_s) for n, lg in logs.items()}
     for name in held:
         others = [n for n in logs if n != name]
-        base = robot_baseline([logs[n] for n in others], detector, overlay, windows=[tw[n][1] for n in others])
+        base = robot_baseline([logs[n] for n in others], detector, overlay.params, overlay.effects,
+                              windows=[tw[n][1] for n in others])
         rows += sweep(logs[name], overlay, detector, base, *tw[name])
         print(f"{name}: {time.perf_counter() - t0:.0f} s", file=sys.stderr, flush=True)
     write_json_atomic(out / "sizes.json", {"detector": str(detector), "rows": rows, "offsets_A": OFFSETS_A,

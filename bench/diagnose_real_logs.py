@@ -13,7 +13,9 @@ The detector is one ``ur5fault benchmark`` saved from a campaign logged like a U
   as docs/validation.md replays them), each under an overlay of ``ur5fault identify`` fitted on OTHER Kufieta
   runs: two folds (:data:`FOLDS`), each identified jointly on the other fold's runs plus the standstill run
   after its last push (its only constant-target stretch, as bench/cross_robot.py does), never on the run
-  diagnosed.
+  diagnosed. The overlay is identify's whole output, its motor-angle ripples (``motor_harmonic`` effects)
+  included, as ``diagnose --model`` reads it; ``--params-only`` takes its parameters alone (the bench before
+  2026-11-30).
 
 Every log is diagnosed as it is (healthy: a flag is a false alarm) and with one fault written into its measured
 current (tests/real_hidden.py, written independently of the workflow): a current-sensor offset of
@@ -184,14 +186,26 @@ def flagged_on_joint(d: dict, joint: int) -> dict:
             "p_fault_joint_median": float(np.median([x["joints"][joint]["p_fault_joint"] or 0.0 for x in w]))}
 
 
-def twin_and_windows(log, overlay: dict | None, window_s: float):
+@dataclasses.dataclass(frozen=True)
+class Model:
+    """The model a log is diagnosed under: parameter overrides and effects, as ``ur5fault identify --out`` writes
+    them and ``diagnose --model`` reads them (None and (): the packaged model)."""
+
+    params: dict | None = None
+    effects: tuple = ()
+
+
+PACKAGED = Model()
+
+
+def twin_and_windows(log, model: Model, window_s: float):
     from ur5fault.health.diagnosis import log_windows, replay_twin
 
-    twin = replay_twin(log, overlay)
+    twin = replay_twin(log, model.params, model.effects)
     return twin, log_windows(log, window_s, twin)
 
 
-def run_pair(log, overlay: dict | None, detector: Path, spread: pd.DataFrame, out: Path, twin, windows,
+def run_pair(log, model: Model, detector: Path, spread: pd.DataFrame, out: Path, twin, windows,
              baselines: dict) -> list[dict]:
     """The log diagnosed healthy and with each injected fault, without and with each of ``baselines`` (label ->
     baseline map): one row per case and baseline."""
@@ -202,13 +216,14 @@ def run_pair(log, overlay: dict | None, detector: Path, spread: pd.DataFrame, ou
     rows, healthy = [], None
     for _label, kind, joint, values in INJECTIONS:
         lg = log if kind is None else inject(log, kind, joint, **values)
-        d0 = diagnose(lg, detector, overlay, twin=twin, windows=windows if kind is None else None)
+        d0 = diagnose(lg, detector, model.params, model.effects, twin=twin, windows=windows if kind is None else None)
         if kind is None:
             healthy = d0
         for name, baseline in baselines.items():
-            d1 = diagnose(lg, detector, overlay, twin=twin, windows=d0["_windows"], baseline=baseline)
+            d1 = diagnose(lg, detector, model.params, model.effects, twin=twin, windows=d0["_windows"],
+                          baseline=baseline)
             row = {"log": log.source, "injected": kind, "joint": None if joint is None else joint + 1,
-                   "model": "packaged" if overlay is None else "identified on the other fold",
+                   "model": "packaged" if model == PACKAGED else "identified on the other fold",
                    "baseline": name, "baseline_logs": list(baseline.logs), "baseline_windows": baseline.n_windows,
                    "n_windows": d0["n_windows"], "without": summarise(d0, kind, joint),
                    "with": summarise(d1, kind, joint)}
@@ -266,14 +281,16 @@ def nist_second_half(detector: Path, window_s: float):
     nist = read_nist(NIST_LOG)
     halves = [dataclasses.replace(nist.window(a, b), source=f"{nist.source}[{a:g},{b:g})")
               for a, b in ((0.0, NIST_SPLIT_S), (NIST_SPLIT_S, 1e9))]
-    base_tw = twin_and_windows(halves[0], None, window_s)
-    return (halves[1], twin_and_windows(halves[1], None, window_s),
+    base_tw = twin_and_windows(halves[0], PACKAGED, window_s)
+    return (halves[1], twin_and_windows(halves[1], PACKAGED, window_s),
             robot_baseline([halves[0]], detector, windows=[base_tw[1]]))
 
 
-def fold_overlay(k: int, n_boot: int) -> dict:
-    """The overlay the runs of fold ``k`` are diagnosed under: ``ur5fault identify`` on the other fold's runs and
-    the standstill run's rest."""
+def fold_overlay(k: int, n_boot: int, params_only: bool = False) -> Model:
+    """The model the runs of fold ``k`` are diagnosed under: the overlay of ``ur5fault identify`` on the other fold's
+    runs and the standstill run's rest, its motor-angle ripples (``motor_harmonic`` effects) included as
+    ``diagnose --model`` reads it (``params_only``: its parameters alone, as this bench did before 2026-11-30)."""
+    from ur5fault.config import parse_effects
     from ur5fault.identify import identify
     from ur5fault.sim.params import load_params
 
@@ -282,17 +299,23 @@ def fold_overlay(k: int, n_boot: int) -> dict:
     print(f"identifying on {', '.join(other)}", file=sys.stderr, flush=True)
     ident = identify([read_kufieta(n) for n in other] + [read_kufieta(REST_RUN).window(REST_FROM_S, 60.0)],
                      params, sweep=False, n_boot=n_boot)
-    return ident.overlay(params)["params"]
+    overlay = ident.overlay(params)
+    effects = () if params_only else parse_effects(overlay.get("effects"), "identify's overlay: effects")
+    return Model(overlay["params"], tuple(effects))
 
 
-def arguments(doc: str, out_name: str, argv=None) -> tuple[Path, Path, int]:
-    """The detector folder, the output folder and the identification's bootstrap count of a real-log bench."""
+def arguments(doc: str, out_name: str, argv=None) -> tuple[Path, Path, int, bool]:
+    """The detector folder, the output folder, the identification's bootstrap count of a real-log bench and whether
+    the Kufieta runs take identify's parameters only."""
     ap = argparse.ArgumentParser(description=doc.splitlines()[0])
     ap.add_argument("--detector", default=str(REPO / "results" / "diagnostics_urlog" / "benchmark"))
     ap.add_argument("--out", default=str(REPO / "results" / out_name))
     ap.add_argument("--n-boot", type=int, default=50, help="bootstrap resamples of the identification")
+    ap.add_argument("--params-only", action="store_true",
+                    help="diagnose the Kufieta runs under identify's parameters without its motor-angle ripples "
+                         "(the bench before 2026-11-30)")
     args = ap.parse_args(argv)
-    return Path(args.detector), Path(args.out), args.n_boot
+    return Path(args.detector), Path(args.out), args.n_boot, args.params_only
 
 
 def main(argv=None) -> int:
@@ -300,24 +323,25 @@ def main(argv=None) -> int:
     from ur5fault.health.diagnostics.saved import load_models
     from ur5fault.util.io import write_json_atomic, write_text_atomic
 
-    detector, out, n_boot = arguments(__doc__, "diagnose_real_logs", argv)
+    detector, out, n_boot, params_only = arguments(__doc__, "diagnose_real_logs", argv)
     t0 = time.perf_counter()
     _, schema = load_models(detector)
     window_s = float(schema["window_s"])
     spread = healthy_spread(detector, [c["name"] for c in schema["inputs"]])
     nist, nist_tw, nist_base = nist_second_half(detector, window_s)
-    rows = run_pair(nist, None, detector, spread, out, *nist_tw, {"first half": nist_base})
+    rows = run_pair(nist, PACKAGED, detector, spread, out, *nist_tw, {"first half": nist_base})
     overlays = {}
     for k, fold in enumerate(FOLDS):
-        overlays[k] = fold_overlay(k, n_boot)
+        overlays[k] = fold_overlay(k, n_boot, params_only)
         # every undisturbed run replayed under this fold's overlay: the fold's own (unseen by the overlay) and
         # the other fold's (the overlay was identified on them)
         logs = {n: read_kufieta(n) for f in FOLDS for n in f}
         tw = {n: twin_and_windows(lg, overlays[k], window_s) for n, lg in logs.items()}
         for name in fold:
             choice = {BASE_FOLD: [n for n in fold if n != name], BASE_ALL: [n for n in logs if n != name]}
-            bases = {label: robot_baseline([logs[n] for n in names], detector, overlays[k],
-                                           windows=[tw[n][1] for n in names]) for label, names in choice.items()}
+            bases = {label: robot_baseline([logs[n] for n in names], detector, overlays[k].params,
+                                           overlays[k].effects, windows=[tw[n][1] for n in names])
+                     for label, names in choice.items()}
             rows += run_pair(logs[name], overlays[k], detector, spread, out, *tw[name], bases)
     summary = {"detector": str(detector), "feature_set": schema.get("feature_set"),
                "threshold_5pct_false_alarms": schema["joint_kind_threshold_5pct_false_alarms"],
