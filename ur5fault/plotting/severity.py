@@ -46,12 +46,13 @@ def severity_figure(sweep: EffectSweep, feature: str = "tcp_dev_max_mm", *, heal
     table = severity_table(sweep, feature) * scale
     values = joint_feature(sweep.rows, feature) * scale
     generic = _is_generic(sweep.rows, feature)
+    # a sampled campaign's sizes are continuous, one run each on its own motion and conditions: a line through them
+    # in size order zig-zags between motions, so its points stand alone (the effect's distinct sizes, as campaign
+    # run counts them, not one joint's)
+    style = "o" if table.shape[1] > MANY_SIZES else "o-"
     for k, (label, line) in enumerate(table.iterrows()):
         color = f"C{k % 10}"
         line = line.dropna()
-        # a sampled campaign's sizes are continuous, one run each on its own motion and conditions: a line through
-        # them in size order zig-zags between motions, so its points stand alone
-        style = "o" if len(line) > MANY_SIZES else "o-"
         ax.plot(line.index, line.to_numpy(), style, color=color, ms=4, lw=1.2, label=f"J{label}" if sweep.per_joint
                 else "robot")
         if sweep.per_joint:
