@@ -104,4 +104,4 @@ def test_a_criterion_the_unworn_robot_meets_is_said_and_not_benchmarked(tmp_path
     assert main(["prognose", str(tmp_path / "fleet"), "--out", str(tmp_path / "pg")]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "0 failed training and 0 failed test units with a degradation path" in err \
-        and "(3 units met the failure criterion tcp_track_max_mm >= 0.01 at their first inspection, unworn" in err, err
+        and "; 3 units met the failure criterion tcp_track_max_mm >= 0.01 at their first inspection, unworn" in err, err

@@ -105,18 +105,18 @@ def predict(df: pd.DataFrame, failure: Failure, seed: int = 0, twin: TwinSetup |
 
     Returns the prediction tables per estimator, the fitted constants, and the health index of every row.
     """
-    failed = df[~df["censored"]]
+    # a unit failed at its first inspection (unworn) shows no degradation to fit or predict: left out of both
+    unworn = set(df.loc[~df["censored"] & (df["eol_cycles"] == 0), "unit_id"])
+    failed = df[~df["censored"] & ~df["unit_id"].isin(unworn)]
     train, test = failed[failed["split"] == "train"], failed[failed["split"] == "test"]
-    # a unit failed at its first inspection (unworn) shows no degradation to fit or predict
-    unworn = set(failed.loc[failed["eol_cycles"] == 0, "unit_id"])
-    n_tr = train.loc[~train["unit_id"].isin(unworn), "unit_id"].nunique()
-    n_te = test.loc[~test["unit_id"].isin(unworn), "unit_id"].nunique()
+    n_tr, n_te = train["unit_id"].nunique(), test["unit_id"].nunique()
     if n_tr < 3 or n_te < 1:
         raise ConfigFileError(
             f"{n_tr} failed training and {n_te} failed test units with a degradation path: need at least 3 and 1 "
-            + (f"({len(unworn)} units met the failure criterion {failure.feature} >= {failure.threshold:g} at their "
-               "first inspection, unworn: the healthy robot meets it on their task; raise life.failure.threshold)"
-               if unworn else "(a larger fleet or a longer max_cycles)"))
+            "(a larger fleet or a longer max_cycles"
+            + (f"; {len(unworn)} units met the failure criterion {failure.feature} >= {failure.threshold:g} at their "
+               "first inspection, unworn: the healthy robot meets it on their task, raise life.failure.threshold"
+               if unworn else "") + ")")
     hi_model = TaskHealthIndex(failure.feature, failure.threshold).fit(train)
     hi_all = hi_model.transform(df)
     hi_of = pd.Series(hi_all, index=df.index)
