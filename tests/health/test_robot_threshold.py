@@ -118,3 +118,18 @@ def test_with_enough_windows_the_joint_at_the_conformal_rank_is_named(monkeypatc
     assert t.score < max(t.held_out_scores)
     assert t.set_by_joint == 3 and t.held_out_max_by_joint[3] > t.score
     assert set_by_sentence(t.summary()).startswith(f"the threshold {t.score:.3f} is wrist_1_joint's score")
+
+
+def test_the_report_names_the_joint_only_where_the_robots_threshold_is_the_bar():
+    """The report's baseline sentence says which joint's window the robot's threshold is where that threshold is
+    the one windows are flagged above; where the training runs' is higher, it does not (as the notes)."""
+    from ur5fault.health.diagnosis.report import _baseline
+
+    rules = {r: {"n_inputs": 1} for r in ("scaled", "shifted", "shifted_zero_spread", "shifted_few_windows",
+                                          "left_as_measured", "condition")}
+    t = {"n_held_out_windows": 4, "groups": ["a", "b"], "rank": 5, "score": 0.97, "false_alarm_bound": 0.2,
+         "held_out_max_by_joint": {"wrist_2_joint": 0.97, "wrist_1_joint": 0.1}, "set_by_joint": "wrist_2_joint"}
+    b = {"rules": rules, "robot_threshold": t, "n_windows": 4, "logs": ["a", "b"], "mapping": "m", "reference": "r"}
+    said = "the threshold 0.970 is wrist_2_joint's score in a held-out healthy window"
+    assert said in _baseline(b, robot_bar=True) and "wrist_1_joint 0.10" in _baseline(b, robot_bar=True)
+    assert said not in _baseline(b, robot_bar=False) and "The robot's own threshold" in _baseline(b, False)
