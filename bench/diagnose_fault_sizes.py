@@ -115,6 +115,8 @@ def main(argv=None) -> int:
         rows += sweep(logs[name], overlay, detector, base, *tw[name])
         print(f"{name}: {time.perf_counter() - t0:.0f} s", file=sys.stderr, flush=True)
     write_json_atomic(out / "sizes.json", {"detector": str(detector), "rows": rows, "offsets_A": OFFSETS_A,
+                                           "kufieta_model": "identify's parameters only" if params_only else
+                                           "identify's whole overlay",
                                            "gains": GAINS, "wall_s": time.perf_counter() - t0})
     md = table(rows)
     write_text_atomic(out / "sizes.md", md)

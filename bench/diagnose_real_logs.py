@@ -309,13 +309,15 @@ def arguments(doc: str, out_name: str, argv=None) -> tuple[Path, Path, int, bool
     the Kufieta runs take identify's parameters only."""
     ap = argparse.ArgumentParser(description=doc.splitlines()[0])
     ap.add_argument("--detector", default=str(REPO / "results" / "diagnostics_urlog" / "benchmark"))
-    ap.add_argument("--out", default=str(REPO / "results" / out_name))
+    ap.add_argument("--out", help=f"default results/{out_name} (with --params-only: results/{out_name}_params_only)")
     ap.add_argument("--n-boot", type=int, default=50, help="bootstrap resamples of the identification")
     ap.add_argument("--params-only", action="store_true",
                     help="diagnose the Kufieta runs under identify's parameters without its motor-angle ripples "
                          "(the bench before 2026-11-30)")
     args = ap.parse_args(argv)
-    return Path(args.detector), Path(args.out), args.n_boot, args.params_only
+    out = args.out if args.out is not None else str(REPO / "results" / (out_name + ("_params_only" if
+                                                                                   args.params_only else "")))
+    return Path(args.detector), Path(out), args.n_boot, args.params_only
 
 
 def main(argv=None) -> int:
@@ -349,6 +351,7 @@ def main(argv=None) -> int:
                "run_level_threshold_5pct_false_alarms": schema["detector_threshold_5pct_false_alarms"],
                "calibration": schema.get("calibration", {}) and schema["calibration"].get("method"),
                "folds": FOLDS, "nist_split_s": NIST_SPLIT_S, "rows": rows, "overlays": overlays,
+               "kufieta_model": "identify's parameters only" if params_only else "identify's whole overlay",
                "wall_s": time.perf_counter() - t0}
     write_json_atomic(out / "summary.json", json.loads(json.dumps(summary, default=_jsonable)))
     md = table_baseline(rows)

@@ -6,10 +6,10 @@ target_current``) on the same samples (docs/validation.md, "Across robots").
     python bench/nist_end_to_end.py [--jobs 2] [--out results/nist_end_to_end]
 
 The identification sees only the samples the workflow fits on (``MeasuredLog.window`` of the first
-``FIT_FRACTION`` of the log's time, as the workflow splits it), so the held-out part is never fitted by either
-step. Caveat: the packaged ``[nist]`` parameters the identification starts from were identified on the whole
-log. Writes ``OUT/identified.yaml``, the workflow's folder ``OUT/discrepancy`` and ``OUT/ratios.json``; prints a
-Markdown table.
+``FIT_FRACTION`` of the log's time, as the workflow splits it, to within one 8 ms sample at the boundary), so the
+held-out part is not fitted by either step. Caveat: the packaged ``[nist]`` parameters the identification starts
+from were identified on the whole log. Writes ``OUT/identified.yaml``, the workflow's folder ``OUT/discrepancy``
+and ``OUT/ratios.json``; prints a Markdown table.
 """
 
 from __future__ import annotations
