@@ -286,9 +286,4 @@ def read_consolidated(path: Path) -> tuple[Any, str | None, dict[str, Any] | Non
         table = pq.read_table(path)
     except (*DAMAGED_PARQUET_ERRORS, pa.ArrowException) as exc:
         return None, None, {"state": "bad", "detail": f"unreadable as Parquet ({' '.join(str(exc).split())[:120]})"}
-    raw = (table.schema.metadata or {}).get(b"ur5fault")
-    try:
-        recorded = json.loads(raw).get("campaign_identity") if raw else None
-    except (ValueError, AttributeError):
-        recorded = None
-    return table, recorded, None
+    return table, (_read_meta(table.schema) or {}).get("campaign_identity"), None

@@ -4,7 +4,6 @@ at every inspection of the held-out units before their failure, judge the goals,
 
 from __future__ import annotations
 
-import json
 import time
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -12,11 +11,11 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pandas as pd
 
-from ...campaign.store import check_table_of_manifest
+from ...campaign.store import check_table_of_manifest, read_manifest
 from ...errors import ConfigFileError
 from ...util.io import (
+    StoredFileError,
     check_new_output,
-    check_stored,
     read_parquet_stored,
     remove_stale_temporaries,
     write_figure_atomic,
@@ -62,14 +61,9 @@ def load_inspections(folder: Path) -> tuple[pd.DataFrame, dict[str, Any]]:
     missing = [c for c in NEEDED if c not in df.columns]
     if missing:
         raise ConfigFileError(f"{path}: column {missing[0]!r} missing; not the inspections of a life campaign")
-    mpath = Path(folder) / "manifest.json"
-    if mpath.exists():  # a manifest that changed on disk would give a wrong wear law and inputs: refused
-        check_stored(mpath, remake)
-    try:
-        manifest = json.loads(mpath.read_text())
-    except (OSError, ValueError):
-        manifest = {}
-    manifest = manifest if isinstance(manifest, dict) else {}
+    manifest, damaged = read_manifest(Path(folder))
+    if damaged:  # a manifest that changed on disk would give a wrong wear law and inputs: refused
+        raise StoredFileError(f"{Path(folder) / 'manifest.json'}: {damaged}; {remake}")
     check_table_of_manifest(path, remake, manifest)  # an earlier fleet's table left by a rerun that stopped
     return df, manifest
 
