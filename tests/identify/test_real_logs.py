@@ -122,3 +122,38 @@ def test_unwrap_leaves_a_continuous_log_alone():
     bad = q.copy()
     bad[-1, 2] = 12.0  # a bad value, not a fold (spans more than a turn): left for the range check to name
     assert unwrap_joints(bad)[1] == []
+
+
+def _kufieta_log(name: str):
+    src = KUFIETA / f"{name}.csv.gz"
+    if not src.exists():
+        pytest.skip(f"no Kufieta log at {src}")
+    return read_log(src, "rtde", payload_kg=0.0, tcp_offset_m=(0, 0, 0))
+
+
+def test_a_stiffness_the_starts_do_not_give_is_the_models_value_marked():
+    """The standstill run is pushed by hand: on wrist_3 its starts give no positive torque change over
+    displacement, and the stiffness was written as NaN (with the sweep, identify then stopped on its own overlay,
+    blaming the packaged ur5_drive.yaml). It is now not identifiable there and keeps the model's value."""
+    from ur5fault.identify import identify
+
+    p = load_params()
+    ident = identify([_kufieta_log("Movement_No10_Standstill_WDist"), _kufieta_log("Movement_No8_Singularity_Free_1")],
+                     sweep=False, n_boot=20)
+    est = ident.get("friction.presliding_stiffness_Nm_per_rad", 5)
+    assert not est.identifiable and "no positive torque change" in est.note
+    written = ident.overlay(p)["params"]["friction"]["presliding_stiffness_Nm_per_rad"]
+    assert np.all(np.isfinite(written)) and written[5] == p.friction.presliding_stiffness_Nm_per_rad[5]
+    load_params(overrides=ident.overlay(p)["params"], where="identified")  # every value within its range
+
+
+def test_a_sweep_over_no_moving_joint_keeps_the_bandwidth_marked():
+    """The standstill run moves no joint: the bandwidth sweep scored every candidate 0 and wrote the lowest, 1 Hz,
+    with the interval [1, 1], as if measured. Now not identifiable, the model's value kept, and nothing replayed."""
+    from ur5fault.identify import identify
+
+    p = load_params()
+    ident = identify(_kufieta_log("Movement_No10_Standstill_WDist"), sweep=True, n_boot=20)
+    est = ident.get("controller.position_bw_Hz", None)
+    assert not est.identifiable and est.value == float(np.mean(p.controller.position_bw_Hz))
+    assert "nothing for the sweep to score" in est.note and ident.sweep is None

@@ -25,6 +25,8 @@ from .report import Identification, overlay_params
 from .signals import derive_all
 from .stats import BLOCK_S, N_BOOT, Estimate, block_indices, bootstrap, fallback, interval
 
+PRESLIDING_KEY = "friction.presliding_stiffness_Nm_per_rad"
+
 
 def identify(log: MeasuredLog | Sequence[MeasuredLog], params: RobotParams | None = None, *,
              model_path: str | Path | None = None,
@@ -36,9 +38,10 @@ def identify(log: MeasuredLog | Sequence[MeasuredLog], params: RobotParams | Non
     Args:
         log: a measured log (:func:`ur5fault.logs.read_log`) with its payload and tool offset, or several
             logs of one robot identified jointly (every regression over all their samples; a rest or a
-            start from rest never spans two logs; the bandwidth sweep replays the first). A log whose payload
-            is unknown (``payload_kg`` ``None``) has it fitted as its own nuisance (:mod:`.payload`), reported in
-            ``Identification.payloads``, never in the overlay.
+            start from rest never spans two logs; the bandwidth sweep replays the first whose first
+            ``sweep_window_s`` moves a joint, and where none does the bandwidth is not identifiable). A log whose
+            payload is unknown (``payload_kg`` ``None``) has it fitted as its own nuisance (:mod:`.payload`),
+            reported in ``Identification.payloads``, never in the overlay.
         params: the model whose assumptions are kept (rotor inertia, gear ratio, viscous temperature
             law, the fallbacks); default the packaged ``ur5_drive.yaml``.
         model_path: MJCF for the inverse dynamics (default: the simulator's).
@@ -55,7 +58,6 @@ def identify(log: MeasuredLog | Sequence[MeasuredLog], params: RobotParams | Non
     logs = [log] if isinstance(log, MeasuredLog) else list(log)
     if not logs:
         raise ParameterError("identify needs at least one log")
-    log = logs[0]  # the one the bandwidth sweep replays
     p = params if params is not None else load_params()
     say = progress or (lambda _msg: None)
     say("inverse dynamics of the log's motion" if len(logs) == 1 else f"inverse dynamics of {len(logs)} logs")
@@ -83,7 +85,6 @@ def identify(log: MeasuredLog | Sequence[MeasuredLog], params: RobotParams | Non
             theta, fit.payload.columns_Nm, axes=1), payload_columns_Nm=None, payload_owner=())
         logs = [dataclasses.replace(lg, payload_kg=r.replayed_kg, tcp_offset_m=r.replayed_com_m)
                 for lg, r in zip(logs, payloads)]
-        log = logs[0]
     est += _torque_constant(fit, full, lo, hi, p)
     fit_k = fit  # the joint fit decides which torque constants were identified
     fit = friction.FrictionFit(sig, p) if payloads else fit_k  # the later steps: at the fitted payloads
@@ -109,7 +110,7 @@ def identify(log: MeasuredLog | Sequence[MeasuredLog], params: RobotParams | Non
 
     say("breakaway and presliding stiffness (starts from rest)")
     q_noise = np.array([e.value for e in noise if e.key == "sensors.resolver_noise_rad"])
-    est += _breakaway(sig, fit, full, coulomb_A, q_noise, n_boot, seed)
+    est += _breakaway(sig, fit, full, coulomb_A, q_noise, n_boot, seed, _presliding_prior(p))
 
     say("tracking lag")
     lags, lag_ok = loop.tracking_lag(sig, n_boot, seed)
@@ -119,10 +120,18 @@ def identify(log: MeasuredLog | Sequence[MeasuredLog], params: RobotParams | Non
 
     result = Identification(source, duration_s, tuple(est), None)
     bw_prior = float(np.mean(p.controller.position_bw_Hz))
-    if sweep:
-        sw = loop.bandwidth_sweep(log, overlay_params(result, p), lag, lag_ok, ff_prior, bandwidths_Hz,
+    # the sweep replays the first log whose first sweep_window_s moves a joint (none: it cannot tell)
+    sweep_log = next((lg for lg in logs if loop.sweep_joints(lg, sweep_window_s)[1]), None)
+    if sweep and sweep_log is None:
+        sw = None
+        est.append(fallback("controller.position_bw_Hz", None, bw_prior, "kept the model's value",
+                            f"no joint's target reaches {loop.MIN_TOP_SPEED_RAD_S:g} rad/s within the first "
+                            f"{sweep_window_s:g} s of any log: nothing for the sweep to score"))
+        bw = bw_prior
+    elif sweep:
+        sw = loop.bandwidth_sweep(sweep_log, overlay_params(result, p), lag, lag_ok, ff_prior, bandwidths_Hz,
                                   sweep_window_s, n_boot, seed, progress=say)
-        est.append(loop.sweep_estimate(sw, log.source))
+        est.append(loop.sweep_estimate(sw, sweep_log.source))
         bw = sw.best_Hz
     else:
         sw = None
@@ -220,15 +229,29 @@ def _why_not(fit: friction.FrictionFit, j: int) -> str:
     return f"J{j + 1}: " + "; ".join(failed)
 
 
+def _presliding_prior(p: RobotParams) -> NDArray:
+    """The model's presliding stiffness per joint [N*m/rad] (what a joint keeps where a log cannot give it)."""
+    return np.broadcast_to(np.asarray(p.friction.presliding_stiffness_Nm_per_rad, float), (N_JOINTS,))
+
+
 def _breakaway(sig, fit: friction.FrictionFit, full: NDArray, coulomb_A: NDArray, q_noise: NDArray, n_boot: int,
-               seed: int) -> list[Estimate]:
+               seed: int, stiffness_prior: NDArray) -> list[Estimate]:
     """Breakaway current and presliding stiffness per joint.  Where the starts do not show a breakaway
     (its interval reaches zero), the breakaway is the joint's Coulomb level times the breakaway-to-Coulomb
-    ratio measured on the joints where they do, and the stiffness is not reported."""
+    ratio measured on the joints where they do, and the stiffness is not reported.  A stiffness the starts do
+    not give as a positive number (the torque rose while the joint moved back: a push by hand) is not
+    identifiable there and keeps the model's value (``stiffness_prior``)."""
     found = stickslip.identify_stickslip(sig, full[0], full[3], q_noise, np.flatnonzero(fit.ok), n_boot, seed)
     brk = {e.joint: e for e in found if e.key == "friction.breakaway_A"}
     good = {j for j, e in brk.items() if e.lo > 0}
-    out = [e for e in found if e.joint in good]
+    out = []
+    for e in found:
+        if e.joint not in good:
+            continue
+        if e.key == PRESLIDING_KEY and not (np.isfinite(e.value) and e.value > 0.0):
+            e = fallback(PRESLIDING_KEY, e.joint, stiffness_prior[e.joint], "kept the model's value",
+                         f"the starts of J{e.joint + 1} give no positive torque change over joint displacement")
+        out.append(e)
     ratio = float(np.median([brk[j].value / coulomb_A[j] for j in good])) if good else 1.0
     src = ", ".join(f"J{j + 1}" for j in sorted(good)) or "no joint (ratio 1 assumed)"
     for j in range(N_JOINTS):

@@ -95,6 +95,16 @@ def _score(sq_sim: NDArray, sq_meas: NDArray, idx: NDArray, joints: Sequence[int
     return np.sum(np.log(ratio[:, list(joints)]) ** 2, axis=1)
 
 
+def sweep_joints(log: MeasuredLog, window_s: float = SWEEP_WINDOW_S) -> tuple[int, tuple[int, ...]]:
+    """The samples the sweep replays (the log's first ``window_s``, at most the whole log) and the joints it scores
+    there: those whose target reaches ``MIN_TOP_SPEED_RAD_S`` (none: the sweep cannot tell the bandwidths
+    apart)."""
+    n = min(int(round(window_s / log.period_s)), log.t_s.size - 1)
+    speed = np.abs(np.gradient(log.q_target_rad[: n + 1], log.period_s, axis=0)).max(axis=0) if n > 1 else \
+        np.zeros(log.q_target_rad.shape[1])
+    return n, tuple(int(j) for j in np.flatnonzero(speed >= MIN_TOP_SPEED_RAD_S))
+
+
 def bandwidth_sweep(log: MeasuredLog, base_overrides: dict, lag_s: NDArray, lag_ok: NDArray,
                     ff_fallback: NDArray, bandwidths_Hz: Sequence[float] = BANDWIDTHS_HZ,
                     window_s: float = SWEEP_WINDOW_S, n_boot: int = N_BOOT, seed: int = 0,
@@ -108,11 +118,8 @@ def bandwidth_sweep(log: MeasuredLog, base_overrides: dict, lag_s: NDArray, lag_
         lag_s, lag_ok: the identified lag per joint and where it is identifiable.
         ff_fallback: feed-forward of the joints without an identifiable lag.
     """
-    n = int(round(window_s / log.period_s))
-    n = min(n, log.t_s.size - 1)
+    n, joints = sweep_joints(log, window_s)
     meas = log.q_target_rad[1 : n + 1] - log.q_actual_rad[1 : n + 1]
-    speed = np.abs(np.gradient(log.q_target_rad[: n + 1], log.period_s, axis=0)).max(axis=0)
-    joints = tuple(int(j) for j in np.flatnonzero(speed >= MIN_TOP_SPEED_RAD_S))
     sq_sim = []
     for f in bandwidths_Hz:
         if progress is not None:

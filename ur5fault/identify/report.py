@@ -205,6 +205,7 @@ def not_written(ident: Identification) -> list[str]:
 
 def _presliding(ident: Identification, params: RobotParams) -> NDArray:
     """Identified joints take their estimate; the others keep the model's value (its stated assumption)."""
-    vals = {e.joint: e.value for e in ident.estimates if e.key == "friction.presliding_stiffness_Nm_per_rad"}
+    vals = {e.joint: e.value for e in ident.estimates
+            if e.key == "friction.presliding_stiffness_Nm_per_rad" and e.identifiable}
     prior = getattr(params.friction, PRESLIDING_FIELD)
     return np.array([vals.get(j, prior[j]) for j in range(N_JOINTS)])
