@@ -25,8 +25,8 @@ def register(sub) -> None:
     d.add_argument("--no-sweep", action="store_true",
                    help="skip the position-loop bandwidth sweep (it replays the log once per candidate)")
     d.add_argument("--sweep-window-s", type=float,
-                   help=f"the part of the log the sweep replays, from its start; of several logs, the first "
-                        f"(default {SWEEP_WINDOW_S:g})")
+                   help=f"the part of the log the sweep replays, from its start; of several logs, the first whose "
+                        f"part moves a joint (default {SWEEP_WINDOW_S:g})")
     d.add_argument("--bootstrap", type=int, default=N_BOOT,
                    help=f"resamples per interval, 20..{MAX_BOOT} (default {N_BOOT})")
     d.add_argument("--quiet", action="store_true", help="no progress messages")
