@@ -157,3 +157,25 @@ def test_a_sweep_over_no_moving_joint_keeps_the_bandwidth_marked():
     est = ident.get("controller.position_bw_Hz", None)
     assert not est.identifiable and est.value == float(np.mean(p.controller.position_bw_Hz))
     assert "nothing for the sweep to score" in est.note and ident.sweep is None
+
+
+def test_temperatures_in_kelvin_are_named(tmp_path):
+    """Joint temperatures of 308 (kelvin) were taken as degC: identify wrote a viscous friction of 2337 N*m*s/rad
+    that every other command refused, and the replays clipped them to 120 degC without a word."""
+    def kelvin(df):
+        for j in range(6):
+            df[f"joint_temperatures_{j}"] = 308.15
+        return df
+
+    log = _kufieta(tmp_path, "Movement_No8_Singularity_Free_1.csv.gz", edit=kelvin)
+    with pytest.raises(LogFormatError, match=r"joint 1 has a median of 308.1 degC.*look like kelvin \(35.0 degC\)"):
+        read_log(log, "rtde", payload_kg=0.0, tcp_offset_m=(0, 0, 0))
+
+    def celsius(df):
+        for j in range(6):
+            df[f"joint_temperatures_{j}"] = 35.0
+        return df
+
+    ok = read_log(_kufieta(tmp_path, "Movement_No8_Singularity_Free_1.csv.gz", edit=celsius), "rtde",
+                  payload_kg=0.0, tcp_offset_m=(0, 0, 0))
+    assert ok.temperature_C is not None and np.all(ok.temperature_C == 35.0)

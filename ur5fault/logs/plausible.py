@@ -20,6 +20,10 @@ Limits and their reasons:
   assumed for ``sensors.current_lsb_A`` in ``ur5_drive.yaml``): a reading beyond it is a unit mistake,
   and one that fits once divided by 1000 is named as milliamperes (a current in mA once reached the
   discrepancy report as 3300 A "unexplained");
+- joint temperatures, where logged: each joint's median within the model's range for
+  ``joint_temperature_C`` (:func:`temperature_range_C`, -20..120 degC), one in 253..393 named as kelvin (a
+  log in kelvin once gave ``identify`` a viscous friction of 2337 N*m*s/rad, which every other command refused,
+  and was silently clipped to 120 degC by the replays);
 - units: where a log carries joint velocities, the time derivative of the positions (as declared,
   converted to radians) must agree with them; a factor of 180/pi = 57.3 either way is named as a
   degrees/radians mix-up, any other factor outside [0.5, 2] as a disagreement.
@@ -170,3 +174,27 @@ def check_current_units(src: str, arrays: Mapping[str, NDArray | None]) -> None:
                 else "wrong column or unit")
         raise LogFormatError(f"{src}: {name} of joint {j + 1} reaches {peak:.4g} A, beyond the +-{CURRENT_RANGE_A:g} A "
                              f"a UR5 current sensor reads: {hint}")
+
+
+def temperature_range_C() -> tuple[float, float]:
+    """The model's range of ``joint_temperature_C`` [degC] (``sim/params.py``): what a log's temperatures must lie
+    in, and what a replay clips single readings to."""
+    from ..sim.params import RobotParams
+
+    meta = next(f.metadata for f in dataclasses.fields(RobotParams) if f.name == "joint_temperature_C")
+    return float(meta["lo"]), float(meta["hi"])
+
+
+def check_temperature_units(src: str, temperature_C: NDArray | None) -> None:
+    """Each joint's median temperature within :func:`temperature_range_C`; kelvin named as such."""
+    if temperature_C is None or temperature_C.size == 0:
+        return
+    lo, hi = temperature_range_C()
+    median = np.nanmedian(temperature_C, axis=0)
+    for j, m in enumerate(median):
+        if np.isnan(m) or lo <= m <= hi:  # a joint never read is the optional columns' business (regular.py)
+            continue
+        hint = (f"they look like kelvin ({m - 273.15:.1f} degC); give the log in degC" if 253.0 <= m <= 393.0
+                else "wrong column or unit")
+        raise LogFormatError(f"{src}: the temperature of joint {j + 1} has a median of {m:.4g} degC, outside the "
+                             f"{lo:g}..{hi:g} degC the model takes: {hint}")

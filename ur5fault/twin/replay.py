@@ -25,14 +25,16 @@ from numpy.typing import NDArray
 
 from ..errors import ParameterError
 from ..logs import MeasuredLog
+from ..logs.plausible import temperature_range_C
 from ..sim.axes import JOINT_NAMES
 from ..sim.effects import EffectSpec
 from ..sim.engine import RunSpec, Simulator
 from ..sim.params import RobotParams, deep_merge, load_params
 from ..sim.terms import sensor_temperature_term
 
-#: joint temperatures outside this range are clipped before they reach the model [degC] (the params' range)
-TEMPERATURE_RANGE_C = (-20.0, 120.0)
+#: joint temperatures outside this range are clipped before they reach the model [degC] (the params' range; a log
+#: whose median is outside it is refused by its reader)
+TEMPERATURE_RANGE_C = temperature_range_C()
 #: every signal a replay computes, in order; a replay keeps the first two, and the third when the log has
 #: motor encoders
 SIGNALS = ("current_A", "position_rad", "mismatch_rad")
