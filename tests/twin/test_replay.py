@@ -39,8 +39,19 @@ def test_log_overrides_carry_the_tool_and_clip_the_temperature():
     assert over["joint_temperature_C"] == [120.0] * 6  # the parameters' upper bound
     assert log_overrides(_log(temperature_C=-40.0))["joint_temperature_C"] == [-20.0] * 6
     p = replay_params(_log(temperature_C=35.0), {"joint_temperature_C": [40.0] * 6})
-    assert list(p.joint_temperature_C) == [40.0] * 6  # the overlay wins over the log
+    assert list(p.joint_temperature_C) == [35.0] * 6  # the log's measurement wins over the robot's model
     assert tuple(p.tcp_offset_m) == (0.0, 0.0, 0.12)
+    unlogged = dataclasses.replace(_log(), temperature_C=None)
+    assert list(replay_params(unlogged, {"joint_temperature_C": [40.0] * 6}).joint_temperature_C) == [40.0] * 6
+
+
+def test_a_model_overlay_with_another_tool_is_refused():
+    """An overlay's tcp_offset_m replaced the log's stated tool in the replay while the report named the stated
+    one, and was carried into the written model.yaml; the same tool is accepted."""
+    with pytest.raises(ParameterError, match=r"tcp_offset_m = \[0.0, 0.0, 0.6\] m, but synthetic's tool offset is "
+                                             r"\[0.0, 0.0, 0.12\] m"):
+        replay_params(_log(), {"tcp_offset_m": [0.0, 0.0, 0.6]})
+    assert tuple(replay_params(_log(), {"tcp_offset_m": [0.0, 0.0, 0.12]}).tcp_offset_m) == (0.0, 0.0, 0.12)
 
 
 def test_replay_equals_the_plain_simulator_run():

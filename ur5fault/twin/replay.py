@@ -50,9 +50,19 @@ def log_overrides(log: MeasuredLog) -> dict:
 
 
 def replay_params(log: MeasuredLog, params_overrides: dict | None = None) -> RobotParams:
-    """The packaged parameters under the log's own overrides (:func:`log_overrides`), then
-    ``params_overrides`` (which win)."""
-    return load_params(overrides=deep_merge(log_overrides(log), dict(params_overrides or {})))
+    """The packaged parameters under ``params_overrides`` (the robot's model), then the log's own overrides
+    (:func:`log_overrides`), which win: the tool and the measured temperatures belong to the log, not to the robot
+    (an overlay's ``joint_temperature_C`` stands for a log that logs none). An overlay whose tool offset differs
+    from the log's is refused: it would replay another tool than the one stated while the report names the log's."""
+    over = dict(params_overrides or {})
+    if "tcp_offset_m" in over:
+        tool = load_params(overrides={"tcp_offset_m": over["tcp_offset_m"]}, where="the model overlay: params")
+        if not np.allclose(tool.tcp_offset_m, log.tcp_offset_m, rtol=0.0, atol=1e-9):
+            raise ParameterError(f"the model overlay sets params.tcp_offset_m = {list(tool.tcp_offset_m)} m, but "
+                                 f"{log.source}'s tool offset is {list(log.tcp_offset_m)} m: the tool is the log's "
+                                 "(--tcp-offset-m, a manifest's tcp_offset_m or the log's layout), not the robot's "
+                                 "model; leave it out of the overlay")
+    return load_params(overrides=deep_merge(over, log_overrides(log)))
 
 
 @dataclasses.dataclass(frozen=True)
