@@ -3,7 +3,6 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -12,7 +11,7 @@ import numpy as np
 from ..sim.axes import JOINT_NAMES, N_JOINTS
 from ..sim.effects import REGISTRY
 from ..twin.residuals import UNEXPLAINED_FACTOR
-from ..util.io import remove_stale_temporaries, remove_unwritten, write_figure_atomic, write_text_atomic
+from ..util.io import json_text, remove_stale_temporaries, remove_unwritten, write_figure_atomic, write_text_atomic
 from .candidates import LibraryCandidate, TermCandidate
 from .speed import bare_mj_step_us, wall_over_mj_steps
 from .statistics import Z_95
@@ -223,7 +222,7 @@ def write_report(model: DiscrepancyModel, out: Path) -> list[Path]:
     out.mkdir(parents=True, exist_ok=True)
     remove_stale_temporaries(out)  # of a writer killed mid-write over an hour ago
     summ = summary(model, bare_mj_step_us(model.replay_.params.physics_dt_s))
-    write_text_atomic(out / "summary.json", json.dumps(summ, indent=2, default=float))
+    write_text_atomic(out / "summary.json", json_text(summ))  # strict JSON: no value is null, never NaN
     write_text_atomic(out / "model.yaml", yaml.safe_dump(model.overlay(), sort_keys=False))
     paths = []
     for s, fig in figures(model).items():

@@ -10,7 +10,6 @@ the identified current.  Interval, method and caveat of every value go into the 
 from __future__ import annotations
 
 import dataclasses
-import json
 from typing import Any
 
 import numpy as np
@@ -20,6 +19,7 @@ from numpy.typing import NDArray
 from ..sim.axes import N_JOINTS
 from ..sim.params import FrictionParams, RobotParams
 from ..twin.payload import PayloadRecord
+from ..util.io import finite_json
 from .stats import Estimate
 
 #: stick-slip parameters of issue 10 part A: written as soon as the friction parameters have the field
@@ -130,7 +130,7 @@ class Identification:
             out["sweep"] = {"bandwidths_Hz": s.bandwidths_Hz, "scores": s.scores, "best_Hz": s.best_Hz,
                             "window_s": s.window_s, "joints": [j + 1 for j in s.joints],
                             "rms_sim_rad": s.rms_sim_rad.tolist(), "rms_meas_rad": s.rms_meas_rad.tolist()}
-        return json.loads(json.dumps(out, default=float))
+        return finite_json(out)  # an interval it has not is null, never NaN (strict JSON)
 
 
 def overlay_params(ident: Identification, params: RobotParams) -> dict[str, Any]:

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import math
 import os
 import tempfile
 import time
@@ -275,6 +276,26 @@ def write_text_atomic(path: str | Path, text: str) -> Path:
 def write_bytes_atomic(path: str | Path, data: bytes, checksum: bool = False) -> Path:
     """Write ``data`` atomically, with a SHA-256 sidecar when ``checksum``."""
     return _atomic(path, lambda tmp: Path(tmp).write_bytes(data), checksum)
+
+
+def finite_json(data: Any) -> Any:
+    """``data`` with every non-finite number (NaN, inf: "no value") as ``None`` and numpy values as Python's, so that
+    ``json.dumps(..., allow_nan=False)`` writes JSON every parser reads (a bare ``NaN`` is Python's extension;
+    JavaScript's ``JSON.parse`` refuses it)."""
+    if isinstance(data, Mapping):
+        return {k: finite_json(v) for k, v in data.items()}
+    if isinstance(data, (list, tuple)):
+        return [finite_json(v) for v in data]
+    if hasattr(data, "tolist") and not isinstance(data, (str, bytes)):  # numpy arrays and scalars
+        return finite_json(data.tolist())
+    if isinstance(data, float) and not math.isfinite(data):
+        return None
+    return data
+
+
+def json_text(data: Any, indent: int | None = 2) -> str:
+    """``data`` as strict JSON text (:func:`finite_json`: no value is ``null``, never ``NaN``)."""
+    return json.dumps(finite_json(data), indent=indent, allow_nan=False, default=str)
 
 
 def write_json_atomic(path: str | Path, data: Mapping[str, Any], checksum: bool = False) -> Path:

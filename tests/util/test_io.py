@@ -1,0 +1,34 @@
+"""Strict JSON for the files other tools read (``util.io.json_text``)."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+
+from ur5fault.identify import report, stats
+from ur5fault.util.io import finite_json, json_text
+
+
+def _strict(text: str):
+    def refuse(token):
+        raise AssertionError(f"{token} is not JSON")
+
+    return json.loads(text, parse_constant=refuse)
+
+
+def test_no_value_is_null_and_numpy_values_are_plain():
+    data = {"a": float("nan"), "b": [1.0, float("inf"), -float("inf")], "c": np.float64(2.5),
+            "d": np.array([np.nan, 3]), "e": (np.int64(4), "x"), "f": {"g": np.float32(np.nan)}}
+    assert _strict(json_text(data)) == {"a": None, "b": [1.0, None, None], "c": 2.5, "d": [None, 3.0], "e": [4, "x"],
+                                        "f": {"g": None}}
+    assert finite_json(["s", True, None, 7]) == ["s", True, None, 7]
+
+
+def test_identify_json_of_a_value_the_log_cannot_give_is_strict():
+    """identify --json wrote "lo": NaN, "hi": NaN for every estimate without an interval (JSON.parse refuses it)."""
+    ident = report.Identification("x", 1.0, (
+        stats.fallback("friction.breakaway_A", 0, 0.5, "m", "why"),
+        stats.Estimate("motor.torque_constant_Nm_per_A", 1, 0.13, 0.12, 0.14, "m")))
+    got = _strict(json.dumps(ident.to_json(), allow_nan=False))
+    assert got["estimates"][0]["lo"] is None and got["estimates"][1]["hi"] == 0.14
