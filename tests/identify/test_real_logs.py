@@ -179,3 +179,19 @@ def test_temperatures_in_kelvin_are_named(tmp_path):
     ok = read_log(_kufieta(tmp_path, "Movement_No8_Singularity_Free_1.csv.gz", edit=celsius), "rtde",
                   payload_kg=0.0, tcp_offset_m=(0, 0, 0))
     assert ok.temperature_C is not None and np.all(ok.temperature_C == 35.0)
+
+
+def test_an_optional_group_present_in_part_is_said(tmp_path):
+    """One misspelt header (target_current_3 written target_curent_3) dropped UR's model columns of every joint
+    without a word; a group short of one column the same."""
+    def typo(df):
+        return df.rename(columns={"target_current_3": "target_curent_3"}).drop(columns=["target_moment_5"])
+
+    log = read_log(_kufieta(tmp_path, "Movement_No8_Singularity_Free_1.csv.gz", edit=typo), "rtde",
+                   payload_kg=0.0, tcp_offset_m=(0, 0, 0))
+    assert log.target_current_A is None and log.target_torque_Nm is None
+    said = [n for n in log.notes if "are present" in n]
+    assert len(said) == 2
+    assert "5 of the 6 columns target_current_0..target_current_5 are present (missing: target_current_3): the " \
+           "group is not used" in said[0]
+    assert "(missing: target_moment_5)" in said[1]

@@ -47,8 +47,18 @@ def _joint_numbers(columns: Sequence[str], pattern: str) -> list[int]:
     return [int(m.group(1)) for c in columns if (m := rx.fullmatch(c))]
 
 
-def _have(columns: Sequence[str], wanted: Sequence[str]) -> list[str]:
-    return list(wanted) if all(c in columns for c in wanted) else []
+def _have(columns: Sequence[str], wanted: Sequence[str], partial: list[str] | None = None,
+          src: str = "") -> list[str]:
+    """``wanted`` where every one of them is a column, else none; a group present in part is said in ``partial``
+    (a note: one misspelt header otherwise drops the group's other columns without a word)."""
+    if all(c in columns for c in wanted):
+        return list(wanted)
+    present = [c for c in wanted if c in columns]
+    if present and partial is not None:
+        missing = [c for c in wanted if c not in columns]
+        partial.append(f"{src}: {len(present)} of the {len(wanted)} columns {wanted[0]}..{wanted[-1]} are present "
+                       f"(missing: {', '.join(missing)}): the group is not used")
+    return []
 
 
 def _stack(data: Mapping[str, NDArray], cols: Sequence[str]) -> NDArray | None:
@@ -91,14 +101,14 @@ def rest_target_style(t: NDArray, target_q: NDArray, actual_q: NDArray, target_q
 
 def _assemble(src: str, t: NDArray, required: Mapping[str, NDArray], optional: Mapping[str, NDArray | None],
               declared: str, labels: tuple[str, str] = ("target_q", "actual_q"),
-              length: plausible.MinLength | None = None, **fields) -> MeasuredLog:
+              length: plausible.MinLength | None = None, notes: Sequence[str] = (), **fields) -> MeasuredLog:
     """Checks, optional columns completed (:func:`.regular.complete_optional`), the rows put on the controller
     tick grid (:func:`.regular.on_ticks`), and the log. ``required``: target positions ``"target_q"``, actual
     positions ``"actual_q"`` (both already in radians) and ``"actual_current"``; ``optional``: ``"target_qd"``,
     ``"actual_qd"`` (rad/s, for the unit check only), ``"target_current"``, ``"temperature"``, ``"tcp"``,
-    ``"target_torque"``."""
+    ``"target_torque"``; ``notes``: the reader's own (:func:`_have`'s), said before the assembly's."""
     plausible.check_finite(src, {"time": t, **required})
-    notes: list[str] = []
+    notes = list(notes)
     rows, opt = regular.complete_optional(src, t, optional, notes)
     t = t[rows]
     req = {k: v[rows] for k, v in required.items()}
@@ -144,12 +154,13 @@ def read_nist(path: str | Path, length: plausible.MinLength | None = None) -> Me
     cur_a = [f"ROBOT_ACTUAL_JOINT_CURRENT (J{j})" for j in range(1, 7)]
     _require(cols, ["ROBOT_TIME", *pos_t, *pos_a, *cur_a], src)
     plausible.check_joint_count(src, _joint_numbers(cols, r"ROBOT_ACTUAL_JOINT_POSITIONS \(J(\d+)\)"), 1)
-    cur_t = _have(cols, [f"ROBOT_TARGET_JOITN_CURRENT (J{j})" for j in range(1, 7)])
-    temp = _have(cols, [f"ROBOT_JOINT_TEMP (J{j})" for j in range(1, 7)])
-    tcp = _have(cols, [f"ROBOT_CARTESIAN_COORD_TOOL ({a})" for a in "xyz"])
-    vel_t = _have(cols, [f"ROBOT_TARGET_JOINT_VELOCITIES (J{j})" for j in range(1, 7)])
-    vel_a = _have(cols, [f"ROBOT_ACTUAL_JOINT_VELOCITIES (J{j})" for j in range(1, 7)])
-    torq = _have(cols, [f"ROBOT_TARGET_JOINT_TORQUES (J{j})" for j in range(1, 7)])
+    part: list[str] = []
+    cur_t = _have(cols, [f"ROBOT_TARGET_JOITN_CURRENT (J{j})" for j in range(1, 7)], part, src)
+    temp = _have(cols, [f"ROBOT_JOINT_TEMP (J{j})" for j in range(1, 7)], part, src)
+    tcp = _have(cols, [f"ROBOT_CARTESIAN_COORD_TOOL ({a})" for a in "xyz"], part, src)
+    vel_t = _have(cols, [f"ROBOT_TARGET_JOINT_VELOCITIES (J{j})" for j in range(1, 7)], part, src)
+    vel_a = _have(cols, [f"ROBOT_ACTUAL_JOINT_VELOCITIES (J{j})" for j in range(1, 7)], part, src)
+    torq = _have(cols, [f"ROBOT_TARGET_JOINT_TORQUES (J{j})" for j in range(1, 7)], part, src)
     d = read_columns(path, src, layout,
                      ["ROBOT_TIME", *pos_t, *pos_a, *cur_a, *cur_t, *temp, *tcp, *vel_t, *vel_a, *torq])
     plausible.check_finite(src, {"target positions": _stack(d, pos_t), "actual positions": _stack(d, pos_a),
@@ -159,7 +170,7 @@ def read_nist(path: str | Path, length: plausible.MinLength | None = None) -> Me
     optional = {"target_qd": _stack(d, vel_t), "actual_qd": _stack(d, vel_a), "target_current": _stack(d, cur_t),
                 "temperature": _stack(d, temp), "tcp": _stack(d, tcp), "target_torque": _stack(d, torq)}
     return _assemble(src, d["ROBOT_TIME"], required, optional, "degrees",
-                     ("target positions", "actual positions"), length, payload_kg=NIST_PAYLOAD_KG,
+                     ("target positions", "actual positions"), length, part, payload_kg=NIST_PAYLOAD_KG,
                      tcp_offset_m=NIST_TOOL_OFFSET_M)
 
 
@@ -213,18 +224,19 @@ def read_rtde(path: str | Path, payload_kg: float | None = None,
                              f"{' or '.join(repr(c) for c in RTDE_TIME_COLUMNS[1:])}): the time [s]")
     _require(cols, [*qt, *qa, *ia], src)
     plausible.check_joint_count(src, _joint_numbers(cols, r"actual_q_(\d+)"), 0)
-    ct = _have(cols, [f"target_current_{j}" for j in range(6)])
-    temp = _have(cols, [f"joint_temperatures_{j}" for j in range(6)])
-    tcp = _have(cols, [f"actual_TCP_pose_{j}" for j in range(3)])
-    vt = _have(cols, [f"target_qd_{j}" for j in range(6)])
-    va = _have(cols, [f"actual_qd_{j}" for j in range(6)])
-    tm = _have(cols, [f"target_moment_{j}" for j in range(6)])
+    part: list[str] = []
+    ct = _have(cols, [f"target_current_{j}" for j in range(6)], part, src)
+    temp = _have(cols, [f"joint_temperatures_{j}" for j in range(6)], part, src)
+    tcp = _have(cols, [f"actual_TCP_pose_{j}" for j in range(3)], part, src)
+    vt = _have(cols, [f"target_qd_{j}" for j in range(6)], part, src)
+    va = _have(cols, [f"actual_qd_{j}" for j in range(6)], part, src)
+    tm = _have(cols, [f"target_moment_{j}" for j in range(6)], part, src)
     d = read_columns(path, src, layout, [time_col, *qt, *qa, *ia, *ct, *temp, *tcp, *vt, *va, *tm])
     required = {"target_q": _stack(d, qt), "actual_q": _stack(d, qa), "actual_current": _stack(d, ia)}
     optional = {"target_qd": _stack(d, vt), "actual_qd": _stack(d, va), "target_current": _stack(d, ct),
                 "temperature": _stack(d, temp), "tcp": _stack(d, tcp), "target_torque": _stack(d, tm)}
-    return _assemble(src, d[time_col], required, optional, "radians", length=length, payload_kg=payload_kg,
-                     tcp_offset_m=tcp_offset_m)
+    return _assemble(src, d[time_col], required, optional, "radians", length=length, notes=part,
+                     payload_kg=payload_kg, tcp_offset_m=tcp_offset_m)
 
 
 #: what to do about a run's time series that fails its checksum
