@@ -104,6 +104,25 @@ def test_one_recording_under_two_names_is_refused(tmp_path):
         read_log_options(_args([str(TEST), *STATED, "--hold-out", str(copy)]))
 
 
+def test_a_part_of_a_fitted_log_held_out_is_refused(tmp_path):
+    """A held-out run cut from the first 10.4 s of a fitted log passed (only whole files were compared) and was scored
+    as held out on the samples the model was fitted on; the same holds with its time restarted at 0."""
+    import pandas as pd
+
+    raw = pd.read_csv(RUN1)
+    head = tmp_path / "head.csv"
+    raw.iloc[:1300].to_csv(head, index=False)
+    with pytest.raises(ParameterError, match=r"head.csv and Movement_No8_Singularity_Free_1.csv.gz \(fitted and held "
+                                             r"out\) share 1300 samples .*parts of one recording"):
+        read_log_options(_args([str(RUN1), *STATED, "--hold-out", str(head)]))
+    restarted = raw.iloc[600:1300].assign(time=lambda d: d["time"] - d["time"].iloc[0])
+    restarted.to_csv(head, index=False)
+    with pytest.raises(ParameterError, match="share 700 samples"):
+        read_log_options(_args([str(RUN1), *STATED, "--hold-out", str(head)]))
+    fit, held = read_log_options(_args([str(RUN1), str(RUN2), *STATED, "--hold-out", str(TEST)]))  # three runs
+    assert len(fit) == 2 and len(held) == 1
+
+
 def test_logs_of_one_file_name_in_two_folders_are_named_by_their_folders(tmp_path):
     """Recorders write one file name per session folder: two recordings, named apart, notes included."""
     for folder, src in (("day1", RUN1), ("day2", TEST)):

@@ -31,6 +31,8 @@ import os
 from collections.abc import Sequence
 from pathlib import Path
 
+import numpy as np
+
 from ..errors import LogFormatError, ParameterError
 from ..util.checks import check_bool
 from ..util.yamlsafe import read_yaml
@@ -317,10 +319,22 @@ def _read_named(e: LogEntry, name: str, allow_unknown: bool) -> MeasuredLog:
         raise type(exc)(name + text[len(e.path.name):]) from None
 
 
+#: two logs sharing at least this many rows (and this share of the shorter one's) are parts of one recording: a
+#: row holds every joint's measured position and current, which two recordings never repeat over tens of samples
+SHARED_ROWS_MIN, SHARED_ROWS_SHARE = 25, 0.01
+
+
+def _row_keys(log: MeasuredLog) -> set[bytes]:
+    """One key per logged row: its measured positions and currents, bit for bit (not its time, which a cut may
+    restart)."""
+    rows = np.ascontiguousarray(np.hstack([log.q_actual_rad, log.current_A])[log.logged_rows()], dtype=np.float64)
+    return {r.tobytes() for r in rows}
+
+
 def refuse_same_samples(groups: Sequence[tuple[str, Sequence[MeasuredLog]]]) -> None:
-    """Logs holding the same samples (one recording under two names or paths: fitted twice, or scored as held out
-    on the samples it was fitted on) refused with one line; ``groups``: ``(role, logs)``, e.g. ``("fitted",
-    logs)``, ``("held out", held)``."""
+    """Logs holding the same samples (one recording under two names or paths, or a part of it cut out: fitted
+    twice, or scored as held out on the samples it was fitted on) refused with one line; ``groups``: ``(role,
+    logs)``, e.g. ``("fitted", logs)``, ``("held out", held)``."""
     seen: dict[str, tuple[str, str]] = {}
     for role, logs in groups:
         for log in logs:
@@ -332,6 +346,14 @@ def refuse_same_samples(groups: Sequence[tuple[str, Sequence[MeasuredLog]]]) -> 
                     f"{log.source} and {name} hold the same samples ({both})"
                 raise ParameterError(f"{what}: one recording counts once; give it once")
             seen[sha] = (log.source, role)
+    tagged = [(role, log, _row_keys(log)) for role, logs in groups for log in logs]
+    for i, (role_a, a, keys_a) in enumerate(tagged):
+        for role_b, b, keys_b in tagged[i + 1:]:
+            shared = len(keys_a & keys_b)
+            if shared >= max(SHARED_ROWS_MIN, SHARED_ROWS_SHARE * min(len(keys_a), len(keys_b))):
+                both = f"both {role_a}" if role_a == role_b else f"{role_a} and {role_b}"
+                raise ParameterError(f"{b.source} and {a.source} ({both}) share {shared} samples (of {len(keys_b)} "
+                                     f"and {len(keys_a)}): parts of one recording; give each sample once")
 
 
 def read_log_options(args: argparse.Namespace, *, allow_unknown: bool = False,
