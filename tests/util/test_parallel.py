@@ -27,6 +27,24 @@ def _fails(k: int) -> int:
     return k
 
 
+def _interrupt_handler() -> tuple[object, int]:
+    import signal
+
+    return signal.getsignal(signal.SIGINT), os.getpid()
+
+
+def test_workers_leave_ctrl_c_to_this_process():
+    """A terminal's Ctrl-C reaches every process of its group: a worker it stopped printed its own
+    KeyboardInterrupt traceback after the command's one-line message. Workers now ignore it, whichever way they
+    were started; this process keeps its handler."""
+    import signal
+
+    handler, pid = submit(_interrupt_handler, (), jobs=2).result()
+    assert pid != os.getpid() and handler == signal.SIG_IGN
+    assert all(h == signal.SIG_IGN for h, p in map_tasks(_interrupt_handler, [()] * 4, jobs=2) if p != os.getpid())
+    assert signal.getsignal(signal.SIGINT) != signal.SIG_IGN
+
+
 def test_results_in_task_order_equal_the_plain_map_and_both_processes_work():
     tasks = [(k,) for k in range(7)]
     out = map_tasks(_task, tasks, jobs=2)
@@ -208,7 +226,7 @@ def test_balanced_a_task_the_pool_refuses_fails_the_call_instead_of_hanging_it(m
     """The feeder gives the worker its next task and ``submit`` raises: that task fails the call (the feeder used
     to die there, and the caller waited forever for the task it had taken)."""
     pool = _PoolThatBreaks()
-    monkeypatch.setattr(joblib.executor, "get_memmapping_executor", lambda n_workers: pool)
+    monkeypatch.setattr(joblib.executor, "get_memmapping_executor", lambda n_workers, **_: pool)
     got = _outcome_within(60, lambda: map_balanced(_slow_square, [(k,) for k in range(6)], 2, [6, 5, 4, 3, 2, 1]))
     assert isinstance(got.get("error"), BrokenProcessPool), got
     assert pool.n_submitted == 2  # the failure stopped the feeding

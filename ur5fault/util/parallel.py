@@ -82,6 +82,25 @@ def own_share(cost: Sequence[float], jobs: int) -> int:
     return k
 
 
+def ignore_interrupt() -> None:
+    """A worker process's start: Ctrl-C is the calling process's to handle (it stops the workers and says so in one
+    line). A terminal sends it to every process of its group, and a worker it stopped printed its own
+    ``KeyboardInterrupt`` traceback after that line."""
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def _executor(jobs: int):
+    """The ``jobs - 1`` worker processes: joblib's own reusable executor, not loky's bare one (both are loky's one
+    process-wide executor, and a ``joblib.Parallel`` called later in this process, e.g. a life campaign after a
+    campaign, reuses it and needs the temporary-folder manager only joblib's factory gives it), its workers
+    started by :func:`ignore_interrupt`."""
+    from joblib.executor import get_memmapping_executor
+
+    return get_memmapping_executor(jobs - 1, initializer=ignore_interrupt)
+
+
 def iter_tasks(fn: Callable[..., Any], tasks: Sequence[tuple], jobs: int, cost: Sequence[float] | None = None
                ) -> Iterator[tuple[int, Any]]:
     """``(index, fn(*tasks[index]))`` for every task as it finishes, over this process and ``jobs - 1`` workers
@@ -94,13 +113,8 @@ def iter_tasks(fn: Callable[..., Any], tasks: Sequence[tuple], jobs: int, cost: 
         return
     from concurrent.futures import as_completed
 
-    from joblib.executor import get_memmapping_executor
-
     k = own_share([1.0] * len(tasks) if cost is None else [float(c) for c in cost], jobs)
-    # joblib's own reusable executor, not loky's bare one: both are loky's one process-wide executor, and a
-    # ``joblib.Parallel`` called later in this process (a life campaign after a campaign) reuses it and needs the
-    # temporary-folder manager only joblib's factory gives it
-    executor = get_memmapping_executor(jobs - 1)
+    executor = _executor(jobs)
     futures = {executor.submit(fn, *t): i for i, t in enumerate(tasks[:k])}
     done = False
     try:
@@ -143,10 +157,8 @@ def map_balanced(fn: Callable[..., Any], tasks: Sequence[tuple], jobs: int, cost
     import threading
     from concurrent.futures import Future
 
-    from joblib.executor import get_memmapping_executor
-
     order = sorted(range(len(tasks)), key=lambda i: -float(cost[i]))
-    executor = get_memmapping_executor(jobs - 1)
+    executor = _executor(jobs)
     lock = threading.Lock()
     ends = [0, len(order)]  # the tasks not yet taken: order[ends[0]:ends[1]]
     finished: queue.SimpleQueue = queue.SimpleQueue()  # (task index, future) of the workers, as they finish
@@ -231,9 +243,7 @@ def submit(fn: Callable[..., Any], args: tuple, jobs: int):
     else."""
     if jobs <= 1:
         return None
-    from joblib.executor import get_memmapping_executor
-
-    return get_memmapping_executor(jobs - 1).submit(fn, *args)
+    return _executor(jobs).submit(fn, *args)
 
 
 def stop_workers(jobs: int) -> None:
@@ -243,6 +253,4 @@ def stop_workers(jobs: int) -> None:
     workers."""
     if jobs <= 1:
         return
-    from joblib.executor import get_memmapping_executor
-
-    get_memmapping_executor(jobs - 1).shutdown(wait=False, kill_workers=True)
+    _executor(jobs).shutdown(wait=False, kill_workers=True)

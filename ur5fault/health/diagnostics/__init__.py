@@ -321,7 +321,9 @@ def _start_comparison(features: pd.DataFrame, seed: int, threshold_mm: float, so
     trained the chosen set's classifiers a second time)."""
     from joblib.externals.loky import get_reusable_executor
 
-    pool = get_reusable_executor(max_workers=jobs)
+    from ...util.parallel import ignore_interrupt
+
+    pool = get_reusable_executor(max_workers=jobs, initializer=ignore_interrupt)
     return {fs: {"shuffled" if shuffled else "trained": pool.submit(_compared, features, seed, shuffled,
                                                                     threshold_mm, source, fs)
                  for shuffled in (False, True) if shuffled or fs != reused} for fs in FEATURE_SETS}
