@@ -165,3 +165,11 @@ def test_library_candidates_are_linearised_about_the_model_being_fitted():
     assert temp[0] == 0.01 and temp[2] == 0.03
     payload = [c for c in candidates(0.7, params=p) if c.effect == "payload"]
     assert [(c.x0, c.probe) for c in payload] == [(0.7, 1.2)]
+
+
+def test_a_value_below_its_limit_reads_below_it():
+    """A drop reason read "z 4.0 < 4" (3.96 to one decimal)."""
+    from ur5fault.discrepancy.statistics import below
+
+    assert below(3.96, 4.0) == "3.96" and below(3.2, 4.0) == "3.2" and below(3.9996, 4.0) == "3.9996"
+    assert below(-1.0, 4.0) == "-1.0"

@@ -16,7 +16,7 @@ from .drift import Drift
 from .refinement import FindingSet, Refined
 from .replay_noise import in_metric, replay_scatter, with_scatter
 from .search import Verdict, backward, columns_of, forward, judge
-from .statistics import MIN_Z, Z_95, BlockGram, Generalisation, amplitude_z, generalisation, rss_of
+from .statistics import MIN_Z, Z_95, BlockGram, Generalisation, amplitude_z, below, generalisation, rss_of
 from .weighting import OwnVariance, per_channel
 
 
@@ -207,9 +207,10 @@ def final_verdicts(kept: list[Finding], pol: Refined, n_fit: int, drift: Drift |
             se = with_scatter(np.asarray(v.se), scatter[k])
             z = amplitude_z(np.asarray(v.theta), se)
             f.within_scatter = v.accepted and z < MIN_Z
+            why = (f"z {below(z, MIN_Z)} < {MIN_Z:g} with the scatter of its replays under other noise seeds "
+                   f"({v.z:.1f} without)" if z < MIN_Z else "")
             v = dataclasses.replace(v, se=tuple(float(x) for x in se), z=z, accepted=v.accepted and z >= MIN_Z,
-                                    reason=v.reason or (f"z {z:.1f} < {MIN_Z:g} with the scatter of its replays under "
-                                                        f"other noise seeds ({v.z:.1f} without)" if z < MIN_Z else ""))
+                                    reason=v.reason or why)
         f.verdict = v
         f.se = np.asarray(v.se)
         if not f.verdict.accepted or f.candidate.range_problem(f.theta):

@@ -49,7 +49,7 @@ from .judging import Finding, SearchStep, channels
 from .replay_noise import scatter_of, with_scatter
 from .rivals import MAX_RIVALS, Rival, current_channel, differ_most, in_place, indistinguishable_held_out, judge_rival
 from .search import backward, columns_of, forward, judge
-from .statistics import MIN_Z, BlockGram, generalisation, rss_of, weighted
+from .statistics import MIN_Z, BlockGram, below, generalisation, rss_of, weighted
 from .weighting import OwnVariance, per_channel
 
 __all__ = ["MAX_RIVALS", "freed_joints", "indistinguishable_held_out", "rescreen", "rivals_of", "select_on_freed"]
@@ -243,8 +243,8 @@ def rescreen(rp: LogReplay, lib_X: NDArray, lib_drift: Drift | None, candidates:
         f.verdict = dataclasses.replace(v, se=tuple(float(x) for x in f.se), z=z, accepted=v.accepted and z >= MIN_Z)
         if f.within_scatter:
             f.kept, f.rivals, f.alternatives = False, [], []
-            f.reason = (f"within the scatter of the model's own replays (z {z:.1f} < {MIN_Z:g} with the scatter of its "
-                        f"replays under other noise seeds, {v.z:.1f} without)")
+            f.reason = (f"within the scatter of the model's own replays (z {below(z, MIN_Z)} < {MIN_Z:g} with the "
+                        f"scatter of its replays under other noise seeds, {v.z:.1f} without)")
     if any(f.within_scatter for f in named):
         rest = kept_specs + tuple(f.spec() for f in named if f.kept)
         final = rp.run([rest], rp.n_samples, progress)[0] if len(rest) > len(kept_specs) else after

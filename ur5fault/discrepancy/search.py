@@ -21,6 +21,7 @@ from .statistics import (
     BlockGram,
     Stability,
     amplitude_z,
+    below,
     bic,
     collinearity,
     effective_n,
@@ -83,7 +84,7 @@ def judge(bg: BlockGram, e_fit: NDArray, X: NDArray, cands: Sequence[Candidate],
     if dbic > -MIN_DELTA_BIC:
         reasons.append(f"delta BIC {dbic:.1f} > -{MIN_DELTA_BIC:g}")
     if z < MIN_Z:
-        reasons.append(f"z {z:.1f} < {MIN_Z:g}")
+        reasons.append(f"z {below(z, MIN_Z)} < {MIN_Z:g}")
     if not stab.stable:
         reasons.append("unstable across time blocks (" + ", ".join(f"{r:.2f}" for r in stab.ratios) + ")")
     return Verdict(cands[cand].label, tuple(float(t) for t in th[own]), tuple(float(s) for s in se[own]),
