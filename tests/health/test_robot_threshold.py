@@ -125,11 +125,28 @@ def test_the_report_names_the_joint_only_where_the_robots_threshold_is_the_bar()
     the one windows are flagged above; where the training runs' is higher, it does not (as the notes)."""
     from ur5fault.health.diagnosis.report import _baseline
 
-    rules = {r: {"n_inputs": 1} for r in ("scaled", "shifted", "shifted_zero_spread", "shifted_few_windows",
-                                          "left_as_measured", "condition")}
+    rules = {r: {"n_inputs": 1} for r in ("scaled", "shifted", "shifted_zero_spread", "shifted_training_zero_spread",
+                                          "shifted_few_windows", "left_as_measured", "condition")}
     t = {"n_held_out_windows": 4, "groups": ["a", "b"], "rank": 5, "score": 0.97, "false_alarm_bound": 0.2,
          "held_out_max_by_joint": {"wrist_2_joint": 0.97, "wrist_1_joint": 0.1}, "set_by_joint": "wrist_2_joint"}
     b = {"rules": rules, "robot_threshold": t, "n_windows": 4, "logs": ["a", "b"], "mapping": "m", "reference": "r"}
     said = "the threshold 0.970 is wrist_2_joint's score in a held-out healthy window"
     assert said in _baseline(b, robot_bar=True) and "wrist_1_joint 0.10" in _baseline(b, robot_bar=True)
     assert said not in _baseline(b, robot_bar=False) and "The robot's own threshold" in _baseline(b, False)
+
+
+def test_the_reports_threshold_on_both_scales_and_every_rule_counted():
+    """The report gave the robot's threshold as a by-joint score (0.849) beside a header's p(fault) 0.926 without
+    saying which was which, and its count of inputs left out those shifted for a zero spread in the training runs
+    (the notes counted them)."""
+    from ur5fault.health.diagnosis.report import _baseline
+
+    rules = {r: {"n_inputs": k} for k, r in enumerate(("scaled", "shifted", "shifted_zero_spread",
+                                                       "shifted_training_zero_spread", "shifted_few_windows",
+                                                       "left_as_measured", "condition"), start=1)}
+    t = {"n_held_out_windows": 4, "groups": ["a", "b"], "rank": 5, "score": 0.849, "false_alarm_bound": 0.2}
+    b = {"rules": rules, "robot_threshold": t, "n_windows": 4, "logs": ["a", "b"], "mapping": "m", "reference": "r"}
+    text = _baseline(b, robot_bar=True, p_fault=0.926)
+    assert "(0.849 on the by-joint score, p(fault) 0.926 on the table's scale;" in text
+    assert "4 shifted (zero spread in the training runs)" in text and "5 shifted (too few baseline values)" in text
+    assert "p(fault)" not in _baseline(b, robot_bar=False, p_fault=0.926)

@@ -47,9 +47,10 @@ def _fmt(v: float | None, unit: str) -> str:
     return "-" if v is None else f"{v:.3g} {unit}"
 
 
-def _baseline(b: dict[str, Any] | None, robot_bar: bool = False) -> str:
+def _baseline(b: dict[str, Any] | None, robot_bar: bool = False, p_fault: float | None = None) -> str:
     """The sentence saying which baseline the inputs were referred to (or that there was none); ``robot_bar``: the
-    robot's own threshold is the one windows are flagged above (not the training runs', which is higher)."""
+    robot's own threshold is the one windows are flagged above (not the training runs', which is higher), at
+    ``p_fault`` on the table's scale."""
     if b is None:
         return ("No baseline of this robot: the inputs are scored as they are, against the simulated healthy "
                 "training runs only (a real robot's model error then reads as a fault: `--baseline-logs`).")
@@ -59,13 +60,16 @@ def _baseline(b: dict[str, Any] | None, robot_bar: bool = False) -> str:
              f" The robot's own threshold: each of its {t['n_held_out_windows']} baseline windows scored against a "
              f"baseline of the other {len(t['groups']) - 1} group(s) of windows, the "
              + ("largest held-out score" if t["rank"] > t["n_held_out_windows"] else f"{t['rank']}-th smallest")
-             + f" ({t['score']:.3f}; a healthy window like them exceeds it with probability "
+             + f" ({t['score']:.3f} on the by-joint score"
+             + (f", p(fault) {p_fault:.3f} on the table's scale" if robot_bar and p_fault is not None else "")
+             + "; a healthy window like them exceeds it with probability "
              f"{t['false_alarm_bound']:.2g}); windows are flagged above it and the training runs' threshold."
              + (f" As a window's score is its joints' largest, {set_by}."
                 if robot_bar and (set_by := set_by_sentence(t)) else ""))
     return (f"Baseline: {b['n_windows']} windows of {len(b['logs'])} healthy log(s) of the robot "
             f"({', '.join(b['logs'])}); every input referred to it ({b['mapping']}): {n['scaled']} scaled, "
             f"{n['shifted']} shifted, {n['shifted_zero_spread']} shifted (zero spread in the baseline), "
+            f"{n['shifted_training_zero_spread']} shifted (zero spread in the training runs), "
             f"{n['shifted_few_windows']} shifted (too few baseline values), {n['left_as_measured']} left as measured "
             f"(no value), {n['condition']} operating conditions left as they are; reference: {b['reference']}."
             + robot)
@@ -110,7 +114,8 @@ def _report(d: dict[str, Any]) -> str:
              "fault-kind classifier by joint's largest joint probability of a fault, "
              f"{'calibrated' if det['calibrated'] else 'NOT calibrated: the detector saved no calibration'}; "
              "the run-level detector's reading is in diagnosis.json).", "",
-             _baseline(d.get("baseline"), d["flag_threshold"]["from"] == ROBOT_THRESHOLD_FROM), "",
+             _baseline(d.get("baseline"), d["flag_threshold"]["from"] == ROBOT_THRESHOLD_FROM,
+                       d["flag_threshold"].get("p_fault")), "",
              f"**{d['n_flagged']} of {d['n_windows']} windows flagged.**", "",
              "| window [s] | p(fault) | flagged | likeliest joint | likeliest kinds there (size, interval) |",
              "| --- | --- | --- | --- | --- |"]
