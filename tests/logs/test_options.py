@@ -47,8 +47,11 @@ def test_manifest_with_per_log_options(tmp_path):
     ("logs: []\n", "'logs' must be a list of at least one log"),
     ("logs: [a.csv]\nspeed: 3\n", "unknown key 'speed'"),
     ("format: rtde\nlogs: [{path: a.csv, payload: 1}]\n", "logs[0]: unknown key 'payload'"),
-    ("format: nist\nlogs: [{path: a.csv, payload_kg: 1}]\n", "logs[0]: --payload-kg applies to --format rtde only"),
-    ("format: csv\nlogs: [a.csv]\n", "format 'csv' is not one of"),
+    # the manifest's key, not the command line's flag (was "logs[0]: --payload-kg applies to --format rtde only")
+    ("format: nist\nlogs: [{path: a.csv, payload_kg: 1}]\n", "robot.yaml: logs[0]: payload_kg applies to rtde logs "
+                                                            "only (or with payload_kg: unknown)"),
+    # the top-level key named where the value came from (was "logs[0]: format 'csv'", as if the log's own)
+    ("format: csv\nlogs: [a.csv]\n", "robot.yaml: logs[0]: format (from robot.yaml: format): 'csv' is not one of"),
     # the manifest's key path named, as for every other key (was the bare payload range / "a.csv: no such file")
     ("format: rtde\ntcp_offset_m: [0, 0, 0]\nlogs: [{path: a.csv, payload_kg: -0.5}]\n",
      "robot.yaml: logs[0]: payload_kg = -0.5 is out of range [0, 5] kg"),

@@ -58,7 +58,8 @@ def cmd_identify(args: argparse.Namespace) -> int:
     if not logs:
         raise ParameterError("every log given is held out; name at least one log to fit")
     if held:  # a manifest shared with discrepancy or monitor: its held-out runs stay unseen by the fit
-        print(f"note: held out, not fitted: {', '.join(g.source for g in held)}", file=sys.stderr)
+        print(f"note: left out (hold_out in the manifest; identify scores no held-out run, `ur5fault discrepancy` "
+              f"does): {', '.join(g.source for g in held)}", file=sys.stderr)
     check_logs_length(logs, "identify")
     log = logs[0]
     say = None if args.quiet else (lambda msg: print(f"identify: {msg}...", file=sys.stderr, flush=True))

@@ -95,14 +95,22 @@ class LogEntry:
         return self.payload_kg == UNKNOWN or (self.fmt == "rtde" and self.payload_kg is None)
 
 
-def _check_payload_options(fmt: str, payload_kg, tcp_offset_m, where: str) -> None:
+#: what the command line's messages call a log's payload and tool offset, and where they apply
+CLI_NAMES = ("--payload-kg", "--tcp-offset-m", "--format rtde only (or with --payload-kg unknown)")
+
+
+def _check_payload_options(fmt: str, payload_kg, tcp_offset_m, where: str,
+                           names: tuple[str, str, str] = CLI_NAMES) -> None:
+    """A payload and tool offset given for a log of format ``fmt``; ``names``: what the messages call the payload
+    and the tool offset (in full: a manifest's key paths, or the command line's flags, :data:`CLI_NAMES`), and the
+    logs they apply to; ``where``: the place of a payload that is not a number."""
     if isinstance(payload_kg, str) and payload_kg.strip().lower() != UNKNOWN:
         raise ParameterError(f"{where}payload_kg = {payload_kg!r} is neither a number of kg nor 'unknown'")
     if fmt != "rtde" and payload_kg != UNKNOWN:
-        for flag, value in (("--payload-kg", payload_kg), ("--tcp-offset-m", tcp_offset_m)):
+        for name, value in zip(names, (payload_kg, tcp_offset_m)):
             if value is not None:
-                raise ParameterError(f"{where}{flag} applies to --format rtde only (or with --payload-kg unknown): a "
-                                     f"{fmt} log carries its own payload and tool offset")
+                raise ParameterError(f"{name} applies to {names[2]}: a {fmt} log carries its own payload and tool "
+                                     "offset")
 
 
 #: the command line's options that are defaults of a manifest's logs: (attribute of the parsed arguments, flag,
@@ -133,7 +141,7 @@ def _entry(item: dict, data: dict, args: argparse.Namespace, path: Path, w: str,
 
     fmt = value("fmt", "format")
     if fmt not in args.log_formats:
-        raise ParameterError(f"{w}format {fmt!r} is not one of: {', '.join(args.log_formats)}"
+        raise ParameterError(f"{source['format']}: {fmt!r} is not one of: {', '.join(args.log_formats)}"
                              if fmt is not None else
                              f"{w}no format: give --format or the manifest's 'format' ({', '.join(args.log_formats)})")
     rtde = fmt == "rtde"  # the manifest's and the command line's payload and tool are defaults of rtde logs
@@ -142,7 +150,9 @@ def _entry(item: dict, data: dict, args: argparse.Namespace, path: Path, w: str,
     tcp = value("tcp_offset_m", "tcp_offset_m") if rtde or "tcp_offset_m" in item else None
     if tcp is not None and (not isinstance(tcp, (list, tuple)) or len(tcp) != 3):
         raise ParameterError(f"{w}tcp_offset_m = {tcp!r} must be 3 numbers [m]")
-    _check_payload_options(fmt, payload, tcp, w)
+    _check_payload_options(fmt, payload, tcp, w, (source.get("payload_kg", f"{w}payload_kg"),
+                                                   source.get("tcp_offset_m", f"{w}tcp_offset_m"),
+                                                   "rtde logs only (or with payload_kg: unknown)"))
     # the manifest's payload and tool in range, named by their key paths; values taken from the command line were
     # checked under the flags' names before any log was read (_resolve)
     def stated(key: str, value):
