@@ -92,6 +92,9 @@ def test_baseline_stats_reused_and_refused_under_another_overlay(monitored):
     r = run(str(logs[0]), *RTDE, "--baseline", str(model), "--baseline-stats", str(bare), "--out", str(tmp / "b"),
             "--jobs", "2")
     assert r.returncode == 0 and "bare.json: no bare.json.sha256 beside it; read unverified" in r.stderr, r.stderr
+    # written back without a checksum: a fresh one would vouch for statistics nothing checked
+    assert (tmp / "b" / "baseline.json").is_file() and not (tmp / "b" / "baseline.json.sha256").exists()
+    assert (again / "baseline.json.sha256").exists()  # read against its checksum: written with one
     other = tmp / "other.yaml"
     other.write_text("params: {}\neffects:\n  - {effect: coulomb_friction, joint: 1, scale: 1.1}\n")
     r = run(str(logs[0]), *RTDE, "--baseline", str(other), "--baseline-stats", str(out / "baseline.json"),

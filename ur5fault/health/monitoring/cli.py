@@ -60,12 +60,14 @@ def cmd_monitor(args: argparse.Namespace) -> int:
     check_new_output(args.out, folder=True, results=RESULT_FILES, replace=args.replace)
     overlay = Overlay.load(args.baseline)
     sha = overlay_sha256(dict(overlay.params), overlay.effects)
-    stats = None
+    stats, verified = None, True
     if args.baseline_stats:
         stats = Baseline.load(args.baseline_stats)
         sidecar = checksum_path(Path(args.baseline_stats))
-        if not sidecar.exists():  # edited by hand, or copied without it
-            print(f"note: {args.baseline_stats}: no {sidecar.name} beside it; read unverified", file=sys.stderr)
+        verified = sidecar.exists()
+        if not verified:  # edited by hand, or copied without it
+            print(f"note: {args.baseline_stats}: no {sidecar.name} beside it; read unverified (and written to "
+                  f"{args.out} without one)", file=sys.stderr)
         if stats.overlay_sha256 != sha:
             raise ParameterError(f"{args.baseline_stats}: was built under another model overlay than "
                                  f"{args.baseline}; rebuild it with --baseline-logs")
@@ -93,7 +95,7 @@ def cmd_monitor(args: argparse.Namespace) -> int:
     observed = [observe(g, params, effects, jobs=jobs) for g in logs]
     channels = tuple(dict.fromkeys(args.event_channels))
     entries = [assess(stats, o, channels) for o in observed]
-    paths = write(Path(args.out), stats, observed, entries, args.baseline, channels)
+    paths = write(Path(args.out), stats, observed, entries, args.baseline, channels, verified)
     for e in entries:
         print(f"{e['log']}: {e['verdict']} ({len(e['changes'])} changes, {len(e['events'])} events)")
     print(f"wrote {', '.join(str(p) for p in paths[:2])}, {paths[-1]}")

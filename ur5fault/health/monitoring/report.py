@@ -14,6 +14,7 @@ from numpy.typing import NDArray
 
 from ...sim.axes import JOINT_NAMES, N_JOINTS
 from ...util.io import (
+    checksum_path,
     remove_stale_temporaries,
     remove_unwritten,
     write_figure_atomic,
@@ -123,12 +124,16 @@ def markdown(baseline: Baseline, entries: Sequence[dict[str, Any]], figs: Sequen
 
 
 def write(out: Path, baseline: Baseline, observed: Sequence[Observed], entries: Sequence[dict[str, Any]],
-          model: str, channels: Sequence[str]) -> list[Path]:
-    """Write every output into ``out`` (created), atomically; returns the paths, ``monitor.json`` first."""
+          model: str, channels: Sequence[str], verified: bool = True) -> list[Path]:
+    """Write every output into ``out`` (created), atomically; returns the paths, ``monitor.json`` first.
+    ``verified``: the baseline's statistics were built here or read against their checksum; a baseline read
+    unverified is written without one (a fresh checksum would vouch for what nothing checked)."""
     out.mkdir(parents=True, exist_ok=True)
     remove_stale_temporaries(out)  # of a writer killed mid-write over an hour ago
     paths = [write_json_atomic(out / "monitor.json", {"logs": list(entries)}),
-             write_json_atomic(out / "baseline.json", baseline.to_json(), checksum=True)]
+             write_json_atomic(out / "baseline.json", baseline.to_json(), checksum=verified)]
+    if not verified:
+        checksum_path(out / "baseline.json").unlink(missing_ok=True)  # an earlier result's (--replace)
     figs, paired_s = [], []
     for k, (obs, e) in enumerate(zip(observed, entries)):
         name = f"monitor_{k + 1}.png"
