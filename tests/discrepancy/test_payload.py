@@ -108,3 +108,20 @@ def test_discrepancy_fits_an_unknown_payload_and_names_nothing_the_stated_one_do
                if "scatter of the model's own replays" in f["reason"]}
     gone = dropped[("breakaway_friction", "shoulder_pan_joint")]
     assert gone["z"] < 4 and gone["replay_scatter"][0] > 0
+
+
+def test_a_finding_of_the_stated_payload_stays_out_of_model_yaml():
+    """A stated payload the fit finds wrong (its mass, its centre of mass) is the job's: in model.yaml it replaced
+    the stated payload of every other log the overlay was used on, and `campaign run --model` refused the file."""
+    from types import SimpleNamespace
+
+    from ur5fault.discrepancy.model import DiscrepancyModel
+    from ur5fault.sim.effects import make_effect
+
+    found = [make_effect("payload", None, mass_kg=1.5), make_effect("payload_com", None, dy_m=0.02),
+             make_effect("current_sensor_offset", 3, offset_A=0.1)]
+    m = object.__new__(DiscrepancyModel)
+    m.params_overrides_, m.base_effects_ = {}, ()
+    m.findings_ = [SimpleNamespace(kept=True, spec=lambda e=e: e) for e in found]
+    over = m.overlay()
+    assert [e["effect"] for e in over["effects"]] == ["current_sensor_offset"]

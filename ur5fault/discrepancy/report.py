@@ -238,7 +238,8 @@ def _markdown(model: DiscrepancyModel, summ: dict[str, Any], figs: list[Path]) -
     for loc in summ["localisation_before"]:
         lines.append(f"| {loc['signal']} | {loc['joint']} | {loc['rms']:.4g} | {loc['rms_over_noise']:.1f} | "
                      f"{loc['largest_where']} ({loc['rms_by_condition'][loc['largest_where']]:.4g}) |")
-    lines += ["", "## Payload (the job's, not the robot's: not in model.yaml)", ""]
+    lines += ["", "## Payload (the job's, not the robot's: not in model.yaml, nor a finding of its mass or centre of "
+              "mass below)", ""]
     lines += [f"- {rec.line()}" for rec in model.payload_.values()]
     lib = [sentence(f) for f in model.effects_]
     terms = [sentence(f) for f in model.terms_]
