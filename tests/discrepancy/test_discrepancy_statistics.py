@@ -172,4 +172,5 @@ def test_a_value_below_its_limit_reads_below_it():
     from ur5fault.discrepancy.statistics import below
 
     assert below(3.96, 4.0) == "3.96" and below(3.2, 4.0) == "3.2" and below(3.9996, 4.0) == "3.9996"
+    assert float(below(3.99999999, 4.0)) < 4.0
     assert below(-1.0, 4.0) == "-1.0"

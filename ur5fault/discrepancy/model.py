@@ -48,8 +48,6 @@ logger = logging.getLogger(__name__)
 
 #: the workflow's own sensor-noise stream of its replays, unrelated to any log
 WORKFLOW_SEED = 20261121
-#: findings of the job's payload (its mass and centre of mass): reported, never written into model.yaml
-JOB_EFFECTS = frozenset({"payload", "payload_com"})
 
 FIT_FRACTION_RANGE = (0.2, 0.9)
 #: the library is screened and the dictionary selected on at most this much of the fitting part [s]
@@ -295,12 +293,12 @@ class DiscrepancyModel:
     def overlay(self) -> dict:
         """The model overlay (``params`` and ``effects``) that ``simulate``, ``campaign run`` and
         ``discrepancy --model`` accept: the starting overlay plus every kept finding but those of the job's payload
-        (:data:`JOB_EFFECTS`: reported, not the robot's; in a campaign's overlay a payload is refused, and on another
-        log it would replace that log's stated payload)."""
+        (its mass and centre of mass, ``payload.PAYLOAD_KINDS``: reported, not the robot's; in a campaign's overlay a
+        payload is refused, and on another log it would replace that log's stated payload)."""
         def entry(e: EffectSpec) -> dict:
             return {"effect": e.name, **({"joint": JOINT_NAMES[e.joint]} if e.joint is not None else {}),
                     **dict(e.values)}
 
         effects = [entry(e) for e in self.base_effects_] + [entry(f.spec()) for f in self.findings_
-                                                            if f.kept and f.spec().name not in JOB_EFFECTS]
+                                                            if f.kept and f.spec().name not in PAYLOAD_KINDS]
         return {"params": self.params_overrides_, "effects": effects}

@@ -40,11 +40,12 @@ MIN_Z = 4.0
 
 def below(x: float, limit: float) -> str:
     """``x`` (below ``limit``) to as many decimals as it takes to read below it: "z 3.96 < 4", not "z 4.0 < 4"."""
-    for digits in (1, 2, 3, 4):
+    for digits in range(1, 17):
         text = f"{x:.{digits}f}"
         if float(text) < limit:
             return text
-    return f"{x:.6g}"
+    return repr(float(x))
+
 #: blocks of the block jackknife (standard errors and intervals)
 JACKKNIFE_BLOCKS = 10
 #: contiguous blocks of the fitting part in which a finding's estimate must be stable

@@ -144,9 +144,9 @@ def bandwidth_sweep(log: MeasuredLog, base_overrides: dict, lag_s: NDArray, lag_
 
 
 def sweep_estimate(s: Sweep, source: str = "the log") -> Estimate:
-    """The sweep as an estimate; ``source``: the log it replayed (of several, the first). A best bandwidth at an
-    end of the candidates is said to be there: the best may lie beyond it, and the interval says only that the
-    resamples chose the same end."""
+    """The sweep as an estimate; ``source``: the log it replayed (of several, the first whose window moves a joint).
+    A best bandwidth at an end of the candidates is said to be there: the best may lie beyond it, and the interval
+    says only that the resamples chose the same end."""
     scores = ", ".join(f"{f:g} Hz: {v:.2f}" for f, v in zip(s.bandwidths_Hz, s.scores))
     joints = ", ".join(f"J{j + 1}" for j in s.joints)
     edge = ""

@@ -130,10 +130,10 @@ def write(out: Path, baseline: Baseline, observed: Sequence[Observed], entries: 
     unverified is written without one (a fresh checksum would vouch for what nothing checked)."""
     out.mkdir(parents=True, exist_ok=True)
     remove_stale_temporaries(out)  # of a writer killed mid-write over an hour ago
+    if not verified:  # an earlier result's (--replace), removed first: a crash between would leave it mismatched
+        checksum_path(out / "baseline.json").unlink(missing_ok=True)
     paths = [write_json_atomic(out / "monitor.json", {"logs": list(entries)}),
              write_json_atomic(out / "baseline.json", baseline.to_json(), checksum=verified)]
-    if not verified:
-        checksum_path(out / "baseline.json").unlink(missing_ok=True)  # an earlier result's (--replace)
     figs, paired_s = [], []
     for k, (obs, e) in enumerate(zip(observed, entries)):
         name = f"monitor_{k + 1}.png"
