@@ -116,14 +116,38 @@ def test_a_part_of_a_fitted_log_held_out_is_refused(tmp_path):
     head = tmp_path / "head.csv"
     raw.iloc[:1300].to_csv(head, index=False)
     with pytest.raises(ParameterError, match=r"head.csv and Movement_No8_Singularity_Free_1.csv.gz \(fitted and held "
-                                             r"out\) share 1300 samples .*parts of one recording"):
+                                             r"out\) share \d+ rows in motion .*parts of one recording"):
         read_log_options(_args([str(RUN1), *STATED, "--hold-out", str(head)]))
     restarted = raw.iloc[600:1300].assign(time=lambda d: d["time"] - d["time"].iloc[0])
     restarted.to_csv(head, index=False)
-    with pytest.raises(ParameterError, match="share 700 samples"):
+    with pytest.raises(ParameterError, match="rows in motion"):
         read_log_options(_args([str(RUN1), *STATED, "--hold-out", str(head)]))
     fit, held = read_log_options(_args([str(RUN1), str(RUN2), *STATED, "--hold-out", str(TEST)]))  # three runs
     assert len(fit) == 2 and len(held) == 1
+
+
+def test_shared_rows_at_rest_or_of_one_noise_seed_are_not_a_cut():
+    """Rows at rest may repeat in two recordings of a coarse logger, and two simulations of one noise seed repeat
+    each other's samples until their effects act: neither is a part of one recording."""
+    from ur5fault.logs import MeasuredLog
+    from ur5fault.logs.options import refuse_same_samples
+
+    n = 400
+    t = np.arange(n) * 0.008
+    q = np.tile(np.linspace(0.0, 0.5, n)[:, None], (1, 6))
+    cur = np.sin(np.arange(n * 6, dtype=float)).reshape(n, 6)
+
+    def log(name, q_target, current, **kw):
+        return MeasuredLog(name, t, q_target, q_target.copy(), current, **kw)
+
+    still = np.zeros((n, 6))
+    a, b = log("a", still, cur), log("b", still, cur + np.r_[np.zeros(n - 1), 1.0][:, None])  # differ at the end
+    refuse_same_samples([("fitted", [a]), ("held out", [b])])  # at rest throughout: no row in motion
+    moved = cur + np.r_[np.zeros(n - 1), 1.0][:, None]
+    with pytest.raises(ParameterError, match="share 398 rows in motion"):
+        refuse_same_samples([("fitted", [log("a", q, cur)]), ("held out", [log("b", q, moved)])])
+    refuse_same_samples([("fitted", [log("a", q, cur, simulated=True)]),
+                         ("held out", [log("b", q, moved, simulated=True)])])
 
 
 def test_logs_of_one_file_name_in_two_folders_are_named_by_their_folders(tmp_path):

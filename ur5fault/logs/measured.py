@@ -56,6 +56,8 @@ class MeasuredLog:
     #: previous measured position, as a CB2 controller logs it), ``"setpoint"`` (a fixed pose, as a CB3), ``None``
     #: (not seen); logs of one robot's controller share it
     rest_target: str | None = None
+    #: written by ur5fault's simulator (``read_sim``), not recorded by a robot
+    simulated: bool = False
 
     @property
     def payload_known(self) -> bool:

@@ -32,6 +32,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
+from numpy.typing import NDArray
 
 from ..errors import LogFormatError, ParameterError
 from ..util.checks import check_bool
@@ -329,16 +330,20 @@ def _read_named(e: LogEntry, name: str, allow_unknown: bool) -> MeasuredLog:
         raise type(exc)(name + text[len(e.path.name):]) from None
 
 
-#: two logs sharing at least this many rows (and this share of the shorter one's) are parts of one recording: a
-#: row holds every joint's measured position and current, which two recordings never repeat over tens of samples
+#: two recorded logs sharing at least this many rows taken in motion (and this share of the shorter one's) are parts
+#: of one recording: a row holds every joint's measured position and current, which two recordings of a moving arm
+#: never repeat (at rest, a coarse log may)
 SHARED_ROWS_MIN, SHARED_ROWS_SHARE = 25, 0.01
 
 
-def _row_keys(log: MeasuredLog) -> set[bytes]:
-    """One key per logged row: its measured positions and currents, bit for bit (not its time, which a cut may
-    restart)."""
-    rows = np.ascontiguousarray(np.hstack([log.q_actual_rad, log.current_A])[log.logged_rows()], dtype=np.float64)
-    return {r.tobytes() for r in rows}
+def _moving_rows(log: MeasuredLog) -> NDArray:
+    """The log's distinct logged rows where some joint's target moves, each as one opaque value: its measured
+    positions and currents, bit for bit (not its time, which a cut may restart)."""
+    moving = np.zeros(log.t_s.size, dtype=bool)
+    moving[1:] = (np.diff(log.q_target_rad, axis=0) != 0.0).any(axis=1)
+    rows = np.ascontiguousarray(np.hstack([log.q_actual_rad, log.current_A])[log.logged_rows() & moving],
+                                dtype=np.float64)
+    return np.unique(rows.view(np.dtype((np.void, rows.dtype.itemsize * rows.shape[1]))).ravel())
 
 
 def refuse_same_samples(groups: Sequence[tuple[str, Sequence[MeasuredLog]]]) -> None:
@@ -356,14 +361,18 @@ def refuse_same_samples(groups: Sequence[tuple[str, Sequence[MeasuredLog]]]) -> 
                     f"{log.source} and {name} hold the same samples ({both})"
                 raise ParameterError(f"{what}: one recording counts once; give it once")
             seen[sha] = (log.source, role)
-    tagged = [(role, log, _row_keys(log)) for role, logs in groups for log in logs]
-    for i, (role_a, a, keys_a) in enumerate(tagged):
-        for role_b, b, keys_b in tagged[i + 1:]:
-            shared = len(keys_a & keys_b)
-            if shared >= max(SHARED_ROWS_MIN, SHARED_ROWS_SHARE * min(len(keys_a), len(keys_b))):
+    # parts of one recording: recorded logs only (simulated ones of one noise seed repeat each other's samples
+    # wherever their effects have not acted yet: the seed's, not a cut)
+    tagged = [(role, log) for role, logs in groups for log in logs if not log.simulated]
+    rows = [_moving_rows(log) for _, log in tagged] if len(tagged) > 1 else []
+    for i, (role_a, a) in enumerate(tagged):
+        for k, (role_b, b) in enumerate(tagged[i + 1:], start=i + 1):
+            shared = np.intersect1d(rows[i], rows[k], assume_unique=True).size
+            if shared >= max(SHARED_ROWS_MIN, SHARED_ROWS_SHARE * min(rows[i].size, rows[k].size)):
                 both = f"both {role_a}" if role_a == role_b else f"{role_a} and {role_b}"
-                raise ParameterError(f"{b.source} and {a.source} ({both}) share {shared} samples (of {len(keys_b)} "
-                                     f"and {len(keys_a)}): parts of one recording; give each sample once")
+                raise ParameterError(f"{b.source} and {a.source} ({both}) share {shared} rows in motion (of "
+                                     f"{rows[k].size} and {rows[i].size}): parts of one recording; give each sample "
+                                     "once")
 
 
 def read_log_options(args: argparse.Namespace, *, allow_unknown: bool = False,

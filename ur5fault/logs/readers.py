@@ -307,7 +307,7 @@ def read_sim(path: str | Path, length: plausible.MinLength | None = None) -> Mea
     return MeasuredLog(
         source=src, t_s=t, q_target_rad=arrays["q_set_rad"], q_actual_rad=arrays["q_FB_rad"],
         current_A=arrays["i_FB_A"], tcp_m=_stack(d, tcp), q_motor_rad=_stack(d, qm), temperature_C=temp_arr,
-        payload_kg=payload, tcp_offset_m=offset, payload_held=held,  # type: ignore[arg-type]
+        payload_kg=payload, tcp_offset_m=offset, payload_held=held, simulated=True,  # type: ignore[arg-type]
     )
 
 
