@@ -47,11 +47,17 @@ def test_log_overrides_carry_the_tool_and_clip_the_temperature():
 
 def test_a_model_overlay_with_another_tool_is_refused():
     """An overlay's tcp_offset_m replaced the log's stated tool in the replay while the report named the stated
-    one, and was carried into the written model.yaml; the same tool is accepted."""
+    one, and was carried into the written model.yaml. The replay now keeps the log's tool, and the workflows refuse
+    the overlay where they start (a log whose tool is not stated, an unknown payload's, is not compared)."""
+    from ur5fault.twin.replay import refuse_other_tool
+
+    assert tuple(replay_params(_log(), {"tcp_offset_m": [0.0, 0.0, 0.6]}).tcp_offset_m) == (0.0, 0.0, 0.12)
     with pytest.raises(ParameterError, match=r"tcp_offset_m = \[0.0, 0.0, 0.6\] m, but synthetic's tool offset is "
                                              r"\[0.0, 0.0, 0.12\] m"):
-        replay_params(_log(), {"tcp_offset_m": [0.0, 0.0, 0.6]})
-    assert tuple(replay_params(_log(), {"tcp_offset_m": [0.0, 0.0, 0.12]}).tcp_offset_m) == (0.0, 0.0, 0.12)
+        refuse_other_tool({"tcp_offset_m": [0.0, 0.0, 0.6]}, [_log()])
+    refuse_other_tool({"tcp_offset_m": [0.0, 0.0, 0.12]}, [_log()])
+    refuse_other_tool({"tcp_offset_m": [0.0, 0.0, 0.6]}, [dataclasses.replace(_log(), tcp_offset_m=None)])
+    refuse_other_tool({}, [_log()])
 
 
 def test_replay_equals_the_plain_simulator_run():

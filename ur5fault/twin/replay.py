@@ -52,17 +52,26 @@ def log_overrides(log: MeasuredLog) -> dict:
 def replay_params(log: MeasuredLog, params_overrides: dict | None = None) -> RobotParams:
     """The packaged parameters under ``params_overrides`` (the robot's model), then the log's own overrides
     (:func:`log_overrides`), which win: the tool and the measured temperatures belong to the log, not to the robot
-    (an overlay's ``joint_temperature_C`` stands for a log that logs none). An overlay whose tool offset differs
-    from the log's is refused: it would replay another tool than the one stated while the report names the log's."""
+    (an overlay's ``joint_temperature_C`` stands for a log that logs none; an overlay's tool is refused where the
+    workflows start, :func:`refuse_other_tool`)."""
+    return load_params(overrides=deep_merge(dict(params_overrides or {}), log_overrides(log)))
+
+
+def refuse_other_tool(params_overrides: dict | None, logs: Sequence[MeasuredLog]) -> None:
+    """A model overlay whose ``tcp_offset_m`` differs from a log's stated tool, refused in one line: the log's tool
+    is the one replayed (:func:`replay_params`) and reported, so the overlay's would be ignored without a word.
+    Logs whose tool is not stated (an unknown payload's centre of mass, fitted) are not compared."""
     over = dict(params_overrides or {})
-    if "tcp_offset_m" in over:
-        tool = load_params(overrides={"tcp_offset_m": over["tcp_offset_m"]}, where="the model overlay: params")
-        if not np.allclose(tool.tcp_offset_m, log.tcp_offset_m, rtol=0.0, atol=1e-9):
+    if "tcp_offset_m" not in over:
+        return
+    tool = load_params(overrides={"tcp_offset_m": over["tcp_offset_m"]}, where="the model overlay: params")
+    for log in logs:
+        if log.tcp_offset_m is not None and not np.allclose(tool.tcp_offset_m, log.tcp_offset_m, rtol=0.0,
+                                                            atol=1e-9):
             raise ParameterError(f"the model overlay sets params.tcp_offset_m = {list(tool.tcp_offset_m)} m, but "
                                  f"{log.source}'s tool offset is {list(log.tcp_offset_m)} m: the tool is the log's "
                                  "(--tcp-offset-m, a manifest's tcp_offset_m or the log's layout), not the robot's "
                                  "model; leave it out of the overlay")
-    return load_params(overrides=deep_merge(over, log_overrides(log)))
 
 
 @dataclasses.dataclass(frozen=True)
@@ -123,7 +132,8 @@ class LogReplay:
 
     Args:
         log: the measured log.
-        params_overrides: robot-parameter overrides of the model overlay (applied after the log's own).
+        params_overrides: robot-parameter overrides of the model overlay (under the log's own tool and measured
+            temperatures, :func:`replay_params`).
         base_effects: effects of the model overlay, carried by every replay.
         seed: sensor-noise seed of the replays.
         jobs: worker processes for batches of replays.
