@@ -195,3 +195,22 @@ def test_an_optional_group_present_in_part_is_said(tmp_path):
     assert "5 of the 6 columns target_current_0..target_current_5 are present (missing: target_current_3): the " \
            "group is not used" in said[0]
     assert "(missing: target_moment_5)" in said[1]
+
+
+def test_a_stiffness_beyond_the_parameters_range_is_the_models_value_marked(monkeypatch):
+    """Starts with almost no displacement give a positive stiffness beyond the parameter's 1e9 N*m/rad, which the
+    overlay then could not hold; kept at the model's value and said why, as a NaN is."""
+    from types import SimpleNamespace
+
+    from ur5fault.identify import core, stats, stickslip
+
+    found = [e for j in range(6) for e in (
+        stats.Estimate("friction.breakaway_A", j, 0.8, 0.7, 0.9, "m"),
+        stats.Estimate("friction.presliding_stiffness_Nm_per_rad", j, 3e9 if j == 0 else 5e4, 1e4, 5e9, "m"))]
+    monkeypatch.setattr(stickslip, "identify_stickslip", lambda *a, **k: found)
+    fit = SimpleNamespace(ok=np.ones(6, dtype=bool))
+    prior = np.full(6, 1.2e4)
+    out = core._breakaway(None, fit, np.zeros((4, 6)), np.full(6, 0.5), np.zeros(6), 20, 0, prior)
+    stiff = [x for x in out if x.key == "friction.presliding_stiffness_Nm_per_rad"]
+    assert not stiff[0].identifiable and stiff[0].value == 1.2e4 and "beyond the model's 1e+09" in stiff[0].note
+    assert all(x.identifiable and x.value == 5e4 for x in stiff[1:])

@@ -19,13 +19,11 @@ from numpy.typing import NDArray
 from ..errors import ParameterError
 from ..logs import MeasuredLog
 from ..sim.axes import N_JOINTS
-from ..sim.params import RobotParams, load_params
+from ..sim.params import FrictionParams, RobotParams, load_params
 from . import friction, loadfriction, loop, motor, payload, ripple, sensors, stickslip, urmodel
-from .report import Identification, overlay_params
+from .report import PRESLIDING_KEY, Identification, overlay_params
 from .signals import derive_all
 from .stats import BLOCK_S, N_BOOT, Estimate, block_indices, bootstrap, fallback, interval
-
-PRESLIDING_KEY = "friction.presliding_stiffness_Nm_per_rad"
 
 
 def identify(log: MeasuredLog | Sequence[MeasuredLog], params: RobotParams | None = None, *,
@@ -234,23 +232,34 @@ def _presliding_prior(p: RobotParams) -> NDArray:
     return np.broadcast_to(np.asarray(p.friction.presliding_stiffness_Nm_per_rad, float), (N_JOINTS,))
 
 
+def _presliding_range() -> tuple[float, float]:
+    """The range the parameters declare for the presliding stiffness [N*m/rad] (open below)."""
+    meta = next(f.metadata for f in dataclasses.fields(FrictionParams) if f.name == "presliding_stiffness_Nm_per_rad")
+    return float(meta["lo"]), float(meta["hi"])
+
+
 def _breakaway(sig, fit: friction.FrictionFit, full: NDArray, coulomb_A: NDArray, q_noise: NDArray, n_boot: int,
                seed: int, stiffness_prior: NDArray) -> list[Estimate]:
     """Breakaway current and presliding stiffness per joint.  Where the starts do not show a breakaway
     (its interval reaches zero), the breakaway is the joint's Coulomb level times the breakaway-to-Coulomb
     ratio measured on the joints where they do, and the stiffness is not reported.  A stiffness the starts do
-    not give as a positive number (the torque rose while the joint moved back: a push by hand) is not
-    identifiable there and keeps the model's value (``stiffness_prior``)."""
+    not give within the parameter's range (no positive number: the torque rose while the joint moved back, a push
+    by hand; or beyond its upper bound: almost no displacement) is not identifiable there and keeps the model's value
+    (``stiffness_prior``)."""
     found = stickslip.identify_stickslip(sig, full[0], full[3], q_noise, np.flatnonzero(fit.ok), n_boot, seed)
+    lo, hi = _presliding_range()
     brk = {e.joint: e for e in found if e.key == "friction.breakaway_A"}
     good = {j for j, e in brk.items() if e.lo > 0}
     out = []
     for e in found:
         if e.joint not in good:
             continue
-        if e.key == PRESLIDING_KEY and not (np.isfinite(e.value) and e.value > 0.0):
+        if e.key == PRESLIDING_KEY and not (np.isfinite(e.value) and lo < e.value <= hi):
+            positive = bool(np.isfinite(e.value) and e.value > 0.0)
+            why = (f"give {e.value:.3g} N*m/rad, beyond the model's {hi:g} (almost no displacement)" if positive
+                   else "give no positive torque change over joint displacement")
             e = fallback(PRESLIDING_KEY, e.joint, stiffness_prior[e.joint], "kept the model's value",
-                         f"the starts of J{e.joint + 1} give no positive torque change over joint displacement")
+                         f"the starts of J{e.joint + 1} {why}")
         out.append(e)
     ratio = float(np.median([brk[j].value / coulomb_A[j] for j in good])) if good else 1.0
     src = ", ".join(f"J{j + 1}" for j in sorted(good)) or "no joint (ratio 1 assumed)"

@@ -24,6 +24,7 @@ from .stats import Estimate
 
 #: stick-slip parameters of issue 10 part A: written as soon as the friction parameters have the field
 PRESLIDING_FIELD = "presliding_stiffness_Nm_per_rad"
+PRESLIDING_KEY = f"friction.{PRESLIDING_FIELD}"
 #: what this log cannot give for the stick-slip law and the friction share, and why
 NOT_IDENTIFIABLE = (
     "friction.model (smooth sign vs stick-slip law): a model choice, made by comparing replays "
@@ -150,7 +151,7 @@ def overlay_params(ident: Identification, params: RobotParams) -> dict[str, Any]
         # a packaged breakaway below a measured Coulomb level would make a dip, not a peak: no Stribeck peak then
         fr["static_Nm"] = vec(np.maximum(_measured(ident, "friction.breakaway_A", f.static_Nm, k_joint), coulomb))
     fr["viscous_Nms_per_rad"] = vec(_measured(ident, "friction.viscous_A_s_per_rad", f.viscous_Nms_per_rad, k_joint))
-    if ident.has("friction.presliding_stiffness_Nm_per_rad") and PRESLIDING_FIELD in {
+    if ident.has(PRESLIDING_KEY) and PRESLIDING_FIELD in {
             f.name for f in dataclasses.fields(FrictionParams)}:
         fr[PRESLIDING_FIELD] = vec(_presliding(ident, params))
     out["friction"] = fr
@@ -206,6 +207,6 @@ def not_written(ident: Identification) -> list[str]:
 def _presliding(ident: Identification, params: RobotParams) -> NDArray:
     """Identified joints take their estimate; the others keep the model's value (its stated assumption)."""
     vals = {e.joint: e.value for e in ident.estimates
-            if e.key == "friction.presliding_stiffness_Nm_per_rad" and e.identifiable}
+            if e.key == PRESLIDING_KEY and e.identifiable}
     prior = getattr(params.friction, PRESLIDING_FIELD)
     return np.array([vals.get(j, prior[j]) for j in range(N_JOINTS)])
