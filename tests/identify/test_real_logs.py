@@ -214,3 +214,15 @@ def test_a_stiffness_beyond_the_parameters_range_is_the_models_value_marked(monk
     stiff = [x for x in out if x.key == "friction.presliding_stiffness_Nm_per_rad"]
     assert not stiff[0].identifiable and stiff[0].value == 1.2e4 and "beyond the model's 1e+09" in stiff[0].note
     assert all(x.identifiable and x.value == 5e4 for x in stiff[1:])
+
+
+def test_a_dead_current_sensor_is_named(tmp_path):
+    """A joint whose recorded current is 0.0 in every row was fitted as a Coulomb level of 0.04 A and an offset of
+    -1.36 A, without a word."""
+    def dead(df):
+        df["actual_current_2"] = 0.0
+        return df
+
+    log = _kufieta(tmp_path, "Movement_No8_Singularity_Free_1.csv.gz", edit=dead)
+    with pytest.raises(LogFormatError, match="the current of joint 3 reads 0 A in every row: a dead sensor"):
+        read_log(log, "rtde", payload_kg=0.0, tcp_offset_m=(0, 0, 0))

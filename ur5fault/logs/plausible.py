@@ -20,6 +20,9 @@ Limits and their reasons:
   assumed for ``sensors.current_lsb_A`` in ``ur5_drive.yaml``): a reading beyond it is a unit mistake,
   and one that fits once divided by 1000 is named as milliamperes (a current in mA once reached the
   discrepancy report as 3300 A "unexplained");
+- a current reading that changes: a recorded joint current holding one value in every row is a dead sensor or a
+  column the recorder filled (a real reading's noise gives it 43..3,700 distinct values per joint in the real logs
+  of data/; identify fitted an all-zero one as a Coulomb level of 0.04 A and an offset of -1.36 A);
 - joint temperatures, where logged: each joint's median within the model's range for
   ``joint_temperature_C`` (:func:`temperature_range_C`, -20..120 degC), one in 253..393 named as kelvin (a
   log in kelvin once gave ``identify`` a viscous friction of 2337 N*m*s/rad, which every other command refused,
@@ -198,3 +201,14 @@ def check_temperature_units(src: str, temperature_C: NDArray | None) -> None:
                 else "wrong column or unit")
         raise LogFormatError(f"{src}: the temperature of joint {j + 1} has a median of {m:.4g} degC, outside the "
                              f"{lo:g}..{hi:g} degC the model takes: {hint}")
+
+
+def check_current_alive(src: str, current_A: NDArray) -> None:
+    """Each joint's recorded current takes more than one value over the log (not for simulated logs, whose
+    sensor noise may be switched off)."""
+    if current_A.shape[0] < 2:
+        return
+    for j in range(current_A.shape[1]):
+        if np.all(current_A[:, j] == current_A[0, j]):
+            raise LogFormatError(f"{src}: the current of joint {j + 1} reads {current_A[0, j]:g} A in every row: a "
+                                 "dead sensor or a column the recorder filled, nothing to fit")

@@ -121,6 +121,7 @@ def _assemble(src: str, t: NDArray, required: Mapping[str, NDArray], optional: M
                          "made continuous")
     plausible.check_increasing(src, t)
     plausible.check_temperature_units(src, opt["temperature"])
+    plausible.check_current_alive(src, req["actual_current"])
     plausible.check_range(src, req["actual_q"], t, opt["actual_qd"], declared)
     plausible.check_sampling(src, t, length)
     plausible.check_units(src, t, req["target_q"], opt["target_qd"], labels[0], declared)
