@@ -20,8 +20,9 @@ from ..errors import ParameterError
 from ..logs import MeasuredLog
 from ..sim.axes import N_JOINTS
 from ..sim.params import FrictionParams, RobotParams, load_params
+from ..sim.validated import declared_range
 from . import friction, loadfriction, loop, motor, payload, ripple, sensors, stickslip, urmodel
-from .report import PRESLIDING_KEY, Identification, overlay_params
+from .report import PRESLIDING_FIELD, PRESLIDING_KEY, Identification, overlay_params
 from .signals import derive_all
 from .stats import BLOCK_S, N_BOOT, Estimate, block_indices, bootstrap, fallback, interval
 
@@ -119,7 +120,7 @@ def identify(log: MeasuredLog | Sequence[MeasuredLog], params: RobotParams | Non
     result = Identification(source, duration_s, tuple(est), None)
     bw_prior = float(np.mean(p.controller.position_bw_Hz))
     # the sweep replays the first log whose first sweep_window_s moves a joint (none: it cannot tell)
-    sweep_log = next((lg for lg in logs if loop.sweep_joints(lg, sweep_window_s)[1]), None)
+    sweep_log = next((lg for lg in logs if loop.sweep_joints(lg, sweep_window_s)[1]), None) if sweep else None
     if sweep and sweep_log is None:
         sw = None
         est.append(fallback("controller.position_bw_Hz", None, bw_prior, "kept the model's value",
@@ -232,12 +233,6 @@ def _presliding_prior(p: RobotParams) -> NDArray:
     return np.broadcast_to(np.asarray(p.friction.presliding_stiffness_Nm_per_rad, float), (N_JOINTS,))
 
 
-def _presliding_range() -> tuple[float, float]:
-    """The range the parameters declare for the presliding stiffness [N*m/rad] (open below)."""
-    meta = next(f.metadata for f in dataclasses.fields(FrictionParams) if f.name == "presliding_stiffness_Nm_per_rad")
-    return float(meta["lo"]), float(meta["hi"])
-
-
 def _breakaway(sig, fit: friction.FrictionFit, full: NDArray, coulomb_A: NDArray, q_noise: NDArray, n_boot: int,
                seed: int, stiffness_prior: NDArray) -> list[Estimate]:
     """Breakaway current and presliding stiffness per joint.  Where the starts do not show a breakaway
@@ -247,7 +242,7 @@ def _breakaway(sig, fit: friction.FrictionFit, full: NDArray, coulomb_A: NDArray
     by hand; or beyond its upper bound: almost no displacement) is not identifiable there and keeps the model's value
     (``stiffness_prior``)."""
     found = stickslip.identify_stickslip(sig, full[0], full[3], q_noise, np.flatnonzero(fit.ok), n_boot, seed)
-    lo, hi = _presliding_range()
+    lo, hi = declared_range(FrictionParams, PRESLIDING_FIELD)  # open below
     brk = {e.joint: e for e in found if e.key == "friction.breakaway_A"}
     good = {j for j, e in brk.items() if e.lo > 0}
     out = []

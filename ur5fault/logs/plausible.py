@@ -183,9 +183,9 @@ def temperature_range_C() -> tuple[float, float]:
     """The model's range of ``joint_temperature_C`` [degC] (``sim/params.py``): what a log's temperatures must lie
     in, and what a replay clips single readings to."""
     from ..sim.params import RobotParams
+    from ..sim.validated import declared_range
 
-    meta = next(f.metadata for f in dataclasses.fields(RobotParams) if f.name == "joint_temperature_C")
-    return float(meta["lo"]), float(meta["hi"])
+    return declared_range(RobotParams, "joint_temperature_C")
 
 
 def check_temperature_units(src: str, temperature_C: NDArray | None) -> None:

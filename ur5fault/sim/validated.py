@@ -53,6 +53,13 @@ def param(
     return dataclasses.field(default=default, metadata=meta)
 
 
+def declared_range(cls: type, name: str) -> tuple[float, float]:
+    """The range ``[lo, hi]`` the field ``name`` of the parameter class ``cls`` declares (:func:`param`; whether
+    ``lo`` is open is the declaration's ``lo_open``)."""
+    meta = next(f.metadata for f in dataclasses.fields(cls) if f.name == name)
+    return float(meta["lo"]), float(meta["hi"])
+
+
 def _range_text(meta: Mapping[str, Any]) -> str:
     lo, hi = meta["lo"], meta["hi"]
     left = "(" if meta.get("lo_open") else "["
