@@ -3,11 +3,12 @@
 from __future__ import annotations
 
 import json
+import math
 
 import numpy as np
 
 from ur5fault.identify import report, stats
-from ur5fault.util.io import finite_json, json_text
+from ur5fault.util.io import finite_json, json_float, json_text, write_json_atomic
 
 
 def _strict(text: str):
@@ -32,3 +33,16 @@ def test_identify_json_of_a_value_the_log_cannot_give_is_strict():
         stats.Estimate("motor.torque_constant_Nm_per_A", 1, 0.13, 0.12, 0.14, "m")))
     got = _strict(json.dumps(ident.to_json(), allow_nan=False))
     assert got["estimates"][0]["lo"] is None and got["estimates"][1]["hi"] == 0.14
+
+
+def test_written_json_files_are_strict_unless_asked(tmp_path):
+    """write_json_atomic wrote bare NaN / Infinity (manifests, metrics.json, monitor's and diagnose's files) that
+    JavaScript's JSON.parse and jq refuse; now null, read back as NaN by json_float. strict=False keeps Python's
+    tokens for a file only ur5fault reads (the twin radius cache: an infinite radius means a failed ray)."""
+    data = {"x": float("nan"), "y": [np.float64(np.inf), 2.0]}
+    strict = write_json_atomic(tmp_path / "a.json", data)
+    got = _strict(strict.read_text())
+    assert got == {"x": None, "y": [None, 2.0]}
+    assert math.isnan(json_float(got["x"])) and json_float(got["y"][1]) == 2.0 and json_float(3) == 3.0
+    loose = write_json_atomic(tmp_path / "b.json", data, strict=False)
+    assert "NaN" in loose.read_text() and json.loads(loose.read_text())["y"][0] == math.inf

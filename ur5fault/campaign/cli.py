@@ -3,9 +3,9 @@
 from __future__ import annotations
 
 import argparse
-import json
 from pathlib import Path
 
+from ..util.io import json_text
 from .spec import shipped_campaigns
 
 
@@ -107,7 +107,7 @@ def cmd_status(args: argparse.Namespace) -> int:
     from . import status
 
     info = status(Path(args.dir))
-    print(json.dumps(info, indent=2, default=str))
+    print(json_text(info))
     runs = info.get("runs") or info.get("inspections") or {}   # a life campaign's files are inspections
     table = info.get("inspections_table" if info.get("kind") == "life" else "features") or {}
     stale = info.get("state") == "complete" and table.get("state") != "ok"

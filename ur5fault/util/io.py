@@ -298,9 +298,21 @@ def json_text(data: Any, indent: int | None = 2) -> str:
     return json.dumps(finite_json(data), indent=indent, allow_nan=False, default=str)
 
 
-def write_json_atomic(path: str | Path, data: Mapping[str, Any], checksum: bool = False) -> Path:
-    """Write ``data`` as indented JSON atomically, with a SHA-256 sidecar when ``checksum``."""
-    text = json.dumps(data, indent=2, default=str)
+def json_float(value: Any) -> float:
+    """A number read back from a file :func:`write_json_atomic` wrote: ``null`` (no value, :func:`finite_json`)
+    as NaN, anything else through ``float``."""
+    return math.nan if value is None else float(value)
+
+
+def write_json_atomic(path: str | Path, data: Mapping[str, Any], checksum: bool = False, *,
+                      strict: bool = True) -> Path:
+    """Write ``data`` as indented JSON atomically, with a SHA-256 sidecar when ``checksum``.
+
+    ``strict`` (the default): every non-finite number as ``null`` (:func:`json_text`), so that every JSON parser
+    reads the file (JavaScript's ``JSON.parse``, ``jq``; a bare ``NaN`` is Python's extension); its readers take
+    ``null`` back as NaN (:func:`json_float`).  ``strict=False`` keeps Python's ``NaN`` / ``Infinity`` for a
+    file only ur5fault reads where an infinite value means something other than none."""
+    text = json_text(data) if strict else json.dumps(data, indent=2, default=str)
     return _atomic(path, lambda tmp: Path(tmp).write_text(text), checksum)
 
 

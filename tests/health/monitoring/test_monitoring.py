@@ -15,6 +15,7 @@ from ur5fault.errors import ParameterError
 from ur5fault.health.monitoring import Observed, assess, fit_baseline
 from ur5fault.health.monitoring.baseline import Baseline, overlay_sha256
 from ur5fault.health.monitoring.events import multiplier
+from ur5fault.util.io import write_json_atomic
 
 PERIOD = 0.008
 #: the packaged friction law's Stribeck speed [rad/s] (1 / its stribeck_rate_s_per_rad of 10 s/rad)
@@ -141,6 +142,15 @@ def test_baseline_round_trip_and_refusals(tmp_path):
     np.testing.assert_array_equal(back.cond_scale, b.cond_scale)
     np.testing.assert_array_equal(back.cond_tail, b.cond_tail)
     assert back.slow_rad_s == b.slow_rad_s
+    # a statistic with no value (NaN) is written as null (strict JSON) and read back as NaN
+    label = "wrist_3_joint: current_sensor_offset.offset_A"
+    holes = dataclasses.replace(b, scale=np.where(np.arange(b.scale.size).reshape(b.scale.shape) == 0, np.nan, b.scale),
+                                candidates={**b.candidates, label: (0.01, np.nan, 1)})
+    write_json_atomic(path, holes.to_json())
+    assert "NaN" not in path.read_text()
+    back = Baseline.load(path)
+    np.testing.assert_array_equal(back.scale, holes.scale)
+    assert np.isnan(back.candidates[label][1]) and back.candidates[label][2] == 1
     path.write_text(json.dumps({**b.to_json(), "channels": 3}))
     with pytest.raises(ParameterError, match="not a valid monitor baseline"):
         Baseline.load(path)

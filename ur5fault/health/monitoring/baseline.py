@@ -27,7 +27,7 @@ from numpy.typing import NDArray
 
 from ...errors import ParameterError
 from ...sim.axes import JOINT_NAMES, N_JOINTS
-from ...util.io import checksum_path, verify_checksum
+from ...util.io import checksum_path, json_float, verify_checksum
 from . import paired
 from .changes import BLOCK_S, block_estimates, spreads
 from .conditions import CONDITIONS
@@ -135,17 +135,17 @@ class Baseline:
                     raise ParameterError(f"{where}: written with {key} = {data[key]}, this version uses {value}; "
                                          f"rebuild it with --baseline-logs")
             ch = data["channels"]
-            scale = np.array([[[float(ch[c]["scale"][j][f]) for f in FEATURES] for j in JOINT_NAMES]
+            scale = np.array([[[json_float(ch[c]["scale"][j][f]) for f in FEATURES] for j in JOINT_NAMES]
                               for c in CHANNELS])
-            tail = np.array([[[float(ch[c]["tail"][j][k]) for k in ("u0", "beta", "p0")] for j in JOINT_NAMES]
+            tail = np.array([[[json_float(ch[c]["tail"][j][k]) for k in ("u0", "beta", "p0")] for j in JOINT_NAMES]
                              for c in CHANNELS])
             quantum = np.array([np.nan if data["position_quantum_rad"][j] is None
                                 else float(data["position_quantum_rad"][j]) for j in JOINT_NAMES])
             task = data["task_runs"]
             t_scale = np.array([np.full((N_JOINTS, len(FEATURES)), np.nan) if r["scale"] is None else
-                                [[float(r["scale"][j][f]) for f in FEATURES] for j in JOINT_NAMES] for r in task])
+                                [[json_float(r["scale"][j][f]) for f in FEATURES] for j in JOINT_NAMES] for r in task])
             t_tail = np.array([np.full((N_JOINTS, 3), np.nan) if r["tail"] is None else
-                               [[float(r["tail"][j][k]) for k in ("u0", "beta", "p0")] for j in JOINT_NAMES]
+                               [[json_float(r["tail"][j][k]) for k in ("u0", "beta", "p0")] for j in JOINT_NAMES]
                                for r in task])
             runs = [(np.array(r["target_rad"], float).reshape(-1, N_JOINTS),
                      np.array(r["residual_A"], float).reshape(-1, N_JOINTS)) for r in task]
@@ -158,12 +158,13 @@ class Baseline:
                 raise ValueError("the task runs do not match the segments, or their targets and residuals differ "
                                  "in length")
             return cls(str(data["overlay_sha256"]), float(data["period_s"]), tuple(map(str, data["segments"])),
-                       scale, tail, quantum, {str(k): (float(v["mean"]), float(v["variance"]), int(v["n_blocks"]))
-                                     for k, v in data["candidates"].items()},
+                       scale, tail, quantum,
+                       {str(k): (json_float(v["mean"]), json_float(v["variance"]), int(v["n_blocks"]))
+                        for k, v in data["candidates"].items()},
                        tuple(t for t, _ in runs), tuple(r for _, r in runs), t_scale, t_tail,
                        float(data["slow_rad_s"]), c_scale, c_tail,
-                       {str(k): (float(v["mean"]), float(v["variance"]), float(v["n_blocks"]),
-                                 float(v["design_effect"])) for k, v in data["paired_candidates"].items()})
+                       {str(k): (json_float(v["mean"]), json_float(v["variance"]), json_float(v["n_blocks"]),
+                                 json_float(v["design_effect"])) for k, v in data["paired_candidates"].items()})
         except ParameterError:
             raise  # already one line saying what to do (ParameterError is a ValueError)
         except (KeyError, TypeError, ValueError, AttributeError) as exc:
@@ -190,7 +191,7 @@ def _stat(keys: Sequence[str], values: NDArray) -> dict | None:
 
 
 def _unstat(keys: Sequence[str], entry: dict | None) -> list[float]:
-    return [np.nan] * len(keys) if entry is None else [float(entry[k]) for k in keys]
+    return [np.nan] * len(keys) if entry is None else [json_float(entry[k]) for k in keys]
 
 
 def _nulls(x: NDArray) -> list:

@@ -94,5 +94,7 @@ class RadiusCache:
         if todo:
             new = tb.failure_radii(setup, [rays[i] for i in todo])
             self.entries.update({keys[i]: float(v) for i, v in zip(todo, new, strict=True)})
-            write_json_atomic(self.path, {"version": VERSION, "radii": self.entries}, checksum=True)
+            # Python's JSON: an infinite radius (the ray's run stopped: failed) is not "no value", and only this
+            # class reads the file
+            write_json_atomic(self.path, {"version": VERSION, "radii": self.entries}, checksum=True, strict=False)
         return np.array([self.entries[k] for k in keys])
