@@ -130,7 +130,7 @@ def test_shared_rows_at_rest_or_of_one_noise_seed_are_not_a_cut():
     """Rows at rest may repeat in two recordings of a coarse logger, and two simulations of one noise seed repeat
     each other's samples until their effects act: neither is a part of one recording."""
     from ur5fault.logs import MeasuredLog
-    from ur5fault.logs.options import refuse_same_samples
+    from ur5fault.logs.same_samples import refuse_same_samples
 
     n = 400
     t = np.arange(n) * 0.008

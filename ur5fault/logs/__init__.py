@@ -1,5 +1,6 @@
 """Measured logs: readers (:mod:`.readers`) for UR RTDE CSV, the NIST layout and ur5fault's own
-time series, defensive file access (:mod:`.source`) and plausibility checks (:mod:`.plausible`)."""
+time series, defensive file access (:mod:`.source`) and plausibility checks (:mod:`.plausible`); the command
+line's log options (:mod:`.options`) and the refusal of one recording given twice (:mod:`.same_samples`)."""
 
 from .measured import MeasuredLog
 from .readers import (

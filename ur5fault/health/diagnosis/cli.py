@@ -34,7 +34,8 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
     from ...config import Overlay
     from ...errors import ParameterError
     from ...logs.length import check_files_length, check_logs_length
-    from ...logs.options import log_entries, read_entry, refuse_hold_out, refuse_same_samples
+    from ...logs.options import log_entries, read_entry, refuse_hold_out
+    from ...logs.same_samples import refuse_same_samples
     from ...util.io import check_new_output
     from ..diagnostics.classifier import require_sklearn
     from ..diagnostics.saved import load_models

@@ -46,7 +46,8 @@ def cmd_monitor(args: argparse.Namespace) -> int:
     from ...errors import ParameterError
     from ...logs.length import check_files_length, check_logs_length
     from ...logs.measured import assumption_notes
-    from ...logs.options import log_entries, read_log_options, refuse_hold_out, refuse_same_samples
+    from ...logs.options import log_entries, read_log_options, refuse_hold_out
+    from ...logs.same_samples import refuse_same_samples
     from ...sim.params import load_params
     from ...util.io import check_new_output, checksum_path
     from .baseline import Baseline, fit_baseline, overlay_sha256
