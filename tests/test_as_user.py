@@ -127,6 +127,14 @@ def test_shipped_campaigns_by_name_from_any_folder(tmp_path, monkeypatch):
                                               r"diagnostics_reduced, diagnostics_urlog, paper, prognostics, "
                                               r"prognostics_small\)"):
         load_campaign("nope")
+    # a folder of that name (the campaign's own --out) is not the campaign file: `campaign run paper --out paper`
+    # resumed by the same command read the folder ("paper: cannot read (Is a directory)")
+    (tmp_path / "paper.yaml").unlink()
+    (tmp_path / "paper").mkdir()
+    assert load_campaign("paper").path == PACKAGE / "campaigns" / "paper.yaml"
+    (tmp_path / "nope").mkdir()
+    with pytest.raises(ConfigFileError, match="nope: a folder, not a campaign file, and no shipped campaign"):
+        load_campaign("nope")
 
 
 def test_checkout_paths_of_the_readme_still_work():

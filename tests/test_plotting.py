@@ -355,9 +355,13 @@ def test_a_feature_missing_in_every_run_is_one_line_not_blank_figures(two):
     assert campaign_figures(two, "enc_mismatch_p2p_rad")[0]  # with its values: drawn
 
 
-def test_figures_not_redrawn_are_said_to_be_an_earlier_plots(tmp_path, two, capsys):
-    """A damaged time series stops Fig. 3 and Fig. 4: the reason is printed once (both read the same runs; it was
-    printed twice), and the earlier plot's Fig. 3 and Fig. 4 left in the folder are named as not redrawn."""
+def test_figures_not_redrawn_are_said_to_be_an_earlier_plots(tmp_path, two, capsys, caplog):
+    """A damaged time series is simulated again (a warning names it) and Fig. 3 and Fig. 4 are redrawn; where the run
+    cannot be simulated again either (here the manifest's campaign, edited by hand without its sidecar, no longer
+    validates) they are not: the reason is printed once (both read the same runs; it was printed twice), and the
+    earlier plot's Fig. 3 and Fig. 4 left in the folder are named as not redrawn."""
+    import json
+
     from ur5fault.cli import main
 
     copy = tmp_path / "c"
@@ -369,9 +373,19 @@ def test_figures_not_redrawn_are_said_to_be_an_earlier_plots(tmp_path, two, caps
     b[len(b) // 2] ^= 0x01
     f.write_bytes(bytes(b))
     assert main(["plot", str(copy)]) == 0
+    cap = capsys.readouterr()
+    assert not [line for line in cap.out.splitlines() if "not redrawn" in line], cap.out
+    warned = [r.getMessage() for r in caplog.records if f.name in r.getMessage()]
+    assert len(warned) == 1 and "differ from the checksum" in warned[0] and "re-simulating" in warned[0], warned
+    manifest = copy / "manifest.json"
+    m = json.loads(manifest.read_text())
+    m["campaign_data"]["duration_s"] = -1.0
+    manifest.write_text(json.dumps(m))
+    (copy / "manifest.json.sha256").unlink()
+    assert main(["plot", str(copy)]) == 0
     out = capsys.readouterr().out.splitlines()
-    bad = [line for line in out if f.name in line]
-    assert len(bad) == 1 and "differ from the checksum" in bad[0], out
+    bad = [line for line in out if "duration_s" in line]
+    assert len(bad) == 1, out
     stale = sorted(line for line in out if line.endswith("from an earlier plot, not redrawn now"))
     assert [s.split("/")[-1].split(".png")[0][:4] for s in stale] == ["fig3", "fig4"], out
 

@@ -144,8 +144,30 @@ class Terminated(KeyboardInterrupt):
     """SIGTERM arrived: unwind like Ctrl-C (locks released, workers stopped, temporary files removed)."""
 
 
+def _quiet_executor_threads() -> None:
+    """Once the command is stopped (Ctrl-C, SIGTERM): loky's executor manager thread may raise while its workers
+    are shut down (a ``KeyError`` of a task it no longer tracks) and print a thread traceback after the one-line
+    message. It is shutdown noise (the lock is released, the workers stopped): not printed from then on."""
+    import threading
+
+    previous = threading.excepthook
+
+    def quiet_hook(args) -> None:
+        if args.thread is None or not args.thread.name.startswith("ExecutorManagerThread"):
+            previous(args)
+
+    if getattr(previous, "__name__", "") != "quiet_hook":  # once
+        threading.excepthook = quiet_hook
+
+
 def _on_sigterm(signum, frame) -> None:
+    _quiet_executor_threads()
     raise Terminated()
+
+
+def _on_sigint(signum, frame) -> None:
+    _quiet_executor_threads()
+    raise KeyboardInterrupt()
 
 
 def _usage(parser: argparse.ArgumentParser):
@@ -164,8 +186,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     configure_logging(getattr(args, "verbose", 0))
     try:
         previous = signal.signal(signal.SIGTERM, _on_sigterm)
+        # Ctrl-C as Python's own handler, quieting the executor's thread first; an ignored SIGINT (a job started in
+        # the background) stays ignored
+        previous_int = (signal.signal(signal.SIGINT, _on_sigint)
+                        if signal.getsignal(signal.SIGINT) is signal.default_int_handler else None)
     except ValueError:  # not the main thread: leave signals alone
-        previous = None
+        previous = previous_int = None
     try:
         return int(args.func(args) or 0)
     except Ur5FaultError as exc:
@@ -187,6 +213,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     finally:
         if previous is not None:
             signal.signal(signal.SIGTERM, previous)
+        if previous_int is not None:
+            signal.signal(signal.SIGINT, previous_int)
 
 
 if __name__ == "__main__":

@@ -278,3 +278,80 @@ def test_a_damaged_time_series_is_never_read_as_a_log_or_drawn(tmp_path, capsys)
     assert main(["show", str(f), "--out", str(tmp_path / "s.png")]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "differ from the checksum" in err and not (tmp_path / "s.png").exists()
+
+
+def test_time_series_of_other_settings_or_another_run_are_never_read_as_this_runs(tmp_path, caplog):
+    """CampaignResult.time_series (what `plot` and `show --campaign` draw) read any file under timeseries/ whose
+    sidecar matched: after `--replace-changed` without saved time series the earlier settings' files were drawn as
+    the new runs (a 2 s campaign drawn from 1 s files), and a run's file copied over another's (no sidecar) was drawn
+    under the other's name. Now each is checked as `campaign status` checks it (checksum, this run's identity);
+    one that fails is simulated again, and a rerun that does not save time series removes the ones it makes stale."""
+    from ur5fault.campaign import CampaignResult
+
+    out = tmp_path / "out"
+    run_campaign(load_campaign(tiny(tmp_path, dur=0.3)), out, jobs=1, progress=False, note=None,
+                 save_timeseries=True)
+    ids = sorted(p.stem for p in (out / "timeseries").glob("*.parquet"))
+    a, b = ids[0], ids[1]
+    saved_a = pd.read_parquet(out / "timeseries" / f"{a}.parquet")
+    # another run's file (and no sidecar) in a's place: simulated again (the same run, deterministic), not read
+    shutil.copyfile(out / "timeseries" / f"{b}.parquet", out / "timeseries" / f"{a}.parquet")
+    (out / "timeseries" / f"{a}.parquet.sha256").unlink()
+    res = CampaignResult.load(out)
+    own = res.time_series([a])[a]
+    assert f"{a}.parquet: bad: no checksum recorded" in caplog.text and "re-simulating the run instead" in caplog.text
+    pd.testing.assert_frame_equal(own, saved_a)
+    # with its sidecar, another run's file is told by its identity
+    shutil.copyfile(out / "timeseries" / f"{b}.parquet.sha256", out / "timeseries" / f"{a}.parquet.sha256")
+    caplog.clear()
+    pd.testing.assert_frame_equal(CampaignResult.load(out).time_series([a])[a], saved_a)
+    assert f"{a}.parquet: changed: time series of a run made under other settings" in caplog.text
+    # the campaign changed (0.2 s runs), simulated again without saving time series: the 0.3 s files are gone
+    run_campaign(load_campaign(tiny(tmp_path, dur=0.2)), out, jobs=1, progress=False, note=None,
+                 replace_changed=True)
+    assert not list((out / "timeseries").glob("*.parquet*"))
+    res = CampaignResult.load(out)
+    assert res.time_series([a])[a]["t_s"].max() < 0.21
+    assert "not saved" in repr(res)
+
+
+def test_status_says_when_the_manifest_is_gone_or_unreadable(tmp_path, done):
+    """`campaign status` said "sound" (exit 0) for a folder of runs whose manifest.json was deleted or not JSON,
+    while every reader refused the folder."""
+    out = _copy(done, tmp_path)
+    (out / "manifest.json.sha256").unlink()
+    (out / "manifest.json").write_text("{")
+    info = status(out)
+    assert info["sound"] is False and info["manifest"]["state"] == "bad"
+    assert "rewrites it" in info["advice"]
+    (out / "manifest.json").unlink()
+    info = status(out)
+    assert info["sound"] is False and info["manifest"] == {"state": "missing", "detail": "absent"}
+    run_campaign(load_campaign(tiny(tmp_path)), out, jobs=1, progress=False, note=None)
+    info = status(out)
+    assert info["sound"] is True and "manifest" not in info
+
+
+@pytest.mark.parametrize("edit, message", [
+    (lambda m: m.pop("threshold_mm"), "threshold_mm None is not a positive number"),
+    (lambda m: m.update(threshold_mm="abc"), "threshold_mm 'abc' is not a positive number"),
+    (lambda m: m.update(swept_keys="backlash.joint"), "swept_keys 'backlash.joint' is not a list"),
+])
+def test_a_hand_edited_manifest_without_its_sidecar_is_refused_in_one_line(tmp_path, done, edit, message):
+    """A manifest without its sidecar is read unverified; one lacking what the result reads crashed `plot` and
+    CampaignResult with a KeyError / ValueError traceback."""
+    import json
+
+    from ur5fault.campaign import CampaignResult
+    from ur5fault.errors import ConfigFileError
+
+    out = _copy(done, tmp_path)
+    (out / "manifest.json.sha256").unlink()
+    m = json.loads((out / "manifest.json").read_text())
+    edit(m)
+    (out / "manifest.json").write_text(json.dumps(m))
+    with pytest.raises(ConfigFileError, match=f"manifest.json: {message}"):
+        CampaignResult.load(out)
+    (out / "manifest.json").write_text("[1]")
+    with pytest.raises(ConfigFileError, match="not a campaign manifest"):
+        CampaignResult.load(out)

@@ -111,7 +111,7 @@ def cmd_status(args: argparse.Namespace) -> int:
     runs = info.get("runs") or info.get("inspections") or {}   # a life campaign's files are inspections
     table = info.get("inspections_table" if info.get("kind") == "life" else "features") or {}
     stale = info.get("state") == "complete" and table.get("state") != "ok"
-    damaged = (info.get("manifest") or {}).get("state") == "bad"
+    damaged = (info.get("manifest") or {}).get("state") in ("bad", "missing")
     return 1 if runs.get("bad") or runs.get("changed") or stale or damaged else 0
 
 

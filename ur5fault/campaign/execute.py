@@ -26,7 +26,13 @@ import numpy as np
 
 from ..config import parse_trajectory
 from ..sim.params import load_params
-from ..util.io import check_writable, remove_stale_temporaries, write_json_atomic, write_parquet_atomic
+from ..util.io import (
+    check_writable,
+    checksum_path,
+    remove_stale_temporaries,
+    write_json_atomic,
+    write_parquet_atomic,
+)
 from ..util.parallel import one_blas_thread, return_freed_memory
 from ..util.progress import campaign_progress
 from .batches import plan_batches
@@ -39,7 +45,7 @@ from .lock import Lock
 from .manifest import build_manifest
 from .runs import CampaignRun
 from .spec import Campaign
-from .store import BadRunFilesError, CampaignChangedError, consolidate, run_path, write_run_file
+from .store import BadRunFilesError, CampaignChangedError, consolidate, run_path, timeseries_path, write_run_file
 from .verify import scan
 from .workers import check_backend, dask_client, dispatch, exit_with_parent, note_stderr
 
@@ -250,6 +256,10 @@ def _run_locked(camp: Campaign, out: Path, jobs: int, backend: str, client, prog
             say(f"re-simulating {len(found.changed)} run(s) made under other settings (--replace-changed)")
         redo = set(found.missing) | {rid for rid, _ in found.bad} | {rid for rid, _ in found.changed}
         todo = [rc for rc in camp.runs if rc.run_id in redo]
+        if not save_ts:  # a run simulated again without its time series: one stored before is of other settings
+            for rc in todo:
+                timeseries_path(out, rc.run_id).unlink(missing_ok=True)
+                checksum_path(timeseries_path(out, rc.run_id)).unlink(missing_ok=True)
         if capped:
             say(capped)
         for line in camp.notes:

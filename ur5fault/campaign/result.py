@@ -6,7 +6,9 @@ notebooks."""
 from __future__ import annotations
 
 import dataclasses
+import json
 import logging
+import math
 import tempfile
 from collections.abc import Iterable, Mapping
 from pathlib import Path
@@ -18,10 +20,23 @@ from ..errors import ConfigFileError, UnknownNameError
 from ..sim.effects import REGISTRY
 from ..util import provenance, yamlsafe
 from ..util.io import read_json_stored, read_parquet_stored
-from .store import REBUILD_FEATURES, check_table_of_manifest
+from .store import REBUILD_FEATURES, check_table_of_manifest, check_timeseries_file, timeseries_path
 from .summary import EffectSweep, acceptable_backlash, effect_sweep, severity_table, swept_effects, tcp_table
 
 _log = logging.getLogger(__name__)
+
+
+def _check_manifest(path: Path, manifest: Any) -> None:
+    """Refuse with one line a manifest (one without its checksum sidecar is read unverified, e.g. edited by hand)
+    that lacks what the result reads: a JSON object with a positive ``threshold_mm`` and a list of ``swept_keys``."""
+    if not isinstance(manifest, dict):
+        raise ConfigFileError(f"{path}: not a campaign manifest (not a JSON object); {REBUILD_FEATURES}")
+    thr = manifest.get("threshold_mm")
+    if isinstance(thr, bool) or not isinstance(thr, (int, float)) or not math.isfinite(thr) or thr <= 0:
+        raise ConfigFileError(f"{path}: threshold_mm {thr!r} is not a positive number of mm; {REBUILD_FEATURES}")
+    keys = manifest.get("swept_keys", [])
+    if not (isinstance(keys, list) and all(isinstance(k, str) for k in keys)):
+        raise ConfigFileError(f"{path}: swept_keys {keys!r} is not a list of names; {REBUILD_FEATURES}")
 
 
 @dataclasses.dataclass(frozen=True, repr=False, eq=False)
@@ -54,6 +69,7 @@ class CampaignResult:
                 raise ConfigFileError(f"{out}: no {name} (run the campaign to its end first)")
         features = read_parquet_stored(out / "features.parquet", REBUILD_FEATURES)
         manifest = read_json_stored(out / "manifest.json", REBUILD_FEATURES)
+        _check_manifest(out / "manifest.json", manifest)
         check_table_of_manifest(out / "features.parquet", REBUILD_FEATURES, manifest)
         return cls(out, features, manifest)
 
@@ -114,14 +130,34 @@ class CampaignResult:
         ids = list(dict.fromkeys(run_ids))
         for r in ids:
             self.run(r)  # an unknown id is an error naming the valid ones
-        ts = self.out / "timeseries"
+        identities = self._run_identities()
         for r in ids:
-            if r not in self._series and (ts / f"{r}.parquet").exists():
-                self._series[r] = read_parquet_stored(ts / f"{r}.parquet", REBUILD_FEATURES)
+            path = timeseries_path(self.out, r)
+            if r in self._series or not path.exists():
+                continue
+            # as `campaign status` checks it: checksum, and the identity of this run (a file left by a run of other
+            # settings - e.g. after --replace-changed without --save-timeseries - or another run's is not this run's)
+            check = check_timeseries_file(path, identities.get(r, ""), None)
+            if check.state == "ok":
+                self._series[r] = pd.read_parquet(path)
+            else:
+                _log.warning("%s: %s: %s; re-simulating the run instead", path, check.state,
+                             check.detail or "not this run's")
         missing = [r for r in ids if r not in self._series]
         if missing:
             self._series.update(self._resimulate(missing))
         return {r: self._series[r] for r in ids}
+
+    def _run_identities(self) -> dict[str, str]:
+        """run_id -> identity, as ``features.parquet`` records them (empty for a table without them)."""
+        import pyarrow.parquet as pq
+
+        try:
+            meta = json.loads((pq.read_schema(self.out / "features.parquet").metadata or {}).get(b"ur5fault", b"{}"))
+        except (OSError, ValueError):
+            return {}
+        ids = meta.get("run_identities") if isinstance(meta, dict) else None
+        return {str(k): str(v) for k, v in ids.items()} if isinstance(ids, dict) else {}
 
     def _resimulate(self, run_ids: list[str]) -> dict[str, pd.DataFrame]:
         from ..sim.engine import DEFAULT_MODEL_PATH
@@ -150,7 +186,8 @@ class CampaignResult:
     def _headline(self) -> str:
         counts = self.features["status"].value_counts().to_dict()
         status = ", ".join(f"{n} {s}" for s, n in sorted(counts.items()))
-        saved = "saved" if (self.out / "timeseries").is_dir() else "not saved (re-simulated on demand)"
+        saved = ("saved" if self.manifest.get("save_timeseries") and (self.out / "timeseries").is_dir()
+                 else "not saved (re-simulated on demand)")
         return (f"campaign {self.name!r} in {self.out}: {len(self.features)} runs ({status}); swept "
                 f"{', '.join(self.swept_keys) or 'nothing'}; threshold {self.threshold_mm:g} mm; time series {saved}")
 

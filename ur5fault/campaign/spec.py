@@ -116,10 +116,11 @@ def resolve_campaign(path: str | Path) -> Path:
     """A campaign file: an existing path, or the name of a shipped campaign (``paper`` or ``paper.yaml``).
 
     A path that exists always wins, so a user's own ``paper.yaml`` in the working folder is the one run, by
-    either name (``paper`` too: it ran the shipped one while the user's edited copy sat there).
+    either name (``paper`` too: it ran the shipped one while the user's edited copy sat there). A folder is not a
+    campaign file: ``campaign run paper --out paper`` resumes into its own folder.
     """
     p = Path(path)
-    if p.exists() or p.parent != Path("."):
+    if (p.exists() and not p.is_dir()) or p.parent != Path("."):
         return p
     if p.suffix not in (".yaml", ".yml"):
         for own in (p.with_name(f"{p.name}.yaml"), p.with_name(f"{p.name}.yml")):
@@ -130,8 +131,8 @@ def resolve_campaign(path: str | Path) -> Path:
         return shipped
     from ..errors import ConfigFileError
 
-    raise ConfigFileError(f"{p}: no such file, and no shipped campaign of that name "
-                          f"(shipped: {', '.join(shipped_campaigns())})")
+    raise ConfigFileError(f"{p}: {'a folder, not a campaign file' if p.is_dir() else 'no such file'}, and no shipped "
+                          f"campaign of that name (shipped: {', '.join(shipped_campaigns())})")
 
 
 def load_campaign(path: str | Path, out: str | Path | None = None, overlay: str | Path | None = None,

@@ -56,8 +56,8 @@ def scan(out: Path, camp: Campaign, ids: Identities, save_timeseries: bool = Fal
                 round(inputs["log_period_s"] / inputs["params"]["physics_dt_s"]))
             ts = check_timeseries_file(timeseries_path(out, rid), record["identity"], n_log)
             if ts.state != "ok":
-                check = FileCheck(ts.state if ts.state != "missing" else "missing",
-                                  f"time series {ts.state}{': ' + ts.detail if ts.detail else ''}")
+                check = FileCheck(ts.state, f"its time series timeseries/{rid}.parquet {ts.state}"
+                                            f"{': ' + ts.detail if ts.detail else ''}")
         _add(s, rid, check)
     d = runs_dir(out)
     if d.is_dir():
@@ -107,14 +107,23 @@ def status(out: Path) -> dict[str, Any]:
                  else {"held": True, "host": holder[0], "pid": holder[1]}),
         "n_runs_expected": None,
     }
+    manifest_todo = None
     if damaged:  # read as absent; the runs are still checked for soundness
         info["manifest"] = {"state": "bad", "detail": f"{damaged}; {REBUILD_FEATURES}"}
+        manifest_todo = "manifest.json fails its checksum: `ur5fault campaign run` on the campaign rewrites it"
+    elif not manifest and holder is None and (runs_dir(out).is_dir() or any(
+            (out / name).exists() for name in ("features.parquet", "inspections.parquet"))):
+        # runs or a table without the manifest that says which campaign they are: they cannot be checked
+        why = "absent" if not (out / "manifest.json").exists() else "unreadable as a campaign manifest"
+        info["manifest"] = {"state": "missing" if why == "absent" else "bad", "detail": why}
+        manifest_todo = (f"manifest.json {why}: `ur5fault campaign run` on the campaign, with the same --out, "
+                         "rewrites it (the stored runs are verified and kept)")
     if manifest.get("kind") == "life":  # a fleet run to failure (issue 20): inspections, not runs
         from ..health.prognostics.life_status import life_status
 
         info = life_status(out, manifest, info)
         ins = info.get("inspections") or {}
-        info["sound"], info["advice"] = _advice(info, ins.get("bad", 0), ins.get("changed", 0), bool(damaged),
+        info["sound"], info["advice"] = _advice(info, ins.get("bad", 0), ins.get("changed", 0), manifest_todo,
                                                 table_key="inspections_table", what="inspection")
         return info
     camp = None
@@ -147,22 +156,22 @@ def status(out: Path) -> dict[str, Any]:
         info["runs"] = counts
     info["problems"] = _listed(problems)
     runs = info.get("runs") or {}
-    info["sound"], info["advice"] = _advice(info, runs.get("bad", 0), runs.get("changed", 0), bool(damaged))
+    info["sound"], info["advice"] = _advice(info, runs.get("bad", 0), runs.get("changed", 0), manifest_todo)
     return info
 
 
-def _advice(info: dict[str, Any], bad: int, changed: int, damaged: bool, table_key: str = "features",
+def _advice(info: dict[str, Any], bad: int, changed: int, manifest_todo: str | None, table_key: str = "features",
             what: str = "run") -> tuple[bool, str | None]:
     """Whether everything the folder holds is sound now (a ``complete`` state says only that the campaign ran to
-    its end), and what to do where it is not."""
+    its end), and what to do where it is not (``manifest_todo``: what to do about a damaged or missing manifest)."""
     todo = []
     if bad:
         todo.append(f"{bad} damaged {what} file(s): `ur5fault campaign run` on the campaign again simulates them")
     if changed:
         todo.append(f"{changed} {what} file(s) made under other settings: `campaign run --replace-changed` "
                     "simulates them again with the campaign's (without it they are kept and the run refused)")
-    if damaged:
-        todo.append("manifest.json fails its checksum: `ur5fault campaign run` on the campaign rewrites it")
+    if manifest_todo:
+        todo.append(manifest_todo)
     if info.get("state") == "complete" and (info.get(table_key) or {}).get("state") not in (None, "ok"):
         todo.append(f"the {table_key.replace('_table', '')} table does not hold the stored {what}s: `ur5fault "
                     "campaign run` rebuilds it from them")
