@@ -125,7 +125,10 @@ CAMPAIGN = [
      "unknown option of trajectory 'hold' 'speed'; valid: payload_kg, q_rad, seconds"),
     ("log-period-not-multiple", "log_period_s: 0.00007\n" + GOOD, "must be a whole multiple of physics_dt_s"),
     ("log-period-beyond-run", "log_period_s: 2.0\nduration_s: 0.5\n" + GOOD,
-     "log_period_s = 2.0 is longer than the run (0.5 s): a run holds at least one logged sample"),
+     "log_period_s = 2.0 leaves fewer than 3 logged samples in the run (0.5 s)"),
+    # a run of one log period passed, then died in its features with an IndexError (a newcomer probe)
+    ("log-period-one-sample", "log_period_s: 0.001\nduration_s: 0.002\n" + GOOD,
+     "log_period_s = 0.001 leaves fewer than 3 logged samples in the run (0.002 s)"),
     ("grid-too-large", "name: x\nsweep: {seed: [" + ", ".join(map(str, range(1001))) + "], payload_kg: ["
      + ", ".join(f"{i / 1000:.3f}" for i in range(1001)) + "]}\n", "expands to 1e+06 runs, above the limit"),
     ("large-needs-yes", "name: x\nduration_s: 0.5\nsweep: {seed: [" + ", ".join(map(str, range(1200))) + "]}\n",

@@ -161,12 +161,18 @@ def check_duration(value: Any, where: str) -> float:
     return check_number(value, where, 0.0, MAX_DURATION_S, "s", lo_open=True)
 
 
+#: a run logs at least this many samples: its features take speeds and accelerations (first and second
+#: differences) of the logged signals, which a run of one or two samples does not have
+MIN_LOGGED_SAMPLES = 3
+
+
 def check_log_period(value: Any, where: str, physics_dt_s: float, duration_s: float) -> float:
-    """Log period [s]: a whole multiple of the physics step, at most the run's duration."""
+    """Log period [s]: a whole multiple of the physics step, :data:`MIN_LOGGED_SAMPLES` of them within the run."""
     lp = check_number(value, where, physics_dt_s, math.inf, "s")
-    if lp > max(duration_s, physics_dt_s):  # said as what it is, not as a range the user never set
-        raise ParameterError(f"{where} = {short(value)} is longer than the run ({duration_s:g} s): a run holds at "
-                             "least one logged sample; lengthen the run or log more often")
+    if MIN_LOGGED_SAMPLES * lp > max(duration_s, physics_dt_s) * (1 + 1e-9):  # said as what it is
+        raise ParameterError(f"{where} = {short(value)} leaves fewer than {MIN_LOGGED_SAMPLES} logged samples in the "
+                             f"run ({duration_s:g} s): its features take speeds and accelerations of them; lengthen "
+                             "the run (duration_s) or log more often")
     k = round(lp / physics_dt_s)
     if abs(k * physics_dt_s - lp) > 1e-12:
         raise ParameterError(f"{where} = {short(value)} must be a whole multiple of physics_dt_s = {physics_dt_s:g} s")
