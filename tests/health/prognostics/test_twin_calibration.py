@@ -138,11 +138,30 @@ def test_the_radius_cache_simulates_each_ray_once_per_model_and_setup(monkeypatc
 def test_a_file_that_is_not_a_radius_cache_is_refused(tmp_path):
     bad = tmp_path / "radii.json"
     bad.write_text("{not json")
+    with pytest.raises(ConfigFileError, match="not a twin radius cache"):
+        RadiusCache(bad)
+    bad.write_text('{"radii": {not json')
     with pytest.raises(ConfigFileError, match="remove it"):
         RadiusCache(bad)
     bad.write_text(json.dumps({"version": 99, "radii": {}}))
     with pytest.raises(ConfigFileError, match="version"):
         RadiusCache(bad)
+
+
+def test_a_file_of_ur5fault_that_is_not_a_cache_is_never_overwritten(tmp_path):
+    """`prognose --twin --twin-cache res/fleet/manifest.json` (or a detector's schema.json) replaced the file with a
+    radius cache and exited 0 (a newcomer probe): a file of ur5fault's with a sound sidecar was taken for a cache of
+    another version, one with a changed byte for a damaged cache. Both are refused and left as they were."""
+    from ur5fault.util.io import write_json_atomic
+
+    manifest = write_json_atomic(tmp_path / "manifest.json", {"name": "fleet", "kind": "life"}, checksum=True)
+    before = manifest.read_bytes()
+    with pytest.raises(ConfigFileError, match="not a twin radius cache .* would be overwritten"):
+        RadiusCache(manifest)
+    manifest.write_bytes(before.replace(b"fleet", b"fleat"))  # its sidecar no longer matches
+    with pytest.raises(ConfigFileError, match="not a twin radius cache"):
+        RadiusCache(manifest)
+    assert manifest.read_bytes() == before.replace(b"fleet", b"fleat")
 
 
 @pytest.mark.parametrize("flag", [["--twin-calibration", "pooled"], ["--twin-cache", "x.json"]])

@@ -58,12 +58,19 @@ class RadiusCache:
     def __init__(self, path: str | Path) -> None:
         self.path = Path(path)
         self.entries: dict[str, float] = {}
-        why = verify_checksum(self.path) if self.path.is_file() and checksum_path(self.path).exists() else None
+        try:
+            raw = self.path.read_bytes() if self.path.is_file() else None
+        except OSError as exc:
+            raise ConfigFileError(f"{self.path}: cannot read ({exc.strerror or exc})") from None
+        if raw is not None and b'"radii"' not in raw:  # another file (a manifest, a schema): never overwritten
+            raise ConfigFileError(f"{self.path}: not a twin radius cache (it holds no radii) and would be "
+                                  "overwritten; give --twin-cache a new file or a cache prognose wrote")
+        why = verify_checksum(self.path) if raw is not None and checksum_path(self.path).exists() else None
         if why:
             _log.warning("%s: %s; its radii are simulated again and the file rewritten", self.path, why)
         elif self.path.is_file():
             try:
-                data = json.loads(self.path.read_text())
+                data = json.loads(raw)
             except (OSError, ValueError):
                 raise ConfigFileError(f"{self.path}: not a twin radius cache (unreadable JSON); remove it") from None
             ours = checksum_path(self.path).exists()  # written by a RadiusCache (its sidecar verified above)
