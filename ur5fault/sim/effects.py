@@ -113,7 +113,8 @@ def make_effect(name: str, joint: int | str | None = None, where: str = "", **va
         if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(float(v)):
             raise ParameterError(f"{loc}{name}.{p.name} = {v!r} must be a number in [{p.lo:g}, {p.hi:g}] {p.unit}")
         if not p.lo <= float(v) <= p.hi:
-            raise ParameterError(f"{loc}{name}.{p.name} = {v!r} is out of range [{p.lo:g}, {p.hi:g}] {p.unit}")
+            unit = "" if p.unit in ("", "-") else f" {p.unit}"  # a factor: no trailing "-" that reads as cut off
+            raise ParameterError(f"{loc}{name}.{p.name} = {v!r} is out of range [{p.lo:g}, {p.hi:g}]{unit}")
         out.append((p.name, float(v)))
     return EffectSpec(name, j, tuple(out))
 

@@ -62,7 +62,11 @@ def cmd_life_run(args: argparse.Namespace) -> int:
         print(f"life campaign stopped early; run it again to resume ({camp.out})")
         return 1
     ipu = m["inspections_per_unit"]
-    print(f"{m['n_units']} units: {m['n_failed']} failed, {m['n_censored']} censored at {m['max_cycles']} cycles; "
+    beyond = m.get("n_censored_beyond_model", 0)
+    censored = (f"{m['n_censored']} censored at {m['max_cycles']} cycles" if not beyond else
+                f"{m['n_censored']} censored ({m['n_censored'] - beyond} at {m['max_cycles']} cycles, {beyond} where "
+                "their next wear state lay beyond the simulator's effect ranges)")
+    print(f"{m['n_units']} units: {m['n_failed']} failed, {censored}; "
           f"{m['n_inspections']} inspections ({ipu['min']}-{ipu['max']} per unit, mean {ipu['mean']:.1f}); "
           + (f"median life {m['eol_cycles']['median']:.4g} cycles" if m["n_failed"] else
              f"no unit failed within {m['max_cycles']} cycles"))

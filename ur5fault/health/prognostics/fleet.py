@@ -22,12 +22,14 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from ...campaign.identity import DRIVE, STEPPER
 from ...campaign.lock import Lock
 from ...campaign.store import CampaignChangedError, run_path
 from ...campaign.workers import check_backend, dask_client, dispatch, exit_with_parent, note_stderr
 from ...config import parse_trajectory
+from ...errors import ParameterError
 from ...sim.axes import N_JOINTS
 from ...sim.effects import make_effect
 from ...util.io import check_writable, remove_stale_temporaries, write_json_atomic
@@ -125,7 +127,8 @@ def inspect_batch(camp: LifeCampaign, jobs: Sequence[Job], refs: Mapping[str, np
 
 
 def next_job(camp: LifeCampaign, unit: Unit, row: Mapping[str, Any]) -> Job | None:
-    """The unit's next inspection from its stored row, or None when it failed or reached max_cycles."""
+    """The unit's next inspection from its stored row, or None when it failed, reached max_cycles, or its next wear
+    state lies beyond what the simulator's effects may take (:func:`beyond_model`: censored there)."""
     k, cycles = int(row["inspection"]), int(row["cycles"])
     if row["failed"] or cycles + camp.interval_cycles > camp.max_cycles:
         return None
@@ -133,7 +136,21 @@ def next_job(camp: LifeCampaign, unit: Unit, row: Mapping[str, Any]) -> Job | No
     w = np.array([row[f"gear_work_J_j{j + 1}"] for j in range(N_JOINTS)], float)
     rates = unit_rates_deg_per_MJ(camp.wear, camp.seed, unit.index)
     a = advance_backlash_deg(camp.wear, rates, a, w, camp.interval_cycles, camp.seed, unit.index, k)
+    if beyond_model(camp, a, cycles + camp.interval_cycles):
+        return None
     return Job(unit, k + 1, cycles + camp.interval_cycles, tuple(float(v) for v in a))
+
+
+def beyond_model(camp: LifeCampaign, backlash_deg: NDArray, cycles: float) -> str | None:
+    """Why the wear state (clearance ``(6,)`` [deg] after ``cycles``) lies beyond the declared range of an effect
+    it puts on the unit (e.g. a Coulomb friction factor above 10, where the wear law's constants take a unit that
+    never meets the failure criterion), or None. Such a unit is not simulated further: it ends censored at its
+    last inspection, as one reaching max_cycles does, and the fleet's summary counts it apart."""
+    try:
+        wear_effects(camp.wear, np.asarray(backlash_deg, float), cycles)
+    except ParameterError as exc:
+        return str(exc)
+    return None
 
 
 def _resume(camp: LifeCampaign, out: Path, ids: LifeIdentities, n_log: int) -> tuple[dict, dict, dict, list]:
@@ -300,10 +317,14 @@ def _manifest(camp: LifeCampaign, ids: LifeIdentities, state: str, backend: str,
         "backend": backend, "jobs": jobs, "wall_s_this_invocation": time.perf_counter() - t0,
     }
     if df is not None:
-        per_unit = df.groupby("unit_id").agg(n=("inspection", "size"), eol=("eol_cycles", "first"))
+        per_unit = df.groupby("unit_id").agg(n=("inspection", "size"), eol=("eol_cycles", "first"),
+                                             last=("cycles", "max"))
         m.update({
             "n_inspections": int(len(df)), "n_failed": int(per_unit["eol"].notna().sum()),
             "n_censored": int(per_unit["eol"].isna().sum()),
+            # of them, units whose next inspection's wear lay beyond an effect's declared range (next_job)
+            "n_censored_beyond_model": int((per_unit["eol"].isna()
+                                            & (per_unit["last"] + camp.interval_cycles <= camp.max_cycles)).sum()),
             # failed at the first inspection, unworn: the failure criterion is met by the healthy robot's task
             "n_failed_unworn": int((per_unit["eol"] == 0).sum()),
             "inspections_per_unit": {"min": int(per_unit["n"].min()), "mean": float(per_unit["n"].mean()),
