@@ -539,6 +539,18 @@ def test_scoring_another_log_period_is_noted(tmp_path):
     assert setup_notes({"log_period_s": 0.008}, tmp_path / "none") == []
 
 
+def test_scoring_runs_of_another_length_is_noted(tmp_path):
+    """--test on a campaign of 2 s runs with classifiers trained on 5 s runs said nothing (a newcomer probe), while
+    spike counts and high-frequency energy grow with a run's length; a log period was already said."""
+    from ur5fault.health.diagnostics.transfer import setup_notes
+
+    (tmp_path / "manifest.json").write_text(json.dumps({"n_steps_total": 4 * 40_000, "physics_dt_s": 5e-5,
+                                                        "n_runs": 4}))  # 2 s per run
+    note = setup_notes({"window_s": 5.0}, tmp_path)
+    assert len(note) == 1 and note[0].startswith(f"{tmp_path}'s runs last 2 s on average, the training runs 5 s")
+    assert setup_notes({"window_s": 2.2}, tmp_path) == []  # within the motions' own spread
+
+
 def test_a_time_series_given_for_a_feature_table_is_named(tmp_path, capsys):
     pd.DataFrame({"t_s": [0.0, 0.001], "q_FB_rad_j1": [0.0, 0.0]}).to_parquet(tmp_path / "run.parquet")
     assert main(["benchmark", str(tmp_path / "run.parquet"), "--out", str(tmp_path / "b")]) == 2

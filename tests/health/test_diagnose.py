@@ -332,6 +332,25 @@ def test_a_log_of_one_window_is_diagnosed_and_a_shorter_one_refused_naming_the_w
         read_log(short, "sim")
 
 
+def test_a_detector_near_chance_on_its_own_test_split_is_said_so(logs, detector, tmp_path):
+    """A detector whose benchmark scored AUC 0.54 flagged 10 of 12 healthy NIST windows and the report said nothing of
+    how good it was (a newcomer probe): the metrics.json beside the saved classifiers is read for a note."""
+    import shutil
+
+    from ur5fault.health.diagnostics.saved import detector_test_auc
+
+    bench = tmp_path / "bench"
+    shutil.copytree(detector, bench)
+    assert detector_test_auc(bench) is None  # no report beside it: no note
+    (bench / "metrics.json").write_text(json.dumps({"detection_by_joint": {"auc_all": 0.54}}))
+    models = next(p.parent for p in bench.rglob("schema.json"))
+    assert detector_test_auc(bench) == 0.54 and detector_test_auc(models) == 0.54
+    d = _diagnose(logs["healthy"], bench, tmp_path / "h")
+    assert sum("AUC on its own campaign's test split is 0.54 (0.5 is chance)" in n for n in d["notes"]) == 1
+    (bench / "metrics.json").write_text(json.dumps({"detection_by_joint": {"auc_all": 0.93}}))
+    assert not any("chance" in n for n in _diagnose(logs["healthy"], bench, tmp_path / "h2")["notes"])
+
+
 def test_classifiers_saved_without_calibration_load_and_say_so(logs, detector, tmp_path):
     d = _diagnose(logs["healthy"], detector, tmp_path / "h")  # the stand-in detector is saved uncalibrated
     assert d["detector"]["calibrated"] is False

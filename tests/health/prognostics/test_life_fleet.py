@@ -30,8 +30,11 @@ def test_resumed_fleet_is_bit_identical_to_an_uninterrupted_one(tmp_path):
     # a file of the interrupted run damaged as by a kill during a write, and a stale temporary left behind
     (tmp_path / "resumed" / "runs" / "u00001_i0001.parquet").write_bytes(b"PAR1 cut")
     (tmp_path / "resumed" / "runs" / ".u00001_i0002.parquet.x.tmp").write_bytes(b"")
-    again = run_life(camp, tmp_path / "resumed", jobs=2, progress=False, note=None)
+    said = []
+    again = run_life(camp, tmp_path / "resumed", jobs=2, progress=False, note=said.append)
     assert again["state"] == "complete"
+    # 6 inspections stored, u00001's second damaged: its first is kept (the resume said "0 finished" only)
+    assert any("0 finished, 3 to run (5 stored inspections kept)" in s for s in said), said
     a, b = run_tables(tmp_path / "whole"), run_tables(tmp_path / "resumed")
     assert a.keys() == b.keys()
     for name in a:

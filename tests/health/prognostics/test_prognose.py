@@ -92,3 +92,17 @@ def test_a_folder_without_inspections_gets_advice_it_can_follow(tmp_path, capsys
         assert main(["prognose", str(folder), "--out", str(tmp_path / "o")]) == 2
         err = capsys.readouterr().err.strip().splitlines()
         assert len(err) == 1 and words in err[0], err
+
+
+def test_a_gap_in_the_failure_feature_is_named_not_blamed_on_the_fleet_size(tmp_path, capsys):
+    """A NaN in tcp_dev_max_mm of a hand-edited table was refused with the estimators' numpy message and the advice
+    "(a larger fleet, shorter inspection intervals or a longer max_cycles)", which no fleet size fixes."""
+    fleet = tmp_path / "fleet"
+    fleet.mkdir()
+    df = synthetic_fleet(12, 1)
+    df.loc[df.index[:3], "tcp_dev_max_mm"] = np.nan
+    df.to_parquet(fleet / "inspections.parquet")
+    assert main(["prognose", str(fleet), "--out", str(tmp_path / "b")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "tcp_dev_max_mm is missing (NaN) or infinite in 3 inspection(s)" in err[0], err
+    assert "larger fleet" not in err[0]

@@ -41,7 +41,7 @@ from .predictions import test_predictions
 from .report import write_report
 from .saved import MODELS_DIR, check_inputs, load_models, save_models
 from .thresholds import PAPER_TCP_MM, backlash_thresholds
-from .transfer import against_training_split, refuse_training_runs, setup_notes
+from .transfer import against_training_split, mean_run_duration_s, refuse_training_runs, setup_notes
 
 
 def evaluate(features: pd.DataFrame, *, seed: int = 0, shuffle_labels: bool = False,
@@ -280,15 +280,6 @@ def run_benchmark(campaign_dir: str | Path, out: str | Path | None = None, *, se
                     twin_residuals_format=man.get("twin_residuals_format"))
     metrics["out"] = str(out_dir)
     return metrics
-
-
-def mean_run_duration_s(manifest: dict[str, Any]) -> float | None:
-    """The mean simulated duration of a campaign's runs [s] from its manifest (its total steps x the physics
-    step / its runs; the fixed ``duration_s`` when every run has it), or None when the manifest does not say."""
-    try:
-        return float(manifest["n_steps_total"]) * float(manifest["physics_dt_s"]) / int(manifest["n_runs"])
-    except (KeyError, TypeError, ValueError, ZeroDivisionError):
-        return None
 
 
 def compare_feature_sets(features: pd.DataFrame, seed: int, threshold_mm: float, source: str,

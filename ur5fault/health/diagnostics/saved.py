@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import math
 import zipfile
 from pathlib import Path
 from typing import Any
@@ -160,6 +161,25 @@ def save_models(models: Models, ds: Dataset, feature_set: str, threshold_score: 
     }
     write_json_atomic(folder / SCHEMA_FILE, schema, checksum=True)
     return folder
+
+
+#: a saved detector whose own test-split AUC is below this is said to be near chance when it diagnoses a log
+NEAR_CHANCE_AUC = 0.7
+
+
+def detector_test_auc(folder: str | Path) -> float | None:
+    """The by-joint detection AUC the saved classifiers reached on their own campaign's test split, from the
+    ``metrics.json`` beside them (``folder`` as :func:`load_models` takes it), or None where it cannot be read (a
+    note only reads it: the file is a report, not verified)."""
+    folder = Path(folder)
+    for path in (folder / "metrics.json", folder.parent / "metrics.json"):
+        if path.is_file():
+            try:
+                auc = (json.loads(path.read_text()).get("detection_by_joint") or {}).get("auc_all")
+            except (OSError, ValueError, AttributeError):
+                return None
+            return float(auc) if isinstance(auc, (int, float)) and math.isfinite(auc) else None
+    return None
 
 
 def load_models(folder: str | Path) -> tuple[Models, dict[str, Any]]:

@@ -156,9 +156,24 @@ def refuse_training_runs(features: pd.DataFrame, other: pd.DataFrame, campaign_d
                              "runs; the training campaign's own test split is scored in its benchmark report")
 
 
+#: mean run durations of two campaigns further apart than this ratio get a note (sampled motions of one family
+#: differ by a few per cent; a quick trial's --duration-s by several times)
+DURATION_RATIO_NOTE = 1.25
+
+
+def mean_run_duration_s(manifest: dict[str, Any]) -> float | None:
+    """The mean simulated duration of a campaign's runs [s] from its manifest (its total steps x the physics
+    step / its runs; the fixed ``duration_s`` when every run has it), or None when the manifest does not say."""
+    try:
+        return float(manifest["n_steps_total"]) * float(manifest["physics_dt_s"]) / int(manifest["n_runs"])
+    except (KeyError, TypeError, ValueError, ZeroDivisionError):
+        return None
+
+
 def setup_notes(schema: dict[str, Any], test_dir: Path) -> list[str]:
     """What differs between the saved classifiers' training runs and another campaign's, from its manifest: the
-    log period (``diagnose`` says the same of a log) and the twin residual features' version."""
+    log period (``diagnose`` says the same of a log), the runs' mean duration and the twin residual features'
+    version."""
     from ...campaign.store import read_manifest
     from .saved import twin_format_notes
 
@@ -169,6 +184,11 @@ def setup_notes(schema: dict[str, Any], test_dir: Path) -> list[str]:
         notes.append(f"{test_dir} logs every {1e3 * float(other):g} ms, the training runs every "
                      f"{1e3 * float(trained):g} ms: rate-dependent features (current spikes, kurtosis, crest factor, "
                      "high-frequency energy, residual RMS) are not on the scale the classifiers learned")
+    trained_s, other_s = schema.get("window_s"), mean_run_duration_s(man)
+    if trained_s and other_s and max(other_s / trained_s, trained_s / other_s) > DURATION_RATIO_NOTE:
+        notes.append(f"{test_dir}'s runs last {other_s:.3g} s on average, the training runs {float(trained_s):.3g} s: "
+                     "features that grow with a run's length (current spike counts, high-frequency energy) are not "
+                     "on the scale the classifiers learned")
     return notes
 
 

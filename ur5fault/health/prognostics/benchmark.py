@@ -248,6 +248,14 @@ def run_prognose(folder: Path, out: Path | None = None, *, seed: int = 0, twin: 
     check_new_output(out, folder=True, results=RESULT_FILES, replace=replace)  # before reading or simulating
     df, manifest = load_inspections(folder)
     failure = Failure(**manifest["failure"]) if isinstance(manifest.get("failure"), dict) else Failure()
+    if failure.feature in df:  # the criterion every label is read off: a gap is no fleet's as the campaign wrote it
+        ok = df[df["status"] == "ok"] if "status" in df else df  # a stopped run has failed whatever its features
+        bad = int((~np.isfinite(pd.to_numeric(ok[failure.feature], errors="coerce"))).sum())
+        if bad:
+            raise ConfigFileError(f"{folder}: the failure criterion's feature {failure.feature} is missing (NaN) or "
+                                  f"infinite in {bad} inspection(s); the labels are read off it: run the life "
+                                  "campaign again into this folder (it verifies the stored inspections and rebuilds "
+                                  "the table)")
     setup = None
     if twin:
         if "wear" not in manifest or "identity_inputs" not in manifest:

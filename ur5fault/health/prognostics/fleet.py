@@ -235,7 +235,9 @@ def _run_locked(camp, out: Path, n_jobs: int, client, progress, say, max_rounds,
             "life campaign: use another --out, or --replace-changed to simulate them again")
     for _, state, why, where in unusable[:5]:
         say(f"{out / where}: {why or state}; simulating the unit again from there")
-    say(f"life campaign {camp.name}: {len(camp.units)} units, {len(finished)} finished, {len(pending)} to run -> {out}")
+    kept = sum(k + 1 for k in finished.values()) + sum(j.inspection for j in pending.values())  # stored, verified
+    say(f"life campaign {camp.name}: {len(camp.units)} units, {len(finished)} finished, {len(pending)} to run"
+        + (f" ({kept} stored inspections kept)" if kept else "") + f" -> {out}")
     write_json_atomic(out / "manifest.json", _manifest(camp, ids, "running", backend, n_jobs, t0, None),
                       checksum=True)
     report = campaign_progress(progress, len(camp.units))
