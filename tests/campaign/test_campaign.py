@@ -616,3 +616,16 @@ def test_a_rerun_stopped_before_its_end_leaves_no_table_to_read_as_its_result(tm
     # the same table under another name is a table given as a file, not this folder's result: read
     shutil.copy(out / "features.parquet", out / "kept.parquet")
     assert len(load_features(out / "kept.parquet")) == 3
+
+
+def test_a_shortened_campaigns_table_says_it_is_of_the_shortened_runs(tmp_path, capsys):
+    """`campaign run paper --duration-s 1` (the README's quick trial) printed a "largest backlash keeping the TCP
+    within 0.5 mm" table of runs too short to reverse a torque, every size acceptable, without a word (a probe)."""
+    from ur5fault.cli import main
+
+    f = tiny(tmp_path)
+    assert main(["campaign", "run", str(f), "--out", str(tmp_path / "a"), "--jobs", "1", "--quiet",
+                 "--duration-s", "0.2"]) == 0
+    assert "note: every run shortened to 0.2 s (--duration-s)" in capsys.readouterr().out
+    assert main(["campaign", "run", str(f), "--out", str(tmp_path / "b"), "--jobs", "1", "--quiet"]) == 0
+    assert "note: every run shortened" not in capsys.readouterr().out

@@ -91,6 +91,9 @@ def cmd_run(args: argparse.Namespace) -> int:
     if table.shape[1] > MANY_SIZES:  # a sampled campaign's continuous backlash sizes: no readable grid
         print(f"\n{len(features)} runs with {table.shape[1]} distinct backlash sizes: see `ur5fault benchmark`")
     elif not table.empty:
+        if args.duration_s is not None:  # a quick trial: a clearance shows only where the motion so far reverses
+            print(f"\nnote: every run shortened to {args.duration_s:g} s (--duration-s): the TCP deviations below are "
+                  "of that part of the motion only; a backlash shows where it reverses a joint's torque")
         print("\nmax TCP deviation from the healthy twin [mm], fault joint x backlash [deg]:")
         print(table.to_string(float_format=lambda v: f"{v:.3f}"))
         print(f"\nlargest backlash keeping the TCP within {thr:g} mm [deg]:")

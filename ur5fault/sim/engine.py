@@ -27,6 +27,7 @@ import numpy as np
 from ..errors import ParameterError
 from .drive import controller as ctl
 from .drive.state import DRIVES
+from .effects import EffectSpec
 from .interfaces import Multibody
 from .loops import (  # noqa: F401  (the run-health limits and noise layout stay importable here)
     LOG_SOURCES,
@@ -212,6 +213,9 @@ def _checked_runs(runs: Sequence[RunSpec]) -> list[RunSpec]:
             raise ParameterError(f"runs[{i}] = {type(r).__name__}: each run is a RunSpec(run_id, seed, effects)")
         if isinstance(r.seed, bool) or not isinstance(r.seed, numbers.Integral) or not 0 <= r.seed <= MAX_SEED:
             raise ParameterError(f"RunSpec {r.run_id!r}: seed = {r.seed!r} must be an integer in [0, {MAX_SEED}]")
+        if isinstance(r.effects, (str, bytes)) or not all(isinstance(e, EffectSpec) for e in r.effects):
+            raise ParameterError(f"RunSpec {r.run_id!r}: effects = {r.effects!r}: each effect is an EffectSpec; build "
+                                 "it with make_effect(name, joint, **sizes)")
         if r.run_id in seen:
             raise ParameterError(f"runs[{i}]: run_id {r.run_id!r} is given twice; give each run its own run_id")
         seen.add(r.run_id)
