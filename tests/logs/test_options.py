@@ -242,6 +242,15 @@ def test_commands_that_cannot_fit_it_refuse_an_unknown_payload(tmp_path, capsys,
     assert rc == 2 and len(err) == 1 and err[0].endswith("needs its position (0 0 0 for a bare flange)"), err
 
 
+def test_diagnose_refuses_an_unknown_payload_before_any_work(tmp_path, capsys):
+    """diagnose said "payload unknown" only after loading the classifiers and reading the log (8 s on a Kufieta
+    run, a newcomer probe): now from the options, before the detector folder is even looked at."""
+    rc = main(["diagnose", str(RUN1), "--format", "rtde", "--detector", str(tmp_path / "nothing"),
+               "--out", str(tmp_path / "o")])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 2 and len(err) == 1 and "payload unknown (no --payload-kg" in err[0], err
+
+
 @pytest.mark.parametrize("which", ["judged", "baseline"])
 def test_monitor_refuses_hold_out_in_a_manifest(tmp_path, capsys, which):
     """monitor judges every log it is given and builds its baseline from every baseline log: a manifest's hold_out

@@ -271,6 +271,15 @@ def refuse_hold_out(entries: Sequence[LogEntry], where: str) -> None:
                              "the manifest")
 
 
+def refuse_unknown_payload(entries: Sequence[LogEntry]) -> None:
+    """For a command that does not fit a payload: :func:`read_entry`'s refusal of a log whose payload is unknown,
+    said from the options alone, before any log is read or model loaded (it came after seconds of work)."""
+    for e in entries:
+        if e.payload_unknown:
+            raise ParameterError(f"{e.path}: payload unknown (no --payload-kg, or --payload-kg unknown): "
+                                 f"{UNKNOWN_PAYLOAD}")
+
+
 def read_entry(e: LogEntry, length: MinLength | None = None, *, allow_unknown: bool = False) -> MeasuredLog:
     """Read one log (at least ``length`` long, default what fitting needs). A log whose payload is unknown
     (:attr:`LogEntry.payload_unknown`) comes back with ``payload_kg`` ``None`` (and ``tcp_offset_m`` ``None``

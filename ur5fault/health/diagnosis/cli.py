@@ -34,7 +34,7 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
     from ...config import Overlay
     from ...errors import ParameterError
     from ...logs.length import check_files_length, check_logs_length
-    from ...logs.options import log_entries, read_entry, refuse_hold_out
+    from ...logs.options import log_entries, read_entry, refuse_hold_out, refuse_unknown_payload
     from ...logs.same_samples import refuse_same_samples
     from ...util.io import check_new_output
     from ..diagnostics.classifier import require_sklearn
@@ -64,6 +64,7 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
         if entries[0].path.resolve() in names:
             raise ParameterError(f"{entries[0].path} is both diagnosed and a baseline log; a run cannot judge "
                                  "itself: give other healthy logs of the robot")
+    refuse_unknown_payload([*entries, *base])  # before the models are loaded and the logs read
     require_sklearn()
     check_new_output(args.out, folder=True, results=(JSON_FILE, REPORT_FILE, FIGURE_FILE), replace=args.replace)
     window_s = check_schema(load_models(args.detector)[1], args.detector)  # refused before the replay

@@ -46,7 +46,7 @@ def cmd_monitor(args: argparse.Namespace) -> int:
     from ...errors import ParameterError
     from ...logs.length import check_files_length, check_logs_length
     from ...logs.measured import assumption_notes
-    from ...logs.options import log_entries, read_log_options, refuse_hold_out
+    from ...logs.options import log_entries, read_log_options, refuse_hold_out, refuse_unknown_payload
     from ...logs.same_samples import refuse_same_samples
     from ...sim.params import load_params
     from ...util.io import check_new_output, checksum_path
@@ -81,6 +81,7 @@ def cmd_monitor(args: argparse.Namespace) -> int:
     entries = [log_entries(a, *(g for g in groups if g is not a)) for a in groups]
     for group, where in zip(entries, ("the logs monitor judges", "a monitor baseline")):
         refuse_hold_out(group, where)
+        refuse_unknown_payload(group)  # before any log is read
     check_files_length([e.path for group in entries for e in group], "monitor")
     logs, _ = read_log_options(args, others=groups[1:], role="monitored")
     healthy = read_log_options(base_args, others=[args], role="a baseline log")[0] if base_args is not None else []
