@@ -273,6 +273,8 @@ def test_plot_and_show_commands(tmp_path, two, capsys):
     for args, message in ((["show", "rnope", "--campaign", str(two.out)], "unknown run_id 'rnope'; valid: r"),
                           (["show", str(tmp_path / "none.parquet")], "none.parquet: no such file"),
                           (["show", "r1", "--campaign", str(tmp_path)], "no features.parquet"),
+                          (["show", "r1", "--campaign", str(tmp_path / "nonexist")],
+                           "nonexist: no such campaign folder"),
                           (["plot", str(two.out), "--feature", "nope"], "unknown feature 'nope'")):
         assert main(args) == 2
         err = capsys.readouterr().err

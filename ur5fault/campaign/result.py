@@ -58,6 +58,8 @@ class CampaignResult:
     def load(cls, out: str | Path) -> CampaignResult:
         """Read ``OUT/features.parquet`` and ``OUT/manifest.json``."""
         out = Path(out)
+        if not out.exists():
+            raise ConfigFileError(f"{out}: no such campaign folder")
         if out.is_file():  # e.g. a run's time series given to `ur5fault plot`
             raise ConfigFileError(f"{out}: a file, not a campaign folder (`ur5fault plot` and CampaignResult read "
                                   "the folder a campaign ran into; `ur5fault show` draws one run's file)")
