@@ -15,6 +15,9 @@ target current (UR's gravity model at rest). Rests are grouped by pose (every jo
    the motion before) rather than on the pose.
 2. *Against UR's model*: the least-squares line robot = a * UR + b over the rests, for the fit runs, for TEST and
    for both together, and the same for the twin.
+3. *How much a constant could do on TEST*: TEST's current RMS (its first 0.5 s left out, as ``residual_bins.py``
+   keeps it) as a multiple of UR's model, as replayed, with the fit runs' mean residual added to the twin (a
+   current offset identified on them), and with TEST's own mean residual (an oracle: the most any constant can do).
 """
 
 from __future__ import annotations
@@ -96,6 +99,21 @@ def main() -> None:
                   f"{ur.max():+.2f} | {line(ur, rob)} | {line(ur, tw)} |")
         ur, rob, tw = (np.concatenate(x) for x in (both_ur, both_r, both_t))
         print(f"| J{j + 1} | both | {ur.size} | | | {line(ur, rob)} | {line(ur, tw)} |")
+    replays = [dict(np.load(f)) for f in files]
+    fit = [d for d in replays if not int(d["role"][0])]
+    test = next(d for d in replays if int(d["role"][0]))
+    k = test["keep"].astype(bool)
+
+    def rms(x: np.ndarray) -> float:
+        return float(np.sqrt(np.mean(x * x)))
+
+    print("\n| joint | TEST x UR's model: as replayed | + the fit runs' mean residual | + TEST's own mean (oracle) |")
+    print("| --- | --- | --- | --- |")
+    for j in range(6):
+        c = float(np.mean(np.concatenate([(d["meas"] - d["sim"])[d["keep"].astype(bool), j] for d in fit])))
+        e, ur = (test["meas"] - test["sim"])[k, j], (test["meas"] - test["ur"])[k, j]
+        print(f"| J{j + 1} | {rms(e) / rms(ur):.2f} | {rms(e - c) / rms(ur):.2f} ({c:+.3f} A) | "
+              f"{rms(e - e.mean()) / rms(ur):.2f} ({e.mean():+.3f} A) |")
 
 
 if __name__ == "__main__":
