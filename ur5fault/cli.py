@@ -184,6 +184,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     configure_logging(getattr(args, "verbose", 0))
+    import threading
+
+    hook = threading.excepthook  # quieted once the command is stopped (_quiet_executor_threads); restored after
     try:
         previous = signal.signal(signal.SIGTERM, _on_sigterm)
         # Ctrl-C as Python's own handler, quieting the executor's thread first; an ignored SIGINT (a job started in
@@ -211,6 +214,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         sys.stderr.write("ur5fault: interrupted\n")
         return 130
     finally:
+        threading.excepthook = hook  # main() called in a notebook: later threads' errors are printed again
         if previous is not None:
             signal.signal(signal.SIGTERM, previous)
         if previous_int is not None:

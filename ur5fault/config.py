@@ -172,7 +172,7 @@ def check_log_period(value: Any, where: str, physics_dt_s: float, duration_s: fl
     if MIN_LOGGED_SAMPLES * lp > max(duration_s, physics_dt_s) * (1 + 1e-9):  # said as what it is
         raise ParameterError(f"{where} = {short(value)} leaves fewer than {MIN_LOGGED_SAMPLES} logged samples in the "
                              f"run ({duration_s:g} s): its features take speeds and accelerations of them; lengthen "
-                             "the run (duration_s) or log more often")
+                             "the run (duration_s, or --duration-s) or log more often")
     k = round(lp / physics_dt_s)
     if abs(k * physics_dt_s - lp) > 1e-12:
         raise ParameterError(f"{where} = {short(value)} must be a whole multiple of physics_dt_s = {physics_dt_s:g} s")

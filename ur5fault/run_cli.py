@@ -95,7 +95,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
 def _check_flags(args: argparse.Namespace, file_data: dict) -> None:
     """The command line's values in range, refused under the flags' names (the run configuration's checks name its
     keys, which a command-line user never typed)."""
-    from .config import check_duration, check_seed
+    from .config import MIN_LOGGED_SAMPLES, check_duration, check_seed
     from .sim.effects import REGISTRY
     from .util.checks import check_number
 
@@ -109,9 +109,10 @@ def _check_flags(args: argparse.Namespace, file_data: dict) -> None:
     if args.duration_s is not None:
         check_duration(args.duration_s, "--duration-s")
         log_period = args.log_period_s if args.log_period_s is not None else file_data.get("log_period_s", 1e-3)
-        if isinstance(log_period, (int, float)) and args.duration_s < log_period:
-            raise Ur5FaultError(f"--duration-s {args.duration_s:g} is shorter than the log period {log_period:g} s: "
-                                "a run holds at least one logged sample; give a longer run or --log-period-s")
+        if isinstance(log_period, (int, float)) and args.duration_s < MIN_LOGGED_SAMPLES * log_period:
+            raise Ur5FaultError(f"--duration-s {args.duration_s:g} holds fewer than {MIN_LOGGED_SAMPLES} log periods "
+                                f"of {log_period:g} s: a run's features take speeds and accelerations of its "
+                                "logged samples; give a longer run or --log-period-s")
     if args.log_period_s is not None:
         check_number(args.log_period_s, "--log-period-s", 0.0, math.inf, "s", lo_open=True)
 

@@ -306,6 +306,10 @@ def test_time_series_of_other_settings_or_another_run_are_never_read_as_this_run
     caplog.clear()
     pd.testing.assert_frame_equal(CampaignResult.load(out).time_series([a])[a], saved_a)
     assert f"{a}.parquet: changed: time series of a run made under other settings" in caplog.text
+    # a run missing (killed before its run file) re-simulated without saving time series: its sound file is kept
+    (out / "runs" / f"{b}.parquet").unlink()
+    run_campaign(load_campaign(tiny(tmp_path, dur=0.3)), out, jobs=1, progress=False, note=None)
+    assert (out / "timeseries" / f"{b}.parquet").is_file()
     # the campaign changed (0.2 s runs), simulated again without saving time series: the 0.3 s files are gone
     run_campaign(load_campaign(tiny(tmp_path, dur=0.2)), out, jobs=1, progress=False, note=None,
                  replace_changed=True)
@@ -324,6 +328,9 @@ def test_status_says_when_the_manifest_is_gone_or_unreadable(tmp_path, done):
     info = status(out)
     assert info["sound"] is False and info["manifest"]["state"] == "bad"
     assert "rewrites it" in info["advice"]
+    (out / "manifest.json").write_text('{"name": "t"}')  # readable, but not which campaign the runs are
+    info = status(out)
+    assert info["sound"] is False and "does not record its campaign" in info["advice"]
     (out / "manifest.json").unlink()
     info = status(out)
     assert info["sound"] is False and info["manifest"] == {"state": "missing", "detail": "absent"}

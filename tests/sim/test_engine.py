@@ -174,7 +174,8 @@ def test_bad_arguments(tmp_path):
     with pytest.raises(ParameterError, match=r"runs\[0\] = str: each run is a RunSpec"):
         sim.run(pick_and_place(), ["a"], duration_s=0.01)
     # an effect by name (an AttributeError deep in the batch before, a newcomer probe), or one effect not in a tuple
-    for effects in (("backlash",), "backlash", (make_effect("backlash", 2, backlash_deg=0.1), 3)):
+    one = make_effect("backlash", 2, backlash_deg=0.1)
+    for effects in (("backlash",), "backlash", (one, 3), one, None, 5):
         with pytest.raises(ParameterError, match=r"^RunSpec 'a': effects = .*: each effect is an EffectSpec"):
             sim.run(pick_and_place(), [RunSpec("a", effects=effects)], duration_s=0.01)
     res = sim.run(pick_and_place(), [RunSpec("a", seed=np.int64(3))], duration_s=0.01)

@@ -45,7 +45,15 @@ from .lock import Lock
 from .manifest import build_manifest
 from .runs import CampaignRun
 from .spec import Campaign
-from .store import BadRunFilesError, CampaignChangedError, consolidate, run_path, timeseries_path, write_run_file
+from .store import (
+    BadRunFilesError,
+    CampaignChangedError,
+    check_timeseries_file,
+    consolidate,
+    run_path,
+    timeseries_path,
+    write_run_file,
+)
 from .verify import scan
 from .workers import check_backend, dask_client, dispatch, exit_with_parent, note_stderr
 
@@ -256,10 +264,12 @@ def _run_locked(camp: Campaign, out: Path, jobs: int, backend: str, client, prog
             say(f"re-simulating {len(found.changed)} run(s) made under other settings (--replace-changed)")
         redo = set(found.missing) | {rid for rid, _ in found.bad} | {rid for rid, _ in found.changed}
         todo = [rc for rc in camp.runs if rc.run_id in redo]
-        if not save_ts:  # a run simulated again without its time series: one stored before is of other settings
+        if not save_ts:  # a run simulated again without its time series: a stored one of other settings is stale
             for rc in todo:
-                timeseries_path(out, rc.run_id).unlink(missing_ok=True)
-                checksum_path(timeseries_path(out, rc.run_id)).unlink(missing_ok=True)
+                path = timeseries_path(out, rc.run_id)
+                if path.exists() and check_timeseries_file(path, ids.identity(rc), None).state != "ok":
+                    path.unlink(missing_ok=True)
+                    checksum_path(path).unlink(missing_ok=True)
         if capped:
             say(capped)
         for line in camp.notes:

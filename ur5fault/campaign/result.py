@@ -59,7 +59,8 @@ class CampaignResult:
         """Read ``OUT/features.parquet`` and ``OUT/manifest.json``."""
         out = Path(out)
         if not out.exists():
-            raise ConfigFileError(f"{out}: no such campaign folder")
+            raise ConfigFileError(f"{out}: no such campaign folder (give the folder `ur5fault campaign run` wrote, "
+                                  "its --out)")
         if out.is_file():  # e.g. a run's time series given to `ur5fault plot`
             raise ConfigFileError(f"{out}: a file, not a campaign folder (`ur5fault plot` and CampaignResult read "
                                   "the folder a campaign ran into; `ur5fault show` draws one run's file)")
@@ -188,8 +189,10 @@ class CampaignResult:
     def _headline(self) -> str:
         counts = self.features["status"].value_counts().to_dict()
         status = ", ".join(f"{n} {s}" for s, n in sorted(counts.items()))
-        saved = ("saved" if self.manifest.get("save_timeseries") and (self.out / "timeseries").is_dir()
-                 else "not saved (re-simulated on demand)")
+        stored = (self.out / "timeseries").is_dir() and any((self.out / "timeseries").glob("*.parquet"))
+        saved = ("saved" if stored and self.manifest.get("save_timeseries") else
+                 "saved for some runs (the others re-simulated on demand)" if stored else
+                 "not saved (re-simulated on demand)")
         return (f"campaign {self.name!r} in {self.out}: {len(self.features)} runs ({status}); swept "
                 f"{', '.join(self.swept_keys) or 'nothing'}; threshold {self.threshold_mm:g} mm; time series {saved}")
 

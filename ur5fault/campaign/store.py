@@ -148,7 +148,9 @@ def check_timeseries_file(path: Path, identity: str, n_rows: int | None) -> File
         schema, rows = pf.schema_arrow, pf.metadata.num_rows
     except (*DAMAGED_PARQUET_ERRORS, pa.ArrowException) as exc:
         return FileCheck("bad", f"unreadable as Parquet ({' '.join(str(exc).split())[:120]})")
-    if (n_rows is not None and rows != n_rows) or "t_s" not in schema.names:
+    if "t_s" not in schema.names:
+        return FileCheck("bad", "no t_s column: not a run's time series")
+    if n_rows is not None and rows != n_rows:
         return FileCheck("bad", f"{rows} samples, expected {n_rows}")
     corrupt = verify_checksum(path)
     if corrupt:

@@ -133,8 +133,15 @@ def status(out: Path) -> dict[str, Any]:
             camp = build_campaign(data, "manifest.json", str(manifest.get("campaign_text", "")), None, out)
         except Ur5FaultError as exc:
             info["campaign_error"] = str(exc)
+            manifest_todo = manifest_todo or (
+                "manifest.json's campaign does not validate with this ur5fault (the runs were checked for soundness "
+                "only): `ur5fault campaign run` on the campaign, with the same --out, rewrites it")
     else:
         info["campaign_error"] = "manifest.json absent or without the campaign: files checked for soundness only"
+        if manifest and not damaged:  # readable, but it does not say which campaign the runs are
+            manifest_todo = manifest_todo or (
+                "manifest.json does not record its campaign: `ur5fault campaign run` on the campaign, with the same "
+                "--out, rewrites it")
     problems: list[str] = []
     if camp is not None:
         ids = Identities(camp)

@@ -213,7 +213,7 @@ def _checked_runs(runs: Sequence[RunSpec]) -> list[RunSpec]:
             raise ParameterError(f"runs[{i}] = {type(r).__name__}: each run is a RunSpec(run_id, seed, effects)")
         if isinstance(r.seed, bool) or not isinstance(r.seed, numbers.Integral) or not 0 <= r.seed <= MAX_SEED:
             raise ParameterError(f"RunSpec {r.run_id!r}: seed = {r.seed!r} must be an integer in [0, {MAX_SEED}]")
-        if isinstance(r.effects, (str, bytes)) or not all(isinstance(e, EffectSpec) for e in r.effects):
+        if not isinstance(r.effects, (tuple, list)) or not all(isinstance(e, EffectSpec) for e in r.effects):
             raise ParameterError(f"RunSpec {r.run_id!r}: effects = {r.effects!r}: each effect is an EffectSpec; build "
                                  "it with make_effect(name, joint, **sizes)")
         if r.run_id in seen:

@@ -61,7 +61,8 @@ class RadiusCache:
         try:
             raw = self.path.read_bytes() if self.path.is_file() else None
         except OSError as exc:
-            raise ConfigFileError(f"{self.path}: cannot read ({exc.strerror or exc})") from None
+            raise ConfigFileError(f"{self.path}: cannot read ({exc.strerror or exc}); give --twin-cache a file "
+                                  "this user may read and write") from None
         if raw is not None and b'"radii"' not in raw:  # another file (a manifest, a schema): never overwritten
             raise ConfigFileError(f"{self.path}: not a twin radius cache (it holds no radii) and would be "
                                   "overwritten; give --twin-cache a new file or a cache prognose wrote")
