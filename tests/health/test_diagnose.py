@@ -418,3 +418,16 @@ def test_real_nist_log_few_seconds_diagnosed_without_motor_encoders(detector, tm
             # docs/diagnostics.md, "Regressors free of the twin's noise")
             if est["size"] is not None and abs(est["size"]) >= 1.0:
                 assert est["confounded"] and est["variance_inflation"] > MAX_VIF
+
+
+def test_a_shuffled_label_control_given_as_the_detector_is_named(tmp_path, capsys):
+    """`--detector` of a `benchmark --shuffle-labels` folder said only "no saved classifiers" (a newcomer probe)."""
+    (tmp_path / "metrics.json").write_text(json.dumps({"shuffled_labels": True}))
+    from ur5fault.errors import ConfigFileError
+    from ur5fault.health.diagnostics.saved import load_models
+
+    with pytest.raises(ConfigFileError, match="a shuffled-label control .* saves no classifiers"):
+        load_models(tmp_path)
+    (tmp_path / "metrics.json").write_text(json.dumps({"shuffled_labels": False}))
+    with pytest.raises(ConfigFileError, match="no saved classifiers"):
+        load_models(tmp_path)

@@ -182,6 +182,17 @@ def detector_test_auc(folder: str | Path) -> float | None:
     return None
 
 
+def _shuffled_report(folder: Path) -> bool:
+    """Whether the benchmark report in ``folder`` (or beside it) is a shuffled-label control's."""
+    for path in (folder / "metrics.json", folder.parent / "metrics.json"):
+        if path.is_file():
+            try:
+                return json.loads(path.read_text()).get("shuffled_labels") is True
+            except (OSError, ValueError, AttributeError):
+                return False
+    return False
+
+
 def load_models(folder: str | Path) -> tuple[Models, dict[str, Any]]:
     """The saved classifiers and their schema from a ``models`` folder (or the report folder holding one).
 
@@ -196,6 +207,9 @@ def load_models(folder: str | Path) -> tuple[Models, dict[str, Any]]:
         folder = folder / MODELS_DIR
     path, schema_path = folder / CLASSIFIERS_FILE, folder / SCHEMA_FILE
     if not path.exists() or not schema_path.exists():
+        if _shuffled_report(folder):  # the control run saves none: its classifiers learned nothing
+            raise ConfigFileError(f"{folder}: a shuffled-label control (`benchmark --shuffle-labels`), which saves no "
+                                  "classifiers; give the folder of the benchmark run without it")
         raise ConfigFileError(f"{folder}: no saved classifiers ({CLASSIFIERS_FILE} and {SCHEMA_FILE}); "
                               "run `ur5fault benchmark` on a campaign first")
     schema = read_json_stored(schema_path, RESAVE)
