@@ -144,30 +144,25 @@ class Terminated(KeyboardInterrupt):
     """SIGTERM arrived: unwind like Ctrl-C (locks released, workers stopped, temporary files removed)."""
 
 
-def _quiet_executor_threads() -> None:
-    """Once the command is stopped (Ctrl-C, SIGTERM): loky's executor manager thread may raise while its workers
-    are shut down (a ``KeyError`` of a task it no longer tracks) and print a thread traceback after the one-line
-    message. It is shutdown noise (the lock is released, the workers stopped): not printed from then on."""
-    import threading
+#: how long an executor thread's exception waits for the command's stop before it is printed [s]: a SIGTERM sent to
+#: the process group reaches the workers too, and loky's thread may see them die before the main thread has run its
+#: signal handler (a few ms; 1 s is far beyond it)
+STOP_GRACE_S = 1.0
 
-    previous = threading.excepthook
+
+def quiet_when_stopping(previous, stopping, grace_s: float = STOP_GRACE_S):
+    """A ``threading.excepthook`` that drops the exceptions of loky's executor manager thread once the command is
+    stopped (``stopping``, a ``threading.Event`` the SIGTERM / Ctrl-C handlers set): while its workers are shut
+    down it may raise (a ``KeyError`` of a task it no longer tracks) and print a thread traceback after the
+    one-line message. Shutdown noise: the lock is released and the workers stopped. Any other exception, and one of
+    that thread while the command runs, goes to ``previous`` (after ``grace_s``, the stop may be on its way)."""
 
     def quiet_hook(args) -> None:
-        if args.thread is None or not args.thread.name.startswith("ExecutorManagerThread"):
+        manager = args.thread is not None and args.thread.name.startswith("ExecutorManagerThread")
+        if not (manager and stopping.wait(grace_s)):
             previous(args)
 
-    if getattr(previous, "__name__", "") != "quiet_hook":  # once
-        threading.excepthook = quiet_hook
-
-
-def _on_sigterm(signum, frame) -> None:
-    _quiet_executor_threads()
-    raise Terminated()
-
-
-def _on_sigint(signum, frame) -> None:
-    _quiet_executor_threads()
-    raise KeyboardInterrupt()
+    return quiet_hook
 
 
 def _usage(parser: argparse.ArgumentParser):
@@ -186,12 +181,22 @@ def main(argv: Sequence[str] | None = None) -> int:
     configure_logging(getattr(args, "verbose", 0))
     import threading
 
-    hook = threading.excepthook  # quieted once the command is stopped (_quiet_executor_threads); restored after
+    stopping = threading.Event()  # set by the handlers below: the executor's thread is then quiet
+
+    def on_sigterm(signum, frame) -> None:
+        stopping.set()
+        raise Terminated()
+
+    def on_sigint(signum, frame) -> None:  # Python's own Ctrl-C, and the executor's thread quiet
+        stopping.set()
+        raise KeyboardInterrupt()
+
+    hook = threading.excepthook  # restored when main() returns (main() called in a notebook) unless it was stopped
+    threading.excepthook = quiet_when_stopping(hook, stopping)
     try:
-        previous = signal.signal(signal.SIGTERM, _on_sigterm)
-        # Ctrl-C as Python's own handler, quieting the executor's thread first; an ignored SIGINT (a job started in
-        # the background) stays ignored
-        previous_int = (signal.signal(signal.SIGINT, _on_sigint)
+        previous = signal.signal(signal.SIGTERM, on_sigterm)
+        # an ignored SIGINT (a job started in the background) stays ignored
+        previous_int = (signal.signal(signal.SIGINT, on_sigint)
                         if signal.getsignal(signal.SIGINT) is signal.default_int_handler else None)
     except ValueError:  # not the main thread: leave signals alone
         previous = previous_int = None
@@ -214,7 +219,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         sys.stderr.write("ur5fault: interrupted\n")
         return 130
     finally:
-        threading.excepthook = hook  # main() called in a notebook: later threads' errors are printed again
+        if not stopping.is_set():  # stopped: loky's thread may raise after main() returns, while the pool winds down
+            threading.excepthook = hook
         if previous is not None:
             signal.signal(signal.SIGTERM, previous)
         if previous_int is not None:

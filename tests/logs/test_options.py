@@ -249,6 +249,10 @@ def test_diagnose_refuses_an_unknown_payload_before_any_work(tmp_path, capsys):
                "--out", str(tmp_path / "o")])
     err = capsys.readouterr().err.strip().splitlines()
     assert rc == 2 and len(err) == 1 and "payload unknown (no --payload-kg" in err[0], err
+    rc = main(["diagnose", str(RUN1), "--format", "rtde", "--payload-kg", "0", "--detector", str(tmp_path / "nothing"),
+               "--out", str(tmp_path / "o")])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 2 and len(err) == 1 and err[0].endswith("needs its position (0 0 0 for a bare flange)"), err
 
 
 @pytest.mark.parametrize("which", ["judged", "baseline"])

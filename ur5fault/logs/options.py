@@ -272,12 +272,16 @@ def refuse_hold_out(entries: Sequence[LogEntry], where: str) -> None:
 
 
 def refuse_unknown_payload(entries: Sequence[LogEntry]) -> None:
-    """For a command that does not fit a payload: :func:`read_entry`'s refusal of a log whose payload is unknown,
-    said from the options alone, before any log is read or model loaded (it came after seconds of work)."""
+    """For a command that does not fit a payload: :func:`read_entry`'s refusals of a log whose payload is unknown, or
+    (an rtde log's, which the file does not carry) stated without its position, said from the options alone, before
+    any log is read or model loaded (they came after seconds of work)."""
     for e in entries:
         if e.payload_unknown:
             raise ParameterError(f"{e.path}: payload unknown (no --payload-kg, or --payload-kg unknown): "
                                  f"{UNKNOWN_PAYLOAD}")
+        if e.fmt == "rtde" and e.tcp_offset_m is None:
+            raise ParameterError(f"{e.path}: --tcp-offset-m missing (a manifest's tcp_offset_m): a stated payload "
+                                 "needs its position (0 0 0 for a bare flange)")
 
 
 def read_entry(e: LogEntry, length: MinLength | None = None, *, allow_unknown: bool = False) -> MeasuredLog:

@@ -63,6 +63,10 @@ def test_a_unit_whose_wear_leaves_the_effects_ranges_is_censored_not_a_crash(tmp
     # 1 + 10 x cycles/1e6 <= 10 up to 900 000 cycles: inspections at 0, 100 000, ..., 900 000, then censored
     assert sorted(df.groupby("unit_id")["cycles"].max()) == [900_000, 900_000]
     assert (df["friction_scale_j1"] <= 10.0).all()
+    # prognose on it: no failed unit, and the advice says why a longer max_cycles would not help
+    assert main(["prognose", str(tmp_path / "fleet"), "--out", str(tmp_path / "b")]) == 2
+    err = capsys.readouterr().err
+    assert "2 unit(s) were censored where their wear left the simulator's effect ranges" in err, err
     camp = load_life(path)
     why = beyond_model(camp, [0.0] * 6, 1_000_000)
     assert why is not None and "coulomb_friction.scale = 11.0 is out of range [0, 10]" in why and not why.endswith("-")

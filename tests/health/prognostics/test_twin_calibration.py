@@ -162,6 +162,13 @@ def test_a_file_of_ur5fault_that_is_not_a_cache_is_never_overwritten(tmp_path):
     with pytest.raises(ConfigFileError, match="not a twin radius cache"):
         RadiusCache(manifest)
     assert manifest.read_bytes() == before.replace(b"fleet", b"fleat")
+    # the word alone is no cache: a file of another shape that mentions radii (a verifier's variant)
+    other = write_json_atomic(tmp_path / "m2.json", {"name": "radii", "kind": "life"}, checksum=True)
+    with pytest.raises(ConfigFileError, match="not a twin radius cache"):
+        RadiusCache(other)
+    bad = write_json_atomic(tmp_path / "r.json", {"version": 1, "radii": {"a": "x"}}, checksum=True)
+    with pytest.raises(ConfigFileError, match="a radius that is not a number"):
+        RadiusCache(bad)
 
 
 @pytest.mark.parametrize("flag", [["--twin-calibration", "pooled"], ["--twin-cache", "x.json"]])

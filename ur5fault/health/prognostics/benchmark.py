@@ -270,7 +270,10 @@ def run_prognose(folder: Path, out: Path | None = None, *, seed: int = 0, twin: 
     try:
         pred, fitted, hi = predict(df, failure, seed, setup, twin_calibration, cache, twin_friction)
     except ConfigFileError as exc:  # predict's own refusal (too few failed units) already says what to change
-        raise ConfigFileError(f"{folder}: {exc}") from None
+        beyond = manifest.get("n_censored_beyond_model") or 0
+        raise ConfigFileError(f"{folder}: {exc}" + (
+            f"; {beyond} unit(s) were censored where their wear left the simulator's effect ranges, which no longer "
+            "max_cycles changes: lower the wear law's constants or life.failure.threshold" if beyond else "")) from None
     except ValueError as exc:  # the estimators' own "too few units or inspections to fit" (rul.py, twin_*.py)
         raise ConfigFileError(f"{folder}: {exc} (a larger fleet, shorter inspection intervals or a longer "
                               "max_cycles)") from None

@@ -7,7 +7,9 @@ effects, the wear law, the failure criterion, log period, duration, noise seed, 
 constants and the package version.  Each entry is keyed by the SHA-256 of all of them, so a changed model,
 setup or search can never read another's radius; the file holds only radii, written atomically with a
 SHA-256 sidecar.  A cache whose bytes changed since it was written (a changed digit would be a wrong radius,
-read silently) is set aside with a warning and its radii simulated again: a cache never needs a human.
+read silently) is set aside with a warning and its radii simulated again.  A file that is not shaped as a cache (a
+JSON object of exactly a version and radii: a manifest or a schema given by mistake, or a cache damaged past
+parsing) is refused, never overwritten: the one case where a human removes it.
 """
 
 from __future__ import annotations
@@ -52,6 +54,16 @@ def ray_key(setup_sha: str, ray: tb.Ray) -> str:
     return hashlib.sha256(text.encode()).hexdigest()
 
 
+def _cache_shaped(raw: bytes) -> bool:
+    """Whether ``raw`` is a JSON object of exactly a ``version`` and a mapping of ``radii`` (what :class:`RadiusCache`
+    writes; its values are checked on reading)."""
+    try:
+        data = json.loads(raw)
+    except ValueError:
+        return False
+    return isinstance(data, dict) and set(data) == {"version", "radii"} and isinstance(data["radii"], dict)
+
+
 class RadiusCache:
     """Radii by key in one JSON file (``path``); :meth:`radii` looks up, simulates the rest and saves."""
 
@@ -63,9 +75,10 @@ class RadiusCache:
         except OSError as exc:
             raise ConfigFileError(f"{self.path}: cannot read ({exc.strerror or exc}); give --twin-cache a file "
                                   "this user may read and write") from None
-        if raw is not None and b'"radii"' not in raw:  # another file (a manifest, a schema): never overwritten
-            raise ConfigFileError(f"{self.path}: not a twin radius cache (it holds no radii) and would be "
-                                  "overwritten; give --twin-cache a new file or a cache prognose wrote")
+        if raw is not None and not _cache_shaped(raw):  # another file (a manifest, a schema): never overwritten
+            raise ConfigFileError(f"{self.path}: not a twin radius cache (a JSON object of a version and radii "
+                                  "only) and would be overwritten; give --twin-cache a new file or a cache prognose "
+                                  "wrote (an unreadable cache: remove it)")
         why = verify_checksum(self.path) if raw is not None and checksum_path(self.path).exists() else None
         if why:
             _log.warning("%s: %s; its radii are simulated again and the file rewritten", self.path, why)
@@ -82,7 +95,10 @@ class RadiusCache:
                       and isinstance(data.get("radii"), dict)):
                 raise ConfigFileError(f"{self.path}: not a twin radius cache of version {VERSION}; remove it")
             else:
-                self.entries = {str(k): float(v) for k, v in data["radii"].items()}
+                try:
+                    self.entries = {str(k): float(v) for k, v in data["radii"].items()}
+                except (TypeError, ValueError):
+                    raise ConfigFileError(f"{self.path}: a radius that is not a number; remove the cache") from None
         self.hits = self.misses = 0
 
     def radii(self, setup: tb.TwinSetup, rays: Sequence[tb.Ray]) -> NDArray:
