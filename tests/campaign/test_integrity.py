@@ -330,7 +330,7 @@ def test_status_says_when_the_manifest_is_gone_or_unreadable(tmp_path, done):
     assert "rewrites it" in info["advice"]
     (out / "manifest.json").write_text('{"name": "t"}')  # readable, but not which campaign the runs are
     info = status(out)
-    assert info["sound"] is False and "does not record its campaign" in info["advice"]
+    assert info["sound"] is False and info["manifest"]["state"] == "bad" and "rewrites it" in info["advice"]
     (out / "manifest.json").unlink()
     info = status(out)
     assert info["sound"] is False and info["manifest"] == {"state": "missing", "detail": "absent"}
@@ -359,6 +359,8 @@ def test_a_hand_edited_manifest_without_its_sidecar_is_refused_in_one_line(tmp_p
     (out / "manifest.json").write_text(json.dumps(m))
     with pytest.raises(ConfigFileError, match=f"manifest.json: {message}"):
         CampaignResult.load(out)
+    info = status(out)  # said sound, exit 0, while every reader refused it
+    assert info["sound"] is False and info["manifest"]["state"] == "bad" and message in info["manifest"]["detail"]
     (out / "manifest.json").write_text("[1]")
     with pytest.raises(ConfigFileError, match="not a campaign manifest"):
         CampaignResult.load(out)

@@ -8,7 +8,6 @@ from __future__ import annotations
 import dataclasses
 import json
 import logging
-import math
 import tempfile
 from collections.abc import Iterable, Mapping
 from pathlib import Path
@@ -20,23 +19,16 @@ from ..errors import ConfigFileError, UnknownNameError
 from ..sim.effects import REGISTRY
 from ..util import provenance, yamlsafe
 from ..util.io import read_json_stored, read_parquet_stored
-from .store import REBUILD_FEATURES, check_table_of_manifest, check_timeseries_file, timeseries_path
+from .store import (
+    REBUILD_FEATURES,
+    check_manifest_fields,
+    check_table_of_manifest,
+    check_timeseries_file,
+    timeseries_path,
+)
 from .summary import EffectSweep, acceptable_backlash, effect_sweep, severity_table, swept_effects, tcp_table
 
 _log = logging.getLogger(__name__)
-
-
-def _check_manifest(path: Path, manifest: Any) -> None:
-    """Refuse with one line a manifest (one without its checksum sidecar is read unverified, e.g. edited by hand)
-    that lacks what the result reads: a JSON object with a positive ``threshold_mm`` and a list of ``swept_keys``."""
-    if not isinstance(manifest, dict):
-        raise ConfigFileError(f"{path}: not a campaign manifest (not a JSON object); {REBUILD_FEATURES}")
-    thr = manifest.get("threshold_mm")
-    if isinstance(thr, bool) or not isinstance(thr, (int, float)) or not math.isfinite(thr) or thr <= 0:
-        raise ConfigFileError(f"{path}: threshold_mm {thr!r} is not a positive number of mm; {REBUILD_FEATURES}")
-    keys = manifest.get("swept_keys", [])
-    if not (isinstance(keys, list) and all(isinstance(k, str) for k in keys)):
-        raise ConfigFileError(f"{path}: swept_keys {keys!r} is not a list of names; {REBUILD_FEATURES}")
 
 
 @dataclasses.dataclass(frozen=True, repr=False, eq=False)
@@ -72,7 +64,7 @@ class CampaignResult:
                 raise ConfigFileError(f"{out}: no {name} (run the campaign to its end first)")
         features = read_parquet_stored(out / "features.parquet", REBUILD_FEATURES)
         manifest = read_json_stored(out / "manifest.json", REBUILD_FEATURES)
-        _check_manifest(out / "manifest.json", manifest)
+        check_manifest_fields(out / "manifest.json", manifest)
         check_table_of_manifest(out / "features.parquet", REBUILD_FEATURES, manifest)
         return cls(out, features, manifest)
 

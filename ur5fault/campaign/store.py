@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import math
 from collections.abc import Callable, Iterable, Mapping
 from pathlib import Path
 from typing import Any
@@ -227,6 +228,20 @@ def read_manifest(out: Path) -> tuple[dict[str, Any], str | None]:
 
 #: the consolidated tables a campaign folder holds (:func:`check_table_of_manifest`)
 CONSOLIDATED = ("features.parquet", "inspections.parquet")
+
+
+def check_manifest_fields(path: Path, manifest: Any) -> None:
+    """Refuse with one line a fault campaign's manifest (one without its checksum sidecar is read unverified, e.g.
+    edited by hand) that lacks what its readers take: a JSON object with a positive ``threshold_mm`` and a list of
+    ``swept_keys`` (``CampaignResult``; ``campaign status`` reports it as bad)."""
+    if not isinstance(manifest, dict):
+        raise ConfigFileError(f"{path}: not a campaign manifest (not a JSON object); {REBUILD_FEATURES}")
+    thr = manifest.get("threshold_mm")
+    if isinstance(thr, bool) or not isinstance(thr, (int, float)) or not math.isfinite(thr) or thr <= 0:
+        raise ConfigFileError(f"{path}: threshold_mm {thr!r} is not a positive number of mm; {REBUILD_FEATURES}")
+    keys = manifest.get("swept_keys", [])
+    if not (isinstance(keys, list) and all(isinstance(k, str) for k in keys)):
+        raise ConfigFileError(f"{path}: swept_keys {keys!r} is not a list of names; {REBUILD_FEATURES}")
 
 
 def check_table_of_manifest(table: Path, remake: str, manifest: Mapping[str, Any] | None = None) -> None:

@@ -14,6 +14,7 @@ from .spec import Campaign, build_campaign
 from .store import (
     REBUILD_FEATURES,
     FileCheck,
+    check_manifest_fields,
     check_run_file,
     check_timeseries_file,
     read_consolidated,
@@ -118,6 +119,13 @@ def status(out: Path) -> dict[str, Any]:
         info["manifest"] = {"state": "missing" if why == "absent" else "bad", "detail": why}
         manifest_todo = (f"manifest.json {why}: `ur5fault campaign run` on the campaign, with the same --out, "
                          "rewrites it (the stored runs are verified and kept)")
+    if manifest and manifest.get("kind") != "life" and not manifest_todo:
+        try:  # what CampaignResult reads of it (a manifest without its sidecar is read unverified)
+            check_manifest_fields(out / "manifest.json", manifest)
+        except ConfigFileError as exc:
+            info["manifest"] = {"state": "bad", "detail": str(exc)}
+            manifest_todo = ("manifest.json lacks what its readers take: `ur5fault campaign run` on the campaign, with "
+                             "the same --out, rewrites it")
     if manifest.get("kind") == "life":  # a fleet run to failure (issue 20): inspections, not runs
         from ..health.prognostics.life_status import life_status
 
