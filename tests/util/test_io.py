@@ -46,3 +46,18 @@ def test_written_json_files_are_strict_unless_asked(tmp_path):
     assert math.isnan(json_float(got["x"])) and json_float(got["y"][1]) == 2.0 and json_float(3) == 3.0
     loose = write_json_atomic(tmp_path / "b.json", data, strict=False)
     assert "NaN" in loose.read_text() and json.loads(loose.read_text())["y"][0] == math.inf
+
+
+def test_an_empty_or_cut_checksum_file_is_named_as_such(tmp_path):
+    """An empty sidecar was reported as "its bytes differ from the checksum recorded", sending a user to the data
+    file when the sidecar is what is damaged (a newcomer probe)."""
+    from ur5fault.util.io import checksum_path, verify_checksum, write_bytes_atomic
+
+    f = write_bytes_atomic(tmp_path / "a.bin", b"data", checksum=True)
+    assert verify_checksum(f) is None
+    for text in ("", "abc123  a.bin\n"):
+        checksum_path(f).write_text(text)
+        assert verify_checksum(f) == ("its checksum file a.bin.sha256 holds no SHA-256 (damaged, or its write was "
+                                      "interrupted)")
+    checksum_path(f).write_text("0" * 64 + "  a.bin\n")
+    assert "its bytes differ" in verify_checksum(f)

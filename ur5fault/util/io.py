@@ -123,7 +123,9 @@ def verify_checksum(path: str | Path) -> str | None:
         actual = file_sha256(path)
     except OSError as exc:
         return f"unreadable ({exc.strerror or exc})"
-    if not recorded or recorded[0] != actual:
+    if not recorded or len(recorded[0]) != 64:
+        return f"its checksum file {checksum_path(path).name} holds no SHA-256 (damaged, or its write was interrupted)"
+    if recorded[0] != actual:
         return "its bytes differ from the checksum recorded when it was written (corrupted on disk)"
     return None
 
