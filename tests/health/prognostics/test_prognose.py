@@ -106,3 +106,13 @@ def test_a_gap_in_the_failure_feature_is_named_not_blamed_on_the_fleet_size(tmp_
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "tcp_dev_max_mm is missing (NaN) or infinite in 3 inspection(s)" in err[0], err
     assert "larger fleet" not in err[0]
+    # a gap in the fleet's own record (cycles, true clearance) likewise (the estimators' numpy message before)
+    for col in ("backlash_deg_j3", "cycles"):
+        df = synthetic_fleet(12, 1)
+        for j in range(1, 7):
+            df[f"backlash_deg_j{j}"] = 0.0
+        df.loc[df.index[:2], col] = np.nan
+        df.to_parquet(fleet / "inspections.parquet")
+        assert main(["prognose", str(fleet), "--out", str(tmp_path / f"b_{col}")]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and f"the fleet's record {col} is missing (NaN) or infinite in 2 inspection(s)" in err[0]

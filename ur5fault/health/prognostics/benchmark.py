@@ -225,6 +225,8 @@ def predict(df: pd.DataFrame, failure: Failure, seed: int = 0, twin: TwinSetup |
 
 #: what a prognose benchmark writes into its report folder; one of them there is an earlier result
 RESULT_FILES = ("report.md", "metrics.json")
+#: columns every inspection of a fleet holds a finite value in (its duty cycles and true clearances)
+RECORDED_COLUMNS = ("cycles", *(f"backlash_deg_j{j}" for j in range(1, 7)))
 
 
 def run_prognose(folder: Path, out: Path | None = None, *, seed: int = 0, twin: bool = False,
@@ -248,14 +250,17 @@ def run_prognose(folder: Path, out: Path | None = None, *, seed: int = 0, twin: 
     check_new_output(out, folder=True, results=RESULT_FILES, replace=replace)  # before reading or simulating
     df, manifest = load_inspections(folder)
     failure = Failure(**manifest["failure"]) if isinstance(manifest.get("failure"), dict) else Failure()
-    if failure.feature in df:  # the criterion every label is read off: a gap is no fleet's as the campaign wrote it
-        ok = df[df["status"] == "ok"] if "status" in df else df  # a stopped run has failed whatever its features
-        bad = int((~np.isfinite(pd.to_numeric(ok[failure.feature], errors="coerce"))).sum())
+    # the criterion every label is read off, and the fleet's own record of each inspection (its cycles and true
+    # wear, which every inspection has): a gap is no fleet's as the campaign wrote it (a table edited by hand)
+    ok = df[df["status"] == "ok"] if "status" in df else df  # a stopped run has failed whatever its features
+    checked = [(failure.feature, ok, "the failure criterion's feature", "the labels are read off it")]
+    checked += [(c, df, "the fleet's record", "the estimators read it") for c in RECORDED_COLUMNS]
+    for col, rows, what, why in checked:
+        bad = int((~np.isfinite(pd.to_numeric(rows[col], errors="coerce"))).sum()) if col in rows else 0
         if bad:
-            raise ConfigFileError(f"{folder}: the failure criterion's feature {failure.feature} is missing (NaN) or "
-                                  f"infinite in {bad} inspection(s); the labels are read off it: run the life "
-                                  "campaign again into this folder (it verifies the stored inspections and rebuilds "
-                                  "the table)")
+            raise ConfigFileError(f"{folder}: {what} {col} is missing (NaN) or infinite in {bad} inspection(s); "
+                                  f"{why}: run the life campaign again into this folder (it verifies the stored "
+                                  "inspections and rebuilds the table)")
     setup = None
     if twin:
         if "wear" not in manifest or "identity_inputs" not in manifest:
