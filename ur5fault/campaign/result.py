@@ -6,7 +6,6 @@ notebooks."""
 from __future__ import annotations
 
 import dataclasses
-import json
 import logging
 import tempfile
 from collections.abc import Iterable, Mapping
@@ -24,6 +23,7 @@ from .store import (
     check_manifest_fields,
     check_table_of_manifest,
     check_timeseries_file,
+    recorded_run_identities,
     timeseries_path,
 )
 from .summary import EffectSweep, acceptable_backlash, effect_sweep, severity_table, swept_effects, tcp_table
@@ -125,7 +125,7 @@ class CampaignResult:
         ids = list(dict.fromkeys(run_ids))
         for r in ids:
             self.run(r)  # an unknown id is an error naming the valid ones
-        identities = self._run_identities()
+        identities = recorded_run_identities(self.out / "features.parquet")
         for r in ids:
             path = timeseries_path(self.out, r)
             if r in self._series or not path.exists():
@@ -142,17 +142,6 @@ class CampaignResult:
         if missing:
             self._series.update(self._resimulate(missing))
         return {r: self._series[r] for r in ids}
-
-    def _run_identities(self) -> dict[str, str]:
-        """run_id -> identity, as ``features.parquet`` records them (empty for a table without them)."""
-        import pyarrow.parquet as pq
-
-        try:
-            meta = json.loads((pq.read_schema(self.out / "features.parquet").metadata or {}).get(b"ur5fault", b"{}"))
-        except (OSError, ValueError):
-            return {}
-        ids = meta.get("run_identities") if isinstance(meta, dict) else None
-        return {str(k): str(v) for k, v in ids.items()} if isinstance(ids, dict) else {}
 
     def _resimulate(self, run_ids: list[str]) -> dict[str, pd.DataFrame]:
         from ..sim.engine import DEFAULT_MODEL_PATH

@@ -102,6 +102,19 @@ def _read_meta(schema) -> dict[str, Any] | None:
     return meta if isinstance(meta, dict) else None
 
 
+def recorded_run_identities(table: Path) -> dict[str, str]:
+    """run_id -> identity as a consolidated table's metadata records them (:func:`consolidate`); empty for a table
+    without them or unreadable."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    try:
+        ids = (_read_meta(pq.read_schema(table)) or {}).get("run_identities")
+    except (OSError, pa.ArrowException):
+        return {}
+    return {str(k): str(v) for k, v in ids.items()} if isinstance(ids, dict) else {}
+
+
 def check_run_file(path: Path, expected: Mapping[str, Any] | None = None) -> FileCheck:
     """Verify a per-run file; ``expected``: the record (run_id, identity, inputs) it must carry."""
     import pyarrow as pa

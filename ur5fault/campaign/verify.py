@@ -25,6 +25,8 @@ from .store import (
 )
 
 MAX_LISTED = 20
+#: what to run where a campaign folder's manifest is missing, damaged or incomplete
+REWRITE_MANIFEST = "`ur5fault campaign run` on the campaign, with the same --out, rewrites it"
 
 
 @dataclasses.dataclass
@@ -117,15 +119,13 @@ def status(out: Path) -> dict[str, Any]:
         # runs or a table without the manifest that says which campaign they are: they cannot be checked
         why = "absent" if not (out / "manifest.json").exists() else "unreadable as a campaign manifest"
         info["manifest"] = {"state": "missing" if why == "absent" else "bad", "detail": why}
-        manifest_todo = (f"manifest.json {why}: `ur5fault campaign run` on the campaign, with the same --out, "
-                         "rewrites it (the stored runs are verified and kept)")
+        manifest_todo = f"manifest.json {why}: {REWRITE_MANIFEST} (the stored runs are verified and kept)"
     if manifest and manifest.get("kind") != "life" and not manifest_todo:
         try:  # what CampaignResult reads of it (a manifest without its sidecar is read unverified)
             check_manifest_fields(out / "manifest.json", manifest)
         except ConfigFileError as exc:
             info["manifest"] = {"state": "bad", "detail": str(exc)}
-            manifest_todo = ("manifest.json lacks what its readers take: `ur5fault campaign run` on the campaign, with "
-                             "the same --out, rewrites it")
+            manifest_todo = f"manifest.json lacks what its readers take: {REWRITE_MANIFEST}"
     if manifest.get("kind") == "life":  # a fleet run to failure (issue 20): inspections, not runs
         from ..health.prognostics.life_status import life_status
 
@@ -141,15 +141,12 @@ def status(out: Path) -> dict[str, Any]:
             camp = build_campaign(data, "manifest.json", str(manifest.get("campaign_text", "")), None, out)
         except Ur5FaultError as exc:
             info["campaign_error"] = str(exc)
-            manifest_todo = manifest_todo or (
-                "manifest.json's campaign does not validate with this ur5fault (the runs were checked for soundness "
-                "only): `ur5fault campaign run` on the campaign, with the same --out, rewrites it")
+            manifest_todo = manifest_todo or ("manifest.json's campaign does not validate with this ur5fault (the "
+                                              f"runs were checked for soundness only): {REWRITE_MANIFEST}")
     else:
         info["campaign_error"] = "manifest.json absent or without the campaign: files checked for soundness only"
         if manifest and not damaged:  # readable, but it does not say which campaign the runs are
-            manifest_todo = manifest_todo or (
-                "manifest.json does not record its campaign: `ur5fault campaign run` on the campaign, with the same "
-                "--out, rewrites it")
+            manifest_todo = manifest_todo or f"manifest.json does not record its campaign: {REWRITE_MANIFEST}"
     problems: list[str] = []
     if camp is not None:
         ids = Identities(camp)

@@ -277,11 +277,20 @@ def refuse_unknown_payload(entries: Sequence[LogEntry]) -> None:
     any log is read or model loaded (they came after seconds of work)."""
     for e in entries:
         if e.payload_unknown:
-            raise ParameterError(f"{e.path}: payload unknown (no --payload-kg, or --payload-kg unknown): "
-                                 f"{UNKNOWN_PAYLOAD}")
+            raise ParameterError(_unknown_payload(str(e.path)))
         if e.fmt == "rtde" and e.tcp_offset_m is None:
-            raise ParameterError(f"{e.path}: --tcp-offset-m missing (a manifest's tcp_offset_m): a stated payload "
-                                 "needs its position (0 0 0 for a bare flange)")
+            raise ParameterError(_no_position(str(e.path), allow_unknown=False))
+
+
+def _unknown_payload(src: str) -> str:
+    return f"{src}: payload unknown (no --payload-kg, or --payload-kg unknown): {UNKNOWN_PAYLOAD}"
+
+
+def _no_position(src: str, allow_unknown: bool) -> str:
+    """A stated payload without its position; the alternative of an unknown payload only where the command fits
+    one."""
+    return (f"{src}: --tcp-offset-m missing (a manifest's tcp_offset_m): a stated payload needs its position (0 0 0 "
+            "for a bare flange)" + (", or give --payload-kg unknown to fit both" if allow_unknown else ""))
 
 
 def read_entry(e: LogEntry, length: MinLength | None = None, *, allow_unknown: bool = False) -> MeasuredLog:
@@ -297,13 +306,9 @@ def read_entry(e: LogEntry, length: MinLength | None = None, *, allow_unknown: b
         if e.payload_unknown:
             log = dataclasses.replace(log, payload_kg=None, tcp_offset_m=e.tcp_offset_m)
     if log.payload_kg is not None and log.tcp_offset_m is None:
-        # the alternative of an unknown payload only where this command fits one
-        raise ParameterError(f"{log.source}: --tcp-offset-m missing (a manifest's tcp_offset_m): a stated payload "
-                             "needs its position (0 0 0 for a bare flange)"
-                             + (", or give --payload-kg unknown to fit both" if allow_unknown else ""))
+        raise ParameterError(_no_position(log.source, allow_unknown))
     if not log.payload_known and not allow_unknown:
-        raise ParameterError(f"{log.source}: payload unknown (no --payload-kg, or --payload-kg unknown): "
-                             f"{UNKNOWN_PAYLOAD}")
+        raise ParameterError(_unknown_payload(log.source))
     return log
 
 

@@ -171,26 +171,21 @@ def detector_test_auc(folder: str | Path) -> float | None:
     """The by-joint detection AUC the saved classifiers reached on their own campaign's test split, from the
     ``metrics.json`` beside them (``folder`` as :func:`load_models` takes it), or None where it cannot be read (a
     note only reads it: the file is a report, not verified)."""
-    folder = Path(folder)
+    auc = (_benchmark_report(Path(folder)).get("detection_by_joint") or {}).get("auc_all")
+    return float(auc) if isinstance(auc, (int, float)) and math.isfinite(auc) else None
+
+
+def _benchmark_report(folder: Path) -> dict[str, Any]:
+    """The ``metrics.json`` of the benchmark in ``folder`` or beside it (``folder`` as :func:`load_models` takes
+    it), for notes only (a report, not verified); empty where there is none or it cannot be read."""
     for path in (folder / "metrics.json", folder.parent / "metrics.json"):
         if path.is_file():
             try:
-                auc = (json.loads(path.read_text()).get("detection_by_joint") or {}).get("auc_all")
-            except (OSError, ValueError, AttributeError):
-                return None
-            return float(auc) if isinstance(auc, (int, float)) and math.isfinite(auc) else None
-    return None
-
-
-def _shuffled_report(folder: Path) -> bool:
-    """Whether the benchmark report in ``folder`` (or beside it) is a shuffled-label control's."""
-    for path in (folder / "metrics.json", folder.parent / "metrics.json"):
-        if path.is_file():
-            try:
-                return json.loads(path.read_text()).get("shuffled_labels") is True
-            except (OSError, ValueError, AttributeError):
-                return False
-    return False
+                data = json.loads(path.read_text())
+            except (OSError, ValueError):
+                return {}
+            return data if isinstance(data, dict) else {}
+    return {}
 
 
 def load_models(folder: str | Path) -> tuple[Models, dict[str, Any]]:
@@ -207,7 +202,7 @@ def load_models(folder: str | Path) -> tuple[Models, dict[str, Any]]:
         folder = folder / MODELS_DIR
     path, schema_path = folder / CLASSIFIERS_FILE, folder / SCHEMA_FILE
     if not path.exists() or not schema_path.exists():
-        if _shuffled_report(folder):  # the control run saves none: its classifiers learned nothing
+        if _benchmark_report(folder).get("shuffled_labels") is True:  # the control run saves none
             raise ConfigFileError(f"{folder}: a shuffled-label control (`benchmark --shuffle-labels`), which saves no "
                                   "classifiers; give the folder of the benchmark run without it")
         raise ConfigFileError(f"{folder}: no saved classifiers ({CLASSIFIERS_FILE} and {SCHEMA_FILE}); "

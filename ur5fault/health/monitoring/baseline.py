@@ -139,8 +139,7 @@ class Baseline:
                               for c in CHANNELS])
             tail = np.array([[[json_float(ch[c]["tail"][j][k]) for k in ("u0", "beta", "p0")] for j in JOINT_NAMES]
                              for c in CHANNELS])
-            quantum = np.array([np.nan if data["position_quantum_rad"][j] is None
-                                else float(data["position_quantum_rad"][j]) for j in JOINT_NAMES])
+            quantum = np.array([json_float(data["position_quantum_rad"][j]) for j in JOINT_NAMES])
             task = data["task_runs"]
             t_scale = np.array([np.full((N_JOINTS, len(FEATURES)), np.nan) if r["scale"] is None else
                                 [[json_float(r["scale"][j][f]) for f in FEATURES] for j in JOINT_NAMES] for r in task])
