@@ -360,8 +360,9 @@ def test_a_feature_missing_in_every_run_is_one_line_not_blank_figures(two):
 def test_figures_not_redrawn_are_said_to_be_an_earlier_plots(tmp_path, two, capsys, caplog):
     """A damaged time series is simulated again (a warning names it) and Fig. 3 and Fig. 4 are redrawn; where the run
     cannot be simulated again either (here the manifest's campaign, edited by hand without its sidecar, no longer
-    validates) they are not: the reason is printed once (both read the same runs; it was printed twice), and the
-    earlier plot's Fig. 3 and Fig. 4 left in the folder are named as not redrawn."""
+    validates) they are not: the reason is printed once as an error (both read the same runs; it was printed twice, on
+    stdout, with exit status 0), the severity figures are still drawn, the exit status is 1, and the earlier plot's
+    Fig. 3 and Fig. 4 left in the folder are named as not redrawn."""
     import json
 
     from ur5fault.cli import main
@@ -384,10 +385,13 @@ def test_figures_not_redrawn_are_said_to_be_an_earlier_plots(tmp_path, two, caps
     m["campaign_data"]["duration_s"] = -1.0
     manifest.write_text(json.dumps(m))
     (copy / "manifest.json.sha256").unlink()
-    assert main(["plot", str(copy)]) == 0
-    out = capsys.readouterr().out.splitlines()
-    bad = [line for line in out if "duration_s" in line]
-    assert len(bad) == 1, out
+    assert main(["plot", str(copy)]) == 1  # figures the campaign has were not drawn: a script must see it
+    cap = capsys.readouterr()
+    out = cap.out.splitlines()
+    bad = [line for line in cap.err.splitlines() if "duration_s" in line]
+    assert len(bad) == 1 and bad[0].startswith("ur5fault: error: ") and "neither read nor simulated again" in bad[0], \
+        cap.err
+    assert any(line.startswith("wrote ") and "severity_" in line for line in out), out  # what could be drawn was
     stale = sorted(line for line in out if line.endswith("from an earlier plot, not redrawn now"))
     assert [s.split("/")[-1].split(".png")[0][:4] for s in stale] == ["fig3", "fig4"], out
 

@@ -38,5 +38,10 @@ class ConfigFileError(Ur5FaultError, ValueError):
     """A configuration file cannot be read or parsed."""
 
 
+class StoredResultError(ConfigFileError):
+    """A stored result can be neither read as written nor made again (e.g. a run whose campaign, edited by hand,
+    no longer validates)."""
+
+
 class LogFormatError(Ur5FaultError, ValueError):
     """A measured log lacks a column, has NaN or non-monotonic time, or is not a UR5."""

@@ -223,12 +223,14 @@ def test_a_changed_feature_table_is_never_read_and_a_rerun_rebuilds_it(tmp_path,
 
 def test_run_files_deleted_from_a_finished_campaign_are_said(tmp_path, done):
     """Every run file deleted by hand, their checksum sidecars left: the feature table still holds the rows (the
-    folder stays sound), but the advice says the files are gone and the sidecars are listed, not passed over."""
+    folder stays sound), but the advice says the files are gone and the sidecars are listed, not passed over. A
+    sidecar is not a run: each run is counted once, as missing (it was also counted as a stray)."""
     out = _copy(done, tmp_path)
     for p in (out / "runs").glob("*.parquet"):
         p.unlink()
     info = status(out)
-    assert info["state"] == "complete" and info["runs"]["missing"] == 3 and info["runs"]["stray"] == 3
+    assert info["state"] == "complete" and info["runs"]["missing"] == 3 and info["runs"]["stray"] == 0
+    assert len(info["ignored"]) == 3
     assert info["sound"] is True and info["features"]["state"] == "ok"
     assert info["advice"].startswith("3 run file(s) of the finished campaign are gone")
     assert all(line.endswith(".parquet.sha256: a checksum whose run file is gone") for line in info["ignored"])
@@ -364,3 +366,19 @@ def test_a_hand_edited_manifest_without_its_sidecar_is_refused_in_one_line(tmp_p
     (out / "manifest.json").write_text("[1]")
     with pytest.raises(ConfigFileError, match="not a campaign manifest"):
         CampaignResult.load(out)
+
+
+def test_temporary_files_of_a_stopped_writer_are_listed_until_the_next_run_removes_them(tmp_path, done):
+    """A writer killed mid-write leaves `.<name>.<random>.tmp` files; `campaign status` passed over them. They are
+    listed under "ignored" (the folder stays sound: no stored result is damaged), and the next run removes them."""
+    out = _copy(done, tmp_path)
+    made = [out / ".features.parquet.x1.tmp", out / "runs" / ".r.parquet.x2.tmp"]
+    for p in made:
+        p.write_bytes(b"partial")
+    info = status(out)
+    assert info["sound"] is True
+    temps = [line for line in info["ignored"] if "temporary file of a writer stopped mid-write" in line]
+    assert sorted(t.split(":")[0] for t in temps) == [".features.parquet.x1.tmp", "runs/.r.parquet.x2.tmp"], info
+    run_campaign(load_campaign(tiny(tmp_path)), out, jobs=1, progress=False, note=None)
+    assert not any(p.exists() for p in made)
+    assert not [line for line in status(out).get("ignored", []) if "temporary" in line]

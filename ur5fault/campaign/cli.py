@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
 from ..util.io import json_text
@@ -119,7 +120,7 @@ def cmd_status(args: argparse.Namespace) -> int:
 
 
 def cmd_plot(args: argparse.Namespace) -> int:
-    from ..plotting import FIGURE_STEMS, campaign_figures, save
+    from ..plotting import FIGURE_STEMS, drawn_and_failed, save
     from ..util.io import check_writable
     from .result import CampaignResult
 
@@ -128,13 +129,15 @@ def cmd_plot(args: argparse.Namespace) -> int:
     result = CampaignResult.load(Path(args.dir))
     plot_dir = Path(args.out) if args.out else result.out / "plots"
     check_writable(plot_dir, folder=True)  # the default place too
-    figures, messages = campaign_figures(result, args.feature)
+    figures, messages, failures = drawn_and_failed(result, args.feature)
     written = save(figures, plot_dir)
     for path in written:
         print(f"wrote {path}")
-    for message in dict.fromkeys(messages):  # Fig. 3 and Fig. 4 read the same runs: one reason, said once
+    for message in dict.fromkeys(messages):  # what the campaign cannot have
         print(message)
+    for failure in dict.fromkeys(failures):  # Fig. 3 and Fig. 4 read the same runs: one reason, said once
+        print(f"ur5fault: error: {failure}", file=sys.stderr)
     ours = {p for stem in FIGURE_STEMS for p in plot_dir.glob(f"{stem}*.png")}  # not `show`'s, nor a user's
     for path in sorted(ours - set(written)):  # not redrawn: not to be taken for this plot's
         print(f"{path}: from an earlier plot, not redrawn now")
-    return 0
+    return 1 if failures else 0  # a figure the campaign has was not drawn: not a success to a script

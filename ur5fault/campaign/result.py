@@ -14,7 +14,7 @@ from typing import Any
 
 import pandas as pd
 
-from ..errors import ConfigFileError, UnknownNameError
+from ..errors import ConfigFileError, StoredResultError, UnknownNameError, Ur5FaultError
 from ..sim.effects import REGISTRY
 from ..util import provenance, yamlsafe
 from ..util.io import read_json_stored, read_parquet_stored
@@ -140,7 +140,13 @@ class CampaignResult:
                              check.detail or "not this run's")
         missing = [r for r in ids if r not in self._series]
         if missing:
-            self._series.update(self._resimulate(missing))
+            try:
+                self._series.update(self._resimulate(missing))
+            except StoredResultError:
+                raise
+            except Ur5FaultError as exc:  # not the user's input now: the stored campaign cannot be run again
+                raise StoredResultError(f"{self.out}: the time series of {', '.join(missing)} can be neither read nor "
+                                        f"simulated again: {exc}") from exc
         return {r: self._series[r] for r in ids}
 
     def _resimulate(self, run_ids: list[str]) -> dict[str, pd.DataFrame]:

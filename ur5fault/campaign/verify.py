@@ -8,6 +8,7 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import ConfigFileError, Ur5FaultError
+from ..util.io import TEMP_GLOB
 from .identity import Identities, digest
 from .lock import lock_holder
 from .spec import Campaign, build_campaign
@@ -38,6 +39,8 @@ class Scan:
     bad: list[tuple[str, str]] = dataclasses.field(default_factory=list)
     changed: list[tuple[str, str]] = dataclasses.field(default_factory=list)
     stray: list[str] = dataclasses.field(default_factory=list)
+    #: checksum sidecars whose run file is gone (deleted by hand): listed, not counted as runs (the run is missing)
+    orphan_checksums: list[str] = dataclasses.field(default_factory=list)
 
     def counts(self) -> dict[str, int]:
         return {k: len(getattr(self, k)) for k in ("ok", "missing", "bad", "changed", "stray")}
@@ -65,8 +68,7 @@ def scan(out: Path, camp: Campaign, ids: Identities, save_timeseries: bool = Fal
     d = runs_dir(out)
     if d.is_dir():
         s.stray = sorted(p.name for p in d.glob("*.parquet") if p.stem not in wanted)
-        # a checksum sidecar whose run file is gone (deleted by hand): listed, as a stray is
-        s.stray += sorted(p.name for p in d.glob("*.parquet.sha256") if not p.with_suffix("").exists())
+        s.orphan_checksums = sorted(p.name for p in d.glob("*.parquet.sha256") if not p.with_suffix("").exists())
     return s
 
 
@@ -130,6 +132,7 @@ def status(out: Path) -> dict[str, Any]:
         from ..health.prognostics.life_status import life_status
 
         info = life_status(out, manifest, info)
+        info["ignored"] = info.get("ignored", []) + _temporaries(out, holder is not None, ("runs", "reference"))
         ins = info.get("inspections") or {}
         info["sound"], info["advice"] = _advice(info, ins.get("bad", 0), ins.get("changed", 0), manifest_todo,
                                                 table_key="inspections_table", what="inspection")
@@ -155,8 +158,9 @@ def status(out: Path) -> dict[str, Any]:
         info["runs"] = s.counts()
         problems += [f"runs/{rid}.parquet: bad: {why}" for rid, why in s.bad]
         problems += [f"runs/{rid}.parquet: made under other settings: {why}" for rid, why in s.changed]
-        info["ignored"] = _listed([f"runs/{name}: " + ("a checksum whose run file is gone" if name.endswith(".sha256")
-                                                      else "not a run of this campaign (stray)") for name in s.stray])
+        info["ignored"] = _listed([f"runs/{name}: not a run of this campaign (stray)" for name in s.stray]
+                                  + [f"runs/{name}: a checksum whose run file is gone" for name in s.orphan_checksums]
+                                  + _temporaries(out, holder is not None, ("runs", "timeseries")))
         info["features"] = _check_features(out, {rc.run_id: ids.identity(rc) for rc in camp.runs})
     else:
         counts = {"ok": 0, "bad": 0, "changed": 0}
@@ -170,6 +174,16 @@ def status(out: Path) -> dict[str, Any]:
     runs = info.get("runs") or {}
     info["sound"], info["advice"] = _advice(info, runs.get("bad", 0), runs.get("changed", 0), manifest_todo)
     return info
+
+
+def _temporaries(out: Path, held: bool, subfolders: tuple[str, ...]) -> list[str]:
+    """The temporary files of writers stopped mid-write in ``out`` and the ``subfolders`` the run clears (none while
+    a running campaign holds the lock: its writers own them); the next ``campaign run`` removes them."""
+    if held:
+        return []
+    found = [p for d in (out, *(out / f for f in subfolders)) if d.is_dir() for p in sorted(d.glob(TEMP_GLOB))]
+    return [f"{p.relative_to(out)}: a temporary file of a writer stopped mid-write (the next `ur5fault campaign run` "
+            "removes it)" for p in found]
 
 
 def _advice(info: dict[str, Any], bad: int, changed: int, manifest_todo: str | None, table_key: str = "features",

@@ -17,14 +17,14 @@ from matplotlib.figure import Figure
 
 from ..campaign.result import CampaignResult
 from ..campaign.summary import HEALTHY, joint_feature
-from ..errors import ConfigFileError, Ur5FaultError
+from ..errors import ConfigFileError, StoredResultError, Ur5FaultError
 from ._figure import save
 from .paper import fig3_tcp_deviation, fig4_shoulder_current
 from .run import run_figure
 from .severity import heatmap, severity_figure
 
 __all__ = ["FIGURE_STEMS", "campaign_figures", "fig3_tcp_deviation", "fig4_shoulder_current", "heatmap",
-           "plot_campaign", "run_figure", "save", "severity_figure"]
+           "drawn_and_failed", "plot_campaign", "run_figure", "save", "severity_figure"]
 
 _log = logging.getLogger(__name__)
 
@@ -37,14 +37,25 @@ FIGURE_STEMS = ("fig3_", "fig4_", "severity_", "heatmap_")
 
 
 def campaign_figures(result: CampaignResult, feature: str = "tcp_dev_max_mm") -> tuple[dict[str, Figure], list[str]]:
-    """Every figure the campaign supports, by file stem, and one message per figure it cannot have.
+    """Every figure the campaign supports, by file stem, and one message per figure it cannot have or could
+    not draw.
 
     Backlash gets the paper's Fig. 3 and Fig. 4; every swept effect gets ``feature`` against its fault size
     and, when it sits on joints, a joint x size heat map of ``feature``.
     """
+    figures, messages, failures = drawn_and_failed(result, feature)
+    return figures, messages + failures
+
+
+def drawn_and_failed(result: CampaignResult, feature: str = "tcp_dev_max_mm") -> tuple[dict[str, Figure], list[str],
+                                                                                        list[str]]:
+    """:func:`campaign_figures` with the figures the campaign cannot have (its design: nothing to draw) apart from
+    those it could not draw (a run that can be neither read nor simulated again): ``(figures, cannot_have,
+    failed)``."""
     values = joint_feature(result.features, feature)  # an unknown feature is an error before any work
     figures: dict[str, Figure] = {}
     messages: list[str] = []
+    failures: list[str] = []
     if not np.isfinite(values).any():  # e.g. the encoder mismatch of a campaign without motor encoders
         encoders = "" if result.manifest.get("motor_encoders", True) else " (the campaign has motor_encoders: false)"
         raise ConfigFileError(f"{feature} is missing (NaN) in every run of {result.out}{encoders}: nothing to draw; "
@@ -57,7 +68,9 @@ def campaign_figures(result: CampaignResult, feature: str = "tcp_dev_max_mm") ->
                            ("fig4_shoulder_current", lambda: fig4_shoulder_current(result))):
             try:
                 figures[name] = draw()
-            except Ur5FaultError as exc:
+            except StoredResultError as exc:  # its runs can be neither read nor simulated again
+                failures.append(str(exc))
+            except Ur5FaultError as exc:  # the campaign holds no run the figure needs
                 messages.append(str(exc))
     healthy = result.features[(result.features["fault"] == HEALTHY) & (result.features["status"] == "ok")]
     for effect, sweep in sweeps.items():
@@ -67,7 +80,7 @@ def campaign_figures(result: CampaignResult, feature: str = "tcp_dev_max_mm") ->
             figures[f"heatmap_{effect}_{feature}"] = heatmap(sweep, feature)
     if not sweeps and not skipped:
         messages.append(f"{result.out}: the campaign sweeps no effect ({', '.join(result.swept_keys) or 'nothing'})")
-    return figures, messages
+    return figures, messages, failures
 
 
 def plot_campaign(out: str | Path, feature: str = "tcp_dev_max_mm", plot_dir: str | Path | None = None) -> list[Path]:
