@@ -108,3 +108,19 @@ def test_a_criterion_the_unworn_robot_meets_is_said_and_not_benchmarked(tmp_path
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "0 failed training and 0 failed test units with a degradation path" in err \
         and "; 3 units met the failure criterion tcp_track_max_mm >= 0.01 at their first inspection, unworn" in err, err
+
+
+def test_the_start_line_of_a_new_fleet_says_how_large_it_can_grow(tmp_path):
+    """A fleet's start line said only its number of units (an empty `life:` section runs the 100-unit default fleet,
+    about 1.35e9 steps, with no other word); a new fleet's now carries its upper bound in runs and physics steps, as
+    the --yes refusal states it."""
+    from ur5fault.health.prognostics.spec import check_life_limits
+
+    camp = build_life(TINY, "tiny")
+    said = []
+    m = run_life(camp, tmp_path, jobs=1, progress=False, note=said.append, max_rounds=0)
+    assert m["state"] == "running"
+    bound, steps = check_life_limits(camp)
+    start = [s for s in said if s.startswith("life campaign tiny:")]
+    assert len(start) == 1 and start[0].endswith(bound.split(": ", 1)[1]), said
+    assert f"{steps:.3g} physics steps" in start[0]

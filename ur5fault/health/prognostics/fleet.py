@@ -206,7 +206,7 @@ def run_life(camp: LifeCampaign, out: Path | None = None, *, jobs: int | None = 
     """
     out = Path(out) if out is not None else camp.out
     say = note or (lambda m: None)
-    check_life_limits(camp)  # the hard limit, as run_campaign's check_limits (--yes is the command line's)
+    bound, _ = check_life_limits(camp)  # the hard limit, as run_campaign's check_limits (--yes is the command line's)
     n_jobs, capped = check_backend(backend, scheduler, jobs)
     check_writable(out, folder=True)
     client = dask_client(str(scheduler)) if backend == "dask" else None
@@ -214,14 +214,14 @@ def run_life(camp: LifeCampaign, out: Path | None = None, *, jobs: int | None = 
         with Lock(out):
             if capped:
                 say(capped)
-            return _run_locked(camp, out, n_jobs, client, progress, say, max_rounds, backend, replace_changed)
+            return _run_locked(camp, out, n_jobs, client, progress, say, max_rounds, backend, replace_changed, bound)
     finally:
         if client is not None:
             client.close()
 
 
 def _run_locked(camp, out: Path, n_jobs: int, client, progress, say, max_rounds, backend,
-                replace_changed) -> dict[str, Any]:
+                replace_changed, bound: str) -> dict[str, Any]:
     t0 = time.perf_counter()
     for folder in (out, out / "runs", out / "reference"):
         remove_stale_temporaries(folder, 0)  # a writer killed mid-write; we hold the lock
@@ -237,7 +237,8 @@ def _run_locked(camp, out: Path, n_jobs: int, client, progress, say, max_rounds,
         say(f"{out / where}: {why or state}; simulating the unit again from there")
     kept = sum(k + 1 for k in finished.values()) + sum(j.inspection for j in pending.values())  # stored, verified
     say(f"life campaign {camp.name}: {len(camp.units)} units, {len(finished)} finished, {len(pending)} to run"
-        + (f" ({kept} stored inspections kept)" if kept else "") + f" -> {out}")
+        + (f" ({kept} stored inspections kept)" if kept else "") + f" -> {out}"
+        + ("" if finished or kept else f"; {bound.split(': ', 1)[-1]}"))  # how long the whole fleet can take
     write_json_atomic(out / "manifest.json", _manifest(camp, ids, "running", backend, n_jobs, t0, None),
                       checksum=True)
     report = campaign_progress(progress, len(camp.units))
