@@ -148,7 +148,8 @@ def test_corrupted_run_file_is_named_and_simulated_again(tmp_path, done):
     victim.write_bytes(bytes(data))
     info = status(out)
     assert info["runs"]["bad"] == 1 and info["state"] == "complete" and info["sound"] is False
-    assert info["advice"] == "1 damaged run file(s): `ur5fault campaign run` on the campaign again simulates them"
+    assert info["advice"] == ("1 damaged run file(s): `ur5fault campaign run` on the campaign again simulates them; "
+                              f"the command: `ur5fault campaign run {done / 't.yaml'} --out {out}`")
     assert any(victim.name in p and "checksum" in p for p in info["problems"]), info["problems"]
     r = subprocess.run([sys.executable, "-m", "ur5fault.cli", "campaign", "status", str(out)], capture_output=True,
                        text=True, timeout=120)
@@ -382,3 +383,26 @@ def test_temporary_files_of_a_stopped_writer_are_listed_until_the_next_run_remov
     run_campaign(load_campaign(tiny(tmp_path)), out, jobs=1, progress=False, note=None)
     assert not any(p.exists() for p in made)
     assert not [line for line in status(out).get("ignored", []) if "temporary" in line]
+
+
+def test_status_advice_repeats_the_command_with_its_quick_trial_options(tmp_path, capsys):
+    """A campaign run with --duration-s (a quick trial) and a damaged run: the advice said "`ur5fault campaign run` on
+    the campaign again", and the command without --duration-s is another campaign, refused. It now ends with the
+    exact command, which repairs the folder."""
+    import json
+
+    from ur5fault.cli import main
+
+    path = tiny(tmp_path)
+    out = tmp_path / "out"
+    assert main(["campaign", "run", str(path), "--out", str(out), "--duration-s", "0.2", "--quiet"]) == 0
+    capsys.readouterr()
+    assert json.loads((out / "manifest.json").read_text())["command_options"] == {"duration_s": 0.2}
+    f = sorted((out / "runs").glob("*.parquet"))[0]
+    f.write_bytes(f.read_bytes()[:-9])
+    info = status(out)
+    assert info["sound"] is False
+    command = info["advice"].rsplit("the command: ", 1)[1].strip("`")
+    assert command == f"ur5fault campaign run {path} --out {out} --duration-s 0.2", info["advice"]
+    assert main(command.split()[1:] + ["--quiet"]) == 0
+    assert status(out)["sound"] is True

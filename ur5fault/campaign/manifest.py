@@ -40,6 +40,8 @@ def build_manifest(camp: Campaign, ids: Identities, features, state: str, backen
         "name": camp.name,
         "state": state,
         "campaign_file": str(camp.path) if camp.path else None,
+        # command-line options beyond the file (--model, --duration-s): what a rerun must repeat
+        "command_options": dict(camp.command_options),
         "campaign_sha256": camp.sha256,
         "campaign_text": camp.text,
         "campaign_data": camp.data,

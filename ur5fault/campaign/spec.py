@@ -97,6 +97,9 @@ class Campaign:
     twin_com_twins: bool = False
     #: what the user should know before it runs, said by ``campaign run`` (e.g. equal draws collapsed into one run)
     notes: tuple[str, ...] = ()
+    #: the command-line options that shaped it beyond its file (``model``: the overlay's path, ``duration_s``), so
+    #: that advice can repeat the command that makes it again
+    command_options: Mapping[str, Any] = dataclasses.field(default_factory=dict)
 
     @property
     def sha256(self) -> str:
@@ -169,7 +172,9 @@ def load_campaign(path: str | Path, out: str | Path | None = None, overlay: str 
         check_duration(duration_s, "command line: --duration-s")  # refused naming its source, not the file
         data = {**data, "duration_s": duration_s}
         text = yaml.safe_dump(dict(data), sort_keys=False)
-    return build_campaign(data, path.name, text, path, out)
+    options = {k: v for k, v in (("model", str(Path(overlay).resolve()) if overlay is not None else None),
+                                 ("duration_s", duration_s)) if v is not None}
+    return dataclasses.replace(build_campaign(data, path.name, text, path, out), command_options=options)
 
 
 def build_campaign(data: Mapping[str, Any], where: str, text: str = "", path: Path | None = None,

@@ -135,7 +135,8 @@ def status(out: Path) -> dict[str, Any]:
         info["ignored"] = info.get("ignored", []) + _temporaries(out, holder is not None, ("runs", "reference"))
         ins = info.get("inspections") or {}
         info["sound"], info["advice"] = _advice(info, ins.get("bad", 0), ins.get("changed", 0), manifest_todo,
-                                                table_key="inspections_table", what="inspection")
+                                                table_key="inspections_table", what="inspection",
+                                                rerun=None if damaged else rerun_command(manifest, out))
         return info
     camp = None
     data = manifest.get("campaign_data")
@@ -172,7 +173,8 @@ def status(out: Path) -> dict[str, Any]:
         info["runs"] = counts
     info["problems"] = _listed(problems)
     runs = info.get("runs") or {}
-    info["sound"], info["advice"] = _advice(info, runs.get("bad", 0), runs.get("changed", 0), manifest_todo)
+    info["sound"], info["advice"] = _advice(info, runs.get("bad", 0), runs.get("changed", 0), manifest_todo,
+                                            rerun=None if damaged or camp is None else rerun_command(manifest, out))
     return info
 
 
@@ -186,8 +188,29 @@ def _temporaries(out: Path, held: bool, subfolders: tuple[str, ...]) -> list[str
             "removes it)" for p in found]
 
 
+def rerun_command(manifest: dict[str, Any], out: Path) -> str | None:
+    """The ``campaign run`` command that made the folder, its command-line options (``--model``, ``--duration-s``)
+    repeated (a quick trial's ``--duration-s`` left out makes another campaign, which is refused), or None where the
+    manifest does not say which file it ran."""
+    from .spec import SHIPPED_DIR
+
+    file = manifest.get("campaign_file")
+    if not isinstance(file, str) or not file:
+        return None
+    path = Path(file)
+    name = path.stem if path.parent == SHIPPED_DIR else file  # a shipped campaign by its name, as it was given
+    options = manifest.get("command_options")
+    options = options if isinstance(options, dict) else {}
+    cmd = f"ur5fault campaign run {name} --out {out}"
+    if isinstance(options.get("model"), str):
+        cmd += f" --model {options['model']}"
+    if isinstance(options.get("duration_s"), (int, float)) and not isinstance(options.get("duration_s"), bool):
+        cmd += f" --duration-s {options['duration_s']:g}"
+    return cmd
+
+
 def _advice(info: dict[str, Any], bad: int, changed: int, manifest_todo: str | None, table_key: str = "features",
-            what: str = "run") -> tuple[bool, str | None]:
+            what: str = "run", rerun: str | None = None) -> tuple[bool, str | None]:
     """Whether everything the folder holds is sound now (a ``complete`` state says only that the campaign ran to
     its end), and what to do where it is not (``manifest_todo``: what to do about a damaged or missing manifest)."""
     todo = []
@@ -209,6 +232,8 @@ def _advice(info: dict[str, Any], bad: int, changed: int, manifest_todo: str | N
     if info.get("state") == "interrupted":
         todo.append(f"the campaign stopped before its end: `ur5fault campaign run` with the same campaign and --out "
                     f"resumes it (the {what}s made are kept)")
+    if todo and rerun:
+        todo.append(f"the command: `{rerun}`")
     return sound, "; ".join(todo) or None
 
 
