@@ -44,12 +44,30 @@ def test_healthy_labels():
     (make_effect("cogging", 2, amplitude_Nm=0.1, periods_per_rev=12), 2, 0.1, "N*m"),
     (make_effect("delay", None, delay_ms=2.0), -1, 2.0, "ms"),
     (make_effect("payload_com", None, dx_m=0.03, dz_m=0.04), -1, 0.05, "m"),
+    # effects whose parameters mix units: the size is that of their size parameters (it was NaN, no unit)
+    (make_effect("motor_harmonic", 2, sin_Nm=0.03, cos_Nm=-0.04, periods_per_rev=3), 2, 0.05, "N*m"),
+    (make_effect("torque_joint_harmonic", 3, sin_Nm=3.0, cos_Nm=4.0, periods_per_rev=2), 3, 5.0, "N*m"),
+    (make_effect("torque_coulomb", 1, torque_Nm=-1.5, width_rad_s=0.05), 1, 1.5, "N*m"),
+    (make_effect("torque_stribeck", 1, torque_Nm=0.7, speed_rad_s=0.1), 1, 0.7, "N*m"),
+    (make_effect("torque_holding", 4, torque_Nm=0.2, speed_rad_s=0.05), 4, 0.2, "N*m"),
+    (make_effect("link_mass", 5, mass_kg=1.2, com_dx_m=0.1), 5, 1.2, "kg"),
+    (make_effect("current_temperature_drift", 6, coeff_A_per_K=0.002, reference_C=30.0), 6, 0.002, "A/K"),
 ])
 def test_single_fault_labels(effect, joint, expected_size, unit):
     got = labels(effect)
     assert got["fault"] == effect.name and got["fault_joint"] == joint
     assert got["fault_scope"] == ("robot" if joint == -1 else "joint")
     assert got["fault_size"] == pytest.approx(expected_size, rel=1e-12) and got["fault_size_unit"] == unit
+
+
+def test_every_registered_effect_has_a_size_with_a_unit():
+    """Seven effects whose parameters mix units were labelled with a NaN size and no unit: no registry entry may."""
+    from ur5fault.sim.effects import REGISTRY
+
+    for name, eff in REGISTRY.items():
+        values = {p.name: (p.hi if p.absent is None or p.absent != p.hi else p.lo) for p in eff.params}
+        got = labels(make_effect(name, 2 if eff.per_joint else None, **values))
+        assert math.isfinite(got["fault_size"]) and got["fault_size"] > 0 and got["fault_size_unit"], (name, got)
 
 
 def test_multi_fault_labels():

@@ -11,8 +11,9 @@ Columns (docs/outputs.md has the table):
 * ``fault_size`` / ``fault_size_unit``: the magnitude of the deviation from the effect's "absent"
   value, ``|value - absent|``, in the parameter's unit; dimensionless factors (scale, gain, whose
   absent value is 1) give a ``fraction`` of nominal (0.2 = 20 %).  Effects with several parameters:
-  :data:`SIZE_PARAM` names the one that measures size, or the Euclidean norm over parameters of
-  one unit (``payload_com``).  Healthy: 0 with unit ``""``; ``multi``: NaN with unit ``""``.
+  the Euclidean norm over the registry's size parameters (:meth:`Effect.size_parameters`: a harmonic's
+  amplitude, ``link_mass``'s mass, every axis of ``payload_com``).  Healthy: 0 with unit ``""``;
+  ``multi``: NaN with unit ``""``.
 * ``<effect>_joint``, ``<effect>_<param>``: the values of the effects the run carries (joint
   1-based; ``backlash.backlash_deg`` is ``backlash_deg_swept``), NaN in rows that do not carry that
   effect, so a healthy row never keeps a leftover sweep value; ``backlash_deg`` is the run's alpha
@@ -41,8 +42,6 @@ SPLIT_KEYS = ("by", "test_fraction", "seed")
 #: group keys of the split: the trajectory's seed option (runs on a fixed trajectory are grouped by its
 #: whole spec), the whole trajectory spec, or the noise seed
 SPLIT_BY = ("trajectory_seed", "trajectory", "seed")
-#: the parameter that measures the size of effects with several parameters
-SIZE_PARAM = {"cogging": "amplitude_Nm"}
 FRACTION_UNIT = "fraction"
 
 
@@ -100,13 +99,9 @@ def assign_splits(rule: SplitRule, conditions: Iterable[Mapping[str, Any]]) -> d
 
 def effect_size(spec: EffectSpec) -> tuple[float, str]:
     """Size of one effect ``(|value - absent|, unit)`` (see the module docstring)."""
-    eff = REGISTRY[spec.name]
-    params = [eff.param(SIZE_PARAM[spec.name])] if spec.name in SIZE_PARAM else list(eff.params)
+    params = REGISTRY[spec.name].size_parameters()  # of one unit: the registry checks it
     devs = [abs(spec.value(p.name) - (p.absent or 0.0)) for p in params]
-    units = {p.unit for p in params}
-    if len(units) != 1:  # pragma: no cover - no registered effect mixes units without a SIZE_PARAM entry
-        return math.nan, ""
-    unit = units.pop()
+    unit = params[0].unit
     return float(math.hypot(*devs)) if len(devs) > 1 else float(devs[0]), FRACTION_UNIT if unit == "-" else unit
 
 

@@ -57,7 +57,6 @@ from ..sim.axes import joint_index
 from ..sim.effect_types import EffectKey, EffectParam
 from ..sim.effects import REGISTRY, effects_of_keys, make_effect
 from .design import METHODS, SIGNIFICANT_DIGITS, Dist, parse_dist, unit_design
-from .labels import SIZE_PARAM
 from .runs import CONDITION_KEYS, MAX_RUNS
 
 SAMPLE_KEYS = ("n", "method", "seed", "twins", "joints", "faults", "conditions")
@@ -76,7 +75,7 @@ class FaultKind:
 
 def _size_param(name: str, where: str) -> EffectParam:
     eff = REGISTRY[name]
-    params = [eff.param(SIZE_PARAM[name])] if name in SIZE_PARAM else list(eff.params)
+    params = eff.size_parameters()
     if len(params) != 1 or params[0].absent is None:
         raise ParameterError(f"{where}: effect {name!r} has no single parameter with an 'absent' value; "
                              f"it cannot be a sampled fault kind")

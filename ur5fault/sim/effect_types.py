@@ -33,6 +33,9 @@ class Effect:
         per_joint: the effect sits on one joint (``joint`` required) or on the whole robot.
         apply: ``apply(arrays, row, joint_index_or_None, values)`` changes the run's row
             (:class:`ur5fault.sim.interfaces.EffectApplier`).
+        size_params: the parameters whose deviation from "absent" measures the effect's size (their Euclidean
+            norm: a harmonic's amplitude from its sine and cosine), the others being its shape or place (a
+            period, a width, a centre of mass); empty: every parameter. They share one unit.
     """
 
     name: str
@@ -40,6 +43,17 @@ class Effect:
     params: tuple[EffectParam, ...]
     per_joint: bool
     apply: EffectApplier
+    size_params: tuple[str, ...] = ()
+
+    def __post_init__(self) -> None:
+        units = {self.param(n).unit for n in self.size_params or [p.name for p in self.params]}
+        if len(units) != 1:  # a registry entry's error, caught when the package is imported
+            raise ParameterError(f"effect {self.name!r}: its size parameters mix units ({', '.join(sorted(units))}); "
+                                 "name the ones that measure its size (size_params)")
+
+    def size_parameters(self) -> tuple[EffectParam, ...]:
+        """The parameters that measure the effect's size (:attr:`size_params`, or all of them)."""
+        return tuple(self.param(n) for n in self.size_params) if self.size_params else self.params
 
     def param(self, name: str, where: str = "") -> EffectParam:
         for p in self.params:

@@ -120,6 +120,10 @@ def make_effect(name: str, joint: int | str | None = None, where: str = "", **va
 
 
 # ----------------------------------------------------------------------------- appliers
+#: a harmonic's size: its amplitude, the norm of its sine and cosine parts (the period is its shape)
+_AMPLITUDE = ("sin_Nm", "cos_Nm")
+
+
 def _harmonic_params(angle: str) -> tuple[EffectParam, ...]:
     return (EffectParam("sin_Nm", "N*m", -50.0, 50.0, 0.0, f"link torque amplitude of sin(k {angle})"),
             EffectParam("cos_Nm", "N*m", -50.0, 50.0, 0.0, f"link torque amplitude of cos(k {angle})"),
@@ -128,17 +132,17 @@ def _harmonic_params(angle: str) -> tuple[EffectParam, ...]:
 
 _TERM_EFFECTS = [
     Effect("torque_joint_harmonic", "link torque periodic in the joint angle (eccentric or worn gear; data-driven)",
-           _harmonic_params("joint angle"), True, ap.harmonic("term_joint_harmonic")),
+           _harmonic_params("joint angle"), True, ap.harmonic("term_joint_harmonic"), size_params=_AMPLITUDE),
     Effect("torque_coulomb", "Coulomb-like load torque tanh(w / width) (data-driven)",
            (EffectParam("torque_Nm", "N*m", -30.0, 30.0, 0.0, "level at speed"),
             EffectParam("width_rad_s", "rad/s", 1e-3, 1.0, 0.01, "speed of the smooth sign")),
            True, ap.both(ap.add("term_coulomb_Nm", "torque_Nm"),
-                         ap.set_value("term_coulomb_width_rad_s", "width_rad_s"))),
+                         ap.set_value("term_coulomb_width_rad_s", "width_rad_s")), size_params=("torque_Nm",)),
     Effect("torque_stribeck", "Stribeck-like load torque at low speed, fading above v_s (data-driven)",
            (EffectParam("torque_Nm", "N*m", -30.0, 30.0, 0.0, "level at low speed"),
             EffectParam("speed_rad_s", "rad/s", 1e-3, 2.0, 0.05, "Stribeck speed v_s")),
            True, ap.both(ap.add("term_stribeck_Nm", "torque_Nm"),
-                         ap.set_value("term_stribeck_speed_rad_s", "speed_rad_s"))),
+                         ap.set_value("term_stribeck_speed_rad_s", "speed_rad_s")), size_params=("torque_Nm",)),
     Effect("torque_viscous", "viscous load torque c w (data-driven)",
            (EffectParam("coeff_Nms_per_rad", "N*m*s/rad", -100.0, 100.0, 0.0, "c"),),
            True, ap.add("term_viscous_Nms_per_rad", "coeff_Nms_per_rad")),
@@ -154,7 +158,7 @@ _TERM_EFFECTS = [
            (EffectParam("torque_Nm", "N*m", -30.0, 30.0, 0.0, "level at rest"),
             EffectParam("speed_rad_s", "rad/s", 1e-3, 1.0, 0.02, "speed below which the joint is at rest")),
            True, ap.both(ap.add("term_holding_Nm", "torque_Nm"),
-                         ap.set_value("term_holding_speed_rad_s", "speed_rad_s"))),
+                         ap.set_value("term_holding_speed_rad_s", "speed_rad_s")), size_params=("torque_Nm",)),
     Effect("inertia", "added rotational inertia on the joint (armature; missing inertia; data-driven)",
            (EffectParam("inertia_kgm2", "kg*m^2", 0.0, 10.0, 0.0, "added to the joint's inertia"),),
            True, ap.add("armature_kgm2", "inertia_kgm2")),
@@ -162,13 +166,13 @@ _TERM_EFFECTS = [
            (EffectParam("mass_kg", "kg", -10.0, 30.0, 0.0, "added at the link's centre of mass"),
             *(EffectParam(f"com_{k}_m", "m", -0.5, 0.5, 0.0, f"centre-of-mass shift along the link's {k[1]} axis")
               for k in ("dx", "dy", "dz"))),
-           True, ap.link_mass),
+           True, ap.link_mass, size_params=("mass_kg",)),
     Effect("current_temperature_drift", "current-reading drift with joint temperature (sensor or thermal drift; "
            "data-driven)",
            (EffectParam("coeff_A_per_K", "A/K", -1.0, 1.0, 0.0, "c in c (T - T_ref)"),
             EffectParam("reference_C", "degC", -10.0, 90.0, 28.0, "T_ref")),
            True, ap.both(ap.add("current_temp_drift_A_per_K", "coeff_A_per_K"),
-                       ap.set_value("current_temp_reference_C", "reference_C"))),
+                       ap.set_value("current_temp_reference_C", "reference_C")), size_params=("coeff_A_per_K",)),
     Effect("current_time_shift", "logged current reading shifted in time (timestamp skew; data-driven)",
            (EffectParam("shift_ms", "ms", -50.0, 50.0, 0.0, "reading(t) = current(t - shift)"),),
            True, ap.add("current_time_shift_s", "shift_ms", 1e-3)),
@@ -300,6 +304,7 @@ REGISTRY: dict[str, Effect] = {
             True,
             ap.both(ap.set_value("cogging_Nm", "amplitude_Nm"),
                     ap.set_value("cogging_periods_per_rev", "periods_per_rev")),
+            size_params=("amplitude_Nm",),
         ),
         Effect(
             "motor_harmonic",
@@ -312,6 +317,7 @@ REGISTRY: dict[str, Effect] = {
             ),
             True,
             ap.motor_harmonic,
+            size_params=_AMPLITUDE,
         ),
         Effect(
             "breakaway_friction",
