@@ -48,7 +48,16 @@ from ...sim.axes import N_JOINTS
 from ..diagnostics import calibration, joint_kind
 from ..diagnostics.data import CONTEXT_COLUMNS, SIM_ONLY_PREFIX
 from ..diagnostics.kind_call import MERGED_KINDS, NOISE_RATIO
-from ..diagnostics.limits import DEFAULT_Z, ESTIMATE_OF, FLANK_COLUMN, LimitCalibration, joint_limits, reverses
+from ..diagnostics.limits import (
+    DEFAULT_Z,
+    ESTIMATE_OF,
+    FLANK_COLUMN,
+    SIZE_UNIT,
+    LimitCalibration,
+    joint_limits,
+    reverses,
+    signed_size,
+)
 from ..diagnostics.saved import SCHEMA_FORMAT
 from ..features import FEATURE_UNITS
 from ..twin_features import FEATURE_UNITS as TWIN_FEATURE_UNITS
@@ -113,22 +122,10 @@ def check_schema(schema: dict[str, Any], where: str) -> float:
 def size_estimate(kind: str, est: dict[str, float], j: int) -> tuple[float, str]:
     """The size of ``kind`` on joint ``j`` (1-based) from the ``twin_est_*`` values in ``est``, in the unit of
     the campaign's ``fault_size`` (signed where the fault has a direction); NaN when there is none."""
-    def g(name: str) -> float:
-        v = est.get(f"twin_est_{name}_j{j}", float("nan"))
-        return float(v) if v is not None else float("nan")
-
-    def loss(inv_err: float) -> float:  # an estimate of 1/s - 1 -> the loss 1 - s
-        return 1.0 - 1.0 / (1.0 + inv_err) if 1.0 + inv_err > 0 else float("nan")
-
-    return {
-        "backlash": (math.degrees(g("backlash_rad")), "deg"),
-        "current_sensor_offset": (g("current_offset_A"), "A"),
-        "current_sensor_gain": (g("current_gain_err"), "gain - 1"),
-        "torque_constant": (loss(g("current_gain_err")), "loss (1 - scale)"),
-        "coulomb_friction": (g("coulomb_scale_err"), "scale - 1"),
-        "resolver_offset": (-math.degrees(g("mismatch_offset_rad")), "deg"),
-        "gear_stiffness": (loss(g("compliance_err")), "loss (1 - scale)"),
-    }.get(kind, (float("nan"), "-"))
+    if kind not in ESTIMATE_OF:
+        return float("nan"), "-"
+    value = est.get(f"twin_est_{ESTIMATE_OF[kind]}_j{j}")
+    return float(signed_size(kind, float("nan") if value is None else value)), SIZE_UNIT[kind]
 
 
 def cannot_tell(w: Window, j: int, has_motor_encoders: bool) -> dict[str, str]:

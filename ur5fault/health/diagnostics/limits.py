@@ -83,14 +83,24 @@ def size_from_estimate(kind: str, limit: np.ndarray | float) -> np.ndarray:
     resolver offset o gives ``-o`` [rad] (-> deg); a current offset its offset [A]; a gain 1 +- s gives +-s; a
     Coulomb scale 1 + s gives s; a torque constant or a gear stiffness scaled by 1 - s gives ``1/(1 - s) - 1``, so
     an estimate limit L is a size limit ``L / (1 + L)`` (1 at L = inf)."""
-    lim = np.asarray(limit, dtype=float)
+    return np.abs(signed_size(kind, limit))
+
+
+def signed_size(kind: str, estimate: np.ndarray | float) -> np.ndarray:
+    """``kind``'s size estimate (its unit, signed) -> the fault's size in the unit of ``fault_size``, signed where the
+    fault has a direction (``ur5fault diagnose``'s sizes; :func:`size_from_estimate` the same for limits): the
+    conversions of :func:`size_from_estimate`, a resolver offset's sign turned back (its estimate is ``-o``); a loss
+    estimate at or below -1 (no scale gives it) is NaN."""
+    x = np.asarray(estimate, dtype=float)
     _known(kind)
-    if kind in ("backlash", "resolver_offset"):
-        return np.degrees(lim)
-    if kind in ("torque_constant", "gear_stiffness"):
-        with np.errstate(invalid="ignore"):
-            return np.where(np.isinf(lim), 1.0, lim / (1.0 + lim))
-    return lim
+    if kind == "backlash":
+        return np.degrees(x)
+    if kind == "resolver_offset":
+        return -np.degrees(x)
+    if kind in ("torque_constant", "gear_stiffness"):  # the estimate of 1/(1 - s) - 1 -> the loss s
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return np.where(1.0 + x > 0, 1.0 - 1.0 / (1.0 + x), np.nan)
+    return x
 
 
 def estimate_from_size(kind: str, size: np.ndarray | float) -> np.ndarray:
@@ -236,4 +246,4 @@ def joint_limits(features: Mapping[str, float], cal: LimitCalibration, joint: in
 
 __all__ = ["DEFAULT_Z", "ESTIMATES", "ESTIMATE_OF", "SIZE_UNIT", "Z_VALUES", "LimitCalibration", "detection_limits",
            "estimate_from_size", "estimate_limits", "has_estimates", "joint_limits", "reason", "reverses",
-           "size_from_estimate", "standard_errors"]
+           "signed_size", "size_from_estimate", "standard_errors"]
