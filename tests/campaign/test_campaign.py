@@ -16,7 +16,7 @@ import pandas as pd
 import pytest
 
 from ur5fault.campaign import (
-    CampaignLockedError,
+    FolderLockedError,
     Lock,
     build_campaign,
     load_campaign,
@@ -193,7 +193,7 @@ def test_second_campaign_on_same_folder_refused(tmp_path):
     out = tmp_path / "out"
     with Lock(out):  # this (live) process holds it
         f = write(tmp_path, SMALL.format(dur=0.1))
-        with pytest.raises(CampaignLockedError, match="another campaign is writing this folder"):
+        with pytest.raises(FolderLockedError, match="another campaign is writing this folder"):
             run_campaign(load_campaign(f), out, jobs=1, progress=False)
 
 

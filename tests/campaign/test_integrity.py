@@ -16,9 +16,9 @@ import pandas as pd
 import pytest
 from test_campaign import _results, tiny
 
-from ur5fault.campaign import CampaignLockedError, Lock, load_campaign, run_campaign, status
-from ur5fault.campaign import lock as lock_mod
+from ur5fault.campaign import FolderLockedError, Lock, load_campaign, run_campaign, status
 from ur5fault.campaign.store import BadRunFilesError, check_run_file, consolidate
+from ur5fault.util import lock as lock_mod
 from ur5fault.util.io import OutputError
 
 pytestmark = pytest.mark.filterwarnings("ignore::DeprecationWarning")
@@ -75,7 +75,7 @@ def _contend(out, barrier, held, hold_s):
             t0 = time.monotonic()
             time.sleep(hold_s)
             held.put((t0, time.monotonic()))
-    except CampaignLockedError:
+    except FolderLockedError:
         held.put(None)
 
 

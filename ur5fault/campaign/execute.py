@@ -33,6 +33,7 @@ from ..util.io import (
     write_json_atomic,
     write_parquet_atomic,
 )
+from ..util.lock import Lock
 from ..util.parallel import one_blas_thread, return_freed_memory
 from ..util.progress import campaign_progress
 from .batches import plan_batches
@@ -41,7 +42,6 @@ from .identity import DRIVE, STEPPER, Identities
 from .identity import run_effects as _effects_of
 from .labels import assign_splits, refresh_splits, row_labels
 from .limits import check_limits, estimate
-from .lock import Lock
 from .manifest import build_manifest
 from .runs import CampaignRun
 from .spec import Campaign
@@ -212,7 +212,7 @@ def run_campaign(camp: Campaign, out: Path | None = None, *, jobs: int | None = 
 
     Raises:
         CampaignChangedError: stored runs were made under other settings (first difference named).
-        CampaignLockedError: another process writes ``out``.
+        FolderLockedError: another process writes ``out``.
         ParameterError: the campaign exceeds a limit (memory, steps), or a bad backend/scheduler.
         OutputError: ``out`` cannot be written.
     """

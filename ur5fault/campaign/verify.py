@@ -9,8 +9,8 @@ from typing import Any
 
 from ..errors import ConfigFileError, Ur5FaultError
 from ..util.io import TEMP_GLOB
+from ..util.lock import lock_holder
 from .identity import Identities, digest
-from .lock import lock_holder
 from .spec import Campaign, build_campaign
 from .store import (
     REBUILD_FEATURES,

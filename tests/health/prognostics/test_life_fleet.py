@@ -6,10 +6,10 @@ from __future__ import annotations
 import pandas as pd
 import pytest
 
-from ur5fault.campaign.lock import CampaignLockedError, Lock
 from ur5fault.campaign.store import CampaignChangedError
 from ur5fault.health.prognostics.fleet import run_life
 from ur5fault.health.prognostics.spec import build_life
+from ur5fault.util.lock import FolderLockedError, Lock
 
 from tiny_fleet import TINY, run_tables
 
@@ -67,7 +67,7 @@ def test_a_changed_wear_law_is_not_mistaken_for_stored_inspections(tmp_path):
 
 def test_a_second_writer_is_refused(tmp_path):
     camp = build_life(TINY, "tiny")
-    with Lock(tmp_path), pytest.raises(CampaignLockedError):
+    with Lock(tmp_path), pytest.raises(FolderLockedError):
         run_life(camp, tmp_path, jobs=1, progress=False, note=None)
 
 

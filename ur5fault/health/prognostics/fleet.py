@@ -25,7 +25,6 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ...campaign.identity import DRIVE, STEPPER
-from ...campaign.lock import Lock
 from ...campaign.store import CampaignChangedError, run_path
 from ...campaign.workers import check_backend, dask_client, dispatch, exit_with_parent, note_stderr
 from ...config import parse_trajectory
@@ -33,6 +32,7 @@ from ...errors import ParameterError
 from ...sim.axes import N_JOINTS
 from ...sim.effects import make_effect
 from ...util.io import check_writable, remove_stale_temporaries, write_json_atomic
+from ...util.lock import Lock
 from ...util.progress import campaign_progress
 from .life_store import (
     LifeIdentities,

@@ -1,5 +1,6 @@
-"""The lock of a campaign folder, ``OUT/.lock``: one writer at a time, and nothing left that only
-deleting a file by hand could clear.
+"""The lock of an output folder, ``OUT/.lock`` (a campaign's, a fleet's, a result folder's of
+:mod:`ur5fault.util.results`): one writer at a time, and nothing left that only deleting a file by hand could
+clear.
 
 The lock is an operating-system lock (``flock``) held on the open file ``OUT/.lock``, not the
 file's existence: the kernel releases it when its process ends however it ends (SIGKILL, a crash,
@@ -25,20 +26,22 @@ import socket
 from pathlib import Path
 
 from ..errors import Ur5FaultError
-from ..util.io import OutputError
+from .io import OutputError
 
 LOCK_NAME = ".lock"
 
 
-class CampaignLockedError(Ur5FaultError, RuntimeError):
-    """Another campaign process is writing the same output folder."""
+class FolderLockedError(Ur5FaultError, RuntimeError):
+    """Another process is writing the same output folder."""
 
 
 class Lock:
-    """Hold ``OUT/.lock`` for the duration of a ``with`` block (refused at once when held)."""
+    """Hold ``OUT/.lock`` for the duration of a ``with`` block (refused at once when held). ``what`` names the
+    writer in the refusal (``campaign``: "another campaign is writing this folder")."""
 
-    def __init__(self, out: Path) -> None:
+    def __init__(self, out: Path, what: str = "campaign") -> None:
         self.path = Path(out) / LOCK_NAME
+        self.what = what
         self._fd: int | None = None
 
     def __enter__(self) -> Lock:
@@ -54,8 +57,8 @@ class Lock:
                 os.close(fd)
                 if exc.errno in (errno.EWOULDBLOCK, errno.EAGAIN, errno.EACCES):
                     owner = lock_owner(self.path)
-                    raise CampaignLockedError(
-                        f"{self.path.parent}: another campaign is writing this folder (host "
+                    raise FolderLockedError(
+                        f"{self.path.parent}: another {self.what} is writing this folder (host "
                         f"{owner[0] if owner else '?'}, pid {owner[1] if owner else '?'}); wait for it or choose "
                         "another --out") from None
                 raise OutputError(f"{self.path}: cannot lock ({exc.strerror})") from None
@@ -64,7 +67,7 @@ class Lock:
                 break
             os.close(fd)  # the file we locked was unlinked by its previous holder: lock the new one
         else:  # pragma: no cover - a folder whose lock file is replaced a hundred times in a row
-            raise CampaignLockedError(f"{self.path}: could not take the lock (the file keeps being replaced)")
+            raise FolderLockedError(f"{self.path}: could not take the lock (the file keeps being replaced)")
         try:
             os.ftruncate(self._fd, 0)
             os.write(self._fd, f"{socket.gethostname()} {os.getpid()}\n".encode())
