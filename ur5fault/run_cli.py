@@ -124,7 +124,7 @@ OUT_SUFFIXES = (".parquet", ".csv")
 def _check_out_file(out: Path, replace: bool) -> Path:
     """``simulate --out``: a ``.parquet`` or ``.csv`` file that can be written (missing folders are created) and
     holds no earlier run unless ``replace``."""
-    from .util.io import check_new_output
+    from .util.results import check_new_output
 
     return check_new_output(out, replace=replace, suffixes=OUT_SUFFIXES)
 

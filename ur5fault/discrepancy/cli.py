@@ -11,7 +11,6 @@ from ..logs.options import add_log_options
 from ..twin.residuals import FIT_FRACTION
 
 #: what `discrepancy` writes into --out (report.py); one of them there is an earlier result
-RESULT_FILES = ("report.md", "model.yaml", "summary.json")
 
 
 def register(sub) -> None:
@@ -54,9 +53,9 @@ def cmd_discrepancy(args: argparse.Namespace) -> int:
     from ..logs.options import log_entries, read_log_options
     from ..sim.params import load_params
     from ..util.checks import check_count, check_number
-    from ..util.io import check_new_output
+    from ..util.results import check_new_output
     from .model import FIT_FRACTION_RANGE, DiscrepancyModel
-    from .report import summary, write_report
+    from .report import RESULT_FILES, summary, write_report
 
     # everything that can be checked before minutes of fitting is checked first, in the options' own names
     check_number(args.fit_fraction, "--fit-fraction", *FIT_FRACTION_RANGE)
@@ -80,7 +79,7 @@ def cmd_discrepancy(args: argparse.Namespace) -> int:
               overlay.effects if overlay else (), hold_out=held,
               on_payload=lambda line: print(line, file=sys.stderr, flush=True))
     log = model.replay_.log
-    paths = write_report(model, Path(args.out))
+    paths = write_report(model, Path(args.out), replace=args.replace)
     summ = summary(model)
     print(f"{log.source}: {log.t_s[-1]:.1f} s at {1 / log.period_s:.0f} Hz")
     for name, e in summ["per_log"].items():

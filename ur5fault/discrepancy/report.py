@@ -11,7 +11,8 @@ import numpy as np
 from ..sim.axes import JOINT_NAMES, N_JOINTS
 from ..sim.effects import REGISTRY
 from ..twin.residuals import UNEXPLAINED_FACTOR
-from ..util.io import json_text, remove_stale_temporaries, remove_unwritten, write_figure_atomic, write_text_atomic
+from ..util.io import json_text, remove_unwritten, write_figure_atomic, write_text_atomic
+from ..util.results import result_folder
 from .candidates import LibraryCandidate, TermCandidate
 from .speed import bare_mj_step_us, wall_over_mj_steps
 from .statistics import Z_95
@@ -214,21 +215,25 @@ def figures(model: DiscrepancyModel):
     return out
 
 
-def write_report(model: DiscrepancyModel, out: Path) -> list[Path]:
-    """``report.md`` with residual plots, ``model.yaml`` (overlay) and ``summary.json``."""
+#: the files of a result (``--out``), besides the figures
+RESULT_FILES = ("report.md", "model.yaml", "summary.json")
+
+
+def write_report(model: DiscrepancyModel, out: Path, replace: bool = True) -> list[Path]:
+    """``report.md`` with residual plots, ``model.yaml`` (overlay) and ``summary.json``, written as one set
+    (:func:`ur5fault.util.results.result_folder`: a run stopped between them leaves the folder marked incomplete).
+    ``replace=False``: refuse a result another process wrote into ``out`` meanwhile."""
     import yaml
 
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
-    remove_stale_temporaries(out)  # of a writer killed mid-write over an hour ago
     summ = summary(model, bare_mj_step_us(model.replay_.params.physics_dt_s))
-    write_text_atomic(out / "summary.json", json_text(summ))  # strict JSON: no value is null, never NaN
-    write_text_atomic(out / "model.yaml", yaml.safe_dump(model.overlay(), sort_keys=False))
-    paths = []
-    for s, fig in figures(model).items():
-        paths.append(write_figure_atomic(fig, out / f"residual_{s}.png", RESIDUAL_FIGURE_DPI))
-    remove_unwritten(out, "residual_*.png", paths)  # an earlier result's figures of other signals (--replace)
-    write_text_atomic(out / "report.md", _markdown(model, summ, paths))
+    with result_folder(out, RESULT_FILES, replace) as out:
+        write_text_atomic(out / "summary.json", json_text(summ))  # strict JSON: no value is null, never NaN
+        write_text_atomic(out / "model.yaml", yaml.safe_dump(model.overlay(), sort_keys=False))
+        paths = []
+        for s, fig in figures(model).items():
+            paths.append(write_figure_atomic(fig, out / f"residual_{s}.png", RESIDUAL_FIGURE_DPI))
+        remove_unwritten(out, "residual_*.png", paths)  # an earlier result's figures of other signals (--replace)
+        write_text_atomic(out / "report.md", _markdown(model, summ, paths))
     return [out / "report.md", out / "model.yaml", out / "summary.json", *paths]
 
 

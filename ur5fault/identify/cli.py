@@ -39,7 +39,8 @@ def cmd_identify(args: argparse.Namespace) -> int:
     from ..logs.measured import assumption_notes
     from ..logs.options import log_entries, read_log_options
     from ..sim.params import load_params
-    from ..util.io import check_new_output, write_json_atomic, write_text_atomic
+    from ..util.io import write_json_atomic, write_text_atomic
+    from ..util.results import check_new_output
     from . import identify
 
     if not 20 <= args.bootstrap <= MAX_BOOT:
@@ -75,6 +76,9 @@ def cmd_identify(args: argparse.Namespace) -> int:
             print(rec.line(), file=sys.stderr)
     print(result.table())
     out = Path(args.out)
+    for path, option in ((out, "--out"), (Path(args.json) if args.json else None, "--json")):
+        if path is not None:  # again: another process may have written it while this one fitted
+            check_new_output(path, replace=args.replace, option=option)
     write_text_atomic(out, result.to_yaml(params))
     written = [str(out)]
     if args.json:

@@ -74,29 +74,6 @@ def check_writable(path: str | Path, *, folder: bool = False) -> Path:
     return path
 
 
-#: the option every command writing a result takes to replace an earlier result in the place it writes to
-REPLACE_OPTION = "--replace"
-
-
-def check_new_output(path: str | Path, *, folder: bool = False, results: tuple[str, ...] = (),
-                     replace: bool = False, suffixes: tuple[str, ...] = (), option: str = "--out") -> Path:
-    """:func:`check_writable`, then refuse to lose an earlier result silently: a file ``path`` that exists, or a
-    ``folder`` holding any of the file names ``results`` (its own result files; other files are left alone), is
-    refused unless ``replace``.  ``suffixes``: the file name must end with one of them (case-insensitive).
-    Missing parent folders are fine: the writers create them."""
-    path = check_writable(path, folder=folder)
-    if suffixes and path.suffix.lower() not in suffixes:
-        raise OutputError(f"{option} {path}: unknown file type {path.suffix or '(no suffix)'!r}; give a "
-                          f"{' or '.join(suffixes)} file")
-    if replace:
-        return path
-    earlier = [path] if not folder and path.exists() else [path / n for n in results if (path / n).exists()]
-    if earlier:
-        raise OutputError(f"{option} {earlier[0]}: an earlier result is there; give {REPLACE_OPTION} to replace it, "
-                          f"or another {option}")
-    return path
-
-
 def checksum_path(path: str | Path) -> Path:
     """The sidecar holding ``path``'s SHA-256."""
     path = Path(path)

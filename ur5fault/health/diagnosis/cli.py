@@ -36,7 +36,7 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
     from ...logs.length import check_files_length, check_logs_length
     from ...logs.options import log_entries, read_entry, refuse_hold_out, refuse_unknown_payload
     from ...logs.same_samples import refuse_same_samples
-    from ...util.io import check_new_output
+    from ...util.results import check_new_output, result_folder
     from ..diagnostics.classifier import require_sklearn
     from ..diagnostics.saved import load_models
     from . import diagnose, robot_baseline
@@ -66,7 +66,8 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
                                  "itself: give other healthy logs of the robot")
     refuse_unknown_payload([*entries, *base])  # before the models are loaded and the logs read
     require_sklearn()
-    check_new_output(args.out, folder=True, results=(JSON_FILE, REPORT_FILE, FIGURE_FILE), replace=args.replace)
+    results = (JSON_FILE, REPORT_FILE, FIGURE_FILE)
+    check_new_output(args.out, folder=True, results=results, replace=args.replace)
     window_s = check_schema(load_models(args.detector)[1], args.detector)  # refused before the replay
     check_files_length([e.path for e in (*entries, *base)], "diagnose")
     log = read_entry(entries[0], window_length(window_s))
@@ -85,7 +86,8 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
     d = diagnose(log, args.detector, params, effects, baseline=baseline)
     for n in d["notes"]:
         print(f"note: {n}", file=sys.stderr)
-    paths = write_diagnosis(d, args.out)
+    with result_folder(args.out, results, args.replace) as out:  # one set: a stop between files is marked
+        paths = write_diagnosis(d, out)
     print(f"{d['log']}: {d['n_flagged']} of {d['n_windows']} windows of {d['detector']['window_s']:.3g} s flagged "
           f"(p(fault) > {d['flag_threshold']['p_fault']:.3f}: {d['flag_threshold']['from']}); largest p(fault) "
           f"{max(w['p_fault'] for w in d['windows']):.3f}")

@@ -20,7 +20,7 @@ from typing import Any
 import pandas as pd
 
 from ...errors import ConfigFileError, ParameterError
-from ...util.io import check_new_output
+from ...util.results import check_new_output, result_folder
 from .calibration import fit_calibration, test_reliability
 from .data import CONTEXT_COLUMNS, FEATURE_SETS, Dataset, has_twin_features, load_dataset, load_features
 from .limit_metrics import for_dataset
@@ -247,7 +247,8 @@ def run_benchmark(campaign_dir: str | Path, out: str | Path | None = None, *, se
         metrics["notes"] = setup_notes(saved[1], test_dir)
         if saved[0].joint_kind is not None:  # how far apart, against the motions drawn (transfer.py)
             metrics["transfer"] = against_training_split(features, other, saved, seed, str(test_dir))
-        write_report(metrics, figures, out_dir)
+        with result_folder(out_dir, RESULT_FILES, replace):  # one set: a stop between files is marked
+            write_report(metrics, figures, out_dir)
         metrics["out"] = str(out_dir)
         return metrics
     compare = compare and has_twin_features(features)
@@ -267,6 +268,15 @@ def run_benchmark(campaign_dir: str | Path, out: str | Path | None = None, *, se
             if reuse is not None:
                 rows[reused]["trained"] = _compared(features, seed, False, thr, str(campaign_dir), *reuse)
             metrics["comparison"] = {fs: {k: rows[fs][k] for k in ("trained", "shuffled")} for fs in FEATURE_SETS}
+    with result_folder(out_dir, RESULT_FILES, replace):  # the report and the classifiers, one set
+        _write_trained(metrics, figures, out_dir, models, features, feature_set, shuffle_labels, man)
+    metrics["out"] = str(out_dir)
+    return metrics
+
+
+def _write_trained(metrics: dict[str, Any], figures: dict, out_dir: Path, models: Models, features: pd.DataFrame,
+                   feature_set: str, shuffle_labels: bool, man: dict[str, Any]) -> None:
+    """The report, and the trained classifiers beside it (not a shuffled-label control's)."""
     write_report(metrics, figures, out_dir)
     if not shuffle_labels:
         save_models(models, load_dataset(features, feature_set), feature_set,
@@ -278,8 +288,6 @@ def run_benchmark(campaign_dir: str | Path, out: str | Path | None = None, *, se
                     limit_calibration=(metrics["detection_limits"] or {}).get("calibration"),
                     twin_com_twins=bool((man.get("campaign_data") or {}).get("twin_com_twins", False)),
                     twin_residuals_format=man.get("twin_residuals_format"))
-    metrics["out"] = str(out_dir)
-    return metrics
 
 
 def compare_feature_sets(features: pd.DataFrame, seed: int, threshold_mm: float, source: str,

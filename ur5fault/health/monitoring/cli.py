@@ -49,7 +49,8 @@ def cmd_monitor(args: argparse.Namespace) -> int:
     from ...logs.options import log_entries, read_log_options, refuse_hold_out, refuse_unknown_payload
     from ...logs.same_samples import refuse_same_samples
     from ...sim.params import load_params
-    from ...util.io import check_new_output, checksum_path
+    from ...util.io import checksum_path
+    from ...util.results import check_new_output, result_folder
     from .baseline import Baseline, fit_baseline, overlay_sha256
     from .observe import BASELINE_SCREEN_S, observe
     from .report import write
@@ -97,7 +98,8 @@ def cmd_monitor(args: argparse.Namespace) -> int:
     observed = [observe(g, params, effects, jobs=jobs) for g in logs]
     channels = tuple(dict.fromkeys(args.event_channels))
     entries = [assess(stats, o, channels) for o in observed]
-    paths = write(Path(args.out), stats, observed, entries, args.baseline, channels, verified)
+    with result_folder(args.out, RESULT_FILES, args.replace) as out:  # one set: a stop between files is marked
+        paths = write(out, stats, observed, entries, args.baseline, channels, verified)
     for e in entries:
         print(f"{e['log']}: {e['verdict']} ({len(e['changes'])} changes, {len(e['events'])} events)")
     print(f"wrote {', '.join(str(p) for p in paths[:2])}, {paths[-1]}")

@@ -15,14 +15,13 @@ from ...campaign.store import check_table_of_manifest, read_manifest
 from ...errors import ConfigFileError
 from ...util.io import (
     StoredFileError,
-    check_new_output,
     read_parquet_stored,
-    remove_stale_temporaries,
     write_figure_atomic,
     write_json_atomic,
     write_parquet_atomic,
     write_text_atomic,
 )
+from ...util.results import check_new_output, result_folder
 from ..diagnostics.report import clean
 from . import metrics as M
 from .clearance_rul import ClearanceRUL
@@ -317,18 +316,17 @@ def run_prognose(folder: Path, out: Path | None = None, *, seed: int = 0, twin: 
     figures = {"rul_alpha_cone": rul_alpha_cone(pred), "health_index": health_index_paths(df, hi,
                                                                                         fitted["health_index"]
                                                                                         ["failure_level"])}
-    out.mkdir(parents=True, exist_ok=True)
-    remove_stale_temporaries(out)  # of a writer killed mid-write over an hour ago
-    names = []
-    for name, fig in figures.items():
-        write_figure_atomic(fig, out / f"{name}.png")  # its temporary file removed on any failure
-        names.append(f"{name}.png")
-    for name, p in pred.items():
-        write_parquet_atomic(p, out / f"predictions_{name}.parquet")
-    m["figures"] = names
-    m["benchmark_wall_s"] = time.perf_counter() - t0
-    m["out"] = str(out)
-    m = clean(m)
-    write_json_atomic(out / "metrics.json", m)
-    write_text_atomic(out / "report.md", markdown(m))
+    with result_folder(out, RESULT_FILES, replace):  # one set: a stop between files is marked
+        names = []
+        for name, fig in figures.items():
+            write_figure_atomic(fig, out / f"{name}.png")  # its temporary file removed on any failure
+            names.append(f"{name}.png")
+        for name, p in pred.items():
+            write_parquet_atomic(p, out / f"predictions_{name}.parquet")
+        m["figures"] = names
+        m["benchmark_wall_s"] = time.perf_counter() - t0
+        m["out"] = str(out)
+        m = clean(m)
+        write_json_atomic(out / "metrics.json", m)
+        write_text_atomic(out / "report.md", markdown(m))
     return m

@@ -1,0 +1,95 @@
+"""A command's result files written as one set (ur5fault/util/results.py): a run stopped between its files leaves
+a folder marked incomplete, which the next run replaces without a person; two writers never share a folder; a
+complete result written meanwhile by another run is not overwritten silently."""
+
+from __future__ import annotations
+
+import logging
+import subprocess
+import sys
+
+import pytest
+
+from ur5fault.util.io import OutputError
+from ur5fault.util.lock import LOCK_NAME, FolderLockedError, Lock
+from ur5fault.util.results import INCOMPLETE_MARK, check_new_output, result_folder
+
+RESULTS = ("report.md", "summary.json")
+
+
+def test_a_finished_set_leaves_no_mark_and_no_lock_and_is_an_earlier_result(tmp_path):
+    out = tmp_path / "out"
+    with result_folder(out, RESULTS) as folder:
+        assert (folder / INCOMPLETE_MARK).exists() and (folder / LOCK_NAME).exists()
+        for name in RESULTS:
+            (folder / name).write_text("x")
+    assert sorted(p.name for p in out.iterdir()) == sorted(RESULTS)
+    with pytest.raises(OutputError, match="an earlier result is there; give --replace"):
+        check_new_output(out, folder=True, results=RESULTS)
+
+
+def test_a_set_cut_short_is_marked_and_replaced_by_the_next_run_with_a_warning(tmp_path, caplog):
+    """As a SIGTERM (an exception through the block) or a kill between two files: summary.json was written, the report
+    not. The next run's check at its start refused it as "an earlier result" until a person deleted it."""
+    out = tmp_path / "out"
+    with pytest.raises(KeyboardInterrupt), result_folder(out, RESULTS) as folder:
+        (folder / "summary.json").write_text("x")
+        raise KeyboardInterrupt
+    assert (out / INCOMPLETE_MARK).exists() and not (out / LOCK_NAME).exists()
+    with caplog.at_level(logging.WARNING, logger="ur5fault"):
+        assert check_new_output(out, folder=True, results=RESULTS) == out
+    assert any("stopped while writing it" in r.getMessage() and "replacing it" in r.getMessage()
+               for r in caplog.records), caplog.records
+    with result_folder(out, RESULTS, replace=False) as folder:  # the check again, under the lock, passes too
+        for name in RESULTS:
+            (folder / name).write_text("y")
+    assert not (out / INCOMPLETE_MARK).exists()
+
+
+def test_a_set_killed_mid_write_is_replaced_by_the_next_run(tmp_path):
+    """SIGKILL of the writer between two files, in another process: the mark and the lock file stay, the lock is not
+    held (the kernel released it), and the next run takes the folder."""
+    out = tmp_path / "out"
+    code = (f"import os, signal\nfrom ur5fault.util.results import result_folder\n"
+            f"with result_folder({str(out)!r}, {RESULTS!r}) as f:\n"
+            f"    (f / 'summary.json').write_text('x')\n"
+            f"    os.kill(os.getpid(), signal.SIGKILL)\n")
+    r = subprocess.run([sys.executable, "-c", code], timeout=120)
+    assert r.returncode == -9
+    assert (out / INCOMPLETE_MARK).exists() and (out / "summary.json").exists() and (out / LOCK_NAME).exists()
+    check_new_output(out, folder=True, results=RESULTS)  # not refused
+    with result_folder(out, RESULTS, replace=False) as folder:
+        (folder / "report.md").write_text("y")
+    assert not (out / INCOMPLETE_MARK).exists() and not (out / LOCK_NAME).exists()
+
+
+def test_a_folder_being_written_is_refused_not_taken_for_one_cut_short(tmp_path):
+    out = tmp_path / "out"
+    with result_folder(out, RESULTS):
+        with pytest.raises(FolderLockedError, match="another ur5fault process is writing its result there"):
+            check_new_output(out, folder=True, results=RESULTS)
+        with pytest.raises(FolderLockedError, match="another ur5fault process is writing this folder"):
+            with result_folder(out, RESULTS):
+                pass
+
+
+def test_a_result_written_by_another_run_meanwhile_is_not_overwritten(tmp_path):
+    """Two runs into one --out started together: each checked an empty folder at its start, and the second to finish
+    overwrote the first's result, both saying "wrote". Checked again under the lock, the second is refused."""
+    out = tmp_path / "out"
+    check_new_output(out, folder=True, results=RESULTS)  # run A's check at its start: nothing there
+    with result_folder(out, RESULTS, replace=False) as folder:  # run B writes its result in the meantime
+        (folder / "report.md").write_text("B")
+    with pytest.raises(OutputError, match="an earlier result is there"):
+        with result_folder(out, RESULTS, replace=False):  # run A, at its end
+            pytest.fail("A wrote over B's result")
+    assert (out / "report.md").read_text() == "B"
+    with result_folder(out, RESULTS, replace=True) as folder:  # --replace: A's result replaces it, as asked
+        (folder / "report.md").write_text("A")
+    assert (out / "report.md").read_text() == "A"
+
+
+def test_the_lock_names_its_writer(tmp_path):
+    with Lock(tmp_path), pytest.raises(FolderLockedError, match="another campaign is writing this folder"):
+        with Lock(tmp_path):
+            pass

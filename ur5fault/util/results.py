@@ -1,0 +1,87 @@
+"""A command's result files written into their folder as one set: one writer at a time, and a result cut
+short by a crash known as such.
+
+``identify``'s overlay aside, a command's result is several files (``discrepancy``: ``report.md``,
+``model.yaml``, ``summary.json`` and figures; ``monitor``: ``monitor.json``, ``baseline.json``, ...).  Each file
+is written atomically (:mod:`ur5fault.util.io`), but a process stopped between two of them (SIGKILL, SIGTERM, a
+full disk) left a folder of complete-looking files without the rest, which the next run refused as "an earlier
+result" until a person deleted it.  :func:`result_folder` writes the set:
+
+- under the folder's lock (:class:`ur5fault.util.lock.Lock`): two processes never write one folder at once;
+- with the mark ``OUT/.incomplete`` from before the first file to after the last: a folder holding the mark and
+  no lock holder holds a result cut short, which :func:`check_new_output` does not count as an
+  earlier result (the next run replaces it and says so) and whose files no reader should take as a result;
+- after checking again, under the lock, that no other process wrote a complete result there since the command
+  started (unless ``replace``): two runs into one ``--out`` started together overwrote each other silently.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import os
+import socket
+from collections.abc import Iterator
+from pathlib import Path
+
+from .io import OutputError, check_writable, remove_stale_temporaries, write_text_atomic
+from .lock import FolderLockedError, Lock, lock_holder
+
+#: the option every command writing a result takes to replace an earlier result in the place it writes to
+REPLACE_OPTION = "--replace"
+#: the mark a result folder holds while its files are written (:func:`result_folder`): left
+#: behind, the files beside it are a result cut short
+INCOMPLETE_MARK = ".incomplete"
+
+
+def check_new_output(path: str | Path, *, folder: bool = False, results: tuple[str, ...] = (),
+                     replace: bool = False, suffixes: tuple[str, ...] = (), option: str = "--out",
+                     note: bool = True, holding_lock: bool = False) -> Path:
+    """:func:`check_writable`, then refuse to lose an earlier result silently: a file ``path`` that exists, or a
+    ``folder`` holding any of the file names ``results`` (its own result files; other files are left alone), is
+    refused unless ``replace``.  A folder still holding :data:`INCOMPLETE_MARK` holds a result cut short (its
+    writer stopped between its files): not an earlier result, replaced (said in a warning when ``note``), unless a
+    process holds the folder's lock now (it is being written: refused); ``holding_lock``: the caller holds it.
+    ``suffixes``: the file name must end with one of them (case-insensitive).  Missing parent folders are fine: the
+    writers create them."""
+    path = check_writable(path, folder=folder)
+    if suffixes and path.suffix.lower() not in suffixes:
+        raise OutputError(f"{option} {path}: unknown file type {path.suffix or '(no suffix)'!r}; give a "
+                          f"{' or '.join(suffixes)} file")
+    if replace:
+        return path
+    if folder and (path / INCOMPLETE_MARK).exists():
+        holder = None if holding_lock else lock_holder(path)
+        if holder is not None:  # not cut short: being written now
+            raise FolderLockedError(f"{path}: another ur5fault process is writing its result there"
+                                    + (f" (host {holder[0]}, pid {holder[1]})" if isinstance(holder, tuple) else "")
+                                    + f"; wait for it or choose another {option}")
+        if note:
+            logging.getLogger(__name__).warning(
+                "%s holds the result of a run stopped while writing it (%s is still there): replacing it", path,
+                INCOMPLETE_MARK)
+        return path
+    earlier = [path] if not folder and path.exists() else [path / n for n in results if (path / n).exists()]
+    if earlier:
+        raise OutputError(f"{option} {earlier[0]}: an earlier result is there; give {REPLACE_OPTION} to replace it, "
+                          f"or another {option}")
+    return path
+
+
+
+@contextlib.contextmanager
+def result_folder(out: str | Path, results: tuple[str, ...] = (), replace: bool = True,
+                  option: str = "--out") -> Iterator[Path]:
+    """Hold ``out``'s lock and its :data:`INCOMPLETE_MARK` while the ``with`` block writes the
+    result files (``results``: their names, for the check again of ``replace=False``); the mark is removed only
+    when the block ends without an exception."""
+    out = Path(out)
+    with Lock(out, what="ur5fault process"):
+        if not replace:  # a complete result written by another run since this one checked at its start
+            check_new_output(out, folder=True, results=results, replace=False, option=option, note=False,
+                             holding_lock=True)
+        remove_stale_temporaries(out, 0)  # we hold the lock: no running writer owns them
+        mark = out / INCOMPLETE_MARK
+        write_text_atomic(mark, f"{socket.gethostname()} {os.getpid()}\n")
+        yield out
+        mark.unlink(missing_ok=True)
