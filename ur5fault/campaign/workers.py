@@ -7,20 +7,16 @@ from __future__ import annotations
 import logging
 import os
 import sys
-import threading
-import time
 import warnings
 from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
 from ..errors import ParameterError
-from ..util.parallel import iter_tasks
+from ..util.parallel import iter_tasks, watch_parent
 from .limits import effective_jobs
 
 #: seconds to wait for a Dask scheduler to answer (distributed's own default is 30 s)
 DASK_CONNECT_TIMEOUT_S = 10.0
-#: how often a loky worker checks that the campaign process is still alive [s]
-PARENT_POLL_S = 1.0
 
 
 def check_backend(backend: str, scheduler: str | None, jobs: int | None) -> tuple[int, str | None]:
@@ -72,18 +68,7 @@ def exit_with_parent(parent_pid: int | None) -> None:
     pid when the batch runs in the campaign process itself)."""
     if parent_pid is None or os.getpid() == parent_pid:
         return
-    if os.getppid() != parent_pid:  # the campaign process died before this batch started
-        os._exit(1)
-    if any(t.name == "ur5fault-parent-watch" for t in threading.enumerate()):
-        return
-
-    def watch() -> None:
-        while True:
-            time.sleep(PARENT_POLL_S)
-            if os.getppid() != parent_pid:
-                os._exit(1)
-
-    threading.Thread(target=watch, name="ur5fault-parent-watch", daemon=True).start()
+    watch_parent(parent_pid)
 
 
 def note_stderr(message: str) -> None:

@@ -15,8 +15,14 @@ late or run slower (replays of logs: one task per run); :func:`submit` starts on
 
 from __future__ import annotations
 
+import os
+import threading
+import time
 from collections.abc import Callable, Iterator, Sequence
 from typing import Any
+
+#: how often a worker process checks that the process that started it is still alive [s]
+PARENT_POLL_S = 1.0
 
 #: how often :func:`map_balanced` checks that its feeder thread is alive while it waits for the workers [s]
 #: (a liveness check, not a deadline: any value well under a task's length)
@@ -85,10 +91,30 @@ def own_share(cost: Sequence[float], jobs: int) -> int:
 def ignore_interrupt() -> None:
     """A worker process's start: Ctrl-C is the calling process's to handle (it stops the workers and says so in one
     line). A terminal sends it to every process of its group, and a worker it stopped printed its own
-    ``KeyboardInterrupt`` traceback after that line."""
+    ``KeyboardInterrupt`` traceback after that line. The worker also exits when the process that started it is
+    gone (:func:`watch_parent`)."""
     import signal
 
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    watch_parent(os.getppid())
+
+
+def watch_parent(parent_pid: int) -> None:
+    """In a worker process: exit as soon as ``parent_pid`` is no longer its parent. A parent killed by SIGKILL (an
+    out-of-memory killer) runs no handler that could stop its workers: they were left running, idle, holding their
+    memory (one of 294 MB still there 7 minutes after a `discrepancy --jobs 2` was killed)."""
+    if os.getppid() != parent_pid:  # gone before this worker started its task
+        os._exit(1)
+    if any(t.name == "ur5fault-parent-watch" for t in threading.enumerate()):
+        return
+
+    def watch() -> None:
+        while True:
+            time.sleep(PARENT_POLL_S)
+            if os.getppid() != parent_pid:
+                os._exit(1)
+
+    threading.Thread(target=watch, name="ur5fault-parent-watch", daemon=True).start()
 
 
 def _executor(jobs: int):
