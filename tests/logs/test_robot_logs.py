@@ -221,3 +221,39 @@ def test_logs_of_two_controllers_under_one_model_are_said():
                      f"a fixed setpoint in {cb3.source} (as a CB3's): logs of two controllers, likely two robots, "
                      "under one model"]
     assert not [n for n in assumption_notes(cb2, [28.0] * 6) if "two controllers" in n]
+
+
+def _first_12_s_of_test(tmp_path, edit=None):
+    """The first 12 s of the Kufieta TEST run as an RTDE CSV, ``edit`` applied to its columns."""
+    df = pd.read_csv(KUFIETA_DIR / "TEST.csv.gz")
+    df = df[df["time"] - df["time"].iloc[0] <= 12.0].copy()
+    if edit is not None:
+        edit(df)
+    out = tmp_path / "test12.csv"
+    df.to_csv(out, index=False)
+    return out
+
+
+def test_a_log_whose_currents_have_the_other_sign_is_refused_when_read(tmp_path):
+    """Every actual current negated: identify wrote a negative torque constant and negative friction, which
+    simulate --model then refused. UR's target currents tell it at read time (shoulder and elbow run against
+    them); every real log of data/ passes the same check."""
+    for path in (*KUFIETA_RUNS, NIST_LOG):
+        fmt = "nist" if path == NIST_LOG else "rtde"
+        read_log(path, fmt, **({"payload_kg": 0.0, "tcp_offset_m": (0.0, 0.0, 0.0)} if fmt == "rtde" else {}))
+
+    def negate(names):
+        def edit(df):
+            for j in range(6):
+                for name in names:
+                    df[f"{name}_{j}"] = -df[f"{name}_{j}"]
+        return edit
+
+    kw = {"payload_kg": 0.0, "tcp_offset_m": (0.0, 0.0, 0.0)}
+    read_log(_first_12_s_of_test(tmp_path), "rtde", **kw)
+    with pytest.raises(LogFormatError, match=r"test12.csv: the current of joint\(s\) 2, 3 runs against UR's target "
+                                             r"current \(cosine -0.99, -0.9\d\): its sign convention is opposite to "
+                                             r"the torque's, as in a log with currents of the other sign"):
+        read_log(_first_12_s_of_test(tmp_path, negate(["actual_current"])), "rtde", **kw)
+    # both negated: the target cannot tell (identify's own check does, ur5fault/identify/core.py)
+    read_log(_first_12_s_of_test(tmp_path, negate(["actual_current", "target_current"])), "rtde", **kw)

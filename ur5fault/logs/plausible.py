@@ -23,6 +23,11 @@ Limits and their reasons:
 - a current reading that changes: a recorded joint current holding one value in every row is a dead sensor or a
   column the recorder filled (a real reading's noise gives it 43..3,700 distinct values per joint in the real logs
   of data/; identify fitted an all-zero one as a Coulomb level of 0.04 A and an offset of -1.36 A);
+- a current of the torque's sign, where the log has UR's target currents: on a joint whose target current is at least
+  :data:`SIGN_CHECK_MIN_RMS_A` RMS, the reading's cosine with the target (uncentred, so that gravity's share counts)
+  must not be :data:`SIGN_CHECK_MAX_COSINE` or below (the real logs of data/ give 0.79..1.00 on every such joint, a
+  log with every current negated -0.99 and -0.94 on the shoulder and elbow; identify once wrote a negative torque
+  constant and negative friction from it, which every other command refused);
 - joint temperatures, where logged: each joint's median within the model's range for
   ``joint_temperature_C`` (:func:`temperature_range_C`, -20..120 degC), one in 253..393 named as kelvin (a
   log in kelvin once gave ``identify`` a viscous friction of 2337 N*m*s/rad, which every other command refused,
@@ -72,6 +77,11 @@ MIN_MOVING = 20
 DEG_PER_RAD = 180.0 / math.pi
 #: range of the joint current sensor [A] (assumption of ur5_drive.yaml's current_lsb_A: 14-bit ADC over +-20 A)
 CURRENT_RANGE_A = 20.0
+#: the sign check's joints carry at least this RMS target current [A] (the shoulder and elbow under gravity, 0.8..4.3 A
+#: in the real logs; a wrist's 0..0.2 A target is too close to the reading's noise and friction to tell a sign) ...
+SIGN_CHECK_MIN_RMS_A = 0.5
+#: ... and a reading whose cosine with the target is this or below runs against it
+SIGN_CHECK_MAX_COSINE = -0.5
 
 
 def check_joint_count(src: str, indices: Iterable[int], first: int) -> None:
@@ -177,6 +187,25 @@ def check_current_units(src: str, arrays: Mapping[str, NDArray | None]) -> None:
                 else "wrong column or unit")
         raise LogFormatError(f"{src}: {name} of joint {j + 1} reaches {peak:.4g} A, beyond the +-{CURRENT_RANGE_A:g} A "
                              f"a UR5 current sensor reads: {hint}")
+
+
+def check_current_sign(src: str, current_A: NDArray, target_current_A: NDArray | None) -> None:
+    """On every joint whose target current is at least :data:`SIGN_CHECK_MIN_RMS_A` RMS, the reading runs with the
+    target (their uncentred cosine above :data:`SIGN_CHECK_MAX_COSINE`); a log without target currents is not
+    checked."""
+    if target_current_A is None or target_current_A.size == 0:
+        return
+    a, t = np.asarray(current_A, float), np.asarray(target_current_A, float)
+    rms_t = np.sqrt(np.mean(t**2, axis=0))
+    cos = np.sum(a * t, axis=0) / np.maximum(np.sqrt(np.sum(a**2, axis=0) * np.sum(t**2, axis=0)), 1e-300)
+    bad = [j for j in range(a.shape[1]) if rms_t[j] >= SIGN_CHECK_MIN_RMS_A and cos[j] <= SIGN_CHECK_MAX_COSINE]
+    if bad:
+        joints = ", ".join(f"{j + 1}" for j in bad)
+        got = ", ".join(f"{cos[j]:.2f}" for j in bad)
+        raise LogFormatError(f"{src}: the current of joint(s) {joints} runs against UR's target current (cosine "
+                             f"{got}): its sign convention is opposite to the torque's, as in a log with currents of "
+                             "the other sign (ur5fault takes a current positive when it drives the joint positive); "
+                             "negate the current columns of the other sign")
 
 
 def temperature_range_C() -> tuple[float, float]:
