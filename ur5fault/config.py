@@ -204,11 +204,15 @@ class Overlay:
     @classmethod
     def load(cls, path: str | Path) -> Overlay:
         path = Path(path)
-        data = read_yaml(path)
-        check_keys(data, OVERLAY_KEYS, path.name)
-        params = check_mapping(data.get("params"), f"{path.name}: params")
-        load_params(overrides=dict(params), where=f"{path.name}: params")  # validate now, with key paths
-        return cls(dict(params), parse_effects(data.get("effects"), f"{path.name}: effects"))
+        return cls.from_data(read_yaml(path), path.name)
+
+    @classmethod
+    def from_data(cls, data: Any, where: str) -> Overlay:
+        """An overlay's parsed YAML, validated as :meth:`load` validates a file (``where``: its name in errors)."""
+        check_keys(data, OVERLAY_KEYS, where)
+        params = check_mapping(data.get("params"), f"{where}: params")
+        load_params(overrides=dict(params), where=f"{where}: params")  # validate now, with key paths
+        return cls(dict(params), parse_effects(data.get("effects"), f"{where}: effects"))
 
 
 @dataclasses.dataclass(frozen=True)

@@ -226,3 +226,49 @@ def test_a_dead_current_sensor_is_named(tmp_path):
     log = _kufieta(tmp_path, "Movement_No8_Singularity_Free_1.csv.gz", edit=dead)
     with pytest.raises(LogFormatError, match="the current of joint 3 reads 0 A in every row: a dead sensor"):
         read_log(log, "rtde", payload_kg=0.0, tcp_offset_m=(0, 0, 0))
+
+
+def test_a_log_whose_currents_have_the_other_sign_writes_no_overlay(tmp_path, capsys):
+    """The first 12 s of TEST with every current negated (target currents too, so that the reader cannot tell):
+    identify exited 0 with a negative torque constant and negative friction in the overlay, which simulate --model
+    then refused. Now one line naming the sign, exit 2, nothing written (refused before the resampling)."""
+    from ur5fault.cli import main
+
+    def flip(df):
+        df = df[df["timestamp"] - df["timestamp"].iloc[0] <= 12.0].copy()
+        for j in range(6):
+            for name in ("actual_current", "target_current"):
+                df[f"{name}_{j}"] = -df[f"{name}_{j}"]
+        return df
+
+    log = _kufieta(tmp_path, "TEST.csv.gz", edit=flip)
+    out = tmp_path / "params.yaml"
+    assert main(["identify", str(log), "--format", "rtde", "--payload-kg", "0", "--tcp-offset-m", "0", "0", "0",
+                 "--no-sweep", "--bootstrap", "20", "--quiet", "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()[-1]
+    assert re.fullmatch(r"ur5fault: error: TEST.csv.gz: the torque constant of J2 \(-0.10\d N\*m/A\) and the Coulomb "
+                        r"friction of J2, J3, J4 \(-0.\d+, -0.\d+, -0.\d+ A\) come out negative: the current runs "
+                        r"against the torque and the motion it drives, as in a log with currents of the other sign "
+                        r"\(its sign convention is opposite to the torque's; .*\); negate the current columns of the "
+                        r"other sign \(nothing written\)", err), err
+    assert not out.exists()
+
+
+def test_an_identified_value_outside_its_range_is_named_and_not_written():
+    """Whatever the cause, identify writes no overlay that --model refuses: the text is checked as Overlay.load
+    reads it, and a value outside its parameter's range is named."""
+    from ur5fault.errors import ParameterError
+    from ur5fault.identify import report, stats
+
+    def ident(coulomb_A):
+        est = [stats.Estimate("motor.torque_constant_Nm_per_A", j, 0.1, 0.09, 0.11, "m") for j in range(6)]
+        est += [stats.Estimate("friction.coulomb_A", j, c, 0.1, 0.3, "m") for j, c in enumerate(coulomb_A)]
+        est += [stats.Estimate("friction.viscous_A_s_per_rad", j, 0.5, 0.4, 0.6, "m") for j in range(6)]
+        return report.Identification("x.csv", 1.0, tuple(est))
+
+    p = load_params()
+    Overlay.from_data(yaml.safe_load(ident([0.2] * 6).to_yaml(p)), "ok")
+    with pytest.raises(ParameterError, match=r"^the overlay identified from x.csv: params.friction.coulomb_Nm\[5\] = "
+                                             r"-2.02 is out of range \[0, 500\] N\*m; --model would refuse the "
+                                             r"overlay, so nothing is written$"):
+        ident([0.2, 0.2, 0.2, 0.2, -0.2, 0.2]).to_yaml(p)

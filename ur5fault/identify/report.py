@@ -119,7 +119,9 @@ class Identification:
                      "measurement:"]
             head += [f"#   {m}" for m in missing]
         body = yaml.safe_dump(self.overlay(params), sort_keys=False, default_flow_style=None, width=120)
-        return "\n".join(head) + "\n" + body
+        text = "\n".join(head) + "\n" + body
+        check_overlay_text(text, f"the overlay identified from {self.source}")
+        return text
 
     def to_json(self) -> dict[str, Any]:
         out: dict[str, Any] = {"log": self.source, "duration_s": self.duration_s,
@@ -132,6 +134,20 @@ class Identification:
                             "window_s": s.window_s, "joints": [j + 1 for j in s.joints],
                             "rms_sim_rad": s.rms_sim_rad.tolist(), "rms_meas_rad": s.rms_meas_rad.tolist()}
         return finite_json(out)  # an interval it has not is null, never NaN (strict JSON)
+
+
+def check_overlay_text(text: str, where: str) -> None:
+    """The overlay text as ``--model`` reads it (:meth:`ur5fault.config.Overlay.load`): a value it would refuse
+    (outside its parameter's valid range, e.g. a negative friction) is refused here in one line, naming it, and
+    nothing is written (``where``: the overlay's name in the message)."""
+    from ..config import Overlay
+    from ..errors import ConfigFileError, ParameterError, UnknownNameError
+    from ..util.yamlsafe import loads
+
+    try:
+        Overlay.from_data(loads(text, where), where)
+    except (ConfigFileError, ParameterError, UnknownNameError) as exc:
+        raise ParameterError(f"{exc}; --model would refuse the overlay, so nothing is written") from None
 
 
 def overlay_params(ident: Identification, params: RobotParams) -> dict[str, Any]:
