@@ -112,3 +112,29 @@ def test_a_typo_of_life_is_told(tmp_path, capsys):
     c = _write(tmp_path, "c.yaml", "name: x\nlif: {}\n")
     rc, err, peak = _run(["campaign", "run", str(c), "--out", str(tmp_path / "o")], tmp_path, capsys)
     _assert_one_line(rc, err, peak, "unknown key 'lif' (did you mean 'life'?)")
+
+
+@pytest.mark.parametrize("command", ["discrepancy", "monitor"])
+@pytest.mark.parametrize("effect", ["{effect: payload, mass_kg: 2}", "{effect: payload_com, dz_m: 0.1}"],
+                         ids=["payload", "payload_com"])
+def test_a_payload_in_the_model_overlay_is_refused(command, effect, tmp_path, capsys):
+    # was: ignored for the fit (the payload is the log's), then copied into discrepancy's model.yaml, which
+    # simulate --model applied; refused as the overlay's tcp_offset_m is (diagnose: tests/twin/test_replay.py)
+    ov = _write(tmp_path, "ov.yaml", f"params: {{}}\neffects:\n- {effect}\n")
+    log = _write(tmp_path, "a.csv", rtde_frame())
+    opts = ["--format", "rtde", "--payload-kg", "0", "--tcp-offset-m", "0", "0", "0", "--out", str(tmp_path / "out")]
+    if command == "discrepancy":
+        argv = ["discrepancy", str(log), "--model", str(ov), *opts]
+    else:
+        frame = rtde_frame()
+        for j in range(6):  # another recording (one shared with the monitored log is refused first)
+            frame[[f"target_q_{j}", f"actual_q_{j}"]] += 0.05
+        other = _write(tmp_path, "b.csv", frame)
+        argv = ["monitor", str(log), "--baseline", str(ov), "--baseline-logs", str(other), *opts]
+    rc, err, peak = _run(argv, tmp_path, capsys)
+    name = effect.split(",")[0].split()[-1]
+    # the log's notes come first (the overlay is refused where its tcp_offset_m is, beside the logs)
+    err = "\n".join(line for line in err.splitlines() if not line.startswith("note: "))
+    _assert_one_line(rc, err, peak, f"the model overlay holds a {name} effect, but the payload is the log's "
+                                    "(--payload-kg and --tcp-offset-m, a manifest's payload_kg, or the log's layout; "
+                                    "fitted where unknown), not the robot's model; leave it out of the overlay")

@@ -49,15 +49,35 @@ def test_a_model_overlay_with_another_tool_is_refused():
     """An overlay's tcp_offset_m replaced the log's stated tool in the replay while the report named the stated
     one, and was carried into the written model.yaml. The replay now keeps the log's tool, and the workflows refuse
     the overlay where they start (a log whose tool is not stated, an unknown payload's, is not compared)."""
-    from ur5fault.twin.replay import refuse_other_tool
+    from ur5fault.twin.replay import refuse_log_owned
 
     assert tuple(replay_params(_log(), {"tcp_offset_m": [0.0, 0.0, 0.6]}).tcp_offset_m) == (0.0, 0.0, 0.12)
     with pytest.raises(ParameterError, match=r"tcp_offset_m = \[0.0, 0.0, 0.6\] m, but synthetic's tool offset is "
                                              r"\[0.0, 0.0, 0.12\] m"):
-        refuse_other_tool({"tcp_offset_m": [0.0, 0.0, 0.6]}, [_log()])
-    refuse_other_tool({"tcp_offset_m": [0.0, 0.0, 0.12]}, [_log()])
-    refuse_other_tool({"tcp_offset_m": [0.0, 0.0, 0.6]}, [dataclasses.replace(_log(), tcp_offset_m=None)])
-    refuse_other_tool({}, [_log()])
+        refuse_log_owned({"tcp_offset_m": [0.0, 0.0, 0.6]}, (), [_log()])
+    refuse_log_owned({"tcp_offset_m": [0.0, 0.0, 0.12]}, (), [_log()])
+    refuse_log_owned({"tcp_offset_m": [0.0, 0.0, 0.6]}, (), [dataclasses.replace(_log(), tcp_offset_m=None)])
+    refuse_log_owned({}, (), [_log()])
+
+
+@pytest.mark.parametrize("effect", [make_effect("payload", mass_kg=2.0), make_effect("payload_com", dz_m=0.1)],
+                         ids=["payload", "payload_com"])
+def test_a_model_overlay_with_a_payload_is_refused(effect):
+    """A payload effect in a --model / --baseline overlay was ignored for the fit (the payload is the log's) and
+    then copied into discrepancy's model.yaml, which simulate --model applied. Refused where the overlay's tool is,
+    for every workflow that replays logs under an overlay: discrepancy, monitor (observe) and diagnose
+    (replay_twin, checked here; the other two from the command line in tests/test_user_refusals.py)."""
+    from ur5fault.health.diagnosis import replay_twin
+    from ur5fault.twin.replay import refuse_log_owned
+
+    message = (rf"the model overlay holds a {effect.name} effect, but the payload is the log's \(--payload-kg and "
+               r"--tcp-offset-m, a manifest's payload_kg, or the log's layout; fitted where unknown\), not the "
+               r"robot's model; leave it out of the overlay")
+    with pytest.raises(ParameterError, match=message):
+        refuse_log_owned({}, (effect,), [_log()])
+    with pytest.raises(ParameterError, match=message):
+        replay_twin(_log(), None, (effect,))
+    refuse_log_owned({}, (make_effect("coulomb_friction", 2, scale=1.5),), [_log()])  # a robot's effect: kept
 
 
 def test_replay_equals_the_plain_simulator_run():

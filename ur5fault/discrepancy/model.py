@@ -27,7 +27,7 @@ from ..errors import ParameterError
 from ..logs import MeasuredLog
 from ..sim.axes import JOINT_NAMES, N_JOINTS
 from ..sim.effects import EffectSpec
-from ..twin.replay import LogReplay, Replayed, refuse_other_tool
+from ..twin.replay import LogReplay, Replayed, refuse_log_owned
 from ..twin.residuals import FIT_FRACTION, conditions, fit_samples, localise, rms_table, unexplained
 from ..util.parallel import runs_on_one_blas_thread
 from . import steps
@@ -121,7 +121,7 @@ class DiscrepancyModel:
         gets one line per such log."""
         t0 = time.perf_counter()
         logs = [log] if isinstance(log, MeasuredLog) else list(log)
-        refuse_other_tool(params_overrides, [*logs, *hold_out])
+        refuse_log_owned(params_overrides, base_effects, [*logs, *hold_out])
         t_payload = time.perf_counter()
         logs, hold_out, self.payload_ = resolve_payloads(logs, hold_out, self.fit_fraction, params_overrides,
                                                          base_effects, seed=WORKFLOW_SEED, say=on_payload)

@@ -41,7 +41,7 @@ from scipy import stats
 from ..logs import MeasuredLog
 from ..sim.effects import REGISTRY, EffectSpec
 from ..twin.payload import PayloadRecord, com_in_range, payload_current_columns, share_explained
-from ..twin.replay import LogReplay
+from ..twin.replay import PAYLOAD_EFFECTS, LogReplay
 from ..twin.residuals import fit_samples
 from .drift import basis
 from .statistics import MAX_COLLINEARITY
@@ -52,7 +52,7 @@ JACKKNIFE_BLOCKS = 10
 #: motion's inverse dynamics, the replay from the closed loop: the second step removes what that leaves)
 GAUSS_NEWTON_STEPS = 2
 #: the library's candidates that an unknown payload's fit replaces
-PAYLOAD_KINDS = ("payload", "payload_com")
+PAYLOAD_KINDS = PAYLOAD_EFFECTS
 
 
 def _design(r: NDArray, cols: NDArray, gain: NDArray, drift: list[NDArray], sigma: NDArray, keep: NDArray

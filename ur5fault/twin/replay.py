@@ -38,6 +38,8 @@ TEMPERATURE_RANGE_C = temperature_range_C()
 #: every signal a replay computes, in order; a replay keeps the first two, and the third when the log has
 #: motor encoders
 SIGNALS = ("current_A", "position_rad", "mismatch_rad")
+#: the effects that set a log's payload (its mass, its centre of mass): the log's, never a model overlay's
+PAYLOAD_EFFECTS = ("payload", "payload_com")
 
 
 def log_overrides(log: MeasuredLog) -> dict:
@@ -53,14 +55,26 @@ def replay_params(log: MeasuredLog, params_overrides: dict | None = None) -> Rob
     """The packaged parameters under ``params_overrides`` (the robot's model), then the log's own overrides
     (:func:`log_overrides`), which win: the tool and the measured temperatures belong to the log, not to the robot
     (an overlay's ``joint_temperature_C`` stands for a log that logs none; an overlay's tool is refused where the
-    workflows start, :func:`refuse_other_tool`)."""
+    workflows start, :func:`refuse_log_owned`)."""
     return load_params(overrides=deep_merge(dict(params_overrides or {}), log_overrides(log)))
 
 
-def refuse_other_tool(params_overrides: dict | None, logs: Sequence[MeasuredLog]) -> None:
-    """A model overlay whose ``tcp_offset_m`` differs from a log's stated tool, refused in one line: the log's tool
-    is the one replayed (:func:`replay_params`) and reported, so the overlay's would be ignored without a word.
-    Logs whose tool is not stated (an unknown payload's centre of mass, fitted) are not compared."""
+def refuse_log_owned(params_overrides: dict | None, effects: Sequence[EffectSpec], logs: Sequence[MeasuredLog]
+                     ) -> None:
+    """What a model overlay may not set because the log carries it, refused in one line where the workflows that
+    replay logs under an overlay start (discrepancy, monitor, diagnose):
+
+    * a ``payload`` or ``payload_com`` effect (:data:`PAYLOAD_EFFECTS`): the payload is each log's (stated, or fitted
+      where unknown) and the fit, the report and the statistics are the log's, so the overlay's was ignored without a
+      word, then copied into discrepancy's model.yaml, which ``simulate --model`` applies;
+    * a ``tcp_offset_m`` that differs from a log's stated tool: the log's tool is the one replayed
+      (:func:`replay_params`) and reported, so the overlay's would be ignored without a word.  Logs whose tool is not
+      stated (an unknown payload's centre of mass, fitted) are not compared."""
+    for e in effects:
+        if e.name in PAYLOAD_EFFECTS:
+            raise ParameterError(f"the model overlay holds a {e.name} effect, but the payload is the log's "
+                                 "(--payload-kg and --tcp-offset-m, a manifest's payload_kg, or the log's layout; "
+                                 "fitted where unknown), not the robot's model; leave it out of the overlay")
     over = dict(params_overrides or {})
     if "tcp_offset_m" not in over:
         return

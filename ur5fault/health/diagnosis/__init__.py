@@ -21,7 +21,7 @@ from ...errors import ParameterError
 from ...logs import MeasuredLog
 from ...sim.effects import EffectSpec
 from ...twin import LogReplay, Replayed
-from ...twin.replay import refuse_other_tool
+from ...twin.replay import refuse_log_owned
 from ..diagnostics.limits import DEFAULT_Z, LimitCalibration
 from .baseline import (
     MIN_SPREAD_WINDOWS,
@@ -50,7 +50,7 @@ def replay_twin(log: MeasuredLog, params_overrides: dict | None = None, base_eff
     noise-free replays with the payload's centre of mass shifted (zero without a payload)."""
     from ..twin_regressors import COM_AXES, REGRESSOR_EFFECTS, com_difference, com_effects
 
-    refuse_other_tool(params_overrides, [log])
+    refuse_log_owned(params_overrides, base_effects, [log])
     replay = LogReplay(log, params_overrides, base_effects, seed=seed)
     shifted = [REGRESSOR_EFFECTS + e for e in com_effects()] if com_twins and log.payload_kg > 0 else []
     rep, quiet, *com = replay.run([(), REGRESSOR_EFFECTS, *shifted])

@@ -25,7 +25,7 @@ from ...errors import ParameterError
 from ...identify.sensors import position_quantum
 from ...logs import MeasuredLog
 from ...sim.effects import EffectSpec
-from ...twin.replay import LogReplay, refuse_other_tool
+from ...twin.replay import LogReplay, refuse_log_owned
 from ...twin.residuals import CONDITION_REST_SPEED_RAD_S
 from .conditions import stribeck_speed
 
@@ -110,7 +110,7 @@ def observe(log: MeasuredLog, params_overrides: dict | None = None, effects: Seq
     statistics hold every paired block of it, :data:`BASELINE_SCREEN_S`)."""
     if screen_s is not None and not screen_s > 0:
         raise ParameterError(f"screen_s = {screen_s} must be a positive number of seconds (or None: the whole part)")
-    refuse_other_tool(params_overrides, [log])
+    refuse_log_owned(params_overrides, effects, [log])
     rp = LogReplay(log, params_overrides, effects, seed=WORKFLOW_SEED, jobs=jobs)
     n_all = rp.n_samples
     t = log.t_s[1 : n_all + 1] - log.t_s[0]
