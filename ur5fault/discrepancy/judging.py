@@ -9,6 +9,7 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
+from ..errors import ParameterError
 from ..sim.axes import N_JOINTS
 from ..sim.effects import EffectSpec
 from .candidates import Candidate
@@ -51,7 +52,23 @@ class Finding:
     replay_scatter: NDArray | None = None
     within_scatter: bool = False
 
+    @property
+    def label(self) -> str:
+        """What it is, e.g. ``shoulder_lift_joint: torque_constant.scale``."""
+        return self.candidate.label
+
+    @property
+    def values(self) -> dict[str, float]:
+        """Its effect's parameter values as fitted; a dropped finding's may lie outside the effect's valid range."""
+        return self.candidate.values(self.theta)
+
     def spec(self) -> EffectSpec:
+        """The effect it adds to the model (a kept finding's is in ``model.yaml``). A finding dropped for an estimate
+        outside its effect's valid range has none: refused with the reason (its fitted values: :attr:`values`)."""
+        problem = self.candidate.range_problem(self.theta)
+        if problem is not None:
+            raise ParameterError(f"{self.label}: {problem}, so it is no effect of a model (dropped: {self.reason}); "
+                                 "its fitted values are Finding.values")
         return self.candidate.spec(self.theta)
 
     def interval(self) -> tuple[NDArray, NDArray]:
