@@ -342,3 +342,14 @@ def test_a_baseline_of_plain_files_beside_a_manifest_is_named_without_a_format(t
                "--out", str(tmp_path / "o")])
     err = capsys.readouterr().err.strip().splitlines()
     assert rc == 2 and len(err) == 1 and f"--baseline-logs {RUN2}: no format: give --format" in err[0], err
+
+
+def test_a_manifest_listing_another_manifest_is_refused_as_such(tmp_path, capsys):
+    # was: "ok.yaml: missing required column 'timestamp' (or 'time')", the inner manifest read as a CSV log
+    (tmp_path / "ok.yaml").write_text(f"format: rtde\npayload_kg: 0\ntcp_offset_m: [0, 0, 0]\nlogs: [{RUN1}]\n")
+    m = tmp_path / "nested.yaml"
+    m.write_text("format: rtde\npayload_kg: 0\ntcp_offset_m: [0, 0, 0]\nlogs: [ok.yaml]\n")
+    rc = main(["discrepancy", str(m), "--out", str(tmp_path / "o")])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 2 and err == ["ur5fault: error: nested.yaml: logs[0]: ok.yaml: a manifest cannot list another "
+                               "manifest; list that manifest's logs here, or give it alone"], err

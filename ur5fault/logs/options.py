@@ -20,7 +20,8 @@ say so; the other commands refuse it with one line. A nist
 or sim log carries its payload; ``unknown`` declares it unknown all the same (its tool offset too, unless
 ``tcp_offset_m`` is given). Logs of ``--hold-out`` beside a manifest take its defaults as its own logs do. A
 command-line option that no log takes (the manifest states each log's own) and that differs from what they state
-is refused with one line, never dropped; a manifest is the only log given.
+is refused with one line, never dropped; a manifest is the only log given, and lists logs only (another
+manifest among its logs is refused as such).
 """
 
 from __future__ import annotations
@@ -198,6 +199,9 @@ def _manifest(path: Path, args: argparse.Namespace, held: Sequence[str], used: s
         bad = sorted(set(item) - set(LOG_KEYS))
         if bad:
             raise ParameterError(f"{w}unknown key {bad[0]!r} (keys: {', '.join(LOG_KEYS)})")
+        if Path(str(item["path"])).suffix.lower() in MANIFEST_SUFFIXES:  # it was read as a log: "missing column"
+            raise ParameterError(f"{w}{item['path']}: a manifest cannot list another manifest; list that manifest's "
+                                 "logs here, or give it alone")
         file = path.parent / str(item["path"])
         out.append(_entry(item, data, args, file, w, used, f"{path.name}: "))  # the options first: they need no file
         if not file.exists():
