@@ -107,6 +107,8 @@ def test_baseline_stats_reused_and_refused_under_another_overlay(monitored):
     (["--baseline-stats", "BASE"], "not a monitor baseline"),
     (["--baseline-stats", "NOFILE"], "no such file"),
     (["--baseline-logs", "LOG"], "both monitored and a baseline log"),
+    # one healthy run: no run to leave out for the event limits' tail (healthy runs were called anomalies)
+    (["--baseline-logs", "OTHER"], "--baseline-logs: 1 healthy run given; a baseline needs at least 2"),
     (["--baseline-logs", "LOG", "--jobs", "0"], "--jobs 0 must be at least 1"),
     (["--baseline-logs", "LOG", "--event-channels", "torque"], "invalid choice: 'torque'"),
 ])
@@ -116,7 +118,9 @@ def test_bad_input_one_line(tmp_path, extra, message):
     log = head(tmp_path, "Movement_No2", 6.0)
     bad = tmp_path / "base.json"
     bad.write_text('{"format": "something else"}')
-    extra = [{"BASE": str(bad), "NOFILE": str(tmp_path / "none.json"), "LOG": str(log)}.get(a, a) for a in extra]
+    other = head(tmp_path, "Movement_No8_Singularity_Free_1", 6.0) if "OTHER" in extra else None
+    extra = [{"BASE": str(bad), "NOFILE": str(tmp_path / "none.json"), "LOG": str(log), "OTHER": str(other)}.get(a, a)
+             for a in extra]
     r = run(str(log), *RTDE, "--baseline", str(model), *extra, "--out", str(tmp_path / "out"))
     assert r.returncode == 2, r.stderr
     assert message in r.stderr and "Traceback" not in r.stderr

@@ -171,17 +171,37 @@ def test_baseline_round_trip_and_refusals(tmp_path):
             Baseline.load(path)
         assert "not a valid monitor baseline" not in str(e.value)
     with pytest.raises(ParameterError, match="too few judged samples"):
-        fit_baseline([part("short", noise(4, n=40))], "sha")  # 0.32 s
+        fit_baseline([part("short", noise(4, n=40)), part("short2", noise(5, n=40))], "sha")  # 2 x 0.32 s
     with pytest.raises(ParameterError, match="sample period"):
         assess(b, dataclasses.replace(part("x", noise(3)), period_s=0.002))
+
+
+def test_a_baseline_of_one_run_is_refused_in_python_and_from_baseline_json(tmp_path):
+    """One healthy observation cannot give the event limits' tail (each run normalised by the spread fitted on the
+    others): judged by its own fit, a spread of 0 where it holds little of a motion called healthy runs anomalies.
+    Refused by fit_baseline (a part of a log counts as an observation; one without judged samples does not), and a
+    baseline.json of one run (written by an earlier version) is refused on loading with the same reason."""
+    why = "at least 2 healthy runs or log parts .* got 1: the event limits' tail .*leave one out"
+    with pytest.raises(ParameterError, match=why):
+        fit_baseline([part("one", noise(1))], "sha")
+    with pytest.raises(ParameterError, match=why):  # 0.16 s: under the replay's first 0.25 s, nothing judged
+        fit_baseline([part("one", noise(1)), part("blip", noise(2, n=20))], "sha")
+    two = fit_baseline([part("a", noise(1)), part("b", noise(2))], "sha").to_json()
+    one = {**two, "segments": two["segments"][:1], "task_runs": two["task_runs"][:1]}
+    path = tmp_path / "baseline.json"
+    path.write_text(json.dumps(one))
+    with pytest.raises(ParameterError, match=r"built from 1 healthy run\(s\) \(a\); a baseline needs at least 2: "
+                                             r"the event limits' tail .*rebuild it with --baseline-logs"):
+        Baseline.load(path)
 
 
 @pytest.mark.slow
 def test_nist_rest_consistent_with_its_first_part_despite_the_wrist_3_offset_drift(nist_path):
     """Baseline: the first FIT_FRACTION of the real NIST log under the packaged model (whose values were fitted
-    on this log). The logged wrist_3 current's offset moves from about -0.10 A there to -0.14 A in the rest (the
-    reading of docs/monitoring.md's earlier version, which called the rest 'changed' for it); the drift between
-    the first part's time blocks now bounds it, and the undisturbed rest raises no event."""
+    on this log), as two parts (a baseline needs two observations for its event limits' tail). The logged wrist_3
+    current's offset moves from about -0.10 A there to -0.14 A in the rest (the reading of docs/monitoring.md's
+    earlier version, which called the rest 'changed' for it); the drift between the first part's time blocks now
+    bounds it, and the undisturbed rest raises no event."""
     from ur5fault.health.monitoring import observe
     from ur5fault.logs import read_log
     from ur5fault.twin.residuals import FIT_FRACTION
@@ -189,8 +209,9 @@ def test_nist_rest_consistent_with_its_first_part_despite_the_wrist_3_offset_dri
     log = read_log(nist_path, "nist")
     span = float(log.t_s[-1] - log.t_s[0])
     split = FIT_FRACTION * span
-    b = fit_baseline([observe(log, part_s=(0.0, split), jobs=2)], overlay_sha256({}, ()))
-    assert b.candidates["wrist_3_joint: current_sensor_offset.offset_A"][2] == 4  # four 5 s blocks of 20 s
+    b = fit_baseline([observe(log, part_s=(0.0, split / 2), jobs=2), observe(log, part_s=(split / 2, split), jobs=2)],
+                     overlay_sha256({}, ()))
+    assert b.candidates["wrist_3_joint: current_sensor_offset.offset_A"][2] == 8  # four 4.8 s blocks of each 19 s
     out = assess(b, observe(log, part_s=(split, span + 1), jobs=2))
     assert out["verdict"] == "consistent", out
 

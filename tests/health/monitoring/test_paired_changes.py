@@ -50,6 +50,14 @@ def run(name: str, target: np.ndarray, seed: int, gain: float = 1.0):
     return dataclasses.replace(obs, current_sigma_A=np.full(6, SIGMA_A))
 
 
+def other_task(seed: int, seconds: float = 20.0) -> "object":
+    """A healthy run of another motion (a slow sweep from C, never at rest): a baseline's second observation for
+    its event limits (at least two, :data:`~ur5fault.health.monitoring.baseline.MIN_RUNS`) that repeats nothing,
+    so the paired statistics stay the other run's own."""
+    n = round(seconds / PERIOD)
+    return run(f"other{seed}", C + np.outer(np.arange(n) * PERIOD, np.linspace(0.02, 0.05, 6)), seed)
+
+
 def test_the_paired_difference_reads_a_known_gain_and_cancels_the_repeated_model_error():
     base = [run(f"b{k}", cycle(4, lead_s=0.3 * k), 20 + k) for k in range(2)]
     refs = [(o.target_rad, np.where(o.logged[:, None], o.residual_A, np.nan)) for o in base]
@@ -182,7 +190,7 @@ def test_a_self_paired_baseline_counts_each_difference_once():
     k = independent_blocks([o], refs)
     assert k == round(secs_one / PAIRED_BLOCK_S) and k <= round(secs_two / PAIRED_BLOCK_S) / 2 + 1, (k, secs_one,
                                                                                           secs_two)
-    assert fit_baseline([o], "sha").paired_candidates[LABEL][2] <= k  # worth at most that many
+    assert fit_baseline([o, other_task(30)], "sha").paired_candidates[LABEL][2] <= k  # worth at most that many
 
 
 def test_the_paired_statistics_do_not_depend_on_the_baselines_order():
@@ -268,9 +276,10 @@ def test_a_baseline_run_is_refused_as_a_monitored_log():
 
 
 def test_a_small_gain_on_a_task_one_baseline_run_repeats_is_found():
-    """One healthy run of 6 cycles as the baseline (NIST's case: its reference is its own cycles paired with each
-    other): its 0.5 s blocks, paired one way, are worth more independent blocks than its 2 s stretches are in
-    number (the healthy difference is the sensors' noise: little autocorrelation), so a 2 % gain on
+    """One healthy run of 6 cycles as the baseline's only repeated task (NIST's case: its reference is its own
+    cycles paired with each other; a second run of another motion for the event limits, which need two): its
+    0.5 s blocks, paired one way, are worth more independent blocks than its 2 s stretches are in number (the
+    healthy difference is the sensors' noise: little autocorrelation), so a 2 % gain on
     shoulder_lift is "changed" there with its size (read on the simulated current, as the first test derives),
     and a healthy repeat is "consistent"."""
     from ur5fault.health.monitoring.paired import baseline_references, paired_seconds
@@ -278,7 +287,7 @@ def test_a_small_gain_on_a_task_one_baseline_run_repeats_is_found():
     base = run("b0", cycle(6), 20)
     refs = [(base.target_rad, np.where(base.logged[:, None], base.residual_A, np.nan))]
     secs = paired_seconds(base, baseline_references([base], refs, one_way=True)[0])
-    b = fit_baseline([base], "sha")
+    b = fit_baseline([base, other_task(30)], "sha")
     assert b.paired_candidates[LABEL][2] > secs / 2.0, (b.paired_candidates[LABEL], secs)
     assert assess(b, run("healthy", cycle(5, lead_s=0.2), 40))["verdict"] == "consistent"
     out = assess(b, run("worn", cycle(5, lead_s=0.2), 41, gain=1.02))

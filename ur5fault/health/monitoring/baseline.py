@@ -40,6 +40,16 @@ from .observe import Observed
 #: number of independent ones (a float: their autocorrelation accounted for, :mod:`.effective`) and their
 #: ``design_effect``; 7 counted each independent 2 s difference once, 6 twice
 FORMAT = "ur5fault-monitor-baseline-9"
+#: a baseline is fitted on at least this many healthy observations (runs, or parts of logs) with judged samples:
+#: the event limits' tail is fitted on each normalised by the spread fitted on the others (leave one out,
+#: :func:`.event_fit.fit_channel`); a single one is judged by its own fit, which can leave a spread of 0 where it
+#: holds little of a motion (Kufieta No8 alone: wrist_2's constant and moving terms 0), and healthy logs are
+#: then called anomalies (events of 0.01 A)
+MIN_RUNS = 2
+#: why (the end of each refusal's one line)
+MIN_RUNS_WHY = ("the event limits' tail is fitted on each normalised by the spread fitted on the others (leave one "
+                "out), which one cannot give: judged by its own fit its spread can be 0 where it holds little of a "
+                "motion, and healthy logs are called anomalies")
 
 
 def overlay_sha256(params: dict, effects: Sequence) -> str:
@@ -156,6 +166,10 @@ class Baseline:
             if any(t.shape != r.shape for t, r in runs) or len(runs) != len(data["segments"]):
                 raise ValueError("the task runs do not match the segments, or their targets and residuals differ "
                                  "in length")
+            if len(runs) < MIN_RUNS:  # written by a version that fitted one run
+                raise ParameterError(f"{where}: built from {len(runs)} healthy run(s) ({', '.join(data['segments'])});"
+                                     f" a baseline needs at least {MIN_RUNS}: {MIN_RUNS_WHY}; rebuild it with "
+                                     f"--baseline-logs and at least {MIN_RUNS} runs")
             return cls(str(data["overlay_sha256"]), float(data["period_s"]), tuple(map(str, data["segments"])),
                        scale, tail, quantum,
                        {str(k): (json_float(v["mean"]), json_float(v["variance"]), int(v["n_blocks"]))
@@ -199,9 +213,10 @@ def _nulls(x: NDArray) -> list:
 
 
 def fit_baseline(healthy: Sequence[Observed], overlay_sha: str) -> Baseline:
-    """The baseline from healthy log parts replayed under the overlay."""
+    """The baseline from healthy log parts replayed under the overlay: at least :data:`MIN_RUNS` with judged
+    samples (a part of a log counts as one)."""
     if not healthy:
-        raise ParameterError("a baseline needs at least one healthy log")
+        raise ParameterError(f"a baseline needs at least {MIN_RUNS} healthy runs or log parts, got none")
     period = healthy[0].period_s
     for o in healthy[1:]:
         if abs(o.period_s - period) > 1e-9:
@@ -212,6 +227,10 @@ def fit_baseline(healthy: Sequence[Observed], overlay_sha: str) -> Baseline:
         raise ParameterError("the baseline logs were not all replayed under one model (their friction laws' "
                              "Stribeck speeds differ or are unknown)")
     segs = [segment(o, slow) for o in healthy]
+    judged = sum(bool(ok.any()) for _, _, ok, _ in segs)
+    if judged < MIN_RUNS:
+        raise ParameterError(f"a baseline needs at least {MIN_RUNS} healthy runs or log parts (observe(log, part_s="
+                             f"...): a part counts) with judged samples, got {judged}: {MIN_RUNS_WHY}")
     if sum(int(ok.sum()) for _, _, ok, _ in segs) * period < 2 * WINDOW_S:
         raise ParameterError("the baseline logs hold too few judged samples (under 0.5 s after each replay's first "
                              "0.25 s) to fit the event limits")

@@ -51,7 +51,7 @@ def cmd_monitor(args: argparse.Namespace) -> int:
     from ...sim.params import load_params
     from ...util.io import checksum_path
     from ...util.results import check_new_output, result_folder
-    from .baseline import Baseline, fit_baseline, overlay_sha256
+    from .baseline import MIN_RUNS, MIN_RUNS_WHY, Baseline, fit_baseline, overlay_sha256
     from .observe import BASELINE_SCREEN_S, observe
     from .report import write
     from .verdict import assess
@@ -88,6 +88,9 @@ def cmd_monitor(args: argparse.Namespace) -> int:
     healthy = read_log_options(base_args, others=[args], role="a baseline log")[0] if base_args is not None else []
     check_logs_length([*logs, *healthy], "monitor")
     refuse_same_samples([("monitored", logs), ("a baseline log", healthy)])  # a run cannot judge itself
+    if base_args is not None and len(healthy) < MIN_RUNS:  # before any replay
+        raise ParameterError(f"--baseline-logs: {len(healthy)} healthy run given; a baseline needs at least "
+                             f"{MIN_RUNS}: {MIN_RUNS_WHY}")
     temps = load_params(overrides=dict(overlay.params)).joint_temperature_C
     for line in assumption_notes([*healthy, *logs], temps):
         print(f"note: {line}", file=sys.stderr)
