@@ -126,9 +126,12 @@ class MeasuredLog:
         return MeasuredLog(**kw)
 
 
-def assumption_notes(logs: Sequence[MeasuredLog], joint_temperature_C) -> list[str]:
+def assumption_notes(logs: Sequence[MeasuredLog], joint_temperature_C,
+                     others: Sequence[tuple[str, str | None]] = ()) -> list[str]:
     """Every log's :meth:`MeasuredLog.assumptions`, a note several logs share said once with their names (nine
-    runs of a robot without temperatures: one line, not nine), in the logs' order."""
+    runs of a robot without temperatures: one line, not nine), in the logs' order. ``others``: ``(name,
+    rest_target)`` of logs judged together with these but not read here (the runs of a monitor's
+    ``baseline.json``): they enter the check that all logs are of one controller's style only."""
     by_text: dict[str, list[str]] = {}
     for lg in logs:
         for line in lg.assumptions(joint_temperature_C):
@@ -144,7 +147,8 @@ def assumption_notes(logs: Sequence[MeasuredLog], joint_temperature_C) -> list[s
             out.append(f"{named[0]}: {text}")
         else:
             out.append(f"{len(named)} logs ({', '.join(named)}): {text}")
-    styles = {s: [lg.source for lg in logs if lg.rest_target == s] for s in ("reading", "setpoint")}
+    named = [*others, *((lg.source, lg.rest_target) for lg in logs)]
+    styles = {s: [name for name, style in named if style == s] for s in ("reading", "setpoint")}
     if all(styles.values()):
         out.append(f"the target at rest is the previous reading in {', '.join(styles['reading'])} (as a CB2 "
                    f"controller logs it) and a fixed setpoint in {', '.join(styles['setpoint'])} (as a CB3's): logs "

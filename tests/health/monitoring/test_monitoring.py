@@ -187,11 +187,41 @@ def test_a_baseline_of_one_run_is_refused_in_python_and_from_baseline_json(tmp_p
     with pytest.raises(ParameterError, match=why):  # 0.16 s: under the replay's first 0.25 s, nothing judged
         fit_baseline([part("one", noise(1)), part("blip", noise(2, n=20))], "sha")
     two = fit_baseline([part("a", noise(1)), part("b", noise(2))], "sha").to_json()
+    two.pop("rest_targets", None)  # not recorded by the versions that wrote one run
     one = {**two, "segments": two["segments"][:1], "task_runs": two["task_runs"][:1]}
     path = tmp_path / "baseline.json"
     path.write_text(json.dumps(one))
     with pytest.raises(ParameterError, match=r"built from 1 healthy run\(s\) \(a\); a baseline needs at least 2: "
                                              r"the event limits' tail .*rebuild it with --baseline-logs"):
+        Baseline.load(path)
+
+
+def test_baseline_json_records_its_runs_target_at_rest_for_the_two_controllers_note(tmp_path):
+    """A CB3 log judged against the baseline.json of CB2 runs gets the note that --baseline-logs gives (logs of two
+    controllers, likely two robots): the file records each run's target at rest. A baseline.json written before
+    it did still loads, with nothing recorded (the command line then says it cannot check)."""
+    from ur5fault.logs import MeasuredLog
+    from ur5fault.logs.measured import assumption_notes
+
+    cb2 = [dataclasses.replace(part(n, noise(k)), rest_target="reading") for k, n in enumerate(("no8.csv", "no2.csv"))]
+    path = tmp_path / "baseline.json"
+    path.write_text(json.dumps(fit_baseline(cb2, "sha").to_json()))
+    assert json.loads(path.read_text())["rest_targets"] == ["reading", "reading"]
+    back = Baseline.load(path)
+    assert back.rest_targets == ("reading", "reading")
+    q = np.zeros((10, 6))
+    cb3 = MeasuredLog("nist15.csv", np.arange(10) * PERIOD, q, q, q, rest_target="setpoint")
+    notes = assumption_notes([cb3], [28.0] * 6, others=list(zip(back.segments, back.rest_targets)))
+    assert ("the target at rest is the previous reading in no8.csv, no2.csv (as a CB2 controller logs it) and a "
+            "fixed setpoint in nist15.csv (as a CB3's): logs of two controllers, likely two robots, under one "
+            "model") in notes
+    older = json.loads(path.read_text())
+    del older["rest_targets"]
+    path.write_text(json.dumps(older))
+    assert Baseline.load(path).rest_targets is None
+    assert "rest_targets" not in Baseline.load(path).to_json()  # written back still saying nothing
+    path.write_text(json.dumps({**older, "rest_targets": ["reading"]}))  # not one per run
+    with pytest.raises(ParameterError, match="not a valid monitor baseline.*rest_targets"):
         Baseline.load(path)
 
 

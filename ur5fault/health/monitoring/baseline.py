@@ -38,7 +38,8 @@ from .observe import Observed
 #: 9: the paired statistics' ``design_effect`` the larger of their autocorrelation's and the runs' as clusters
 #: (:func:`.effective.run_design_effect`); 8: the paired statistics on 0.5 s blocks, ``n_blocks`` the effective
 #: number of independent ones (a float: their autocorrelation accounted for, :mod:`.effective`) and their
-#: ``design_effect``; 7 counted each independent 2 s difference once, 6 twice
+#: ``design_effect``; 7 counted each independent 2 s difference once, 6 twice. ``rest_targets`` (the runs' target
+#: at rest) was added within 9: optional, absent in the files written before it (read as not recorded)
 FORMAT = "ur5fault-monitor-baseline-9"
 #: a baseline is fitted on at least this many healthy observations (runs, or parts of logs) with judged samples:
 #: the event limits' tail is fitted on each normalised by the spread fitted on the others (leave one out,
@@ -46,6 +47,8 @@ FORMAT = "ur5fault-monitor-baseline-9"
 #: holds little of a motion (Kufieta No8 alone: wrist_2's constant and moving terms 0), and healthy logs are
 #: then called anomalies (events of 0.01 A)
 MIN_RUNS = 2
+#: the values of a baseline run's recorded target at rest (:attr:`Baseline.rest_targets`; ``None``: not seen)
+REST_TARGETS = ("reading", "setpoint", None)
 #: why (the end of each refusal's one line)
 MIN_RUNS_WHY = ("the event limits' tail is fitted on each normalised by the spread fitted on the others (leave one "
                 "out), which one cannot give: judged by its own fit its spread can be 0 where it holds little of a "
@@ -76,7 +79,10 @@ class Baseline:
     ``paired_candidates``: ``{label: (mean, variance, k_eff, DE)}`` of the coefficient fitted to the difference
     of a baseline run's residual and the other runs' and its own repeats' at the same point of the task, per block
     of paired samples, ``k_eff`` the effective number of independent blocks and ``DE`` their design effect
-    (:mod:`.paired`; empty: the baseline runs do not repeat each other)."""
+    (:mod:`.paired`; empty: the baseline runs do not repeat each other); ``rest_targets``: per baseline run what
+    its target is while the arm stands (:attr:`.observe.Observed.rest_target`: the controller's style, so that a
+    log of another controller is told with ``--baseline-stats`` as with ``--baseline-logs``; ``None``: not
+    recorded, a ``baseline.json`` written before it was)."""
 
     overlay_sha256: str
     period_s: float
@@ -93,6 +99,7 @@ class Baseline:
     cond_scale: NDArray
     cond_tail: NDArray
     paired_candidates: dict[str, tuple[float, float, float, float]] = dataclasses.field(default_factory=dict)
+    rest_targets: tuple[str | None, ...] | None = None
 
     @property
     def task_runs(self) -> list[int]:
@@ -130,7 +137,8 @@ class Baseline:
                                                  for j in range(N_JOINTS)},
                                        "tail": {JOINT_NAMES[j]: _stat(("u0", "beta", "p0"), self.cond_tail[i, m, j])
                                                 for j in range(N_JOINTS)}}
-                                   for m, k in enumerate(CONDITIONS)} for i, c in enumerate(CHANNELS)}}
+                                   for m, k in enumerate(CONDITIONS)} for i, c in enumerate(CHANNELS)},
+                **({} if self.rest_targets is None else {"rest_targets": list(self.rest_targets)})}
 
     @classmethod
     def from_json(cls, data: Any, where: str) -> Baseline:
@@ -166,6 +174,9 @@ class Baseline:
             if any(t.shape != r.shape for t, r in runs) or len(runs) != len(data["segments"]):
                 raise ValueError("the task runs do not match the segments, or their targets and residuals differ "
                                  "in length")
+            styles = data.get("rest_targets")  # absent: written before baseline.json recorded it
+            if styles is not None and (len(styles) != len(runs) or any(v not in REST_TARGETS for v in styles)):
+                raise ValueError(f"rest_targets {styles!r} is not one of {REST_TARGETS} per segment")
             if len(runs) < MIN_RUNS:  # written by a version that fitted one run
                 raise ParameterError(f"{where}: built from {len(runs)} healthy run(s) ({', '.join(data['segments'])});"
                                      f" a baseline needs at least {MIN_RUNS}: {MIN_RUNS_WHY}; rebuild it with "
@@ -177,7 +188,8 @@ class Baseline:
                        tuple(t for t, _ in runs), tuple(r for _, r in runs), t_scale, t_tail,
                        float(data["slow_rad_s"]), c_scale, c_tail,
                        {str(k): (json_float(v["mean"]), json_float(v["variance"]), json_float(v["n_blocks"]),
-                                 json_float(v["design_effect"])) for k, v in data["paired_candidates"].items()})
+                                 json_float(v["design_effect"])) for k, v in data["paired_candidates"].items()},
+                       None if styles is None else tuple(styles))
         except ParameterError:
             raise  # already one line saying what to do (ParameterError is a ValueError)
         except (KeyError, TypeError, ValueError, AttributeError) as exc:
@@ -243,4 +255,4 @@ def fit_baseline(healthy: Sequence[Observed], overlay_sha: str) -> Baseline:
     paired_cands = paired.baseline_spreads(healthy, refs)
     return Baseline(overlay_sha, period, tuple(o.name for o in healthy), scale, tail, quantum, cands,
                     tuple(o.target_rad for o in healthy), tuple(task_residual(o) for o in healthy), t_scale, t_tail,
-                    float(slow), c_scale, c_tail, paired_cands)
+                    float(slow), c_scale, c_tail, paired_cands, tuple(o.rest_target for o in healthy))

@@ -92,7 +92,12 @@ def cmd_monitor(args: argparse.Namespace) -> int:
         raise ParameterError(f"--baseline-logs: {len(healthy)} healthy run given; a baseline needs at least "
                              f"{MIN_RUNS}: {MIN_RUNS_WHY}")
     temps = load_params(overrides=dict(overlay.params)).joint_temperature_C
-    for line in assumption_notes([*healthy, *logs], temps):
+    recorded = () if stats is None or stats.rest_targets is None else tuple(zip(stats.segments, stats.rest_targets))
+    if stats is not None and stats.rest_targets is None:  # written before baseline.json recorded it
+        print(f"note: {args.baseline_stats} does not record its runs' target at rest (written by an earlier "
+              f"version): whether the logs are of its runs' controller is not checked; rebuild it with "
+              f"--baseline-logs to have it checked", file=sys.stderr)
+    for line in assumption_notes([*healthy, *logs], temps, others=recorded):
         print(f"note: {line}", file=sys.stderr)
     params, effects = dict(overlay.params), overlay.effects
     if stats is None:

@@ -75,6 +75,10 @@ class Observed:
         stribeck_speed_rad_s: the replay model's friction Stribeck speed [rad/s], where the events' slow condition
             ends (:func:`.conditions.stribeck_speed`; ``None``: not known, e.g. a part replayed before it was kept,
             refused as a baseline).
+        rest_target: what the log's target is while the arm stands (:attr:`ur5fault.logs.MeasuredLog.rest_target`:
+            ``"reading"`` as a CB2 logs it, ``"setpoint"`` as a CB3, ``None`` not seen); a baseline records its
+            runs' (:attr:`.baseline.Baseline.rest_targets`), so that a log of another controller is told with
+            ``--baseline-stats`` too.
     """
 
     name: str
@@ -93,6 +97,7 @@ class Observed:
     target_rad: NDArray
     current_sigma_A: NDArray | None = None
     stribeck_speed_rad_s: float | None = None
+    rest_target: str | None = None
 
     @property
     def n(self) -> int:
@@ -142,7 +147,7 @@ def observe(log: MeasuredLog, params_overrides: dict | None = None, effects: Seq
                     tuple(kept), X[:, lo : lo + m] if kept else np.zeros((0, *e.shape)), e, qd, qdd,
                     (meas[:, 1] - base.q_rad[:hi])[lo:hi],
                     quanta(log.q_actual_rad), log.q_target_rad[1 : n_all + 1][lo:hi].copy(),
-                    rp.sigma[0].copy(), stribeck_speed(rp.params))
+                    rp.sigma[0].copy(), stribeck_speed(rp.params), log.rest_target)
 
 
 def quanta(q_rad: NDArray) -> NDArray:
