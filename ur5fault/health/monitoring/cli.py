@@ -23,9 +23,9 @@ def register(sub) -> None:
                    help="the robot's fitted model overlay (model.yaml of ur5fault discrepancy, or identify's)")
     src = p.add_mutually_exclusive_group(required=True)
     src.add_argument("--baseline-logs", nargs="+", metavar="LOG",
-                     help="healthy runs of the robot, replayed under the overlay for the residual statistics the "
-                          "thresholds come from (same --format / payload options as the logs; or one manifest); "
-                          "this or --baseline-stats is required")
+                     help="healthy runs of the robot, at least 2, replayed under the overlay for the residual "
+                          "statistics the thresholds come from (same --format / payload options as the logs; or one "
+                          "manifest); this or --baseline-stats is required")
     src.add_argument("--baseline-stats", metavar="FILE",
                      help="baseline.json written by an earlier ur5fault monitor with the same overlay; this or "
                           "--baseline-logs is required")
