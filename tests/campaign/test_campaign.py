@@ -52,7 +52,7 @@ def write(tmp_path, text, name="c.yaml"):
 BAD = [
     ("nmae: x\n", "c.yaml: unknown key 'nmae' (did you mean 'name'?); valid: base, batch_size,"),
     ("base: {seed: -1}\n", "c.yaml: base.seed = -1 must be a non-negative integer in [0, 9223372036854775807]"),
-    ("base: {temperature_C: 500}\n", "c.yaml: base.temperature_C = 500 is out of range [-10, 90] degC"),
+    ("base: {temperature_C: 500}\n", "c.yaml: base.temperature_C = 500 is out of range [-20, 120] degC"),
     ("sweep: {backlash.joint: [7], backlash.backlash_deg: [0.1]}\n", "unknown joint 7; valid: 1..6"),
     ("sweep: {backlash.joint: [2], backlash.backlash_deg: [-0.1]}\n",
      "sweep.backlash.backlash_deg: backlash.backlash_deg = -0.1 is out of range [0, 5] deg"),

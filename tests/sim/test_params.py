@@ -68,3 +68,19 @@ def test_every_default_value_has_a_source_tag():
             current = []
     untagged = [b.splitlines()[-1] for b in blocks if not any(t in b for t in ("[paper]", "[facts]", "[nist]", "[A]"))]
     assert not untagged, f"values without a source tag: {untagged}"
+
+
+def test_one_joint_temperature_range_and_one_nominal_temperature():
+    """The temperature effect (campaigns), a life fleet's duty and a log's temperatures took -10..90 degC in two places
+    and -20..120 in the parameters (a log at 100 degC was replayed where a campaign at 100 degC was refused); 28 degC
+    was typed in six. Now one range and one nominal value, the parameter file's."""
+    from ur5fault.health.prognostics.spec import build_life
+    from ur5fault.sim.effects import REGISTRY
+    from ur5fault.sim.params import JOINT_TEMPERATURE_RANGE_C, NOMINAL_JOINT_TEMPERATURE_C
+
+    assert load_params().joint_temperature_C == (NOMINAL_JOINT_TEMPERATURE_C,) * 6  # the file's [paper] value
+    for eff, name in (("temperature", "temperature_C"), ("current_temperature_drift", "reference_C")):
+        p = REGISTRY[eff].param(name)
+        assert (p.lo, p.hi, p.absent) == (*JOINT_TEMPERATURE_RANGE_C, NOMINAL_JOINT_TEMPERATURE_C), eff
+    life = {"name": "t", "life": {"units": 2, "duty": {"temperature_C": [100.0, 110.0]}}}
+    assert all(100.0 <= u.temperature_C <= 110.0 for u in build_life(life, "t").units)  # was refused above 90

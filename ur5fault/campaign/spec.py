@@ -56,7 +56,7 @@ from ..config import (
 )
 from ..errors import ParameterError
 from ..sim.effects import EffectSpec
-from ..sim.params import deep_merge, load_params, read_yaml
+from ..sim.params import NOMINAL_JOINT_TEMPERATURE_C, deep_merge, load_params, read_yaml
 from ..util.checks import check_bool, check_int, check_number, check_text, short
 from .labels import SplitRule, parse_split
 from .runs import CampaignRun, check_value, grid_runs, sweep_axes, trajectory_specs
@@ -244,7 +244,7 @@ def _base_conditions(data: Mapping[str, Any], base: Mapping[str, Any], where: st
     return {
         "seed": check_value("seed", base.get("seed", 0), f"{where}: base.seed"),
         "payload_kg": check_value("payload_kg", base.get("payload_kg", 2.0), f"{where}: base.payload_kg"),
-        "temperature_C": check_value("temperature_C", base.get("temperature_C", 28.0),
+        "temperature_C": check_value("temperature_C", base.get("temperature_C", NOMINAL_JOINT_TEMPERATURE_C),
                                       f"{where}: base.temperature_C"),
         "trajectory": check_value("trajectory", data.get("trajectory", "pick_and_place"), f"{where}: trajectory"),
     }

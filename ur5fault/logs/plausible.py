@@ -29,7 +29,7 @@ Limits and their reasons:
   log with every current negated -0.99 and -0.94 on the shoulder and elbow; identify once wrote a negative torque
   constant and negative friction from it, which every other command refused);
 - joint temperatures, where logged: each joint's median within the model's range for
-  ``joint_temperature_C`` (:func:`temperature_range_C`, -20..120 degC), one in 253..393 named as kelvin (a
+  ``joint_temperature_C`` (``sim.params.JOINT_TEMPERATURE_RANGE_C``, -20..120 degC), one in 253..393 named as kelvin (a
   log in kelvin once gave ``identify`` a viscous friction of 2337 N*m*s/rad, which every other command refused,
   and was silently clipped to 120 degC by the replays);
 - units: where a log carries joint velocities, the time derivative of the positions (as declared,
@@ -49,6 +49,7 @@ from numpy.typing import NDArray
 from ..errors import LogFormatError
 from ..sim.axes import N_JOINTS
 from ..sim.budget import MAX_DURATION_S
+from ..sim.params import JOINT_TEMPERATURE_RANGE_C
 
 MIN_RATE_HZ = 10.0
 MAX_RATE_HZ = 10_000.0
@@ -208,20 +209,11 @@ def check_current_sign(src: str, current_A: NDArray, target_current_A: NDArray |
                              "negate the current columns of the other sign")
 
 
-def temperature_range_C() -> tuple[float, float]:
-    """The model's range of ``joint_temperature_C`` [degC] (``sim/params.py``): what a log's temperatures must lie
-    in, and what a replay clips single readings to."""
-    from ..sim.params import RobotParams
-    from ..sim.validated import declared_range
-
-    return declared_range(RobotParams, "joint_temperature_C")
-
-
 def check_temperature_units(src: str, temperature_C: NDArray | None) -> None:
-    """Each joint's median temperature within :func:`temperature_range_C`; kelvin named as such."""
+    """Each joint's median temperature within ``JOINT_TEMPERATURE_RANGE_C``; kelvin named as such."""
     if temperature_C is None or temperature_C.size == 0:
         return
-    lo, hi = temperature_range_C()
+    lo, hi = JOINT_TEMPERATURE_RANGE_C
     median = np.nanmedian(temperature_C, axis=0)
     for j, m in enumerate(median):
         if np.isnan(m) or lo <= m <= hi:  # a joint never read is the optional columns' business (regular.py)

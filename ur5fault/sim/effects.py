@@ -20,6 +20,7 @@ from ..errors import ParameterError, UnknownNameError
 from . import effect_appliers as ap
 from .axes import JOINT_NAMES, joint_index
 from .effect_types import Effect, EffectKey, EffectParam
+from .params import JOINT_TEMPERATURE_RANGE_C, NOMINAL_JOINT_TEMPERATURE_C
 
 
 @dataclasses.dataclass(frozen=True)
@@ -170,7 +171,7 @@ _TERM_EFFECTS = [
     Effect("current_temperature_drift", "current-reading drift with joint temperature (sensor or thermal drift; "
            "data-driven)",
            (EffectParam("coeff_A_per_K", "A/K", -1.0, 1.0, 0.0, "c in c (T - T_ref)"),
-            EffectParam("reference_C", "degC", -10.0, 90.0, 28.0, "T_ref")),
+            EffectParam("reference_C", "degC", *JOINT_TEMPERATURE_RANGE_C, NOMINAL_JOINT_TEMPERATURE_C, "T_ref")),
            True, ap.both(ap.add("current_temp_drift_A_per_K", "coeff_A_per_K"),
                        ap.set_value("current_temp_reference_C", "reference_C")), size_params=("coeff_A_per_K",)),
     Effect("current_time_shift", "logged current reading shifted in time (timestamp skew; data-driven)",
@@ -195,7 +196,8 @@ REGISTRY: dict[str, Effect] = {
         Effect(
             "temperature",
             "joint temperature (viscous friction falls as the lubricant warms)",
-            (EffectParam("temperature_C", "degC", -10.0, 90.0, 28.0, "all joints"),),
+            (EffectParam("temperature_C", "degC", *JOINT_TEMPERATURE_RANGE_C, NOMINAL_JOINT_TEMPERATURE_C,
+                         "all joints"),),
             False,
             ap.temperature,
         ),

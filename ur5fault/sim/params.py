@@ -15,7 +15,7 @@ from typing import Any
 
 from ..errors import ParameterError
 from ..util import yamlsafe
-from .validated import Validated, param
+from .validated import Validated, declared_range, param
 
 DEFAULT_PARAMS_PATH = Path(str(resources.files("ur5fault") / "data" / "ur5_drive.yaml"))
 
@@ -114,6 +114,12 @@ class SensorParams(Validated):
     current_lsb_A: tuple[float, ...] = param(0, 1, unit="A", doc="quantisation step")
 
 
+#: the joint temperature the drive parameters refer to [degC] ([paper] Fig. 2 at 28 degC; ur5_drive.yaml's
+#: joint_temperature_C, which a test holds equal): a campaign's and a life fleet's default temperature, and the
+#: value of the temperature effect that means "no effect"
+NOMINAL_JOINT_TEMPERATURE_C = 28.0
+
+
 @dataclasses.dataclass(frozen=True)
 class RobotParams(Validated):
     """Everything the simulator needs to know about one UR5 and its drives."""
@@ -137,7 +143,8 @@ class RobotParams(Validated):
     tcp_offset_m: tuple[float, ...] = param(
         -2, 2, length=3, unit="m", doc="TCP position in the flange frame", default=(0.0, 0.0, 0.15)
     )
-    joint_temperature_C: tuple[float, ...] = param(-20, 120, unit="degC", doc="joint temperature", default=28.0)
+    joint_temperature_C: tuple[float, ...] = param(-20, 120, unit="degC", doc="joint temperature",
+                                                   default=NOMINAL_JOINT_TEMPERATURE_C)
 
     def __post_init__(self) -> None:
         super().__post_init__()
@@ -152,6 +159,11 @@ class RobotParams(Validated):
     def steps_per_servo(self) -> int:
         """Physics steps per servo sample."""
         return round(self.controller.servo_period_s / self.physics_dt_s)
+
+
+#: the joint temperatures the model takes [degC]: a log's, a campaign's, a life fleet's and the temperature effect's
+#: (one range: a log at 100 degC was replayed where a campaign at 100 degC was refused)
+JOINT_TEMPERATURE_RANGE_C = declared_range(RobotParams, "joint_temperature_C")
 
 
 def load_params(path: str | Path | None = None, overrides: dict[str, Any] | None = None,

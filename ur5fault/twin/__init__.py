@@ -11,8 +11,8 @@ the real log and whatever monitors or diagnoses a robot from its logs all take t
 temperature, tool or payload reaches the model one way only.
 """
 
-from .replay import TEMPERATURE_RANGE_C, LogReplay, Replayed, log_overrides, replay_params
+from .replay import LogReplay, Replayed, log_overrides, replay_params
 from .residuals import FIT_FRACTION, conditions, held_out_mask, localise, masked_rms, rms_table, unexplained
 
-__all__ = ["FIT_FRACTION", "TEMPERATURE_RANGE_C", "LogReplay", "Replayed", "conditions",
+__all__ = ["FIT_FRACTION", "LogReplay", "Replayed", "conditions",
            "held_out_mask", "localise", "log_overrides", "masked_rms", "replay_params", "rms_table", "unexplained"]

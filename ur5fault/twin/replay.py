@@ -25,16 +25,12 @@ from numpy.typing import NDArray
 
 from ..errors import ParameterError
 from ..logs import MeasuredLog
-from ..logs.plausible import temperature_range_C
 from ..sim.axes import JOINT_NAMES
 from ..sim.effects import EffectSpec
 from ..sim.engine import RunSpec, Simulator
-from ..sim.params import RobotParams, deep_merge, load_params
+from ..sim.params import JOINT_TEMPERATURE_RANGE_C, RobotParams, deep_merge, load_params
 from ..sim.terms import sensor_temperature_term
 
-#: joint temperatures outside this range are clipped before they reach the model [degC] (the params' range; a log
-#: whose median is outside it is refused by its reader)
-TEMPERATURE_RANGE_C = temperature_range_C()
 #: every signal a replay computes, in order; a replay keeps the first two, and the third when the log has
 #: motor encoders
 SIGNALS = ("current_A", "position_rad", "mismatch_rad")
@@ -44,10 +40,11 @@ PAYLOAD_EFFECTS = ("payload", "payload_com")
 
 def log_overrides(log: MeasuredLog) -> dict:
     """The parameter overrides a log itself carries: its tool offset and its mean joint temperatures
-    (clipped to :data:`TEMPERATURE_RANGE_C`)."""
+    (clipped to the params' ``JOINT_TEMPERATURE_RANGE_C``; a log whose median is outside it is refused by its
+    reader)."""
     over: dict = {"tcp_offset_m": list(log.tcp_offset_m)}
     if log.temperature_C is not None:
-        over["joint_temperature_C"] = np.clip(log.temperature_C.mean(axis=0), *TEMPERATURE_RANGE_C).tolist()
+        over["joint_temperature_C"] = np.clip(log.temperature_C.mean(axis=0), *JOINT_TEMPERATURE_RANGE_C).tolist()
     return over
 
 

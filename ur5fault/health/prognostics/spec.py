@@ -42,7 +42,8 @@ import yaml
 from ...campaign.spec import out_folder
 from ...config import check_duration, check_keys, check_log_period, check_mapping, check_seed, parse_trajectory
 from ...errors import ParameterError, UnknownNameError
-from ...sim.params import load_params, read_yaml
+from ...sim.effects import REGISTRY
+from ...sim.params import JOINT_TEMPERATURE_RANGE_C, NOMINAL_JOINT_TEMPERATURE_C, load_params, read_yaml
 from ...util.checks import check_int, check_number, check_text, short
 from ..features import FEATURE_UNITS
 from .wear import WearLaw, stream
@@ -220,8 +221,10 @@ def build_life(data: Mapping[str, Any], where: str, text: str = "", path: Path |
     if not isinstance(trajs, list) or not trajs:
         raise ParameterError(f"{where}: life.duty.trajectories must be a non-empty list of trajectories")
     durations = [parse_trajectory(t, f"{where}: life.duty.trajectories[{k}]").duration_s for k, t in enumerate(trajs)]
-    payload = _range(duty.get("payload_kg", 1.0), f"{where}: life.duty.payload_kg", 0.0, 5.0, "kg")
-    temperature = _range(duty.get("temperature_C", 28.0), f"{where}: life.duty.temperature_C", -10.0, 90.0, "degC")
+    mass = REGISTRY["payload"].param("mass_kg")
+    payload = _range(duty.get("payload_kg", 1.0), f"{where}: life.duty.payload_kg", mass.lo, mass.hi, "kg")
+    temperature = _range(duty.get("temperature_C", NOMINAL_JOINT_TEMPERATURE_C), f"{where}: life.duty.temperature_C",
+                         *JOINT_TEMPERATURE_RANGE_C, "degC")
     split = check_mapping(data.get("split"), f"{where}: split")
     check_keys(split, ("test_fraction", "seed"), f"{where}: split")
     frac = check_number(split.get("test_fraction", 0.3), f"{where}: split.test_fraction", 0.0, MAX_TEST_FRACTION)
