@@ -16,9 +16,8 @@ import json
 import numpy as np
 
 from ur5fault import JOINT_NAMES, RunSpec, Simulator, make_effect, pick_and_place
+from ur5fault.seed_paper import PAPER_BACKLASH_DEG, PAPER_TCP_MM
 from ur5fault.sim.params import load_params
-
-PAPER_THRESHOLD_MM = 0.5
 
 
 def runs_for(tag: str, alpha_deg: float, seed: int, share: float | None) -> list[RunSpec]:
@@ -33,7 +32,7 @@ def runs_for(tag: str, alpha_deg: float, seed: int, share: float | None) -> list
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser()
-    ap.add_argument("--alpha", type=float, default=0.1, help="backlash [deg]")
+    ap.add_argument("--alpha", type=float, default=PAPER_BACKLASH_DEG, help="backlash [deg]")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--shares", type=float, nargs="*", default=[0.0, 0.25, 0.5, 0.75, 1.0],
                     help="motor-side friction shares of the band")
@@ -56,8 +55,8 @@ def main(argv=None) -> int:
     for j in range(6):
         cells = " | ".join(f"{dev[t][j]:.3f}" for t, _ in groups[1:])
         print(f"| {j + 1} {JOINT_NAMES[j]} | {dev['default'][j]:.3f} | {band[j][0]:.3f}-{band[j][1]:.3f} | {cells} |")
-    above = [JOINT_NAMES[j] for j in range(6) if dev["default"][j] > PAPER_THRESHOLD_MM]
-    print(f"\nAbove {PAPER_THRESHOLD_MM} mm under the default: {', '.join(above) or 'none'}")
+    above = [JOINT_NAMES[j] for j in range(6) if dev["default"][j] > PAPER_TCP_MM]
+    print(f"\nAbove {PAPER_TCP_MM} mm under the default: {', '.join(above) or 'none'}")
     if bad:
         print("Runs not ok:", "; ".join(bad))
     print(json.dumps({"alpha_deg": a.alpha, "shares": a.shares, "tcp_dev_max_mm": dev,

@@ -317,7 +317,7 @@ def test_default_benchmark_compares_the_feature_sets(tmp_path):
     # the chosen set's trained row scores the main evaluation's classifiers instead of training them again: the
     # same figures as every row trained on its own
     from ur5fault.health.diagnostics import compare_feature_sets, load_features
-    from ur5fault.health.diagnostics.thresholds import PAPER_TCP_MM
+    from ur5fault.seed_paper import PAPER_TCP_MM
 
     alone = compare_feature_sets(load_features(tmp_path), 0, PAPER_TCP_MM, str(tmp_path))
     assert json.dumps(alone, sort_keys=True) == json.dumps(cmp, sort_keys=True)

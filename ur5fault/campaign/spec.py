@@ -55,6 +55,7 @@ from ..config import (
     refuse_condition_effects,
 )
 from ..errors import ParameterError
+from ..seed_paper import PAPER_TCP_MM
 from ..sim.effects import EffectSpec
 from ..sim.params import NOMINAL_JOINT_TEMPERATURE_C, deep_merge, load_params, read_yaml
 from ..util.checks import check_bool, check_int, check_number, check_text, short
@@ -207,7 +208,7 @@ def build_campaign(data: Mapping[str, Any], where: str, text: str = "", path: Pa
         runs, swept, notes = _sampled_runs(data["sample"], cond0, where)
     else:
         runs = grid_runs(axes, cond0)
-    thr = check_number(data.get("threshold_mm", 0.5), f"{where}: threshold_mm", 0.0, MAX_THRESHOLD_MM, "mm",
+    thr = check_number(data.get("threshold_mm", PAPER_TCP_MM), f"{where}: threshold_mm", 0.0, MAX_THRESHOLD_MM, "mm",
                        lo_open=True)
     bs = check_int(data.get("batch_size", 32), f"{where}: batch_size", 1, 1024)
     dur = data.get("duration_s")

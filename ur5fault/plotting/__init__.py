@@ -18,6 +18,7 @@ from matplotlib.figure import Figure
 from ..campaign.result import CampaignResult
 from ..campaign.summary import HEALTHY, joint_feature
 from ..errors import ConfigFileError, StoredResultError, Ur5FaultError
+from ..seed_paper import PAPER_BACKLASH_DEG
 from ._figure import save
 from .paper import fig3_tcp_deviation, fig4_shoulder_current
 from .run import run_figure
@@ -28,8 +29,6 @@ __all__ = ["FIGURE_STEMS", "campaign_figures", "fig3_tcp_deviation", "fig4_shoul
 
 _log = logging.getLogger(__name__)
 
-#: backlash size of the paper's Fig. 3 [deg]
-FIG3_BACKLASH_DEG = 0.1
 
 
 #: the beginnings of the file names of :func:`campaign_figures`' figures
@@ -63,8 +62,8 @@ def drawn_and_failed(result: CampaignResult, feature: str = "tcp_dev_max_mm") ->
     sweeps, skipped = result.sweeps()
     messages += [f"no figure for {why}" for why in skipped.values()]
     if "backlash" in sweeps:
-        for name, draw in ((f"fig3_tcp_deviation_alpha{FIG3_BACKLASH_DEG:g}",
-                            lambda: fig3_tcp_deviation(result, FIG3_BACKLASH_DEG)),
+        for name, draw in ((f"fig3_tcp_deviation_alpha{PAPER_BACKLASH_DEG:g}",
+                            lambda: fig3_tcp_deviation(result, PAPER_BACKLASH_DEG)),
                            ("fig4_shoulder_current", lambda: fig4_shoulder_current(result))):
             try:
                 figures[name] = draw()

@@ -17,6 +17,7 @@ from matplotlib.figure import Figure
 
 from ..campaign.summary import effect_sweep, swept_effects
 from ..errors import ParameterError
+from ..seed_paper import PAPER_BACKLASH_DEG
 from ..sim.axes import JOINT_NAMES
 from ._figure import figure_and_axes
 
@@ -42,7 +43,8 @@ def tcp_deviation_mm(run: pd.DataFrame, twin: pd.DataFrame) -> np.ndarray:
     return np.linalg.norm(run[TCP_COLUMNS].to_numpy() - twin[TCP_COLUMNS].to_numpy(), axis=1) * 1e3
 
 
-def fig3_tcp_deviation(result: CampaignResult, backlash_deg: float = 0.1, ax: Axes | None = None) -> Figure:
+def fig3_tcp_deviation(result: CampaignResult, backlash_deg: float = PAPER_BACKLASH_DEG, ax: Axes | None = None
+                       ) -> Figure:
     """TCP deviation from the healthy twin over time, ``backlash_deg`` on each joint in turn (paper Fig. 3),
     with the campaign's ``threshold_mm``."""
     rows = _backlash_rows(result)

@@ -20,6 +20,7 @@ from typing import Any
 import pandas as pd
 
 from ...errors import ConfigFileError, ParameterError
+from ...seed_paper import PAPER_TCP_MM
 from ...util.results import check_new_output, result_folder
 from .calibration import fit_calibration, test_reliability
 from .data import CONTEXT_COLUMNS, FEATURE_SETS, Dataset, has_twin_features, load_dataset, load_features
@@ -40,7 +41,7 @@ from .predictions import FILE as PREDICTIONS_FILE
 from .predictions import test_predictions
 from .report import write_report
 from .saved import MODELS_DIR, check_inputs, load_models, save_models
-from .thresholds import PAPER_TCP_MM, backlash_thresholds
+from .thresholds import backlash_thresholds
 from .transfer import against_training_split, mean_run_duration_s, refuse_training_runs, setup_notes
 
 

@@ -24,9 +24,9 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from ...seed_paper import PAPER_BACKLASH_DEG, PAPER_TCP_MM
+
 DETECTION_PROBABILITY = 0.90
-PAPER_ALPHA_DEG = 0.1  # seed paper: acceptable backlash for the pick-and-place ...
-PAPER_TCP_MM = 0.5  # ... at this TCP deviation
 N_BOOTSTRAP = 200
 MIN_RUNS = 6  # fewer runs on a joint: no fit
 CROSSING_MIN_ALPHA_DEG = 0.2  # alpha/2 = 1.75 mrad: above the healthy span (95th percentile 0.43-1.08 mrad
@@ -115,7 +115,7 @@ def backlash_thresholds(test: pd.DataFrame, detected: np.ndarray, everything: pd
         res.update(_crossing(test, everything, detected, j))
         out[str(j)] = res
     return {"detection_probability": DETECTION_PROBABILITY, "threshold_mm": threshold_mm,
-            "paper": {"alpha_deg": PAPER_ALPHA_DEG, "tcp_mm": PAPER_TCP_MM}, "per_joint": out}
+            "paper": {"alpha_deg": PAPER_BACKLASH_DEG, "tcp_mm": PAPER_TCP_MM}, "per_joint": out}
 
 
 def _crossing(test: pd.DataFrame, df: pd.DataFrame, detected: np.ndarray, joint: int) -> dict[str, Any]:

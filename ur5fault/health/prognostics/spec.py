@@ -42,6 +42,7 @@ import yaml
 from ...campaign.spec import out_folder
 from ...config import check_duration, check_keys, check_log_period, check_mapping, check_seed, parse_trajectory
 from ...errors import ParameterError, UnknownNameError
+from ...seed_paper import PAPER_TCP_MM
 from ...sim.effects import REGISTRY
 from ...sim.params import JOINT_TEMPERATURE_RANGE_C, NOMINAL_JOINT_TEMPERATURE_C, load_params, read_yaml
 from ...util.checks import check_int, check_number, check_text, short
@@ -52,7 +53,6 @@ LIFE_FILE_KEYS = ("name", "out", "life", "split", "batch_size", "log_period_s", 
 LIFE_KEYS = ("units", "seed", "interval_cycles", "max_cycles", "failure", "wear", "duty")
 DUTY_KEYS = ("trajectories", "payload_kg", "temperature_C")
 #: the paper's acceptability limit of a pick-and-place: 0.5 mm TCP deviation from the healthy robot
-PAPER_THRESHOLD_MM = 0.5
 #: random stream purpose of a unit's duty draw (wear.py uses 0..2)
 STREAM_DUTY = 3
 #: largest fleet and inspection count accepted (assumption: 1e4 units x 1e3 inspections ~ 1e7 runs is
@@ -67,7 +67,7 @@ class Failure:
     """Failure criterion: the inspection whose ``feature`` reaches ``threshold`` fails."""
 
     feature: str = "tcp_dev_max_mm"
-    threshold: float = PAPER_THRESHOLD_MM
+    threshold: float = PAPER_TCP_MM
 
 
 @dataclasses.dataclass(frozen=True)
@@ -209,7 +209,7 @@ def build_life(data: Mapping[str, Any], where: str, text: str = "", path: Path |
     if feature not in FEATURE_UNITS:
         raise UnknownNameError("feature", feature if isinstance(feature, str) else short(feature), FEATURE_UNITS,
                                f"{where}: life.failure.feature")  # the error quotes a name itself
-    thr = check_number(fail.get("threshold", PAPER_THRESHOLD_MM), f"{where}: life.failure.threshold", 0.0, 1e6,
+    thr = check_number(fail.get("threshold", PAPER_TCP_MM), f"{where}: life.failure.threshold", 0.0, 1e6,
                        FEATURE_UNITS[feature], lo_open=True)
     try:
         wear = WearLaw.from_mapping(check_mapping(life.get("wear"), f"{where}: life.wear"), f"{where}: life.wear")
