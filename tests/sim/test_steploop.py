@@ -61,8 +61,16 @@ def test_compiled_equals_lockstep_bit_for_bit_for_every_effect(registry_batch):
 
 
 def test_compiled_on_threads_equals_one_thread_bit_for_bit(registry_batch):
+    import numba
+
     runs, fast = registry_batch
-    _same(fast, Simulator(nthread=2).run(grip_inside(DUR), runs, duration_s=DUR))
+    before = numba.get_num_threads()
+    numba.set_num_threads(1)  # a caller's own setting, which the threaded run used to leave at 2
+    try:
+        _same(fast, Simulator(nthread=2).run(grip_inside(DUR), runs, duration_s=DUR))
+        assert numba.get_num_threads() == 1  # numba's thread count is the process's: set for the run only
+    finally:
+        numba.set_num_threads(before)
 
 
 def test_a_trip_stops_its_run_only():

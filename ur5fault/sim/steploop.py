@@ -242,6 +242,7 @@ def run(mb, X, P, setpoints, delay_k, rngs, timing, payload, logging, hook, prog
     tm = terms_tuple(hook, mb, n)
     chunk = noise_shape[0]
     noise = np.empty((n,) + tuple(noise_shape))
+    threads_before = numba.get_num_threads()  # numba's setting is the process's: put back after this run
     if nthread > 1:
         numba.set_num_threads(min(nthread, numba.config.NUMBA_NUM_THREADS))
         advance = advance_threads
@@ -249,20 +250,23 @@ def run(mb, X, P, setpoints, delay_k, rngs, timing, payload, logging, hook, prog
         advance = advance_serial
     next_progress = 0.0
     s = 0
-    while s < n_steps and active.any():
-        si = s // sps
-        si0 = si - si % chunk
-        if si % chunk == 0:
-            for r in range(n):
-                rngs[r].standard_normal(noise_shape, out=noise[r])  # in place: no temporary of the chunk
-        end = min(n_steps, (si0 + chunk) * sps)
-        if progress is not None:
-            if s >= next_progress * n_steps:
-                progress(s / n_steps)
-                next_progress += progress_step
-            end = min(end, max(s + sps, -(-int(np.ceil(next_progress * n_steps)) // sps) * sps))
-        advance(s, end, si0, noise, bt, tm)
-        s = end
+    try:
+        while s < n_steps and active.any():
+            si = s // sps
+            si0 = si - si % chunk
+            if si % chunk == 0:
+                for r in range(n):
+                    rngs[r].standard_normal(noise_shape, out=noise[r])  # in place: no temporary of the chunk
+            end = min(n_steps, (si0 + chunk) * sps)
+            if progress is not None:
+                if s >= next_progress * n_steps:
+                    progress(s / n_steps)
+                    next_progress += progress_step
+                end = min(end, max(s + sps, -(-int(np.ceil(next_progress * n_steps)) // sps) * sps))
+            advance(s, end, si0, noise, bt, tm)
+            s = end
+    finally:
+        numba.set_num_threads(threads_before)
     X[...] = X_runs.transpose(1, 0, 2)
     return log, status, event
 
