@@ -34,6 +34,7 @@ from numpy.typing import NDArray
 
 from ...errors import ParameterError
 from ...util.portable import matmul
+from ..effects import REGISTRY
 from .base import CB3_SETPOINT_PERIOD_S, Trajectory, dwell, movej
 from .ik import TcpKinematics, down_rotation
 
@@ -82,8 +83,10 @@ def random_pick_and_place(seed: int = 0, payload_kg: float = 1.0, tool_tilt_deg:
     """
     if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
         raise ParameterError(f"random_pick_and_place: seed = {seed!r} must be a non-negative integer")
-    if isinstance(payload_kg, bool) or not isinstance(payload_kg, (int, float)) or not 0 <= payload_kg <= 5:
-        raise ParameterError(f"random_pick_and_place: payload_kg = {payload_kg!r} is out of range [0, 5] kg")
+    mass = REGISTRY["payload"].param("mass_kg")  # the payload's one range
+    if isinstance(payload_kg, bool) or not isinstance(payload_kg, (int, float)) or not mass.lo <= payload_kg <= mass.hi:
+        raise ParameterError(f"random_pick_and_place: payload_kg = {payload_kg!r} is out of range [{mass.lo:g}, "
+                             f"{mass.hi:g}] kg")
     if (isinstance(tool_tilt_deg, bool) or not isinstance(tool_tilt_deg, (int, float))
             or not 0 <= tool_tilt_deg <= MAX_TOOL_TILT_DEG):
         raise ParameterError(f"random_pick_and_place: tool_tilt_deg = {tool_tilt_deg!r} is out of range "
