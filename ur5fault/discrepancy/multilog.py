@@ -28,6 +28,7 @@ from numpy.typing import NDArray
 
 from ..errors import ParameterError
 from ..logs import MeasuredLog
+from ..logs.measured import same_period
 from ..sim.effects import EffectSpec
 from ..twin.replay import LogReplay, Replayed, simulate_requests
 from ..twin.residuals import fit_samples
@@ -79,7 +80,7 @@ class MultiReplay:
             if r.signals != first.signals:
                 raise ParameterError(f"{r.log.source}: its signals {r.signals} differ from {first.log.source}'s "
                                      f"{first.signals}; a joint fit needs the same signals in every log")
-            if abs(r.log.period_s - first.log.period_s) > 1e-9:
+            if not same_period(r.log.period_s, first.log.period_s):
                 raise ParameterError(f"{r.log.source}: sample period {r.log.period_s:g} s differs from "
                                      f"{first.log.source}'s {first.log.period_s:g} s")
         self.params, self.signals, self.sigma, self.gear_ratio = first.params, first.signals, first.sigma, \

@@ -23,6 +23,7 @@ from numpy.typing import NDArray
 
 from ..errors import ParameterError
 from ..logs import MeasuredLog
+from ..logs.measured import same_period
 from ..sim.inverse_dynamics import inverse_dynamics_Nm, payload_model
 from ..sim.params import RobotParams
 from ..twin.payload import payload_torque_columns
@@ -98,7 +99,7 @@ def derive_all(logs: Sequence[MeasuredLog], params: RobotParams, model_path: str
         return parts[0]
     period = parts[0].period_s
     for log, p in zip(logs, parts):
-        if abs(p.period_s - period) > 1e-9:
+        if not same_period(p.period_s, period):
             raise ParameterError(f"{log.source}: sample period {p.period_s:g} s differs from {logs[0].source}'s "
                                  f"{period:g} s; a joint identification needs one")
     kw = {}

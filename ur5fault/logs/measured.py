@@ -21,6 +21,11 @@ UNKNOWN_PAYLOAD = ("this command needs the payload stated: give --payload-kg and
                    "(summary.json / the --json file, \"payload\")")
 
 
+#: two sample periods closer than this [s] are one rate (a median of timestamp differences; the real logs' rates, 8 ms
+#: and 2 ms, differ by millions of it)
+PERIOD_TOL_S = 1e-9
+
+
 @dataclasses.dataclass(frozen=True)
 class MeasuredLog:
     """A measured (or simulated) robot log, SI units, batch-free ``(n_samples, 6)`` arrays.
@@ -98,6 +103,7 @@ class MeasuredLog:
     def period_s(self) -> float:
         return float(np.median(np.diff(self.t_s)))
 
+
     def to_trajectory(self, name: str | None = None) -> Trajectory:
         """The log's target positions as a setpoint stream, the payload held where :attr:`payload_held` says
         (a grip or release between two samples placed half-way between them), else throughout."""
@@ -154,3 +160,8 @@ def assumption_notes(logs: Sequence[MeasuredLog], joint_temperature_C,
                    f"controller logs it) and a fixed setpoint in {', '.join(styles['setpoint'])} (as a CB3's): logs "
                    "of two controllers, likely two robots, under one model")
     return out
+
+
+def same_period(a_s: float, b_s: float) -> bool:
+    """Two sample periods [s] are one rate: within :data:`PERIOD_TOL_S` (logs of one command must share one)."""
+    return abs(a_s - b_s) <= PERIOD_TOL_S

@@ -19,6 +19,7 @@ import numpy as np
 
 from ...errors import ParameterError
 from ...logs import MeasuredLog
+from ...logs.measured import same_period
 from ...sim.effects import EffectSpec
 from ...twin import LogReplay, Replayed
 from ...twin.replay import refuse_log_owned
@@ -88,7 +89,7 @@ def robot_baseline(healthy: Sequence[MeasuredLog], detector_dir: str | Path, par
     window_s = check_schema(schema, str(detector_dir))
     if not healthy:
         raise ParameterError("a baseline needs at least one healthy log of the robot")
-    odd = [g.source for g in healthy if abs(g.period_s - healthy[0].period_s) > 1e-9]
+    odd = [g.source for g in healthy if not same_period(g.period_s, healthy[0].period_s)]
     if odd:
         raise ParameterError(f"{odd[0]}: sampled every {1e3 * healthy[0].period_s:g} ms in {healthy[0].source}, "
                              "otherwise here; a baseline's logs must share one sample period")
@@ -133,7 +134,7 @@ def diagnose(log: MeasuredLog, detector_dir: str | Path, params_overrides: dict 
             raise ParameterError(f"{log.source} is both diagnosed and a baseline log; a run cannot judge itself")
         if baseline.reference.names != tuple(c["name"] for c in schema["inputs"]):
             raise ParameterError("the baseline was built for another detector's inputs")
-        if abs(baseline.period_s - log.period_s) > 1e-9:
+        if not same_period(baseline.period_s, log.period_s):
             raise ParameterError(f"{log.source}: sampled every {1e3 * log.period_s:g} ms, its baseline logs every "
                                  f"{1e3 * baseline.period_s:g} ms; the features depend on the rate: give a baseline "
                                  "logged like the diagnosed log")
@@ -171,7 +172,7 @@ def diagnose(log: MeasuredLog, detector_dir: str | Path, params_overrides: dict 
         notes.append(f"this detector's detection AUC on its own campaign's test split is {auc:.2f} (0.5 is chance): "
                      "its flags say little; train it on a larger or more varied campaign")
     trained = schema.get("log_period_s")
-    if trained and abs(log.period_s - trained) > 1e-9:
+    if trained and not same_period(log.period_s, trained):
         notes.append(f"log sampled every {1e3 * log.period_s:g} ms, the training runs every {1e3 * trained:g} ms: "
                      "rate-dependent features (current spikes, kurtosis, crest factor, high-frequency energy, "
                      "residual RMS) are not on the scale the detector learned")

@@ -26,6 +26,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ...errors import ParameterError
+from ...logs.measured import same_period
 from ...sim.axes import JOINT_NAMES, N_JOINTS
 from ...util.io import checksum_path, json_float, verify_checksum
 from . import paired
@@ -231,7 +232,7 @@ def fit_baseline(healthy: Sequence[Observed], overlay_sha: str) -> Baseline:
         raise ParameterError(f"a baseline needs at least {MIN_RUNS} healthy runs or log parts, got none")
     period = healthy[0].period_s
     for o in healthy[1:]:
-        if abs(o.period_s - period) > 1e-9:
+        if not same_period(o.period_s, period):
             raise ParameterError(f"{o.name}: sample period {o.period_s:g} s differs from {healthy[0].name}'s "
                                  f"{period:g} s")
     slow = healthy[0].stribeck_speed_rad_s

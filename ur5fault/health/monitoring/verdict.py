@@ -9,6 +9,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ...errors import ParameterError
+from ...logs.measured import same_period
 from . import paired
 from .baseline import Baseline
 from .changes import BLOCK_S, block_reference, estimates, find_changes, keep_mask, strongest
@@ -168,7 +169,7 @@ def assess(baseline: Baseline, obs: Observed, channels: Sequence[str] = DEFAULT_
     a persistent change is found (even if events are too: a change needs maintenance, an event may not), else
     ``"anomaly"`` when an event is, else ``"consistent"``. ``channels``: the residuals events are judged on
     (:data:`~.events.DEFAULT_CHANNELS` unless given; with both, each at half the false-alarm probability)."""
-    if abs(obs.period_s - baseline.period_s) > 1e-9:
+    if not same_period(obs.period_s, baseline.period_s):
         raise ParameterError(f"{obs.name}: sample period {obs.period_s:g} s differs from the baseline's "
                              f"{baseline.period_s:g} s")
     unknown = sorted(set(channels) - set(CHANNELS))
