@@ -41,6 +41,7 @@ from numpy.typing import NDArray
 from ..sim.axes import N_JOINTS
 from ..sim.params import RobotParams
 from ..sim.trajectories.ik import model_path
+from ..util.robust import robust_spread
 
 #: a fit's columns (scaled to unit norm) are well enough apart when their smallest singular value is at least
 #: ``rcond`` of the largest; below it the last column in the weakest direction is left out, and so on.  The
@@ -83,14 +84,9 @@ def noise_scale(r: NDArray) -> NDArray:
     """Per column of ``r`` ``(n, m)``, the white-noise standard deviation read from first differences
     (1.4826 MAD of ``diff(r)`` over sqrt 2: smooth signal content, a fault's or the model's, barely enters);
     NaN samples left out, 1 where nothing is left or the differences are all zero."""
-    d = np.diff(r, axis=0)
-    out = np.ones(r.shape[1])
-    for k in range(r.shape[1]):
-        v = d[np.isfinite(d[:, k]), k]
-        if v.size:
-            s = 1.4826 * float(np.median(np.abs(v - np.median(v)))) / math.sqrt(2.0)
-            out[k] = s if s > 0 else 1.0
-    return out
+    _, spread, _ = robust_spread(np.diff(r, axis=0))
+    s = spread / math.sqrt(2.0)
+    return np.where(np.isfinite(s) & (s > 0), s, 1.0)
 
 
 def hac_fit(x: NDArray, y: NDArray, rcond: float = 1e-8) -> Fit:

@@ -46,8 +46,9 @@ from numpy.typing import NDArray
 
 from ...errors import ConfigFileError, ParameterError
 from ...sim.axes import JOINT_NAMES
+from ...util.robust import robust_spread
 from ..diagnostics.data import CONTEXT_COLUMNS
-from ..diagnostics.saved import MAD_SCALE, healthy_reference
+from ..diagnostics.saved import healthy_reference
 from .windows import Window, window_inputs
 
 #: the fewest baseline values of an input whose spread is estimated (a choice: the MAD of 5 normal values scatters
@@ -66,20 +67,6 @@ RULES = {SCALED: "baseline spread above the training runs': z against the baseli
                                 "0 there): no training spread to map onto, shifted only (a fault keeps its size)",
          UNMAPPED: "no value in the baseline or the training runs: left as measured",
          CONDITION: "an operating condition, known for every log: left as measured"}
-
-
-def robust_spread(x: NDArray) -> tuple[NDArray, NDArray, NDArray]:
-    """Per column of ``x`` ``(n_rows, n_inputs)``: median, robust spread (:data:`MAD_SCALE` x MAD) and number of
-    finite values (NaN median and spread where there is none)."""
-    x = np.asarray(x, float)
-    n = np.isfinite(x).sum(axis=0)
-    med = np.full(x.shape[1], np.nan)
-    scale = np.full(x.shape[1], np.nan)
-    for k in np.flatnonzero(n):
-        c = x[np.isfinite(x[:, k]), k]
-        med[k] = np.median(c)
-        scale[k] = MAD_SCALE * np.median(np.abs(c - med[k]))
-    return med, scale, n
 
 
 @dataclasses.dataclass(frozen=True)
@@ -262,5 +249,5 @@ def fit_map(reference: Reference, windows_by_log: Sequence[tuple[str, Sequence[W
                        tuple(rule), factor, tuple(log_sha256))
 
 
-__all__ = ["BaselineMap", "MIN_SPREAD_WINDOWS", "Reference", "RobotThreshold", "fit_map", "robust_spread",
+__all__ = ["BaselineMap", "MIN_SPREAD_WINDOWS", "Reference", "RobotThreshold", "fit_map",
            "ROBOT_THRESHOLD_FROM", "set_by_sentence", "training_reference"]

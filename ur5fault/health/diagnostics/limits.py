@@ -33,8 +33,8 @@ import pandas as pd
 
 from ...errors import ConfigFileError
 from ...sim.axes import N_JOINTS
+from ...util.robust import robust_spread
 from ..twin_features import ESTIMATE_UNITS, FLANK_SHARE
-from .saved import MAD_SCALE
 
 #: each fault kind's size estimate (name of :data:`ur5fault.health.twin_features.ESTIMATE_UNITS`); a current-sensor
 #: gain and a torque-constant loss share one (the same signature: ``kind_call.MERGED_KINDS``)
@@ -146,12 +146,9 @@ class LimitCalibration:
         spread, n = {}, {}
         for est in ESTIMATES:
             t = h[_cols(est, "t")].apply(pd.to_numeric, errors="coerce").to_numpy(float)
-            s, k = [], []
-            for col in t.T:
-                v = col[np.isfinite(col)]
-                k.append(int(v.size))
-                s.append(float(MAD_SCALE * np.median(np.abs(v - np.median(v)))) if v.size else math.nan)
-            spread[est], n[est] = tuple(s), tuple(k)
+            _, s, k = robust_spread(t)
+            spread[est] = tuple(math.nan if np.isnan(v) else float(v) for v in s)  # math.nan: one NaN, as read back
+            n[est] = tuple(int(v) for v in k)
         return cls(spread, n)
 
     def to_dict(self) -> dict[str, Any]:

@@ -54,6 +54,7 @@ from ...util.io import (
     write_bytes_atomic,
     write_json_atomic,
 )
+from ...util.robust import robust_spread
 from .data import Dataset
 from .metrics import FROM_OUT_OF_FOLD, FROM_TEST_SPLIT
 from .models import Models
@@ -69,8 +70,6 @@ SCHEMA_FILE = "schema.json"
 SCHEMA_FORMAT = 4
 #: what to run when the saved classifiers fail their checksums
 RESAVE = "run `ur5fault benchmark` on the training campaign again to save them anew"
-#: median absolute deviation -> standard deviation of a normal distribution
-MAD_SCALE = 1.4826
 #: module prefixes of the types a saved file may hold (anything else is refused on loading)
 TRUSTED_PREFIXES = ("sklearn.", "numpy.", "builtins.")
 
@@ -85,14 +84,10 @@ def training_hash(ds: Dataset) -> str:
 
 def healthy_reference(train: pd.DataFrame, inputs: list[str] | tuple[str, ...]) -> dict[str, list]:
     """Per input (in ``inputs``' order), over the healthy rows of ``train`` (``fault == "healthy"``): the median,
-    the robust spread (:data:`MAD_SCALE` x the median absolute deviation) and the number of finite values
+    the robust spread (:func:`ur5fault.util.robust.robust_spread`) and the number of finite values
     (NaN where there is none)."""
     h = train.loc[train["fault"] == "healthy", list(inputs)].apply(pd.to_numeric, errors="coerce").to_numpy(float)
-    n = np.isfinite(h).sum(axis=0)
-    with np.errstate(all="ignore"):
-        med = np.array([np.median(c[np.isfinite(c)]) if k else np.nan for c, k in zip(h.T, n)])
-        scale = np.array([MAD_SCALE * np.median(np.abs(c[np.isfinite(c)] - m)) if k else np.nan
-                          for c, k, m in zip(h.T, n, med)])
+    med, scale, n = robust_spread(h.reshape(len(h), len(inputs)))
     return {"median": [None if not np.isfinite(v) else float(v) for v in med],
             "scale": [None if not np.isfinite(v) else float(v) for v in scale], "n": [int(v) for v in n]}
 
