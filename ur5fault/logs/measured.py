@@ -47,8 +47,8 @@ class MeasuredLog:
     temperature_C: NDArray | None = None
     tcp_m: NDArray | None = None
     q_motor_rad: NDArray | None = None
-    payload_kg: float | None = 0.0
-    tcp_offset_m: tuple[float, float, float] | None = (0.0, 0.0, 0.15)
+    payload_kg: float | None = None
+    tcp_offset_m: tuple[float, float, float] | None = None
     #: UR's own inverse-dynamics joint torque of the target motion [N*m] (NIST ROBOT_TARGET_JOINT_TORQUES,
     #: RTDE target_moment), used as a cross-check by ``ur5fault identify``
     target_torque_Nm: NDArray | None = None
