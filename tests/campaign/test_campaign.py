@@ -9,11 +9,11 @@ import signal
 import subprocess
 import sys
 import time
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
 import pytest
+from processes import workers_outliving_a_kill
 
 from ur5fault.campaign import (
     FolderLockedError,
@@ -526,43 +526,10 @@ def test_workers_exit_when_the_campaign_process_is_killed(tmp_path):
     """SIGKILL of the campaign process alone (not its group): its loky workers exit (within a second
     of their batch running; the issue saw them linger for minutes)."""
     f = write(tmp_path, SMALL.format(dur=3.0))
-    proc = subprocess.Popen([sys.executable, "-m", "ur5fault.cli", "campaign", "run", str(f), "--out",
-                             str(tmp_path / "out"), "--jobs", "2", "--quiet"], stdout=subprocess.DEVNULL,
-                            stderr=subprocess.DEVNULL, start_new_session=True)
-    try:
-        deadline = time.time() + 120
-        workers: list[int] = []
-        while time.time() < deadline and not workers:
-            time.sleep(0.3)
-            workers = [p for p in _children(proc.pid) if b"LokyProcess" in _cmdline(p)]
-        assert len(workers) == 1, "loky worker not seen"  # --jobs 2: the campaign process and one worker
-        time.sleep(3.0)  # both are simulating a batch
-        os.kill(proc.pid, signal.SIGKILL)
-        proc.wait()
-        deadline = time.time() + 30.0  # a worker still importing under load notices when its batch starts
-        while time.time() < deadline and any(_cmdline(p) for p in workers):
-            time.sleep(0.2)
-        assert not any(_cmdline(p) for p in workers), "orphaned workers still running"
-    finally:
-        try:
-            os.killpg(proc.pid, signal.SIGKILL)
-        except ProcessLookupError:
-            pass
-
-
-def _children(pid: int) -> list[int]:
-    try:
-        return [int(x) for x in Path(f"/proc/{pid}/task/{pid}/children").read_text().split()]
-    except OSError:
-        return []
-
-
-def _cmdline(pid: int) -> bytes:
-    try:
-        stat = Path(f"/proc/{pid}/stat").read_text().split()
-        return b"" if stat[2] == "Z" else Path(f"/proc/{pid}/cmdline").read_bytes()
-    except (OSError, IndexError):
-        return b""
+    argv = [sys.executable, "-m", "ur5fault.cli", "campaign", "run", str(f), "--out", str(tmp_path / "out"), "--jobs",
+            "2", "--quiet"]
+    # --jobs 2: the campaign process and one worker, both simulating a batch when it is killed
+    assert not workers_outliving_a_kill(argv, b"LokyProcess", 3.0, expect=1), "orphaned workers still running"
 
 
 def test_a_run_validates_its_faults_once_when_built():

@@ -13,6 +13,7 @@ from pathlib import Path
 import joblib
 import joblib.executor
 import pytest
+from processes import workers_outliving_a_kill
 
 from ur5fault.util.parallel import iter_tasks, map_balanced, map_tasks, own_share, submit
 
@@ -294,45 +295,11 @@ def test_freed_memory_goes_back_to_the_system():
     assert kept > held - 60 and after < kept - 80, (held, kept, after)  # 125 MiB freed in the holes
 
 
-def _proc_children(pid: int) -> list[int]:
-    try:
-        return [int(x) for x in Path(f"/proc/{pid}/task/{pid}/children").read_text().split()]
-    except OSError:
-        return []
-
-
-def _alive(pid: int) -> bool:
-    try:
-        return Path(f"/proc/{pid}/stat").read_text().split()[2] != "Z"
-    except (OSError, IndexError):
-        return False
-
-
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
 def test_workers_exit_when_the_calling_process_is_killed(tmp_path):
     """SIGKILL of a process spreading tasks (as `discrepancy --jobs 2` does; an out-of-memory killer sends it): its
     loky worker exited only with it by SIGTERM, and one was found still running, idle, 7 minutes after a kill."""
-    import signal
-    import subprocess
-
     code = ("import time\nfrom ur5fault.util.parallel import iter_tasks\n"
             "for _ in iter_tasks(time.sleep, [(60.0,), (60.0,)], jobs=2):\n    pass\n")
-    proc = subprocess.Popen([sys.executable, "-c", code], start_new_session=True)
-    try:
-        deadline, workers = time.time() + 120, []
-        while time.time() < deadline and not workers:
-            time.sleep(0.3)
-            workers = [p for p in _proc_children(proc.pid) if b"loky" in Path(f"/proc/{p}/cmdline").read_bytes()]
-        assert workers, "no loky worker seen"
-        time.sleep(2.0)  # started, its task running
-        os.kill(proc.pid, signal.SIGKILL)
-        proc.wait()
-        deadline = time.time() + 30.0
-        while time.time() < deadline and any(_alive(p) for p in workers):
-            time.sleep(0.2)
-        assert not any(_alive(p) for p in workers), "a worker outlived the process that started it"
-    finally:
-        try:
-            os.killpg(proc.pid, signal.SIGKILL)
-        except ProcessLookupError:
-            pass
+    lingering = workers_outliving_a_kill([sys.executable, "-c", code], b"loky", 2.0)
+    assert not lingering, "a worker outlived the process that started it"
