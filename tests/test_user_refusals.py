@@ -126,15 +126,16 @@ def test_a_payload_in_the_model_overlay_is_refused(command, effect, tmp_path, ca
     if command == "discrepancy":
         argv = ["discrepancy", str(log), "--model", str(ov), *opts]
     else:
-        frame = rtde_frame()
-        for j in range(6):  # another recording (one shared with the monitored log is refused first)
-            frame[[f"target_q_{j}", f"actual_q_{j}"]] += 0.05
-        other = _write(tmp_path, "b.csv", frame)
-        argv = ["monitor", str(log), "--baseline", str(ov), "--baseline-logs", str(other), *opts]
+        others = []
+        for k in (1, 2):  # other recordings (one shared with the monitored log is refused first); a baseline is two
+            frame = rtde_frame()
+            for j in range(6):
+                frame[[f"target_q_{j}", f"actual_q_{j}"]] += 0.05 * k
+            others.append(str(_write(tmp_path, f"b{k}.csv", frame)))
+        argv = ["monitor", str(log), "--baseline", str(ov), "--baseline-logs", *others, *opts]
     rc, err, peak = _run(argv, tmp_path, capsys)
     name = effect.split(",")[0].split()[-1]
-    # the log's notes come first (the overlay is refused where its tcp_offset_m is, beside the logs)
-    err = "\n".join(line for line in err.splitlines() if not line.startswith("note: "))
+    # refused before any log is read: no log's note printed before it (they were)
     _assert_one_line(rc, err, peak, f"the model overlay holds a {name} effect, but the payload is the log's "
                                     "(--payload-kg and --tcp-offset-m, a manifest's payload_kg, or the log's layout; "
                                     "fitted where unknown), not the robot's model; leave it out of the overlay")

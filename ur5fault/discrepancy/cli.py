@@ -52,6 +52,7 @@ def cmd_discrepancy(args: argparse.Namespace) -> int:
     from ..logs.measured import assumption_notes
     from ..logs.options import log_entries, read_log_options
     from ..sim.params import load_params
+    from ..twin.replay import refuse_log_owned
     from ..util.checks import check_count, check_number
     from ..util.results import check_new_output
     from .model import FIT_FRACTION_RANGE, DiscrepancyModel
@@ -66,10 +67,13 @@ def cmd_discrepancy(args: argparse.Namespace) -> int:
     model = DiscrepancyModel(fit_fraction=args.fit_fraction, max_effects=args.max_effects,
                              max_terms=args.max_terms, jobs=jobs, progress=not args.quiet)
     check_new_output(args.out, folder=True, results=RESULT_FILES, replace=args.replace)
+    overlay = Overlay.load(args.model) if args.model else None
+    params, effects = (dict(overlay.params), overlay.effects) if overlay else (None, ())
+    refuse_log_owned(params, effects, [])  # a payload in the overlay: before any log is read
     check_files_length([e.path for e in log_entries(args)], "discrepancy")  # an hour-long log: refused in seconds
     logs, held = read_log_options(args, allow_unknown=True)  # an unknown payload is fitted (and said so)
     check_logs_length([*logs, *held], "discrepancy")
-    overlay = Overlay.load(args.model) if args.model else None
+    refuse_log_owned(params, effects, [*logs, *held])  # another tool: before the logs' notes
     if not logs:
         raise ParameterError("every log given is held out; name at least one log to fit")
     temps = load_params(overrides=dict(overlay.params) if overlay else None).joint_temperature_C

@@ -36,6 +36,7 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
     from ...logs.length import check_files_length, check_logs_length
     from ...logs.options import log_entries, read_entry, refuse_hold_out, refuse_unknown_payload
     from ...logs.same_samples import refuse_same_samples
+    from ...twin.replay import refuse_log_owned
     from ...util.results import check_new_output, result_folder
     from ..diagnostics.classifier import require_sklearn
     from ..diagnostics.saved import load_models
@@ -69,13 +70,15 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
     results = (JSON_FILE, REPORT_FILE, FIGURE_FILE)
     check_new_output(args.out, folder=True, results=results, replace=args.replace)
     window_s = check_schema(load_models(args.detector)[1], args.detector)  # refused before the replay
+    overlay = Overlay.load(args.model) if args.model else None
+    params, effects = (dict(overlay.params), overlay.effects) if overlay else (None, ())
+    refuse_log_owned(params, effects, [])  # a payload in the overlay: before any log is read
     check_files_length([e.path for e in (*entries, *base)], "diagnose")
     log = read_entry(entries[0], window_length(window_s))
     healthy = [read_entry(e, window_length(window_s)) for e in base]
     check_logs_length([log, *healthy], "diagnose")
     refuse_same_samples([("diagnosed", [log]), ("a baseline log", healthy)])  # a copy under another name too
-    overlay = Overlay.load(args.model) if args.model else None
-    params, effects = (dict(overlay.params), overlay.effects) if overlay else (None, ())
+    refuse_log_owned(params, effects, [log, *healthy])  # another tool: before the logs' notes
     if healthy:  # what the baseline logs assume (the diagnosed log's notes come with its diagnosis)
         from ...sim.params import load_params
 

@@ -49,6 +49,7 @@ def cmd_monitor(args: argparse.Namespace) -> int:
     from ...logs.options import log_entries, read_log_options, refuse_hold_out, refuse_unknown_payload
     from ...logs.same_samples import refuse_same_samples
     from ...sim.params import load_params
+    from ...twin.replay import refuse_log_owned
     from ...util.io import checksum_path
     from ...util.results import check_new_output, result_folder
     from .baseline import MIN_RUNS, MIN_RUNS_WHY, Baseline, fit_baseline, overlay_sha256
@@ -61,6 +62,7 @@ def cmd_monitor(args: argparse.Namespace) -> int:
         raise ParameterError(f"--jobs {jobs} must be at least 1")
     check_new_output(args.out, folder=True, results=RESULT_FILES, replace=args.replace)
     overlay = Overlay.load(args.baseline)
+    refuse_log_owned(dict(overlay.params), overlay.effects, [])  # a payload in the overlay: before any log is read
     sha = overlay_sha256(dict(overlay.params), overlay.effects)
     stats, verified = None, True
     if args.baseline_stats:
@@ -91,6 +93,7 @@ def cmd_monitor(args: argparse.Namespace) -> int:
     if base_args is not None and len(healthy) < MIN_RUNS:  # before any replay
         raise ParameterError(f"--baseline-logs: {len(healthy)} healthy run given; a baseline needs at least "
                              f"{MIN_RUNS}: {MIN_RUNS_WHY}")
+    refuse_log_owned(dict(overlay.params), overlay.effects, [*healthy, *logs])  # another tool: before the notes
     temps = load_params(overrides=dict(overlay.params)).joint_temperature_C
     recorded = () if stats is None or stats.rest_targets is None else tuple(zip(stats.segments, stats.rest_targets))
     if stats is not None and stats.rest_targets is None:  # written before baseline.json recorded it
