@@ -353,3 +353,13 @@ def test_a_manifest_listing_another_manifest_is_refused_as_such(tmp_path, capsys
     err = capsys.readouterr().err.strip().splitlines()
     assert rc == 2 and err == ["ur5fault: error: nested.yaml: logs[0]: ok.yaml: a manifest cannot list another "
                                "manifest; list that manifest's logs here, or give it alone"], err
+
+
+def test_a_manifest_given_to_hold_out_is_refused_as_such(tmp_path, capsys):
+    # was: read as a CSV log and refused for a missing 'timestamp' column
+    (tmp_path / "held.yaml").write_text(f"format: rtde\npayload_kg: 0\ntcp_offset_m: [0, 0, 0]\nlogs: [{RUN1}]\n")
+    rc = main(["discrepancy", str(RUN1), "--format", "rtde", "--payload-kg", "0", "--tcp-offset-m", "0", "0", "0",
+               "--hold-out", str(tmp_path / "held.yaml"), "--out", str(tmp_path / "o")])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 2 and err == [f"ur5fault: error: --hold-out {tmp_path / 'held.yaml'}: a manifest cannot be held "
+                               "out; mark its logs 'hold_out: true' in one manifest, or give --hold-out log files"], err

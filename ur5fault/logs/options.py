@@ -215,6 +215,10 @@ def _resolve(args: argparse.Namespace) -> tuple[list[LogEntry], set[str], Path |
     """(the logs the command line names, the command-line options they take, the manifest or None)."""
     paths = [args.log] if isinstance(args.log, str) else list(args.log)
     held = list(getattr(args, "hold_out", []) or [])
+    held_manifests = [p for p in held if Path(p).suffix.lower() in MANIFEST_SUFFIXES]
+    if held_manifests:  # it was read as a log: "missing column 'timestamp'"
+        raise ParameterError(f"--hold-out {held_manifests[0]}: a manifest cannot be held out; mark its logs "
+                             "'hold_out: true' in one manifest, or give --hold-out log files")
     manifests = [p for p in paths if Path(p).suffix.lower() in MANIFEST_SUFFIXES]
     if manifests and len(paths) > 1:
         raise ParameterError(f"{manifests[0]}: a manifest of logs must be the only log given (list the others in "
