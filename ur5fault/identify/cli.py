@@ -75,6 +75,8 @@ def cmd_identify(args: argparse.Namespace) -> int:
         if not rec.known:
             print(rec.line(), file=sys.stderr)
     print(result.table())
+    for line in result.notes:
+        print(f"note: {line}", file=sys.stderr)
     out = Path(args.out)
     for path, option in ((out, "--out"), (Path(args.json) if args.json else None, "--json")):
         if path is not None:  # again: another process may have written it while this one fitted

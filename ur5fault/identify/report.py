@@ -56,6 +56,8 @@ class Identification:
         sweep: the bandwidth sweep (``None`` when skipped).
         payloads: per log, its payload as stated or fitted (:class:`ur5fault.twin.payload.PayloadRecord`; empty
             when every log stated it). The log's, not the robot's: never in the overlay.
+        notes: what the fit's own checks say the user should look at, one line each (e.g. a stated payload that
+            UR's own torques contradict).
     """
 
     source: str
@@ -63,6 +65,7 @@ class Identification:
     estimates: tuple[Estimate, ...]
     sweep: Any = None
     payloads: tuple[PayloadRecord, ...] = ()
+    notes: tuple[str, ...] = ()
 
     def get(self, key: str, joint: int | None = None) -> Estimate:
         for e in self.estimates:
@@ -128,6 +131,7 @@ class Identification:
                                "estimates": [e.to_json() for e in self.estimates]}
         if self.payloads:
             out["payload"] = {r.log: r.to_json() for r in self.payloads}
+        out["notes"] = list(self.notes)
         if self.sweep is not None:
             s = self.sweep
             out["sweep"] = {"bandwidths_Hz": s.bandwidths_Hz, "scores": s.scores, "best_Hz": s.best_Hz,
