@@ -257,3 +257,12 @@ def test_a_log_whose_currents_have_the_other_sign_is_refused_when_read(tmp_path)
         read_log(_first_12_s_of_test(tmp_path, negate(["actual_current"])), "rtde", **kw)
     # both negated: the target cannot tell (identify's own check does, ur5fault/identify/core.py)
     read_log(_first_12_s_of_test(tmp_path, negate(["actual_current", "target_current"])), "rtde", **kw)
+
+
+def test_a_log_where_the_arm_stands_throughout_is_said_to():
+    """A standstill-only log: discrepancy named five effects (a shoulder torque constant x0.80 at z 407) and nothing
+    said the arm never moved. Only the standstill run of data/ gets the note (its target spans 1.4 mrad)."""
+    for f in sorted(KUFIETA_DIR.glob("*.csv.gz")):
+        log = read_rtde(f, payload_kg=0.0, tcp_offset_m=(0.0, 0.0, 0.0))
+        stands = [s for s in log.assumptions([28.0] * 6) if "the arm stands throughout" in s]
+        assert len(stands) == (f.name == "Movement_No10_Standstill_WDist.csv.gz"), (f.name, stands)

@@ -21,6 +21,10 @@ UNKNOWN_PAYLOAD = ("this command needs the payload stated: give --payload-kg and
                    "(summary.json / the --json file, \"payload\")")
 
 
+#: a log whose every joint's target spans less than this [rad] stands throughout (a CB2's target at rest follows the
+#: reading, by quanta, and follows a push: Movement_No10_Standstill_WDist spans 1.4 mrad; the moving runs of data/
+#: span 1.4-6.9 rad)
+STANDING_SPAN_RAD = 0.01
 #: two sample periods closer than this [s] are one rate (a median of timestamp differences; the real logs' rates, 8 ms
 #: and 2 ms, differ by millions of it)
 PERIOD_TOL_S = 1e-9
@@ -83,6 +87,11 @@ class MeasuredLog:
         if self.temperature_C is None:
             temps = ", ".join(f"{float(v):g}" for v in np.atleast_1d(joint_temperature_C))
             out.append(f"{self.source}: no joint temperatures in the log; the model's {temps} degC assumed")
+        span = np.ptp(self.q_target_rad, axis=0) if self.t_s.size else np.zeros(0)
+        if span.size and float(span.max()) < STANDING_SPAN_RAD:
+            out.append(f"{self.source}: the arm stands throughout (no joint's target moves {STANDING_SPAN_RAD:g} "
+                       "rad): what shows only in motion (friction, inertia, delays, backlash) is not in it, and at one "
+                       "pose a current gain, a torque constant and a current offset are hard to tell apart")
         return out
 
     def content_sha256(self) -> str:
@@ -102,7 +111,6 @@ class MeasuredLog:
     @property
     def period_s(self) -> float:
         return float(np.median(np.diff(self.t_s)))
-
 
     def to_trajectory(self, name: str | None = None) -> Trajectory:
         """The log's target positions as a setpoint stream, the payload held where :attr:`payload_held` says
