@@ -88,15 +88,16 @@ def own_share(cost: Sequence[float], jobs: int) -> int:
     return k
 
 
-def ignore_interrupt() -> None:
+def ignore_interrupt(parent_pid: int | None = None) -> None:
     """A worker process's start: Ctrl-C is the calling process's to handle (it stops the workers and says so in one
     line). A terminal sends it to every process of its group, and a worker it stopped printed its own
-    ``KeyboardInterrupt`` traceback after that line. The worker also exits when the process that started it is
-    gone (:func:`watch_parent`)."""
+    ``KeyboardInterrupt`` traceback after that line. The worker also exits when ``parent_pid``, the process that
+    started it (given by that process: a worker starting after its parent was killed would otherwise take its new
+    parent, init, for it and watch it for ever), is gone (:func:`watch_parent`)."""
     import signal
 
     signal.signal(signal.SIGINT, signal.SIG_IGN)
-    watch_parent(os.getppid())
+    watch_parent(os.getppid() if parent_pid is None else parent_pid)
 
 
 def watch_parent(parent_pid: int) -> None:
@@ -124,7 +125,7 @@ def _executor(jobs: int):
     started by :func:`ignore_interrupt`."""
     from joblib.executor import get_memmapping_executor
 
-    return get_memmapping_executor(jobs - 1, initializer=ignore_interrupt)
+    return get_memmapping_executor(jobs - 1, initializer=ignore_interrupt, initargs=(os.getpid(),))
 
 
 def iter_tasks(fn: Callable[..., Any], tasks: Sequence[tuple], jobs: int, cost: Sequence[float] | None = None

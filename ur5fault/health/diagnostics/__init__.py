@@ -319,11 +319,13 @@ def _start_comparison(features: pd.DataFrame, seed: int, threshold_mm: float, so
     so a worker returns what this process would; the workers run while this process scores the chosen set
     (the comparison was about 70 % of a full benchmark's CPU: 340 of 477 s on the 2,546-run dataset, when it also
     trained the chosen set's classifiers a second time)."""
+    import os
+
     from joblib.externals.loky import get_reusable_executor
 
     from ...util.parallel import ignore_interrupt
 
-    pool = get_reusable_executor(max_workers=jobs, initializer=ignore_interrupt)
+    pool = get_reusable_executor(max_workers=jobs, initializer=ignore_interrupt, initargs=(os.getpid(),))
     return {fs: {"shuffled" if shuffled else "trained": pool.submit(_compared, features, seed, shuffled,
                                                                     threshold_mm, source, fs)
                  for shuffled in (False, True) if shuffled or fs != reused} for fs in FEATURE_SETS}
