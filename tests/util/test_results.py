@@ -93,3 +93,18 @@ def test_the_lock_names_its_writer(tmp_path):
     with Lock(tmp_path), pytest.raises(FolderLockedError, match="another campaign is writing this folder"):
         with Lock(tmp_path):
             pass
+
+
+def test_one_output_file_is_written_by_one_process_at_a_time(tmp_path):
+    """Two `identify --out same.yaml` started together both checked an empty place, both wrote, both said so (5 of 12
+    trials). The file's own lock, held while the second checks, refuses it, and the lock file goes with the holder."""
+    from ur5fault.util.results import file_lock
+
+    out = tmp_path / "fit" / "p.yaml"
+    with file_lock(out):
+        with pytest.raises(FolderLockedError, match=r"p.yaml: another ur5fault process is writing it \(host"):
+            with file_lock(out):
+                pass
+        with file_lock(tmp_path / "fit" / "other.yaml"):  # another file beside it: its own lock
+            pass
+    assert not (out.parent / ".p.yaml.lock").exists()

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
 import sys
 from pathlib import Path
@@ -40,7 +41,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
     from ..logs.options import log_entries, read_log_options
     from ..sim.params import load_params
     from ..util.io import write_json_atomic, write_text_atomic
-    from ..util.results import check_new_output
+    from ..util.results import check_new_output, file_lock
     from . import identify
 
     if not 20 <= args.bootstrap <= MAX_BOOT:
@@ -78,14 +79,15 @@ def cmd_identify(args: argparse.Namespace) -> int:
     for line in result.notes:
         print(f"note: {line}", file=sys.stderr)
     out = Path(args.out)
-    for path, option in ((out, "--out"), (Path(args.json) if args.json else None, "--json")):
-        if path is not None:  # again: another process may have written it while this one fitted
-            check_new_output(path, replace=args.replace, option=option)
-    write_text_atomic(out, result.to_yaml(params))
-    written = [str(out)]
-    if args.json:
-        write_json_atomic(Path(args.json), {**result.to_json(),
-                                            "log_assumptions": notes})
-        written.append(args.json)
+    text = result.to_yaml(params)  # checked as --model reads it before any lock is taken
+    with contextlib.ExitStack() as held:
+        for path, option in ((out, "--out"), (Path(args.json) if args.json else None, "--json")):
+            if path is not None:  # again, under the file's lock: another run may have written it while this one fitted
+                held.enter_context(file_lock(path))
+                check_new_output(path, replace=args.replace, option=option)
+        write_text_atomic(out, text)
+        if args.json:
+            write_json_atomic(Path(args.json), {**result.to_json(), "log_assumptions": notes})
+    written = [str(out), *([args.json] if args.json else [])]
     print(f"wrote {', '.join(written)}")
     return 0

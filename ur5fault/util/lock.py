@@ -37,11 +37,14 @@ class FolderLockedError(Ur5FaultError, RuntimeError):
 
 class Lock:
     """Hold ``OUT/.lock`` for the duration of a ``with`` block (refused at once when held). ``what`` names the
-    writer in the refusal (``campaign``: "another campaign is writing this folder")."""
+    writer in the refusal (``campaign``: "another campaign is writing this folder"); ``name``: another lock file in
+    ``out`` (one output file's, ``.NAME.lock``: :func:`ur5fault.util.results.file_lock`, whose refusal names the
+    ``subject`` file)."""
 
-    def __init__(self, out: Path, what: str = "campaign") -> None:
-        self.path = Path(out) / LOCK_NAME
+    def __init__(self, out: Path, what: str = "campaign", name: str = LOCK_NAME, subject: Path | None = None) -> None:
+        self.path = Path(out) / name
         self.what = what
+        self.subject = subject  # the one file this lock guards (None: the folder)
         self._fd: int | None = None
 
     def __enter__(self) -> Lock:
@@ -58,7 +61,8 @@ class Lock:
                 if exc.errno in (errno.EWOULDBLOCK, errno.EAGAIN, errno.EACCES):
                     owner = lock_owner(self.path)
                     raise FolderLockedError(
-                        f"{self.path.parent}: another {self.what} is writing this folder (host "
+                        f"{self.subject or self.path.parent}: another {self.what} is writing "
+                        f"{'it' if self.subject else 'this folder'} (host "
                         f"{owner[0] if owner else '?'}, pid {owner[1] if owner else '?'}); wait for it or choose "
                         "another --out") from None
                 raise OutputError(f"{self.path}: cannot lock ({exc.strerror})") from None

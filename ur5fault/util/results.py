@@ -69,6 +69,14 @@ def check_new_output(path: str | Path, *, folder: bool = False, results: tuple[s
 
 
 
+def file_lock(path: str | Path) -> Lock:
+    """The lock of one output file (``identify``'s overlay): ``.NAME.lock`` beside it, held while the command checks
+    and writes it, so that two runs started together into one file do not both write it (each had checked an empty
+    place at its start)."""
+    path = Path(path)
+    return Lock(path.parent, what="ur5fault process", name=f".{path.name}.lock", subject=path)
+
+
 @contextlib.contextmanager
 def result_folder(out: str | Path, results: tuple[str, ...] = (), replace: bool = True,
                   option: str = "--out") -> Iterator[Path]:
