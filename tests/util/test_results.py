@@ -108,3 +108,18 @@ def test_one_output_file_is_written_by_one_process_at_a_time(tmp_path):
         with file_lock(tmp_path / "fit" / "other.yaml"):  # another file beside it: its own lock
             pass
     assert not (out.parent / ".p.yaml.lock").exists()
+
+
+def test_a_set_cut_short_is_removed_before_another_commands_set(tmp_path):
+    """monitor into a folder a killed discrepancy left: it said "replacing it", wrote its files beside the killed
+    run's model.yaml and summary.json and removed the mark, so those passed for a result. The files the cut-short
+    writer named in its mark are removed first; a user's own file in the folder stays."""
+    out = tmp_path / "out"
+    with pytest.raises(KeyboardInterrupt), result_folder(out, ("report.md", "model.yaml", "summary.json")) as f:
+        (f / "model.yaml").write_text("partial")
+        (f / "summary.json").write_text("partial")
+        raise KeyboardInterrupt
+    (out / "notes.txt").write_text("mine")
+    with result_folder(out, ("monitor.json", "baseline.json", "report.md")) as f:
+        (f / "monitor.json").write_text("{}")
+    assert sorted(p.name for p in out.iterdir()) == ["monitor.json", "notes.txt"]

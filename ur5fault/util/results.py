@@ -18,8 +18,10 @@ result" until a person deleted it.  :func:`result_folder` writes the set:
 from __future__ import annotations
 
 import contextlib
+import json
 import logging
 import os
+import shutil
 import socket
 from collections.abc import Iterator
 from pathlib import Path
@@ -90,6 +92,27 @@ def result_folder(out: str | Path, results: tuple[str, ...] = (), replace: bool 
                              holding_lock=True)
         remove_stale_temporaries(out, 0)  # we hold the lock: no running writer owns them
         mark = out / INCOMPLETE_MARK
-        write_text_atomic(mark, f"{socket.gethostname()} {os.getpid()}\n")
+        _remove_cut_short(out, mark)
+        write_text_atomic(mark, json.dumps({"host": socket.gethostname(), "pid": os.getpid(),
+                                            "results": list(results)}) + "\n")
         yield out
         mark.unlink(missing_ok=True)
+
+
+def _remove_cut_short(out: Path, mark: Path) -> None:
+    """The result files a writer stopped mid-set had named in its mark, removed before another set is written: a
+    command of another kind (monitor into a folder a killed discrepancy left) wrote its own files beside them and
+    removed the mark, so they passed for a result. Only plain names inside ``out`` (a ``models/`` folder too)."""
+    try:
+        names = json.loads(mark.read_text()).get("results", [])
+    except (OSError, ValueError, AttributeError):  # absent, or a mark of before it recorded them
+        return
+    for name in names if isinstance(names, list) else []:
+        if not isinstance(name, str) or not name or Path(name).name != name or name in (".", ".."):
+            continue
+        path = out / name
+        if path.is_dir() and not path.is_symlink():
+            shutil.rmtree(path, ignore_errors=True)
+        elif path.exists() or path.is_symlink():
+            path.unlink(missing_ok=True)
+            (out / f"{name}.sha256").unlink(missing_ok=True)
