@@ -47,6 +47,6 @@ def test_a_finding_out_of_its_range_is_no_effect_spec_and_says_why():
     assert kept.spec().name == "current_sensor_offset" and kept.label == "wrist_1_joint: current_sensor_offset.offset_A"
     assert dropped.values == {"scale": pytest.approx(2.526)}
     with pytest.raises(ParameterError, match=r"^shoulder_lift_joint: torque_constant.scale: fitted torque_constant"
-                                             r".scale = 2.526 is outside its valid range \[0.2, 2\] -, so it is no "
+                                             r".scale = 2.526 is outside its valid range \[0.2, 2\], so it is no "
                                              r"effect of a model \(dropped: explains nothing"):
         dropped.spec()

@@ -72,7 +72,7 @@ class Candidate:
         for key, v in self.values(coef).items():
             p = eff.param(key)
             if not (np.isfinite(v) and p.lo <= v <= p.hi):
-                return f"fitted {self.effect}.{key} = {v:.4g} is outside its valid range [{p.lo:g}, {p.hi:g}] {p.unit}"
+                return f"fitted {self.effect}.{key} = {v:.4g} is outside its valid range {p.range_text()}"
         return None
 
     def bounds(self) -> tuple[NDArray, NDArray]:  # pragma: no cover - overridden

@@ -21,6 +21,10 @@ class EffectParam:
     absent: float | None  # the value meaning "no effect"; None: a value is required
     doc: str
 
+    def range_text(self) -> str:
+        """``[lo, hi] unit`` as messages write it (a factor's unit ``-`` left out: it read as a line cut off)."""
+        return f"[{self.lo:g}, {self.hi:g}]" + ("" if self.unit in ("", "-") else f" {self.unit}")
+
 
 @dataclasses.dataclass(frozen=True)
 class Effect:

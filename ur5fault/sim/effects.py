@@ -111,11 +111,10 @@ def make_effect(name: str, joint: int | str | None = None, where: str = "", **va
         if p.name not in values and p.absent is None:
             raise ParameterError(f"{loc}effect {name!r} needs a value for {p.name!r} [{p.unit}]")
         v = values.get(p.name, p.absent)
-        unit = "" if p.unit in ("", "-") else f" {p.unit}"  # a factor: no trailing "-" that reads as cut off
         if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(float(v)):
-            raise ParameterError(f"{loc}{name}.{p.name} = {v!r} must be a number in [{p.lo:g}, {p.hi:g}]{unit}")
+            raise ParameterError(f"{loc}{name}.{p.name} = {v!r} must be a number in {p.range_text()}")
         if not p.lo <= float(v) <= p.hi:
-            raise ParameterError(f"{loc}{name}.{p.name} = {v!r} is out of range [{p.lo:g}, {p.hi:g}]{unit}")
+            raise ParameterError(f"{loc}{name}.{p.name} = {v!r} is out of range {p.range_text()}")
         out.append((p.name, float(v)))
     return EffectSpec(name, j, tuple(out))
 
