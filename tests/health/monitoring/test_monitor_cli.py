@@ -9,6 +9,7 @@ import pandas as pd
 import pytest
 
 from tests.conftest import KUFIETA_DIR
+from ur5fault.sim.axes import JOINT_NAMES
 
 CMD = [sys.executable, "-m", "ur5fault.cli", "monitor"]
 RTDE = ["--format", "rtde", "--payload-kg", "0", "--tcp-offset-m", "0", "0", "0"]
@@ -47,10 +48,11 @@ def monitored(tmp_path_factory):
 def test_monitor_json_schema(monitored):
     _, _, logs, out, _ = monitored
     data = json.loads((out / "monitor.json").read_text())
-    assert list(data) == ["logs"]
+    assert list(data) == ["logs", "notes"]
     assert [e["log"] for e in data["logs"]] == [p.name for p in logs]
     for e in data["logs"]:
-        assert set(e) == {"log", "verdict", "changes", "events"}
+        assert set(e) == {"log", "verdict", "changes", "events", "event_limit_median", "notes"}
+        assert set(e["event_limit_median"]["current"]) == set(JOINT_NAMES)
         assert e["verdict"] in ("consistent", "changed", "anomaly")
         for ev in e["events"]:
             assert set(ev) == {"t_start_s", "t_end_s", "joints", "channels", "peak_A", "peak_rad"}

@@ -63,7 +63,9 @@ def test_spread_grows_with_speed_as_the_baseline_residual_did():
 def test_a_pulse_is_an_event_on_its_joint_and_time_and_noise_is_not():
     b = fit_baseline([part(f"r{k}", noise(k)) for k in range(3)], "sha")
     quiet = assess(b, part("quiet", noise(10)))
-    assert quiet == {"log": "quiet", "verdict": "consistent", "changes": [], "events": []}
+    assert {k: quiet[k] for k in ("log", "verdict", "changes", "events")} == {
+        "log": "quiet", "verdict": "consistent", "changes": [], "events": []}
+    assert quiet["notes"] == []  # every joint's baseline alike: none called out
     r = noise(11)
     r[1000:1060, 2] += 1.0  # 1 A for 0.48 s on the elbow
     out = assess(b, part("pushed", r))
@@ -316,3 +318,18 @@ def test_joints_the_push_does_not_load_are_seldom_named():
         assert len(ev) == 1 and "elbow_joint" in ev[0]["joints"], ev  # (an event elsewhere: the log's own 1 %)
         extra += len(ev[0]["joints"]) - 1
     assert extra <= 2
+
+
+def test_a_joint_judged_against_a_limit_far_above_the_others_is_called_out():
+    """Two clean baseline runs that hardly moved wrist 2 set its current limit at 29,191 x its spread: a 5 A bump of
+    0.5 s there was "consistent" without a word, where the same bump on the base was an event. The verdict now names
+    a joint whose typical limit is BLIND_FACTOR times the joints' median or more."""
+    from ur5fault.health.monitoring.verdict import BLIND_FACTOR, blind_joints
+
+    typical = {"current": np.array([0.9, 1.1, 0.8, 0.3, 46.0, 0.2]), "position": np.full(6, 2e-4)}
+    notes = blind_joints(typical)
+    assert len(notes) == 1 and notes[0].startswith("wrist_2_joint: its current events are judged against a limit "
+                                                   "of 46 A"), notes
+    healthy = {"current": np.array([0.9, 1.1, 0.8, 0.3, 0.6 * BLIND_FACTOR * 0.7, 0.2])}
+    assert blind_joints(healthy) == []
+    assert blind_joints({"current": np.full(6, np.nan)}) == []  # nothing judged: nothing said

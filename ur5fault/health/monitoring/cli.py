@@ -100,7 +100,8 @@ def cmd_monitor(args: argparse.Namespace) -> int:
         print(f"note: {args.baseline_stats} does not record its runs' target at rest (written by an earlier "
               f"version): whether the logs are of its runs' controller is not checked; rebuild it with "
               f"--baseline-logs to have it checked", file=sys.stderr)
-    for line in assumption_notes([*healthy, *logs], temps, others=recorded):
+    notes = assumption_notes([*healthy, *logs], temps, others=recorded)
+    for line in notes:
         print(f"note: {line}", file=sys.stderr)
     params, effects = dict(overlay.params), overlay.effects
     if stats is None:
@@ -110,8 +111,10 @@ def cmd_monitor(args: argparse.Namespace) -> int:
     channels = tuple(dict.fromkeys(args.event_channels))
     entries = [assess(stats, o, channels) for o in observed]
     with result_folder(args.out, RESULT_FILES, args.replace) as out:  # one set: a stop between files is marked
-        paths = write(out, stats, observed, entries, args.baseline, channels, verified)
+        paths = write(out, stats, observed, entries, args.baseline, channels, verified, notes)
     for e in entries:
         print(f"{e['log']}: {e['verdict']} ({len(e['changes'])} changes, {len(e['events'])} events)")
+        for line in e["notes"]:
+            print(f"note: {e['log']}: {line}", file=sys.stderr)
     print(f"wrote {', '.join(str(p) for p in paths[:2])}, {paths[-1]}")
     return 0

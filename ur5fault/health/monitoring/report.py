@@ -88,9 +88,9 @@ def _clip_to_the_transient(ax, dev: NDArray, lim: NDArray, unit: str) -> None:
 
 
 def markdown(baseline: Baseline, entries: Sequence[dict[str, Any]], figs: Sequence[str], model: str,
-             channels: Sequence[str], paired_s: Sequence[tuple[float, float]] = ()) -> str:
+             channels: Sequence[str], paired_s: Sequence[tuple[float, float]] = (), notes: Sequence[str] = ()) -> str:
     """``paired_s``: per log, the seconds judged against a baseline run repeating its task, and its judged
-    seconds."""
+    seconds; ``notes``: what the logs' reading assumed (no temperatures, gaps filled, ...)."""
     lines = ["# Monitoring report", "",
              f"Baseline: model overlay `{model}`, residual statistics of {len(baseline.segments)} healthy run(s): "
              + ", ".join(f"`{s}`" for s in baseline.segments) + ".", "",
@@ -119,20 +119,27 @@ def markdown(baseline: Baseline, entries: Sequence[dict[str, Any]], figs: Sequen
         if paired_s:
             lines.append(f"- current judged against a baseline run repeating its task on {paired_s[k][0]:.1f} of "
                          f"{paired_s[k][1]:.1f} s (elsewhere against the baseline's spread at its motion)")
+        lines += [f"- note: {n}" for n in e.get("notes", ())]
+        for c, per in (e.get("event_limit_median") or {}).items():
+            lines.append(f"- {c} event limit at this log's motion (median over its judged samples): "
+                         + ", ".join(f"{jn} {v:.3g}" for jn, v in per.items()) + f" {UNITS[c]}")
         lines += ["", f"![{e['log']}]({fig})"]
+    if notes:
+        lines += ["", "## Assumed", ""] + [f"- {n}" for n in notes]
     return "\n".join(lines) + "\n"
 
 
 def write(out: Path, baseline: Baseline, observed: Sequence[Observed], entries: Sequence[dict[str, Any]],
-          model: str, channels: Sequence[str], verified: bool = True) -> list[Path]:
+          model: str, channels: Sequence[str], verified: bool = True, notes: Sequence[str] = ()) -> list[Path]:
     """Write every output into ``out`` (created), atomically; returns the paths, ``monitor.json`` first.
     ``verified``: the baseline's statistics were built here or read against their checksum; a baseline read
-    unverified is written without one (a fresh checksum would vouch for what nothing checked)."""
+    unverified is written without one (a fresh checksum would vouch for what nothing checked). ``notes``: what
+    the logs' reading assumed, printed as ``note:`` lines, kept in ``monitor.json`` and ``report.md`` too."""
     out.mkdir(parents=True, exist_ok=True)
     remove_stale_temporaries(out)  # of a writer killed mid-write over an hour ago
     if not verified:  # an earlier result's (--replace), removed first: a crash between would leave it mismatched
         checksum_path(out / "baseline.json").unlink(missing_ok=True)
-    paths = [write_json_atomic(out / "monitor.json", {"logs": list(entries)}),
+    paths = [write_json_atomic(out / "monitor.json", {"logs": list(entries), "notes": list(notes)}),
              write_json_atomic(out / "baseline.json", baseline.to_json(), checksum=verified)]
     figs, paired_s = [], []
     for k, (obs, e) in enumerate(zip(observed, entries)):
@@ -144,5 +151,5 @@ def write(out: Path, baseline: Baseline, observed: Sequence[Observed], entries: 
         figs.append(name)
     remove_unwritten(out, "monitor_*.png", paths)  # an earlier result's figures of more logs (--replace)
     paths.append(write_text_atomic(out / "report.md", markdown(baseline, entries, figs, model, channels,
-                                                               paired_s)))
+                                                               paired_s, notes)))
     return paths

@@ -10,6 +10,7 @@ from numpy.typing import NDArray
 
 from ...errors import ParameterError
 from ...logs.measured import same_period
+from ...sim.axes import JOINT_NAMES, N_JOINTS
 from . import paired
 from .baseline import Baseline
 from .changes import BLOCK_S, block_reference, estimates, find_changes, keep_mask, strongest
@@ -20,6 +21,7 @@ from .events import (
     DEFAULT_CHANNELS,
     FALSE_ALARM_PER_LOG,
     QUANTUM_FLOOR,
+    UNITS,
     find_events,
     multiplier,
     n_windows,
@@ -181,8 +183,36 @@ def assess(baseline: Baseline, obs: Observed, channels: Sequence[str] = DEFAULT_
                              f"itself it pairs at lag 0 and can never change: monitor it against a baseline "
                              f"without it")
     hs, limits_at, judged, _ = transients_and_limits(baseline, obs, channels)
-    events, over = find_events(obs.t_s, hs, limits_at(1.0), judged)
+    lims = limits_at(1.0)
+    events, over = find_events(obs.t_s, hs, lims, judged)
     events = name_joints(events, obs.t_s, hs, limits_at, judged, baseline.period_s)
     changes = judge_changes(baseline, obs, over)
     verdict = "changed" if changes else "anomaly" if events else "consistent"
-    return {"log": obs.name, "verdict": verdict, "changes": changes, "events": events}
+    typical = {c: np.nanmedian(np.where(judged[:, None], lim, np.nan), axis=0) if judged.any()
+               else np.full(N_JOINTS, np.nan) for c, lim in lims.items()}
+    return {"log": obs.name, "verdict": verdict, "changes": changes, "events": events,
+            "event_limit_median": {c: {JOINT_NAMES[j]: float(v[j]) for j in range(N_JOINTS)}
+                                   for c, v in typical.items()},
+            "notes": blind_joints(typical)}
+
+
+#: a joint whose typical event limit is this many times the median of the six joints' is called out: a healthy
+#: baseline gives the wrists smaller limits than the big joints (they draw less current), so a wrist far above the
+#: rest is a spread its baseline runs could not estimate (two runs that hardly move it: wrist_2 at 29,191 x its
+#: spread, a 5 A bump of 0.5 s on it judged consistent, where the same bump on the base was an event)
+BLIND_FACTOR = 10.0
+
+
+def blind_joints(typical: dict[str, NDArray]) -> list[str]:
+    """A note per channel and joint whose typical (median) event limit is :data:`BLIND_FACTOR` times the joints'
+    median or more: events there are judged against a limit the rest of the arm would never need."""
+    notes = []
+    for c, v in typical.items():
+        unit = UNITS[c]
+        mid = float(np.nanmedian(v)) if np.isfinite(v).any() else np.nan
+        for j in np.flatnonzero(np.isfinite(v) & (v >= BLIND_FACTOR * mid)) if mid > 0 else []:
+            notes.append(f"{JOINT_NAMES[j]}: its {c} events are judged against a limit of {v[j]:.3g} {unit} at this "
+                         f"log's motion, {v[j] / mid:.0f} x the joints' median ({mid:.3g} {unit}): the baseline runs "
+                         "do not tell its spread (they hardly move it, or disagree); an event smaller than that is not "
+                         "seen there: give baseline runs that move it as this log does")
+    return notes
