@@ -266,3 +266,25 @@ def test_a_log_where_the_arm_stands_throughout_is_said_to():
         log = read_rtde(f, payload_kg=0.0, tcp_offset_m=(0.0, 0.0, 0.0))
         stands = [s for s in log.assumptions([28.0] * 6) if "the arm stands throughout" in s]
         assert len(stands) == (f.name == "Movement_No10_Standstill_WDist.csv.gz"), (f.name, stands)
+
+
+KW = {"payload_kg": 0.0, "tcp_offset_m": (0.0, 0.0, 0.0)}
+
+
+def test_a_reading_far_from_its_target_is_refused_when_read(tmp_path):
+    """J2's reading frozen for 3 s while its setpoint moves (a stuck encoder, a recorder's fill): monitor called the
+    log consistent and identify wrote a velocity feed-forward of -1.2. A UR stops itself on a far smaller following
+    error; every real log of data/ stays within 0.008 rad (pushes included; the constant's comment)."""
+    for path in (*KUFIETA_RUNS, NIST_LOG):
+        fmt = "nist" if path == NIST_LOG else "rtde"
+        read_log(path, fmt, **(KW if fmt == "rtde" else {}))
+
+    def freeze(df):
+        t = df["time"] - df["time"].iloc[0]
+        moving = (t >= 5.0) & (t < 8.0)
+        df.loc[moving, "actual_q_1"] = df.loc[moving, "actual_q_1"].iloc[0]
+
+    with pytest.raises(LogFormatError, match=r"test12.csv: the measured position of joint 2 departs from its target "
+                                             r"by up to 1.14 rad \(at t = 7.99 s; more than 0.05 rad from t = 6.67 "
+                                             r"to 7.99 s\), far beyond what a running UR allows.*a stuck encoder"):
+        read_log(_first_12_s_of_test(tmp_path, freeze), "rtde", **KW)

@@ -28,6 +28,10 @@ Limits and their reasons:
   must not be :data:`SIGN_CHECK_MAX_COSINE` or below (the real logs of data/ give 0.79..1.00 on every such joint, a
   log with every current negated -0.99 and -0.94 on the shoulder and elbow; identify once wrote a negative torque
   constant and negative friction from it, which every other command refused);
+- a measured position that follows its target: no joint's ``|target - actual|`` above
+  :data:`MAX_FOLLOWING_ERROR_RAD` (a UR stops itself on a far smaller following error; a reading frozen for 3 s while
+  its joint moved, 0.42 rad from its target, was called "consistent" by ``monitor`` and gave ``identify`` a velocity
+  feed-forward of -1.2); not for simulated logs, whose faults may carry the twin up to its own protective stop;
 - joint temperatures, where logged: each joint's median within the model's range for
   ``joint_temperature_C`` (``sim.params.JOINT_TEMPERATURE_RANGE_C``, -20..120 degC), one in 253..393 named as kelvin (a
   log in kelvin once gave ``identify`` a viscous friction of 2337 N*m*s/rad, which every other command refused,
@@ -83,6 +87,15 @@ CURRENT_RANGE_A = 20.0
 SIGN_CHECK_MIN_RMS_A = 0.5
 #: ... and a reading whose cosine with the target is this or below runs against it
 SIGN_CHECK_MAX_COSINE = -0.5
+#: the largest |target - actual| joint position a log of a running robot may show [rad]. Measured on the ten real logs
+#: of data/ (every joint, every row, all ten): NIST 0.13..0.88 mrad; the Kufieta runs up to 7.34 mrad
+#: (Movement_No3_Acc's elbow at 3.2 rad/s; Movement_No4_Acc 7.17), the pushed runs 7.04 mrad
+#: (Movement_No5_Acc_slow_w_disturbance, the base, pushed in motion) and 0.41 mrad (Movement_No10_Standstill_WDist:
+#: pushed at rest, where a CB2 logs the previous reading as its target, so a push never opens a gap there), the other
+#: runs 1.38..2.28 mrad. The limit is 6.8 times the largest, half the twin's own protective stop
+#: (``sim.loops.PROTECTIVE_STOP_RAD``, 0.1 rad), and an eighth of a reading frozen for 3 s while its joint moved
+#: (0.42 rad)
+MAX_FOLLOWING_ERROR_RAD = 0.05
 
 
 def check_joint_count(src: str, indices: Iterable[int], first: int) -> None:
@@ -207,6 +220,24 @@ def check_current_sign(src: str, current_A: NDArray, target_current_A: NDArray |
                              f"{got}): its sign convention is opposite to the torque's, as in a log with currents of "
                              "the other sign (ur5fault takes a current positive when it drives the joint positive); "
                              "negate the current columns of the other sign")
+
+
+def check_following_error(src: str, t: NDArray, target_q_rad: NDArray, actual_q_rad: NDArray) -> None:
+    """No joint's measured position departs from its target by more than :data:`MAX_FOLLOWING_ERROR_RAD` (whole turns
+    between the two, which a logger's wrap may leave, do not count); ``t``: the times [s] from the log's start."""
+    d = np.asarray(target_q_rad, float) - np.asarray(actual_q_rad, float)
+    err = np.abs((d + np.pi) % (2.0 * np.pi) - np.pi)
+    peak = err.max(axis=0, initial=0.0)
+    j = int(np.argmax(peak))
+    if peak[j] <= MAX_FOLLOWING_ERROR_RAD:
+        return
+    over = np.flatnonzero(err[:, j] > MAX_FOLLOWING_ERROR_RAD)
+    i = int(np.argmax(err[:, j]))
+    raise LogFormatError(f"{src}: the measured position of joint {j + 1} departs from its target by up to "
+                         f"{peak[j]:.3g} rad (at t = {t[i]:.2f} s; more than {MAX_FOLLOWING_ERROR_RAD:g} rad from "
+                         f"t = {t[over[0]]:.2f} to {t[over[-1]]:.2f} s), far beyond what a running UR allows (it stops "
+                         "itself on a much smaller following error; every real log of data/ stays within 0.008 rad): "
+                         "a stuck encoder, a column the recorder filled, or a target and a reading of different joints")
 
 
 def check_temperature_units(src: str, temperature_C: NDArray | None) -> None:
