@@ -288,3 +288,25 @@ def test_a_reading_far_from_its_target_is_refused_when_read(tmp_path):
                                              r"by up to 1.14 rad \(at t = 7.99 s; more than 0.05 rad from t = 6.67 "
                                              r"to 7.99 s\), far beyond what a running UR allows.*a stuck encoder"):
         read_log(_first_12_s_of_test(tmp_path, freeze), "rtde", **KW)
+
+
+def test_a_dead_current_channel_is_refused_where_the_target_current_tells(tmp_path):
+    """A current channel reading noise (or a constant plus noise) where UR's target current is 4 A RMS: monitor
+    reported a torque constant scale of 1.89 on J2, identify a sign error or an out-of-range friction. The
+    reading's RMS against the target's tells (0.84..2.40 on every real log of data/; the constant's comment)."""
+    rng = np.random.default_rng(0)
+
+    def noise(offset):
+        def edit(df):
+            df["actual_current_1"] = offset + rng.normal(0.0, 0.01, len(df))
+        return edit
+
+    for offset in (0.0, 0.3):
+        with pytest.raises(LogFormatError, match=r"test12.csv: the current of joint 2 reads 0.\d+ A RMS where UR's "
+                                                 r"target current is 4.\d+ A RMS.*a dead channel or a column of "
+                                                 r"another quantity"):
+            read_log(_first_12_s_of_test(tmp_path, noise(offset)), "rtde", **KW)
+    # a wrist's target (0.06 A RMS on TEST's J4) is too small to tell: its reading may be anything near it
+    read_log(_first_12_s_of_test(tmp_path, lambda df: df.__setitem__("actual_current_3", rng.normal(0, 0.01, len(df)))),
+             "rtde", **KW)
+

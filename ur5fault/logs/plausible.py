@@ -28,6 +28,11 @@ Limits and their reasons:
   must not be :data:`SIGN_CHECK_MAX_COSINE` or below (the real logs of data/ give 0.79..1.00 on every such joint, a
   log with every current negated -0.99 and -0.94 on the shoulder and elbow; identify once wrote a negative torque
   constant and negative friction from it, which every other command refused);
+- a current that carries the torque, where the log has UR's target currents: on a joint whose target current is at
+  least :data:`SIGN_CHECK_MIN_RMS_A` RMS, the reading's RMS must be at least :data:`CURRENT_MIN_RMS_RATIO` of the
+  target's (the real logs of data/ give 0.84..2.40 on every such joint; a channel reading noise around 0 A or 0.3 A
+  gave ``monitor`` a "changed" torque constant, scale 1.89, and ``identify`` a negative friction it took for a sign
+  error);
 - a measured position that follows its target: no joint's ``|target - actual|`` above
   :data:`MAX_FOLLOWING_ERROR_RAD` (a UR stops itself on a far smaller following error; a reading frozen for 3 s while
   its joint moved, 0.42 rad from its target, was called "consistent" by ``monitor`` and gave ``identify`` a velocity
@@ -87,6 +92,12 @@ CURRENT_RANGE_A = 20.0
 SIGN_CHECK_MIN_RMS_A = 0.5
 #: ... and a reading whose cosine with the target is this or below runs against it
 SIGN_CHECK_MAX_COSINE = -0.5
+#: ... and a reading whose RMS is below this share of the target's RMS carries no torque: a dead channel reading
+#: noise, or a column of another quantity. Measured on the ten real logs of data/ (every joint whose target is at least
+#: 0.5 A RMS, 24 joints of 10 logs): 0.84 (NIST, elbow) .. 2.40 (Movement_No1, base, 0.54 A RMS target); the shoulder
+#: 0.87..1.06, the elbow 0.84..1.37; a channel of N(0, 0.01 A) noise on the shoulder gives 0.003, 0.3 A plus that
+#: noise 0.07
+CURRENT_MIN_RMS_RATIO = 0.2
 #: the largest |target - actual| joint position a log of a running robot may show [rad]. Measured on the ten real logs
 #: of data/ (every joint, every row, all ten): NIST 0.13..0.88 mrad; the Kufieta runs up to 7.34 mrad
 #: (Movement_No3_Acc's elbow at 3.2 rad/s; Movement_No4_Acc 7.17), the pushed runs 7.04 mrad
@@ -220,6 +231,23 @@ def check_current_sign(src: str, current_A: NDArray, target_current_A: NDArray |
                              f"{got}): its sign convention is opposite to the torque's, as in a log with currents of "
                              "the other sign (ur5fault takes a current positive when it drives the joint positive); "
                              "negate the current columns of the other sign")
+
+
+def check_current_carries_torque(src: str, current_A: NDArray, target_current_A: NDArray | None) -> None:
+    """On every joint whose target current is at least :data:`SIGN_CHECK_MIN_RMS_A` RMS, the reading's RMS is at least
+    :data:`CURRENT_MIN_RMS_RATIO` of the target's; a log without target currents is not checked."""
+    if target_current_A is None or target_current_A.size == 0:
+        return
+    a, t = np.asarray(current_A, float), np.asarray(target_current_A, float)
+    rms_a, rms_t = np.sqrt(np.mean(a**2, axis=0)), np.sqrt(np.mean(t**2, axis=0))
+    bad = [j for j in range(a.shape[1])
+           if rms_t[j] >= SIGN_CHECK_MIN_RMS_A and rms_a[j] < CURRENT_MIN_RMS_RATIO * rms_t[j]]
+    if bad:
+        said = "; ".join(f"joint {j + 1} reads {rms_a[j]:.3g} A RMS where UR's target current is {rms_t[j]:.3g} A RMS"
+                         for j in bad)
+        raise LogFormatError(f"{src}: the current of {said} (below {CURRENT_MIN_RMS_RATIO:g} of it; every real log of "
+                             "data/ reads 0.84 of its target or more): a dead channel or a column of another quantity, "
+                             "nothing to fit")
 
 
 def check_following_error(src: str, t: NDArray, target_q_rad: NDArray, actual_q_rad: NDArray) -> None:

@@ -346,6 +346,7 @@ def read_log(path: str | Path, fmt: str, length: plausible.MinLength | None = No
         raise LogFormatError(f"{p}: not a file")
     log = READERS[fmt](p, length=length, **{k: v for k, v in kwargs.items() if v is not None})
     plausible.check_current_units(log.source, {"current": log.current_A, "target current": log.target_current_A})
+    plausible.check_current_carries_torque(log.source, log.current_A, log.target_current_A)
     plausible.check_current_sign(log.source, log.current_A, log.target_current_A)
     if not log.simulated:  # a simulated fault may carry the twin up to its own protective stop
         plausible.check_following_error(log.source, log.t_s, log.q_target_rad, log.q_actual_rad)
