@@ -310,3 +310,29 @@ def test_a_dead_current_channel_is_refused_where_the_target_current_tells(tmp_pa
     read_log(_first_12_s_of_test(tmp_path, lambda df: df.__setitem__("actual_current_3", rng.normal(0, 0.01, len(df)))),
              "rtde", **KW)
 
+
+def test_temperatures_of_exactly_zero_everywhere_are_taken_as_not_recorded(tmp_path):
+    """0 degC on every joint in every row (a recorder's fill) was fitted as 0 degC: identify's viscous friction came
+    out 39-43 % low. Now the columns are dropped with a note, as a log without temperatures is read."""
+    def temps(values):
+        def edit(df):
+            for j in range(6):
+                df[f"joint_temperatures_{j}"] = values[j]
+        return edit
+
+    log = read_log(_first_12_s_of_test(tmp_path, temps([0.0] * 6)), "rtde", **KW)
+    assert log.temperature_C is None
+    assert any("joint temperatures read exactly 0 degC on every joint in every row" in s for s in log.notes)
+    assert any("no joint temperatures in the log; the model's 28" in s for s in log.assumptions([28.0] * 6))
+    # one joint at 30 degC, or a single row of 0.5 degC, is a temperature (only the all-zero fill is dropped)
+    def one_joint(df):
+        temps([0.0] * 6)(df)
+        df["joint_temperatures_1"] = 30.0
+
+    def one_row(df):
+        temps([0.0] * 6)(df)
+        df.loc[df.index[-1], "joint_temperatures_5"] = 0.5
+
+    for edit in (one_joint, one_row):
+        log = read_log(_first_12_s_of_test(tmp_path, edit), "rtde", **KW)
+        assert log.temperature_C is not None and not any("exactly 0 degC" in s for s in log.notes)

@@ -120,6 +120,7 @@ def _assemble(src: str, t: NDArray, required: Mapping[str, NDArray], optional: M
             notes.append(f"{src}: {label} of joint(s) {joints} wrap around (a jump of a whole turn between two rows): "
                          "made continuous")
     plausible.check_increasing(src, t)
+    opt["temperature"] = regular.unrecorded_temperature(src, opt["temperature"], notes)
     plausible.check_temperature_units(src, opt["temperature"])
     plausible.check_current_alive(src, req["actual_current"])
     plausible.check_range(src, req["actual_q"], t, opt["actual_qd"], declared)

@@ -6,6 +6,11 @@ group of optional columns whose missing values sit only at the start and end of 
 the log is cut to the rows where it is finite, if that costs at most :data:`MAX_CUT_S` seconds;
 otherwise (or where values are missing in the middle) the group is not used. Each case is a note.
 
+*Temperatures of exactly 0.* A recorder that fills a signal it did not record writes 0: joint temperatures of
+exactly 0.0 degC on every joint in every row are taken as not recorded (a note; the model's temperature is then
+assumed, as for a log without them): a real joint never reads exactly 0.0 on all six joints for a whole log, and
+fitted as 0 degC they gave ``identify`` a viscous friction 39-43 % low. Any other value, anywhere, keeps them.
+
 *Missing rows.* A UR controller samples on a fixed tick (8 ms on CB2/CB3); host time stamps jitter
 around it by a fraction of a millisecond, and a recorder that drops rows leaves gaps of whole ticks
 (Movement_No1-No3: every other step is 24 ms). The replay drives the model with the log's setpoints
@@ -80,6 +85,16 @@ def complete_optional(src: str, t: NDArray, groups: Mapping[str, NDArray | None]
         notes.append(f"{src}: {', '.join(cut)} end early (NaN there); the log cut to rows {lo + 1}..{hi} of "
                      f"{t.size} ({t[hi - 1] - t[lo]:.2f} s kept)")
     return slice(lo, hi), used
+
+
+def unrecorded_temperature(src: str, temperature: NDArray | None, notes: list[str]) -> NDArray | None:
+    """``temperature`` ``(n, 6)``, or ``None`` with a note where it reads exactly 0 degC on every joint in every row
+    (a recorder's fill: see the module docstring)."""
+    if temperature is None or temperature.size == 0 or np.any(temperature != 0.0):
+        return temperature
+    notes.append(f"{src}: the joint temperatures read exactly 0 degC on every joint in every row, as a recorder "
+                 "fills a signal it did not record: taken as not recorded")
+    return None
 
 
 def ticks(t: NDArray) -> tuple[NDArray, float]:
