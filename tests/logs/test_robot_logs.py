@@ -336,3 +336,31 @@ def test_temperatures_of_exactly_zero_everywhere_are_taken_as_not_recorded(tmp_p
     for edit in (one_joint, one_row):
         log = read_log(_first_12_s_of_test(tmp_path, edit), "rtde", **KW)
         assert log.temperature_C is not None and not any("exactly 0 degC" in s for s in log.notes)
+
+
+@pytest.mark.parametrize("fmt", ["nist", "rtde"])
+def test_a_gap_is_judged_in_whole_missing_ticks_alike_in_both_formats(tmp_path, fmt):
+    """4 rows dropped from the NIST log were refused ("a gap of 0.04 s ...; at most 5 sample periods (0.04 s)
+    allowed": its clock, 10578 s, left the step 5.0000000002 periods) while the Kufieta log took the same gap with a
+    note. Now both count the ticks missing in a row: up to 5 interpolated (as docs/discrepancy.md says), 6 refused
+    with the remedy, the log cut at the gap into two logs of one robot."""
+    if fmt == "nist":
+        df, time = pd.read_csv(NIST_LOG).iloc[:1875], "ROBOT_TIME"
+    else:
+        df, time = pd.read_csv(KUFIETA_DIR / "TEST.csv.gz").iloc[:1875], "time"
+    p = tmp_path / "gap.csv"
+    kw = KW if fmt == "rtde" else {}
+    for dropped in (4, 5):
+        df.drop(index=range(937, 937 + dropped)).to_csv(p, index=False)
+        log = read_log(p, fmt, **kw)
+        assert int((~log.logged).sum()) == dropped
+        assert any(f"{dropped} of 1875 controller ticks (8 ms) missing in gaps of up to {dropped}" in s
+                   for s in log.notes)
+    df.drop(index=range(937, 943)).to_csv(p, index=False)
+    t0 = df[time].iloc[0]
+    with pytest.raises(LogFormatError) as err:
+        read_log(p, fmt, **kw)
+    assert str(err.value) == (
+        f"gap.csv: a gap of 0.056 s after t = {df[time].iloc[936] - t0:.3f} s (data row 937): 6 ticks of 8 ms "
+        "missing in a row, more than the 5 interpolated; cut the log at the gap into two logs (data rows 1..937 and "
+        "938..1869), which identify, discrepancy and monitor take together as logs of one robot")
