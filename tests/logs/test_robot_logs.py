@@ -364,3 +364,27 @@ def test_a_gap_is_judged_in_whole_missing_ticks_alike_in_both_formats(tmp_path, 
         f"gap.csv: a gap of 0.056 s after t = {df[time].iloc[936] - t0:.3f} s (data row 937): 6 ticks of 8 ms "
         "missing in a row, more than the 5 interpolated; cut the log at the gap into two logs (data rows 1..937 and "
         "938..1869), which identify, discrepancy and monitor take together as logs of one robot")
+
+
+def test_rtde_column_names_are_matched_whatever_their_case(tmp_path):
+    """Every column upper-cased (TIME, ACTUAL_Q_0, ...) was refused as "missing required column 'timestamp'"; now
+    matched case-insensitively, to the same log. Two columns that differ only in case cannot be told apart: refused,
+    both named."""
+    plain = read_log(_first_12_s_of_test(tmp_path), "rtde", **KW)
+    def spelt(case):
+        def edit(df):
+            df.columns = [case(c) for c in df.columns]
+        return edit
+
+    for case in (str.upper, str.title):  # TIME, ACTUAL_Q_0; Time, Actual_Q_0
+        log = read_log(_first_12_s_of_test(tmp_path, spelt(case)), "rtde", **KW)
+        assert log.content_sha256() == plain.content_sha256() and log.notes == plain.notes
+        np.testing.assert_array_equal(log.target_current_A, plain.target_current_A)
+        np.testing.assert_array_equal(log.tcp_m, plain.tcp_m)
+
+    def twice(df):
+        df["ACTUAL_Q_2"] = df["actual_q_2"]
+
+    with pytest.raises(LogFormatError, match=r"test12.csv: columns 'actual_q_2' and 'ACTUAL_Q_2' differ only in case: "
+                                             r"which one is meant cannot be told; rename or drop one"):
+        read_log(_first_12_s_of_test(tmp_path, twice), "rtde", **KW)

@@ -43,7 +43,7 @@ def _require(columns: Sequence[str], required: Sequence[str], source: str) -> No
 
 
 def _joint_numbers(columns: Sequence[str], pattern: str) -> list[int]:
-    rx = re.compile(pattern)
+    rx = re.compile(pattern, re.IGNORECASE)
     return [int(m.group(1)) for c in columns if (m := rx.fullmatch(c))]
 
 
@@ -59,6 +59,23 @@ def _have(columns: Sequence[str], wanted: Sequence[str], partial: list[str] | No
         partial.append(f"{src}: {len(present)} of the {len(wanted)} columns {wanted[0]}..{wanted[-1]} are present "
                        f"(missing: {', '.join(missing)}): the group is not used")
     return []
+
+
+def _match_case(columns: Sequence[str], known: Sequence[str], src: str) -> dict[str, str]:
+    """Header column -> the name of ``known`` it spells in another case (``TIME``, ``Actual_Q_0``); a name two
+    columns spell (``actual_q_2`` and ``ACTUAL_Q_2``) is refused, both named."""
+    by_lower: dict[str, list[str]] = {}
+    for c in columns:
+        by_lower.setdefault(c.lower(), []).append(c)
+    rename = {}
+    for name in known:
+        found = by_lower.get(name.lower(), [])
+        if len(found) > 1:
+            raise LogFormatError(f"{src}: columns {found[0]!r} and {found[1]!r} differ only in case: which one is "
+                                 "meant cannot be told; rename or drop one")
+        if found and found[0] != name:
+            rename[found[0]] = name
+    return rename
 
 
 def _stack(data: Mapping[str, NDArray], cols: Sequence[str]) -> NDArray | None:
@@ -203,6 +220,7 @@ def read_rtde(path: str | Path, payload_kg: float | None = None,
     """Read a UR RTDE CSV as the ``rtde`` recorder writes it (radians, amperes, metres), comma-,
     tab-, semicolon- or space-separated, plain or gzip, with or without a UTF-8 byte-order mark.
 
+    Column names match whatever their case (``TIME``, ``ACTUAL_Q_0``), unless two differ only in case.
     Required columns: ``timestamp`` (or ``time``), ``target_q_0..5``, ``actual_q_0..5``,
     ``actual_current_0..5``; optional: ``target_current_0..5``, ``joint_temperatures_0..5``,
     ``actual_TCP_pose_0..5``, ``target_moment_0..5`` (UR's target torque), and
@@ -216,10 +234,13 @@ def read_rtde(path: str | Path, payload_kg: float | None = None,
         raise LogFormatError(f"tcp_offset_m = {tcp_offset_m!r} must be 3 numbers [m]")
     payload_kg, tcp_offset_m = check_payload_and_tool(payload_kg, tcp_offset_m)  # type: ignore[assignment]
     layout = sniff(path, src)
-    cols = layout.columns
     qt = [f"target_q_{j}" for j in range(6)]
     qa = [f"actual_q_{j}" for j in range(6)]
     ia = [f"actual_current_{j}" for j in range(6)]
+    groups = ("target_current", "joint_temperatures", "actual_TCP_pose", "target_qd", "actual_qd", "target_moment")
+    rename = _match_case(layout.columns, [*RTDE_TIME_COLUMNS, *qt, *qa, *ia,
+                                          *(f"{name}_{j}" for name in groups for j in range(6))], src)
+    cols = tuple(rename.get(c, c) for c in layout.columns)  # names as the reader knows them
     time_col = next((c for c in RTDE_TIME_COLUMNS if c in cols), None)
     if time_col is None:
         raise LogFormatError(f"{src}: missing required column {RTDE_TIME_COLUMNS[0]!r} (or "
@@ -233,7 +254,10 @@ def read_rtde(path: str | Path, payload_kg: float | None = None,
     vt = _have(cols, [f"target_qd_{j}" for j in range(6)], part, src)
     va = _have(cols, [f"actual_qd_{j}" for j in range(6)], part, src)
     tm = _have(cols, [f"target_moment_{j}" for j in range(6)], part, src)
-    d = read_columns(path, src, layout, [time_col, *qt, *qa, *ia, *ct, *temp, *tcp, *vt, *va, *tm])
+    in_file = {v: k for k, v in rename.items()}
+    wanted = [time_col, *qt, *qa, *ia, *ct, *temp, *tcp, *vt, *va, *tm]
+    d = read_columns(path, src, layout, [in_file.get(c, c) for c in wanted])
+    d = {rename.get(c, c): v for c, v in d.items()}
     required = {"target_q": _stack(d, qt), "actual_q": _stack(d, qa), "actual_current": _stack(d, ia)}
     optional = {"target_qd": _stack(d, vt), "actual_qd": _stack(d, va), "target_current": _stack(d, ct),
                 "temperature": _stack(d, temp), "tcp": _stack(d, tcp), "target_torque": _stack(d, tm)}
