@@ -113,7 +113,7 @@ def test_nan_inside_an_optional_column_drops_it_with_a_note(tmp_path):
 def test_nan_in_a_required_column_is_refused(tmp_path):
     df = _frame()
     df.loc[500, "actual_current_2"] = np.nan
-    with pytest.raises(LogFormatError, match="NaN or inf in actual_current at data row 501"):
+    with pytest.raises(LogFormatError, match="NaN or inf in actual_current_2 at data row 501$"):
         _read(tmp_path, df)
 
 
@@ -388,3 +388,26 @@ def test_rtde_column_names_are_matched_whatever_their_case(tmp_path):
     with pytest.raises(LogFormatError, match=r"test12.csv: columns 'actual_q_2' and 'ACTUAL_Q_2' differ only in case: "
                                              r"which one is meant cannot be told; rename or drop one"):
         read_log(_first_12_s_of_test(tmp_path, twice), "rtde", **KW)
+
+
+def test_nan_in_a_required_column_is_named_with_its_column_and_extent(tmp_path):
+    """"NaN or inf in actual_current at data row 1" named no joint, nor whether the NaN went on (cutting the log
+    helps only then). Each format names its own column."""
+    def nan_rows(column, rows):
+        def edit(df):
+            df.loc[df.index[rows], column] = np.nan
+        return edit
+
+    for column, rows, said in (("actual_current_2", slice(None), "at data row 1 (every row)"),
+                               ("actual_current_2", slice(900, 1276), "at data row 901 (376 rows, the last data row "
+                                                                      "1276)"),
+                               ("target_q_4", [7], "at data row 8")):
+        with pytest.raises(LogFormatError) as err:
+            read_log(_first_12_s_of_test(tmp_path, nan_rows(column, rows)), "rtde", **KW)
+        assert str(err.value) == f"test12.csv: NaN or inf in {column} {said}"
+    df = pd.read_csv(NIST_LOG).iloc[:1000]
+    df["ROBOT_ACTUAL_JOINT_CURRENT (J3)"] = np.nan
+    df.to_csv(tmp_path / "nist.csv", index=False)
+    with pytest.raises(LogFormatError, match=r"^nist.csv: NaN or inf in ROBOT_ACTUAL_JOINT_CURRENT \(J3\) at data "
+                                             r"row 1 \(every row\)$"):
+        read_log(tmp_path / "nist.csv", "nist")

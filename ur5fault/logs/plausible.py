@@ -54,7 +54,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Mapping, Sequence
 
 import numpy as np
 from numpy.typing import NDArray
@@ -124,12 +124,22 @@ def check_joint_count(src: str, indices: Iterable[int], first: int) -> None:
                              f"{N_JOINTS}, numbered {first}..{first + N_JOINTS - 1}")
 
 
-def check_finite(src: str, arrays: Mapping[str, NDArray]) -> None:
+def check_finite(src: str, arrays: Mapping[str, NDArray], columns: Mapping[str, Sequence[str]] | None = None) -> None:
+    """Every value of ``arrays`` (name -> ``(n,)`` or ``(n, k)``) finite; a NaN or inf is named by its column
+    (``columns``: name -> the file's column of each array column; else the name, with ``_{j}`` on a 2-D array), its
+    first data row and how many rows of that column hold one."""
     for name, arr in arrays.items():
         bad = ~np.isfinite(arr)
-        if bad.any():
-            row = int(np.argwhere(bad)[0][0])
-            raise LogFormatError(f"{src}: NaN or inf in {name} at data row {row + 1}")
+        if not bad.any():
+            continue
+        row, *col = (int(i) for i in np.argwhere(bad)[0])
+        j = col[0] if col else 0
+        labels = (columns or {}).get(name) or ([f"{name}_{k}" for k in range(arr.shape[1])] if arr.ndim == 2
+                                               else [name])
+        rows = np.flatnonzero(bad[:, j] if bad.ndim == 2 else bad)
+        extent = (" (every row)" if rows.size == bad.shape[0] else
+                  f" ({rows.size} rows, the last data row {rows[-1] + 1})" if rows.size > 1 else "")
+        raise LogFormatError(f"{src}: NaN or inf in {labels[j]} at data row {row + 1}{extent}")
 
 
 def check_increasing(src: str, t: NDArray) -> None:

@@ -118,13 +118,15 @@ def rest_target_style(t: NDArray, target_q: NDArray, actual_q: NDArray, target_q
 
 def _assemble(src: str, t: NDArray, required: Mapping[str, NDArray], optional: Mapping[str, NDArray | None],
               declared: str, labels: tuple[str, str] = ("target_q", "actual_q"),
-              length: plausible.MinLength | None = None, notes: Sequence[str] = (), **fields) -> MeasuredLog:
+              length: plausible.MinLength | None = None, notes: Sequence[str] = (),
+              columns: Mapping[str, Sequence[str]] | None = None, **fields) -> MeasuredLog:
     """Checks, optional columns completed (:func:`.regular.complete_optional`), the rows put on the controller
     tick grid (:func:`.regular.on_ticks`), and the log. ``required``: target positions ``"target_q"``, actual
     positions ``"actual_q"`` (both already in radians) and ``"actual_current"``; ``optional``: ``"target_qd"``,
     ``"actual_qd"`` (rad/s, for the unit check only), ``"target_current"``, ``"temperature"``, ``"tcp"``,
-    ``"target_torque"``; ``notes``: the reader's own (:func:`_have`'s), said before the assembly's."""
-    plausible.check_finite(src, {"time": t, **required})
+    ``"target_torque"``; ``notes``: the reader's own (:func:`_have`'s), said before the assembly's; ``columns``: the
+    file's columns of ``"time"`` and of each required array, named where a value is NaN."""
+    plausible.check_finite(src, {"time": t, **required}, columns)
     notes = list(notes)
     rows, opt = regular.complete_optional(src, t, optional, notes)
     t = t[rows]
@@ -182,8 +184,10 @@ def read_nist(path: str | Path, length: plausible.MinLength | None = None) -> Me
     torq = _have(cols, [f"ROBOT_TARGET_JOINT_TORQUES (J{j})" for j in range(1, 7)], part, src)
     d = read_columns(path, src, layout,
                      ["ROBOT_TIME", *pos_t, *pos_a, *cur_a, *cur_t, *temp, *tcp, *vel_t, *vel_a, *torq])
-    plausible.check_finite(src, {"target positions": _stack(d, pos_t), "actual positions": _stack(d, pos_a),
-                                 "actual currents": _stack(d, cur_a)})
+    plausible.check_finite(src, {"time": d["ROBOT_TIME"], "target positions": _stack(d, pos_t),
+                                 "actual positions": _stack(d, pos_a), "actual currents": _stack(d, cur_a)},
+                           {"time": ["ROBOT_TIME"], "target positions": pos_t, "actual positions": pos_a,
+                            "actual currents": cur_a})
     required = {"target_q": np.radians(_stack(d, pos_t)), "actual_q": np.radians(_stack(d, pos_a)),
                 "actual_current": _stack(d, cur_a)}
     optional = {"target_qd": _stack(d, vel_t), "actual_qd": _stack(d, vel_a), "target_current": _stack(d, cur_t),
@@ -261,7 +265,9 @@ def read_rtde(path: str | Path, payload_kg: float | None = None,
     required = {"target_q": _stack(d, qt), "actual_q": _stack(d, qa), "actual_current": _stack(d, ia)}
     optional = {"target_qd": _stack(d, vt), "actual_qd": _stack(d, va), "target_current": _stack(d, ct),
                 "temperature": _stack(d, temp), "tcp": _stack(d, tcp), "target_torque": _stack(d, tm)}
-    return _assemble(src, d[time_col], required, optional, "radians", length=length, notes=part,
+    columns = {"time": [time_col], "target_q": qt, "actual_q": qa, "actual_current": ia}
+    columns = {k: [in_file.get(c, c) for c in v] for k, v in columns.items()}  # as the file spells them
+    return _assemble(src, d[time_col], required, optional, "radians", length=length, notes=part, columns=columns,
                      payload_kg=payload_kg, tcp_offset_m=tcp_offset_m)
 
 
@@ -311,7 +317,7 @@ def read_sim(path: str | Path, length: plausible.MinLength | None = None) -> Mea
     t = d["t_s"]
     arrays = {"q_set_rad": _stack(d, cols("q_set_rad")), "q_FB_rad": _stack(d, cols("q_FB_rad")),
               "i_FB_A": _stack(d, cols("i_FB_A"))}
-    plausible.check_finite(src, {"time": t, **arrays})
+    plausible.check_finite(src, {"time": t, **arrays}, {"time": ["t_s"], **{k: cols(k) for k in arrays}})
     plausible.check_increasing(src, t)
     plausible.check_range(src, arrays["q_FB_rad"])
     plausible.check_sampling(src, t, length)
