@@ -168,7 +168,8 @@ def test_temperatures_in_kelvin_are_named(tmp_path):
         return df
 
     log = _kufieta(tmp_path, "Movement_No8_Singularity_Free_1.csv.gz", edit=kelvin)
-    with pytest.raises(LogFormatError, match=r"joint 1 has a median of 308.1 degC.*look like kelvin \(35.0 degC\)"):
+    with pytest.raises(LogFormatError, match=r"joint 1 \(shoulder_pan_joint\) has a median of 308.1 "
+                                             r"degC.*look like kelvin \(35.0 degC\)"):
         read_log(log, "rtde", payload_kg=0.0, tcp_offset_m=(0, 0, 0))
 
     def celsius(df):
@@ -224,7 +225,8 @@ def test_a_dead_current_sensor_is_named(tmp_path):
         return df
 
     log = _kufieta(tmp_path, "Movement_No8_Singularity_Free_1.csv.gz", edit=dead)
-    with pytest.raises(LogFormatError, match="the current of joint 3 reads 0 A in every row: a dead sensor"):
+    with pytest.raises(LogFormatError, match=r"the current of joint 3 \(elbow_joint\) reads 0 A in "
+                                             r"every row: a dead sensor"):
         read_log(log, "rtde", payload_kg=0.0, tcp_offset_m=(0, 0, 0))
 
 

@@ -251,7 +251,8 @@ def test_a_log_whose_currents_have_the_other_sign_is_refused_when_read(tmp_path)
 
     kw = {"payload_kg": 0.0, "tcp_offset_m": (0.0, 0.0, 0.0)}
     read_log(_first_12_s_of_test(tmp_path), "rtde", **kw)
-    with pytest.raises(LogFormatError, match=r"test12.csv: the current of joint\(s\) 2, 3 runs against UR's target "
+    with pytest.raises(LogFormatError, match=r"test12.csv: the current of joint 2 \(shoulder_lift_joint\), joint 3 "
+                                             r"\(elbow_joint\) runs against UR's target "
                                              r"current \(cosine -0.99, -0.9\d\): its sign convention is opposite to "
                                              r"the torque's, as in a log with currents of the other sign"):
         read_log(_first_12_s_of_test(tmp_path, negate(["actual_current"])), "rtde", **kw)
@@ -284,7 +285,8 @@ def test_a_reading_far_from_its_target_is_refused_when_read(tmp_path):
         moving = (t >= 5.0) & (t < 8.0)
         df.loc[moving, "actual_q_1"] = df.loc[moving, "actual_q_1"].iloc[0]
 
-    with pytest.raises(LogFormatError, match=r"test12.csv: the measured position of joint 2 departs from its target "
+    with pytest.raises(LogFormatError, match=r"test12.csv: the measured position of joint 2 \(shoulder_lift_joint\) "
+                                             r"departs from its target "
                                              r"by up to 1.14 rad \(at t = 7.99 s; more than 0.05 rad from t = 6.67 "
                                              r"to 7.99 s\), far beyond what a running UR allows.*a stuck encoder"):
         read_log(_first_12_s_of_test(tmp_path, freeze), "rtde", **KW)
@@ -302,7 +304,8 @@ def test_a_dead_current_channel_is_refused_where_the_target_current_tells(tmp_pa
         return edit
 
     for offset in (0.0, 0.3):
-        with pytest.raises(LogFormatError, match=r"test12.csv: the current of joint 2 reads 0.\d+ A RMS where UR's "
+        with pytest.raises(LogFormatError, match=r"test12.csv: the current of joint 2 "
+                                                 r"\(shoulder_lift_joint\) reads 0.\d+ A RMS where UR's "
                                                  r"target current is 4.\d+ A RMS.*a dead channel or a column of "
                                                  r"another quantity"):
             read_log(_first_12_s_of_test(tmp_path, noise(offset)), "rtde", **KW)

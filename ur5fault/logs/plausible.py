@@ -60,7 +60,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import LogFormatError
-from ..sim.axes import N_JOINTS
+from ..sim.axes import JOINT_NAMES, N_JOINTS
 from ..sim.budget import MAX_DURATION_S
 from ..sim.params import JOINT_TEMPERATURE_RANGE_C
 from . import regular
@@ -113,6 +113,12 @@ CURRENT_MIN_RMS_RATIO = 0.2
 #: (``sim.loops.PROTECTIVE_STOP_RAD``, 0.1 rad), and an eighth of a reading frozen for 3 s while its joint moved
 #: (0.42 rad)
 MAX_FOLLOWING_ERROR_RAD = 0.05
+
+
+def _joint(j: int) -> str:
+    """Joint ``j`` (0-based) as the reader's messages name it: its number from 1 and its name (an RTDE log numbers its
+    columns from 0, so "joint 2" alone was read as actual_current_2)."""
+    return f"joint {j + 1} ({JOINT_NAMES[j]})"
 
 
 def check_joint_count(src: str, indices: Iterable[int], first: int) -> None:
@@ -191,7 +197,7 @@ def check_range(src: str, q_rad: NDArray, t: NDArray | None = None, v_rad_s: NDA
                                  f"logged velocities (rad/s): they look like degrees, but this layout declares "
                                  f"{declared}")
         j = int(np.argmax(np.max(np.abs(q_rad), axis=0)))
-        raise LogFormatError(f"{src}: joint {j + 1} beyond +-360 deg; wrong robot or unit (degrees vs radians)")
+        raise LogFormatError(f"{src}: {_joint(j)} beyond +-360 deg; wrong robot or unit (degrees vs radians)")
 
 
 def velocity_ratio(t: NDArray, q_rad: NDArray, v_rad_s: NDArray) -> float | None:
@@ -233,7 +239,7 @@ def check_current_units(src: str, arrays: Mapping[str, NDArray | None]) -> None:
         j = int(np.argmax(np.max(np.abs(a), axis=0))) if a.ndim == 2 else 0
         hint = ("they look like milliamperes; give the log in amperes" if peak / 1000.0 <= CURRENT_RANGE_A
                 else "wrong column or unit")
-        raise LogFormatError(f"{src}: {name} of joint {j + 1} reaches {peak:.4g} A, beyond the +-{CURRENT_RANGE_A:g} A "
+        raise LogFormatError(f"{src}: {name} of {_joint(j)} reaches {peak:.4g} A, beyond the +-{CURRENT_RANGE_A:g} A "
                              f"a UR5 current sensor reads: {hint}")
 
 
@@ -248,12 +254,13 @@ def check_current_sign(src: str, current_A: NDArray, target_current_A: NDArray |
     cos = np.sum(a * t, axis=0) / np.maximum(np.sqrt(np.sum(a**2, axis=0) * np.sum(t**2, axis=0)), 1e-300)
     bad = [j for j in range(a.shape[1]) if rms_t[j] >= SIGN_CHECK_MIN_RMS_A and cos[j] <= SIGN_CHECK_MAX_COSINE]
     if bad:
-        joints = ", ".join(f"{j + 1}" for j in bad)
+        joints = ", ".join(_joint(j) for j in bad)
         got = ", ".join(f"{cos[j]:.2f}" for j in bad)
-        raise LogFormatError(f"{src}: the current of joint(s) {joints} runs against UR's target current (cosine "
+        raise LogFormatError(f"{src}: the current of {joints} runs against UR's target current (cosine "
                              f"{got}): its sign convention is opposite to the torque's, as in a log with currents of "
                              "the other sign (ur5fault takes a current positive when it drives the joint positive); "
-                             "negate the current columns of the other sign")
+                             "negate the current columns of the other sign, as a rule every joint's (only the joints "
+                             f"whose target current reaches {SIGN_CHECK_MIN_RMS_A:g} A RMS can be checked here)")
 
 
 def check_current_carries_torque(src: str, current_A: NDArray, target_current_A: NDArray | None) -> None:
@@ -266,7 +273,7 @@ def check_current_carries_torque(src: str, current_A: NDArray, target_current_A:
     bad = [j for j in range(a.shape[1])
            if rms_t[j] >= SIGN_CHECK_MIN_RMS_A and rms_a[j] < CURRENT_MIN_RMS_RATIO * rms_t[j]]
     if bad:
-        said = "; ".join(f"joint {j + 1} reads {rms_a[j]:.3g} A RMS where UR's target current is {rms_t[j]:.3g} A RMS"
+        said = "; ".join(f"{_joint(j)} reads {rms_a[j]:.3g} A RMS where UR's target current is {rms_t[j]:.3g} A RMS"
                          for j in bad)
         raise LogFormatError(f"{src}: the current of {said} (below {CURRENT_MIN_RMS_RATIO:g} of it; every real log of "
                              "data/ reads 0.84 of its target or more): a dead channel or a column of another quantity, "
@@ -284,7 +291,7 @@ def check_following_error(src: str, t: NDArray, target_q_rad: NDArray, actual_q_
         return
     over = np.flatnonzero(err[:, j] > MAX_FOLLOWING_ERROR_RAD)
     i = int(np.argmax(err[:, j]))
-    raise LogFormatError(f"{src}: the measured position of joint {j + 1} departs from its target by up to "
+    raise LogFormatError(f"{src}: the measured position of {_joint(j)} departs from its target by up to "
                          f"{peak[j]:.3g} rad (at t = {t[i]:.2f} s; more than {MAX_FOLLOWING_ERROR_RAD:g} rad from "
                          f"t = {t[over[0]]:.2f} to {t[over[-1]]:.2f} s), far beyond what a running UR allows (it stops "
                          "itself on a much smaller following error; every real log of data/ stays within 0.008 rad): "
@@ -302,7 +309,7 @@ def check_temperature_units(src: str, temperature_C: NDArray | None) -> None:
             continue
         hint = (f"they look like kelvin ({m - 273.15:.1f} degC); give the log in degC" if 253.0 <= m <= 393.0
                 else "wrong column or unit")
-        raise LogFormatError(f"{src}: the temperature of joint {j + 1} has a median of {m:.4g} degC, outside the "
+        raise LogFormatError(f"{src}: the temperature of {_joint(j)} has a median of {m:.4g} degC, outside the "
                              f"{lo:g}..{hi:g} degC the model takes: {hint}")
 
 
@@ -313,5 +320,5 @@ def check_current_alive(src: str, current_A: NDArray) -> None:
         return
     for j in range(current_A.shape[1]):
         if np.all(current_A[:, j] == current_A[0, j]):
-            raise LogFormatError(f"{src}: the current of joint {j + 1} reads {current_A[0, j]:g} A in every row: a "
+            raise LogFormatError(f"{src}: the current of {_joint(j)} reads {current_A[0, j]:g} A in every row: a "
                                  "dead sensor or a column the recorder filled, nothing to fit")
