@@ -50,3 +50,16 @@ def test_a_finding_out_of_its_range_is_no_effect_spec_and_says_why():
                                              r".scale = 2.526 is outside its valid range \[0.2, 2\], so it is no "
                                              r"effect of a model \(dropped: explains nothing"):
         dropped.spec()
+
+
+def test_a_payload_finding_says_the_stated_payload_is_contradicted():
+    """A run stated at 3 kg that carried none: discrepancy listed 'mass gripped during the pick-and-place - mass_kg
+    1.849 kg' among the effects found and never said that the stated 3 kg was what the log contradicted."""
+    from ur5fault.discrepancy.report import sentence
+
+    c = LibraryCandidate("payload", None, param="mass_kg", x0=3.0, probe=3.5)
+    v0, v1 = c.value(np.array([0.0])), c.value(np.array([1.0]))
+    theta = np.array([(1.849 - v0) / (v1 - v0)])  # the coefficient at which it reads 1.849 kg
+    f = Finding(c, theta, np.array([0.05]), SimpleNamespace(z=40.0, delta_bic=-300.0))
+    text = sentence(f)
+    assert "mass_kg 1.849 kg" in text and "where 3 kg was stated: check the payload given (--payload-kg" in text, text

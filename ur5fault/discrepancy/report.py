@@ -59,6 +59,9 @@ def sentence(f: Finding) -> str:
         a, b = sorted((c.value(lo), c.value(hi)))
         text = (f"{c.where}: {REGISTRY[c.effect].doc} - {c.param} {c.value(f.theta):.4g} {unit} "
                 f"({a:.4g}..{b:.4g})")
+        if (c.effect, c.param) == ("payload", "mass_kg"):  # the job's, stated by the user: which the log contradicts
+            text += (f", where {c.x0:g} kg was stated: check the payload given (--payload-kg, a manifest's "
+                     "payload_kg), or omit it to have it fitted")
     else:
         text = _term_text(c, amp, lo, hi)
     tests = f"z {f.verdict.z:.0f}, delta BIC {f.verdict.delta_bic:.0f}"
