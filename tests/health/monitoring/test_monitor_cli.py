@@ -150,3 +150,19 @@ def test_a_baseline_run_monitored_against_its_own_statistics_refused(monitored):
     assert last.startswith("ur5fault: error:") and "is one of the baseline's runs" in last
     assert "Movement_No2_14s.csv: the same samples" in last and "Traceback" not in r.stderr
     assert r.stderr.count("ur5fault: error:") == 1
+
+
+def test_a_log_of_another_rate_than_its_baseline_is_refused_before_any_replay(tmp_path):
+    """A log decimated to 16 ms judged against a baseline of 8 ms runs was refused only after seconds of replays, with
+    no word on what to do. Now before any replay, saying to build a baseline at the log's rate."""
+    model = tmp_path / "model.yaml"
+    model.write_text("params: {}\neffects: []\n")
+    base = [str(head(tmp_path, run, 6.0)) for run in ("Movement_No8_Singularity_Free_1", "Movement_No4_Acc")]
+    df = pd.read_csv(head(tmp_path, "Movement_No5_Acc_slow_no_disturbance", 12.0))  # one row every tick
+    slow = tmp_path / "slow.csv"
+    df.iloc[::2].to_csv(slow, index=False)
+    r = run(str(slow), *RTDE, "--baseline", str(model), "--baseline-logs", *base, "--out", str(tmp_path / "out"))
+    assert r.returncode == 2 and "Traceback" not in r.stderr, r.stderr
+    err = [line for line in r.stderr.strip().splitlines() if not line.startswith("note: ")]
+    assert len(err) == 1 and "slow.csv: logged every 16 ms, the baseline's runs every 8 ms" in err[0], r.stderr
+    assert "build one from healthy logs at this rate with --baseline-logs" in err[0]

@@ -45,7 +45,7 @@ def cmd_monitor(args: argparse.Namespace) -> int:
     from ...config import Overlay
     from ...errors import ParameterError
     from ...logs.length import check_files_length, check_logs_length
-    from ...logs.measured import assumption_notes
+    from ...logs.measured import assumption_notes, same_period
     from ...logs.options import log_entries, read_log_options, refuse_hold_out, refuse_unknown_payload
     from ...logs.same_samples import refuse_same_samples
     from ...sim.params import load_params
@@ -93,6 +93,12 @@ def cmd_monitor(args: argparse.Namespace) -> int:
     if base_args is not None and len(healthy) < MIN_RUNS:  # before any replay
         raise ParameterError(f"--baseline-logs: {len(healthy)} healthy run given; a baseline needs at least "
                              f"{MIN_RUNS}: {MIN_RUNS_WHY}")
+    rate = healthy[0].period_s if healthy else stats.period_s if stats is not None else None
+    for g in [*healthy, *logs] if rate is not None else []:  # before any replay (it was told after seconds of it)
+        if not same_period(g.period_s, rate):
+            raise ParameterError(f"{g.source}: logged every {1e3 * g.period_s:g} ms, the baseline's runs every "
+                                 f"{1e3 * rate:g} ms: a baseline judges logs of its own rate (its spread and tails "
+                                 "depend on it); build one from healthy logs at this rate with --baseline-logs")
     refuse_log_owned(dict(overlay.params), overlay.effects, [*healthy, *logs])  # another tool: before the notes
     temps = load_params(overrides=dict(overlay.params)).joint_temperature_C
     recorded = () if stats is None or stats.rest_targets is None else tuple(zip(stats.segments, stats.rest_targets))
