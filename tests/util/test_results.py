@@ -123,3 +123,21 @@ def test_a_set_cut_short_is_removed_before_another_commands_set(tmp_path):
     with result_folder(out, ("monitor.json", "baseline.json", "report.md")) as f:
         (f / "monitor.json").write_text("{}")
     assert sorted(p.name for p in out.iterdir()) == ["monitor.json", "notes.txt"]
+
+
+def test_taking_over_a_cut_short_set_spares_what_it_did_not_name(tmp_path):
+    """The review of the change: the takeover removed every temporary file (another command writing into the folder
+    without its lock, identify --out OUT/x.yaml, lost its write), a whole `models/` folder the cut-short benchmark
+    named (a user's files in it too), and skipped the earlier-result check for files the mark did not name."""
+    out = tmp_path / "out"
+    with pytest.raises(KeyboardInterrupt), result_folder(out, ("report.md", "models")) as f:
+        (f / "models").mkdir()
+        (f / "models" / "mine.txt").write_text("a user's")
+        raise KeyboardInterrupt
+    (out / ".x.yaml.abc.tmp").write_text("identify writing")  # another command's file being written, seconds old
+    (out / "monitor.json").write_text("{}")  # a complete result of another command, not in the mark
+    with pytest.raises(OutputError, match="monitor.json: an earlier result is there"):
+        check_new_output(out, folder=True, results=("monitor.json", "report.md"))
+    with result_folder(out, ("summary.json",), replace=False) as f:  # a command that writes none of them
+        (f / "summary.json").write_text("{}")
+    assert (out / ".x.yaml.abc.tmp").exists() and (out / "models" / "mine.txt").exists()

@@ -21,7 +21,6 @@ import contextlib
 import json
 import logging
 import os
-import shutil
 import socket
 from collections.abc import Iterator
 from pathlib import Path
@@ -52,18 +51,20 @@ def check_new_output(path: str | Path, *, folder: bool = False, results: tuple[s
                           f"{' or '.join(suffixes)} file")
     if replace:
         return path
+    cut_short: set[str] = set()
     if folder and (path / INCOMPLETE_MARK).exists():
         holder = None if holding_lock else lock_holder(path)
         if holder is not None:  # not cut short: being written now
             raise FolderLockedError(f"{path}: another ur5fault process is writing its result there"
                                     + (f" (host {holder[0]}, pid {holder[1]})" if isinstance(holder, tuple) else "")
                                     + f"; wait for it or choose another {option}")
+        cut_short = set(_marked_results(path / INCOMPLETE_MARK) or results)  # a mark of before it named them: all
         if note:
             logging.getLogger(__name__).warning(
                 "%s holds the result of a run stopped while writing it (%s is still there): replacing it", path,
                 INCOMPLETE_MARK)
-        return path
-    earlier = [path] if not folder and path.exists() else [path / n for n in results if (path / n).exists()]
+    earlier = [path] if not folder and path.exists() else [path / n for n in results
+                                                           if (path / n).exists() and n not in cut_short]
     if earlier:
         raise OutputError(f"{option} {earlier[0]}: an earlier result is there; give {REPLACE_OPTION} to replace it, "
                           f"or another {option}")
@@ -90,7 +91,7 @@ def result_folder(out: str | Path, results: tuple[str, ...] = (), replace: bool 
         if not replace:  # a complete result written by another run since this one checked at its start
             check_new_output(out, folder=True, results=results, replace=False, option=option, note=False,
                              holding_lock=True)
-        remove_stale_temporaries(out, 0)  # we hold the lock: no running writer owns them
+        remove_stale_temporaries(out)  # an hour old: identify or simulate may write a file here without this lock
         mark = out / INCOMPLETE_MARK
         _remove_cut_short(out, mark)
         write_text_atomic(mark, json.dumps({"host": socket.gethostname(), "pid": os.getpid(),
@@ -99,20 +100,24 @@ def result_folder(out: str | Path, results: tuple[str, ...] = (), replace: bool 
         mark.unlink(missing_ok=True)
 
 
+def _marked_results(mark: Path) -> list[str]:
+    """The result names a mark records: plain file names inside its folder (empty for an absent or unreadable mark,
+    or one of before it recorded them)."""
+    try:
+        names = json.loads(mark.read_text()).get("results", [])
+    except (OSError, ValueError, AttributeError):
+        return []
+    return [n for n in (names if isinstance(names, list) else [])
+            if isinstance(n, str) and n and Path(n).name == n and n not in (".", "..")]
+
+
 def _remove_cut_short(out: Path, mark: Path) -> None:
     """The result files a writer stopped mid-set had named in its mark, removed before another set is written: a
     command of another kind (monitor into a folder a killed discrepancy left) wrote its own files beside them and
-    removed the mark, so they passed for a result. Only plain names inside ``out`` (a ``models/`` folder too)."""
-    try:
-        names = json.loads(mark.read_text()).get("results", [])
-    except (OSError, ValueError, AttributeError):  # absent, or a mark of before it recorded them
-        return
-    for name in names if isinstance(names, list) else []:
-        if not isinstance(name, str) or not name or Path(name).name != name or name in (".", ".."):
-            continue
+    removed the mark, so they passed for a result. Files only: a folder it named (benchmark's ``models/``) may hold
+    a user's files too, and its own are checked against each other when read."""
+    for name in _marked_results(mark):
         path = out / name
-        if path.is_dir() and not path.is_symlink():
-            shutil.rmtree(path, ignore_errors=True)
-        elif path.exists() or path.is_symlink():
+        if path.is_file() or path.is_symlink():
             path.unlink(missing_ok=True)
             (out / f"{name}.sha256").unlink(missing_ok=True)
