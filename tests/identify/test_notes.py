@@ -44,3 +44,22 @@ def test_why_a_joint_does_not_carry_its_torque_constant_names_the_real_cause():
                                      f"{friction.MIN_MOVING_SAMPLES} samples and {friction.MIN_TOP_SPEED_RAD_S:g} "
                                      "rad/s needed)")
     assert _why_no_lever(fit, 2) == "J3's model torque spreads 0.09 N*m (< 2)"
+
+
+def test_a_coulomb_level_within_noise_of_zero_is_not_taken_for_currents_of_the_other_sign():
+    """The review: a joint with next to no Coulomb friction (a simulated log at scale 0) fits a few mA either way,
+    and a fit of -0.004 A was refused as "a log with currents of the other sign"."""
+    import pytest
+
+    from ur5fault.errors import LogFormatError
+    from ur5fault.identify.core import SIGN_COULOMB_A, refuse_current_sign
+
+    fit = types.SimpleNamespace(k_groups={3: [1], 1: []}, ok=np.array([True, True, False, False, False, False]),
+                                ratio=np.full(6, 101.0))
+    full = np.zeros((3, 6))
+    full[0, 1] = 13.0  # K * ratio: positive
+    full[1, :2] = [-0.004, 0.3]
+    refuse_current_sign(fit, full, "near0.csv")  # not refused
+    full[1, 0] = -2 * SIGN_COULOMB_A
+    with pytest.raises(LogFormatError, match=r"near0.csv: the Coulomb friction of J1 \(-0.1 A\) come out negative"):
+        refuse_current_sign(fit, full, "near0.csv")

@@ -205,3 +205,16 @@ def test_close_drops_the_prefetched_runs_and_stops_a_worker_still_on_one(monkeyp
     rp.close()
     assert not rp.holds((), 1) and stopped == [2]
     assert rp.run([()], 10)[0].ok  # and later runs simulate what they need
+
+
+def test_the_parameters_of_a_log_whose_tool_is_unknown_are_refused_in_one_line():
+    """MeasuredLog's payload and tool default to unknown (None): replay_params and log_overrides raised a bare
+    TypeError on such a log; they now say what to give."""
+    import dataclasses
+
+    from ur5fault.twin.replay import log_overrides, replay_params
+
+    unknown = dataclasses.replace(_log(), payload_kg=None, tcp_offset_m=None)
+    for call in (log_overrides, replay_params):
+        with pytest.raises(ParameterError, match="payload and tool offset"):
+            call(unknown)

@@ -161,13 +161,19 @@ def stated_payload_notes(est: Sequence[Estimate]) -> list[str]:
         k = ours.get(c.joint)
         if k is None or not c.value > 0 or abs(k.value / c.value - 1) <= K_VS_UR_NOTE_SHARE:
             continue
-        if k.lo <= c.hi and c.lo <= k.hi:  # the intervals overlap: not told apart
-            continue
+        if not np.isfinite([k.lo, k.hi, c.lo, c.hi]).all() or (k.lo <= c.hi and c.lo <= k.hi):
+            continue  # an interval it has not, or overlapping ones: not told apart
         notes.append(f"J{c.joint + 1}'s torque constant fitted on the model's torques under the stated payload "
                      f"({k.value:.4g} N*m/A) is {100 * (k.value / c.value - 1):+.0f} % from the one UR's own target "
                      f"torques give ({c.value:.4g}): check the payload and tool stated (--payload-kg, --tcp-offset-m; "
                      "on the real logs of ur5fault's data/ the two agree within 3 %), or omit --payload-kg to fit it")
     return notes
+
+
+#: a Coulomb level counts as of the other sign below minus this [A]: half the smallest of the real logs (0.10 A), so
+#: a joint with next to no Coulomb friction (a simulated log at scale 0 fits a few mA either way) is not refused as a
+#: log of the other sign; a log whose currents have the other sign gives -0.2..-0.8 A
+SIGN_COULOMB_A = 0.05
 
 
 def refuse_current_sign(fit: friction.FrictionFit, full: NDArray, source: str) -> None:
@@ -178,7 +184,7 @@ def refuse_current_sign(fit: friction.FrictionFit, full: NDArray, source: str) -
     0.10..0.81 A on every joint the fit identifies."""
     k_joints = sorted(j for g in fit.k_groups.values() for j in g)
     neg_k = [j for j in k_joints if full[0, j] < 0]
-    neg_c = [int(j) for j in np.flatnonzero(fit.ok) if full[1, j] < 0]
+    neg_c = [int(j) for j in np.flatnonzero(fit.ok) if full[1, j] < -SIGN_COULOMB_A]
     if not neg_k and not neg_c:
         return
     parts = []

@@ -41,8 +41,8 @@ PAYLOAD_EFFECTS = ("payload", "payload_com")
 def log_overrides(log: MeasuredLog) -> dict:
     """The parameter overrides a log itself carries: its tool offset and its mean joint temperatures
     (clipped to the params' ``JOINT_TEMPERATURE_RANGE_C``; a log whose median is outside it is refused by its
-    reader)."""
-    over: dict = {"tcp_offset_m": list(log.tcp_offset_m)}
+    reader). A log whose tool is unknown is refused in one line (:meth:`MeasuredLog.require_payload`)."""
+    over: dict = {"tcp_offset_m": list(log.require_payload().tcp_offset_m)}
     if log.temperature_C is not None:
         over["joint_temperature_C"] = np.clip(log.temperature_C.mean(axis=0), *JOINT_TEMPERATURE_RANGE_C).tolist()
     return over
