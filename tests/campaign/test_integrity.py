@@ -7,6 +7,7 @@ from __future__ import annotations
 import errno
 import multiprocessing as mp
 import os
+import shlex
 import shutil
 import subprocess
 import sys
@@ -403,6 +404,6 @@ def test_status_advice_repeats_the_command_with_its_quick_trial_options(tmp_path
     info = status(out)
     assert info["sound"] is False
     command = info["advice"].rsplit("the command: ", 1)[1].strip("`")
-    assert command == f"ur5fault campaign run {path} --out {out} --duration-s 0.2", info["advice"]
-    assert main(command.split()[1:] + ["--quiet"]) == 0
+    assert command == f"ur5fault campaign run {path.resolve()} --out {out} --duration-s 0.2", info["advice"]
+    assert main(shlex.split(command)[1:] + ["--quiet"]) == 0
     assert status(out)["sound"] is True

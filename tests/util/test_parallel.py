@@ -304,5 +304,5 @@ def test_workers_exit_when_the_calling_process_is_killed(tmp_path, settle_s):
     found one 9 minutes later): the parent's pid is now given to it."""
     code = ("import time\nfrom ur5fault.util.parallel import iter_tasks\n"
             "for _ in iter_tasks(time.sleep, [(60.0,), (60.0,)], jobs=2):\n    pass\n")
-    lingering = workers_outliving_a_kill([sys.executable, "-c", code], b"loky", settle_s)
+    lingering = workers_outliving_a_kill([sys.executable, "-c", code], b"LokyProcess", settle_s)  # not its tracker
     assert not lingering, "a worker outlived the process that started it"

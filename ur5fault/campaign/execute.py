@@ -8,7 +8,7 @@ must be writable.  On a rerun into an existing folder every stored run is verifi
 and re-simulated, and results made under other settings stop the campaign with the first
 difference named (``replace_changed=True`` re-simulates them instead).  On an interruption
 (Ctrl-C, SIGTERM) the loky workers are stopped and the lock released; a worker whose parent
-process dies (even by SIGKILL) exits within a second.
+process dies (even by SIGKILL) exits within about two seconds (it checks every second).
 """
 
 from __future__ import annotations

@@ -7,6 +7,7 @@ import json
 import sys
 import time
 from collections.abc import Mapping
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -39,7 +40,7 @@ def build_manifest(camp: Campaign, ids: Identities, features, state: str, backen
     m: dict[str, Any] = {
         "name": camp.name,
         "state": state,
-        "campaign_file": str(camp.path) if camp.path else None,
+        "campaign_file": str(Path(camp.path).resolve()) if camp.path else None,  # from any folder: the advice's
         # command-line options beyond the file (--model, --duration-s): what a rerun must repeat
         "command_options": dict(camp.command_options),
         "campaign_sha256": camp.sha256,

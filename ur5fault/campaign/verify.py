@@ -192,20 +192,20 @@ def rerun_command(manifest: dict[str, Any], out: Path) -> str | None:
     """The ``campaign run`` command that made the folder, its command-line options (``--model``, ``--duration-s``)
     repeated (a quick trial's ``--duration-s`` left out makes another campaign, which is refused), or None where the
     manifest does not say which file it ran."""
-    from .spec import SHIPPED_DIR
+    import shlex
 
     file = manifest.get("campaign_file")
     if not isinstance(file, str) or not file:
         return None
-    path = Path(file)
-    name = path.stem if path.parent == SHIPPED_DIR else file  # a shipped campaign by its name, as it was given
     options = manifest.get("command_options")
     options = options if isinstance(options, dict) else {}
-    cmd = f"ur5fault campaign run {name} --out {out}"
+    # the file as the manifest recorded it (an absolute path: status may run from another folder), every
+    # argument quoted for a shell, a duration in full (a rounded one is another campaign, refused)
+    cmd = f"ur5fault campaign run {shlex.quote(file)} --out {shlex.quote(str(out))}"
     if isinstance(options.get("model"), str):
-        cmd += f" --model {options['model']}"
+        cmd += f" --model {shlex.quote(options['model'])}"
     if isinstance(options.get("duration_s"), (int, float)) and not isinstance(options.get("duration_s"), bool):
-        cmd += f" --duration-s {options['duration_s']:g}"
+        cmd += f" --duration-s {float(options['duration_s'])!r}"
     return cmd
 
 

@@ -10,8 +10,6 @@ from pathlib import Path
 from ..logs.options import add_log_options
 from ..twin.residuals import FIT_FRACTION
 
-#: what `discrepancy` writes into --out (report.py); one of them there is an earlier result
-
 
 def register(sub) -> None:
     d = sub.add_parser("discrepancy", help="find, name and fix where the model and a measured log disagree")
