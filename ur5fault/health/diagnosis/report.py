@@ -7,7 +7,7 @@ from typing import Any
 
 import numpy as np
 
-from ...util.io import remove_stale_temporaries, write_figure_atomic, write_json_atomic, write_text_atomic
+from ...util.io import write_figure_atomic, write_json_atomic, write_text_atomic
 from .baseline import ROBOT_THRESHOLD_FROM, set_by_sentence
 
 JSON_FILE, REPORT_FILE, FIGURE_FILE = "diagnosis.json", "report.md", "diagnosis.png"
@@ -145,10 +145,10 @@ def _report(d: dict[str, Any]) -> str:
 
 
 def write_diagnosis(d: dict[str, Any], out: str | Path) -> list[Path]:
-    """Write the three files into ``out``; return their paths."""
+    """Write the three files into ``out``; return their paths (the command writes them inside
+    :func:`ur5fault.util.results.result_folder`, which clears a killed writer's temporaries)."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    remove_stale_temporaries(out)  # of a writer killed mid-write over an hour ago
     data = {k: v for k, v in d.items() if not k.startswith("_")}
     return [write_json_atomic(out / JSON_FILE, data), write_text_atomic(out / REPORT_FILE, _report(d)),
             write_figure_atomic(_figure(d), out / FIGURE_FILE)]

@@ -9,7 +9,6 @@ from typing import Any
 
 from ...sim.axes import JOINT_NAMES
 from ...util.io import (
-    remove_stale_temporaries,
     write_figure_atomic,
     write_json_atomic,
     write_parquet_atomic,
@@ -260,9 +259,9 @@ def comparison_lines(cmp: dict[str, Any]) -> list[str]:
 def write_report(m: dict[str, Any], figures: dict[str, Any], out: Path) -> list[Path]:
     """Write ``<name>.png`` for each figure, ``metrics.json`` (NaN as null), ``report.md`` and, where ``m`` holds
     them (``"_predictions"``, taken out of ``m``), the scored runs' calls as ``predictions.parquet``
-    (:mod:`.predictions`), each atomically; return the paths."""
+    (:mod:`.predictions`), each atomically, inside the benchmark's :func:`ur5fault.util.results.result_folder` (which
+    clears a killed writer's temporaries); return the paths."""
     out.mkdir(parents=True, exist_ok=True)
-    remove_stale_temporaries(out)  # of a writer killed mid-write over an hour ago
     predictions = m.pop("_predictions", None)
     paths = [write_figure_atomic(fig, out / f"{name}.png") for name, fig in figures.items()]
     m = clean({**m, "figures": [p.name for p in paths]})

@@ -15,7 +15,6 @@ from numpy.typing import NDArray
 from ...sim.axes import JOINT_NAMES, N_JOINTS
 from ...util.io import (
     checksum_path,
-    remove_stale_temporaries,
     remove_unwritten,
     write_figure_atomic,
     write_json_atomic,
@@ -135,8 +134,7 @@ def write(out: Path, baseline: Baseline, observed: Sequence[Observed], entries: 
     ``verified``: the baseline's statistics were built here or read against their checksum; a baseline read
     unverified is written without one (a fresh checksum would vouch for what nothing checked). ``notes``: what
     the logs' reading assumed, printed as ``note:`` lines, kept in ``monitor.json`` and ``report.md`` too."""
-    out.mkdir(parents=True, exist_ok=True)
-    remove_stale_temporaries(out)  # of a writer killed mid-write over an hour ago
+    out.mkdir(parents=True, exist_ok=True)  # inside the command's result_folder, which clears stale temporaries
     if not verified:  # an earlier result's (--replace), removed first: a crash between would leave it mismatched
         checksum_path(out / "baseline.json").unlink(missing_ok=True)
     paths = [write_json_atomic(out / "monitor.json", {"logs": list(entries), "notes": list(notes)}),
