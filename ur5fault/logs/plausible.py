@@ -243,20 +243,31 @@ def check_current_units(src: str, arrays: Mapping[str, NDArray | None]) -> None:
                              f"a UR5 current sensor reads: {hint}")
 
 
+def _against_target(current_A: NDArray, target_current_A: NDArray | None) -> tuple[NDArray, NDArray, list[int]] | None:
+    """The reading and UR's target current ``(n, 6)`` and the joints whose target is at least
+    :data:`SIGN_CHECK_MIN_RMS_A` RMS (the ones a reading can be judged against it on), or None for a log without
+    target currents: what :func:`check_current_sign` and :func:`check_current_carries_torque` judge."""
+    if target_current_A is None or target_current_A.size == 0:
+        return None
+    a, t = np.asarray(current_A, float), np.asarray(target_current_A, float)
+    rms_t = np.sqrt(np.mean(t**2, axis=0))
+    return a, t, [j for j in range(a.shape[1]) if rms_t[j] >= SIGN_CHECK_MIN_RMS_A]
+
+
 def check_current_sign(src: str, current_A: NDArray, target_current_A: NDArray | None) -> None:
     """On every joint whose target current is at least :data:`SIGN_CHECK_MIN_RMS_A` RMS, the reading runs with the
     target (their uncentred cosine above :data:`SIGN_CHECK_MAX_COSINE`); a log without target currents is not
     checked."""
-    if target_current_A is None or target_current_A.size == 0:
+    judged = _against_target(current_A, target_current_A)
+    if judged is None:
         return
-    a, t = np.asarray(current_A, float), np.asarray(target_current_A, float)
-    rms_t = np.sqrt(np.mean(t**2, axis=0))
+    a, t, joints = judged
     cos = np.sum(a * t, axis=0) / np.maximum(np.sqrt(np.sum(a**2, axis=0) * np.sum(t**2, axis=0)), 1e-300)
-    bad = [j for j in range(a.shape[1]) if rms_t[j] >= SIGN_CHECK_MIN_RMS_A and cos[j] <= SIGN_CHECK_MAX_COSINE]
+    bad = [j for j in joints if cos[j] <= SIGN_CHECK_MAX_COSINE]
     if bad:
-        joints = ", ".join(_joint(j) for j in bad)
+        names = ", ".join(_joint(j) for j in bad)
         got = ", ".join(f"{cos[j]:.2f}" for j in bad)
-        raise LogFormatError(f"{src}: the current of {joints} runs against UR's target current (cosine "
+        raise LogFormatError(f"{src}: the current of {names} runs against UR's target current (cosine "
                              f"{got}): its sign convention is opposite to the torque's, as in a log with currents of "
                              "the other sign (ur5fault takes a current positive when it drives the joint positive); "
                              "negate the current columns of the other sign, as a rule every joint's (only the joints "
@@ -266,12 +277,12 @@ def check_current_sign(src: str, current_A: NDArray, target_current_A: NDArray |
 def check_current_carries_torque(src: str, current_A: NDArray, target_current_A: NDArray | None) -> None:
     """On every joint whose target current is at least :data:`SIGN_CHECK_MIN_RMS_A` RMS, the reading's RMS is at least
     :data:`CURRENT_MIN_RMS_RATIO` of the target's; a log without target currents is not checked."""
-    if target_current_A is None or target_current_A.size == 0:
+    judged = _against_target(current_A, target_current_A)
+    if judged is None:
         return
-    a, t = np.asarray(current_A, float), np.asarray(target_current_A, float)
+    a, t, joints = judged
     rms_a, rms_t = np.sqrt(np.mean(a**2, axis=0)), np.sqrt(np.mean(t**2, axis=0))
-    bad = [j for j in range(a.shape[1])
-           if rms_t[j] >= SIGN_CHECK_MIN_RMS_A and rms_a[j] < CURRENT_MIN_RMS_RATIO * rms_t[j]]
+    bad = [j for j in joints if rms_a[j] < CURRENT_MIN_RMS_RATIO * rms_t[j]]
     if bad:
         said = "; ".join(f"{_joint(j)} reads {rms_a[j]:.3g} A RMS where UR's target current is {rms_t[j]:.3g} A RMS"
                          for j in bad)
