@@ -46,6 +46,7 @@ from .manifest import build_manifest
 from .runs import CampaignRun
 from .spec import Campaign
 from .store import (
+    SUBFOLDERS,
     BadRunFilesError,
     CampaignChangedError,
     check_timeseries_file,
@@ -318,7 +319,7 @@ def _run_locked(camp: Campaign, out: Path, jobs: int, backend: str, client, prog
 
 def _remove_stale_temporaries(out: Path) -> None:
     """Temporary files of a writer killed mid-write (we hold the lock, so no one else writes here)."""
-    for folder in (out, out / "runs", out / "timeseries"):
+    for folder in (out, *(out / f for f in SUBFOLDERS)):
         remove_stale_temporaries(folder, 0)
 
 

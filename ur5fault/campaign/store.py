@@ -64,6 +64,11 @@ class FileCheck:
     detail: str = ""
 
 
+#: the subfolders a campaign writes beside its table: where a writer stopped mid-write may leave temporaries, which
+#: the next run clears and ``campaign status`` lists
+SUBFOLDERS = ("runs", "timeseries")
+
+
 def runs_dir(out: Path) -> Path:
     return Path(out) / "runs"
 

@@ -14,6 +14,7 @@ from .identity import Identities, digest
 from .spec import Campaign, build_campaign
 from .store import (
     REBUILD_FEATURES,
+    SUBFOLDERS,
     FileCheck,
     check_manifest_fields,
     check_run_file,
@@ -132,7 +133,9 @@ def status(out: Path) -> dict[str, Any]:
         from ..health.prognostics.life_status import life_status
 
         info = life_status(out, manifest, info)
-        info["ignored"] = info.get("ignored", []) + _temporaries(out, holder is not None, ("runs", "reference"))
+        from ..health.prognostics.life_store import SUBFOLDERS as LIFE_SUBFOLDERS
+
+        info["ignored"] = info.get("ignored", []) + _temporaries(out, holder is not None, LIFE_SUBFOLDERS)
         ins = info.get("inspections") or {}
         info["sound"], info["advice"] = _advice(info, ins.get("bad", 0), ins.get("changed", 0), manifest_todo,
                                                 table_key="inspections_table", what="inspection",
@@ -161,7 +164,7 @@ def status(out: Path) -> dict[str, Any]:
         problems += [f"runs/{rid}.parquet: made under other settings: {why}" for rid, why in s.changed]
         info["ignored"] = _listed([f"runs/{name}: not a run of this campaign (stray)" for name in s.stray]
                                   + [f"runs/{name}: a checksum whose run file is gone" for name in s.orphan_checksums]
-                                  + _temporaries(out, holder is not None, ("runs", "timeseries")))
+                                  + _temporaries(out, holder is not None, SUBFOLDERS))
         info["features"] = _check_features(out, {rc.run_id: ids.identity(rc) for rc in camp.runs})
     else:
         counts = {"ok": 0, "bad": 0, "changed": 0}

@@ -35,6 +35,7 @@ from ...util.io import check_writable, remove_stale_temporaries, write_json_atom
 from ...util.lock import Lock
 from ...util.progress import campaign_progress
 from .life_store import (
+    SUBFOLDERS,
     LifeIdentities,
     check_inspection,
     check_reference,
@@ -223,7 +224,7 @@ def run_life(camp: LifeCampaign, out: Path | None = None, *, jobs: int | None = 
 def _run_locked(camp, out: Path, n_jobs: int, client, progress, say, max_rounds, backend,
                 replace_changed, bound: str) -> dict[str, Any]:
     t0 = time.perf_counter()
-    for folder in (out, out / "runs", out / "reference"):
+    for folder in (out, *(out / f for f in SUBFOLDERS)):
         remove_stale_temporaries(folder, 0)  # a writer killed mid-write; we hold the lock
     ids = LifeIdentities(camp)
     pending, finished, refs, unusable = resume_state(camp, out, ids)

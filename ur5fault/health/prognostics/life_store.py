@@ -42,6 +42,10 @@ LIFE_UNITS = {
 }
 
 
+#: the subfolders a life campaign writes (as :data:`ur5fault.campaign.store.SUBFOLDERS` a fault campaign's)
+SUBFOLDERS = ("runs", "reference")
+
+
 def run_id(unit: Unit, k: int) -> str:
     return f"{unit.unit_id}_i{k:04d}"
 
