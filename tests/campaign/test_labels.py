@@ -17,7 +17,7 @@ from ur5fault.campaign.labels import (
     fault_columns,
     fault_labels,
     parse_split,
-    refresh_splits,
+    refresh_labels,
     split_group,
 )
 from ur5fault.errors import ParameterError, UnknownNameError
@@ -178,5 +178,19 @@ def test_edited_split_rule_relabels_without_resimulating(tiny):
     assert stamp == {p.name: p.stat().st_mtime_ns for p in (out / "runs").iterdir()}  # nothing re-run
     again = pd.read_parquet(out / "features.parquet")
     assert (again["split"] != df["split"]).all()  # two groups: both swap sides
-    _, changed = refresh_splits(again, edited.split, edited.runs)
+    _, changed = refresh_labels(again, edited.split, edited.runs)
     assert not changed
+
+
+def test_rows_stored_without_a_size_get_the_size_this_version_gives(tiny):
+    """A campaign resumed across a change of the size rule (stop 52: seven effects had a NaN ``fault_size``):
+    the stored rows' labels are recomputed, the results kept."""
+    camp, _, df = tiny
+    old = df.assign(fault_size=np.where(df["fault"] == "healthy", 0.0, np.nan), fault_size_unit="")
+    fixed, changed = refresh_labels(old, camp.split, camp.runs)
+    assert changed
+    faulty = fixed[fixed["fault"] == "backlash"]
+    assert (faulty["fault_size"] == 0.2).all() and (faulty["fault_size_unit"] == "deg").all()
+    assert (fixed.loc[fixed["fault"] == "healthy", "fault_size_unit"] == "").all()
+    results = [c for c in df.columns if c.startswith(("enc_", "tcp_", "cur_"))]
+    assert results and fixed[results].equals(old[results])

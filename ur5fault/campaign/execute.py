@@ -40,7 +40,7 @@ from .batches import plan_batches
 from .digital_twin import regressor_runs, twin_id, twin_runs
 from .identity import DRIVE, STEPPER, Identities
 from .identity import run_effects as _effects_of
-from .labels import assign_splits, refresh_splits, row_labels
+from .labels import assign_splits, refresh_labels, row_labels
 from .limits import check_limits, estimate
 from .manifest import build_manifest
 from .runs import CampaignRun
@@ -292,8 +292,8 @@ def _run_locked(camp: Campaign, out: Path, jobs: int, backend: str, client, prog
             report.close()
         records = {rc.run_id: ids.record(rc) for rc in camp.runs}
 
-        def relabel(df):  # the split is a label, not a result: stored rows follow the current split rule
-            return refresh_splits(df, camp.split, camp.runs)[0]
+        def relabel(df):  # labels are not results: stored rows follow the current split rule and fault sizes
+            return refresh_labels(df, camp.split, camp.runs)[0]
 
         try:
             features = consolidate(out, records, relabel)

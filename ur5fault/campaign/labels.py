@@ -154,15 +154,21 @@ def row_labels(cond: Mapping[str, Any], effects: Sequence[EffectSpec], rule: Spl
             "split": splits[group], "split_group": group}
 
 
-def refresh_splits(features, rule: SplitRule, runs: Iterable[Any]):
-    """``(features, changed)``: the table with ``split`` and ``split_group`` recomputed from the campaign's
-    rule and runs (``run_id`` and ``cond`` of each), so an edited ``split`` applies to rows made before it."""
+def refresh_labels(features, rule: SplitRule, runs: Iterable[Any]):
+    """``(features, changed)``: the table with its label columns recomputed from the campaign's rule and runs
+    (``run_id``, ``cond`` and ``fault_effects()`` of each): ``split`` and ``split_group``, so an edited ``split``
+    applies to rows made before it, and the fault labels (:func:`fault_labels`), so rows stored by an earlier
+    version carry the sizes this version gives (labels are not results: nothing is simulated again)."""
     runs = list(runs)
     splits = assign_splits(rule, (rc.cond for rc in runs))
     group = {rc.run_id: split_group(rc.cond, rule.by) for rc in runs}
-    new_group = features["run_id"].map(group)
-    new_split = new_group.map(splits)
-    if ("split" in features and "split_group" in features and new_split.equals(features["split"])
-            and new_group.equals(features["split_group"])):
+    new = {"split_group": features["run_id"].map(group)}
+    new["split"] = new["split_group"].map(splits)
+    labels = {rc.run_id: fault_labels(rc.fault_effects()) for rc in runs}
+    for col in ("fault", "fault_scope", "fault_joint", "fault_size", "fault_size_unit"):
+        new[col] = features["run_id"].map({rid: lab[col] for rid, lab in labels.items()})
+        if col in features:
+            new[col] = new[col].astype(features[col].dtype)
+    if all(col in features and new[col].equals(features[col]) for col in new):
         return features, False
-    return features.assign(split=new_split, split_group=new_group), True
+    return features.assign(**new), True
