@@ -33,6 +33,7 @@ from .sim.runspec import MAX_SEED
 from .sim.trajectories import TRAJECTORIES, Trajectory, get_trajectory
 from .sim.trajectories.base import MAX_SPEED_SCALE, MIN_SPEED_SCALE
 from .util.checks import check_int, check_number, short
+from .util.results import check_whole
 
 #: numeric trajectory options and their valid ranges: the payload effect's range; speed up to
 #: UR's maximum joint speed (pi rad/s, ur5-facts.md) over the controller default 1.047 rad/s;
@@ -204,6 +205,7 @@ class Overlay:
     @classmethod
     def load(cls, path: str | Path) -> Overlay:
         path = Path(path)
+        check_whole(path, "run the command that wrote it")  # a discrepancy's model.yaml: one file of a set
         return cls.from_data(read_yaml(path), path.name)
 
     @classmethod

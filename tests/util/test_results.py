@@ -141,3 +141,29 @@ def test_taking_over_a_cut_short_set_spares_what_it_did_not_name(tmp_path):
     with result_folder(out, ("summary.json",), replace=False) as f:  # a command that writes none of them
         (f / "summary.json").write_text("{}")
     assert (out / ".x.yaml.abc.tmp").exists() and (out / "models" / "mine.txt").exists()
+
+
+def test_a_file_of_a_set_cut_short_is_not_read_as_a_result(tmp_path):
+    """`--model DIR/model.yaml` of a discrepancy run stopped between its files (the file may be the earlier run's,
+    the new summary beside it) and `--baseline-stats` of a monitor run stopped so: refused in one line, until the
+    command that writes them has run again; a file the mark does not name is read as it is."""
+    from ur5fault.config import Overlay
+    from ur5fault.errors import StoredResultError
+    from ur5fault.health.monitoring.baseline import Baseline
+
+    out = tmp_path / "out"
+    with pytest.raises(KeyboardInterrupt), result_folder(out, ("model.yaml", "baseline.json")) as folder:
+        (folder / "model.yaml").write_text("params: {}\n")
+        raise KeyboardInterrupt
+    (out / "identified.yaml").write_text("params: {}\n")  # identify's overlay saved into the same folder
+    assert Overlay.load(out / "identified.yaml").params == {}
+    with pytest.raises(StoredResultError, match=r"model.yaml: part of a result cut short .*run the command that "
+                                                r"wrote it again"):
+        Overlay.load(out / "model.yaml")
+    with pytest.raises(StoredResultError, match=r"baseline.json: part of a result cut short .*--baseline-logs"):
+        Baseline.load(out / "baseline.json")
+    with result_folder(out, ("model.yaml",)) as folder:
+        with pytest.raises(StoredResultError, match="another ur5fault process is writing its result there now"):
+            Overlay.load(folder / "model.yaml")
+        (folder / "model.yaml").write_text("params: {}\n")
+    assert Overlay.load(out / "model.yaml").params == {}

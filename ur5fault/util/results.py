@@ -25,6 +25,7 @@ import socket
 from collections.abc import Iterator
 from pathlib import Path
 
+from ..errors import StoredResultError
 from .io import OutputError, check_writable, remove_stale_temporaries, write_text_atomic
 from .lock import FolderLockedError, Lock, lock_holder
 
@@ -70,6 +71,22 @@ def check_new_output(path: str | Path, *, folder: bool = False, results: tuple[s
                           f"or another {option}")
     return path
 
+
+
+def check_whole(path: str | Path, remake: str) -> None:
+    """Refuse to read ``path`` as a result while its folder's :data:`INCOMPLETE_MARK` names it: its set was being
+    written when its writer stopped (or is being written now), so the file may be the earlier result's or the new
+    one's, and the rest of its set may be missing.  ``remake``: what makes the file again (for the message).  A file
+    the mark does not name (``identify``'s overlay saved beside a result folder's files) is read as it is."""
+    path = Path(path)
+    mark = path.parent / INCOMPLETE_MARK
+    if not mark.exists() or path.name not in (_marked_results(mark) or [path.name]):
+        return
+    holder = lock_holder(path.parent)
+    if holder is not None:
+        raise StoredResultError(f"{path}: another ur5fault process is writing its result there now; wait for it")
+    raise StoredResultError(f"{path}: part of a result cut short (its writer stopped before finishing; "
+                            f"{mark} is still there): {remake} again")
 
 
 def file_lock(path: str | Path) -> Lock:

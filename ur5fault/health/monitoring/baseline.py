@@ -29,6 +29,7 @@ from ...errors import ParameterError
 from ...logs.measured import same_period
 from ...sim.axes import JOINT_NAMES, N_JOINTS
 from ...util.io import checksum_path, json_float, verify_checksum
+from ...util.results import check_whole
 from . import paired
 from .changes import BLOCK_S, block_estimates, spreads
 from .conditions import CONDITIONS
@@ -199,6 +200,7 @@ class Baseline:
     @classmethod
     def load(cls, path: str | Path) -> Baseline:
         path = Path(path)
+        check_whole(path, "rebuild it with `ur5fault monitor --baseline-logs ...`")
         why = verify_checksum(path) if checksum_path(path).exists() else None
         if why:  # a changed digit would move an event limit silently
             raise ParameterError(f"{path}: {why}; rebuild it with `ur5fault monitor --baseline-logs ...`")
