@@ -414,3 +414,23 @@ def test_nan_in_a_required_column_is_named_with_its_column_and_extent(tmp_path):
     with pytest.raises(LogFormatError, match=r"^nist.csv: NaN or inf in ROBOT_ACTUAL_JOINT_CURRENT \(J3\) at data "
                                              r"row 1 \(every row\)$"):
         read_log(tmp_path / "nist.csv", "nist")
+
+
+def test_the_readers_called_directly_make_the_checks_read_log_makes(tmp_path):
+    """`read_rtde` / `read_nist` are the package's API too (a notebook calls them): they refused less than
+    `read_log` (current sign, dead channel, units, following error were read_log's alone)."""
+    def negate(df):
+        for j in range(6):
+            df[f"actual_current_{j}"] = -df[f"actual_current_{j}"]
+
+    with pytest.raises(LogFormatError, match=r"test12.csv: the current of joint 2 .* runs against UR's target"):
+        read_rtde(_first_12_s_of_test(tmp_path, negate), **KW)
+
+    def freeze(df):
+        t = df["time"] - df["time"].iloc[0]
+        df.loc[(t >= 5.0) & (t < 8.0), "actual_q_1"] = df.loc[t >= 5.0, "actual_q_1"].iloc[0]
+
+    with pytest.raises(LogFormatError,
+                       match=r"test12.csv: the measured position of joint 2 .* departs from its target"):
+        read_rtde(_first_12_s_of_test(tmp_path, freeze), **KW)
+    read_nist(NIST_LOG)  # the real log passes as before

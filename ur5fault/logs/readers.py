@@ -154,12 +154,23 @@ def _assemble(src: str, t: NDArray, required: Mapping[str, NDArray], optional: M
     keep = {**req, **{k: v for k, v in opt.items() if k not in ("target_qd", "actual_qd")}}
     grid, a, logged = regular.on_ticks(src, t, keep, notes)
     cur_t = a["target_current"]
-    return MeasuredLog(
+    return _checked(MeasuredLog(
         source=src, t_s=grid, q_target_rad=a["target_q"], q_actual_rad=a["actual_q"],
         current_A=a["actual_current"] * UR_CURRENT_SIGN,
         target_current_A=None if cur_t is None else cur_t * UR_CURRENT_SIGN, temperature_C=a["temperature"],
         tcp_m=a["tcp"], target_torque_Nm=a["target_torque"], logged=logged, notes=tuple(notes),
-        rest_target=rest_target, **fields)
+        rest_target=rest_target, **fields))
+
+
+def _checked(log: MeasuredLog) -> MeasuredLog:
+    """The checks of a whole log every reader makes (read directly or through :func:`read_log`): current units, a
+    current that carries the torque, its sign against UR's target current, and (a real robot's) following error."""
+    plausible.check_current_units(log.source, {"current": log.current_A, "target current": log.target_current_A})
+    plausible.check_current_carries_torque(log.source, log.current_A, log.target_current_A)
+    plausible.check_current_sign(log.source, log.current_A, log.target_current_A)
+    if not log.simulated:  # a simulated fault may carry the twin up to its own protective stop
+        plausible.check_following_error(log.source, log.t_s, log.q_target_rad, log.q_actual_rad)
+    return log
 
 
 def read_nist(path: str | Path, length: plausible.MinLength | None = None) -> MeasuredLog:
@@ -336,11 +347,11 @@ def read_sim(path: str | Path, length: plausible.MinLength | None = None) -> Mea
                 held = np.where(t >= float(te), bool(g), held)
     except (TypeError, ValueError) as exc:
         raise LogFormatError(f"{src}: malformed ur5fault metadata ({exc})") from None
-    return MeasuredLog(
+    return _checked(MeasuredLog(
         source=src, t_s=t, q_target_rad=arrays["q_set_rad"], q_actual_rad=arrays["q_FB_rad"],
         current_A=arrays["i_FB_A"], tcp_m=_stack(d, tcp), q_motor_rad=_stack(d, qm), temperature_C=temp_arr,
         payload_kg=payload, tcp_offset_m=offset, payload_held=held, simulated=True,  # type: ignore[arg-type]
-    )
+    ))
 
 
 def _sim_metadata(schema, src: str) -> dict:
@@ -375,10 +386,4 @@ def read_log(path: str | Path, fmt: str, length: plausible.MinLength | None = No
         raise LogFormatError(f"{p}: no such file")
     if not p.is_file():
         raise LogFormatError(f"{p}: not a file")
-    log = READERS[fmt](p, length=length, **{k: v for k, v in kwargs.items() if v is not None})
-    plausible.check_current_units(log.source, {"current": log.current_A, "target current": log.target_current_A})
-    plausible.check_current_carries_torque(log.source, log.current_A, log.target_current_A)
-    plausible.check_current_sign(log.source, log.current_A, log.target_current_A)
-    if not log.simulated:  # a simulated fault may carry the twin up to its own protective stop
-        plausible.check_following_error(log.source, log.t_s, log.q_target_rad, log.q_actual_rad)
-    return log
+    return READERS[fmt](p, length=length, **{k: v for k, v in kwargs.items() if v is not None})
