@@ -125,3 +125,19 @@ def test_a_finding_of_the_stated_payload_stays_out_of_model_yaml():
     m.findings_ = [SimpleNamespace(kept=True, spec=lambda e=e: e) for e in found]
     over = m.overlay()
     assert [e["effect"] for e in over["effects"]] == ["current_sensor_offset"]
+
+
+def test_the_payload_is_screened_only_where_one_mass_is_stated_for_every_log():
+    """Logs of jobs with different stated payloads: the library's payload candidate is one mass, so screening it
+    would replay each log at one log's mass and report "where X kg was stated" of that log alone. Not screened, and
+    said; one stated mass (on every log) is screened; a fitted one never (a nuisance)."""
+    from ur5fault.discrepancy.payload import payload_kinds_screened
+    from ur5fault.twin.payload import PayloadRecord
+
+    def rec(name, kg, known=True):
+        return PayloadRecord(name, known, kg, (0.0, 0.0, 0.0))
+
+    assert payload_kinds_screened({"a": rec("a", 0.72), "b": rec("b", 0.72)}) == (True, None)
+    screened, why = payload_kinds_screened({"a": rec("a", 0.0), "b": rec("b", 2.0)})
+    assert not screened and "different payloads (0, 2 kg)" in why
+    assert payload_kinds_screened({"a": rec("a", 0.72), "b": rec("b", 1.1, known=False)}) == (False, None)

@@ -35,7 +35,7 @@ from .joint_check import joint_check
 from .judging import Finding, SearchStep, final_verdicts
 from .library import kinds as library_kinds
 from .multilog import MultiReplay, per_log
-from .payload import PAYLOAD_KINDS, resolve_payloads
+from .payload import PAYLOAD_KINDS, payload_kinds_screened, resolve_payloads
 from .refinement import FindingSet, Refined, polish
 from .replay_noise import null_residuals
 from .rescreen import rescreen
@@ -126,8 +126,11 @@ class DiscrepancyModel:
         logs, hold_out, self.payload_ = resolve_payloads(logs, hold_out, self.fit_fraction, params_overrides,
                                                          base_effects, seed=WORKFLOW_SEED, say=on_payload)
         kinds = self.kinds
-        if not all(r.known for r in self.payload_.values()):  # a fitted payload is a nuisance, not a finding
+        screened, why = payload_kinds_screened(self.payload_)
+        if not screened:
             kinds = [k for k in (kinds if kinds is not None else library_kinds()) if k not in PAYLOAD_KINDS]
+            if why is not None:
+                (on_payload or logger.warning)(why)
         t_payload = time.perf_counter() - t_payload
         rp: LogReplay | MultiReplay
         if len(logs) == 1 and not hold_out:

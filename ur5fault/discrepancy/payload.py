@@ -203,3 +203,18 @@ def resolve_payloads(logs: Sequence[MeasuredLog], hold_out: Sequence[MeasuredLog
     fitted = [one(g, False) for g in logs]
     held = [one(g, True) for g in hold_out]
     return fitted, held, records
+
+
+def payload_kinds_screened(records: dict[str, PayloadRecord]) -> tuple[bool, str | None]:
+    """Whether the library screens the job's payload (:data:`PAYLOAD_KINDS`) as a finding, and why not.
+
+    Not when a payload was fitted (a nuisance of the job, not a discrepancy of the robot), nor when the logs state
+    different masses: the library's payload candidate is one mass, so it would replace each log's own (a 2 kg run
+    replayed at the 0 kg run's mass), and its text would name one log's payload as the one stated."""
+    if not all(r.known for r in records.values()):
+        return False, None
+    masses = sorted({r.mass_kg for r in records.values()})
+    if len(masses) > 1:
+        return False, ("the payload is not screened as a finding: the logs state different payloads ("
+                       + ", ".join(f"{m:g}" for m in masses) + " kg), and one mass would replace each log's own")
+    return True, None
