@@ -236,6 +236,7 @@ def test_saved_classifiers_round_trip_and_score_another_campaign(tmp_path):
     df = with_twin(synthetic())
     df.to_parquet(train_dir / "features.parquet")
     other = with_twin(synthetic(n_groups=6, seed=7), seed=8)  # other motions, other noise
+    other.loc[:2, "payload_kg"] = 4.5  # three runs beyond the training runs' payloads (all 1 kg)
     other.to_parquet(other_dir / "features.parquet")
     m = run_benchmark(train_dir, compare=False)
     assert m["feature_set"] == "both" and "comparison" not in m
@@ -243,6 +244,7 @@ def test_saved_classifiers_round_trip_and_score_another_campaign(tmp_path):
     ds = load_dataset(df, "both")
     assert [c["name"] for c in schema["inputs"]] == list(ds.inputs)
     assert schema["training_set_sha256"] == training_hash(ds) and schema["ur5fault_version"]
+    assert schema["training_ranges"] == {"payload_kg": [1.0, 1.0], "temperature_C": [28.0, 28.0]}
     from ur5fault.health.diagnostics.limits import DEFAULT_Z, LimitCalibration
 
     # the detection limits' calibration: read off the training runs, saved for ur5fault diagnose, reported
@@ -259,6 +261,10 @@ def test_saved_classifiers_round_trip_and_score_another_campaign(tmp_path):
     np.testing.assert_array_equal(models.kind.predict(x), fresh.kind.predict(x))
     t = run_benchmark(train_dir, test_dir=other_dir)
     assert t["saved_models"]["training_set_sha256"] == schema["training_set_sha256"]
+    assert [n for n in t["notes"] if "outside the training runs'" in n] == [
+        f"{other_dir}: payload_kg 3 of {len(other)} runs (4.5 to 4.5 kg) outside the training runs' 1 to 1 kg: the "
+        "classifiers hold their value at the edge there (trees do not extrapolate), so p(fault) is not a measured "
+        "rate; train on a campaign that covers it"]
     assert t["dataset"]["n_test"] == len(other) and t["detection"]["auc_all"] > 0.85
     assert (other_dir / "benchmark_transfer" / "metrics.json").exists()
     # against the training campaign's own test split: the saved by-joint detector there is the training report's
@@ -574,3 +580,18 @@ def test_a_detector_trained_on_other_twin_features_is_noted():
     (note,) = twin_format_notes({"twin_residuals_format": TWIN_RESIDUALS_FORMAT}, 9, "other/")
     assert "other/ computes format 9" in note
     assert twin_format_notes({"twin_residuals_format": 9}, None, "other/") == []  # the other campaign's not recorded
+
+
+def test_a_log_beyond_the_training_conditions_is_noted():
+    """diagnose on a log whose payload or temperature the classifiers never saw: said (trees hold their edge value);
+    nothing where the schema has no record (classifiers saved before it) or the value lies inside."""
+    from ur5fault.health.diagnostics.envelope import outside_notes
+
+    schema = {"training_ranges": {"payload_kg": [0.0, 3.0], "temperature_C": [15.0, 45.0]}}
+    notes = outside_notes(schema, {"payload_kg": 4.5, "temperature_C": 30.0}, "log.csv")
+    assert notes == ["log.csv: payload_kg 4.5 kg outside the training runs' 0 to 3 kg: the classifiers hold their "
+                     "value at the edge there (trees do not extrapolate), so p(fault) is not a measured rate; train "
+                     "on a campaign that covers it"]
+    assert outside_notes(schema, {"payload_kg": 3.0, "temperature_C": 15.0}, "log.csv") == []
+    assert "temperature_C 8 degC outside" in outside_notes(schema, {"temperature_C": 8.0}, "x")[0]
+    assert outside_notes({}, {"payload_kg": 4.5}, "log.csv") == []

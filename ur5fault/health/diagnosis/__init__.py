@@ -113,6 +113,7 @@ def diagnose(log: MeasuredLog, detector_dir: str | Path, params_overrides: dict 
     signals), reused instead of replayed again; ``windows``: the log's :func:`log_windows` under that twin,
     reused likewise; ``baseline``: the robot's own healthy baseline (:func:`robot_baseline`), which every input
     is referred to before it is scored (None: the inputs are scored as they are)."""
+    from ..diagnostics.envelope import outside_notes
     from ..diagnostics.saved import NEAR_CHANCE_AUC, detector_test_auc, load_models, twin_format_notes
 
     models, schema = load_models(detector_dir)
@@ -167,6 +168,7 @@ def diagnose(log: MeasuredLog, detector_dir: str | Path, params_overrides: dict 
         notes.append("no motor encoders in the log: every encoder-mismatch feature is missing (NaN) and the "
                      "detector scores without them; backlash, resolver offset and gear stiffness cannot be told")
     notes.extend(twin_format_notes(schema))
+    notes.extend(outside_notes(schema, context, log.source))
     auc = detector_test_auc(detector_dir)
     if auc is not None and auc < NEAR_CHANCE_AUC:
         notes.append(f"this detector's detection AUC on its own campaign's test split is {auc:.2f} (0.5 is chance): "

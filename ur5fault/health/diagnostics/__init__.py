@@ -245,7 +245,7 @@ def run_benchmark(campaign_dir: str | Path, out: str | Path | None = None, *, se
         metrics, figures = evaluate(features, seed=seed, threshold_mm=thr, source=str(test_dir), saved=saved,
                                     test_features=other, with_importance=False)
         metrics.pop("_models")
-        metrics["notes"] = setup_notes(saved[1], test_dir)
+        metrics["notes"] = setup_notes(saved[1], test_dir, other)
         if saved[0].joint_kind is not None:  # how far apart, against the motions drawn (transfer.py)
             metrics["transfer"] = against_training_split(features, other, saved, seed, str(test_dir))
         with result_folder(out_dir, RESULT_FILES, replace):  # one set: a stop between files is marked

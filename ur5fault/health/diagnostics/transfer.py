@@ -20,6 +20,7 @@ import pandas as pd
 
 from ...errors import ConfigFileError, ParameterError
 from . import joint_kind
+from .envelope import outside_notes
 from .saved import check_inputs
 
 #: motion resamples of :func:`compare` (each costs two AUCs of a few hundred runs, about 1 ms)
@@ -170,16 +171,20 @@ def mean_run_duration_s(manifest: dict[str, Any]) -> float | None:
         return None
 
 
-def setup_notes(schema: dict[str, Any], test_dir: Path) -> list[str]:
+def setup_notes(schema: dict[str, Any], test_dir: Path, other_features: pd.DataFrame | None = None) -> list[str]:
     """What differs between the saved classifiers' training runs and another campaign's, from its manifest: the
     log period (``diagnose`` says the same of a log), the runs' mean duration and the twin residual features'
-    version."""
+    version; and from its table (``other_features``) its runs whose payload or temperature lie outside the training
+    runs' (:mod:`.envelope`)."""
     from ...campaign.store import read_manifest
     from .saved import twin_format_notes
 
     man = read_manifest(Path(test_dir))[0]
     trained, other = schema.get("log_period_s"), man.get("log_period_s")
     notes = twin_format_notes(schema, man.get("twin_residuals_format"), f"{test_dir}")
+    if other_features is not None:
+        ok = other_features[other_features["status"] == "ok"] if "status" in other_features else other_features
+        notes += outside_notes(schema, {c: ok[c] for c in ok.columns}, f"{test_dir}")
     if trained and other and abs(float(other) - float(trained)) > 1e-9:
         notes.append(f"{test_dir} logs every {1e3 * float(other):g} ms, the training runs every "
                      f"{1e3 * float(trained):g} ms: rate-dependent features (current spikes, kurtosis, crest factor, "

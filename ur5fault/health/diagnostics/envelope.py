@@ -1,0 +1,60 @@
+"""The operating conditions the saved classifiers were trained over, and a note where a log or another campaign
+leaves them.
+
+A robot knows its payload and its joints' temperature, and both are inputs of the classifiers
+(:data:`.data.CONTEXT_COLUMNS`).  Gradient-boosted trees hold their last value beyond the largest (or below the
+smallest) value they were trained on, so a 4.5 kg payload scored by classifiers trained on 0-3 kg gets the
+probability of a 3 kg run: an extrapolation nobody measured.  The schema records each condition's range over the
+training runs (``training_ranges``); ``ur5fault diagnose`` and ``ur5fault benchmark --test`` say where they leave
+it.  Classifiers saved before the record say nothing.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from .data import CONTEXT_COLUMNS
+
+#: each condition's unit, for the notes
+UNITS = {"payload_kg": "kg", "temperature_C": "degC"}
+
+
+def training_ranges(train: pd.DataFrame) -> dict[str, list[float]]:
+    """``{condition: [smallest, largest]}`` over the training runs, for the conditions the table holds."""
+    out = {}
+    for c in CONTEXT_COLUMNS:
+        if c in train:
+            v = pd.to_numeric(train[c], errors="coerce").to_numpy(float)
+            v = v[np.isfinite(v)]
+            if v.size:
+                out[c] = [float(v.min()), float(v.max())]
+    return out
+
+
+def outside_notes(schema: Mapping[str, Any], values: Mapping[str, Any], where: str) -> list[str]:
+    """One note per condition of ``values`` (a log's value, or another campaign's column) outside the schema's
+    ``training_ranges``; none where the schema has no record."""
+    ranges = schema.get("training_ranges")
+    if not isinstance(ranges, Mapping):
+        return []
+    notes = []
+    for c, rng in ranges.items():
+        if c not in values or not isinstance(rng, (list, tuple)) or len(rng) != 2:
+            continue
+        lo, hi = float(rng[0]), float(rng[1])
+        v = np.atleast_1d(pd.to_numeric(pd.Series(np.ravel(values[c])), errors="coerce").to_numpy(float))
+        v = v[np.isfinite(v)]
+        out = v[(v < lo) | (v > hi)]
+        if not out.size:
+            continue
+        unit = UNITS.get(c, "")
+        seen = (f"{out[0]:.3g} {unit}" if v.size == 1 else
+                f"{out.size} of {v.size} runs ({out.min():.3g} to {out.max():.3g} {unit})")
+        notes.append(f"{where}: {c} {seen} outside the training runs' {lo:.3g} to {hi:.3g} {unit}: the classifiers "
+                     "hold their value at the edge there (trees do not extrapolate), so p(fault) is not a measured "
+                     "rate; train on a campaign that covers it")
+    return notes
