@@ -12,6 +12,7 @@ import shutil
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import pandas as pd
 import pytest
@@ -407,3 +408,14 @@ def test_status_advice_repeats_the_command_with_its_quick_trial_options(tmp_path
     assert command == f"ur5fault campaign run {path.resolve()} --out {out} --duration-s 0.2", info["advice"]
     assert main(shlex.split(command)[1:] + ["--quiet"]) == 0
     assert status(out)["sound"] is True
+
+
+def test_the_advised_command_carries_yes_where_the_campaign_needed_it():
+    """A 2,546-run campaign's status advice ended with a command that is refused ("needs --yes to start")."""
+    from ur5fault.campaign.limits import CONFIRM_RUN_STEPS, CONFIRM_RUNS
+    from ur5fault.campaign.verify import rerun_command
+
+    base = {"campaign_file": "/c/d.yaml", "n_runs": CONFIRM_RUNS, "n_steps_total": int(CONFIRM_RUN_STEPS)}
+    assert rerun_command(base, Path("out")) == "ur5fault campaign run /c/d.yaml --out out"
+    assert rerun_command({**base, "n_runs": CONFIRM_RUNS + 1}, Path("out")).endswith(" --out out --yes")
+    assert rerun_command({**base, "n_steps_total": int(CONFIRM_RUN_STEPS) + 1}, Path("out")).endswith(" --yes")

@@ -193,8 +193,8 @@ def _temporaries(out: Path, held: bool, subfolders: tuple[str, ...]) -> list[str
 
 def rerun_command(manifest: dict[str, Any], out: Path) -> str | None:
     """The ``campaign run`` command that made the folder, its command-line options (``--model``, ``--duration-s``)
-    repeated (a quick trial's ``--duration-s`` left out makes another campaign, which is refused), or None where the
-    manifest does not say which file it ran."""
+    repeated (a quick trial's ``--duration-s`` left out makes another campaign, which is refused) and ``--yes`` where
+    the campaign needed it, or None where the manifest does not say which file it ran."""
     import shlex
 
     file = manifest.get("campaign_file")
@@ -209,7 +209,19 @@ def rerun_command(manifest: dict[str, Any], out: Path) -> str | None:
         cmd += f" --model {shlex.quote(options['model'])}"
     if isinstance(options.get("duration_s"), (int, float)) and not isinstance(options.get("duration_s"), bool):
         cmd += f" --duration-s {float(options['duration_s'])!r}"
+    if _large(manifest):  # without it the command is refused before it resumes anything
+        cmd += " --yes"
     return cmd
+
+
+def _large(manifest: dict[str, Any]) -> bool:
+    """Whether the campaign a manifest records needed ``--yes`` (:func:`.limits.confirmation_needed`'s bounds on its
+    runs and steps; a life campaign's bound is on steps it does not record: it says so when it stops early)."""
+    from .limits import CONFIRM_RUN_STEPS, CONFIRM_RUNS
+
+    n, steps = manifest.get("n_runs"), manifest.get("n_steps_total")
+    return ((isinstance(n, int) and n > CONFIRM_RUNS)
+            or (isinstance(steps, (int, float)) and not isinstance(steps, bool) and steps > CONFIRM_RUN_STEPS))
 
 
 def _advice(info: dict[str, Any], bad: int, changed: int, manifest_todo: str | None, table_key: str = "features",

@@ -45,6 +45,8 @@ def register(sub) -> None:
 
 def cmd_life_run(args: argparse.Namespace) -> int:
     """``campaign run`` of a life campaign file."""
+    import shlex
+
     from ...campaign.limits import CONFIRM_RUN_STEPS
     from ...errors import ParameterError
     from .fleet import run_life
@@ -60,7 +62,9 @@ def cmd_life_run(args: argparse.Namespace) -> int:
     m = run_life(camp, camp.out, jobs=args.jobs, backend=args.backend, scheduler=args.scheduler,
                  progress=not args.quiet, replace_changed=args.replace_changed)
     if m["state"] != "complete":
-        print(f"life campaign stopped early; run it again to resume ({camp.out})")
+        again = (f"ur5fault campaign run {shlex.quote(str(args.file))} --out {shlex.quote(str(camp.out))}"
+                 + (" --yes" if steps > CONFIRM_RUN_STEPS else ""))
+        print(f"life campaign stopped early; run it again to resume: {again}")
         return 1
     ipu = m["inspections_per_unit"]
     beyond = m.get("n_censored_beyond_model", 0)
