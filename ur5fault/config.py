@@ -27,7 +27,7 @@ from typing import Any
 
 from .errors import ParameterError, UnknownNameError
 from .sim.budget import MAX_DURATION_S, check_memory, sim_bytes
-from .sim.effects import REGISTRY, EffectSpec, make_effect
+from .sim.effects import REGISTRY, EffectSpec, effect_of, make_effect
 from .sim.params import RobotParams, deep_merge, load_params, read_yaml
 from .sim.runspec import MAX_SEED
 from .sim.trajectories import TRAJECTORIES, Trajectory, get_trajectory
@@ -60,7 +60,7 @@ def parse_effects(items: Any, where: str) -> tuple[EffectSpec, ...]:
         if not isinstance(item, Mapping) or "effect" not in item:
             raise ParameterError(f"{loc}: each effect is a mapping with an 'effect' key (and its parameters)")
         values = {k: v for k, v in item.items() if k not in ("effect", "joint")}
-        out.append(make_effect(str(item["effect"]), item.get("joint"), where=loc, **values))
+        out.append(effect_of(str(item["effect"]), item.get("joint"), values, loc))
     return tuple(out)
 
 

@@ -102,3 +102,21 @@ def test_absent_values_come_from_the_registry():
     a = build_run_arrays(load_params(), [()], 0.0)
     assert np.all(a.term_holding_speed_rad_s == REGISTRY["torque_holding"].absent("speed_rad_s"))
     assert np.all(a.cogging_periods_per_rev == 6.0)
+
+
+@pytest.mark.parametrize("key", ["where", "name"])
+def test_a_key_named_like_an_argument_is_an_unknown_parameter(key):
+    """`{effect: backlash, joint: 2, where: 5}` in a file, an overlay or `--effect` crashed with "make_effect() got
+    multiple values for keyword argument 'where'" (a traceback, exit 1)."""
+    from ur5fault.config import parse_effects
+    from ur5fault.errors import UnknownNameError
+
+    with pytest.raises(UnknownNameError, match=rf"f.yaml: effects\[0\]: unknown parameter of effect 'backlash' "
+                                               rf"'{key}'; valid: backlash_deg"):
+        parse_effects([{"effect": "backlash", "joint": 2, "backlash_deg": 0.1, key: 5}], "f.yaml: effects")
+
+
+def test_where_is_given_by_name_only():
+    """`make_effect("backlash", 2, 0.1)` took 0.1 for the message context and said the effect had no size."""
+    with pytest.raises(TypeError):
+        make_effect("backlash", 2, 0.1)

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 from typing import Any
 
 from ..errors import ParameterError, UnknownNameError
@@ -73,12 +73,12 @@ def effects_of_keys(values: Iterable[tuple[str, Any]], where: str = "") -> tuple
     out = []
     for name, vals in sorted(by_effect.items()):
         joint = vals.pop("joint", None)
-        out.append(make_effect(name, joint, where, **vals))
+        out.append(effect_of(name, joint, vals, where))
     return tuple(out)
 
 
-def make_effect(name: str, joint: int | str | None = None, where: str = "", **values: Any) -> EffectSpec:
-    """Validate and build an :class:`EffectSpec`.
+def make_effect(name: str, joint: int | str | None = None, *, where: str = "", **values: Any) -> EffectSpec:
+    """Validate and build an :class:`EffectSpec` (:func:`effect_of` with the values as keywords).
 
     Args:
         name: registry key; an unknown one lists the registered effects.
@@ -87,6 +87,12 @@ def make_effect(name: str, joint: int | str | None = None, where: str = "", **va
         values: parameter values, at least one (a sizeless effect is refused: a fault of size 0 is no fault);
             missing ones take their "absent" value.
     """
+    return effect_of(name, joint, values, where)
+
+
+def effect_of(name: str, joint: int | str | None, values: Mapping[str, Any], where: str = "") -> EffectSpec:
+    """:func:`make_effect` of a mapping of parameter values, as a file or a command line gives them: a key that
+    is also an argument's name (``where``, ``name``) is an unknown parameter like any other, not an argument."""
     if name not in REGISTRY:
         raise UnknownNameError("effect", name, REGISTRY, where)
     eff = REGISTRY[name]
