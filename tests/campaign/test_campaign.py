@@ -13,6 +13,7 @@ import time
 import numpy as np
 import pandas as pd
 import pytest
+import yaml
 from processes import workers_outliving_a_kill
 
 from ur5fault.campaign import (
@@ -97,6 +98,33 @@ def test_model_overlay_applies_to_every_run(tmp_path):
     bad = write(tmp_path, "effects:\n  - {effect: rust}\n", "bad_overlay.yaml")
     with pytest.raises(UnknownNameError, match="bad_overlay.yaml: effects\\[0\\]: unknown effect 'rust'"):
         load_campaign(REPO / "campaigns" / "default.yaml", overlay=bad)
+
+
+def test_a_base_effect_the_sweep_also_gives_is_refused_and_a_models_is_noted(tmp_path):
+    """A newcomer probe: base.effects held backlash 0.3 deg on joint 2 and the sweep backlash 0 / 0.1 deg there. The
+    run labelled healthy had 0.3 deg (the base's), the one labelled "backlash 0.1" 0.1 deg (the sweep's replaced it):
+    the labels said the opposite of the robot, exit 0. A scale (coulomb_friction) compounded unsaid."""
+    sweep = {"sweep": {"backlash.joint": [2], "backlash.backlash_deg": [0.0, 0.1]}}
+    same = {"effect": "backlash", "joint": 2, "backlash_deg": 0.3}
+    with pytest.raises(ParameterError, match=r"t.yaml: base.effects\[0\] \(backlash on shoulder_lift_joint "
+                                             r"\(backlash_deg=0.3\)\) is also swept \(a run with backlash on "
+                                             r"shoulder_lift_joint \(backlash_deg=0.1\)\).*not both"):
+        build_campaign({**sweep, "base": {"effects": [same]}}, "t.yaml")
+    scaled = {"sweep": {"coulomb_friction.joint": [1], "coulomb_friction.scale": [1.5]}}
+    with pytest.raises(ParameterError, match="is also swept"):
+        build_campaign({**scaled, "base": {"effects": [{"effect": "coulomb_friction", "joint": 1, "scale": 2}]}},
+                       "t.yaml")
+    with pytest.raises(ParameterError, match="give each effect once per joint"):
+        build_campaign({"base": {"effects": [same, {**same, "backlash_deg": 0.2}]}}, "t.yaml")
+    # another joint, or another kind: as before
+    build_campaign({**sweep, "base": {"effects": [{**same, "joint": 3}]}}, "t.yaml")
+    # the robot's model (--model): the faults come on top of it, said once
+    ov = write(tmp_path, "effects:\n  - {effect: backlash, joint: 2, backlash_deg: 0.3}\n", "model.yaml")
+    path = write(tmp_path, yaml.safe_dump(sweep), "c.yaml")
+    camp = load_campaign(path, overlay=ov)
+    assert len(camp.notes) == 1 and camp.notes[0].startswith(
+        "c.yaml: faults of backlash on shoulder_lift_joint come on top of the model overlay's backlash on "
+        "shoulder_lift_joint (backlash_deg=0.3)")
 
 
 def test_default_grid():

@@ -157,7 +157,8 @@ class CampaignResult:
 
         text = str(self.manifest.get("campaign_text", ""))
         data = self.manifest.get("campaign_data")  # the validated mapping (older manifests: the text)
-        camp = build_campaign(data if isinstance(data, dict) else yamlsafe.loads(text, "manifest"), "manifest", text)
+        camp = build_campaign(data if isinstance(data, dict) else yamlsafe.loads(text, "manifest"), "manifest", text,
+                              model_effects=None)
         then = (self.manifest.get("ur5fault_version"), self.manifest.get("model_sha256"))
         now = (provenance.package_version(), file_sha256(DEFAULT_MODEL_PATH))
         if then != now:

@@ -50,12 +50,15 @@ from ..config import (
     check_keys,
     check_log_period,
     check_mapping,
+    effect_key,
     parse_effects,
     parse_trajectory,
     refuse_condition_effects,
+    refuse_repeats,
 )
 from ..errors import ParameterError
 from ..seed_paper import PAPER_TCP_MM
+from ..sim.axes import JOINT_NAMES
 from ..sim.effects import EffectSpec
 from ..sim.params import NOMINAL_JOINT_TEMPERATURE_C, deep_merge, load_params, read_yaml
 from ..util.checks import check_bool, check_int, check_number, check_text, short
@@ -151,6 +154,7 @@ def load_campaign(path: str | Path, out: str | Path | None = None, overlay: str 
     path = resolve_campaign(path)
     data = read_yaml(path)
     text = path.read_text()
+    n_model = 0
     if overlay is not None:
         ov_path = Path(overlay)
         for i, e in enumerate(Overlay.load(ov_path).effects):  # validated with its own file name in messages
@@ -167,6 +171,7 @@ def load_campaign(path: str | Path, out: str | Path | None = None, overlay: str 
         if not isinstance(own_effects, list):
             raise ParameterError(f"{path.name}: base.effects: expected a list of effects")
         base["effects"] = list(ov.get("effects") or []) + own_effects
+        n_model = len(ov.get("effects") or [])
         data = {**data, "base": base}
         text = yaml.safe_dump(dict(data), sort_keys=False)
     if duration_s is not None:
@@ -175,15 +180,18 @@ def load_campaign(path: str | Path, out: str | Path | None = None, overlay: str 
         text = yaml.safe_dump(dict(data), sort_keys=False)
     options = {k: v for k, v in (("model", str(Path(overlay).resolve()) if overlay is not None else None),
                                  ("duration_s", duration_s)) if v is not None}
-    return dataclasses.replace(build_campaign(data, path.name, text, path, out), command_options=options)
+    return dataclasses.replace(build_campaign(data, path.name, text, path, out, n_model), command_options=options)
 
 
 def build_campaign(data: Mapping[str, Any], where: str, text: str = "", path: Path | None = None,
-                   out: str | Path | None = None) -> Campaign:
+                   out: str | Path | None = None, model_effects: int | None = 0) -> Campaign:
     """Validate a campaign mapping and expand it into runs (twins included); nothing is simulated.
 
     Every value that reaches the engine is checked here: types (no bool or string as a number),
     finiteness, ranges, the log period against the physics step, and the grid size before expanding.
+    ``model_effects``: how many of ``base.effects`` came first from a model overlay (:func:`load_campaign`; a
+    swept fault may come on top of those, not of the file's own); None: a campaign rebuilt from its manifest,
+    checked when it ran (the count is not recorded there).
     """
     if not isinstance(data, Mapping):
         raise ParameterError(f"{where}: expected a mapping of campaign keys, got {short(data)}")
@@ -208,6 +216,8 @@ def build_campaign(data: Mapping[str, Any], where: str, text: str = "", path: Pa
         runs, swept, notes = _sampled_runs(data["sample"], cond0, where)
     else:
         runs = grid_runs(axes, cond0)
+    notes += _base_and_swept(base_effects, len(base_effects) if model_effects is None else model_effects,
+                             runs.values(), where)
     thr = check_number(data.get("threshold_mm", PAPER_TCP_MM), f"{where}: threshold_mm", 0.0, MAX_THRESHOLD_MM, "mm",
                        lo_open=True)
     bs = check_int(data.get("batch_size", 32), f"{where}: batch_size", 1, 1024)
@@ -229,6 +239,34 @@ def build_campaign(data: Mapping[str, Any], where: str, text: str = "", path: Pa
     return Campaign(name, path, text or yaml.safe_dump(dict(data)), out_dir, base_effects, params,
                     tuple(runs.values()), tuple(swept), thr, bs, lp, save_ts, dur, resolved,
                     parse_split(data.get("split"), where), twin_res, motor_enc, com_twins, notes)
+
+
+def _base_and_swept(base_effects: tuple[EffectSpec, ...], model_effects: int, runs, where: str) -> tuple[str, ...]:
+    """A swept (or drawn) fault of the same kind on the same joint as a base effect: refused where the campaign
+    file gives both (a set value such as backlash is replaced in the faulty runs while the healthy ones keep it, so
+    the labels say the opposite of the robot; a scale compounds with it unsaid), and said in a note where the base
+    effect is the model overlay's (its first ``model_effects``): the robot's model, which the faults are meant to
+    come on top of, as ``simulate --model`` says of a run's effect."""
+    refuse_repeats(base_effects[model_effects:], f"{where}: base.effects")
+    first = {effect_key(e): i for i, e in enumerate(base_effects)}
+    notes: dict[int, str] = {}
+    for rc in runs:
+        for e in rc.fault_effects():
+            i = first.get(effect_key(e))
+            if i is None or i in notes:
+                continue
+            b = base_effects[i]
+            if i >= model_effects:
+                raise ParameterError(f"{where}: base.effects[{i - model_effects}] ({b.describe()}) is also swept "
+                                     f"(a run with {e.describe()}): the run's value would replace it (a set value "
+                                     "such as backlash) or compound with it (a scale) while the healthy runs keep "
+                                     "it, so the labels would not say the robot's fault; give it in base.effects or "
+                                     "in the sweep, not both")
+            notes[i] = (f"{where}: faults of {e.name}{' on ' + JOINT_NAMES[e.joint] if e.joint is not None else ''} "
+                        f"come on top of the model overlay's {b.describe()}: an effect that sets a value (e.g. "
+                        "backlash) keeps the run's, one that scales compounds with it; the labels give the run's "
+                        "effect alone")
+    return tuple(notes[i] for i in sorted(notes))
 
 
 def out_folder(data: Mapping[str, Any], where: str, out: str | Path | None, name: str) -> Path:

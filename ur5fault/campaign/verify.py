@@ -145,7 +145,8 @@ def status(out: Path) -> dict[str, Any]:
     data = manifest.get("campaign_data")
     if isinstance(data, dict):
         try:
-            camp = build_campaign(data, "manifest.json", str(manifest.get("campaign_text", "")), None, out)
+            camp = build_campaign(data, "manifest.json", str(manifest.get("campaign_text", "")), None, out,
+                                  model_effects=None)
         except Ur5FaultError as exc:
             info["campaign_error"] = str(exc)
             manifest_todo = manifest_todo or ("manifest.json's campaign does not validate with this ur5fault (the "
