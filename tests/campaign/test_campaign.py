@@ -624,3 +624,10 @@ def test_a_shortened_campaigns_table_says_it_is_of_the_shortened_runs(tmp_path, 
     assert "note: every run shortened to 0.2 s (--duration-s)" in capsys.readouterr().out
     assert main(["campaign", "run", str(f), "--out", str(tmp_path / "b"), "--jobs", "1", "--quiet"]) == 0
     assert "note: every run shortened" not in capsys.readouterr().out
+
+
+def test_a_life_campaign_through_the_campaign_api_is_refused():
+    """`run_campaign(load_campaign("prognostics_small"))` simulated one healthy run and wrote a feature table: the
+    life section was dropped without a word (the command line alone told the two kinds apart)."""
+    with pytest.raises(ParameterError, match=r"prognostics_small.yaml: a life campaign .*load_life .*run_life"):
+        load_campaign("prognostics_small")

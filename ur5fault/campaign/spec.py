@@ -195,8 +195,12 @@ def build_campaign(data: Mapping[str, Any], where: str, text: str = "", path: Pa
     """
     if not isinstance(data, Mapping):
         raise ParameterError(f"{where}: expected a mapping of campaign keys, got {short(data)}")
-    # `life` is named among the valid keys (a file with it is a life campaign and never reaches here): a typo of it
-    # gets "did you mean" instead of a list without it
+    if "life" in data:  # the command line runs it as one; through the API its life section was silently dropped
+        raise ParameterError(f"{where}: a life campaign (it has a `life:` section): load it with "
+                             "ur5fault.health.prognostics.spec.load_life and run it with "
+                             "ur5fault.health.prognostics.fleet.run_life, or `ur5fault campaign run` it")
+    # `life` is named among the valid keys (a file with it is a life campaign, refused above): a typo of it gets
+    # "did you mean" instead of a list without it
     check_keys(data, (*CAMPAIGN_KEYS, "life"), where)
     base = check_mapping(data.get("base"), f"{where}: base")
     check_keys(base, BASE_KEYS, f"{where}: base")
