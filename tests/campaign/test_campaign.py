@@ -631,3 +631,17 @@ def test_a_life_campaign_through_the_campaign_api_is_refused():
     life section was dropped without a word (the command line alone told the two kinds apart)."""
     with pytest.raises(ParameterError, match=r"prognostics_small.yaml: a life campaign .*load_life .*run_life"):
         load_campaign("prognostics_small")
+
+
+@pytest.mark.parametrize("data", [
+    {"trajectory": {"name": "pick_and_place", "payload_kg": 4.0}},
+    {"sweep": {"trajectory": [{"name": "pick_and_place", "payload_kg": 4.0}]}},
+    {"sample": {"n": 4, "faults": {"backlash": {"size": [0.01, 0.1]}},
+                "conditions": {"trajectory": {"name": "random_pick_and_place", "payload_kg": 4.0,
+                                              "seed": {"integers": [0, 3]}}}}},
+])
+def test_a_trajectorys_own_payload_is_refused_in_a_campaign(data):
+    """`trajectory: {name: pick_and_place, payload_kg: 4.0}` ran at base.payload_kg's 2 kg, exit 0 (simulate honours
+    it): every campaign run's payload is its payload_kg condition, applied last."""
+    with pytest.raises(ParameterError, match="payload_kg: a campaign run's payload is its payload_kg condition"):
+        build_campaign(data, "t.yaml")

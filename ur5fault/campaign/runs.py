@@ -68,6 +68,14 @@ def as_list(value: Any, where: str) -> list:
     return value
 
 
+def refuse_trajectory_payload(spec: Any, where: str) -> None:
+    """A campaign run's payload is its ``payload_kg`` condition (``base.payload_kg``, swept or drawn), applied last:
+    a trajectory's own ``payload_kg`` option (which ``simulate`` honours) would be silently replaced by it."""
+    if isinstance(spec, Mapping) and "payload_kg" in spec:
+        raise ParameterError(f"{where}: payload_kg: a campaign run's payload is its payload_kg condition, which "
+                             "replaces the trajectory's: give it as base.payload_kg (or sweep payload_kg)")
+
+
 def check_value(key: Any, value: Any, where: str) -> Any:
     """Validate one swept (or base) value now, before any simulation starts."""
     if key == "seed":
@@ -79,6 +87,7 @@ def check_value(key: Any, value: Any, where: str) -> Any:
         p = REGISTRY["temperature"].param("temperature_C")
         return check_number(value, where, p.lo, p.hi, p.unit)
     if key == "trajectory":
+        refuse_trajectory_payload(value, where)
         parse_trajectory(value, where)
         return value if isinstance(value, str) else dict(value)
     ek = EffectKey.parse(key)

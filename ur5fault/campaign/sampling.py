@@ -57,7 +57,7 @@ from ..sim.axes import joint_index
 from ..sim.effect_types import EffectKey, EffectParam
 from ..sim.effects import REGISTRY, effects_of_keys, make_effect
 from .design import METHODS, SIGNIFICANT_DIGITS, Dist, parse_dist, unit_design
-from .runs import CONDITION_KEYS, MAX_RUNS
+from .runs import CONDITION_KEYS, MAX_RUNS, refuse_trajectory_payload
 
 SAMPLE_KEYS = ("n", "method", "seed", "twins", "joints", "faults", "conditions")
 DIRECTIONS = ("up", "down", "both")
@@ -154,6 +154,7 @@ def _trajectory_dists(spec: Any, where: str) -> tuple[Any, dict[str, Dist]]:
     """The trajectory's fixed spec and its drawn options."""
     if not isinstance(spec, Mapping):
         return spec, {}
+    refuse_trajectory_payload(spec, where)
     fixed, drawn = {}, {}
     for k, v in spec.items():
         d = parse_dist(v, f"{where}.{k}") if isinstance(v, (Mapping, list)) else Dist("fixed", (v,))
