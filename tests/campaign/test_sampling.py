@@ -161,6 +161,8 @@ BAD = [
     (sample_with(conditions__trajectory={"name": "zigzag"}), UnknownNameError, "unknown trajectory 'zigzag'"),
     (sample_with(twins=["gear_stiffness"]), UnknownNameError, "unknown twin kind 'gear_stiffness'"),
     (sample_with(joints=[7]), UnknownNameError, "unknown joint 7"),
+    (sample_with(joints=[2, "shoulder_lift_joint"]), ParameterError,
+     "sample.joints: joint 2 is given twice (by number and name or alias)"),
     ({**SPEC, "sweep": {"seed": [0, 1]}}, ParameterError, "sample cannot be combined with sweep or zip"),
 ]
 

@@ -238,6 +238,10 @@ def parse_sample(spec: Any, cond0: Mapping[str, Any], loc: str) -> SamplePlan:
     if not isinstance(joints, list) or not joints:
         raise ParameterError(f"{loc}.joints must be a non-empty list of joints 1..6")
     joints = [joint_index(j, f"{loc}.joints") + 1 for j in joints]
+    twice = sorted({j for j in joints if joints.count(j) > 1})
+    if twice:  # [2, shoulder_lift]: joint 2 would be drawn twice as often, unsaid (a sweep refuses the same)
+        raise ParameterError(f"{loc}.joints: joint {twice[0]} is given twice (by number and name or alias); give "
+                             "each joint once")
     twin_kinds = _twin_kinds(spec.get("twins", "all"), kinds, loc)
     cond_dists, traj_fixed, traj_drawn = _condition_dists(spec.get("conditions") or {}, cond0, kinds, loc)
     return SamplePlan(n, method, seed, tuple(kinds), tuple(joints), frozenset(twin_kinds), cond_dists, traj_fixed,
