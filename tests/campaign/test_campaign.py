@@ -645,3 +645,10 @@ def test_a_trajectorys_own_payload_is_refused_in_a_campaign(data):
     it): every campaign run's payload is its payload_kg condition, applied last."""
     with pytest.raises(ParameterError, match="payload_kg: a campaign run's payload is its payload_kg condition"):
         build_campaign(data, "t.yaml")
+
+
+def test_a_broken_duration_in_the_file_is_refused_also_under_duration_s(tmp_path):
+    """`--duration-s 1` replaced a file's `duration_s: -1` before it was checked: the file's error went unsaid."""
+    path = tiny(tmp_path, dur=-1)
+    with pytest.raises(ParameterError, match="t.yaml: duration_s"):
+        load_campaign(path, duration_s=0.2)

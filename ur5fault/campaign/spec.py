@@ -176,6 +176,8 @@ def load_campaign(path: str | Path, out: str | Path | None = None, overlay: str 
         text = yaml.safe_dump(dict(data), sort_keys=False)
     if duration_s is not None:
         check_duration(duration_s, "command line: --duration-s")  # refused naming its source, not the file
+        if isinstance(data, Mapping) and data.get("duration_s") is not None:  # the file's, replaced: still valid
+            check_duration(data["duration_s"], f"{path.name}: duration_s")
         data = {**data, "duration_s": duration_s}
         text = yaml.safe_dump(dict(data), sort_keys=False)
     options = {k: v for k, v in (("model", str(Path(overlay).resolve()) if overlay is not None else None),
