@@ -652,3 +652,11 @@ def test_a_broken_duration_in_the_file_is_refused_also_under_duration_s(tmp_path
     path = tiny(tmp_path, dur=-1)
     with pytest.raises(ParameterError, match="t.yaml: duration_s"):
         load_campaign(path, duration_s=0.2)
+
+
+def test_a_duration_beyond_the_trajectory_is_said():
+    """simulate says when its run outlasts the trajectory; a campaign held the last setpoint unsaid."""
+    assert build_campaign({"duration_s": 30.0}, "t.yaml").notes == (
+        "t.yaml: duration_s 30 s outlasts a trajectory, which ends at 13 s: the robot holds its last setpoint for "
+        "the rest",)
+    assert build_campaign({"duration_s": 3.0}, "t.yaml").notes == ()

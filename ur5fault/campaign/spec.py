@@ -229,8 +229,11 @@ def build_campaign(data: Mapping[str, Any], where: str, text: str = "", path: Pa
     bs = check_int(data.get("batch_size", 32), f"{where}: batch_size", 1, 1024)
     dur = data.get("duration_s")
     dur = None if dur is None else check_duration(dur, f"{where}: duration_s")
-    shortest = dur if dur is not None else min(
-        parse_trajectory(t, f"{where}: trajectory").duration_s for t in trajectory_specs(runs.values()))
+    own = min(parse_trajectory(t, f"{where}: trajectory").duration_s for t in trajectory_specs(runs.values()))
+    shortest = dur if dur is not None else own
+    if dur is not None and dur > own + 1e-9:  # as simulate says it
+        notes += (f"{where}: duration_s {dur:g} s outlasts a trajectory, which ends at {own:g} s: the robot holds its "
+                  "last setpoint for the rest",)
     lp = check_log_period(data.get("log_period_s", 1e-3), f"{where}: log_period_s", robot.physics_dt_s, shortest)
     save_ts = check_bool(data.get("save_timeseries", False), f"{where}: save_timeseries")
     twin_res = check_bool(data.get("twin_residuals", False), f"{where}: twin_residuals")
