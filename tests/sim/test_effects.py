@@ -120,3 +120,15 @@ def test_where_is_given_by_name_only():
     """`make_effect("backlash", 2, 0.1)` took 0.1 for the message context and said the effect had no size."""
     with pytest.raises(TypeError):
         make_effect("backlash", 2, 0.1)
+
+
+def test_an_effect_at_zero_size_is_absent_whatever_its_shape():
+    """A sweep of `cogging.periods_per_rev` alone (amplitude 0) gave runs labelled "cogging", size 0, physically
+    healthy (a newcomer probe). A shape at zero size is no effect; a link's centre-of-mass shift acts alone."""
+    assert make_effect("cogging", 2, periods_per_rev=12).is_absent
+    assert make_effect("torque_joint_harmonic", 2, periods_per_rev=3).is_absent
+    assert make_effect("current_temperature_drift", 2, reference_C=40.0).is_absent
+    assert not make_effect("cogging", 2, amplitude_Nm=0.1, periods_per_rev=12).is_absent
+    assert not make_effect("link_mass", 2, com_dx_m=0.05).is_absent
+    assert make_effect("link_mass", 2, mass_kg=0.0).is_absent
+    assert make_effect("backlash", 2, backlash_deg=0.0).is_absent

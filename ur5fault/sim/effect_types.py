@@ -40,6 +40,9 @@ class Effect:
         size_params: the parameters whose deviation from "absent" measures the effect's size (their Euclidean
             norm: a harmonic's amplitude from its sine and cosine), the others being its shape or place (a
             period, a width, a centre of mass); empty: every parameter. They share one unit.
+        acts_alone: parameters besides the size that change the robot on their own (a link's centre-of-mass
+            shift moves the link's own mass); the others only shape the size (a harmonic's period at amplitude 0 is
+            no effect), so an effect whose size and these are all at their "absent" values is absent.
     """
 
     name: str
@@ -48,12 +51,15 @@ class Effect:
     per_joint: bool
     apply: EffectApplier
     size_params: tuple[str, ...] = ()
+    acts_alone: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         units = {self.param(n).unit for n in self.size_params or [p.name for p in self.params]}
         if len(units) != 1:  # a registry entry's error, caught when the package is imported
             raise ParameterError(f"effect {self.name!r}: its size parameters mix units ({', '.join(sorted(units))}); "
                                  "name the ones that measure its size (size_params)")
+        for n in self.acts_alone:
+            self.param(n)  # an unknown name, caught at import like the units
 
     def size_parameters(self) -> tuple[EffectParam, ...]:
         """The parameters that measure the effect's size (:attr:`size_params`, or all of them)."""

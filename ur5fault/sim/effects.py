@@ -52,9 +52,11 @@ class EffectSpec:
 
     @property
     def is_absent(self) -> bool:
-        """Every value is the registry's "absent" one: the run carries no such effect."""
+        """Its size (and any parameter that acts alone, :attr:`Effect.acts_alone`) at the registry's "absent" value:
+        the run carries no such effect, whatever its shape (a cogging period at amplitude 0 is no fault)."""
         eff = REGISTRY[self.name]
-        return all(eff.param(k).absent == v for k, v in self.values)
+        live = {p.name for p in eff.size_parameters()} | set(eff.acts_alone)
+        return all(eff.param(k).absent == v for k, v in self.values if k in live)
 
     def describe(self) -> str:
         where = f" on {JOINT_NAMES[self.joint]}" if self.joint is not None else ""
@@ -172,7 +174,7 @@ _TERM_EFFECTS = [
            (EffectParam("mass_kg", "kg", -10.0, 30.0, 0.0, "added at the link's centre of mass"),
             *(EffectParam(f"com_{k}_m", "m", -0.5, 0.5, 0.0, f"centre-of-mass shift along the link's {k[1]} axis")
               for k in ("dx", "dy", "dz"))),
-           True, ap.link_mass, size_params=("mass_kg",)),
+           True, ap.link_mass, size_params=("mass_kg",), acts_alone=("com_dx_m", "com_dy_m", "com_dz_m")),
     Effect("current_temperature_drift", "current-reading drift with joint temperature (sensor or thermal drift; "
            "data-driven)",
            (EffectParam("coeff_A_per_K", "A/K", -1.0, 1.0, 0.0, "c in c (T - T_ref)"),
