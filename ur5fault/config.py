@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import dataclasses
 import inspect
+import json
 import math
 from collections.abc import Mapping, Sequence
 from pathlib import Path
@@ -106,6 +107,24 @@ def repeats_of(base: Sequence[EffectSpec], added: Sequence[EffectSpec]) -> list[
     counts them): a run's effect given on top of its model overlay's, which is allowed but worth a note."""
     first = {effect_key(e): e for e in base}
     return [(first[effect_key(e)], e) for e in added if effect_key(e) in first]
+
+
+def trajectory_key(spec: Any) -> str:
+    """What makes two valid trajectory specs the same motion: the name and every option, a default filled in and a
+    number as a float (``pick_and_place``, ``{name: pick_and_place}`` and ``{name: pick_and_place, speed_scale: 1}``
+    are one). For telling repeats apart only: a run's identity keeps its spec as written."""
+    name, given = (spec, {}) if isinstance(spec, str) else (spec["name"], {k: v for k, v in spec.items()
+                                                                          if k != "name"})
+    options = {k: p.default for k, p in inspect.signature(TRAJECTORIES[name]).parameters.items()
+               if p.default is not inspect.Parameter.empty}
+    options.update(given)
+
+    def canon(v):
+        if isinstance(v, (list, tuple)):
+            return [canon(x) for x in v]
+        return float(v) if isinstance(v, (int, float)) and not isinstance(v, bool) else v
+
+    return json.dumps([name, {k: canon(v) for k, v in sorted(options.items())}], default=str)
 
 
 def parse_trajectory(spec: Any, where: str) -> Trajectory:

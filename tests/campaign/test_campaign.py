@@ -660,3 +660,16 @@ def test_a_duration_beyond_the_trajectory_is_said():
         "t.yaml: duration_s 30 s outlasts a trajectory, which ends at 13 s: the robot holds its last setpoint for "
         "the rest",)
     assert build_campaign({"duration_s": 3.0}, "t.yaml").notes == ()
+
+
+@pytest.mark.parametrize("trajectories", [
+    ["pick_and_place", {"name": "pick_and_place"}],
+    [{"name": "random_pick_and_place", "seed": 3}, {"name": "random_pick_and_place", "seed": 3, "tool_tilt_deg": 0}],
+    ["pick_and_place", {"name": "pick_and_place", "speed_scale": 1}],
+])
+def test_one_motion_spelled_twice_in_a_sweep_is_refused(trajectories):
+    """`trajectory: [pick_and_place, {name: pick_and_place}]` simulated the same runs twice under two identities."""
+    with pytest.raises(ParameterError, match=r"sweep.trajectory\[1\]: .* repeats \[0\]"):
+        build_campaign({"sweep": {"trajectory": trajectories}}, "t.yaml")
+    build_campaign({"sweep": {"trajectory": ["pick_and_place", {"name": "pick_and_place", "speed_scale": 0.5}]}},
+                   "t.yaml")

@@ -13,7 +13,7 @@ import json
 from collections.abc import Iterable, Mapping, Sequence
 from typing import Any
 
-from ..config import CONDITION_EFFECTS, check_mapping, check_seed, parse_trajectory
+from ..config import CONDITION_EFFECTS, check_mapping, check_seed, parse_trajectory, trajectory_key
 from ..errors import ParameterError, UnknownNameError
 from ..sim.axes import joint_index
 from ..sim.effect_types import EffectKey
@@ -117,7 +117,8 @@ def sweep_axes(data: Mapping[str, Any], where: str) -> tuple[list[list[dict[str,
         vals = [check_value(key, v, loc) for v in as_list(values, loc)]
         first: dict[str, int] = {}
         for i, v in enumerate(vals):  # the same value twice is the same run, kept once: the grid would shrink silently
-            i0 = first.setdefault(json.dumps(v, sort_keys=True, default=str), i)
+            same = trajectory_key(v) if key == "trajectory" else json.dumps(v, sort_keys=True, default=str)
+            i0 = first.setdefault(same, i)
             if i0 != i:
                 raise ParameterError(f"{loc}[{i}]: {short(values[i])} repeats [{i0}] ({short(values[i0])}); give each "
                                      "value once")
