@@ -125,6 +125,12 @@ def test_a_base_effect_the_sweep_also_gives_is_refused_and_a_models_is_noted(tmp
     assert len(camp.notes) == 1 and camp.notes[0].startswith(
         "c.yaml: faults of backlash on shoulder_lift_joint come on top of the model overlay's backlash on "
         "shoulder_lift_joint (backlash_deg=0.3)")
+    # the campaign's own base effect on top of the model's: said as simulate says it of a run's
+    own = write(tmp_path, yaml.safe_dump({"base": {"effects": [{**same, "backlash_deg": 0.1}]}}), "own.yaml")
+    assert load_campaign(own, overlay=ov).notes == (
+        "own.yaml: base.effects' backlash on shoulder_lift_joint (backlash_deg=0.1) is given on top of the model "
+        "overlay's backlash on shoulder_lift_joint (backlash_deg=0.3): an effect that sets a value (e.g. backlash) "
+        "keeps the campaign's, one that scales compounds with it",)
 
 
 def test_default_grid():

@@ -55,6 +55,7 @@ from ..config import (
     parse_trajectory,
     refuse_condition_effects,
     refuse_repeats,
+    repeats_of,
 )
 from ..errors import ParameterError
 from ..seed_paper import PAPER_TCP_MM
@@ -275,7 +276,10 @@ def _base_and_swept(base_effects: tuple[EffectSpec, ...], model_effects: int, ru
                         f"come on top of the model overlay's {b.describe()}: an effect that sets a value (e.g. "
                         "backlash) keeps the run's, one that scales compounds with it; the labels give the run's "
                         "effect alone")
-    return tuple(notes[i] for i in sorted(notes))
+    over = [f"{where}: base.effects' {added.describe()} is given on top of the model overlay's {b.describe()}: an "
+            "effect that sets a value (e.g. backlash) keeps the campaign's, one that scales compounds with it"
+            for b, added in repeats_of(base_effects[:model_effects], base_effects[model_effects:])]
+    return tuple(over) + tuple(notes[i] for i in sorted(notes))
 
 
 def out_folder(data: Mapping[str, Any], where: str, out: str | Path | None, name: str) -> Path:
