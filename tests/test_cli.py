@@ -220,7 +220,7 @@ def test_simulate_command_line_effects_replace_the_files_and_errors_name_their_s
     rep.write_text("effects: [{effect: backlash, joint: 1, backlash_deg: 0.1}, {effect: coulomb_friction, joint: 2, "
                    "scale: 1.1}, {effect: coulomb_friction, joint: 2, scale: 1.2}]\n")
     assert main(["simulate", "--config", str(rep), "--backlash", "2:0.3", "--out", str(out), "--replace"]) == 2
-    assert "rep.yaml: effects[2]: coulomb_friction on shoulder_lift_joint (scale=1.2) repeats rep.yaml: effects[1]" \
+    assert "rep.yaml: effects[2]: coulomb_friction on shoulder_lift_joint (scale=1.2) repeats effects[1]" \
         in capsys.readouterr().err
     # a payload from either side replaces the other side's, said so; both on one side is refused
     pay = tmp_path / "pay.yaml"

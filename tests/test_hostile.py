@@ -174,9 +174,9 @@ SIMULATE = [
     ("backlash-arg-nan", ["--backlash", "elbow:nan"], "backlash.backlash_deg = nan must be a number"),
     ("effect-arg-nan", ["--effect", "coulomb_friction@2:scale=nan"], "coulomb_friction.scale = nan must be a number"),
     ("backlash-arg-repeated", ["--backlash", "elbow:0.1", "--backlash", "3:0.2"],
-     "effects[1]: backlash on elbow_joint (backlash_deg=0.2) repeats command line: effects[0]"),
+     "effects[1]: backlash on elbow_joint (backlash_deg=0.2) repeats effects[0]"),
     ("effect-arg-repeated", ["--effect", "coulomb_friction@2:scale=1.5", "--effect", "coulomb_friction@2:scale=1.2"],
-     "repeats command line: effects[0] (coulomb_friction on shoulder_lift_joint (scale=1.5)); give each effect once"),
+     "repeats effects[0] (coulomb_friction on shoulder_lift_joint (scale=1.5)); give each effect once"),
     ("payload-effect-and-option", ["--effect", "payload:mass_kg=1", "--payload-kg", "2"],
      "command line: effects[0]: payload (mass_kg=1) and payload_kg = 2.0 (--payload-kg) both set "
      "the payload: give it once"),

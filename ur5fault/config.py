@@ -75,7 +75,7 @@ def refuse_repeats(effects: Sequence[EffectSpec], where: str) -> None:
     for i, e in enumerate(effects):
         key = effect_key(e)
         if key in seen:
-            raise ParameterError(f"{where}[{i}]: {e.describe()} repeats {where}[{seen[key]}] "
+            raise ParameterError(f"{where}[{i}]: {e.describe()} repeats {where.rsplit(': ', 1)[-1]}[{seen[key]}] "
                                  f"({effects[seen[key]].describe()}); give each effect once"
                                  + (" per joint" if e.joint is not None else ""))
         seen[key] = i
