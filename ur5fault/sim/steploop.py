@@ -9,8 +9,9 @@ model's ``dof_damping``; the payload mass at gripper events; ``mj_step`` of MuJo
 the loop is over runs outside and steps inside, optionally spread over threads (numba ``prange``).
 
 Python returns only between chunks: every ``NOISE_CHUNK_SAMPLES`` servo samples (the runs' random streams are
-drawn there by numpy, so they are the reference loop's streams) and at progress points.  The result equals the
-lockstep loop with the compiled drive bit for bit (``tests/sim/test_steploop.py``).
+drawn there from their numpy generators, by compiled code, ``draw_normals``: the reference loop's streams) and at
+progress points.  The result equals the lockstep loop with the compiled drive bit for bit
+(``tests/sim/test_steploop.py``).
 """
 
 from __future__ import annotations
@@ -177,6 +178,17 @@ def advance_threads(s0, s1, si0, noise, bt, tm):
                                                            grav_scale, sign_w, hold, hold_w, last_sign)))
 
 
+@njit(cache=True)
+def draw_normals(rng, out):
+    """``rng.standard_normal(out.shape, out=out)`` for a C-contiguous ``out``, compiled: the same numbers in the same
+    order and the generator left in the same state (numba's support of numpy's ``Generator`` runs numpy's ziggurat
+    on the generator's own bit state), about a third of numpy's cost (PCG64: 3.4 against 9.4 ns per number, i.e.
+    0.09 us less per run-step at 15 numbers per physics step)."""
+    flat = out.reshape(-1)
+    for i in range(flat.size):
+        flat[i] = rng.standard_normal()
+
+
 def term_arrays(a, last_sign: np.ndarray) -> tuple:
     """The run-array fields of the link-torque terms in :func:`terms.load_torque_rj`'s order."""
     return (a.term_joint_harmonic_Nm, a.term_joint_harmonic_per_rev, a.term_coulomb_Nm, a.term_coulomb_width_rad_s,
@@ -256,7 +268,7 @@ def run(mb, X, P, setpoints, delay_k, rngs, timing, payload, logging, hook, prog
             si0 = si - si % chunk
             if si % chunk == 0:
                 for r in range(n):
-                    rngs[r].standard_normal(noise_shape, out=noise[r])  # in place: no temporary of the chunk
+                    draw_normals(rngs[r], noise[r])  # rngs[r].standard_normal(noise_shape, out=noise[r]), compiled
             end = min(n_steps, (si0 + chunk) * sps)
             if progress is not None:
                 if s >= next_progress * n_steps:
