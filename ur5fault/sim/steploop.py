@@ -26,6 +26,7 @@ import numpy as np
 from numba import njit, prange
 
 from . import gravity, jitcache, mjlib, terms
+from .axes import N_JOINTS
 from .drive import kernel
 from .drive.kernel import Q_FB, S_L, physics_rj, sensors_rj, servo_rj
 from .drive.layout import PARAM_NAMES, STATE_NAMES
@@ -53,6 +54,9 @@ def sources_crc32() -> int:
 if sources_crc32() != SOURCES_CRC32:
     raise ImportError(f"the code compiled into ur5fault/sim/steploop.py changed: set SOURCES_CRC32 = {sources_crc32()} "
                       "there so numba recompiles the cached loop")
+
+#: rows of the packed drive state and parameters, compiled into the loop as constants
+X_ROWS, P_ROWS = len(STATE_NAMES), len(PARAM_NAMES)
 
 # columns of the per-run address table (``addresses``)
 MODEL, DATA, QPOS, QVEL, QFRC, DAMPING, MASS_MATRIX, XIPOS, XANCHOR, XAXIS, BODY_MASS, BODY_INERTIA = range(12)
@@ -99,10 +103,12 @@ def _advance(r, s0, s1, si0, noise, bt, tm):
     # the run's drive state and parameters: one contiguous block each (``run`` passes them run-major, ``(n_runs,
     # rows, 6)``: in the batch layout ``(rows, n_runs, 6)`` a run's rows lie n_runs * 48 bytes apart, and at 128
     # runs they fall into a few cache sets and evict each other; measured, 128 runs: 4.3 us per run-step against
-    # 3.1 us), viewed as the kernels' ``(rows, 1, 6)`` of run index 0 without numba's reference count (``uncounted``)
-    x_rows, p_rows, nj = X.shape[1], P.shape[1], X.shape[2]
-    xs = numba.carray(as_f64ptr(X.ctypes.data + r * x_rows * nj * 8), (x_rows, 1, nj))
-    ps = numba.carray(as_f64ptr(P.ctypes.data + r * p_rows * nj * 8), (p_rows, 1, nj))
+    # 3.1 us), viewed as the kernels' ``(rows, 1, 6)`` of run index 0 without numba's reference count (``uncounted``).
+    # The shapes are the layout's constants (``run`` checks them): every row is then a fixed offset from the block's
+    # start, where with the arrays' own shapes each row's address was computed once and mostly kept on the stack
+    nj = N_JOINTS
+    xs = numba.carray(as_f64ptr(X.ctypes.data + r * X_ROWS * nj * 8), (X_ROWS, 1, nj))
+    ps = numba.carray(as_f64ptr(P.ctypes.data + r * P_ROWS * nj * 8), (P_ROWS, 1, nj))
     for step in range(s0, s1):
         if step % sps == 0:
             si = step // sps
@@ -234,6 +240,9 @@ def run(mb, X, P, setpoints, delay_k, rngs, timing, payload, logging, hook, prog
     from .multibody import PAYLOAD_CUBE_M
 
     n_steps, sps, dt, ts, stribeck, has_cogging = timing
+    if X.shape[0] != X_ROWS or P.shape[0] != P_ROWS or X.shape[2] != N_JOINTS or P.shape[2] != N_JOINTS:
+        raise ValueError(f"drive arrays {X.shape}, {P.shape}: the compiled loop takes ({X_ROWS}, n, {N_JOINTS}) and "
+                         f"({P_ROWS}, n, {N_JOINTS})")
     log_every, n_log, src = logging
     n = X.shape[1]
     # run-major copies for the loop (each run's rows contiguous, ``_advance``), written back at the end
