@@ -100,9 +100,14 @@ def check_limits(camp: Campaign, est: CostEstimate) -> None:
                  f"x {est.max_logged} logged samples)", "raise log_period_s, lower batch_size or --jobs")
 
 
+def beyond_confirmation(n_runs: float, run_steps: float) -> bool:
+    """Whether a campaign of ``n_runs`` runs and ``run_steps`` physics steps needs ``--yes``."""
+    return n_runs > CONFIRM_RUNS or run_steps > CONFIRM_RUN_STEPS
+
+
 def confirmation_needed(camp: Campaign, est: CostEstimate) -> str | None:
     """Why this campaign needs ``--yes`` (too many runs or steps), or None."""
-    if est.n_runs > CONFIRM_RUNS or est.run_steps > CONFIRM_RUN_STEPS:
+    if beyond_confirmation(est.n_runs, est.run_steps):
         return (f"campaign {camp.name}: {est.describe()}; more than {CONFIRM_RUNS} runs or {CONFIRM_RUN_STEPS:g} "
                 "steps needs --yes to start")
     return None

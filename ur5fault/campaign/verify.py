@@ -218,11 +218,12 @@ def rerun_command(manifest: dict[str, Any], out: Path) -> str | None:
 def _large(manifest: dict[str, Any]) -> bool:
     """Whether the campaign a manifest records needed ``--yes`` (:func:`.limits.confirmation_needed`'s bounds on its
     runs and steps; a life campaign's bound is on steps it does not record: it says so when it stops early)."""
-    from .limits import CONFIRM_RUN_STEPS, CONFIRM_RUNS
+    from .limits import beyond_confirmation
 
-    n, steps = manifest.get("n_runs"), manifest.get("n_steps_total")
-    return ((isinstance(n, int) and n > CONFIRM_RUNS)
-            or (isinstance(steps, (int, float)) and not isinstance(steps, bool) and steps > CONFIRM_RUN_STEPS))
+    def number(v) -> float:  # a manifest edited by hand: a value that is no count counts as none
+        return float(v) if isinstance(v, (int, float)) and not isinstance(v, bool) else 0.0
+
+    return beyond_confirmation(number(manifest.get("n_runs")), number(manifest.get("n_steps_total")))
 
 
 def _advice(info: dict[str, Any], bad: int, changed: int, manifest_todo: str | None, table_key: str = "features",

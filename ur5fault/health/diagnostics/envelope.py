@@ -35,7 +35,7 @@ def training_ranges(train: pd.DataFrame) -> dict[str, list[float]]:
     return out
 
 
-def outside_notes(schema: Mapping[str, Any], values: Mapping[str, Any], where: str) -> list[str]:
+def outside_notes(schema: Mapping[str, Any], values: Mapping[str, Any] | pd.DataFrame, where: str) -> list[str]:
     """One note per condition of ``values`` (a log's value, or another campaign's column) outside the schema's
     ``training_ranges``; none where the schema has no record."""
     ranges = schema.get("training_ranges")

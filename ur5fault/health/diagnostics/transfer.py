@@ -184,7 +184,7 @@ def setup_notes(schema: dict[str, Any], test_dir: Path, other_features: pd.DataF
     notes = twin_format_notes(schema, man.get("twin_residuals_format"), f"{test_dir}")
     if other_features is not None:
         ok = other_features[other_features["status"] == "ok"] if "status" in other_features else other_features
-        notes += outside_notes(schema, {c: ok[c] for c in ok.columns}, f"{test_dir}")
+        notes += outside_notes(schema, ok, f"{test_dir}")
     if trained and other and abs(float(other) - float(trained)) > 1e-9:
         notes.append(f"{test_dir} logs every {1e3 * float(other):g} ms, the training runs every "
                      f"{1e3 * float(trained):g} ms: rate-dependent features (current spikes, kurtosis, crest factor, "

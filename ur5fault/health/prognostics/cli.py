@@ -57,13 +57,14 @@ def cmd_life_run(args: argparse.Namespace) -> int:
             raise ParameterError(f"{flag} does not apply to a life campaign ({args.file} has a `life:` section)")
     camp = load_life(args.file, args.out)
     bound, steps = check_life_limits(camp)
-    if steps > CONFIRM_RUN_STEPS and not args.yes:  # as a fault campaign: a typo more likely than intent
+    large = steps > CONFIRM_RUN_STEPS
+    if large and not args.yes:  # as a fault campaign: a typo more likely than intent
         raise ParameterError(f"{bound}; more than {CONFIRM_RUN_STEPS:g} steps needs --yes to start")
     m = run_life(camp, camp.out, jobs=args.jobs, backend=args.backend, scheduler=args.scheduler,
                  progress=not args.quiet, replace_changed=args.replace_changed)
     if m["state"] != "complete":
         again = (f"ur5fault campaign run {shlex.quote(str(args.file))} --out {shlex.quote(str(camp.out))}"
-                 + (" --yes" if steps > CONFIRM_RUN_STEPS else ""))
+                 + (" --yes" if large else ""))
         print(f"life campaign stopped early; run it again to resume: {again}")
         return 1
     ipu = m["inspections_per_unit"]
