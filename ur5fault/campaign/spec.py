@@ -62,7 +62,7 @@ from ..seed_paper import PAPER_TCP_MM
 from ..sim.axes import JOINT_NAMES
 from ..sim.effects import EffectSpec
 from ..sim.params import NOMINAL_JOINT_TEMPERATURE_C, deep_merge, load_params, read_yaml
-from ..util.checks import check_bool, check_int, check_number, check_text, short
+from ..util.checks import check_bool, check_int, check_name, check_number, check_text, short
 from .labels import SplitRule, parse_split
 from .runs import CampaignRun, check_value, grid_runs, sweep_axes, trajectory_specs
 from .sampling import sample_runs
@@ -242,7 +242,7 @@ def build_campaign(data: Mapping[str, Any], where: str, text: str = "", path: Pa
     com_twins = check_bool(data.get("twin_com_twins", False), f"{where}: twin_com_twins")
     if com_twins and not twin_res:
         raise ParameterError(f"{where}: twin_com_twins needs twin_residuals: true (they are the twin fits' columns)")
-    name = check_text(data["name"], f"{where}: name") if data.get("name") is not None else (
+    name = check_name(data["name"], f"{where}: name") if data.get("name") is not None else (
         path.stem if path else "campaign")
     out_dir = out_folder(data, where, out, name)
     resolved = {**dict(data), "base": {**dict(base), "params": params}}

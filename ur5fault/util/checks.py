@@ -73,3 +73,13 @@ def check_text(value: Any, where: str, max_len: int = 200) -> str:
         raise ParameterError(f"{where} = {short(value)} must be a non-empty one-line text of at most "
                              f"{max_len} characters")
     return value
+
+
+def check_name(value: Any, where: str) -> str:
+    """A campaign's (or life campaign's) name: one-line text that is a name, not a path, since it names the default
+    results folder ``results/NAME`` (``../x`` or ``a/b`` would write elsewhere than the name says)."""
+    name = check_text(value, where)
+    if "/" in name or "\\" in name or name.strip(". ") == "":
+        raise ParameterError(f"{where} = {short(value)} must be a name, not a path (no / or \\, not . or ..): it "
+                             "names the results folder results/NAME; give out: or --out for a folder elsewhere")
+    return name

@@ -63,6 +63,14 @@ def test_a_life_files_out_must_be_a_folder_name(out):
     assert str(build_life({**BASE, "out": "fleets/a"}, "t", out="cli").out) == "cli"  # the command line first
 
 
+@pytest.mark.parametrize("name", ["../../evil", "fleets/a", "..", "a\\b"])
+def test_a_life_files_name_is_a_name_not_a_path(name):
+    """The name is the default folder results/NAME: ``../../evil`` wrote the fleet two folders above results/."""
+    with pytest.raises(ParameterError, match=r"^t: name = .* must be a name, not a path"):
+        build_life({**BASE, "name": name}, "t")
+    assert str(build_life({**BASE, "name": "fleet.v2"}, "t").out) == "results/fleet.v2"
+
+
 def test_cli_bad_life_file_is_one_line_exit_2(tmp_path, capsys):
     f = tmp_path / "life.yaml"
     f.write_text("name: x\nlife:\n  units: 1\n")
