@@ -1,5 +1,6 @@
 """The command line: a real run, and one-line errors with exit status 2 on bad input."""
 
+import re
 import subprocess
 import sys
 
@@ -74,6 +75,9 @@ def test_bad_yaml_files(tmp_path):
 def test_effects_lists_registry():
     r = run("effects")
     assert r.returncode == 0 and "backlash" in r.stdout and "torque_constant" in r.stdout
+    # one column per field: every line's scope ("per joint" / "robot") starts at the same character
+    starts = {re.match(r"\S+\s+(per joint|robot) ", line).start(1) for line in r.stdout.splitlines()}
+    assert len(starts) == 1, starts
 
 
 def test_discrepancy_bad_input(tmp_path):

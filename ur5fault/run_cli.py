@@ -191,10 +191,11 @@ def _parse_effect_arg(spec: str) -> dict:
 def cmd_effects(args: argparse.Namespace) -> int:
     from .sim.effects import REGISTRY
 
+    width = max(len(name) for name in REGISTRY)  # the longest name sets the column (one was wider than 22)
     for e in REGISTRY.values():
         ps = ", ".join(f"{p.name} [{p.lo:g}..{p.hi:g}]" + (f" absent={p.absent:g}" if p.absent is not None else "")
                        for p in e.params)
-        print(f"{e.name:22s} {'per joint' if e.per_joint else 'robot    '}  {ps}  - {e.doc}")
+        print(f"{e.name:{width}s}  {'per joint' if e.per_joint else 'robot    '}  {ps}  - {e.doc}")
     return 0
 
 
