@@ -2,7 +2,7 @@
 
 Campaign YAML (see campaigns/default.yaml)::
 
-    name: default
+    name: default                   # a name, not a path: the default folder is results/NAME
     out: results/default            # output folder (``--out`` overrides)
     trajectory: pick_and_place      # name or {name: ..., speed_scale: ...}; may also be swept
     base: {seed: 0, payload_kg: 2.0, temperature_C: 28.0, effects: [], params: {}}
