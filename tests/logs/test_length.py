@@ -58,3 +58,34 @@ def test_the_estimate_from_the_first_64_kB_is_close_to_the_row_count(hour_log):
     assert abs(est - HOUR_ROWS) < 0.05 * HOUR_ROWS
     with pytest.raises(LogFormatError, match="about 4.6"):
         check_files_length([hour_log], "identify")
+
+
+def _log(name, seconds, period_s):
+    from types import SimpleNamespace
+
+    import numpy as np
+    return SimpleNamespace(source=name, t_s=np.arange(0.0, seconds, period_s), period_s=period_s)
+
+
+def test_several_short_logs_too_long_together_are_told_to_come_fewer_not_cut():
+    """Three 13 s simulated logs at 1 ms were told to be "cut into pieces of at most 39 s" (each was 13 s): the
+    limit is for the logs fitted together, and a 1 ms log can be written at the controller's 125 Hz."""
+    from ur5fault.logs.length import check_logs_length
+
+    logs = [_log(f"h{i}.parquet", 13.0, 1e-3) for i in range(3)]
+    with pytest.raises(LogFormatError) as e:
+        check_logs_length(logs, "monitor")
+    msg = str(e.value)
+    assert msg.startswith("3 logs (h0.parquet, h1.parquet, h2.parquet): about 3.9e+04 samples together (39 s); ")
+    assert "give fewer or shorter logs at once (the limit is for all of them together)" in msg
+    assert "or log at a UR controller's 125 Hz (`ur5fault simulate --log-period-s 0.008`: 311 s)" in msg
+    assert "cut the log" not in msg
+    check_logs_length([_log(f"h{i}.parquet", 13.0, 0.008) for i in range(3)], "monitor")  # the same at 125 Hz: fine
+
+
+def test_one_log_too_long_at_125_hz_is_told_to_be_cut_without_a_rate_advice():
+    from ur5fault.logs.length import check_logs_length
+
+    with pytest.raises(LogFormatError, match=r"^run.csv: about 3.9e\+04 samples \(312 s\); .*: cut the log into "
+                       r"pieces of at most 311 s$"):
+        check_logs_length([_log("run.csv", 312.0, 0.008)], "identify")

@@ -43,15 +43,25 @@ UR_TICK_S = 0.008
 ESTIMATE_MARGIN = 1.2
 
 
-def _too_long(src: str, rows: float, period_s: float | None, command: str) -> LogFormatError:
+def _too_long(names: Sequence[str], rows: float, seconds: float | None, period_s: float | None,
+              command: str) -> LogFormatError:
+    """The one line that refuses logs of ``rows`` samples together: one log is cut into pieces; several logs
+    are too many at once (each may be short: the limit holds for the samples fitted together); a log sampled
+    faster than a UR controller's 125 Hz (a simulated log at 1 ms) can be written at that rate instead."""
     period = period_s or UR_TICK_S
-    length = f" ({rows * period_s:.0f} s)" if period_s else ""
+    length = f" ({seconds:.0f} s)" if seconds else ""
     rate = "at this rate" if period_s else f"at {1 / UR_TICK_S:.0f} Hz"
     limit_s = MAX_FIT_SAMPLES * period
+    what = (f"{names[0]}: about {rows:.4g} samples{length}" if len(names) == 1 else
+            f"{len(names)} logs ({', '.join(names)})"[:200] + f": about {rows:.4g} samples together{length}")
+    fix = (f"cut the log into pieces of at most {limit_s:.0f} s" if len(names) == 1 else
+           "give fewer or shorter logs at once (the limit is for all of them together)")
+    if period_s and period_s < 0.9 * UR_TICK_S:
+        fix += (f", or log at a UR controller's {1 / UR_TICK_S:.0f} Hz (`ur5fault simulate --log-period-s "
+                f"{UR_TICK_S:g}`: {MAX_FIT_SAMPLES * UR_TICK_S:.0f} s)")
     return LogFormatError(
-        f"{src}: about {rows:.4g} samples{length}; `ur5fault {command}` takes logs of up to {MAX_FIT_SAMPLES} samples "
-        f"({limit_s:.0f} s {rate}) to stay within {MEMORY_BOUND_BYTES / 1e9:g} GB of memory: cut the log into "
-        f"pieces of at most {limit_s:.0f} s")
+        f"{what}; `ur5fault {command}` takes logs of up to {MAX_FIT_SAMPLES} samples ({limit_s:.0f} s {rate}) "
+        f"to stay within {MEMORY_BOUND_BYTES / 1e9:g} GB of memory: {fix}")
 
 
 def check_files_length(paths: Sequence[str | Path], command: str) -> None:
@@ -63,11 +73,12 @@ def check_files_length(paths: Sequence[str | Path], command: str) -> None:
         if p.is_file() and p.suffix != ".parquet":  # the reader names a missing file; a simulated log: below
             rows += sniff(p, p.name).rows_estimate
     if rows > ESTIMATE_MARGIN * MAX_FIT_SAMPLES:
-        raise _too_long(", ".join(Path(p).name for p in paths)[:200], rows, None, command)
+        raise _too_long([Path(p).name for p in paths], rows, None, None, command)
 
 
 def check_logs_length(logs: Sequence[MeasuredLog], command: str) -> None:
     """Refuse logs read in full that have more than :data:`MAX_FIT_SAMPLES` samples together."""
     n = sum(lg.t_s.size for lg in logs)
     if n > MAX_FIT_SAMPLES:
-        raise _too_long(", ".join(lg.source for lg in logs)[:200], n, logs[0].period_s, command)
+        seconds = sum(float(lg.t_s[-1] - lg.t_s[0]) + lg.period_s for lg in logs)
+        raise _too_long([lg.source for lg in logs], n, seconds, logs[0].period_s, command)
