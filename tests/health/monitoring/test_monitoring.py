@@ -132,6 +132,24 @@ def test_a_drift_within_the_baseline_runs_widens_the_change_bar():
     assert assess(drifting, new)["verdict"] == "consistent"
 
 
+def test_a_baseline_too_short_to_see_a_change_says_so():
+    """Two 6 s baseline runs give the change test two 5 s blocks: Student's bar at one degree of freedom is about
+    10^4 standard deviations, and a newcomer's 0.3 A offset (5 x the event limit) was "consistent" without a
+    word. The log's entry now says why and what to give; three 20 s runs (12 blocks) say nothing."""
+    from ur5fault.health.monitoring.verdict import WEAK_BAR_FACTOR
+
+    short = fit_baseline([offset_run(f"s{k}", np.full(750, -0.10), k) for k in range(2)], "sha")
+    out = assess(short, offset_run("new", np.full(750, -0.40), 9))
+    weak = [n for n in out["notes"] if n.startswith("changes are judged against 2 block(s) of 5 s")]
+    assert len(weak) == 1 and "give longer or more baseline runs" in weak[0], out["notes"]
+    bar_sd = float(weak[0].split("a change must lie ")[1].split(" standard")[0])
+    assert bar_sd > WEAK_BAR_FACTOR * 4.0
+    n = 2500
+    steady = fit_baseline([offset_run(f"s{k}", np.full(n, -0.10), k) for k in range(3)], "sha")
+    assert not any(n.startswith("changes are judged") for n in assess(steady, offset_run("new", np.full(n, -0.16),
+                                                                                          9))["notes"])
+
+
 def test_baseline_round_trip_and_refusals(tmp_path):
     b = fit_baseline([part("a", noise(1)), part("b", noise(2))], overlay_sha256({}, ()))
     path = tmp_path / "baseline.json"

@@ -8,12 +8,14 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from ...discrepancy.model import SCREEN_S
+from ...discrepancy.statistics import MIN_Z
 from ...errors import ParameterError
 from ...logs.measured import same_period
 from ...sim.axes import JOINT_NAMES, N_JOINTS
 from . import paired
 from .baseline import Baseline
-from .changes import BLOCK_S, block_reference, estimates, find_changes, keep_mask, strongest
+from .changes import BLOCK_S, bar, block_reference, estimates, find_changes, keep_mask, strongest
 from .conditions import motion_limit
 from .event_fit import segment
 from .events import (
@@ -114,12 +116,7 @@ def judge_changes(baseline: Baseline, obs: Observed, over: NDArray) -> list[dict
     probability (Bonferroni: :func:`.changes.bar`'s ``share``)."""
     m = obs.e.shape[0]
     logged, keep = obs.logged[:m], keep_mask(obs, over)
-    ref = None
-    if baseline.paired_candidates:
-        refs = list(zip(baseline.task_target_rad, baseline.task_residual_A))
-        ref = reference(obs.target_rad, refs, obs.period_s)[0]
-        if paired.paired_seconds(obs, ref) < paired.MIN_PAIRED_S:
-            ref = None
+    ref = paired_reference(baseline, obs)
     if ref is None:
         every = estimates(obs, logged)
         return find_changes(obs, every, estimates(obs, keep) if over.any() else every,
@@ -137,6 +134,40 @@ def judge_changes(baseline: Baseline, obs: Observed, over: NDArray) -> list[dict
         found = strongest(found, find_changes(obs, every, estimates(obs, keep & ~on) if over.any() else every,
                                               block_reference(baseline.candidates), share=share))
     return found
+
+
+def paired_reference(baseline: Baseline, obs: Observed) -> NDArray | None:
+    """The paired baseline run's residual at each sample of the log's task (:func:`.task.reference`), or None
+    where the baseline holds no paired statistics or the log repeats a baseline task for less than
+    :data:`~.paired.MIN_PAIRED_S`: then the block test alone judges its changes."""
+    if not baseline.paired_candidates:
+        return None
+    refs = list(zip(baseline.task_target_rad, baseline.task_residual_A))
+    ref = reference(obs.target_rad, refs, obs.period_s)[0]
+    return None if paired.paired_seconds(obs, ref) < paired.MIN_PAIRED_S else ref
+
+
+#: the block test's bar (in prediction standard deviations) beyond which a log's entry says that its baseline
+#: holds too few blocks to see moderate changes: 2 x the workflow's MIN_Z, i.e. 8 blocks of BLOCK_S or fewer
+#: (8.5; 12 blocks 6.2, 20 blocks 5.1; two 6 s runs give 2 blocks: about 10^4, where a 0.3 A offset went unseen)
+WEAK_BAR_FACTOR = 2.0
+
+
+def weak_change_test(baseline: Baseline, obs: Observed) -> list[str]:
+    """A note when the block test judges the log (no paired run, or a rest of at least BLOCK_S beside it) and
+    the baseline gives it so few blocks that Student's bar is :data:`WEAK_BAR_FACTOR` x ``MIN_Z`` or more."""
+    ref = paired_reference(baseline, obs)
+    if ref is not None and (obs.logged[: obs.e.shape[0]] & ~paired.difference(obs, ref)[1]).sum() * obs.period_s \
+            < BLOCK_S:
+        return []
+    k = max((n for _, _, n in baseline.candidates.values()), default=0)
+    if k < 1 or bar(k) < WEAK_BAR_FACTOR * MIN_Z:
+        return []
+    return [f"changes are judged against {k} block(s) of {BLOCK_S:g} s of the baseline runs: a change must lie "
+            f"{bar(k):.3g} standard deviations from them (Student's t, {k - 1} degree(s) of freedom; {MIN_Z:g} with "
+            f"many blocks), so only a large change is seen: give longer or more baseline runs (each holds "
+            f"a block per {BLOCK_S:g} s, up to {SCREEN_S:g} s)" + ("" if ref is not None else
+            ", or baseline runs repeating this log's task")]
 
 
 def baseline_run_of(baseline: Baseline, obs: Observed) -> str | None:
@@ -193,7 +224,7 @@ def assess(baseline: Baseline, obs: Observed, channels: Sequence[str] = DEFAULT_
     return {"log": obs.name, "verdict": verdict, "changes": changes, "events": events,
             "event_limit_median": {c: {JOINT_NAMES[j]: float(v[j]) for j in range(N_JOINTS)}
                                    for c, v in typical.items()},
-            "notes": blind_joints(typical)}
+            "notes": blind_joints(typical) + weak_change_test(baseline, obs)}
 
 
 #: a joint whose typical event limit is this many times the median of the six joints' is called out: a healthy
