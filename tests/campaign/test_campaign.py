@@ -679,3 +679,16 @@ def test_one_motion_spelled_twice_in_a_sweep_is_refused(trajectories):
         build_campaign({"sweep": {"trajectory": trajectories}}, "t.yaml")
     build_campaign({"sweep": {"trajectory": ["pick_and_place", {"name": "pick_and_place", "speed_scale": 0.5}]}},
                    "t.yaml")
+
+
+def test_numpy_numbers_in_a_campaign_are_its_plain_numbers(tmp_path):
+    """`load_campaign(path, duration_s=np.float64(1))` failed in the YAML dumper (RepresenterError), and a mapping of
+    numpy values gave the campaign's text python-object tags: they are the numbers they hold."""
+    path = tiny(tmp_path)
+    a, b = load_campaign(path, duration_s=0.2), load_campaign(path, duration_s=np.float64(0.2))
+    assert b.text == a.text and b.duration_s == 0.2 and [r.run_id for r in b.runs] == [r.run_id for r in a.runs]
+    camp = build_campaign({"duration_s": np.float64(3.0), "threshold_mm": np.int64(1), "batch_size": np.int64(2)},
+                          "t.yaml")
+    assert "!!python" not in camp.text and yaml.safe_load(camp.text)["duration_s"] == 3.0
+    assert camp == build_campaign({"duration_s": 3.0, "threshold_mm": 1, "batch_size": 2}, "t.yaml",
+                                  text=camp.text)
