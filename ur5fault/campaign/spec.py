@@ -37,6 +37,7 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
+import os
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -126,6 +127,9 @@ def resolve_campaign(path: str | Path) -> Path:
     either name (``paper`` too: it ran the shipped one while the user's edited copy sat there). A folder is not a
     campaign file: ``campaign run paper --out paper`` resumes into its own folder.
     """
+    if not isinstance(path, (str, os.PathLike)) or not str(path).strip():
+        raise ParameterError(f"campaign = {short(path)} must be a campaign file's path or a shipped campaign's name "
+                             f"({', '.join(shipped_campaigns())})")
     p = Path(path)
     if (p.exists() and not p.is_dir()) or p.parent != Path("."):
         return p
