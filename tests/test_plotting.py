@@ -415,3 +415,103 @@ def test_sampled_sizes_are_points_not_a_line_through_other_motions(two):
     lines = joint_lines(severity_figure(dataclasses.replace(sweep, rows=sampled)))
     assert len(lines) >= 2 and all(len(ln.get_xdata()) <= MANY_SIZES for ln in lines)
     assert all(ln.get_linestyle() == "None" for ln in lines) and sum(len(ln.get_xdata()) for ln in lines) == n
+
+
+# ----------------------------------------------------------------------------- bad input, refused by name
+@pytest.fixture(scope="module")
+def short_pair():
+    """Two runs of 20 ms standing still: tables to draw, cheap to make."""
+    from ur5fault.sim.trajectories import hold
+
+    return Simulator().run(hold(seconds=0.1), [RunSpec("a", 1), RunSpec("b", 2)], duration_s=0.02)
+
+
+def test_run_figure_refuses_what_is_not_a_run_table(short_pair):
+    df = short_pair.to_pandas(0)
+    cases = [
+        ({"series": short_pair}, r"^series = <SimResult 2 run\(s\) .* must be a run's time-series table \(a pandas "
+                                 r"DataFrame\) \(a SimResult: give res.to_pandas\(run\)\)$"),
+        ({"series": "run.parquet"}, r"^series = 'run.parquet' must be a run's time-series table \(a pandas DataFrame\) "
+                                    r"\(a file: read it with pandas.read_parquet, or draw it with `ur5fault show "
+                                    r"FILE`\)$"),
+        ({"series": None}, r"^series = None must be a run's time-series table \(a pandas DataFrame\)$"),
+        ({"series": df.iloc[:0]}, r"^series: the time series has no rows: nothing to draw$"),
+        ({"series": df, "twin": short_pair}, r"^twin = <SimResult .* \(a SimResult: give res.to_pandas\(run\)\)$"),
+        ({"series": df, "twin": df.iloc[:5]}, r"^twin: 5 samples, the run 20: give the twin of the same motion, "
+                                              r"duration and log period$"),
+        ({"series": df, "twin": df[["t_s"]]}, r"^twin: the healthy twin's table lacks column 'tcp_x_m' \(its TCP is "
+                                              r"what the run's deviation is measured from\)$"),
+        ({"series": df, "gear_ratio": [101, 101, 101]}, r"^gear_ratio = \[101, 101, 101\] must be one positive number "
+                                                        r"or 6, one per joint$"),
+        ({"series": df, "gear_ratio": [0] * 6}, r"^gear_ratio = \[0, 0, 0, 0, 0, 0\] must be one positive number"),
+        ({"series": df, "gear_ratio": "101"}, r"^gear_ratio = '101' must be one positive number"),
+        ({"series": df, "axes": 5}, r"^axes = 5 must be 5 matplotlib Axes \(joint angle, tracking error, encoder "
+                                    r"mismatch, motor current, TCP deviation\)$"),
+        ({"series": df, "axes": ["a"] * 5}, r"^axes = \['a', 'a', 'a', 'a', 'a'\] must be 5 matplotlib Axes"),
+        ({"series": df, "title": 5}, r"^title = 5 must be a string, or None for the run's own$"),
+    ]
+    for kwargs, message in cases:
+        with pytest.raises(ParameterError, match=message):
+            run_figure(**kwargs)
+    assert isinstance(run_figure(df, twin=short_pair.to_pandas(1), gear_ratio=101), Figure)
+    assert isinstance(run_figure(df, gear_ratio=np.full(6, 101.0)), Figure)
+
+
+def test_campaign_figures_refuse_what_is_not_a_campaign_result():
+    from ur5fault.plotting import campaign_figures, fig4_shoulder_current, heatmap
+
+    for draw, name in ((fig3_tcp_deviation, "fig3_tcp_deviation"), (fig4_shoulder_current, "fig4_shoulder_current"),
+                       (campaign_figures, "campaign_figures")):
+        with pytest.raises(ParameterError, match=rf"^{name}: result = 'results/x' must be a CampaignResult; read the "
+                                                 r"folder with CampaignResult.load\('results/x'\)$"):
+            draw("results/x")
+        with pytest.raises(ParameterError, match=rf"^{name}: result = None must be a CampaignResult$"):
+            draw(None)
+    for draw, name in ((severity_figure, "severity_figure"), (heatmap, "heatmap")):
+        with pytest.raises(ParameterError, match=rf"^{name}: sweep = 'backlash' must be an EffectSweep "
+                                                 r"\(effect_sweep\(features, effect\) returns one"):
+            draw("backlash")
+        with pytest.raises(ParameterError, match=rf"^{name}: sweep = 3 must be an EffectSweep "
+                                                 r"\(effect_sweep\(features, effect\)\)$"):
+            draw(3)
+
+
+def test_severity_figures_refuse_an_empty_sweep_and_bad_options():
+    from ur5fault.campaign.summary import EffectSweep
+    from ur5fault.plotting import heatmap
+
+    empty = EffectSweep("backlash", "backlash_deg", "deg", True, pd.DataFrame(columns=["size", "fault_joint"]), 2)
+    for draw, name in ((severity_figure, "severity_figure"), (heatmap, "heatmap")):
+        with pytest.raises(ParameterError, match=rf"^{name}: the backlash sweep holds no successful run: nothing to "
+                                                 r"draw$"):
+            draw(empty)
+    one = EffectSweep("backlash", "backlash_deg", "deg", True, pd.DataFrame({"size": [0.1], "fault_joint": [2]}), 0)
+    with pytest.raises(ParameterError, match=r"^severity_figure: feature = 5 must be the name of a feature column "
+                                             r"\(e.g. 'tcp_dev_max_mm'\)$"):
+        severity_figure(one, 5)
+    with pytest.raises(ParameterError, match=r"^severity_figure: threshold_mm = '0.5' must be a number, or None$"):
+        severity_figure(one, threshold_mm="0.5")
+    with pytest.raises(ParameterError, match=r"^severity_figure: healthy = 'x' must be the healthy runs' feature rows"):
+        severity_figure(one, healthy="x")
+    with pytest.raises(ParameterError, match=r"^severity_figure: ax = 'ax' must be a matplotlib Axes to draw into, or "
+                                             r"None for a new figure$"):
+        severity_figure(one, ax="ax")
+
+
+def test_plot_campaign_and_save_refuse_what_is_not_a_path_or_figure(tmp_path):
+    from ur5fault.plotting import save
+
+    with pytest.raises(ParameterError, match=r"^plot_campaign: out = 5 must be a folder path$"):
+        plot_campaign(5)
+    with pytest.raises(ParameterError, match=r"^plot_campaign: feature = None must be the name of a feature column"):
+        plot_campaign(tmp_path, feature=None)
+    with pytest.raises(ParameterError, match=r"^save: figures = \[1\] must be a mapping of file stem -> matplotlib "
+                                             r"Figure$"):
+        save([1], tmp_path)
+    with pytest.raises(ParameterError, match=r"^save: figures\['a'\] = 1 must be a matplotlib Figure$"):
+        save({"a": 1}, tmp_path)
+    with pytest.raises(ParameterError, match=r"^save: figure name '../a' must be a plain file stem \(no folder\)$"):
+        save({"../a": Figure()}, tmp_path)
+    with pytest.raises(ParameterError, match=r"^save: folder = None must be a folder path$"):
+        save({"a": Figure()}, None)
+    assert list(tmp_path.iterdir()) == []

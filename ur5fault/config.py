@@ -28,23 +28,17 @@ from typing import Any
 
 from .errors import ParameterError, UnknownNameError
 from .sim.budget import MAX_DURATION_S, check_memory, sim_bytes
-from .sim.effects import REGISTRY, EffectSpec, effect_of, make_effect
+from .sim.effects import EffectSpec, effect_of, make_effect
 from .sim.params import RobotParams, deep_merge, load_params, read_yaml
 from .sim.runspec import MAX_SEED
 from .sim.trajectories import TRAJECTORIES, Trajectory, get_trajectory
-from .sim.trajectories.base import MAX_SPEED_SCALE, MIN_SPEED_SCALE
+from .sim.trajectories.base import OPTION_RANGES
 from .util.checks import check_int, check_number, short
 from .util.results import check_whole
 
-#: numeric trajectory options and their valid ranges: the payload effect's range; speed up to
-#: UR's maximum joint speed (pi rad/s, ur5-facts.md) over the controller default 1.047 rad/s;
-#: dwell times up to the run-length limit; setpoint periods from the 0.1 ms servo period to 10 Hz
-TRAJECTORY_OPTIONS = {
-    "payload_kg": (REGISTRY["payload"].param("mass_kg").lo, REGISTRY["payload"].param("mass_kg").hi, "kg"),
-    "speed_scale": (MIN_SPEED_SCALE, MAX_SPEED_SCALE, "-"),
-    "seconds": (0.01, MAX_DURATION_S, "s"),
-    "setpoint_period_s": (1e-4, 0.1, "s"),
-}
+#: numeric trajectory options and their valid ranges (written once, in the trajectories: each function checks its
+#: own options against them too)
+TRAJECTORY_OPTIONS = OPTION_RANGES
 RUN_KEYS = ("trajectory", "seed", "payload_kg", "temperature_C", "duration_s", "log_period_s", "effects", "params")
 OVERLAY_KEYS = ("params", "effects")
 

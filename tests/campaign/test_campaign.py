@@ -679,3 +679,55 @@ def test_one_motion_spelled_twice_in_a_sweep_is_refused(trajectories):
         build_campaign({"sweep": {"trajectory": trajectories}}, "t.yaml")
     build_campaign({"sweep": {"trajectory": ["pick_and_place", {"name": "pick_and_place", "speed_scale": 0.5}]}},
                    "t.yaml")
+
+
+def test_numpy_numbers_in_a_campaign_are_its_plain_numbers(tmp_path):
+    """`load_campaign(path, duration_s=np.float64(1))` failed in the YAML dumper (RepresenterError), and a mapping of
+    numpy values gave the campaign's text python-object tags: they are the numbers they hold."""
+    path = tiny(tmp_path)
+    a, b = load_campaign(path, duration_s=0.2), load_campaign(path, duration_s=np.float64(0.2))
+    assert b.text == a.text and b.duration_s == 0.2 and [r.run_id for r in b.runs] == [r.run_id for r in a.runs]
+    camp = build_campaign({"duration_s": np.float64(3.0), "threshold_mm": np.int64(1), "batch_size": np.int64(2)},
+                          "t.yaml")
+    assert "!!python" not in camp.text and yaml.safe_load(camp.text)["duration_s"] == 3.0
+    assert camp == build_campaign({"duration_s": 3.0, "threshold_mm": 1, "batch_size": 2}, "t.yaml",
+                                  text=camp.text)
+
+
+@pytest.mark.parametrize("camp, kwargs, message", [
+    ("default", {}, r"^run_campaign: camp = 'default' must be a Campaign; load it first: "
+                    r"run_campaign\(load_campaign\('default'\), ...\)$"),
+    ({"name": "x"}, {}, r"^run_campaign: camp = \{'name': 'x'\} must be a Campaign; load one with load_campaign\(path "
+                        r"or shipped name\) or build_campaign\(mapping, where\)$"),
+    (None, {"out": 5}, r"^run_campaign: out = 5 must be a folder path, or None for the campaign's own \(.*\)$"),
+    (None, {"out": ""}, r"^run_campaign: out = '' must be a folder path"),  # it meant the working folder
+    (None, {"jobs": 0}, r"^--jobs 0: must be a whole number of at least 1$"),
+    (None, {"jobs": -2, "backend": "dask", "scheduler": "tcp://127.0.0.1:1"},
+     r"^--jobs -2: must be a whole number of at least 1$"),  # was passed on to Dask as it was
+    (None, {"jobs": 1.5}, r"^--jobs 1.5: must be a whole number of at least 1$"),
+    (None, {"backend": "dask", "scheduler": 5},
+     r"^run_campaign: scheduler = 5 must be a Dask scheduler address \(tcp://HOST:PORT\) or None$"),
+    (None, {"progress": "yes"}, r"^run_campaign: progress = 'yes' must be true, false or a function \(done, total, "
+                                r"eta_s\)$"),
+    (None, {"save_timeseries": "no"}, r"^run_campaign: save_timeseries = 'no' must be true or false \(or None: the "
+                                      r"campaign's own\)$"),
+    (None, {"replace_changed": 1}, r"^run_campaign: replace_changed = 1 must be true or false$"),
+    (None, {"note": 5}, r"^run_campaign: note = 5 must be a function of one line of text, or None$"),
+])
+def test_run_campaign_arguments_refused_by_name_before_any_work(tmp_path, camp, kwargs, message):
+    kwargs = {"out": tmp_path / "out", "jobs": 1, "progress": False, **kwargs}
+    with pytest.raises(ParameterError, match=message):
+        run_campaign(camp if camp is not None else load_campaign(tiny(tmp_path)), **kwargs)
+    assert not (tmp_path / "out").exists() and not list(tmp_path.glob("*.json"))
+
+
+def test_load_campaign_of_no_path_is_refused_by_name():
+    with pytest.raises(ParameterError, match=r"^campaign = 5 must be a campaign file's path or a shipped campaign's "
+                                             r"name \(default, "):
+        load_campaign(5)
+
+
+def test_run_campaign_takes_numpy_jobs_and_flags(tmp_path):
+    manifest = run_campaign(load_campaign(tiny(tmp_path)), tmp_path / "out", jobs=np.int64(1), progress=np.False_,
+                            note=None, replace_changed=np.False_)
+    assert manifest["state"] == "complete"

@@ -34,6 +34,14 @@ def test_a_sizeless_effect_is_refused_from_python_as_from_yaml():
         make_effect("payload", where="here")
 
 
+def test_numpy_scalars_are_sizes_and_joints():
+    e = make_effect("backlash", np.int64(2), backlash_deg=np.float32(0.5))
+    assert e == make_effect("backlash", 2, backlash_deg=0.5) and type(e.value("backlash_deg")) is float
+    assert make_effect("backlash", 2, backlash_deg=np.int64(1)) == make_effect("backlash", 2, backlash_deg=1.0)
+    with pytest.raises(ParameterError, match=r"^backlash.backlash_deg = np.True_ must be a number in \[0, 5\] deg$"):
+        make_effect("backlash", 2, backlash_deg=np.True_)
+
+
 def test_range_and_unknown_parameter():
     with pytest.raises(ParameterError) as e:
         make_effect("backlash", "elbow", backlash_deg=-0.1)

@@ -10,6 +10,8 @@ from ur5fault.sim.multibody import LoopMultibody
 from ur5fault.sim.trajectories import hold
 
 DUR = 1.0
+HOLD = hold(seconds=0.1)
+SIM = Simulator()
 
 
 @pytest.fixture(scope="module")
@@ -185,6 +187,65 @@ def test_bad_arguments(tmp_path):
         Simulator(stepper="fast")
     with pytest.raises(ParameterError, match="choose one of: numpy, numba"):
         Simulator(drive="c")
+
+
+@pytest.mark.parametrize("args, kwargs, message", [
+    (("pick_and_place", [RunSpec("a")]), {},
+     r"^run\(\): trajectory = 'pick_and_place' must be a Trajectory; get_trajectory\('pick_and_place'\) builds the "
+     r"one of that name$"),
+    ((None, [RunSpec("a")]), {}, r"^run\(\): trajectory = None must be a Trajectory; build one with "),
+    ((HOLD, RunSpec("a")), {},
+     r"^run\(\): runs = RunSpec\(run_id='a', seed=0, effects=\(\)\) must be a list of RunSpec; one run is a batch "
+     r"of one: \[RunSpec\(...\)\]$"),
+    ((HOLD, "ab"), {}, r"^run\(\): runs = 'ab' must be a list of RunSpec\(run_id, seed, effects\)$"),
+    ((HOLD, None), {}, r"^run\(\): runs = None must be a list of RunSpec"),
+    ((HOLD, [RunSpec(5)]), {}, r"^runs\[0\]: run_id = 5 must be a non-empty one-line string \(the result finds the run "
+                               r"by it\)$"),
+    ((HOLD, [RunSpec("a"), RunSpec(" ")]), {}, r"^runs\[1\]: run_id = ' ' must be a non-empty one-line string"),
+    ((HOLD, [RunSpec("a")]), {"duration_s": -1.0}, r"^duration_s = -1.0 is out of range \(0, 3600\] s$"),
+    ((HOLD, [RunSpec("a")]), {"duration_s": float("nan")},
+     r"^duration_s = nan must be a finite number in \(0, 3600\] s$"),
+    ((HOLD, [RunSpec("a")]), {"duration_s": float("inf")}, r"^duration_s = inf must be a finite number"),
+    ((HOLD, [RunSpec("a")]), {"duration_s": "1"}, r"^duration_s = '1' must be a number in \(0, 3600\] s$"),
+    ((HOLD, [RunSpec("a")]), {"duration_s": True}, r"^duration_s = True must be a number in \(0, 3600\] s$"),
+    ((HOLD, [RunSpec("a")]), {"duration_s": 1e12}, r"^duration_s = 1000000000000.0 is out of range \(0, 3600\] s$"),
+    ((HOLD, [RunSpec("a")]), {"duration_s": 0.01, "log_period_s": 0.1},
+     r"^duration_s = 0.01 s is shorter than one log period \(log_period_s = 0.1 s\): nothing would be logged$"),
+    ((HOLD, [RunSpec("a")]), {"log_period_s": float("nan")},
+     r"^log_period_s = nan must be a finite number in \(0, inf\] s$"),
+    ((HOLD, [RunSpec("a")]), {"log_period_s": "1ms"}, r"^log_period_s = '1ms' must be a number in \(0, inf\] s$"),
+    ((HOLD, [RunSpec("a")]), {"log_period_s": -1e-3}, r"^log_period_s = -0.001 is out of range \(0, inf\] s$"),
+    ((HOLD, [RunSpec("a")]), {"progress": 5},
+     r"^progress = 5 must be a function of the finished fraction \(0..1\), or None$"),
+    ((HOLD, [RunSpec(str(i)) for i in range(3000)]), {"duration_s": 3600.0},
+     r"^run\(\): 3000 run\(s\) of 3600 s logged every 0.001 s needs about .* of memory, more than 80% of the .* "
+     r"available; simulate fewer runs at once, a shorter duration_s or a longer log_period_s$"),
+])
+def test_run_arguments_refused_by_name_before_any_step(args, kwargs, message):
+    with pytest.raises(ParameterError, match=message):
+        SIM.run(*args, **kwargs)
+
+
+def test_run_takes_numpy_numbers_and_any_iterable_of_runs():
+    res = SIM.run(HOLD, (RunSpec(r, 1) for r in "ab"), duration_s=np.float64(0.01), log_period_s=np.float64(2e-3))
+    assert res.run_ids == ("a", "b") and res.t_s.size == 5
+    assert SIM.run(HOLD, np.array([RunSpec("a"), RunSpec("b")]), duration_s=np.int64(1)).n_runs == 2
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    ({"nthread": 1.5}, r"^nthread = 1.5 must be a whole number, at least 1$"),
+    ({"nthread": "2"}, r"^nthread = '2' must be a whole number, at least 1$"),
+    ({"params": "ur5_drive.yaml"},
+     r"^params = 'ur5_drive.yaml' must be a RobotParams \(load_params\(path, overrides\)\) or None for the packaged "
+     r"parameters$"),
+    ({"model_path": 5}, r"^model_path = 5 must be the path of an MJCF file, or None for the packaged model$"),
+    ({"model_path": "/no/such/ur5.xml"}, r"^model_path = '/no/such/ur5.xml': no such file \(an MJCF model, e.g. the "
+                                         r"packaged ur5.xml\)$"),
+])
+def test_simulator_arguments_refused_by_name(kwargs, message):
+    with pytest.raises(ParameterError, match=message):
+        Simulator(**kwargs)
+    assert Simulator(nthread=np.int64(2)).nthread == 2
 
 
 def test_protective_stop_is_recorded_and_batch_goes_on():

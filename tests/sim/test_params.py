@@ -2,6 +2,7 @@
 
 import dataclasses
 
+import numpy as np
 import pytest
 
 from ur5fault.errors import ParameterError, UnknownNameError
@@ -19,6 +20,17 @@ def test_default_file_loads_and_is_frozen():
 def test_scalar_broadcasts_to_all_joints():
     g = GearParams(ratio=101, stiffness_Nm_per_rad=1e5, damping_Nms_per_rad=10)
     assert g.stiffness_Nm_per_rad == (1e5,) * 6 and g.backlash_rad == (0.0,) * 6
+
+
+def test_numpy_scalars_and_arrays_are_numbers():
+    g = GearParams(ratio=np.int64(101), stiffness_Nm_per_rad=np.float32(1e5), damping_Nms_per_rad=np.float64(10))
+    assert g.ratio == (101.0,) * 6 and g.stiffness_Nm_per_rad == (1e5,) * 6 and g.damping_Nms_per_rad == (10.0,) * 6
+    assert all(type(v) is float for v in g.ratio + g.stiffness_Nm_per_rad)
+    g = GearParams(ratio=np.full(6, 101), stiffness_Nm_per_rad=1e5, damping_Nms_per_rad=10)
+    assert g.ratio == (101.0,) * 6
+    assert load_params(overrides={"gear": {"ratio": np.int64(100)}}).gear.ratio == (100.0,) * 6
+    with pytest.raises(ParameterError, match=r"^GearParams.ratio = np.True_ must be a list of 6 values$"):
+        GearParams(ratio=np.True_, stiffness_Nm_per_rad=1e5, damping_Nms_per_rad=10)
 
 
 def test_out_of_range_message_names_field_value_and_range():

@@ -7,7 +7,16 @@ import numpy as np
 import pytest
 
 from ur5fault.sim.engine import DEFAULT_MODEL_PATH
-from ur5fault.sim.trajectories import CB3_SETPOINT_PERIOD_S, Trajectory, movej, pick_and_place
+from ur5fault.sim.trajectories import (
+    CB3_SETPOINT_PERIOD_S,
+    Trajectory,
+    dwell,
+    hold,
+    joint_sweep,
+    movej,
+    pick_and_place,
+    random_pick_and_place,
+)
 
 
 @pytest.fixture(scope="module")
@@ -246,3 +255,75 @@ def test_speed_scale_has_one_range_up_to_the_ur5_maximum_joint_speed():
         assert 1.5 * top(build()) < top(fastest) <= np.pi + 1e-9
         with pytest.raises(ParameterError, match=r"speed_scale = 3.5 is out of range \[0.05, 3.001\]"):
             build(speed_scale=3.5)
+
+
+# ----------------------------------------------------------------------------- bad input, refused at construction
+Q0 = np.zeros(6)
+
+
+@pytest.mark.parametrize("build, message", [
+    (lambda: movej(Q0, np.ones(6), 0, 1, 0.008), r"^movej: v_max = 0 is out of range \(0, inf\] rad/s$"),
+    (lambda: movej(Q0, np.ones(6), 1, -1, 0.008), r"^movej: a_max = -1 is out of range \(0, inf\] rad/s\^2$"),
+    (lambda: movej(Q0, np.ones(6), 1, float("nan"), 0.008), r"^movej: a_max = nan must be a finite number in "),
+    (lambda: movej(Q0, np.ones(6), 1, 1, 0), r"^movej: period_s = 0 is out of range \(0, inf\] s$"),
+    (lambda: movej(np.zeros(5), np.ones(6), 1, 1, 0.008), r"^movej: q0 = array\(\[0., 0., 0., 0., 0.\]\) must be 6 "
+                                                          r"joint angles \[rad\], shape \(6,\)$"),
+    (lambda: movej(Q0, [1, 2, "x", 4, 5, 6], 1, 1, 0.008), r"^movej: q1 = \[1, 2, 'x', 4, 5, 6\] must be 6 joint"),
+    (lambda: movej(Q0, np.full(6, np.inf), 1, 1, 0.008), r"^movej: q1 = array\(\[inf, .* must be finite \(no NaN "
+                                                          r"or inf\)$"),
+    (lambda: dwell(Q0, -1, 0.008), r"^dwell: seconds = -1 is out of range \[0, 3600\] s$"),
+    (lambda: dwell(Q0, 1, 0), r"^dwell: period_s = 0 is out of range \(0, inf\] s$"),
+    (lambda: hold(q_rad=(1, 2, 3)), r"^hold: q_rad = \(1, 2, 3\) must be 6 joint angles \[rad\], shape \(6,\)$"),
+    (lambda: hold(seconds=-1), r"^hold: seconds = -1 is out of range \[0.01, 3600\] s$"),
+    (lambda: hold(seconds=float("nan")), r"^hold: seconds = nan must be a finite number in \[0.01, 3600\] s$"),
+    (lambda: hold(payload_kg=-1), r"^hold: payload_kg = -1 is out of range \[0, 5\] kg$"),
+    (lambda: hold(payload_kg="2"), r"^hold: payload_kg = '2' must be a number in \[0, 5\] kg$"),
+    (lambda: pick_and_place(payload_kg=float("nan")), r"^pick_and_place: payload_kg = nan must be a finite number "),
+    (lambda: pick_and_place(payload_kg=6), r"^pick_and_place: payload_kg = 6 is out of range \[0, 5\] kg$"),
+    (lambda: pick_and_place(speed_scale="1"), r"^speed_scale = '1' must be a number in \[0.05, 3.001\]$"),
+    (lambda: pick_and_place(setpoint_period_s=0), r"^pick_and_place: setpoint_period_s = 0 is out of range "
+                                                  r"\[0.0001, 0.1\] s$"),
+    (lambda: pick_and_place(setpoint_period_s=-0.008), r"^pick_and_place: setpoint_period_s = -0.008 is out of range"),
+    (lambda: joint_sweep(payload_kg=-1), r"^joint_sweep: payload_kg = -1 is out of range \[0, 5\] kg$"),
+    (lambda: Trajectory("x", float("inf"), np.zeros((3, 6))),
+     r"^trajectory 'x': setpoint_period_s = inf must be a finite number in \(0, inf\] s$"),
+    (lambda: Trajectory("x", 0.008, "abc"), r"^trajectory 'x': q_set_rad = 'abc' must be an array of joint angles "
+                                            r"\[rad\], shape \(n >= 2, 6\)$"),
+    (lambda: Trajectory("x", 0.008, np.zeros(6)), r"^trajectory 'x': q_set_rad must have shape \(n >= 2, 6\), got "
+                                                  r"\(6,\)$"),
+    (lambda: Trajectory("x", 0.008, np.zeros((3, 6)), ((0.01, True), (0.005, False))),
+     r"^trajectory 'x': payload_events\[1\] time = 0.005 s must come after the event before it \(0.01 s\): events in "
+     r"increasing time$"),
+    (lambda: Trajectory("x", 0.008, np.zeros((3, 6)), ((0.01, True), (0.01, False))),
+     r"^trajectory 'x': payload_events\[1\] time = 0.01 s must come after"),
+    (lambda: Trajectory("x", 0.008, np.zeros((3, 6)), ((float("nan"), True),)),
+     r"^trajectory 'x': payload_events\[0\] time = nan must be a finite number in \[0, inf\] s$"),
+    (lambda: Trajectory("x", 0.008, np.zeros((3, 6)), (1.0,)),
+     r"^trajectory 'x': payload_events\[0\] = 1.0 must be a \(time_s, gripped\) pair$"),
+    (lambda: Trajectory("x", 0.008, np.zeros((3, 6)), ((1.0, "yes"),)),
+     r"^trajectory 'x': payload_events\[0\] gripped = 'yes' must be true or false$"),
+    (lambda: Trajectory("x", 0.008, np.zeros((3, 6)), (), False, -1),
+     r"^trajectory 'x': default_payload_kg = -1 is out of range \[0, inf\] kg$"),
+    (lambda: Trajectory("", 0.008, np.zeros((3, 6))), r"^Trajectory: name = '' must be a non-empty string"),
+])
+def test_bad_motion_refused_by_name_at_construction(build, message):
+    with pytest.raises(ParameterError, match=message):
+        build()
+
+
+def test_unknown_trajectory_option_lists_the_options():
+    from ur5fault.errors import UnknownNameError
+    from ur5fault.sim.trajectories import get_trajectory
+
+    with pytest.raises(UnknownNameError, match=r"^unknown option of trajectory 'hold' 'foo'; valid: payload_kg, q_rad, "
+                                               r"seconds$"):
+        get_trajectory("hold", foo=1)
+
+
+def test_numpy_numbers_build_the_same_motions():
+    assert random_pick_and_place(seed=np.int64(3)) is random_pick_and_place(seed=3)  # one cached build
+    a, b = pick_and_place(np.float64(2.0), np.float32(1.0)), pick_and_place(2.0, 1.0)
+    np.testing.assert_array_equal(a.q_set_rad, b.q_set_rad)
+    assert a.payload_events == b.payload_events and type(a.default_payload_kg) is float
+    t = Trajectory("x", np.float64(0.008), np.zeros((3, 6)), ((np.float64(0.01), np.True_),), np.False_)
+    assert t.payload_events == ((0.01, True),) and type(t.payload_events[0][1]) is bool

@@ -25,7 +25,9 @@ from typing import Any
 import numpy as np
 
 from ..config import parse_trajectory
+from ..errors import ParameterError
 from ..sim.params import load_params
+from ..util.checks import as_bool, short
 from ..util.io import (
     check_writable,
     checksum_path,
@@ -214,9 +216,11 @@ def run_campaign(camp: Campaign, out: Path | None = None, *, jobs: int | None = 
     Raises:
         CampaignChangedError: stored runs were made under other settings (first difference named).
         FolderLockedError: another process writes ``out``.
-        ParameterError: the campaign exceeds a limit (memory, steps), or a bad backend/scheduler.
+        ParameterError: a bad argument (named with its value), the campaign exceeds a limit (memory, steps), or a
+            bad backend/scheduler.
         OutputError: ``out`` cannot be written.
     """
+    _check_arguments(camp, out, scheduler, progress, save_timeseries, replace_changed, note)
     out = Path(out) if out is not None else camp.out
     say = note or (lambda message: None)
     jobs, capped = check_backend(backend, scheduler, jobs)
@@ -229,6 +233,33 @@ def run_campaign(camp: Campaign, out: Path | None = None, *, jobs: int | None = 
     finally:
         if client is not None:
             client.close()
+
+
+def _check_arguments(camp: Any, out: Any, scheduler: Any, progress: Any, save_timeseries: Any, replace_changed: Any,
+                     note: Any) -> None:
+    """run_campaign's arguments of the wrong kind, refused by name before anything is read or written (``jobs`` and
+    ``backend`` are checked with the backend)."""
+    if not isinstance(camp, Campaign):
+        path = isinstance(camp, (str, os.PathLike))
+        hint = (f"load it first: run_campaign(load_campaign({short(str(camp))}), ...)" if path
+                else "load one with load_campaign(path or shipped name) or build_campaign(mapping, where)")
+        raise ParameterError(f"run_campaign: camp = {short(camp)} must be a Campaign; {hint}")
+    if out is not None and (not isinstance(out, (str, os.PathLike)) or not str(out).strip()):
+        raise ParameterError(f"run_campaign: out = {short(out)} must be a folder path, or None for the campaign's own "
+                             f"({camp.out})")
+    if scheduler is not None and not isinstance(scheduler, str):
+        raise ParameterError(f"run_campaign: scheduler = {short(scheduler)} must be a Dask scheduler address "
+                             "(tcp://HOST:PORT) or None")
+    if as_bool(progress) is None and not callable(progress):
+        raise ParameterError(f"run_campaign: progress = {short(progress)} must be true, false or a function "
+                             "(done, total, eta_s)")
+    for name, value, none_ok in (("save_timeseries", save_timeseries, True),
+                                 ("replace_changed", replace_changed, False)):
+        if as_bool(value) is None and not (none_ok and value is None):
+            raise ParameterError(f"run_campaign: {name} = {short(value)} must be true or false"
+                                 + (" (or None: the campaign's own)" if none_ok else ""))
+    if note is not None and not callable(note):
+        raise ParameterError(f"run_campaign: note = {short(note)} must be a function of one line of text, or None")
 
 
 def _other_campaign(out: Path, name: str) -> str | None:

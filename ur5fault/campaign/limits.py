@@ -15,6 +15,7 @@ from ..config import parse_trajectory
 from ..errors import ParameterError
 from ..sim.budget import check_memory, core_hours, fmt_bytes, sim_bytes
 from ..sim.params import load_params
+from ..util.checks import check_count
 from .batches import plan_batches
 from .digital_twin import regressor_runs, twin_id
 from .runs import trajectory_specs
@@ -58,8 +59,7 @@ def effective_jobs(requested: int | None) -> tuple[int, str | None]:
     cores = available_cores()
     if requested is None:
         return cores, None
-    if isinstance(requested, bool) or not isinstance(requested, int) or requested < 1:
-        raise ParameterError(f"--jobs {requested!r}: must be a whole number of at least 1")
+    requested = check_count(requested, "--jobs", 1)
     if requested > cores:
         return cores, f"--jobs {requested} capped at the {cores} cores available"
     return requested, None

@@ -37,11 +37,10 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
+import os
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
-
-import yaml
 
 from ..config import (
     CONDITION_EFFECTS,
@@ -63,6 +62,7 @@ from ..sim.axes import JOINT_NAMES
 from ..sim.effects import EffectSpec
 from ..sim.params import NOMINAL_JOINT_TEMPERATURE_C, deep_merge, load_params, read_yaml
 from ..util.checks import check_bool, check_int, check_name, check_number, check_text, short
+from ..util.yamlsafe import dump
 from .labels import SplitRule, parse_split
 from .runs import CampaignRun, check_value, grid_runs, sweep_axes, trajectory_specs
 from .sampling import sample_runs
@@ -127,6 +127,9 @@ def resolve_campaign(path: str | Path) -> Path:
     either name (``paper`` too: it ran the shipped one while the user's edited copy sat there). A folder is not a
     campaign file: ``campaign run paper --out paper`` resumes into its own folder.
     """
+    if not isinstance(path, (str, os.PathLike)) or not str(path).strip():
+        raise ParameterError(f"campaign = {short(path)} must be a campaign file's path or a shipped campaign's name "
+                             f"({', '.join(shipped_campaigns())})")
     p = Path(path)
     if (p.exists() and not p.is_dir()) or p.parent != Path("."):
         return p
@@ -174,13 +177,13 @@ def load_campaign(path: str | Path, out: str | Path | None = None, overlay: str 
         base["effects"] = list(ov.get("effects") or []) + own_effects
         n_model = len(ov.get("effects") or [])
         data = {**data, "base": base}
-        text = yaml.safe_dump(dict(data), sort_keys=False)
+        text = dump(data, path.name, sort_keys=False)
     if duration_s is not None:
         check_duration(duration_s, "command line: --duration-s")  # refused naming its source, not the file
         if isinstance(data, Mapping) and data.get("duration_s") is not None:  # the file's, replaced: still valid
             check_duration(data["duration_s"], f"{path.name}: duration_s")
         data = {**data, "duration_s": duration_s}
-        text = yaml.safe_dump(dict(data), sort_keys=False)
+        text = dump(data, path.name, sort_keys=False)
     options = {k: v for k, v in (("model", str(Path(overlay).resolve()) if overlay is not None else None),
                                  ("duration_s", duration_s)) if v is not None}
     return dataclasses.replace(build_campaign(data, path.name, text, path, out, n_model), command_options=options)
@@ -246,7 +249,7 @@ def build_campaign(data: Mapping[str, Any], where: str, text: str = "", path: Pa
         path.stem if path else "campaign")
     out_dir = out_folder(data, where, out, name)
     resolved = {**dict(data), "base": {**dict(base), "params": params}}
-    return Campaign(name, path, text or yaml.safe_dump(dict(data)), out_dir, base_effects, params,
+    return Campaign(name, path, text or dump(data, where), out_dir, base_effects, params,
                     tuple(runs.values()), tuple(swept), thr, bs, lp, save_ts, dur, resolved,
                     parse_split(data.get("split"), where), twin_res, motor_enc, com_twins, notes)
 

@@ -12,6 +12,7 @@ from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
 from ..errors import ParameterError
+from ..util.checks import check_count
 from ..util.parallel import iter_tasks, watch_parent
 from .limits import effective_jobs
 
@@ -29,7 +30,9 @@ def check_backend(backend: str, scheduler: str | None, jobs: int | None) -> tupl
     if backend != "dask" and scheduler:
         raise ParameterError(f"--scheduler {scheduler} is for --backend dask (the {backend} backend runs on this "
                              "machine and would not use it); add --backend dask or drop --scheduler")
-    return effective_jobs(jobs) if backend == "loky" else (jobs or 1, None)
+    if backend == "loky":
+        return effective_jobs(jobs)
+    return (1 if jobs is None else check_count(jobs, "--jobs", 1)), None
 
 
 def dispatch(fn: Callable[..., Any], tasks: Sequence[tuple], jobs: int, client=None,

@@ -226,12 +226,12 @@ def write_report(model: DiscrepancyModel, out: Path, replace: bool = True) -> li
     """``report.md`` with residual plots, ``model.yaml`` (overlay) and ``summary.json``, written as one set
     (:func:`ur5fault.util.results.result_folder`: a run stopped between them leaves the folder marked incomplete).
     ``replace=False``: refuse a result another process wrote into ``out`` meanwhile."""
-    import yaml
+    from ..util.yamlsafe import dump
 
     summ = summary(model, bare_mj_step_us(model.replay_.params.physics_dt_s))
     with result_folder(out, RESULT_FILES, replace) as out:
         write_text_atomic(out / "summary.json", json_text(summ))  # strict JSON: no value is null, never NaN
-        write_text_atomic(out / "model.yaml", yaml.safe_dump(model.overlay(), sort_keys=False))
+        write_text_atomic(out / "model.yaml", dump(model.overlay(), "model.yaml", sort_keys=False))
         paths = []
         for s, fig in figures(model).items():
             paths.append(write_figure_atomic(fig, out / f"residual_{s}.png", RESIDUAL_FIGURE_DPI))

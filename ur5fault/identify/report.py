@@ -13,13 +13,13 @@ import dataclasses
 from typing import Any
 
 import numpy as np
-import yaml
 from numpy.typing import NDArray
 
 from ..sim.axes import N_JOINTS
 from ..sim.params import FrictionParams, RobotParams
 from ..twin.payload import PayloadRecord
 from ..util.io import finite_json
+from ..util.yamlsafe import dump
 from .stats import Estimate
 
 #: stick-slip parameters of issue 10 part A: written as soon as the friction parameters have the field
@@ -121,7 +121,7 @@ class Identification:
             head += ["#", "# Not identifiable on this log, so the model's own (packaged) value is written, not a "
                      "measurement:"]
             head += [f"#   {m}" for m in missing]
-        body = yaml.safe_dump(self.overlay(params), sort_keys=False, default_flow_style=None, width=120)
+        body = dump(self.overlay(params), "the identified overlay", sort_keys=False, default_flow_style=None, width=120)
         text = "\n".join(head) + "\n" + body
         check_overlay_text(text, f"the overlay identified from {self.source}")
         return text

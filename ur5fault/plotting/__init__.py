@@ -19,8 +19,8 @@ from ..campaign.result import CampaignResult
 from ..campaign.summary import HEALTHY, joint_feature
 from ..errors import ConfigFileError, StoredResultError, Ur5FaultError
 from ..seed_paper import PAPER_BACKLASH_DEG
-from ._figure import save
-from .paper import fig3_tcp_deviation, fig4_shoulder_current
+from ._figure import check_feature, check_folder, save
+from .paper import check_result, fig3_tcp_deviation, fig4_shoulder_current
 from .run import run_figure
 from .severity import heatmap, severity_figure
 
@@ -51,6 +51,10 @@ def drawn_and_failed(result: CampaignResult, feature: str = "tcp_dev_max_mm") ->
     """:func:`campaign_figures` with the figures the campaign cannot have (its design: nothing to draw) apart from
     those it could not draw (a run that can be neither read nor simulated again): ``(figures, cannot_have,
     failed)``."""
+    check_result(result, "campaign_figures")
+    check_feature(feature, "campaign_figures")
+    if result.features.empty:
+        raise ConfigFileError(f"{result.out}: the campaign's feature table holds no runs: nothing to draw")
     values = joint_feature(result.features, feature)  # an unknown feature is an error before any work
     figures: dict[str, Figure] = {}
     messages: list[str] = []
@@ -85,6 +89,10 @@ def drawn_and_failed(result: CampaignResult, feature: str = "tcp_dev_max_mm") ->
 def plot_campaign(out: str | Path, feature: str = "tcp_dev_max_mm", plot_dir: str | Path | None = None) -> list[Path]:
     """Write :func:`campaign_figures` of the campaign in ``out`` as PNG (default ``out/plots``); return the
     paths.  Figures the campaign cannot have are logged as warnings."""
+    check_folder(out, "plot_campaign: out")
+    check_feature(feature, "plot_campaign")
+    if plot_dir is not None:
+        check_folder(plot_dir, "plot_campaign: plot_dir")
     result = CampaignResult.load(out)
     figures, messages = campaign_figures(result, feature)
     for m in messages:

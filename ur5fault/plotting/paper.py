@@ -8,6 +8,7 @@ group: those compared with the most frequent healthy twin.
 
 from __future__ import annotations
 
+import os
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -19,7 +20,8 @@ from ..campaign.summary import effect_sweep, swept_effects
 from ..errors import ParameterError
 from ..seed_paper import PAPER_BACKLASH_DEG
 from ..sim.axes import JOINT_NAMES
-from ._figure import figure_and_axes
+from ..util.checks import is_real, short
+from ._figure import check_ax, figure_and_axes
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..campaign.result import CampaignResult
@@ -27,6 +29,16 @@ if TYPE_CHECKING:  # pragma: no cover
 TCP_COLUMNS = ["tcp_x_m", "tcp_y_m", "tcp_z_m"]
 #: the joint of the paper's Fig. 4 (1-based: the shoulder, which carries the largest gravity load)
 FIG4_JOINT = 2
+
+
+def check_result(result: object, where: str) -> None:
+    """A :class:`CampaignResult` (a folder path is named with the call that reads it)."""
+    from ..campaign.result import CampaignResult
+
+    if not isinstance(result, CampaignResult):
+        hint = (f"; read the folder with CampaignResult.load({short(str(result))})"
+                if isinstance(result, (str, os.PathLike)) else "")
+        raise ParameterError(f"{where}: result = {short(result)} must be a CampaignResult{hint}")
 
 
 def _backlash_rows(result: CampaignResult) -> pd.DataFrame:
@@ -47,6 +59,11 @@ def fig3_tcp_deviation(result: CampaignResult, backlash_deg: float = PAPER_BACKL
                        ) -> Figure:
     """TCP deviation from the healthy twin over time, ``backlash_deg`` on each joint in turn (paper Fig. 3),
     with the campaign's ``threshold_mm``."""
+    check_result(result, "fig3_tcp_deviation")
+    if not is_real(backlash_deg) or not backlash_deg > 0:
+        raise ParameterError(f"fig3_tcp_deviation: backlash_deg = {short(backlash_deg)} must be a backlash size > 0 "
+                             "[deg] of the campaign")
+    check_ax(ax, "fig3_tcp_deviation: ax")
     rows = _backlash_rows(result)
     sel = rows[np.isclose(rows["size"], backlash_deg)].sort_values("fault_joint")
     if sel.empty:
@@ -68,6 +85,8 @@ def fig3_tcp_deviation(result: CampaignResult, backlash_deg: float = PAPER_BACKL
 
 def fig4_shoulder_current(result: CampaignResult, ax: Axes | None = None) -> Figure:
     """Shoulder motor current (q axis) of the healthy twin and every shoulder backlash size (paper Fig. 4)."""
+    check_result(result, "fig4_shoulder_current")
+    check_ax(ax, "fig4_shoulder_current: ax")
     rows = _backlash_rows(result)
     sel = rows[rows["fault_joint"] == FIG4_JOINT].sort_values("size")
     if sel.empty:

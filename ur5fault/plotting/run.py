@@ -3,6 +3,7 @@ encoder mismatch, motor currents and TCP deviation, joints in the same colours i
 
 from __future__ import annotations
 
+import os
 from collections.abc import Sequence
 
 import numpy as np
@@ -12,6 +13,7 @@ from matplotlib.figure import Figure
 
 from ..errors import ParameterError
 from ..sim.axes import JOINT_NAMES, N_JOINTS
+from ..util.checks import short
 from .paper import TCP_COLUMNS, tcp_deviation_mm
 
 #: panels of :func:`run_figure`, top to bottom
@@ -22,6 +24,33 @@ DEFAULT_GEAR_RATIO = 101.0
 
 def _joint_cols(name: str) -> list[str]:
     return [f"{name}_j{j}" for j in range(1, N_JOINTS + 1)]
+
+
+def _check_run_arguments(series: object, twin: object, title: object) -> None:
+    for name, value in (("series", series), ("twin", twin)):
+        if value is None and name == "twin":
+            continue
+        if not isinstance(value, pd.DataFrame):
+            hint = (" (a SimResult: give res.to_pandas(run))" if type(value).__name__ == "SimResult"
+                    else " (a file: read it with pandas.read_parquet, or draw it with `ur5fault show FILE`)"
+                    if isinstance(value, (str, os.PathLike)) else "")
+            raise ParameterError(f"{name} = {short(value)} must be a run's time-series table (a pandas DataFrame)"
+                                 f"{hint}")
+    if title is not None and not isinstance(title, str):
+        raise ParameterError(f"title = {short(title)} must be a string, or None for the run's own")
+
+
+def _gear_ratio(value: object) -> np.ndarray:
+    """One gear ratio per joint (a single number: every joint's), each finite and > 0."""
+    ratio = None
+    if not isinstance(value, (str, bytes)):
+        try:
+            ratio = np.broadcast_to(np.asarray(value, dtype=float), (N_JOINTS,))
+        except (TypeError, ValueError):
+            pass
+    if ratio is None or not np.all(np.isfinite(ratio)) or not np.all(ratio > 0):
+        raise ParameterError(f"gear_ratio = {short(value)} must be one positive number or {N_JOINTS}, one per joint")
+    return ratio
 
 
 def run_figure(series: pd.DataFrame, twin: pd.DataFrame | None = None, *, gear_ratio: Sequence[float] | None = None,
@@ -40,6 +69,7 @@ def run_figure(series: pd.DataFrame, twin: pd.DataFrame | None = None, *, gear_r
     Returns:
         The figure.
     """
+    _check_run_arguments(series, twin, title)
     need = ["t_s", *_joint_cols("q_set_rad"), *_joint_cols("q_FB_rad"), *_joint_cols("i_FB_A")]
     missing = [c for c in need if c not in series.columns]
     if missing and len(series) == 1 and "run_id" in series.columns:  # a campaign's run file: one row of features
@@ -50,11 +80,23 @@ def run_figure(series: pd.DataFrame, twin: pd.DataFrame | None = None, *, gear_r
         raise ParameterError(f"time series lacks column {missing[0]!r} (a ur5fault time series has {need[0]}, "
                              "q_set_rad_j1.., q_FB_rad_j1.., i_FB_A_j1..: a table of `ur5fault simulate` or "
                              "SimResult.to_pandas)")
+    if series.empty:
+        raise ParameterError("series: the time series has no rows: nothing to draw")
+    if twin is not None:
+        lacking = [c for c in TCP_COLUMNS if c not in twin.columns]
+        if lacking:
+            raise ParameterError(f"twin: the healthy twin's table lacks column {lacking[0]!r} (its TCP is what the "
+                                 "run's deviation is measured from)")
+        if len(twin) != len(series):
+            raise ParameterError(f"twin: {len(twin)} samples, the run {len(series)}: give the twin of the same "
+                                 "motion, duration and log period")
     meta = series.attrs.get("ur5fault", {})
-    ratio = np.asarray(gear_ratio if gear_ratio is not None else meta.get("gear_ratio", [DEFAULT_GEAR_RATIO] * 6))
+    ratio = _gear_ratio(gear_ratio if gear_ratio is not None else meta.get("gear_ratio", [DEFAULT_GEAR_RATIO] * 6))
     if axes is None:
         fig = Figure(figsize=(10, 12), layout="constrained")
         axes = fig.subplots(len(PANELS), 1, sharex=True)
+    elif not hasattr(axes, "__len__") or not all(isinstance(a, Axes) for a in np.ravel(np.asarray(axes, object))):
+        raise ParameterError(f"axes = {short(axes)} must be {len(PANELS)} matplotlib Axes ({', '.join(PANELS)})")
     elif len(axes) != len(PANELS):
         raise ParameterError(f"axes: {len(axes)} given, run_figure draws {len(PANELS)} panels ({', '.join(PANELS)})")
     fig = axes[0].figure

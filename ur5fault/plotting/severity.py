@@ -9,8 +9,10 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from ..campaign.summary import MANY_SIZES, EffectSweep, joint_feature, severity_table
+from ..errors import ParameterError
 from ..health.features import feature_label
-from ._figure import figure_and_axes
+from ..util.checks import short
+from ._figure import check_ax, check_feature, check_kind, check_optional_number, figure_and_axes
 
 
 def _display(feature: str) -> tuple[float, str]:
@@ -27,6 +29,17 @@ def _is_generic(df: pd.DataFrame, feature: str) -> bool:
     return feature not in df.columns and f"{feature}_j1" in df.columns
 
 
+def _check_sweep(sweep: object, feature: object, where: str) -> None:
+    """An :class:`EffectSweep` with runs to draw, and a feature name."""
+    if isinstance(sweep, str):  # effect_sweep's reason why an effect has no figure, or an effect's name
+        raise ParameterError(f"{where}: sweep = {short(sweep)} must be an EffectSweep (effect_sweep(features, effect) "
+                             "returns one, or a string saying why the effect has no figure)")
+    check_kind(sweep, EffectSweep, f"{where}: sweep", "an EffectSweep (effect_sweep(features, effect))")
+    if sweep.rows.empty:
+        raise ParameterError(f"{where}: the {sweep.effect} sweep holds no successful run: nothing to draw")
+    check_feature(feature, where)
+
+
 def severity_figure(sweep: EffectSweep, feature: str = "tcp_dev_max_mm", *, healthy: pd.DataFrame | None = None,
                     threshold_mm: float | None = None, ax: Axes | None = None) -> Figure:
     """``feature`` against the fault size of one swept effect.
@@ -41,6 +54,12 @@ def severity_figure(sweep: EffectSweep, feature: str = "tcp_dev_max_mm", *, heal
     Returns:
         The figure.
     """
+    _check_sweep(sweep, feature, "severity_figure")
+    if healthy is not None:
+        check_kind(healthy, pd.DataFrame, "severity_figure: healthy", "the healthy runs' feature rows (a pandas "
+                   "DataFrame), or None")
+    check_optional_number(threshold_mm, "severity_figure: threshold_mm")
+    check_ax(ax, "severity_figure: ax")
     fig, ax = figure_and_axes(ax, (8, 4.5))
     scale, name = _display(feature)
     table = severity_table(sweep, feature) * scale
@@ -79,6 +98,8 @@ def severity_figure(sweep: EffectSweep, feature: str = "tcp_dev_max_mm", *, heal
 
 def heatmap(sweep: EffectSweep, feature: str = "tcp_dev_max_mm", ax: Axes | None = None) -> Figure:
     """``feature`` (largest over repeated runs) by fault joint x fault size, values written in the cells."""
+    _check_sweep(sweep, feature, "heatmap")
+    check_ax(ax, "heatmap: ax")
     fig, ax = figure_and_axes(ax, (8, 4.5))
     scale, name = _display(feature)
     table = severity_table(sweep, feature) * scale

@@ -17,6 +17,7 @@ from collections.abc import Iterable, Mapping
 from typing import Any
 
 from ..errors import ParameterError, UnknownNameError
+from ..util.checks import is_real
 from . import effect_appliers as ap
 from .axes import JOINT_NAMES, joint_index
 from .effect_types import Effect, EffectKey, EffectParam
@@ -119,7 +120,7 @@ def effect_of(name: str, joint: int | str | None, values: Mapping[str, Any], whe
         if p.name not in values and p.absent is None:
             raise ParameterError(f"{loc}effect {name!r} needs a value for {p.name!r} [{p.unit}]")
         v = values.get(p.name, p.absent)
-        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(float(v)):
+        if not is_real(v) or not math.isfinite(float(v)):
             raise ParameterError(f"{loc}{name}.{p.name} = {v!r} must be a number in {p.range_text()}")
         if not p.lo <= float(v) <= p.hi:
             raise ParameterError(f"{loc}{name}.{p.name} = {v!r} is out of range {p.range_text()}")

@@ -15,16 +15,21 @@ from __future__ import annotations
 
 import dataclasses
 import logging
+import math
 import numbers
+import os
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from importlib import resources
 from pathlib import Path
 
 import mujoco
 import numpy as np
 
+from ..config import check_duration
 from ..errors import ParameterError
+from ..util.checks import check_number, is_integer, short
+from .budget import check_memory, sim_bytes
 from .drive import controller as ctl
 from .drive.state import DRIVES
 from .effects import EffectSpec
@@ -100,11 +105,20 @@ class Simulator:
         if stepper == "compiled" and drive != "numba":
             raise ParameterError(f"stepper = 'compiled' runs the compiled drive only, not drive = {drive!r}; "
                                  "choose stepper batch or loop for it")
-        if int(nthread) < 1:
-            raise ParameterError(f"nthread = {nthread} must be at least 1")
+        if not is_integer(nthread) or nthread < 1:
+            raise ParameterError(f"nthread = {short(nthread)} must be a whole number, at least 1")
+        if params is not None and not isinstance(params, RobotParams):
+            raise ParameterError(f"params = {short(params)} must be a RobotParams (load_params(path, overrides)) or "
+                                 "None for the packaged parameters")
+        if model_path is not None and not isinstance(model_path, (str, os.PathLike)):
+            raise ParameterError(f"model_path = {short(model_path)} must be the path of an MJCF file, or None for "
+                                 "the packaged model")
         self.stepper, self.nthread, self.drive = stepper, int(nthread), drive
         self.params = params if params is not None else load_params()
         self.model_path = Path(model_path) if model_path is not None else DEFAULT_MODEL_PATH
+        if not self.model_path.is_file():
+            raise ParameterError(f"model_path = {str(self.model_path)!r}: no such file (an MJCF model, e.g. the "
+                                 f"packaged {DEFAULT_MODEL_PATH.name})")
         self.model = mujoco.MjModel.from_xml_path(str(self.model_path))
         self.model.opt.timestep = self.params.physics_dt_s
         # the payload's centre of mass may move off its body origin at run time (effect payload_com):
@@ -169,19 +183,32 @@ class Simulator:
 
         Returns:
             A :class:`SimResult` with signals shaped ``(n_runs, n_log, 6)``.
+
+        Raises:
+            ParameterError: a bad argument, named with its value and what is valid (checked before anything is
+                simulated), or a batch whose log would not fit in the memory available.
         """
-        if not runs:
-            raise ParameterError("run() needs at least one RunSpec")
-        runs = _checked_runs(runs)
+        _check_trajectory(trajectory)
+        runs = _checked_runs(_run_list(runs))
+        if progress is not None and not callable(progress):
+            raise ParameterError(f"progress = {short(progress)} must be a function of the finished fraction "
+                                 "(0..1), or None")
         p = self.params
         dt = p.physics_dt_s
+        log_period_s = check_number(log_period_s, "log_period_s", 0.0, math.inf, "s", lo_open=True)
         log_every = round(log_period_s / dt)
         if log_every < 1 or abs(log_every * dt - log_period_s) > 1e-12:
             raise ParameterError(f"log_period_s = {log_period_s:g} must be a whole multiple of physics_dt_s = {dt:g}")
-        duration = trajectory.duration_s if duration_s is None else float(duration_s)
+        duration = trajectory.duration_s if duration_s is None else check_duration(duration_s, "duration_s")
         n_steps = int(round(duration / dt))
         if n_steps < 1:
             raise ParameterError(f"duration_s = {duration} s is shorter than one physics step")
+        if n_steps < log_every:
+            raise ParameterError(f"duration_s = {duration:g} s is shorter than one log period (log_period_s = "
+                                 f"{log_period_s:g} s): nothing would be logged")
+        check_memory(sim_bytes(len(runs), n_steps // log_every),
+                     f"run(): {len(runs)} run(s) of {duration:g} s logged every {log_period_s:g} s",
+                     "simulate fewer runs at once, a shorter duration_s or a longer log_period_s")
         a = build_run_arrays(p, [r.effects for r in runs], trajectory.default_payload_kg)
         _log.info("simulating %d run(s) x %d physics steps of %g s on %s (drive %s, stepper %s, %d thread(s))",
                   len(runs), n_steps, dt, trajectory.name, self.drive, self.stepper, self.nthread)
@@ -202,15 +229,38 @@ class Simulator:
         return res
 
 
+def _check_trajectory(trajectory: object) -> None:
+    if not isinstance(trajectory, Trajectory):
+        hint = (f"get_trajectory({trajectory!r}) builds the one of that name" if isinstance(trajectory, str)
+                else "build one with get_trajectory(name, ...) or pick_and_place(...)")
+        raise ParameterError(f"run(): trajectory = {short(trajectory)} must be a Trajectory; {hint}")
+
+
+def _run_list(runs: object) -> list:
+    """``runs`` as a list: any iterable of runs but a single RunSpec, a string or a mapping; at least one run."""
+    if isinstance(runs, RunSpec):
+        raise ParameterError(f"run(): runs = {short(runs)} must be a list of RunSpec; one run is a batch of one: "
+                             "[RunSpec(...)]")
+    if isinstance(runs, (str, bytes, Mapping)) or not isinstance(runs, Iterable):
+        raise ParameterError(f"run(): runs = {short(runs)} must be a list of RunSpec(run_id, seed, effects)")
+    out = list(runs)
+    if not out:
+        raise ParameterError("run() needs at least one RunSpec")
+    return out
+
+
 def _checked_runs(runs: Sequence[RunSpec]) -> list[RunSpec]:
-    """The runs, each a RunSpec with its own run_id (the result finds runs by id: a second run of one id would be
-    unreachable by name) and an integer seed in [0, MAX_SEED], made a Python int (a numpy integer would not go
-    into the result file's JSON metadata)."""
+    """The runs, each a RunSpec with its own run_id, a non-empty one-line string (the result finds runs by id: a
+    second run of one id would be unreachable by name) and an integer seed in [0, MAX_SEED], made a Python int (a
+    numpy integer would not go into the result file's JSON metadata)."""
     seen: set[str] = set()
     out = []
     for i, r in enumerate(runs):
         if not isinstance(r, RunSpec):
             raise ParameterError(f"runs[{i}] = {type(r).__name__}: each run is a RunSpec(run_id, seed, effects)")
+        if not isinstance(r.run_id, str) or not r.run_id.strip() or "\n" in r.run_id:
+            raise ParameterError(f"runs[{i}]: run_id = {short(r.run_id)} must be a non-empty one-line string (the "
+                                 "result finds the run by it)")
         if isinstance(r.seed, bool) or not isinstance(r.seed, numbers.Integral) or not 0 <= r.seed <= MAX_SEED:
             raise ParameterError(f"RunSpec {r.run_id!r}: seed = {r.seed!r} must be an integer in [0, {MAX_SEED}]")
         if not isinstance(r.effects, (tuple, list)) or not all(isinstance(e, EffectSpec) for e in r.effects):

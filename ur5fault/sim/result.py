@@ -11,6 +11,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import json
+import os
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -19,6 +20,8 @@ import numpy as np
 import pandas as pd
 from numpy.typing import NDArray
 
+from ..errors import ParameterError, UnknownNameError
+from ..util.checks import is_integer, short
 from ..util.io import write_csv_atomic, write_parquet_atomic
 from .axes import JOINT_NAMES, N_JOINTS
 from .drive.motor import phase_currents
@@ -117,8 +120,33 @@ class SimResult:
         return head + table.to_html(index=False)
 
     def __getitem__(self, name: str) -> NDArray:
-        """A joint signal by name, ``(n_runs, n_log, 6)``."""
+        """A joint signal by name, ``(n_runs, n_log, 6)``; an unknown name (a :class:`KeyError`) lists the
+        signals there are."""
+        if not isinstance(name, str) or name not in self.signals:
+            where = (f"SimResult[...] takes a signal name (a run's table is to_pandas({name}))" if is_integer(name)
+                     else "SimResult[...]")
+            raise UnknownNameError("signal", name, self.signals, where)
         return self.signals[name]
+
+    def run_index(self, run: int | str) -> int:
+        """The batch index of ``run``: a ``run_id`` or an index into the batch (negative from the end, as for a
+        list); an unknown run_id lists the run ids, an index out of range says the batch's size."""
+        n = self.n_runs
+        if isinstance(run, str):
+            if run not in self.run_ids:
+                raise UnknownNameError("run_id", run, self.run_ids, "SimResult")
+            return self.run_ids.index(run)
+        if not is_integer(run):
+            raise ParameterError(f"SimResult: run = {short(run)} must be a run_id (one of {self._ids_text()}) or an "
+                                 f"index 0..{n - 1}")
+        if not -n <= run < n:
+            raise ParameterError(f"SimResult: run = {run} is out of range: the result holds {n} run(s), index "
+                                 f"0..{n - 1} (or -{n}..-1 from the end) or a run_id ({self._ids_text()})")
+        return int(run) % n
+
+    def _ids_text(self) -> str:
+        shown = ", ".join(map(repr, self.run_ids[: self.REPR_RUNS]))
+        return shown + (f", ... {self.n_runs - self.REPR_RUNS} more" if self.n_runs > self.REPR_RUNS else "")
 
     @classmethod
     def build(cls, params: RobotParams, model_path: Path, tcp_site: int, traj: Trajectory, runs: list[RunSpec],
@@ -177,7 +205,7 @@ class SimResult:
         ``df.attrs["ur5fault"]`` carries the run's metadata (:meth:`run_metadata`: run id, status, effects,
         seed, gear ratios, versions), so figures drawn from the table alone are titled right.
         """
-        r = self.run_ids.index(run) if isinstance(run, str) else int(run)
+        r = self.run_index(run)
         cols: dict[str, NDArray] = {"t_s": self.t_s}
         for j in range(N_JOINTS):
             cols[f"q_set_rad_j{j + 1}"] = self.q_set_rad[:, j]
@@ -196,8 +224,9 @@ class SimResult:
         df.attrs["ur5fault"] = self.run_metadata(r)
         return df
 
-    def run_metadata(self, run: int) -> dict[str, Any]:
-        """Per-run metadata written beside the time series."""
+    def run_metadata(self, run: int | str) -> dict[str, Any]:
+        """Per-run metadata written beside the time series (``run``: an index or a run_id)."""
+        run = self.run_index(run)
         return {
             "run_id": self.run_ids[run], "seed": self.seeds[run], "status": self.status[run],
             "reason": self.reason[run], "effects": list(self.effects[run]), "joint_names": list(JOINT_NAMES),
@@ -205,20 +234,30 @@ class SimResult:
         }
 
     def to_parquet(self, path: str | Path, run: int | str = 0) -> Path:
-        """Write one run's wide table to Parquet atomically, metadata in the file's schema."""
-        r = self.run_ids.index(run) if isinstance(run, str) else int(run)
+        """Write one run's wide table to Parquet atomically, metadata in the file's schema.
+
+        ``path`` must end in ``.parquet`` (the readers of ur5fault, ``ur5fault show`` among them, tell a file's
+        format by its suffix); anything else is refused before the run is looked up."""
+        path = _out_path(path, ".parquet", "to_parquet", "to_csv")
+        r = self.run_index(run)
         df = self.to_pandas(r)
         return write_parquet_atomic(df, path, {"ur5fault": json.dumps(self.run_metadata(r))})
 
     def to_csv(self, path: str | Path, run: int | str = 0) -> Path:
         """Write one run's wide table to CSV atomically (the metadata of :meth:`run_metadata` stays behind:
-        CSV has no place for it; Parquet keeps it)."""
+        CSV has no place for it; Parquet keeps it).
+
+        ``path`` must end in ``.csv``: the file is plain text, never compressed (``.csv.gz`` is refused, not
+        written as plain text a reader would try to decompress)."""
+        path = _out_path(path, ".csv", "to_csv", "to_parquet")
         return write_csv_atomic(self.to_pandas(run), path)
 
-    def summary(self, run: int = 0) -> dict[str, float | str | None]:
+    def summary(self, run: int | str = 0) -> dict[str, float | str | None]:
         """A few headline numbers of one run (for the command line); ``None`` where the run has no finite
         value (a run ended by a protective stop), so that the summary stays valid JSON."""
         import warnings
+
+        run = self.run_index(run)
 
         with warnings.catch_warnings():  # an all-NaN run: numpy's "All-NaN slice" warning says nothing more
             warnings.simplefilter("ignore", RuntimeWarning)
@@ -232,3 +271,16 @@ class SimResult:
             }
         return {"duration_s": float(self.t_s[-1]), "status": self.status[run],
                 **{k: v if np.isfinite(v) else None for k, v in values.items()}}
+
+
+def _out_path(path: str | Path, suffix: str, method: str, other: str) -> Path:
+    """``path`` as a Path, refused unless it is a str or path ending in ``suffix`` (case-insensitive)."""
+    if not isinstance(path, (str, os.PathLike)) or not str(path).strip():
+        raise ParameterError(f"SimResult.{method}: path = {short(path)} must be a file path ending in {suffix}")
+    path = Path(path)
+    if path.suffix.lower() != suffix:
+        other_suffix = {".parquet": ".csv", ".csv": ".parquet"}[suffix]
+        hint = f"; SimResult.{other} writes {other_suffix} files" if path.suffix.lower() == other_suffix else ""
+        ends = f"ends in {path.suffix!r}" if path.suffix else "has no suffix"
+        raise ParameterError(f"SimResult.{method}: path {str(path)!r} {ends}, not {suffix}: give a {suffix} file{hint}")
+    return path

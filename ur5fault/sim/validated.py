@@ -15,7 +15,7 @@ from collections.abc import Mapping
 from typing import Any, TypeVar
 
 from ..errors import ParameterError, UnknownNameError
-from ..util.checks import short
+from ..util.checks import is_real, short
 from .axes import N_JOINTS
 
 T = TypeVar("T", bound="Validated")
@@ -71,7 +71,7 @@ def _check_scalar(where: str, value: Any, meta: Mapping[str, Any]) -> Any:
         if not isinstance(value, str) or value not in meta["choices"]:
             raise ParameterError(f"{where} = {value!r} is not valid; choose one of: {', '.join(meta['choices'])}")
         return value
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
+    if not is_real(value):
         raise ParameterError(f"{where} = {value!r} must be a number in {_range_text(meta)}")
     try:
         v = float(value)
@@ -98,10 +98,10 @@ class Validated:
             where = f"{prefix}.{f.name}"
             n = meta["length"]
             if n is not None:
-                if n == N_JOINTS and isinstance(value, (str, int, float)) and not isinstance(value, bool):
+                if n == N_JOINTS and (isinstance(value, str) or is_real(value)):
                     # a scalar applies to every joint: checked once, under its own name (not as element [1])
                     value = (_check_scalar(where, value, meta),) * N_JOINTS
-                if isinstance(value, (str, int, float)) or not hasattr(value, "__len__"):
+                if isinstance(value, (str, int, float)) or is_real(value) or not hasattr(value, "__len__"):
                     raise ParameterError(f"{where} = {value!r} must be a list of {n} values")
                 value = tuple(value)
                 if len(value) != n:

@@ -3,13 +3,18 @@
 Each returns the value in its canonical Python type or raises :class:`ParameterError` with one
 line naming where the value came from, the value (shortened) and what is valid.  No bool passes
 as a number and no string passes as a number: the strict YAML loader (:mod:`ur5fault.util.yamlsafe`)
-already reads ``1e9`` as the number it means, so a string here is a quoted value or a typo.
+already reads ``1e9`` as the number it means, so a string here is a quoted value or a typo.  numpy scalars
+(``np.float64``, ``np.int64``, ``np.bool_``) pass wherever the Python value they hold would, and come back as
+that Python value: values taken from arrays are numbers, not strangers.
 """
 
 from __future__ import annotations
 
 import math
+import numbers
 from typing import Any
+
+import numpy as np
 
 from ..errors import ParameterError
 
@@ -22,6 +27,21 @@ def short(value: Any) -> str:
     return text if len(text) <= _MAX_REPR else text[: _MAX_REPR - 3] + "..."
 
 
+def is_real(value: Any) -> bool:
+    """A real number: a Python or numpy integer or float; never a bool (``np.bool_`` is no number either)."""
+    return isinstance(value, numbers.Real) and not isinstance(value, bool)
+
+
+def is_integer(value: Any) -> bool:
+    """A Python or numpy integer; never a bool."""
+    return isinstance(value, numbers.Integral) and not isinstance(value, bool)
+
+
+def as_bool(value: Any) -> bool | None:
+    """``value`` as a Python bool if it is one (``True``, ``np.True_``); else None."""
+    return bool(value) if isinstance(value, (bool, np.bool_)) else None
+
+
 def _range(lo: float, hi: float, unit: str, lo_open: bool) -> str:
     return f"{'(' if lo_open else '['}{lo:g}, {hi:g}] {unit}".rstrip()
 
@@ -30,7 +50,7 @@ def check_number(value: Any, where: str, lo: float = -math.inf, hi: float = math
                  lo_open: bool = False) -> float:
     """A finite real number in ``[lo, hi]`` (``(lo, hi]`` with ``lo_open``); ints are accepted."""
     rng = _range(lo, hi, unit, lo_open)
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
+    if not is_real(value):
         raise ParameterError(f"{where} = {short(value)} must be a number in {rng}")
     try:
         v = float(value)
@@ -45,26 +65,29 @@ def check_number(value: Any, where: str, lo: float = -math.inf, hi: float = math
 
 def check_int(value: Any, where: str, lo: int, hi: int, what: str = "an integer") -> int:
     """An integer in ``[lo, hi]``; a float with an integral value (``1e9``) is the integer it means."""
-    if isinstance(value, float) and math.isfinite(value) and value.is_integer() and abs(value) < 2**53:
-        value = int(value)
-    if isinstance(value, bool) or not isinstance(value, int) or not lo <= value <= hi:
+    if is_real(value) and not is_integer(value):
+        v = float(value)
+        if math.isfinite(v) and v.is_integer() and abs(v) < 2**53:
+            value = int(v)
+    if not is_integer(value) or not lo <= value <= hi:
         raise ParameterError(f"{where} = {short(value)} must be {what} in [{lo}, {hi}]")
-    return value
+    return int(value)
 
 
 def check_count(value: Any, option: str, least: int) -> int:
     """A command-line count (``--jobs``, ``--max-effects``): a whole number of at least ``least``, refused in the
     campaign commands' words, ``--jobs 0: must be a whole number of at least 1``."""
-    if isinstance(value, bool) or not isinstance(value, int) or value < least:
+    if not is_integer(value) or value < least:
         raise ParameterError(f"{option} {value!r}: must be a whole number of at least {least}")
-    return value
+    return int(value)
 
 
 def check_bool(value: Any, where: str) -> bool:
     """``true`` or ``false`` (YAML also reads ``yes``/``no`` as these); never a string or a number."""
-    if not isinstance(value, bool):
+    flag = as_bool(value)
+    if flag is None:
         raise ParameterError(f"{where} = {short(value)} must be true or false")
-    return value
+    return flag
 
 
 def check_text(value: Any, where: str, max_len: int = 200) -> str:
@@ -72,7 +95,7 @@ def check_text(value: Any, where: str, max_len: int = 200) -> str:
     if not isinstance(value, str) or not value.strip() or len(value) > max_len or "\n" in value or "\0" in value:
         raise ParameterError(f"{where} = {short(value)} must be a non-empty one-line text of at most "
                              f"{max_len} characters")
-    return value
+    return str(value)
 
 
 def check_name(value: Any, where: str) -> str:

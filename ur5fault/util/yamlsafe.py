@@ -14,18 +14,25 @@ overlays) goes through :func:`read_yaml` or :func:`loads`, which differ from ``y
 - **an empty file is an error** (it is almost always a mistake, never "use the defaults").
 
 Every failure is a :class:`~ur5fault.errors.ConfigFileError` with a one-line message.
+
+The one YAML writer is :func:`dump`: ``yaml.safe_dump`` of :func:`plain` data, so that numbers taken from numpy
+(``np.float64(0.1)``, ``np.int64(3)``, ``np.bool_``) are written as the plain YAML numbers and booleans they are,
+not refused by the safe dumper (nor written with a ``!!python/object`` tag a safe loader cannot read).
 """
 
 from __future__ import annotations
 
 import re
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import yaml
 from yaml.nodes import MappingNode, Node, ScalarNode, SequenceNode
 
-from ..errors import ConfigFileError
+from ..errors import ConfigFileError, ParameterError
+from .checks import short
 
 #: largest YAML document read [bytes]; ur5fault's own files are below 10 kB (assumption: a
 #: configuration 100 times larger than any real one is a mistake, not a configuration)
@@ -210,3 +217,28 @@ def read_yaml(path: str | Path, *, allow_empty: bool = False) -> dict[str, Any]:
     if not isinstance(data, dict):
         raise ConfigFileError(f"{path}: expected a mapping at the top level, got {type(data).__name__}")
     return data
+
+
+def plain(data: Any) -> Any:
+    """``data`` with numpy scalars made the Python numbers, booleans and strings they hold, numpy arrays and
+    tuples made lists and mappings dicts (recursively); everything else as it is."""
+    if isinstance(data, Mapping):
+        return {(k.item() if isinstance(k, np.generic) else k): plain(v) for k, v in data.items()}
+    if isinstance(data, (list, tuple)):
+        return [plain(v) for v in data]
+    if isinstance(data, np.ndarray):
+        return plain(data.tolist())
+    if isinstance(data, np.generic):
+        return data.item()
+    return data
+
+
+def dump(data: Any, where: str = "YAML", **kwargs: Any) -> str:
+    """``yaml.safe_dump(plain(data), **kwargs)``; a value YAML cannot write as plain data (an object, a path) is
+    refused naming ``where``, the value and what can be written."""
+    try:
+        return yaml.safe_dump(plain(data), **kwargs)
+    except yaml.representer.RepresenterError as exc:
+        bad = exc.args[1] if len(exc.args) > 1 else None
+        raise ParameterError(f"{where}: cannot write {short(bad)} ({type(bad).__name__}) as YAML; give numbers, "
+                             "text, true/false, lists and mappings") from None

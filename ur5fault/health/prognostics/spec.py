@@ -37,7 +37,6 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import yaml
 
 from ...campaign.spec import out_folder
 from ...config import check_duration, check_keys, check_log_period, check_mapping, check_seed, parse_trajectory
@@ -46,6 +45,7 @@ from ...seed_paper import PAPER_TCP_MM
 from ...sim.effects import REGISTRY
 from ...sim.params import JOINT_TEMPERATURE_RANGE_C, NOMINAL_JOINT_TEMPERATURE_C, load_params, read_yaml
 from ...util.checks import check_int, check_name, check_number, short
+from ...util.yamlsafe import dump
 from ..features import FEATURE_UNITS
 from .wear import WearLaw, stream
 
@@ -244,7 +244,7 @@ def build_life(data: Mapping[str, Any], where: str, text: str = "", path: Path |
         units.append(Unit(u, trajs[k], float(rng.uniform(*payload)), float(rng.uniform(*temperature)), splits[u]))
     return LifeCampaign(name, out_dir, tuple(units), seed, interval, max_cycles, Failure(str(feature), thr), wear,
                         batch, log_period, frac, split_seed, duration,
-                        text or yaml.safe_dump(dict(data), sort_keys=False),
+                        text or dump(data, where, sort_keys=False),
                         json.loads(json.dumps(data, default=str)), path)
 
 

@@ -4,6 +4,7 @@ pick-and-place and test motions (:mod:`.fixed`), the seeded random pick-and-plac
 
 from __future__ import annotations
 
+import inspect
 from collections.abc import Callable
 
 from ...errors import UnknownNameError
@@ -20,9 +21,13 @@ TRAJECTORIES: dict[str, Callable[..., Trajectory]] = {
 
 
 def get_trajectory(name: str, **kwargs) -> Trajectory:
-    """Build a named trajectory; an unknown name lists the valid ones."""
-    if name not in TRAJECTORIES:
+    """Build a named trajectory; an unknown name lists the valid ones, an unknown option the trajectory's options."""
+    if not isinstance(name, str) or name not in TRAJECTORIES:
         raise UnknownNameError("trajectory", name, TRAJECTORIES)
+    options = inspect.signature(TRAJECTORIES[name]).parameters
+    for key in kwargs:
+        if key not in options:
+            raise UnknownNameError(f"option of trajectory {name!r}", key, options)
     return TRAJECTORIES[name](**kwargs)
 
 

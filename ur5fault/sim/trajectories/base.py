@@ -12,12 +12,17 @@ forward as the velocity setpoint.
 from __future__ import annotations
 
 import dataclasses
+import math
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from ...errors import ParameterError
+from ...util.checks import check_bool, check_number, short
 from ..axes import N_JOINTS
+from ..budget import MAX_DURATION_S
+from ..effects import REGISTRY
 
 CB3_SETPOINT_PERIOD_S = 0.008  # 125 Hz (ur5-facts.md)
 UR_DEFAULT_SPEED_RAD_S = 1.047  # controller default joint speed (ur5-facts.md)
@@ -26,6 +31,36 @@ UR_MAX_SPEED_RAD_S = np.pi  # the UR5's maximum joint speed, 180 deg/s (ur5-fact
 #: the fastest a fixed motion may be scaled: the UR5's maximum joint speed over the controller default, 3.0
 MAX_SPEED_SCALE = UR_MAX_SPEED_RAD_S / UR_DEFAULT_SPEED_RAD_S
 MIN_SPEED_SCALE = 0.05
+_PAYLOAD = REGISTRY["payload"].param("mass_kg")  # the payload's one range
+#: the numeric options of the trajectory functions, ``(lo, hi, unit)``: each function checks its own against them at
+#: its edge, and a YAML file's trajectory options are checked against them before it is built.  The payload
+#: effect's range; speed up to UR's maximum joint speed (pi rad/s, ur5-facts.md) over the controller default
+#: 1.047 rad/s; dwell times up to the run-length limit; setpoint periods from the 0.1 ms servo period to 10 Hz
+OPTION_RANGES = {
+    "payload_kg": (_PAYLOAD.lo, _PAYLOAD.hi, "kg"),
+    "speed_scale": (MIN_SPEED_SCALE, MAX_SPEED_SCALE, "-"),
+    "seconds": (0.01, MAX_DURATION_S, "s"),
+    "setpoint_period_s": (1e-4, 0.1, "s"),
+}
+
+
+def check_option(fn: str, key: str, value: Any) -> float:
+    """``value`` of the trajectory function ``fn``'s option ``key``, checked against :data:`OPTION_RANGES`."""
+    lo, hi, unit = OPTION_RANGES[key]
+    return check_number(value, f"{fn}: {key}", lo, hi, unit)
+
+
+def check_pose(q: Any, where: str) -> NDArray[np.float64]:
+    """Six finite joint angles [rad] (a list, tuple or array of shape ``(6,)``)."""
+    try:
+        arr = np.asarray(q, dtype=float)
+    except (TypeError, ValueError):
+        arr = None
+    if arr is None or arr.shape != (N_JOINTS,):
+        raise ParameterError(f"{where} = {short(q)} must be {N_JOINTS} joint angles [rad], shape ({N_JOINTS},)")
+    if not np.all(np.isfinite(arr)):
+        raise ParameterError(f"{where} = {short(q)} must be finite (no NaN or inf)")
+    return arr
 
 
 @dataclasses.dataclass(frozen=True)
@@ -50,15 +85,29 @@ class Trajectory:
     default_payload_kg: float = 0.0
 
     def __post_init__(self) -> None:
-        q = np.asarray(self.q_set_rad, dtype=float)
+        name = self.name
+        if not isinstance(name, str) or not name.strip():
+            raise ParameterError(f"Trajectory: name = {short(name)} must be a non-empty string (written to outputs)")
+        where = f"trajectory {name!r}"
+        try:
+            q = np.asarray(self.q_set_rad, dtype=float)
+        except (TypeError, ValueError):
+            raise ParameterError(f"{where}: q_set_rad = {short(self.q_set_rad)} must be an array of joint angles "
+                                 "[rad], shape (n >= 2, 6)") from None
         if q.ndim != 2 or q.shape[1] != N_JOINTS or q.shape[0] < 2:
-            raise ParameterError(f"trajectory {self.name!r}: q_set_rad must have shape (n >= 2, 6), got {q.shape}")
+            raise ParameterError(f"{where}: q_set_rad must have shape (n >= 2, 6), got {q.shape}")
         if not np.all(np.isfinite(q)):
-            raise ParameterError(f"trajectory {self.name!r}: q_set_rad contains NaN or inf")
-        if not self.setpoint_period_s > 0:
-            raise ParameterError(f"trajectory {self.name!r}: setpoint_period_s must be > 0")
+            raise ParameterError(f"{where}: q_set_rad contains NaN or inf")
+        period = check_number(self.setpoint_period_s, f"{where}: setpoint_period_s", 0.0, math.inf, "s",
+                              lo_open=True)
         q.setflags(write=False)
         object.__setattr__(self, "q_set_rad", q)
+        object.__setattr__(self, "setpoint_period_s", period)
+        object.__setattr__(self, "payload_events", _checked_events(self.payload_events, where))
+        object.__setattr__(self, "payload_gripped_at_start",
+                           check_bool(self.payload_gripped_at_start, f"{where}: payload_gripped_at_start"))
+        object.__setattr__(self, "default_payload_kg",
+                           check_number(self.default_payload_kg, f"{where}: default_payload_kg", 0.0, math.inf, "kg"))
 
     @property
     def duration_s(self) -> float:
@@ -90,13 +139,40 @@ class Trajectory:
         return state
 
 
+def _checked_events(events: Any, where: str) -> tuple[tuple[float, bool], ...]:
+    """Payload events as ``((time_s, gripped), ...)``: finite times >= 0 in increasing order, each with a bool."""
+    if isinstance(events, (str, bytes)) or not hasattr(events, "__iter__"):
+        raise ParameterError(f"{where}: payload_events = {short(events)} must be a sequence of (time_s, gripped) "
+                             "pairs")
+    out: list[tuple[float, bool]] = []
+    for k, ev in enumerate(events):
+        at = f"{where}: payload_events[{k}]"
+        if isinstance(ev, (str, bytes)) or not hasattr(ev, "__len__") or len(ev) != 2:
+            raise ParameterError(f"{at} = {short(ev)} must be a (time_s, gripped) pair")
+        t = check_number(ev[0], f"{at} time", 0.0, math.inf, "s")
+        if out and t <= out[-1][0]:
+            raise ParameterError(f"{at} time = {t:g} s must come after the event before it ({out[-1][0]:g} s): "
+                                 "events in increasing time")
+        out.append((t, check_bool(ev[1], f"{at} gripped")))
+    return tuple(out)
+
+
 def movej(q0: NDArray, q1: NDArray, v_max: float, a_max: float, period_s: float) -> NDArray[np.float64]:
     """UR-style joint move: a trapezoidal speed profile shared by all joints (they start and
     stop together), limited by the joint with the largest displacement.
 
+    Args:
+        q0, q1: start and end joint angles, six finite values each [rad].
+        v_max: joint speed, finite and > 0 [rad/s].
+        a_max: joint acceleration, finite and > 0 [rad/s^2].
+        period_s: setpoint period, finite and > 0 [s].
+
     Returns setpoints from ``q0`` (excluded) to ``q1`` (included), ``(n, 6)`` [rad].
     """
-    q0, q1 = np.asarray(q0, float), np.asarray(q1, float)
+    q0, q1 = check_pose(q0, "movej: q0"), check_pose(q1, "movej: q1")
+    v_max = check_number(v_max, "movej: v_max", 0.0, math.inf, "rad/s", lo_open=True)
+    a_max = check_number(a_max, "movej: a_max", 0.0, math.inf, "rad/s^2", lo_open=True)
+    period_s = check_number(period_s, "movej: period_s", 0.0, math.inf, "s", lo_open=True)
     dist = float(np.max(np.abs(q1 - q0)))
     if dist == 0.0:
         return q1[None, :]
@@ -123,5 +199,9 @@ def movej(q0: NDArray, q1: NDArray, v_max: float, a_max: float, period_s: float)
 
 
 def dwell(q: NDArray, seconds: float, period_s: float) -> NDArray[np.float64]:
-    """Hold ``q`` for ``seconds`` (at least one setpoint), ``(n, 6)`` [rad]."""
-    return np.repeat(np.asarray(q, float)[None, :], max(1, round(seconds / period_s)), axis=0)
+    """Hold ``q`` (six finite joint angles) for ``seconds`` (finite, >= 0; at least one setpoint), ``(n, 6)``
+    [rad]."""
+    q = check_pose(q, "dwell: q")
+    seconds = check_number(seconds, "dwell: seconds", 0.0, MAX_DURATION_S, "s")
+    period_s = check_number(period_s, "dwell: period_s", 0.0, math.inf, "s", lo_open=True)
+    return np.repeat(q[None, :], max(1, round(seconds / period_s)), axis=0)

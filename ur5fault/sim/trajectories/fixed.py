@@ -7,6 +7,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ...errors import ParameterError
+from ...util.checks import is_real, short
 from .base import (
     CB3_SETPOINT_PERIOD_S,
     MAX_SPEED_SCALE,
@@ -15,6 +16,8 @@ from .base import (
     UR_DEFAULT_SPEED_RAD_S,
     UR_MAX_SPEED_RAD_S,
     Trajectory,
+    check_option,
+    check_pose,
     dwell,
     movej,
 )
@@ -29,12 +32,16 @@ PLACE_APPROACH = (0.5, -2.2043, -1.4889, -1.0192, 1.5708, 0.9)
 PLACE = (0.5, -2.3794, -1.5444, -0.7885, 1.5708, 0.9)
 
 
-def check_speed_scale(speed_scale: float) -> None:
+def check_speed_scale(speed_scale: float) -> float:
     """A fixed motion's speed and acceleration factor: up to the UR5's maximum joint speed (3.0006 x the default)."""
+    if not is_real(speed_scale):
+        raise ParameterError(f"speed_scale = {short(speed_scale)} must be a number in [{MIN_SPEED_SCALE:g}, "
+                             f"{MAX_SPEED_SCALE:.4g}]")
     if not MIN_SPEED_SCALE <= speed_scale <= MAX_SPEED_SCALE:
         raise ParameterError(f"speed_scale = {speed_scale} is out of range [{MIN_SPEED_SCALE:g}, "
                              f"{MAX_SPEED_SCALE:.4g}] (the UR5's maximum joint speed, {UR_MAX_SPEED_RAD_S:.4g} rad/s, "
                              f"over the controller default {UR_DEFAULT_SPEED_RAD_S:g} rad/s)")
+    return float(speed_scale)
 
 
 def pick_and_place(
@@ -49,7 +56,9 @@ def pick_and_place(
     the shoulder and elbow (the base joint's axis is vertical, so it carries no gravity
     torque; its torque reverses through inertia).  About 14 s at ``speed_scale = 1``.
     """
-    check_speed_scale(speed_scale)
+    speed_scale = check_speed_scale(speed_scale)
+    payload_kg = check_option("pick_and_place", "payload_kg", payload_kg)
+    setpoint_period_s = check_option("pick_and_place", "setpoint_period_s", setpoint_period_s)
     v, a, ts = UR_DEFAULT_SPEED_RAD_S * speed_scale, UR_DEFAULT_ACCEL_RAD_S2 * speed_scale, setpoint_period_s
     parts: list[NDArray] = [dwell(PICK_APPROACH, 0.5, ts)]
     events: list[tuple[float, bool]] = []
@@ -76,7 +85,10 @@ def pick_and_place(
 
 
 def hold(q_rad=PICK_APPROACH, seconds: float = 1.0, payload_kg: float = 0.0) -> Trajectory:
-    """Stand still at ``q_rad`` (useful for noise and drift checks)."""
+    """Stand still at ``q_rad`` (six joint angles [rad]) for ``seconds`` (useful for noise and drift checks)."""
+    q_rad = check_pose(q_rad, "hold: q_rad")
+    seconds = check_option("hold", "seconds", seconds)
+    payload_kg = check_option("hold", "payload_kg", payload_kg)
     q = dwell(q_rad, seconds, CB3_SETPOINT_PERIOD_S)
     return Trajectory("hold", CB3_SETPOINT_PERIOD_S, np.vstack([q, q[-1:]]), (), payload_kg > 0, payload_kg)
 
@@ -88,7 +100,8 @@ def joint_sweep(speed_scale: float = 1.0, payload_kg: float = 1.0) -> Trajectory
     change sign (-41 -> +20 N*m and -19 -> +2 N*m with 1 kg); every joint reverses its velocity.
     Used to test the discrepancy workflow on a motion it was not developed on.
     """
-    check_speed_scale(speed_scale)
+    speed_scale = check_speed_scale(speed_scale)
+    payload_kg = check_option("joint_sweep", "payload_kg", payload_kg)
     v, a, ts = UR_DEFAULT_SPEED_RAD_S * speed_scale, UR_DEFAULT_ACCEL_RAD_S2 * speed_scale, CB3_SETPOINT_PERIOD_S
     home = np.asarray(PICK_APPROACH)
     out_ = np.array([0.5, -2.0, 0.2, -1.5, -1.2, 0.9])

@@ -33,6 +33,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ...errors import ParameterError
+from ...util.checks import is_integer, is_real
 from ...util.portable import matmul
 from ..effects import REGISTRY
 from .base import CB3_SETPOINT_PERIOD_S, Trajectory, dwell, movej
@@ -81,17 +82,16 @@ def random_pick_and_place(seed: int = 0, payload_kg: float = 1.0, tool_tilt_deg:
         tool_tilt_deg: largest tilt of the tool from straight down about each of its x and y axes [deg]
             (0: straight down, the family as it always was; at most :data:`MAX_TOOL_TILT_DEG`).
     """
-    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+    if not is_integer(seed) or seed < 0:
         raise ParameterError(f"random_pick_and_place: seed = {seed!r} must be a non-negative integer")
     mass = REGISTRY["payload"].param("mass_kg")  # the payload's one range
-    if isinstance(payload_kg, bool) or not isinstance(payload_kg, (int, float)) or not mass.lo <= payload_kg <= mass.hi:
+    if not is_real(payload_kg) or not mass.lo <= payload_kg <= mass.hi:
         raise ParameterError(f"random_pick_and_place: payload_kg = {payload_kg!r} is out of range [{mass.lo:g}, "
                              f"{mass.hi:g}] kg")
-    if (isinstance(tool_tilt_deg, bool) or not isinstance(tool_tilt_deg, (int, float))
-            or not 0 <= tool_tilt_deg <= MAX_TOOL_TILT_DEG):
+    if not is_real(tool_tilt_deg) or not 0 <= tool_tilt_deg <= MAX_TOOL_TILT_DEG:
         raise ParameterError(f"random_pick_and_place: tool_tilt_deg = {tool_tilt_deg!r} is out of range "
                              f"[0, {MAX_TOOL_TILT_DEG:g}] deg")
-    return _build(seed, float(payload_kg), float(tool_tilt_deg))
+    return _build(int(seed), float(payload_kg), float(tool_tilt_deg))
 
 
 @functools.lru_cache(maxsize=256)
