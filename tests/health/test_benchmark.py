@@ -181,7 +181,10 @@ def test_cli_writes_report_metrics_and_figures(simulated, tmp_path, capsys):
     m = json.loads((tmp_path / "rep" / "metrics.json").read_text())  # strict JSON: NaN written as null
     assert set(m) >= {"dataset", "detection", "localisation", "kind", "backlash", "importance"}
     assert "## Backlash: smallest alpha detected per joint" in (tmp_path / "rep" / "report.md").read_text()
-    assert "detection ROC AUC" in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert "detection ROC AUC" in out
+    if m.get("detection_by_joint"):  # the AUC diagnose's note quotes, printed beside the run-level one
+        assert f"(by joint, the detector `ur5fault diagnose` uses: {m['detection_by_joint']['auc_all']:.3f})" in out
 
 
 def test_cli_missing_folder_is_one_line_exit_2(tmp_path, capsys):

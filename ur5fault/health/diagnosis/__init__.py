@@ -171,7 +171,8 @@ def diagnose(log: MeasuredLog, detector_dir: str | Path, params_overrides: dict 
     notes.extend(outside_notes(schema, context, log.source))
     auc = detector_test_auc(detector_dir)
     if auc is not None and auc < NEAR_CHANCE_AUC:
-        notes.append(f"this detector's detection AUC on its own campaign's test split is {auc:.2f} (0.5 is chance): "
+        notes.append(f"this detector's by-joint detection AUC on its own campaign's test split is {auc:.2f} (0.5 is "
+                     "chance; `ur5fault benchmark` prints it beside the run-level AUC): "
                      "its flags say little; train it on a larger or more varied campaign")
     trained = schema.get("log_period_s")
     if trained and not same_period(log.period_s, trained):

@@ -53,8 +53,10 @@ def cmd_benchmark(args: argparse.Namespace) -> int:
     det, loc, kind = m["detection"], m["localisation"], m["kind"]
     print(f"{m['dataset']['n_train']} train / {m['dataset']['n_test']} test runs, features {m['feature_set']}"
           + (" (training labels shuffled)" if m["shuffled_labels"] else ""))
-    print(f"detection ROC AUC {det['auc_all']:.3f}; joint accuracy {loc['accuracy']:.3f}; "
-          f"fault-kind accuracy {kind['accuracy']:.3f}")
+    bj = (m.get("detection_by_joint") or {}).get("auc_all")
+    print(f"detection ROC AUC {det['auc_all']:.3f}"
+          + (f" (by joint, the detector `ur5fault diagnose` uses: {bj:.3f})" if isinstance(bj, (int, float)) else "")
+          + f"; joint accuracy {loc['accuracy']:.3f}; fault-kind accuracy {kind['accuracy']:.3f}")
     for j, v in m["backlash"]["per_joint"].items():
         a90 = v["alpha_90_deg"]
         why = v.get("note", f"{v['n_test']} test runs")
