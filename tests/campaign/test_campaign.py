@@ -731,3 +731,14 @@ def test_run_campaign_takes_numpy_jobs_and_flags(tmp_path):
     manifest = run_campaign(load_campaign(tiny(tmp_path)), tmp_path / "out", jobs=np.int64(1), progress=np.False_,
                             note=None, replace_changed=np.False_)
     assert manifest["state"] == "complete"
+
+
+def test_the_acceptable_backlash_is_printed_as_a_reader_takes_it():
+    """The paper campaign printed `2 shoulder_lift_joint 0` where even its smallest simulated backlash (0.05 deg)
+    moves the TCP beyond 0.5 mm: 0 read as "no figure". Printed: `< 0.05`; no level within: `none`."""
+    from ur5fault.campaign.summary import acceptable_backlash_text
+
+    table = pd.DataFrame([[0.0, 0.3, 0.6], [0.0, 0.7, 1.2], [0.9, 1.0, 1.1]], columns=[0.0, 0.05, 0.1],
+                         index=["1 a", "2 b", "3 c"])
+    acceptable = pd.Series({"1 a": 0.05, "2 b": 0.0, "3 c": np.nan}, name="x")
+    assert acceptable_backlash_text(acceptable, table).to_dict() == {"1 a": "0.05", "2 b": "< 0.05", "3 c": "none"}

@@ -66,7 +66,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     from . import acceptable_backlash, load_campaign, run_campaign, tcp_table
     from .limits import confirmation_needed, effective_jobs, estimate
     from .spec import MAX_THRESHOLD_MM
-    from .summary import MANY_SIZES
+    from .summary import MANY_SIZES, acceptable_backlash_text
 
     if is_life_file(args.file):  # a life campaign (issue 20): units run to failure
         from ..health.prognostics.cli import cmd_life_run
@@ -98,7 +98,7 @@ def cmd_run(args: argparse.Namespace) -> int:
         print("\nmax TCP deviation from the healthy twin [mm], fault joint x backlash [deg]:")
         print(table.to_string(float_format=lambda v: f"{v:.3f}"))
         print(f"\nlargest backlash keeping the TCP within {thr:g} mm [deg]:")
-        print(acceptable_backlash(features, thr, camp.swept_keys).to_string(float_format=lambda v: f"{v:g}"))
+        print(acceptable_backlash_text(acceptable_backlash(features, thr, camp.swept_keys), table).to_string())
     bad = features[features["status"] != "ok"]
     if len(bad):
         print(f"\n{len(bad)} run(s) not ok:\n" + bad[["run_id", "status", "reason"]].to_string(index=False))

@@ -26,7 +26,15 @@ from .store import (
     recorded_run_identities,
     timeseries_path,
 )
-from .summary import EffectSweep, acceptable_backlash, effect_sweep, severity_table, swept_effects, tcp_table
+from .summary import (
+    EffectSweep,
+    acceptable_backlash,
+    acceptable_backlash_text,
+    effect_sweep,
+    severity_table,
+    swept_effects,
+    tcp_table,
+)
 
 _log = logging.getLogger(__name__)
 
@@ -198,7 +206,7 @@ class CampaignResult:
         acc = self.acceptable_backlash()
         if not acc.empty:
             parts.append(f"<p>largest backlash keeping the TCP within {self.threshold_mm:g} mm [deg]:</p>")
-            parts.append(acc.to_frame().to_html(float_format=lambda v: f"{v:g}", na_rep="none"))
+            parts.append(acceptable_backlash_text(acc, tcp_table(self.features, self.swept_keys)).to_frame().to_html())
         _, skipped = self.sweeps()
         parts += [f"<p>{html.escape(why)}</p>" for why in skipped.values()]
         return "\n".join(parts)

@@ -184,3 +184,12 @@ def acceptable_backlash(features: pd.DataFrame, threshold_mm: float,
         below = [lvl for lvl in ok if not bad or lvl < min(bad)]
         out[joint] = max(below) if below else np.nan
     return pd.Series(out, name=f"max_backlash_deg_within_{threshold_mm:g}mm")
+
+
+def acceptable_backlash_text(acceptable: pd.Series, table: pd.DataFrame) -> pd.Series:
+    """:func:`acceptable_backlash` as a reader takes it: where only the healthy level (0) stays within the
+    threshold, ``< SMALLEST`` (the smallest backlash simulated already exceeds it; a bare 0 read as "no backlash
+    allowed" or as a missing figure); where no level does, ``none``."""
+    sizes = sorted(float(c) for c in table.columns if float(c) > 0)
+    return pd.Series({j: ("none" if not np.isfinite(v) else f"< {sizes[0]:g}" if v == 0 and sizes else f"{v:g}")
+                      for j, v in acceptable.items()}, name=acceptable.name, dtype=object)
