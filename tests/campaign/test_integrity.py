@@ -419,3 +419,21 @@ def test_the_advised_command_carries_yes_where_the_campaign_needed_it():
     assert rerun_command(base, Path("out")) == "ur5fault campaign run /c/d.yaml --out out"
     assert rerun_command({**base, "n_runs": CONFIRM_RUNS + 1}, Path("out")).endswith(" --out out --yes")
     assert rerun_command({**base, "n_steps_total": int(CONFIRM_RUN_STEPS) + 1}, Path("out")).endswith(" --yes")
+
+
+def test_a_feature_table_without_its_checksum_is_refused_where_status_calls_it_bad(tmp_path, done):
+    """After `rm features.parquet.sha256`, `campaign status` said bad (exit 1) while `plot` and CampaignResult read
+    the table without a word: the readers now refuse it too, and a rerun rewrites it."""
+    from ur5fault.campaign import CampaignResult
+    from ur5fault.health.diagnostics.data import load_features
+    from ur5fault.util.io import StoredFileError
+
+    out = _copy(done, tmp_path)
+    (out / "features.parquet.sha256").unlink()
+    assert status(out)["features"]["state"] == "bad"
+    for read in (CampaignResult.load, load_features):
+        with pytest.raises(StoredFileError, match=r"features.parquet: no checksum recorded beside it \(its write was "
+                                                  r"cut short, or the checksum file was deleted\)"):
+            read(out)
+    run_campaign(load_campaign(tiny(tmp_path)), out, jobs=1, progress=False, note=None)
+    assert status(out)["sound"] is True and len(CampaignResult.load(out).features) == 3

@@ -272,7 +272,8 @@ def check_table_of_manifest(table: Path, remake: str, manifest: Mapping[str, Any
     complete (each invocation writes it ``running`` first: the table beside it may be the earlier fleet's until the
     invocation ends).  Nothing to compare (another file name, no manifest beside the table, no identity or state
     recorded): passes; a manifest that fails its checksum is refused.  ``manifest``: the folder's, when already read and
-    verified."""
+    verified.  A table without its checksum beside a checksummed manifest is refused (what ``campaign status``
+    calls bad)."""
     import pyarrow as pa
     import pyarrow.parquet as pq
 
@@ -286,6 +287,11 @@ def check_table_of_manifest(table: Path, remake: str, manifest: Mapping[str, Any
             raise StoredFileError(f"{table.parent / 'manifest.json'}: {damaged}; {remake}")
     if not manifest:
         return
+    if checksum_path(table.parent / "manifest.json").exists() and not checksum_path(table).exists():
+        # a folder whose manifest is checksummed was written by a ur5fault that checksums its tables: one without
+        # is a write cut short or a checksum deleted, as `campaign status` reports it ("bad"), not a sound table
+        raise StoredFileError(f"{table}: no checksum recorded beside it (its write was cut short, or the checksum "
+                              f"file was deleted), so it cannot be verified; {remake}")
     state = manifest.get("state")
     if manifest.get("kind") == "life":
         if state is not None and state != "complete":  # a manifest recording no state (made by hand): nothing said
