@@ -176,9 +176,6 @@ def _usage(parser: argparse.ArgumentParser):
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = build_parser()
-    args = parser.parse_args(argv)
-    configure_logging(getattr(args, "verbose", 0))
     import threading
 
     stopping = threading.Event()  # set by the handlers below: the executor's thread is then quiet
@@ -200,7 +197,9 @@ def main(argv: Sequence[str] | None = None) -> int:
                         if signal.getsignal(signal.SIGINT) is signal.default_int_handler else None)
     except ValueError:  # not the main thread: leave signals alone
         previous = previous_int = None
-    try:
+    try:  # the parser too: building it imports the command's modules, the first second of a command's life
+        args = build_parser().parse_args(argv)
+        configure_logging(getattr(args, "verbose", 0))
         return int(args.func(args) or 0)
     except Ur5FaultError as exc:
         return _one_line(str(exc))
