@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import functools
+import importlib
 import logging
 import signal
 import sys
@@ -94,35 +95,47 @@ def configure_logging(verbosity: int) -> None:
         logger.addHandler(handler)
 
 
-def build_parser() -> argparse.ArgumentParser:
+#: each command group's module and the commands it registers, in the order ``ur5fault --help`` lists them. A command
+#: line imports the module of its command alone: all of them took 2-3 s (scipy, scikit-learn, the simulator), more
+#: than ``ur5fault --version`` or ``ur5fault effects`` should wait
+COMMAND_GROUPS = {
+    ".run_cli": ("simulate", "effects", "show"),
+    ".campaign.cli": ("campaign", "plot"),
+    ".discrepancy.cli": ("discrepancy",),
+    ".identify.cli": ("identify",),
+    ".health.diagnostics.cli": ("benchmark",),
+    ".health.diagnosis.cli": ("diagnose",),
+    ".health.prognostics.cli": ("prognose",),
+    ".health.monitoring.cli": ("monitor",),
+}
+
+#: options of ``ur5fault`` itself that may stand before the command, spelled out (none takes a value)
+_LEADING = ("--verbose", "--version")
+
+
+def build_parser(groups: Sequence[str] | None = None) -> argparse.ArgumentParser:
+    """The parser of ``ur5fault`` with the commands of ``groups`` (keys of :data:`COMMAND_GROUPS`; default: all)."""
     p = _Parser(prog="ur5fault", description="UR5 fault-injection simulator")
     p.add_argument("--version", action="version", version=_version())
     sub = p.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     p.set_defaults(func=_usage(p))
-    _add_optional_commands(sub)
+    for group in COMMAND_GROUPS if groups is None else groups:
+        # imported directly: a broken module is an error, not a silently missing command
+        importlib.import_module(group, __package__).register(sub)
     return p
 
 
-def _add_optional_commands(sub) -> None:
-    """The command groups, each registering its own subcommands (imported directly: a broken module is an error,
-    not a silently missing command)."""
-    from . import run_cli
-    from .campaign import cli as campaign_cli
-    from .discrepancy import cli as discrepancy_cli
-    from .health.diagnosis import cli as diagnose_cli
-    from .health.diagnostics import cli as benchmark_cli
-    from .health.monitoring import cli as monitor_cli
-    from .health.prognostics import cli as prognose_cli
-    from .identify import cli as identify_cli
-
-    run_cli.register(sub)
-    campaign_cli.register(sub)
-    discrepancy_cli.register(sub)
-    identify_cli.register(sub)
-    benchmark_cli.register(sub)
-    diagnose_cli.register(sub)
-    prognose_cli.register(sub)
-    monitor_cli.register(sub)
+def groups_needed(argv: Sequence[str]) -> tuple[str, ...]:
+    """The command groups the command line ``argv`` needs: its command's alone, none for ``--version``; every group
+    when the command is not plain (``ur5fault --help``, a misspelled command, an abbreviated option before it), so
+    that argparse answers as it does with all of them."""
+    for arg in argv:
+        if arg == "--version":  # ends the parse before any command is looked at
+            return ()
+        if arg in _LEADING or (arg.startswith("-v") and set(arg[1:]) == {"v"}):
+            continue
+        return tuple(group for group, commands in COMMAND_GROUPS.items() if arg in commands) or tuple(COMMAND_GROUPS)
+    return tuple(COMMAND_GROUPS)
 
 
 def _one_line(message: str) -> int:
@@ -197,8 +210,9 @@ def main(argv: Sequence[str] | None = None) -> int:
                         if signal.getsignal(signal.SIGINT) is signal.default_int_handler else None)
     except ValueError:  # not the main thread: leave signals alone
         previous = previous_int = None
-    try:  # the parser too: building it imports the command's modules, the first second of a command's life
-        args = build_parser().parse_args(argv)
+    try:  # the parser too: building it imports the command's modules, a command's first second
+        given = sys.argv[1:] if argv is None else argv
+        args = build_parser(groups_needed(given)).parse_args(given)
         configure_logging(getattr(args, "verbose", 0))
         return int(args.func(args) or 0)
     except Ur5FaultError as exc:
