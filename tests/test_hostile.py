@@ -507,6 +507,23 @@ def test_a_stop_while_the_parser_is_built_is_one_line(signame, line, status):
     assert (proc.returncode, err) == (status, line + "\n")
 
 
+@pytest.mark.parametrize("stop, line, status", [(KeyboardInterrupt, "ur5fault: interrupted", 130),
+                                                ("Terminated", "ur5fault: terminated", 143)])
+def test_a_stop_while_the_handlers_are_set_up_is_one_line(monkeypatch, capsys, stop, line, status):
+    """From main()'s first line: a stop before its handlers are in place (here: while the executor's thread hook
+    is made) was a traceback too."""
+    from ur5fault import cli
+
+    exc = cli.Terminated if stop == "Terminated" else stop
+
+    def stopped(*args, **kwargs):
+        raise exc()
+
+    monkeypatch.setattr(cli, "quiet_when_stopping", stopped)
+    assert cli.main(["--version"]) == status
+    assert capsys.readouterr().err == line + "\n"
+
+
 def _cmdline(pid: int) -> bytes:
     try:
         with open(f"/proc/{pid}/cmdline", "rb") as fh:

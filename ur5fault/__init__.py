@@ -4,17 +4,16 @@ MuJoCo holds the multibody; per-step vectorised Python runs every joint's drive 
 (cascaded loops, inverter, DC/PMSM motor, 101:1 gear with elastic backlash, Stribeck
 friction with temperature, sensors).  See README.md.
 
-The names below are imported on first use (``ur5fault.Simulator``, ``from ur5fault import RunSpec``): the
-simulator's modules (MuJoCo, numba, pandas) take most of a second, which ``ur5fault --version`` and every
-command that needs none of them should not wait for.
+The names below, and ``__version__``, are looked up on first use (``ur5fault.Simulator``, ``from ur5fault import
+RunSpec``): the simulator's modules (MuJoCo, numba, pandas) take most of a second and ``importlib.metadata``
+40 ms, which ``ur5fault --version`` and the commands that need none of them should not wait for; and until the
+command line's ``main`` runs, Ctrl-C prints a traceback.
 """
 
 from __future__ import annotations
 
 from importlib import import_module
 from typing import TYPE_CHECKING, Any
-
-from .util.provenance import package_version
 
 if TYPE_CHECKING:
     from .sim.axes import JOINT_NAMES, N_JOINTS
@@ -37,16 +36,17 @@ __all__ = [
     "load_params", "SimResult", "Trajectory", "get_trajectory", "pick_and_place",
 ]
 
-__version__ = package_version()
-
 
 def __getattr__(name: str) -> Any:
-    if name not in _LAZY:
+    if name == "__version__":  # the installed distribution's (pyproject.toml is its one source)
+        value: Any = import_module(".util.provenance", __name__).package_version()
+    elif name in _LAZY:
+        value = getattr(import_module(_LAZY[name], __name__), name)
+    else:
         raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(import_module(_LAZY[name], __name__), name)
     globals()[name] = value  # once: later lookups find it without this function
     return value
 
 
 def __dir__() -> list[str]:
-    return sorted({*globals(), *__all__})
+    return sorted({*globals(), *__all__, "__version__"})

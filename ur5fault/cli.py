@@ -13,7 +13,6 @@ from __future__ import annotations
 import argparse
 import functools
 import importlib
-import logging
 import signal
 import sys
 from collections.abc import Sequence
@@ -86,6 +85,8 @@ def _version() -> str:
 
 def configure_logging(verbosity: int) -> None:
     """Send the ``ur5fault`` loggers' records to stderr: WARNING by default, INFO at ``-v``, DEBUG at ``-vv``."""
+    import logging  # here, not at the top: imported before main(), a Ctrl-C in it would print a traceback
+
     logger = logging.getLogger("ur5fault")
     logger.setLevel(logging.WARNING if verbosity <= 0 else logging.INFO if verbosity == 1 else logging.DEBUG)
     if not any(getattr(h, "_ur5fault_cli", False) for h in logger.handlers):
@@ -189,6 +190,19 @@ def _usage(parser: argparse.ArgumentParser):
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    try:  # from the first line: a stop while the handlers are set up, or the parser built, is the same one line
+        return _run(argv)
+    except Terminated:
+        sys.stderr.write("ur5fault: terminated\n")
+        return 128 + signal.SIGTERM
+    except KeyboardInterrupt:
+        sys.stderr.write("ur5fault: interrupted\n")
+        return 130
+
+
+def _run(argv: Sequence[str] | None) -> int:
+    """The command of ``argv``, its errors one line, under handlers that turn SIGTERM and Ctrl-C into exceptions
+    (:func:`main` prints them)."""
     import threading
 
     stopping = threading.Event()  # set by the handlers below: the executor's thread is then quiet
@@ -210,7 +224,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                         if signal.getsignal(signal.SIGINT) is signal.default_int_handler else None)
     except ValueError:  # not the main thread: leave signals alone
         previous = previous_int = None
-    try:  # the parser too: building it imports the command's modules, a command's first second
+    try:
         given = sys.argv[1:] if argv is None else argv
         args = build_parser(groups_needed(given)).parse_args(given)
         configure_logging(getattr(args, "verbose", 0))
@@ -225,12 +239,6 @@ def main(argv: Sequence[str] | None = None) -> int:
             raise
         return _one_line("a worker process died (killed, or out of memory); every result written before it is "
                          "kept: run the same command again to continue")
-    except Terminated:
-        sys.stderr.write("ur5fault: terminated\n")
-        return 128 + signal.SIGTERM
-    except KeyboardInterrupt:
-        sys.stderr.write("ur5fault: interrupted\n")
-        return 130
     finally:
         if not stopping.is_set():  # stopped: loky's thread may raise after main() returns, while the pool winds down
             threading.excepthook = hook
