@@ -141,6 +141,69 @@ def test_version_matches_installed_metadata():
     assert r.stdout.startswith(f"ur5fault {version('ur5fault')} (mujoco {version('mujoco')}")
 
 
+def test_each_command_group_registers_the_commands_the_table_names():
+    """cli.COMMAND_GROUPS, read to import only the chosen command's module, says what each module registers, in the
+    order of `ur5fault --help`."""
+    import argparse
+
+    from ur5fault.cli import COMMAND_GROUPS, build_parser
+
+    def commands(parser):
+        return [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)][0].choices
+
+    for group, names in COMMAND_GROUPS.items():
+        assert tuple(commands(build_parser([group]))) == names, group
+    assert tuple(commands(build_parser())) == sum(COMMAND_GROUPS.values(), ())
+
+
+@pytest.mark.parametrize("argv, groups", [(["--version"], ()), (["-vv", "--version", "simulate"], ()),
+                                          (["effects"], (".run_cli",)), (["-v", "--verbose", "plot", "x"],
+                                                                          (".campaign.cli",)),
+                                          (["monitor", "--version"], (".health.monitoring.cli",)),
+                                          ([], None), (["-h"], None), (["simul"], None), (["--verb", "show"], None),
+                                          (["-vh", "show"], None), (["--", "show"], None)])
+def test_a_command_line_imports_its_commands_module_alone(argv, groups):
+    """Only the chosen command's module is imported; whenever the choice is not plain (help, a misspelled
+    command, an abbreviated option before it), every group, so that argparse answers as before."""
+    from ur5fault.cli import COMMAND_GROUPS, groups_needed
+
+    assert groups_needed(argv) == (tuple(COMMAND_GROUPS) if groups is None else groups)
+
+
+@pytest.mark.parametrize("args, absent", [(["--version"], ("ur5fault.run_cli", "ur5fault.sim", "numpy")),
+                                          (["effects"], ("ur5fault.campaign", "ur5fault.discrepancy",
+                                                         "ur5fault.identify", "ur5fault.health", "scipy", "sklearn",
+                                                         "pandas", "matplotlib"))])
+def test_a_command_starts_without_the_other_commands_modules(args, absent):
+    """`ur5fault --version` and `ur5fault effects` took 2-3 s importing every command's modules (a newcomer
+    probe); the package's names are imported on first use."""
+    script = ("import sys\nfrom ur5fault.cli import main\n"
+              f"try:\n    main({args!r})\nexcept SystemExit:\n    pass\n"
+              f"print([m for m in sys.modules if m.split('.')[0] in {absent!r} or m.startswith({absent!r})])\n")
+    r = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0 and r.stdout.strip().splitlines()[-1] == "[]", (r.stdout, r.stderr)
+
+
+def test_the_command_line_module_imports_little_before_main():
+    """Until main() sets up its handlers, Ctrl-C prints a traceback: `import ur5fault.cli` (the console script's
+    first line) took 0.9 s importing the simulator, then 40 ms importing importlib.metadata for __version__."""
+    script = ("import sys\nbefore = set(sys.modules)\nimport ur5fault.cli\n"
+              "print(sorted(m for m in set(sys.modules) - before if m.startswith('ur5fault')))\n"
+              "new = set(sys.modules) - before\n"
+              "print([m for m in ('importlib.metadata', 'logging', 'numpy', 'subprocess') if m in new])\n")
+    r = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=120)
+    assert r.stdout.splitlines() == ["['ur5fault', 'ur5fault.cli', 'ur5fault.errors', 'ur5fault.util', "
+                                     "'ur5fault.util.usage']", "[]"], r.stderr
+
+
+def test_the_packages_names_are_there_on_first_use():
+    script = ("import ur5fault\nfrom ur5fault import *\n"
+              "print(sorted(ur5fault.__all__) == sorted(n for n in ur5fault.__all__ if n in globals()),\n"
+              "      ur5fault.Simulator.__module__, hasattr(ur5fault, 'nothing'), 'Simulator' in dir(ur5fault))\n")
+    r = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=120)
+    assert r.stdout.split() == ["True", "ur5fault.sim.engine", "False", "True"], r.stderr
+
+
 @pytest.mark.parametrize("where", ["before", "after"])
 def test_verbose_logs_through_logging(tmp_path, where):
     args = ["simulate", "--duration-s", "0.02", "--out", str(tmp_path / "r.parquet"), "--quiet"]

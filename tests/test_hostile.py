@@ -477,6 +477,53 @@ def test_once_stopped_the_executors_thread_prints_no_traceback():
     assert seen == ["ExecutorManagerThread", "Thread-mine"]
 
 
+@pytest.mark.parametrize("signame, line, status", [("SIGINT", "ur5fault: interrupted", 130),
+                                                    ("SIGTERM", "ur5fault: terminated", 143)])
+def test_a_stop_while_the_parser_is_built_is_one_line(signame, line, status):
+    """Ctrl-C or SIGTERM in a command's first second, while the parser imports the command's modules, printed a
+    KeyboardInterrupt traceback (`timeout -s INT 1 ur5fault --version`, a newcomer probe): the same one line, and
+    the same status, as a stop later on. The parser is held there (a stand-in waiting for the signal) so that the
+    signal lands inside it every time."""
+    import signal
+    import subprocess
+    import sys
+
+    script = ("import signal, sys, time\n"
+              "signal.signal(signal.SIGINT, signal.default_int_handler)\n"  # as in a terminal, not a background job
+              "from ur5fault import cli\n"
+              "def build_parser(*args, **kwargs):\n"
+              "    print('building', flush=True)\n"
+              "    time.sleep(60)\n"
+              "cli.build_parser = build_parser\n"
+              "sys.exit(cli.main(['--version']))\n")
+    proc = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True)
+    try:
+        assert proc.stdout.readline() == "building\n"
+        proc.send_signal(getattr(signal, signame))
+        err = proc.communicate(timeout=30)[1]
+    finally:
+        proc.kill()
+    assert (proc.returncode, err) == (status, line + "\n")
+
+
+@pytest.mark.parametrize("stop, line, status", [(KeyboardInterrupt, "ur5fault: interrupted", 130),
+                                                ("Terminated", "ur5fault: terminated", 143)])
+def test_a_stop_while_the_handlers_are_set_up_is_one_line(monkeypatch, capsys, stop, line, status):
+    """From main()'s first line: a stop before its handlers are in place (here: while the executor's thread hook
+    is made) was a traceback too."""
+    from ur5fault import cli
+
+    exc = cli.Terminated if stop == "Terminated" else stop
+
+    def stopped(*args, **kwargs):
+        raise exc()
+
+    monkeypatch.setattr(cli, "quiet_when_stopping", stopped)
+    assert cli.main(["--version"]) == status
+    assert capsys.readouterr().err == line + "\n"
+
+
 def _cmdline(pid: int) -> bytes:
     try:
         with open(f"/proc/{pid}/cmdline", "rb") as fh:

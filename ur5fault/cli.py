@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import argparse
 import functools
-import logging
+import importlib
 import signal
 import sys
 from collections.abc import Sequence
@@ -85,6 +85,8 @@ def _version() -> str:
 
 def configure_logging(verbosity: int) -> None:
     """Send the ``ur5fault`` loggers' records to stderr: WARNING by default, INFO at ``-v``, DEBUG at ``-vv``."""
+    import logging  # here, not at the top: imported before main(), a Ctrl-C in it would print a traceback
+
     logger = logging.getLogger("ur5fault")
     logger.setLevel(logging.WARNING if verbosity <= 0 else logging.INFO if verbosity == 1 else logging.DEBUG)
     if not any(getattr(h, "_ur5fault_cli", False) for h in logger.handlers):
@@ -94,35 +96,47 @@ def configure_logging(verbosity: int) -> None:
         logger.addHandler(handler)
 
 
-def build_parser() -> argparse.ArgumentParser:
+#: each command group's module and the commands it registers, in the order ``ur5fault --help`` lists them. A command
+#: line imports the module of its command alone: all of them took 2-3 s (scipy, scikit-learn, the simulator), more
+#: than ``ur5fault --version`` or ``ur5fault effects`` should wait
+COMMAND_GROUPS = {
+    ".run_cli": ("simulate", "effects", "show"),
+    ".campaign.cli": ("campaign", "plot"),
+    ".discrepancy.cli": ("discrepancy",),
+    ".identify.cli": ("identify",),
+    ".health.diagnostics.cli": ("benchmark",),
+    ".health.diagnosis.cli": ("diagnose",),
+    ".health.prognostics.cli": ("prognose",),
+    ".health.monitoring.cli": ("monitor",),
+}
+
+#: options of ``ur5fault`` itself that may stand before the command, spelled out (none takes a value)
+_LEADING = ("--verbose", "--version")
+
+
+def build_parser(groups: Sequence[str] | None = None) -> argparse.ArgumentParser:
+    """The parser of ``ur5fault`` with the commands of ``groups`` (keys of :data:`COMMAND_GROUPS`; default: all)."""
     p = _Parser(prog="ur5fault", description="UR5 fault-injection simulator")
     p.add_argument("--version", action="version", version=_version())
     sub = p.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     p.set_defaults(func=_usage(p))
-    _add_optional_commands(sub)
+    for group in COMMAND_GROUPS if groups is None else groups:
+        # imported directly: a broken module is an error, not a silently missing command
+        importlib.import_module(group, __package__).register(sub)
     return p
 
 
-def _add_optional_commands(sub) -> None:
-    """The command groups, each registering its own subcommands (imported directly: a broken module is an error,
-    not a silently missing command)."""
-    from . import run_cli
-    from .campaign import cli as campaign_cli
-    from .discrepancy import cli as discrepancy_cli
-    from .health.diagnosis import cli as diagnose_cli
-    from .health.diagnostics import cli as benchmark_cli
-    from .health.monitoring import cli as monitor_cli
-    from .health.prognostics import cli as prognose_cli
-    from .identify import cli as identify_cli
-
-    run_cli.register(sub)
-    campaign_cli.register(sub)
-    discrepancy_cli.register(sub)
-    identify_cli.register(sub)
-    benchmark_cli.register(sub)
-    diagnose_cli.register(sub)
-    prognose_cli.register(sub)
-    monitor_cli.register(sub)
+def groups_needed(argv: Sequence[str]) -> tuple[str, ...]:
+    """The command groups the command line ``argv`` needs: its command's alone, none for ``--version``; every group
+    when the command is not plain (``ur5fault --help``, a misspelled command, an abbreviated option before it), so
+    that argparse answers as it does with all of them."""
+    for arg in argv:
+        if arg == "--version":  # ends the parse before any command is looked at
+            return ()
+        if arg in _LEADING or (arg.startswith("-v") and set(arg[1:]) == {"v"}):
+            continue
+        return tuple(group for group, commands in COMMAND_GROUPS.items() if arg in commands) or tuple(COMMAND_GROUPS)
+    return tuple(COMMAND_GROUPS)
 
 
 def _one_line(message: str) -> int:
@@ -176,9 +190,19 @@ def _usage(parser: argparse.ArgumentParser):
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = build_parser()
-    args = parser.parse_args(argv)
-    configure_logging(getattr(args, "verbose", 0))
+    try:  # from the first line: a stop while the handlers are set up, or the parser built, is the same one line
+        return _run(argv)
+    except Terminated:
+        sys.stderr.write("ur5fault: terminated\n")
+        return 128 + signal.SIGTERM
+    except KeyboardInterrupt:
+        sys.stderr.write("ur5fault: interrupted\n")
+        return 130
+
+
+def _run(argv: Sequence[str] | None) -> int:
+    """The command of ``argv``, its errors one line, under handlers that turn SIGTERM and Ctrl-C into exceptions
+    (:func:`main` prints them)."""
     import threading
 
     stopping = threading.Event()  # set by the handlers below: the executor's thread is then quiet
@@ -201,6 +225,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except ValueError:  # not the main thread: leave signals alone
         previous = previous_int = None
     try:
+        given = sys.argv[1:] if argv is None else argv
+        args = build_parser(groups_needed(given)).parse_args(given)
+        configure_logging(getattr(args, "verbose", 0))
         return int(args.func(args) or 0)
     except Ur5FaultError as exc:
         return _one_line(str(exc))
@@ -212,12 +239,6 @@ def main(argv: Sequence[str] | None = None) -> int:
             raise
         return _one_line("a worker process died (killed, or out of memory); every result written before it is "
                          "kept: run the same command again to continue")
-    except Terminated:
-        sys.stderr.write("ur5fault: terminated\n")
-        return 128 + signal.SIGTERM
-    except KeyboardInterrupt:
-        sys.stderr.write("ur5fault: interrupted\n")
-        return 130
     finally:
         if not stopping.is_set():  # stopped: loky's thread may raise after main() returns, while the pool winds down
             threading.excepthook = hook

@@ -33,6 +33,7 @@ from .sim.params import RobotParams, deep_merge, load_params, read_yaml
 from .sim.runspec import MAX_SEED
 from .sim.trajectories import TRAJECTORIES, Trajectory, get_trajectory
 from .sim.trajectories.base import OPTION_RANGES
+from .sim.trajectories.fixed import check_speed_scale
 from .util.checks import check_int, check_number, short
 from .util.results import check_whole
 
@@ -161,6 +162,8 @@ def _trajectory_option(key: str, value: Any, where: str) -> Any:
                      for j, v in enumerate(value))
     if key == "seed":  # a trajectory family's seed (random_pick_and_place)
         return check_seed(value, where)
+    if key == "speed_scale":  # the API's message, its bound rounded alike and the reason for it given
+        return check_speed_scale(value, where)
     lo, hi, unit = TRAJECTORY_OPTIONS.get(key, (-math.inf, math.inf, ""))
     return check_number(value, where, lo, hi, unit)
 

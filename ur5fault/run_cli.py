@@ -288,8 +288,9 @@ def register(sub) -> None:
     e = sub.add_parser("effects", help="list the effect registry")
     e.set_defaults(func=cmd_effects)
     sh = sub.add_parser("show", help="draw one run: setpoint vs resolver, encoder mismatch, currents, TCP deviation")
-    sh.add_argument("target", help="a time-series Parquet file (from `simulate`, or a campaign's timeseries/), or the "
-                                   "run_id of a run in the campaign folder --campaign (re-simulated if not saved)")
+    sh.add_argument("target", help="a time-series Parquet or CSV file (from `simulate`, or a campaign's timeseries/), "
+                                   "or the run_id of a run in the campaign folder --campaign (re-simulated if not "
+                                   "saved)")
     sh.add_argument("--campaign", help="campaign output folder of a RUN_ID (default: this folder)")
     sh.add_argument("--out", help="PNG file (default: FILE.png beside the file, or CAMPAIGN/plots/show_RUN_ID.png)")
     sh.set_defaults(func=cmd_show)

@@ -175,6 +175,16 @@ def test_validation_before_any_simulation(spec, exc, message):
     assert "\n" not in str(info.value)
 
 
+@pytest.mark.parametrize("size, message", [
+    ({"log": [0.1, 20.0]}, "size 20 gives coulomb_friction.scale = 21, out of range [0, 10]"),
+    ([-1, 1], "-1.0 must be a positive number (scale deviation)")])
+def test_a_factors_size_is_refused_without_a_unit(size, message):
+    """A dimensionless size was refused as "out of range [0, 10] -" and "(scale deviation in -)"."""
+    with pytest.raises(ParameterError) as info:
+        build_campaign(sample_with(faults__coulomb_friction={"size": size, "direction": "up"}), "s.yaml")
+    assert str(info.value) == f"s.yaml: sample.faults.coulomb_friction.size: {message}"
+
+
 def test_distributions_map_the_unit_interval():
     assert parse_dist([1.0, 3.0], "x").value(0.5) == 2.0
     assert parse_dist({"log": [0.01, 1.0]}, "x").value(0.5) == pytest.approx(0.1)

@@ -44,7 +44,8 @@ def test_manifest_with_per_log_options(tmp_path):
 
 
 @pytest.mark.parametrize("text, message", [
-    ("logs: []\n", "'logs' must be a list of at least one log"),
+    ("logs: []\n", "robot.yaml: read as a manifest of logs (a .yaml or .yml file among the logs is one): 'logs' must "
+                   "be a list of at least one log ({path: FILE, ...} or FILE)"),
     ("logs: [a.csv]\nspeed: 3\n", "unknown key 'speed'"),
     ("format: rtde\nlogs: [{path: a.csv, payload: 1}]\n", "logs[0]: unknown key 'payload'"),
     # the manifest's key, not the command line's flag (was "logs[0]: --payload-kg applies to --format rtde only")
@@ -69,6 +70,35 @@ def test_bad_manifest_is_one_line(tmp_path, capsys, text, message):
     rc = main(["discrepancy", str(m), "--out", str(tmp_path / "o")])
     err = capsys.readouterr().err.strip().splitlines()
     assert rc == 2 and len(err) == 1 and message in err[0], err
+
+
+@pytest.mark.parametrize("command, options", [("identify", ["--out", "p.yaml"]), ("discrepancy", ["--out", "o"]),
+                                             ("monitor", ["--baseline", "ov.yaml", "--baseline-logs", "b.csv",
+                                                          "--format", "rtde", "--out", "o"]),
+                                             ("diagnose", ["--detector", "d", "--out", "o"])])
+def test_a_yaml_that_is_no_manifest_is_told_what_it_was_read_as(tmp_path, capsys, monkeypatch, command, options):
+    """A campaign's YAML given where a log goes was refused as `unknown key 'base' (keys: format, ...)`, leaving the
+    user to guess what those keys belong to (a newcomer probe); every command that takes logs says it alike."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "campaign.yaml").write_text("name: c\nbase: {duration_s: 1}\nsweep: {backlash.joint: [2]}\n")
+    (tmp_path / "ov.yaml").write_text("params: {}\n")
+    assert main([command, "campaign.yaml", *options]) == 2
+    assert capsys.readouterr().err == ("ur5fault: error: campaign.yaml: read as a manifest of logs (a .yaml or .yml "
+                                       "file among the logs is one): unknown key 'base' (keys: format, payload_kg, "
+                                       "tcp_offset_m, logs)\n")
+
+
+def test_diagnose_and_show_say_what_they_read():
+    """`diagnose --help` called its log a "measured log file" (a manifest naming one is read too), `show --help` a
+    Parquet file (CSV is read too)."""
+    from ur5fault.cli import build_parser
+
+    def help_of(command: str, dest: str) -> str:
+        sub = [a for a in build_parser()._actions if isinstance(a, argparse._SubParsersAction)][0].choices[command]
+        return next(a.help for a in sub._actions if a.dest == dest)
+
+    assert help_of("diagnose", "log") == "measured log file, or a YAML manifest of logs that names one"
+    assert help_of("show", "target").startswith("a time-series Parquet or CSV file (from `simulate`")
 
 
 def test_manifest_takes_the_command_lines_values_under_the_flags_names(tmp_path, capsys):

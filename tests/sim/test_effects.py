@@ -34,6 +34,16 @@ def test_a_sizeless_effect_is_refused_from_python_as_from_yaml():
         make_effect("payload", where="here")
 
 
+def test_a_factors_range_is_written_without_a_unit():
+    """A dimensionless size's unit "-" was written in the messages: `give scale [0..10 -]`, `[0, 10] -`."""
+    with pytest.raises(ParameterError) as e:
+        make_effect("coulomb_friction", "elbow")
+    assert str(e.value) == "effect 'coulomb_friction' has no size; give scale [0..10]"
+    with pytest.raises(ParameterError) as e:
+        make_effect("coulomb_friction", "elbow", scale=11)
+    assert str(e.value) == "coulomb_friction.scale = 11 is out of range [0, 10]"
+
+
 def test_numpy_scalars_are_sizes_and_joints():
     e = make_effect("backlash", np.int64(2), backlash_deg=np.float32(0.5))
     assert e == make_effect("backlash", 2, backlash_deg=0.5) and type(e.value("backlash_deg")) is float

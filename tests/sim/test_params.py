@@ -37,6 +37,9 @@ def test_out_of_range_message_names_field_value_and_range():
     with pytest.raises(ParameterError) as e:
         load_params(overrides={"gear": {"backlash_rad": [0, -0.01, 0, 0, 0, 0]}})
     assert str(e.value) == "ur5_drive.yaml.gear.backlash_rad[2] = -0.01 is out of range [0, 0.1] rad"
+    with pytest.raises(ParameterError) as e:  # a ratio has no unit (its "-" was written: "[1, 1000] -")
+        load_params(overrides={"gear": {"ratio": 0}})
+    assert str(e.value) == "ur5_drive.yaml.gear.ratio = 0 is out of range [1, 1000]"
 
 
 def test_unknown_key_lists_valid_keys():

@@ -257,6 +257,18 @@ def test_speed_scale_has_one_range_up_to_the_ur5_maximum_joint_speed():
             build(speed_scale=3.5)
 
 
+def test_a_yaml_speed_scale_is_refused_as_the_api_refuses_it():
+    """A run file's `trajectory: {speed_scale: 0}` said `out of range [0.05, 3.00057] -` (a bare unit of a factor,
+    and a bound the API writes 3.001): the API's one message, under the YAML key."""
+    why = "(the UR5's maximum joint speed, 3.142 rad/s, over the controller default 1.047 rad/s)"
+    with pytest.raises(ParameterError) as e:
+        parse_trajectory({"name": "pick_and_place", "speed_scale": 0}, "run.yaml: trajectory")
+    assert str(e.value) == f"run.yaml: trajectory.speed_scale = 0 is out of range [0.05, 3.001] {why}"
+    with pytest.raises(ParameterError) as e:
+        pick_and_place(speed_scale=0)
+    assert str(e.value) == f"speed_scale = 0 is out of range [0.05, 3.001] {why}"
+
+
 # ----------------------------------------------------------------------------- bad input, refused at construction
 Q0 = np.zeros(6)
 

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from ur5fault.errors import ParameterError
-from ur5fault.util.checks import check_bool, check_count, check_int, check_number, check_text
+from ur5fault.util.checks import check_bool, check_count, check_int, check_number, check_text, range_text
 
 
 @pytest.mark.parametrize("value", [np.float64(0.5), np.float32(0.5), np.float16(0.5)])
@@ -56,3 +56,12 @@ def test_numpy_values_refused_as_python_ones_are():
 def test_numpy_string_is_text():
     out = check_text(np.str_("abc"), "name")
     assert out == "abc" and type(out) is str
+
+
+def test_a_range_of_a_factor_has_no_unit():
+    """A dimensionless unit "-" ended messages as `[0, 10] -`, read as a line cut off."""
+    assert range_text(0, 10, "-") == range_text(0, 10) == "[0, 10]"
+    assert range_text(0, 3600, "s", lo_open=True) == "(0, 3600] s"
+    with pytest.raises(ParameterError) as e:
+        check_number(11, "x", 0, 10, "-")
+    assert str(e.value) == "x = 11 is out of range [0, 10]"

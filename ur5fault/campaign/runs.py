@@ -190,5 +190,5 @@ def _check_fault_keys(swept: Sequence[str], where: str) -> None:
         if REGISTRY[name].per_joint and f"{name}.joint" not in swept:
             raise ParameterError(f"{where}: sweep of effect {name!r} needs '{name}.joint' (list of joints 1..6)")
         if swept.count(f"{name}.joint") and not [k for k in swept if k.startswith(f"{name}.") and k != f"{name}.joint"]:
-            sizes = ", ".join(f"'{name}.{p.name}' [{p.unit}]" for p in REGISTRY[name].params)
+            sizes = ", ".join(f"'{name}.{p.name}'{p.unit_text(' [{}]')}" for p in REGISTRY[name].params)
             raise ParameterError(f"{where}: sweep of effect {name!r} gives joints but no size; sweep {sizes} too")

@@ -108,12 +108,13 @@ def _parse_kind(name: str, spec: Any, where: str) -> FaultKind:
         raise UnknownNameError("direction", direction, DIRECTIONS, f"{where}.direction")
     for s in size.bounds():
         if isinstance(s, bool) or not isinstance(s, (int, float)) or s <= 0:
-            raise ParameterError(f"{where}.size: {s!r} must be a positive number ({p.name} deviation in {p.unit})")
+            raise ParameterError(f"{where}.size: {s!r} must be a positive number ({p.name} deviation"
+                                 f"{p.unit_text(' in {}')})")
         for sign in _signs(direction):
             v = p.absent + sign * s
             if not p.lo <= v <= p.hi:
                 raise ParameterError(f"{where}.size: size {s:g} gives {name}.{p.name} = {v:g}, out of range "
-                                     f"[{p.lo:g}, {p.hi:g}] {p.unit}")
+                                     f"{p.range_text()}")
     return FaultKind(name, float(w), size, p, str(direction))
 
 

@@ -55,9 +55,9 @@ def sentence(f: Finding) -> str:
     c = f.candidate
     amp, lo, hi = _amplitude(f)
     if isinstance(c, LibraryCandidate):
-        unit = REGISTRY[c.effect].param(c.param).unit
+        unit = REGISTRY[c.effect].param(c.param).unit_text()  # none for a factor: "scale 1.5 - (...)" read oddly
         a, b = sorted((c.value(lo), c.value(hi)))
-        text = (f"{c.where}: {REGISTRY[c.effect].doc} - {c.param} {c.value(f.theta):.4g} {unit} "
+        text = (f"{c.where}: {REGISTRY[c.effect].doc} - {c.param} {c.value(f.theta):.4g}{unit} "
                 f"({a:.4g}..{b:.4g})")
         if (c.effect, c.param) == ("payload", "mass_kg"):  # the job's, stated by the user: which the log contradicts
             text += (f", where {c.x0:g} kg was stated: check the payload given (--payload-kg, a manifest's "

@@ -43,6 +43,8 @@ from .same_samples import refuse_same_samples
 MANIFEST_SUFFIXES = (".yaml", ".yml")
 MANIFEST_KEYS = ("format", "payload_kg", "tcp_offset_m", "logs")
 LOG_KEYS = ("path", "format", "payload_kg", "tcp_offset_m", "hold_out")
+#: what a refused manifest's first words say it was taken for
+READ_AS_MANIFEST = "read as a manifest of logs (a .yaml or .yml file among the logs is one)"
 #: the value of ``--payload-kg`` / ``payload_kg`` that declares a log's payload unknown (fitted by discrepancy
 #: and identify)
 UNKNOWN = "unknown"
@@ -64,7 +66,7 @@ def add_log_options(parser: argparse.ArgumentParser, formats: Sequence[str], *, 
     record; ``hold_out``: also ``--hold-out LOG ...`` (runs held out whole)."""
     parser.add_argument("log", nargs="+" if several else None,
                         help="measured log file(s) of one robot, or one YAML manifest of logs"
-                        if several else "measured log file")
+                        if several else "measured log file, or a YAML manifest of logs that names one")
     parser.add_argument("--format", choices=tuple(formats), dest="fmt",
                         help="log format: " + ", ".join(formats) + " (required unless a manifest names it)")
     parser.add_argument("--payload-kg", type=payload_kg_arg,
@@ -183,7 +185,7 @@ def _manifest(path: Path, args: argparse.Namespace, held: Sequence[str], used: s
     """The logs of the manifest ``path``, then the command line's ``held`` (``--hold-out``; paths as given, each
     with the manifest's defaults); ``used`` collects the command-line options some log took."""
     data = read_yaml(path)
-    where = f"{path.name}: "
+    where = f"{path.name}: {READ_AS_MANIFEST}: "  # a campaign's YAML given by mistake is told what it was read as
     bad = sorted(set(data) - set(MANIFEST_KEYS))
     if bad:
         raise ParameterError(f"{where}unknown key {bad[0]!r} (keys: {', '.join(MANIFEST_KEYS)})")

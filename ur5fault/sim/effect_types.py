@@ -7,6 +7,7 @@ from __future__ import annotations
 import dataclasses
 
 from ..errors import ParameterError, UnknownNameError
+from ..util.checks import DIMENSIONLESS, range_text
 from .interfaces import EffectApplier
 
 
@@ -23,7 +24,11 @@ class EffectParam:
 
     def range_text(self) -> str:
         """``[lo, hi] unit`` as messages write it (a factor's unit ``-`` left out: it read as a line cut off)."""
-        return f"[{self.lo:g}, {self.hi:g}]" + ("" if self.unit in ("", "-") else f" {self.unit}")
+        return range_text(self.lo, self.hi, self.unit)
+
+    def unit_text(self, form: str = " {}") -> str:
+        """The unit in ``form`` as messages write it (`` [{}]``: `` [deg]``); nothing for a factor (unit ``-``)."""
+        return "" if self.unit in DIMENSIONLESS else form.format(self.unit)
 
 
 @dataclasses.dataclass(frozen=True)

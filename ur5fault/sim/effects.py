@@ -109,7 +109,7 @@ def effect_of(name: str, joint: int | str | None, values: Mapping[str, Any], whe
             raise ParameterError(f"{loc}effect {name!r} acts on the whole robot and takes no joint")
         j = None
     if eff.params and not values:  # a fault of size 0 is no fault: say which size
-        sizes = ", ".join(f"{p.name} [{p.lo:g}..{p.hi:g} {p.unit}]" for p in eff.params)
+        sizes = ", ".join(f"{p.name} [{p.lo:g}..{p.hi:g}{p.unit_text()}]" for p in eff.params)
         raise ParameterError(f"{loc}effect {name!r} has no size; give {sizes}")
     known = {p.name: p for p in eff.params}
     out = []
@@ -118,7 +118,7 @@ def effect_of(name: str, joint: int | str | None, values: Mapping[str, Any], whe
             raise UnknownNameError(f"parameter of effect {name!r}", key, known, where)
     for p in eff.params:
         if p.name not in values and p.absent is None:
-            raise ParameterError(f"{loc}effect {name!r} needs a value for {p.name!r} [{p.unit}]")
+            raise ParameterError(f"{loc}effect {name!r} needs a value for {p.name!r} in {p.range_text()}")
         v = values.get(p.name, p.absent)
         if not is_real(v) or not math.isfinite(float(v)):
             raise ParameterError(f"{loc}{name}.{p.name} = {v!r} must be a number in {p.range_text()}")

@@ -15,7 +15,7 @@ from collections.abc import Mapping
 from typing import Any, TypeVar
 
 from ..errors import ParameterError, UnknownNameError
-from ..util.checks import is_real, short
+from ..util.checks import is_real, range_text, short
 from .axes import N_JOINTS
 
 T = TypeVar("T", bound="Validated")
@@ -61,9 +61,7 @@ def declared_range(cls: type, name: str) -> tuple[float, float]:
 
 
 def _range_text(meta: Mapping[str, Any]) -> str:
-    lo, hi = meta["lo"], meta["hi"]
-    left = "(" if meta.get("lo_open") else "["
-    return f"{left}{lo:g}, {hi:g}] {meta['unit']}".rstrip()
+    return range_text(meta["lo"], meta["hi"], meta["unit"], bool(meta.get("lo_open")))
 
 
 def _check_scalar(where: str, value: Any, meta: Mapping[str, Any]) -> Any:

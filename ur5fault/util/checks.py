@@ -42,14 +42,21 @@ def as_bool(value: Any) -> bool | None:
     return bool(value) if isinstance(value, (bool, np.bool_)) else None
 
 
-def _range(lo: float, hi: float, unit: str, lo_open: bool) -> str:
-    return f"{'(' if lo_open else '['}{lo:g}, {hi:g}] {unit}".rstrip()
+#: the units of a number without one (a factor, a share, a ratio), which messages leave out: ``[0, 10] -`` read as
+#: a line cut off
+DIMENSIONLESS = ("", "-")
+
+
+def range_text(lo: float, hi: float, unit: str = "", lo_open: bool = False) -> str:
+    """``[lo, hi] unit`` (``(lo, hi] unit`` with ``lo_open``) as messages write a valid range; a dimensionless unit
+    (:data:`DIMENSIONLESS`) left out."""
+    return f"{'(' if lo_open else '['}{lo:g}, {hi:g}]" + ("" if unit in DIMENSIONLESS else f" {unit}")
 
 
 def check_number(value: Any, where: str, lo: float = -math.inf, hi: float = math.inf, unit: str = "", *,
                  lo_open: bool = False) -> float:
     """A finite real number in ``[lo, hi]`` (``(lo, hi]`` with ``lo_open``); ints are accepted."""
-    rng = _range(lo, hi, unit, lo_open)
+    rng = range_text(lo, hi, unit, lo_open)
     if not is_real(value):
         raise ParameterError(f"{where} = {short(value)} must be a number in {rng}")
     try:
