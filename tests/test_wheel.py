@@ -30,7 +30,12 @@ pytestmark = pytest.mark.slow
 
 #: what the wheel must carry besides the Python modules
 PACKAGE_DATA = ("ur5fault/models/ur5.xml", "ur5fault/data/ur5_drive.yaml", "ur5fault/py.typed",
-                *(f"ur5fault/campaigns/{name}.yaml" for name in ("default", "paper", "diagnostics")))
+                *(f"ur5fault/campaigns/{name}.yaml" for name in ("default", "paper", "diagnostics")),
+                # the real logs (`ur5fault data`), their READMEs and the Kufieta licence
+                "ur5fault/data/nist-ur5/ur5testresult_halfspeed_payload1.6lb_1.csv.gz",
+                "ur5fault/data/nist-ur5/README.md",
+                "ur5fault/data/kufieta-ur5/TEST.csv.gz", "ur5fault/data/kufieta-ur5/README.md",
+                "ur5fault/data/kufieta-ur5/LICENSE-Apache-2.0.txt")
 #: the pages whose command blocks a wheel user follows literally
 DOCS = (REPO / "README.md", REPO / "docs" / "usage.md")
 #: shortened durations: (command, what is added to it); the documented command itself is run unchanged otherwise
