@@ -80,6 +80,25 @@ def test_effects_lists_registry():
     assert len(starts) == 1, starts
 
 
+def test_data_lists_the_shipped_logs_and_prints_a_path_for_the_shell():
+    """A wheel user had no real log to try identify or discrepancy on: `ur5fault data` names them, `data NAME` prints
+    the path(s), one per line, and an unknown name is one line listing the names."""
+    from pathlib import Path
+
+    r = run("data")
+    assert r.returncode == 0 and r.stdout.startswith("nist ") and "--format nist" in r.stdout
+    assert "kufieta/TEST " in r.stdout and "--format rtde --tcp-offset-m 0 0 0" in r.stdout
+    r = run("data", "nist")
+    path = Path(r.stdout.strip())
+    assert r.returncode == 0 and path.name == "ur5testresult_halfspeed_payload1.6lb_1.csv.gz" and path.is_file()
+    r = run("data", "kufieta")
+    assert r.returncode == 0 and len(r.stdout.splitlines()) == 9
+    assert all(Path(line).is_file() for line in r.stdout.splitlines())
+    r = run("data", "kufieta/No1")
+    assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1
+    assert "unknown shipped log 'kufieta/No1' (did you mean" in r.stderr
+
+
 def test_discrepancy_bad_input(tmp_path):
     r = run("discrepancy", str(tmp_path / "nope.csv"), "--format", "rtde", "--out", str(tmp_path / "o"))
     assert r.returncode == 2 and "no such file" in r.stderr and len(r.stderr.strip().splitlines()) == 1
@@ -124,7 +143,7 @@ def test_refusals_name_what_the_user_typed(tmp_path):
                             "0", "0", "0", *opt, "--out", out), text)
 
 
-@pytest.mark.parametrize("args, commands", [((), "(simulate, effects, show, campaign,"),
+@pytest.mark.parametrize("args, commands", [((), "(simulate, effects, data, show, campaign,"),
                                             (("campaign",), "(run, status)")])
 def test_a_group_without_its_command_ends_its_help_with_one_error_line(args, commands):
     r = run(*args)

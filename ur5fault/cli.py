@@ -100,7 +100,7 @@ def configure_logging(verbosity: int) -> None:
 #: line imports the module of its command alone: all of them took 2-3 s (scipy, scikit-learn, the simulator), more
 #: than ``ur5fault --version`` or ``ur5fault effects`` should wait
 COMMAND_GROUPS = {
-    ".run_cli": ("simulate", "effects", "show"),
+    ".run_cli": ("simulate", "effects", "data", "show"),
     ".campaign.cli": ("campaign", "plot"),
     ".discrepancy.cli": ("discrepancy",),
     ".identify.cli": ("identify",),

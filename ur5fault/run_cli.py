@@ -199,6 +199,23 @@ def cmd_effects(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_data(args: argparse.Namespace) -> int:
+    """The shipped real logs: a table of them, or the path(s) of one (or of a group), one per line for the shell."""
+    from .logs.shipped import shipped_log, shipped_logs
+
+    if args.name is not None:
+        print("\n".join(str(lg.path) for lg in shipped_log(args.name)))
+        return 0
+    logs = shipped_logs().values()
+    width = max(len(lg.name) for lg in logs)
+    for lg in logs:
+        opts = " ".join(("--format", lg.format, *lg.options))
+        print(f"{lg.name:{width}s}  {opts:38s}  {lg.about}")
+    print(f"\nin {next(iter(logs)).path.parent.parent} (a README per folder); the path of one: ur5fault data NAME, "
+          "e.g. ur5fault identify $(ur5fault data nist) --format nist --out params.yaml")
+    return 0
+
+
 def cmd_show(args: argparse.Namespace) -> int:
     from .errors import ConfigFileError
     from .logs.readers import RESIMULATE
@@ -287,6 +304,11 @@ def register(sub) -> None:
     s.set_defaults(func=cmd_simulate)
     e = sub.add_parser("effects", help="list the effect registry")
     e.set_defaults(func=cmd_effects)
+    d = sub.add_parser("data", help="the real UR5 logs shipped with ur5fault (NIST CB3, Kufieta CB2): names, formats, "
+                                    "paths")
+    d.add_argument("name", nargs="?", help="print the path of this log (or of every run of a group, one per line), "
+                                           "e.g. nist, kufieta/TEST, kufieta")
+    d.set_defaults(func=cmd_data)
     sh = sub.add_parser("show", help="draw one run: setpoint vs resolver, encoder mismatch, currents, TCP deviation")
     sh.add_argument("target", help="a time-series Parquet or CSV file (from `simulate`, or a campaign's timeseries/), "
                                    "or the run_id of a run in the campaign folder --campaign (re-simulated if not "
