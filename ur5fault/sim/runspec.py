@@ -20,7 +20,11 @@ class RunSpec:
             run's metadata, and keeps the batch's order (``SimResult.run_ids``), so an index finds a run too.
             It is a label, not an input: two runs that differ only in run_id simulate the same numbers.
         seed: the noise seed, an integer in ``[0, MAX_SEED]`` (a numpy integer is made a Python int).
-        effects: the run's effects, each built with :func:`~ur5fault.sim.effects.make_effect`.
+        effects: the run's effects, each built with :func:`~ur5fault.sim.effects.make_effect`, applied in order:
+            the same effect given twice on one joint is not refused here (a campaign puts its faults on top of a
+            model overlay's on purpose): one that sets a value (``backlash``) keeps the last, one that scales
+            (``coulomb_friction``) compounds (1.5 then 2.0 is 3.0). The command line and YAML files refuse such a
+            repeat (``ur5fault.config.refuse_repeats``); call it on your effects for the same check.
 
     :meth:`ur5fault.sim.engine.Simulator.run` checks all three before simulating and refuses a bad one by name.
     """
