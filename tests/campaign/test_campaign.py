@@ -742,3 +742,14 @@ def test_the_acceptable_backlash_is_printed_as_a_reader_takes_it():
                          index=["1 a", "2 b", "3 c"])
     acceptable = pd.Series({"1 a": 0.05, "2 b": 0.0, "3 c": np.nan}, name="x")
     assert acceptable_backlash_text(acceptable, table).to_dict() == {"1 a": "0.05", "2 b": "< 0.05", "3 c": "none"}
+
+
+@pytest.mark.parametrize("name", ["../../evil", "a/../../b", "..", "/tmp/evil"])
+def test_a_campaign_name_making_its_folder_stays_inside_results(name):
+    """`name: ../../evil` without out: wrote the runs two folders above results/ (a newcomer probe). Refused where the
+    name makes the folder; a subfolder name stays inside results/, and out: or --out takes any name."""
+    with pytest.raises(ParameterError, match=r"^c.yaml: name = .* must name a folder inside results/ \(no \.\. part"):
+        build_campaign({"name": name}, "c.yaml")
+    assert str(build_campaign({"name": "study/v1"}, "c.yaml").out) == "results/study/v1"
+    assert str(build_campaign({"name": name, "out": "here"}, "c.yaml").out) == "here"
+    assert str(build_campaign({"name": name}, "c.yaml", out="cli").out) == "cli"

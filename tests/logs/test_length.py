@@ -60,11 +60,11 @@ def test_the_estimate_from_the_first_64_kB_is_close_to_the_row_count(hour_log):
         check_files_length([hour_log], "identify")
 
 
-def _log(name, seconds, period_s):
+def _log(name, seconds, period_s, simulated=True):
     from types import SimpleNamespace
 
     import numpy as np
-    return SimpleNamespace(source=name, t_s=np.arange(0.0, seconds, period_s), period_s=period_s)
+    return SimpleNamespace(source=name, t_s=np.arange(0.0, seconds, period_s), period_s=period_s, simulated=simulated)
 
 
 def test_several_short_logs_too_long_together_are_told_to_come_fewer_not_cut():
@@ -81,6 +81,10 @@ def test_several_short_logs_too_long_together_are_told_to_come_fewer_not_cut():
     assert "or log at a UR controller's 125 Hz (`ur5fault simulate --log-period-s 0.008`: 311 s)" in msg
     assert "cut the log" not in msg
     check_logs_length([_log(f"h{i}.parquet", 13.0, 0.008) for i in range(3)], "monitor")  # the same at 125 Hz: fine
+    real = [_log(f"r{i}.csv", 13.0, 1e-3, simulated=False) for i in range(3)]  # a real robot's 1 kHz log: no simulate
+    with pytest.raises(LogFormatError) as e:
+        check_logs_length(real, "monitor")
+    assert "simulate" not in str(e.value) and str(e.value).endswith("(the limit is for all of them together)")
 
 
 def test_one_log_too_long_at_125_hz_is_told_to_be_cut_without_a_rate_advice():

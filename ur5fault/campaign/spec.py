@@ -245,7 +245,7 @@ def build_campaign(data: Mapping[str, Any], where: str, text: str = "", path: Pa
     com_twins = check_bool(data.get("twin_com_twins", False), f"{where}: twin_com_twins")
     if com_twins and not twin_res:
         raise ParameterError(f"{where}: twin_com_twins needs twin_residuals: true (they are the twin fits' columns)")
-    name = check_name(data["name"], f"{where}: name") if data.get("name") is not None else (
+    name = check_text(data["name"], f"{where}: name") if data.get("name") is not None else (
         path.stem if path else "campaign")
     out_dir = out_folder(data, where, out, name)
     resolved = {**dict(data), "base": {**dict(base), "params": params}}
@@ -288,10 +288,11 @@ def _base_and_swept(base_effects: tuple[EffectSpec, ...], model_effects: int, ru
 def out_folder(data: Mapping[str, Any], where: str, out: str | Path | None, name: str) -> Path:
     """The folder a campaign (or life campaign) file runs into: ``out`` given on the command line, else the file's
     ``out:`` (a non-empty one-line text: a number, a list or ``""``, the working folder itself, refused), else
-    ``results/NAME``."""
+    ``results/NAME`` (the name then checked to stay inside results/: :func:`~ur5fault.util.checks.check_name`)."""
     file_out = check_text(data["out"], f"{where}: out", max_len=4096) if data.get("out") is not None else None
     out = out if out is not None else file_out
-    return Path(out) if out is not None else Path("results") / name
+    # the name makes the folder only here: checked here (a stored folder's manifest is rebuilt with its out)
+    return Path(out) if out is not None else Path("results") / check_name(name, f"{where}: name")
 
 
 def _base_conditions(data: Mapping[str, Any], base: Mapping[str, Any], where: str) -> dict[str, Any]:

@@ -44,10 +44,10 @@ ESTIMATE_MARGIN = 1.2
 
 
 def _too_long(names: Sequence[str], rows: float, seconds: float | None, period_s: float | None,
-              command: str) -> LogFormatError:
+              command: str, simulated: bool = False) -> LogFormatError:
     """The one line that refuses logs of ``rows`` samples together: one log is cut into pieces; several logs
-    are too many at once (each may be short: the limit holds for the samples fitted together); a log sampled
-    faster than a UR controller's 125 Hz (a simulated log at 1 ms) can be written at that rate instead."""
+    are too many at once (each may be short: the limit holds for the samples fitted together); ``simulated`` logs
+    sampled faster than a UR controller's 125 Hz (``simulate``'s 1 ms) can be written at that rate instead."""
     period = period_s or UR_TICK_S
     length = f" ({seconds:.0f} s)" if seconds else ""
     rate = "at this rate" if period_s else f"at {1 / UR_TICK_S:.0f} Hz"
@@ -56,7 +56,7 @@ def _too_long(names: Sequence[str], rows: float, seconds: float | None, period_s
             f"{len(names)} logs ({', '.join(names)})"[:200] + f": about {rows:.4g} samples together{length}")
     fix = (f"cut the log into pieces of at most {limit_s:.0f} s" if len(names) == 1 else
            "give fewer or shorter logs at once (the limit is for all of them together)")
-    if period_s and period_s < 0.9 * UR_TICK_S:
+    if simulated and period_s and period_s < 0.9 * UR_TICK_S:
         fix += (f", or log at a UR controller's {1 / UR_TICK_S:.0f} Hz (`ur5fault simulate --log-period-s "
                 f"{UR_TICK_S:g}`: {MAX_FIT_SAMPLES * UR_TICK_S:.0f} s)")
     return LogFormatError(
@@ -81,4 +81,5 @@ def check_logs_length(logs: Sequence[MeasuredLog], command: str) -> None:
     n = sum(lg.t_s.size for lg in logs)
     if n > MAX_FIT_SAMPLES:
         seconds = sum(float(lg.t_s[-1] - lg.t_s[0]) + lg.period_s for lg in logs)
-        raise _too_long([lg.source for lg in logs], n, seconds, logs[0].period_s, command)
+        raise _too_long([lg.source for lg in logs], n, seconds, logs[0].period_s, command,
+                        all(lg.simulated for lg in logs))

@@ -106,10 +106,13 @@ def check_text(value: Any, where: str, max_len: int = 200) -> str:
 
 
 def check_name(value: Any, where: str) -> str:
-    """A campaign's (or life campaign's) name: one-line text that is a name, not a path, since it names the default
-    results folder ``results/NAME`` (``../x`` or ``a/b`` would write elsewhere than the name says)."""
+    """A campaign's (or life campaign's) name: one-line text naming a folder inside ``results/``, the default
+    folder ``results/NAME`` (``study/v1`` is one; ``../x`` or an absolute path would write elsewhere than
+    results/, and a name of dots into results/ itself)."""
     name = check_text(value, where)
-    if "/" in name or "\\" in name or name.strip(". ") == "":
-        raise ParameterError(f"{where} = {short(value)} must be a name, not a path (no / or \\, not . or ..): it "
-                             "names the results folder results/NAME; give out: or --out for a folder elsewhere")
+    parts = name.replace("\\", "/").split("/")
+    if name.startswith(("/", "\\")) or name[1:2] == ":" or ".." in parts or all(p.strip(". ") == "" for p in parts):
+        raise ParameterError(f"{where} = {short(value)} must name a folder inside results/ (no .. part, not an "
+                             "absolute path, not only dots): the default folder is results/NAME; for a folder "
+                             "elsewhere give out: or --out")
     return name

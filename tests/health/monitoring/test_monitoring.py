@@ -5,6 +5,7 @@ undisturbed rest consistent with its first part."""
 
 import dataclasses
 import json
+import math
 import zlib
 
 import numpy as np
@@ -143,6 +144,9 @@ def test_a_baseline_too_short_to_see_a_change_says_so():
     weak = [n for n in out["notes"] if n.startswith("changes are judged against 2 block(s) of 5 s")]
     assert len(weak) == 1 and "give longer or more baseline runs" in weak[0], out["notes"]
     bar_sd = float(weak[0].split("a change must lie ")[1].split(" standard")[0])
+    # Student's t with one degree of freedom at the normal's 4-sigma tail, in closed form: cot(pi p)
+    p = 0.5 * math.erfc(4.0 / math.sqrt(2.0))
+    assert bar_sd == pytest.approx(1.0 / math.tan(math.pi * p), rel=5e-3)  # printed to 3 digits
     assert bar_sd > WEAK_BAR_FACTOR * 4.0
     n = 2500
     steady = fit_baseline([offset_run(f"s{k}", np.full(n, -0.10), k) for k in range(3)], "sha")

@@ -63,12 +63,15 @@ def test_a_life_files_out_must_be_a_folder_name(out):
     assert str(build_life({**BASE, "out": "fleets/a"}, "t", out="cli").out) == "cli"  # the command line first
 
 
-@pytest.mark.parametrize("name", ["../../evil", "fleets/a", "..", "a\\b"])
-def test_a_life_files_name_is_a_name_not_a_path(name):
-    """The name is the default folder results/NAME: ``../../evil`` wrote the fleet two folders above results/."""
-    with pytest.raises(ParameterError, match=r"^t: name = .* must be a name, not a path"):
+@pytest.mark.parametrize("name", ["../../evil", "a/../../b", "..", "/tmp/fleet"])
+def test_a_life_files_name_keeps_its_default_folder_inside_results(name):
+    """The name is the default folder results/NAME: ``../../evil`` wrote the fleet two folders above results/. A name
+    with a subfolder stays inside it, and any name goes where out: or --out sends the fleet."""
+    with pytest.raises(ParameterError, match=r"^t: name = .* must name a folder inside results/"):
         build_life({**BASE, "name": name}, "t")
     assert str(build_life({**BASE, "name": "fleet.v2"}, "t").out) == "results/fleet.v2"
+    assert str(build_life({**BASE, "name": "study/v1"}, "t").out) == "results/study/v1"
+    assert str(build_life({**BASE, "name": name}, "t", out="cli").out) == "cli"
 
 
 def test_cli_bad_life_file_is_one_line_exit_2(tmp_path, capsys):

@@ -114,13 +114,19 @@ def judge_changes(baseline: Baseline, obs: Observed, over: NDArray) -> list[dict
     (:mod:`.changes`); elsewhere the whole part by the latter. Per joint the change furthest beyond its bar. Where
     both tests judge the log, a change is flagged when either finds one, so each spends half the false-alarm
     probability (Bonferroni: :func:`.changes.bar`'s ``share``)."""
+    return _judge_changes(baseline, obs, over)[0]
+
+
+def _judge_changes(baseline: Baseline, obs: Observed, over: NDArray) -> tuple[list[dict], str | None, float]:
+    """:func:`judge_changes`, with how the block test judged the log: ``("all" | "rest" | None, share)`` (the whole
+    part, the part beside a paired run, or not at all; the false-alarm share it spent)."""
     m = obs.e.shape[0]
     logged, keep = obs.logged[:m], keep_mask(obs, over)
     ref = paired_reference(baseline, obs)
     if ref is None:
         every = estimates(obs, logged)
         return find_changes(obs, every, estimates(obs, keep) if over.any() else every,
-                            block_reference(baseline.candidates))
+                            block_reference(baseline.candidates)), "all", 1.0
     on = paired.difference(obs, ref)[1]
     rest = logged & ~on
     both = rest.sum() * obs.period_s >= BLOCK_S  # shorter, its estimate holds more of the model's error than a block
@@ -129,11 +135,12 @@ def judge_changes(baseline: Baseline, obs: Observed, over: NDArray) -> list[dict
     stats = paired.for_log(baseline.paired_candidates, float((keep & on).sum() * obs.period_s))
     found = find_changes(obs, every, paired.estimates(obs, ref, keep) if over.any() else every, stats, "paired",
                          share)
-    if both:
-        every = estimates(obs, rest)
-        found = strongest(found, find_changes(obs, every, estimates(obs, keep & ~on) if over.any() else every,
-                                              block_reference(baseline.candidates), share=share))
-    return found
+    if not both:
+        return found, None, share
+    every = estimates(obs, rest)
+    found = strongest(found, find_changes(obs, every, estimates(obs, keep & ~on) if over.any() else every,
+                                          block_reference(baseline.candidates), share=share))
+    return found, "rest", share
 
 
 def paired_reference(baseline: Baseline, obs: Observed) -> NDArray | None:
@@ -153,21 +160,19 @@ def paired_reference(baseline: Baseline, obs: Observed) -> NDArray | None:
 WEAK_BAR_FACTOR = 2.0
 
 
-def weak_change_test(baseline: Baseline, obs: Observed) -> list[str]:
-    """A note when the block test judges the log (no paired run, or a rest of at least BLOCK_S beside it) and
-    the baseline gives it so few blocks that Student's bar is :data:`WEAK_BAR_FACTOR` x ``MIN_Z`` or more."""
-    ref = paired_reference(baseline, obs)
-    if ref is not None and (obs.logged[: obs.e.shape[0]] & ~paired.difference(obs, ref)[1]).sum() * obs.period_s \
-            < BLOCK_S:
-        return []
+def weak_change_test(baseline: Baseline, judged: str | None, share: float) -> list[str]:
+    """A note when the block test judged the log (``judged``: ``"all"``, or ``"rest"``, the part beside a paired
+    run; None: it did not) at false-alarm ``share`` and the baseline gives it so few blocks that its bar is
+    :data:`WEAK_BAR_FACTOR` x ``MIN_Z`` or more."""
     k = max((n for _, _, n in baseline.candidates.values()), default=0)
-    if k < 1 or bar(k) < WEAK_BAR_FACTOR * MIN_Z:
+    if judged is None or k < 1 or bar(k, share) < WEAK_BAR_FACTOR * MIN_Z:
         return []
-    return [f"changes are judged against {k} block(s) of {BLOCK_S:g} s of the baseline runs: a change must lie "
-            f"{bar(k):.3g} standard deviations from them (Student's t, {k - 1} degree(s) of freedom; {MIN_Z:g} with "
-            f"many blocks), so only a large change is seen: give longer or more baseline runs (each holds "
-            f"a block per {BLOCK_S:g} s, up to {SCREEN_S:g} s)" + ("" if ref is not None else
-            ", or baseline runs repeating this log's task")]
+    where = "changes" if judged == "all" else "changes on the part not repeating a baseline run's task"
+    return [f"{where} are judged against {k} block(s) of {BLOCK_S:g} s of the baseline runs: a change must lie "
+            f"{bar(k, share):.3g} standard deviations from them (Student's t, {k - 1} degree(s) of freedom; "
+            f"{bar(1e9, share):.3g} with many blocks), so only a large change is seen there: give longer or more "
+            f"baseline runs (each holds a block per {BLOCK_S:g} s, up to {SCREEN_S:g} s)"
+            + (", or baseline runs repeating this log's task" if judged == "all" else "")]
 
 
 def baseline_run_of(baseline: Baseline, obs: Observed) -> str | None:
@@ -217,14 +222,14 @@ def assess(baseline: Baseline, obs: Observed, channels: Sequence[str] = DEFAULT_
     lims = limits_at(1.0)
     events, over = find_events(obs.t_s, hs, lims, judged)
     events = name_joints(events, obs.t_s, hs, limits_at, judged, baseline.period_s)
-    changes = judge_changes(baseline, obs, over)
+    changes, block_judged, block_share = _judge_changes(baseline, obs, over)
     verdict = "changed" if changes else "anomaly" if events else "consistent"
     typical = {c: np.nanmedian(np.where(judged[:, None], lim, np.nan), axis=0) if judged.any()
                else np.full(N_JOINTS, np.nan) for c, lim in lims.items()}
     return {"log": obs.name, "verdict": verdict, "changes": changes, "events": events,
             "event_limit_median": {c: {JOINT_NAMES[j]: float(v[j]) for j in range(N_JOINTS)}
                                    for c, v in typical.items()},
-            "notes": blind_joints(typical) + weak_change_test(baseline, obs)}
+            "notes": blind_joints(typical) + weak_change_test(baseline, block_judged, block_share)}
 
 
 #: a joint whose typical event limit is this many times the median of the six joints' is called out: a healthy

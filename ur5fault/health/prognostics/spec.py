@@ -44,7 +44,7 @@ from ...errors import ParameterError, UnknownNameError
 from ...seed_paper import PAPER_TCP_MM
 from ...sim.effects import REGISTRY
 from ...sim.params import JOINT_TEMPERATURE_RANGE_C, NOMINAL_JOINT_TEMPERATURE_C, load_params, read_yaml
-from ...util.checks import check_int, check_name, check_number, short
+from ...util.checks import check_int, check_number, check_text, short
 from ...util.yamlsafe import dump
 from ..features import FEATURE_UNITS
 from .wear import WearLaw, stream
@@ -194,7 +194,7 @@ def build_life(data: Mapping[str, Any], where: str, text: str = "", path: Path |
     check_keys(data, LIFE_FILE_KEYS, where)
     life = check_mapping(data.get("life"), f"{where}: life")
     check_keys(life, LIFE_KEYS, f"{where}: life")
-    name = check_name(data.get("name", "life"), f"{where}: name")
+    name = check_text(data.get("name", "life"), f"{where}: name")
     out_dir = out_folder(data, where, out, name)
     n_units = check_int(life.get("units", 100), f"{where}: life.units", 2, MAX_UNITS)
     seed = check_seed(life.get("seed", 0), f"{where}: life.seed")

@@ -3,6 +3,8 @@ sweep used to test the discrepancy workflow."""
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numpy.typing import NDArray
 
@@ -32,15 +34,19 @@ PLACE_APPROACH = (0.5, -2.2043, -1.4889, -1.0192, 1.5708, 0.9)
 PLACE = (0.5, -2.3794, -1.5444, -0.7885, 1.5708, 0.9)
 
 
+#: the largest speed scale as messages show it: rounded down to 4 digits (3.000566 shown as 3.001 was itself refused)
+_MAX_SHOWN = f"{math.floor(MAX_SPEED_SCALE * 1e3) / 1e3:g}"
+
+
 def check_speed_scale(speed_scale: float, where: str = "speed_scale") -> float:
     """A fixed motion's speed and acceleration factor: up to the UR5's maximum joint speed (3.0006 x the default).
     One message for the API and a YAML file's trajectory (``where``: ``trajectory.speed_scale``)."""
     if not is_real(speed_scale):
         raise ParameterError(f"{where} = {short(speed_scale)} must be a number in [{MIN_SPEED_SCALE:g}, "
-                             f"{MAX_SPEED_SCALE:.4g}]")
+                             f"{_MAX_SHOWN}]")
     if not MIN_SPEED_SCALE <= speed_scale <= MAX_SPEED_SCALE:
         raise ParameterError(f"{where} = {speed_scale} is out of range [{MIN_SPEED_SCALE:g}, "
-                             f"{MAX_SPEED_SCALE:.4g}] (the UR5's maximum joint speed, {UR_MAX_SPEED_RAD_S:.4g} rad/s, "
+                             f"{_MAX_SHOWN}] (the UR5's maximum joint speed, {UR_MAX_SPEED_RAD_S:.4g} rad/s, "
                              f"over the controller default {UR_DEFAULT_SPEED_RAD_S:g} rad/s)")
     return float(speed_scale)
 
