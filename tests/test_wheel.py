@@ -83,6 +83,10 @@ def test_wheel_carries_model_and_data(wheel):
     names = set(zipfile.ZipFile(wheel).namelist())
     for path in PACKAGE_DATA:
         assert path in names, path
+    from ur5fault.logs.shipped import LOGS_DIR, shipped_logs  # every shipped log, not the few named above
+
+    for lg in shipped_logs().values():
+        assert f"ur5fault/data/{lg.path.relative_to(LOGS_DIR).as_posix()}" in names, lg.name
     assert "ur5fault/sim/drive/kernel.py" in names and "ur5fault/campaign/spec.py" in names
     assert not [n for n in names if n.startswith(("tests/", "bench/", "campaigns/"))]
 

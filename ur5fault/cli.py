@@ -1,6 +1,6 @@
-"""Command line: ``ur5fault simulate | effects | show | campaign | plot | discrepancy | identify | benchmark |
+"""Command line: ``ur5fault simulate | effects | data | show | campaign | plot | discrepancy | identify | benchmark |
 diagnose | prognose | monitor``: the parser, its one-line errors and ``main``; each command group registers its
-own subcommands (``run_cli.py``: simulate, effects, show; ``campaign/cli.py``, ``discrepancy/cli.py``, ... ).
+own subcommands (``run_cli.py``: simulate, effects, data, show; ``campaign/cli.py``, ``discrepancy/cli.py``, ... ).
 
 Bad input prints one line ``ur5fault: error: ...`` naming the problem and the valid
 choices, and exits with status 2; never a traceback.  ``-v`` (before or after the
@@ -216,15 +216,16 @@ def _run(argv: Sequence[str] | None) -> int:
         raise KeyboardInterrupt()
 
     hook = threading.excepthook  # restored when main() returns (main() called in a notebook) unless it was stopped
-    threading.excepthook = quiet_when_stopping(hook, stopping)
-    try:
-        previous = signal.signal(signal.SIGTERM, on_sigterm)
-        # an ignored SIGINT (a job started in the background) stays ignored
-        previous_int = (signal.signal(signal.SIGINT, on_sigint)
-                        if signal.getsignal(signal.SIGINT) is signal.default_int_handler else None)
-    except ValueError:  # not the main thread: leave signals alone
-        previous = previous_int = None
-    try:
+    previous = previous_int = None
+    try:  # everything set up inside it: a stop arriving while the hook and handlers are installed undoes them too
+        threading.excepthook = quiet_when_stopping(hook, stopping)
+        try:
+            previous = signal.signal(signal.SIGTERM, on_sigterm)
+            # an ignored SIGINT (a job started in the background) stays ignored
+            previous_int = (signal.signal(signal.SIGINT, on_sigint)
+                            if signal.getsignal(signal.SIGINT) is signal.default_int_handler else None)
+        except ValueError:  # not the main thread: leave signals alone
+            pass
         given = sys.argv[1:] if argv is None else argv
         args = build_parser(groups_needed(given)).parse_args(given)
         configure_logging(getattr(args, "verbose", 0))

@@ -212,7 +212,7 @@ def cmd_data(args: argparse.Namespace) -> int:
         opts = " ".join(("--format", lg.format, *lg.options))
         print(f"{lg.name:{width}s}  {opts:38s}  {lg.about}")
     print(f"\nin {next(iter(logs)).path.parent.parent} (a README per folder); the path of one: ur5fault data NAME, "
-          "e.g. ur5fault identify $(ur5fault data nist) --format nist --out params.yaml")
+          "e.g. ur5fault identify \"$(ur5fault data nist)\" --format nist --out params.yaml")
     return 0
 
 

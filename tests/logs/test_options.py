@@ -44,9 +44,11 @@ def test_manifest_with_per_log_options(tmp_path):
 
 
 @pytest.mark.parametrize("text, message", [
-    ("logs: []\n", "robot.yaml: read as a manifest of logs (a .yaml or .yml file among the logs is one): 'logs' must "
-                   "be a list of at least one log ({path: FILE, ...} or FILE)"),
-    ("logs: [a.csv]\nspeed: 3\n", "unknown key 'speed'"),
+    # a manifest (it has 'logs') is not told what it was read as; a YAML without 'logs' is (below)
+    ("logs: []\n", "robot.yaml: 'logs' must be a list of at least one log ({path: FILE, ...} or FILE)"),
+    ("logs: [a.csv]\nspeed: 3\n", "robot.yaml: unknown key 'speed'"),
+    ("speed: 3\n", "robot.yaml: read as a manifest of logs (a .yaml or .yml file among the logs is one): unknown key "
+                   "'speed'"),
     ("format: rtde\nlogs: [{path: a.csv, payload: 1}]\n", "logs[0]: unknown key 'payload'"),
     # the manifest's key, not the command line's flag (was "logs[0]: --payload-kg applies to --format rtde only")
     ("format: nist\nlogs: [{path: a.csv, payload_kg: 1}]\n", "robot.yaml: logs[0]: payload_kg applies to rtde logs "

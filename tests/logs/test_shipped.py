@@ -39,3 +39,16 @@ def test_an_unknown_name_lists_the_logs():
     with pytest.raises(UnknownNameError, match=r"unknown shipped log 'kufieta/No1' \(did you mean 'kufieta' or "
                                                r"'kufieta/Movement_No1'.*valid: kufieta, kufieta/Movement_No1, "):
         shipped_log("kufieta/No1")
+
+
+def test_a_shipped_log_missing_from_the_install_is_said_so(tmp_path, monkeypatch):
+    """A broken install (a package-data glob that missed the logs) printed a path that did not exist, exit 0."""
+    from ur5fault.errors import ConfigFileError
+    from ur5fault.logs import shipped
+
+    monkeypatch.setattr(shipped, "LOGS_DIR", tmp_path)
+    with pytest.raises(ConfigFileError, match=r"ur5testresult_halfspeed_payload1.6lb_1.csv.gz: the shipped log nist "
+                                              r"is not installed: reinstall ur5fault"):
+        shipped_log("nist")
+    with pytest.raises(ConfigFileError, match=r"the shipped Kufieta logs are not installed"):
+        shipped_log("kufieta")

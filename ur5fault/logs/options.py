@@ -185,7 +185,8 @@ def _manifest(path: Path, args: argparse.Namespace, held: Sequence[str], used: s
     """The logs of the manifest ``path``, then the command line's ``held`` (``--hold-out``; paths as given, each
     with the manifest's defaults); ``used`` collects the command-line options some log took."""
     data = read_yaml(path)
-    where = f"{path.name}: {READ_AS_MANIFEST}: "  # a campaign's YAML given by mistake is told what it was read as
+    # a YAML without 'logs' (a campaign's, given by mistake) is told what it was read as; a manifest needs no telling
+    where = f"{path.name}: " + ("" if isinstance(data, dict) and "logs" in data else f"{READ_AS_MANIFEST}: ")
     bad = sorted(set(data) - set(MANIFEST_KEYS))
     if bad:
         raise ParameterError(f"{where}unknown key {bad[0]!r} (keys: {', '.join(MANIFEST_KEYS)})")

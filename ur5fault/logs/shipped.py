@@ -14,7 +14,7 @@ import dataclasses
 from importlib import resources
 from pathlib import Path
 
-from ..errors import UnknownNameError
+from ..errors import ConfigFileError, UnknownNameError
 
 #: the folder of the shipped logs (beside the drive parameters)
 LOGS_DIR = Path(str(resources.files("ur5fault") / "data"))
@@ -51,9 +51,17 @@ def shipped_log(name: str) -> list[ShippedLog]:
     with the names there are."""
     logs = shipped_logs()
     if name in logs:
-        return [logs[name]]
-    group = [lg for key, lg in logs.items() if key.startswith(f"{name}/")]
-    if group:
-        return group
-    groups = sorted({key.split("/")[0] for key in logs if "/" in key})
-    raise UnknownNameError("shipped log", name, [*groups, *logs])
+        found = [logs[name]]
+    else:
+        found = [lg for key, lg in logs.items() if key.startswith(f"{name}/")]
+    if not found and name == "kufieta":  # the group exists by design: its folder is empty or missing
+        raise ConfigFileError(f"the shipped Kufieta logs are not installed (no *.csv.gz in {LOGS_DIR / 'kufieta-ur5'}):"
+                              " reinstall ur5fault")
+    if not found:
+        groups = sorted({key.split("/")[0] for key in logs if "/" in key})
+        raise UnknownNameError("shipped log", name, [*groups, *logs])
+    missing = [lg for lg in found if not lg.path.is_file()]
+    if missing:
+        raise ConfigFileError(f"{missing[0].path}: the shipped log {missing[0].name} is not installed: reinstall "
+                              "ur5fault")
+    return found
