@@ -23,6 +23,8 @@ if TYPE_CHECKING:
     from .sim.result import SimResult
     from .sim.trajectories import Trajectory, get_trajectory, pick_and_place
 
+    __version__: str
+
 #: each name of ``__all__`` -> the module that defines it
 _LAZY = {
     "JOINT_NAMES": ".sim.axes", "N_JOINTS": ".sim.axes", "REGISTRY": ".sim.effects", "make_effect": ".sim.effects",
@@ -37,15 +39,17 @@ __all__ = [
 ]
 
 
-def __getattr__(name: str) -> Any:
-    if name == "__version__":  # the installed distribution's (pyproject.toml is its one source)
-        value: Any = import_module(".util.provenance", __name__).package_version()
-    elif name in _LAZY:
-        value = getattr(import_module(_LAZY[name], __name__), name)
-    else:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    globals()[name] = value  # once: later lookups find it without this function
-    return value
+if not TYPE_CHECKING:  # hidden from type checkers, which then still catch a misspelled ``ur5fault.Simulatr``
+
+    def __getattr__(name: str) -> Any:
+        if name == "__version__":  # the installed distribution's (pyproject.toml is its one source)
+            value: Any = import_module(".util.provenance", __name__).package_version()
+        elif name in _LAZY:
+            value = getattr(import_module(_LAZY[name], __name__), name)
+        else:
+            raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+        globals()[name] = value  # once: later lookups find it without this function
+        return value
 
 
 def __dir__() -> list[str]:
