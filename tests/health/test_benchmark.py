@@ -598,3 +598,22 @@ def test_a_log_beyond_the_training_conditions_is_noted():
     assert outside_notes(schema, {"payload_kg": 3.0, "temperature_C": 15.0}, "log.csv") == []
     assert "temperature_C 8 degC outside" in outside_notes(schema, {"temperature_C": 8.0}, "x")[0]
     assert outside_notes({}, {"payload_kg": 4.5}, "log.csv") == []
+
+
+def test_cli_prints_the_by_joint_detectors_auc_beside_the_run_level_one(tmp_path, capsys, monkeypatch):
+    """`benchmark` printed the run-level AUC (1.000) and `diagnose` quoted the by-joint detector's (0.50) for the same
+    folder, with nothing to tell them apart (a newcomer probe): the summary line prints both, named."""
+    from ur5fault.health import diagnostics
+
+    metrics = {"notes": [], "dataset": {"n_train": 10, "n_test": 4}, "feature_set": "both", "shuffled_labels": False,
+               "detection": {"auc_all": 1.0}, "detection_by_joint": {"auc_all": 0.5},
+               "localisation": {"accuracy": 0.75}, "kind": {"accuracy": 0.5}, "backlash": {"per_joint": {}},
+               "out": str(tmp_path)}
+    monkeypatch.setattr(diagnostics, "run_benchmark", lambda *a, **k: metrics)
+    assert main(["benchmark", str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    said = "detection ROC AUC 1.000 (by joint, the detector `ur5fault diagnose` uses: 0.500); joint accuracy 0.750"
+    assert said in out
+    metrics["detection_by_joint"] = None  # no by-joint detector (too few single-joint faults): the line as before
+    assert main(["benchmark", str(tmp_path)]) == 0
+    assert "detection ROC AUC 1.000; joint accuracy 0.750; fault-kind accuracy 0.500" in capsys.readouterr().out
