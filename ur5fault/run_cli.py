@@ -207,10 +207,10 @@ def cmd_data(args: argparse.Namespace) -> int:
         print("\n".join(str(lg.path) for lg in shipped_log(args.name)))
         return 0
     logs = shipped_logs().values()
-    width = max(len(lg.name) for lg in logs)
+    opts = {lg.name: " ".join(("--format", lg.format, *lg.options)) for lg in logs}
+    width, opts_width = max(map(len, opts)), max(map(len, opts.values()))
     for lg in logs:
-        opts = " ".join(("--format", lg.format, *lg.options))
-        print(f"{lg.name:{width}s}  {opts:38s}  {lg.about}")
+        print(f"{lg.name:{width}s}  {opts[lg.name]:{opts_width}s}  {lg.about}")
     print(f"\nin {next(iter(logs)).path.parent.parent} (a README per folder); the path of one: ur5fault data NAME, "
           "e.g. ur5fault identify \"$(ur5fault data nist)\" --format nist --out params.yaml")
     return 0

@@ -41,8 +41,10 @@ def _kufieta() -> list[ShippedLog]:
 
 def shipped_logs() -> dict[str, ShippedLog]:
     """Every shipped log by name, NIST first."""
+    from .readers import NIST_PAYLOAD_KG  # the reader's own value of the layout's payload
+
     nist = ShippedLog("nist", LOGS_DIR / "nist-ur5" / "ur5testresult_halfspeed_payload1.6lb_1.csv.gz", "nist", (),
-                      "UR5 CB3 (NIST, public domain), payload 0.726 kg, 63 s")
+                      f"UR5 CB3 (NIST, public domain), payload {NIST_PAYLOAD_KG:g} kg, 63 s")
     return {lg.name: lg for lg in (nist, *_kufieta())}
 
 

@@ -106,20 +106,16 @@ def judged_transients(baseline: Baseline, obs: Observed, channels: Sequence[str]
     return hs, limits_at(1.0), judged, paired
 
 
-def judge_changes(baseline: Baseline, obs: Observed, over: NDArray) -> list[dict]:
-    """The changes of a log part (``over`` ``(n, 6)``: its event exceedances). Where its screened part repeats a
+def judge_changes(baseline: Baseline, obs: Observed, over: NDArray) -> tuple[list[dict], str | None, float]:
+    """The changes of a log part (``over`` ``(n, 6)``: its event exceedances), and how the block test judged it:
+    ``(changes, "all" | "rest" | None, share)`` (the whole part, the part beside a paired run, or not at all; the
+    false-alarm share it spent). Where its screened part repeats a
     baseline run's task over at least :data:`~.paired.MIN_PAIRED_S` and the baseline holds paired statistics, the
     paired samples are judged by the paired test (:mod:`.paired`) and the rest, if it holds at least
     :data:`~.changes.BLOCK_S` (the length of the blocks it is compared with), by the baseline's block estimates
     (:mod:`.changes`); elsewhere the whole part by the latter. Per joint the change furthest beyond its bar. Where
     both tests judge the log, a change is flagged when either finds one, so each spends half the false-alarm
     probability (Bonferroni: :func:`.changes.bar`'s ``share``)."""
-    return _judge_changes(baseline, obs, over)[0]
-
-
-def _judge_changes(baseline: Baseline, obs: Observed, over: NDArray) -> tuple[list[dict], str | None, float]:
-    """:func:`judge_changes`, with how the block test judged the log: ``("all" | "rest" | None, share)`` (the whole
-    part, the part beside a paired run, or not at all; the false-alarm share it spent)."""
     m = obs.e.shape[0]
     logged, keep = obs.logged[:m], keep_mask(obs, over)
     ref = paired_reference(baseline, obs)
@@ -170,7 +166,7 @@ def weak_change_test(baseline: Baseline, judged: str | None, share: float) -> li
     where = "changes" if judged == "all" else "changes on the part not repeating a baseline run's task"
     return [f"{where} are judged against {k} block(s) of {BLOCK_S:g} s of the baseline runs: a change must lie "
             f"{bar(k, share):.3g} standard deviations from them (Student's t, {k - 1} degree(s) of freedom; "
-            f"{bar(1e9, share):.3g} with many blocks), so only a large change is seen there: give longer or more "
+            f"{bar(1, share):.3g} with many blocks), so only a large change is seen there: give longer or more "
             f"baseline runs (each holds a block per {BLOCK_S:g} s, up to {SCREEN_S:g} s)"
             + (", or baseline runs repeating this log's task" if judged == "all" else "")]
 
@@ -222,7 +218,7 @@ def assess(baseline: Baseline, obs: Observed, channels: Sequence[str] = DEFAULT_
     lims = limits_at(1.0)
     events, over = find_events(obs.t_s, hs, lims, judged)
     events = name_joints(events, obs.t_s, hs, limits_at, judged, baseline.period_s)
-    changes, block_judged, block_share = _judge_changes(baseline, obs, over)
+    changes, block_judged, block_share = judge_changes(baseline, obs, over)
     verdict = "changed" if changes else "anomaly" if events else "consistent"
     typical = {c: np.nanmedian(np.where(judged[:, None], lim, np.nan), axis=0) if judged.any()
                else np.full(N_JOINTS, np.nan) for c, lim in lims.items()}
