@@ -89,6 +89,16 @@ def test_baseline_stats_reused_and_refused_under_another_overlay(monitored):
     first = json.loads((out / "monitor.json").read_text())["logs"][0]
     assert json.loads((again / "monitor.json").read_text())["logs"][0] == first
     assert "read unverified" not in r.stderr
+    assert "does not record" not in r.stderr  # this version's file records what it covered
+    older = tmp / "older.json"  # written before baseline.json recorded the runs' motion range and payloads
+    data = json.loads((out / "baseline.json").read_text())
+    assert data["payloads_kg"] == [0.0] * 5 and set(data["motion_max"]) == {"speed_rad_s", "accel_rad_s2"}
+    older.write_text(json.dumps({k: v for k, v in data.items() if k not in ("motion_max", "payloads_kg")}))
+    r = run(str(logs[0]), *RTDE, "--baseline", str(model), "--baseline-stats", str(older), "--out", str(tmp / "o"),
+            "--jobs", "2")
+    assert r.returncode == 0 and ("older.json does not record its runs' motion range and payloads (written by an "
+                                  "earlier version)") in r.stderr, r.stderr
+    assert json.loads((tmp / "o" / "monitor.json").read_text())["logs"][0]["verdict"] == first["verdict"]
     bare = tmp / "bare.json"  # copied without its checksum file, or edited by hand: used, and said so
     bare.write_bytes((out / "baseline.json").read_bytes())
     r = run(str(logs[0]), *RTDE, "--baseline", str(model), "--baseline-stats", str(bare), "--out", str(tmp / "b"),

@@ -28,11 +28,13 @@ from numpy.typing import NDArray
 from ...errors import ParameterError
 from ...logs.measured import same_period
 from ...sim.axes import JOINT_NAMES, N_JOINTS
+from ...util.checks import is_real
 from ...util.io import checksum_path, json_float, verify_checksum
 from ...util.results import check_whole
 from . import paired
 from .changes import BLOCK_S, block_estimates, spreads
 from .conditions import CONDITIONS
+from .coverage import QUANTITIES, envelope
 from .event_fit import fit_events, fit_task, segment, task_residual
 from .events import CHANNELS, FEATURES, LEVEL_S, SMOOTH_S, WINDOW_S
 from .observe import Observed
@@ -84,7 +86,9 @@ class Baseline:
     (:mod:`.paired`; empty: the baseline runs do not repeat each other); ``rest_targets``: per baseline run what
     its target is while the arm stands (:attr:`.observe.Observed.rest_target`: the controller's style, so that a
     log of another controller is told with ``--baseline-stats`` as with ``--baseline-logs``; ``None``: not
-    recorded, a ``baseline.json`` written before it was)."""
+    recorded, a ``baseline.json`` written before it was); ``motion_max`` ``(2, 6)``: the largest target speed
+    [rad/s] and acceleration [rad/s^2] per joint of the runs, ``payloads_kg``: per run its stated payload [kg]
+    (what the runs covered, :mod:`.coverage`; ``None``: not recorded, as ``rest_targets``)."""
 
     overlay_sha256: str
     period_s: float
@@ -102,6 +106,8 @@ class Baseline:
     cond_tail: NDArray
     paired_candidates: dict[str, tuple[float, float, float, float]] = dataclasses.field(default_factory=dict)
     rest_targets: tuple[str | None, ...] | None = None
+    motion_max: NDArray | None = None
+    payloads_kg: tuple[float | None, ...] | None = None
 
     @property
     def task_runs(self) -> list[int]:
@@ -140,7 +146,11 @@ class Baseline:
                                        "tail": {JOINT_NAMES[j]: _stat(("u0", "beta", "p0"), self.cond_tail[i, m, j])
                                                 for j in range(N_JOINTS)}}
                                    for m, k in enumerate(CONDITIONS)} for i, c in enumerate(CHANNELS)},
-                **({} if self.rest_targets is None else {"rest_targets": list(self.rest_targets)})}
+                **({} if self.rest_targets is None else {"rest_targets": list(self.rest_targets)}),
+                **({} if self.motion_max is None else
+                   {"motion_max": {q: {JOINT_NAMES[j]: float(self.motion_max[i, j]) for j in range(N_JOINTS)}
+                                   for i, q in enumerate(QUANTITIES)}}),
+                **({} if self.payloads_kg is None else {"payloads_kg": list(self.payloads_kg)})}
 
     @classmethod
     def from_json(cls, data: Any, where: str) -> Baseline:
@@ -179,6 +189,16 @@ class Baseline:
             styles = data.get("rest_targets")  # absent: written before baseline.json recorded it
             if styles is not None and (len(styles) != len(runs) or any(v not in REST_TARGETS for v in styles)):
                 raise ValueError(f"rest_targets {styles!r} is not one of {REST_TARGETS} per segment")
+            motion = data.get("motion_max")  # absent: written before baseline.json recorded it, as the payloads
+            motion = None if motion is None else np.array([[float(motion[q][j]) for j in JOINT_NAMES]
+                                                           for q in QUANTITIES])
+            if motion is not None and not (np.isfinite(motion).all() and (motion >= 0).all()):
+                raise ValueError("motion_max holds a negative or non-finite value")
+            loads = data.get("payloads_kg")
+            if loads is not None and (len(loads) != len(runs) or any(
+                    p is not None and not (is_real(p) and np.isfinite(p) and p >= 0)
+                    for p in loads)):
+                raise ValueError(f"payloads_kg {loads!r} is not a payload [kg] or null per segment")
             if len(runs) < MIN_RUNS:  # written by a version that fitted one run
                 raise ParameterError(f"{where}: built from {len(runs)} healthy run(s) ({', '.join(data['segments'])});"
                                      f" a baseline needs at least {MIN_RUNS}: {MIN_RUNS_WHY}; rebuild it with "
@@ -191,7 +211,8 @@ class Baseline:
                        float(data["slow_rad_s"]), c_scale, c_tail,
                        {str(k): (json_float(v["mean"]), json_float(v["variance"]), json_float(v["n_blocks"]),
                                  json_float(v["design_effect"])) for k, v in data["paired_candidates"].items()},
-                       None if styles is None else tuple(styles))
+                       None if styles is None else tuple(styles), motion,
+                       None if loads is None else tuple(None if p is None else float(p) for p in loads))
         except ParameterError:
             raise  # already one line saying what to do (ParameterError is a ValueError)
         except (KeyError, TypeError, ValueError, AttributeError) as exc:
@@ -258,4 +279,5 @@ def fit_baseline(healthy: Sequence[Observed], overlay_sha: str) -> Baseline:
     paired_cands = paired.baseline_spreads(healthy, refs)
     return Baseline(overlay_sha, period, tuple(o.name for o in healthy), scale, tail, quantum, cands,
                     tuple(o.target_rad for o in healthy), tuple(task_residual(o) for o in healthy), t_scale, t_tail,
-                    float(slow), c_scale, c_tail, paired_cands, tuple(o.rest_target for o in healthy))
+                    float(slow), c_scale, c_tail, paired_cands, tuple(o.rest_target for o in healthy),
+                    envelope(healthy), tuple(o.payload_kg for o in healthy))

@@ -79,6 +79,8 @@ class Observed:
             ``"reading"`` as a CB2 logs it, ``"setpoint"`` as a CB3, ``None`` not seen); a baseline records its
             runs' (:attr:`.baseline.Baseline.rest_targets`), so that a log of another controller is told with
             ``--baseline-stats`` too.
+        payload_kg: the log's stated payload [kg] (``None``: not stated); a baseline records its runs'
+            (:attr:`.baseline.Baseline.payloads_kg`, :mod:`.coverage`).
     """
 
     name: str
@@ -98,6 +100,7 @@ class Observed:
     current_sigma_A: NDArray | None = None
     stribeck_speed_rad_s: float | None = None
     rest_target: str | None = None
+    payload_kg: float | None = None
 
     @property
     def n(self) -> int:
@@ -147,7 +150,7 @@ def observe(log: MeasuredLog, params_overrides: dict | None = None, effects: Seq
                     tuple(kept), X[:, lo : lo + m] if kept else np.zeros((0, *e.shape)), e, qd, qdd,
                     (meas[:, 1] - base.q_rad[:hi])[lo:hi],
                     quanta(log.q_actual_rad), log.q_target_rad[1 : n_all + 1][lo:hi].copy(),
-                    rp.sigma[0].copy(), stribeck_speed(rp.params), log.rest_target)
+                    rp.sigma[0].copy(), stribeck_speed(rp.params), log.rest_target, log.payload_kg)
 
 
 def quanta(q_rad: NDArray) -> NDArray:

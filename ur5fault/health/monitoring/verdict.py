@@ -17,6 +17,7 @@ from . import paired
 from .baseline import Baseline
 from .changes import BLOCK_S, bar, block_reference, estimates, find_changes, keep_mask, strongest
 from .conditions import motion_limit
+from .coverage import motion_notes, payload_notes
 from .event_fit import segment
 from .events import (
     CHANNELS,
@@ -225,7 +226,9 @@ def assess(baseline: Baseline, obs: Observed, channels: Sequence[str] = DEFAULT_
     return {"log": obs.name, "verdict": verdict, "changes": changes, "events": events,
             "event_limit_median": {c: {JOINT_NAMES[j]: float(v[j]) for j in range(N_JOINTS)}
                                    for c, v in typical.items()},
-            "notes": blind_joints(typical) + weak_change_test(baseline, block_judged, block_share)}
+            "notes": blind_joints(typical) + weak_change_test(baseline, block_judged, block_share)
+            + ([] if baseline.motion_max is None else motion_notes(baseline.motion_max, obs))
+            + ([] if baseline.payloads_kg is None else payload_notes(baseline.payloads_kg, obs))}
 
 
 #: a joint whose typical event limit is this many times the median of the six joints' is called out: a healthy

@@ -1,0 +1,117 @@
+"""A monitored log that leaves what its baseline runs covered is said to: a joint moved faster or accelerated harder
+than any baseline run did, for half a second or more, beyond a 10 % margin; a payload outside the runs' own. The
+baseline records both in baseline.json; a file written before it did loads and says nothing. No verdict moves."""
+
+import dataclasses
+import json
+
+import numpy as np
+import pytest
+
+from tests.health.monitoring.test_monitoring import PERIOD, noise, part
+from ur5fault.errors import ParameterError
+from ur5fault.health.monitoring import assess, fit_baseline
+from ur5fault.health.monitoring.baseline import Baseline
+
+
+def speeds(n: int, elbow: float, base: float = 0.5) -> np.ndarray:
+    """Target speeds ``(n, 6)``: every joint at ``base`` rad/s, the elbow at ``elbow``."""
+    s = np.full((n, 6), base)
+    s[:, 2] = elbow
+    return s
+
+
+@pytest.fixture(scope="module")
+def baseline():
+    """Two runs at 0.5 rad/s on every joint (the elbow at 0.6 in the second), accelerations 0, payload 0 kg."""
+    runs = [dataclasses.replace(part("a", noise(1)), payload_kg=0.0),
+            dataclasses.replace(part("b", noise(2), speed=speeds(2000, 0.6)), payload_kg=0.0)]
+    return fit_baseline(runs, "sha")
+
+
+def notes_of(baseline, obs) -> list[str]:
+    return assess(baseline, obs)["notes"]
+
+
+def test_the_baseline_records_the_largest_speed_and_acceleration_and_the_payloads(baseline):
+    np.testing.assert_array_equal(baseline.motion_max[0], [0.5, 0.5, 0.6, 0.5, 0.5, 0.5])
+    np.testing.assert_array_equal(baseline.motion_max[1], np.zeros(6))
+    assert baseline.payloads_kg == (0.0, 0.0)
+
+
+def test_a_joint_moved_faster_than_any_baseline_run_is_named_with_its_figures(baseline):
+    s = speeds(2000, 0.6)
+    s[1000:1250, 2] = 0.9  # 2 s at 0.9 rad/s, 1.5 x the baseline's largest
+    r = noise(11)
+    out = assess(baseline, dataclasses.replace(part("fast", r, speed=s), payload_kg=0.0))
+    (note,) = out["notes"]
+    assert note.startswith("moves beyond what the baseline runs covered: elbow_joint speed up to 0.9 rad/s "
+                           "(2.0 s above the baseline runs' largest, 0.6)")
+    assert "give baseline runs that move as this log does" in note
+    same = assess(baseline, dataclasses.replace(part("fast", r, speed=speeds(2000, 0.6)), payload_kg=0.0))
+    assert same["verdict"] == out["verdict"]  # said, not judged: the verdict is the limits' alone
+
+
+@pytest.mark.parametrize("elbow, seconds", [(0.65, 2.0),  # within the 10 % margin of 0.6
+                                            (0.9, 0.4)])  # beyond it, for under half a second
+def test_motion_within_the_margin_or_too_briefly_beyond_it_is_not_named(baseline, elbow, seconds):
+    s = speeds(2000, 0.6)
+    s[1000 : 1000 + round(seconds / PERIOD), 2] = elbow
+    assert notes_of(baseline, dataclasses.replace(part("x", noise(12), speed=s), payload_kg=0.0)) == []
+
+
+def test_a_harder_acceleration_is_named(baseline):
+    obs = part("acc", noise(13))
+    acc = np.zeros((2000, 6))
+    acc[500:700, 4] = 3.0  # 1.6 s on wrist_2, the baseline runs never accelerated
+    (note,) = notes_of(baseline, dataclasses.replace(obs, accel_rad_s2=acc, payload_kg=0.0))
+    assert "wrist_2_joint accel up to 3 rad/s^2 (1.6 s above the baseline runs' largest, 0)" in note
+
+
+def test_samples_the_robot_did_not_log_are_not_counted(baseline):
+    s = speeds(2000, 0.6)
+    s[1000:1250, 2] = 0.9
+    obs = dataclasses.replace(part("gap", noise(14), speed=s), payload_kg=0.0)
+    logged = np.ones(2000, bool)
+    logged[1000:1250] = False  # filled in a gap: no motion the robot reported
+    assert notes_of(baseline, dataclasses.replace(obs, logged=logged)) == []
+
+
+@pytest.mark.parametrize("payload, said", [(1.5, True), (0.005, False), (None, False)])
+def test_a_payload_the_baseline_runs_did_not_carry_is_named(baseline, payload, said):
+    notes = notes_of(baseline, dataclasses.replace(part("p", noise(15)), payload_kg=payload))
+    assert notes == ([] if not said else [
+        "carries 1.5 kg, the baseline runs 0 kg: a model error that grows with the load (a torque-constant, "
+        "current-gain or mass error) shows here as a change the baseline runs could not show; check the stated "
+        "payload, or give baseline runs with this payload"])
+
+
+def test_coverage_round_trips_and_an_earlier_file_says_nothing(baseline, tmp_path):
+    path = tmp_path / "baseline.json"
+    path.write_text(json.dumps(baseline.to_json()))
+    data = json.loads(path.read_text())
+    assert data["motion_max"]["speed_rad_s"]["elbow_joint"] == 0.6 and data["payloads_kg"] == [0.0, 0.0]
+    back = Baseline.load(path)
+    np.testing.assert_array_equal(back.motion_max, baseline.motion_max)
+    assert back.payloads_kg == (0.0, 0.0)
+    older = {k: v for k, v in data.items() if k not in ("motion_max", "payloads_kg")}
+    path.write_text(json.dumps(older))
+    old = Baseline.load(path)
+    assert old.motion_max is None and old.payloads_kg is None
+    s = speeds(2000, 0.6)
+    s[1000:1250, 2] = 0.9
+    assert notes_of(old, dataclasses.replace(part("fast", noise(16), speed=s), payload_kg=3.0)) == []
+    assert "motion_max" not in old.to_json() and "payloads_kg" not in old.to_json()  # still saying nothing
+
+
+@pytest.mark.parametrize("key, value, message", [
+    ("payloads_kg", [0.0], "payloads_kg"),  # not one per run
+    ("payloads_kg", [0.0, -1.0], "payloads_kg"),
+    ("payloads_kg", [0.0, True], "payloads_kg"),
+    ("motion_max", {"speed_rad_s": {}, "accel_rad_s2": {}}, "motion_max|KeyError"),
+])
+def test_a_broken_coverage_record_is_refused(baseline, tmp_path, key, value, message):
+    path = tmp_path / "baseline.json"
+    path.write_text(json.dumps({**baseline.to_json(), key: value}))
+    with pytest.raises(ParameterError, match=f"not a valid monitor baseline.*({message})"):
+        Baseline.load(path)
