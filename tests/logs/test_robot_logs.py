@@ -110,10 +110,27 @@ def test_nan_inside_an_optional_column_drops_it_with_a_note(tmp_path):
     assert any("target_torque missing from data row 501" in s and "not used" in s for s in log.notes)
 
 
-def test_nan_in_a_required_column_is_refused(tmp_path):
+def test_a_few_rows_without_a_required_value_are_read_as_ticks_the_robot_did_not_log(tmp_path):
+    """A recorder that lost a value lost the tick: rows with NaN or inf in a required column, up to 5 in a row (the
+    gap a missing row may leave), are dropped and filled on the tick grid like missing rows, left out of every
+    RMS figure (``logged`` False), with a note; 6 in a row are refused in one line saying where to cut."""
     df = _frame()
-    df.loc[500, "actual_current_2"] = np.nan
-    with pytest.raises(LogFormatError, match="NaN or inf in actual_current_2 at data row 501$"):
+    df.loc[500:502, "actual_current_2"] = np.nan  # 3 rows
+    df.loc[700, "target_q_0"] = np.inf
+    df.loc[0, "actual_q_1"] = np.nan  # at the start: the log begins a tick later
+    log = _read(tmp_path, df)
+    assert log.t_s.size == 999 and not log.logged[[499, 500, 501, 699]].any() and log.logged.sum() == 995
+    # the filled ticks are the line between their neighbours (sign: UR's current sign applied by the reader)
+    i = df["actual_current_2"].to_numpy()
+    np.testing.assert_allclose(np.abs(log.current_A[499:502, 2]), np.abs(i[499] + (i[503] - i[499]) * np.arange(1, 4)
+                                                                          / 4), rtol=1e-9)
+    assert ("log.csv: 5 data row(s) with NaN or inf in target_q_0, actual_q_1, actual_current_2 (from data row 1; at "
+            "most 3 in a row): read as ticks the robot did not log, interpolated for the replay and left out of every "
+            "RMS figure") in log.notes
+    df.loc[500:505, "actual_current_2"] = np.nan  # 6 rows in a row
+    with pytest.raises(LogFormatError, match=r"^log.csv: NaN or inf in actual_current_2 in data rows 501..506 \(6 "
+                                             r"rows in a row; up to 5 are read as ticks the robot did not log\); cut "
+                                             r"the log there into two logs \(data rows 1..500 and 507..1000\)"):
         _read(tmp_path, df)
 
 
@@ -401,13 +418,20 @@ def test_nan_in_a_required_column_is_named_with_its_column_and_extent(tmp_path):
             df.loc[df.index[rows], column] = np.nan
         return edit
 
+    n = pd.read_csv(_first_12_s_of_test(tmp_path)).shape[0]
     for column, rows, said in (("actual_current_2", slice(None), "at data row 1 (every row)"),
-                               ("actual_current_2", slice(900, 1276), "at data row 901 (376 rows, the last data row "
-                                                                      "1276)"),
-                               ("target_q_4", [7], "at data row 8")):
+                               ("actual_current_2", slice(900, 1276), "in data rows 901..1276 (376 rows in a row; up "
+                                                                      "to 5 are read as ticks the robot did not log); "
+                                                                      f"cut the log there into two logs (data rows "
+                                                                      f"1..900 and 1277..{n})"),
+                               ("target_q_4", list(range(7, 13)), "in data rows 8..13 (6 rows in a row; up to 5 are "
+                                                                  "read as ticks the robot did not log); cut the log "
+                                                                  f"there into two logs (data rows 1..7 and 14..{n})")):
         with pytest.raises(LogFormatError) as err:
             read_log(_first_12_s_of_test(tmp_path, nan_rows(column, rows)), "rtde", **KW)
-        assert str(err.value) == f"test12.csv: NaN or inf in {column} {said}"
+        assert str(err.value) == (f"test12.csv: NaN or inf in {column} {said}, which identify, discrepancy and "
+                                  "monitor take together as logs of one robot"
+                                  if "cut" in said else f"test12.csv: NaN or inf in {column} {said}")
     df = pd.read_csv(NIST_LOG).iloc[:1000]
     df["ROBOT_ACTUAL_JOINT_CURRENT (J3)"] = np.nan
     df.to_csv(tmp_path / "nist.csv", index=False)

@@ -125,9 +125,14 @@ def _assemble(src: str, t: NDArray, required: Mapping[str, NDArray], optional: M
     positions ``"actual_q"`` (both already in radians) and ``"actual_current"``; ``optional``: ``"target_qd"``,
     ``"actual_qd"`` (rad/s, for the unit check only), ``"target_current"``, ``"temperature"``, ``"tcp"``,
     ``"target_torque"``; ``notes``: the reader's own (:func:`_have`'s), said before the assembly's; ``columns``: the
-    file's columns of ``"time"`` and of each required array, named where a value is NaN."""
-    plausible.check_finite(src, {"time": t, **required}, columns)
+    file's columns of ``"time"`` and of each required array, named where a value is NaN (a few rows of NaN in
+    a required array are read as ticks the robot did not log: :func:`.regular.unreadable_rows`)."""
+    plausible.check_finite(src, {"time": t}, columns)
     notes = list(notes)
+    keep = regular.unreadable_rows(src, required, columns, plausible.MAX_GAP_TICKS, notes)
+    if keep is not None:  # a few rows without a value: ticks the robot did not log, as a missing row
+        t, required = t[keep], {k: v[keep] for k, v in required.items()}
+        optional = {k: None if v is None else v[keep] for k, v in optional.items()}
     rows, opt = regular.complete_optional(src, t, optional, notes)
     t = t[rows]
     req = {k: v[rows] for k, v in required.items()}
@@ -195,16 +200,13 @@ def read_nist(path: str | Path, length: plausible.MinLength | None = None) -> Me
     torq = _have(cols, [f"ROBOT_TARGET_JOINT_TORQUES (J{j})" for j in range(1, 7)], part, src)
     d = read_columns(path, src, layout,
                      ["ROBOT_TIME", *pos_t, *pos_a, *cur_a, *cur_t, *temp, *tcp, *vel_t, *vel_a, *torq])
-    plausible.check_finite(src, {"time": d["ROBOT_TIME"], "target positions": _stack(d, pos_t),
-                                 "actual positions": _stack(d, pos_a), "actual currents": _stack(d, cur_a)},
-                           {"time": ["ROBOT_TIME"], "target positions": pos_t, "actual positions": pos_a,
-                            "actual currents": cur_a})
     required = {"target_q": np.radians(_stack(d, pos_t)), "actual_q": np.radians(_stack(d, pos_a)),
                 "actual_current": _stack(d, cur_a)}
     optional = {"target_qd": _stack(d, vel_t), "actual_qd": _stack(d, vel_a), "target_current": _stack(d, cur_t),
                 "temperature": _stack(d, temp), "tcp": _stack(d, tcp), "target_torque": _stack(d, torq)}
+    columns = {"time": ["ROBOT_TIME"], "target_q": pos_t, "actual_q": pos_a, "actual_current": cur_a}
     return _assemble(src, d["ROBOT_TIME"], required, optional, "degrees",
-                     ("target positions", "actual positions"), length, part, payload_kg=NIST_PAYLOAD_KG,
+                     ("target positions", "actual positions"), length, part, columns, payload_kg=NIST_PAYLOAD_KG,
                      tcp_offset_m=NIST_TOOL_OFFSET_M)
 
 

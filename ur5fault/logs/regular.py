@@ -19,11 +19,16 @@ setpoints of a missing tick are interpolated linearly between its neighbours (th
 smooth: at the 3.2 rad/s^2 of the fastest run the interpolation error over 24 ms is 2e-4 rad), and
 so are the readings, which the replay needs at every tick; ``MeasuredLog.logged`` marks the ticks the
 robot really wrote, and every RMS figure the workflows report counts only those.
+
+*Values missing in required columns.* A row whose target position, position reading or current holds NaN or inf
+is a tick the recorder lost a value of: up to as many rows in a row as a gap may miss
+(:data:`.plausible.MAX_GAP_TICKS`) are dropped and so read as missing ticks, with a note
+(:func:`unreadable_rows`); a longer stretch is refused in one line that names its column and rows and where to cut.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 from numpy.typing import NDArray
@@ -55,6 +60,40 @@ def finite_span(arr: NDArray) -> tuple[int, int] | None:
     if idx.size == 0 or not ok[idx[0]: idx[-1] + 1].all():
         return None
     return int(idx[0]), int(idx[-1]) + 1
+
+
+def unreadable_rows(src: str, required: Mapping[str, NDArray], columns: Mapping[str, Sequence[str]] | None,
+                    max_rows: int, notes: list[str]) -> NDArray | None:
+    """The rows to keep ``(n,)`` of a log whose required arrays (name -> ``(n, k)``) hold NaN or inf in stretches of
+    at most ``max_rows`` rows in a row: those rows are read as ticks the robot did not log (a recorder that lost a
+    value lost the tick; the replay interpolates it as a missing row, :func:`on_ticks`), with a note; ``None`` when
+    every value is finite. A longer stretch (or a column with no value at all) is refused in one line naming its
+    column and rows. ``columns``: name -> the file's column of each array column (else ``name_j``)."""
+    labels = {k: list((columns or {}).get(k) or [f"{k}_{j}" for j in range(a.shape[1])]) for k, a in required.items()}
+    bad_cols = {k: ~np.isfinite(a) for k, a in required.items()}
+    bad = np.zeros(next(iter(required.values())).shape[0], dtype=bool)
+    for b in bad_cols.values():
+        bad |= b.any(axis=1)
+    if not bad.any():
+        return None
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], bad.astype(np.int8), [0]])))
+    starts, stops = edges[::2], edges[1::2]
+    i = int(np.argmax(stops - starts))
+    a, b = int(starts[i]), int(stops[i])
+    if b - a > max_rows or bad.all():
+        name, j = next((k, int(np.flatnonzero(m[a:b].any(axis=0))[0])) for k, m in bad_cols.items() if m[a:b].any())
+        if bad_cols[name][:, j].all():
+            raise LogFormatError(f"{src}: NaN or inf in {labels[name][j]} at data row 1 (every row)")
+        raise LogFormatError(f"{src}: NaN or inf in {labels[name][j]} in data rows {a + 1}..{b} ({b - a} rows in a "
+                             f"row; up to {max_rows} are read as ticks the robot did not log); cut the log there into "
+                             f"two logs (data rows 1..{a} and {b + 1}..{bad.size}), which identify, discrepancy and "
+                             "monitor take together as logs of one robot")
+    named = list(dict.fromkeys(labels[k][j] for k, m in bad_cols.items() for j in np.flatnonzero(m.any(axis=0))))
+    shown = ", ".join(named[:3]) + (f" and {len(named) - 3} more" if len(named) > 3 else "")
+    notes.append(f"{src}: {int(bad.sum())} data row(s) with NaN or inf in {shown} (from data row "
+                 f"{int(starts[0]) + 1}; at most {int((stops - starts).max())} in a row): read as ticks the robot did "
+                 "not log, interpolated for the replay and left out of every RMS figure")
+    return ~bad
 
 
 def complete_optional(src: str, t: NDArray, groups: Mapping[str, NDArray | None],
