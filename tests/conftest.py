@@ -32,6 +32,20 @@ JOINT_NAMES = (
 )
 
 
+def as_numpy(data):
+    """``data`` (nested dicts and lists) with every Python number and bool made the numpy scalar a notebook's arrays
+    give (``np.float64``, ``np.int64``, ``np.bool_``): a mapping built from numpy results, as the API may be given."""
+    if isinstance(data, dict):
+        return {k: as_numpy(v) for k, v in data.items()}
+    if isinstance(data, list):
+        return [as_numpy(v) for v in data]
+    if isinstance(data, bool):
+        return np.bool_(data)
+    if isinstance(data, int):
+        return np.int64(data)
+    return np.float64(data) if isinstance(data, float) else data
+
+
 @pytest.fixture(scope="session")
 def nist_path() -> Path:
     if not NIST_LOG.exists():  # part of the repository: a missing log is a broken checkout, not a skip

@@ -160,36 +160,65 @@ def test_version_matches_installed_metadata():
     assert r.stdout.startswith(f"ur5fault {version('ur5fault')} (mujoco {version('mujoco')}")
 
 
-def test_each_command_group_registers_the_commands_the_table_names():
-    """cli.COMMAND_GROUPS, read to import only the chosen command's module, says what each module registers, in the
-    order of `ur5fault --help`."""
+def _summaries(parser) -> dict[str, str]:
+    """The commands of ``parser`` with the one-line help ``ur5fault --help`` lists, in its order."""
     import argparse
 
+    sub = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)][0]
+    return {a.dest: a.help for a in sub._choices_actions}
+
+
+def test_each_command_group_registers_the_commands_and_summaries_the_table_names():
+    """cli.COMMAND_GROUPS, read to import only the chosen command's module and to list the commands in `ur5fault
+    --help` without importing any, says what each module registers, with the same summaries, in the same order."""
     from ur5fault.cli import COMMAND_GROUPS, build_parser
 
-    def commands(parser):
-        return [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)][0].choices
+    for group, summaries in COMMAND_GROUPS.items():
+        assert list(_summaries(build_parser([group])).items()) == list(summaries.items()), group
+    every = [item for summaries in COMMAND_GROUPS.values() for item in summaries.items()]
+    assert list(_summaries(build_parser()).items()) == every
+    assert list(_summaries(build_parser(())).items()) == every
 
-    for group, names in COMMAND_GROUPS.items():
-        assert tuple(commands(build_parser([group]))) == names, group
-    assert tuple(commands(build_parser())) == sum(COMMAND_GROUPS.values(), ())
+
+@pytest.mark.parametrize("argv", [["--help"], ["-h"], ["-v", "--help", "simulate"], ["-v"]])
+def test_the_top_level_help_without_the_command_modules_is_the_one_with_them(argv, capsys, monkeypatch):
+    """`ur5fault --help` imported every command's module (1.8 s) to list one line per command: it is made from
+    COMMAND_GROUPS' summaries alone, and prints, byte for byte, the help of the parser built with every group (so
+    does a command line without a command, on stderr before its error line)."""
+    from ur5fault.cli import build_parser, groups_needed, main
+
+    monkeypatch.setenv("COLUMNS", "100")  # one width for both (argparse reads it when it formats)
+    full = build_parser().format_help()  # the slow way: every group's module imported and registered
+    assert groups_needed(argv) == () and build_parser(()).format_help() == full
+    if argv == ["-v"]:
+        assert main(argv) == 2
+        err = capsys.readouterr().err
+        assert err == full + "ur5fault: error: name a command (" + ", ".join(_summaries(build_parser())) + ")\n"
+        return
+    with pytest.raises(SystemExit) as info:
+        main(argv)
+    assert info.value.code == 0 and capsys.readouterr().out == full
 
 
 @pytest.mark.parametrize("argv, groups", [(["--version"], ()), (["-vv", "--version", "simulate"], ()),
                                           (["effects"], (".run_cli",)), (["-v", "--verbose", "plot", "x"],
                                                                           (".campaign.cli",)),
                                           (["monitor", "--version"], (".health.monitoring.cli",)),
-                                          ([], None), (["-h"], None), (["simul"], None), (["--verb", "show"], None),
-                                          (["-vh", "show"], None), (["--", "show"], None)])
+                                          ([], ()), (["-h"], ()), (["-v", "--help", "show"], ()), (["-v"], ()),
+                                          (["show", "-h"], (".run_cli",)), (["simul"], None), (["--he"], None),
+                                          (["--verb", "show"], None), (["-vh", "show"], None), (["--", "show"], None)])
 def test_a_command_line_imports_its_commands_module_alone(argv, groups):
-    """Only the chosen command's module is imported; whenever the choice is not plain (help, a misspelled
-    command, an abbreviated option before it), every group, so that argparse answers as before."""
+    """Only the chosen command's module is imported, none for the top-level help (its summaries are
+    COMMAND_GROUPS'); whenever the choice is not plain (a misspelled command, an abbreviated option before it),
+    every group, so that argparse answers as before."""
     from ur5fault.cli import COMMAND_GROUPS, groups_needed
 
     assert groups_needed(argv) == (tuple(COMMAND_GROUPS) if groups is None else groups)
 
 
 @pytest.mark.parametrize("args, absent", [(["--version"], ("ur5fault.run_cli", "ur5fault.sim", "numpy")),
+                                          (["--help"], ("ur5fault.run_cli", "ur5fault.campaign", "ur5fault.sim",
+                                                        "ur5fault.health", "numpy", "scipy", "sklearn")),
                                           (["effects"], ("ur5fault.campaign", "ur5fault.discrepancy",
                                                          "ur5fault.identify", "ur5fault.health", "scipy", "sklearn",
                                                          "pandas", "matplotlib"))])

@@ -190,6 +190,9 @@ SIMULATE = [
     ("config-duplicate", ["--config", "{tmp}/dup.yaml"], "duplicate key 'params'"),
     ("config-memory", ["--config", "{tmp}/long.yaml"], "of memory, more than 80% of the"),
     ("config-seed-float", ["--config", "{tmp}/seed.yaml"], "seed = 1.5 must be a non-negative integer"),
+    # was "--duration-s 1 holds fewer than 3 log periods of 1 s": true counted as a log period of 1 s
+    ("config-log-period-true", ["--config", "{tmp}/lptrue.yaml", "--duration-s", "1"],
+     "lptrue.yaml: log_period_s = True must be a number in [5e-05, inf] s"),
     ("model-negative-link-mass", ["--model", "{tmp}/negmass.yaml"],
      "link_mass on shoulder_pan_joint: mass_kg = -10 would leave the link -6.3 kg (it weighs 3.7 kg)"),
     ("model-int-beyond-float", ["--model", "{tmp}/bigint.yaml"], "coulomb_Nm[1] = 1000000000"),
@@ -294,6 +297,7 @@ def support_files(tmp_path):
     _write(tmp_path, "dup.yaml", "params: {}\nparams: {gear: {ratio: 50}}\n")
     _write(tmp_path, "long.yaml", "trajectory: {name: hold, seconds: 3500}\nlog_period_s: 0.00005\n")
     _write(tmp_path, "seed.yaml", "seed: 1.5\n")
+    _write(tmp_path, "lptrue.yaml", "log_period_s: true\n")
     _write(tmp_path, "negmass.yaml", "effects:\n  - {effect: link_mass, joint: 1, mass_kg: -10}\n")
     _write(tmp_path, "bigint.yaml", f"params:\n  friction:\n    coulomb_Nm: [{10 ** 400}, 1, 1, 1, 1, 1]\n")
     _write(tmp_path, "many.yaml", "effects:\n" + "  - {effect: current_sensor_offset, joint: 1, offset_A: 0.001}\n"

@@ -96,30 +96,63 @@ def configure_logging(verbosity: int) -> None:
         logger.addHandler(handler)
 
 
-#: each command group's module and the commands it registers, in the order ``ur5fault --help`` lists them. A command
-#: line imports the module of its command alone: all of them took 2-3 s (scipy, scikit-learn, the simulator), more
-#: than ``ur5fault --version`` or ``ur5fault effects`` should wait
-COMMAND_GROUPS = {
-    ".run_cli": ("simulate", "effects", "data", "show"),
-    ".campaign.cli": ("campaign", "plot"),
-    ".discrepancy.cli": ("discrepancy",),
-    ".identify.cli": ("identify",),
-    ".health.diagnostics.cli": ("benchmark",),
-    ".health.diagnosis.cli": ("diagnose",),
-    ".health.prognostics.cli": ("prognose",),
-    ".health.monitoring.cli": ("monitor",),
+#: each command group's module and the commands it registers with their one-line summaries (the ``help`` its
+#: ``register`` gives them), in the order ``ur5fault --help`` lists them. A command line imports the module of its
+#: command alone: all of them took 2-3 s (scipy, scikit-learn, the simulator), more than ``ur5fault --version``,
+#: ``ur5fault --help`` or ``ur5fault effects`` should wait; the top-level help lists these summaries (a test holds
+#: them equal to the modules')
+COMMAND_GROUPS: dict[str, dict[str, str]] = {
+    ".run_cli": {
+        "simulate": "run one configuration and write its time series to Parquet or CSV",
+        "effects": "list the effect registry",
+        "data": "the real UR5 logs shipped with ur5fault (NIST CB3, Kufieta CB2): names, formats, paths",
+        "show": "draw one run: setpoint vs resolver, encoder mismatch, currents, TCP deviation",
+    },
+    ".campaign.cli": {
+        "campaign": "run a YAML fault campaign into Parquet feature tables",
+        "plot": "draw the paper's backlash figures and a severity figure per swept effect (PNG)",
+    },
+    ".discrepancy.cli": {"discrepancy": "find, name and fix where the model and a measured log disagree"},
+    ".identify.cli": {"identify": "re-derive the measured drive parameters from a log (parameter overlay)"},
+    ".health.diagnostics.cli": {
+        "benchmark": "train baseline classifiers on a campaign's train split, report on its test split (needs "
+                     "scikit-learn and skops: pip install 'scikit-learn>=1.3' 'skops>=0.10', or the wheel's [ml] "
+                     "extra)",
+    },
+    ".health.diagnosis.cli": {
+        "diagnose": "score a measured log with the classifiers `ur5fault benchmark` saved: p(fault) per window and "
+                    "joint, likeliest kinds and sizes",
+    },
+    ".health.prognostics.cli": {
+        "prognose": "benchmark remaining-useful-life estimators on a life campaign's held-out units (report.md, "
+                    "metrics.json, figures)",
+    },
+    ".health.monitoring.cli": {
+        "monitor": "compare new logs of a robot with its fitted baseline: consistent, changed or anomaly",
+    },
 }
 
 #: options of ``ur5fault`` itself that may stand before the command, spelled out (none takes a value)
 _LEADING = ("--verbose", "--version")
+#: options that end the parse with the top-level help, before any command is looked at
+_HELP = ("-h", "--help")
 
 
 def build_parser(groups: Sequence[str] | None = None) -> argparse.ArgumentParser:
-    """The parser of ``ur5fault`` with the commands of ``groups`` (keys of :data:`COMMAND_GROUPS`; default: all)."""
+    """The parser of ``ur5fault`` with the commands of ``groups`` (keys of :data:`COMMAND_GROUPS`; default: all).
+
+    With no group (``ur5fault --help``, ``--version``, no command), every command is named by its summary in
+    :data:`COMMAND_GROUPS` alone, on a parser that takes nothing: the top-level help is the one of all groups, and
+    no command's module is imported."""
     p = _Parser(prog="ur5fault", description="UR5 fault-injection simulator")
     p.add_argument("--version", action="version", version=_version())
     sub = p.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     p.set_defaults(func=_usage(p))
+    if groups is not None and not groups:
+        for commands in COMMAND_GROUPS.values():
+            for name, summary in commands.items():
+                sub.add_parser(name, help=summary)
+        return p
     for group in COMMAND_GROUPS if groups is None else groups:
         # imported directly: a broken module is an error, not a silently missing command
         importlib.import_module(group, __package__).register(sub)
@@ -127,16 +160,17 @@ def build_parser(groups: Sequence[str] | None = None) -> argparse.ArgumentParser
 
 
 def groups_needed(argv: Sequence[str]) -> tuple[str, ...]:
-    """The command groups the command line ``argv`` needs: its command's alone, none for ``--version``; every group
-    when the command is not plain (``ur5fault --help``, a misspelled command, an abbreviated option before it), so
-    that argparse answers as it does with all of them."""
+    """The command groups the command line ``argv`` needs: its command's alone; none for ``--version``, for
+    ``--help``/``-h`` before any command and for no command at all (the top-level help, :func:`build_parser` makes
+    from the summaries); every group when the command is not plain (a misspelled command, an abbreviated option
+    before it), so that argparse answers as it does with all of them."""
     for arg in argv:
-        if arg == "--version":  # ends the parse before any command is looked at
+        if arg == "--version" or arg in _HELP:  # end the parse before any command is looked at
             return ()
         if arg in _LEADING or (arg.startswith("-v") and set(arg[1:]) == {"v"}):
             continue
         return tuple(group for group, commands in COMMAND_GROUPS.items() if arg in commands) or tuple(COMMAND_GROUPS)
-    return tuple(COMMAND_GROUPS)
+    return ()
 
 
 def _one_line(message: str) -> int:

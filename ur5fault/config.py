@@ -34,7 +34,7 @@ from .sim.runspec import MAX_SEED
 from .sim.trajectories import TRAJECTORIES, Trajectory, get_trajectory
 from .sim.trajectories.base import OPTION_RANGES
 from .sim.trajectories.fixed import check_speed_scale
-from .util.checks import check_int, check_number, short
+from .util.checks import check_int, check_number, is_real, short
 from .util.results import check_whole
 
 #: numeric trajectory options and their valid ranges (written once, in the trajectories: each function checks its
@@ -117,7 +117,7 @@ def trajectory_key(spec: Any) -> str:
     def canon(v):
         if isinstance(v, (list, tuple)):
             return [canon(x) for x in v]
-        return float(v) if isinstance(v, (int, float)) and not isinstance(v, bool) else v
+        return float(v) if is_real(v) else v
 
     return json.dumps([name, {k: canon(v) for k, v in sorted(options.items())}], default=str)
 

@@ -97,7 +97,7 @@ def _check_flags(args: argparse.Namespace, file_data: dict) -> None:
     keys, which a command-line user never typed)."""
     from .config import MIN_LOGGED_SAMPLES, check_duration, check_seed
     from .sim.effects import REGISTRY
-    from .util.checks import check_number
+    from .util.checks import check_number, is_real
 
     if args.seed is not None:
         check_seed(args.seed, "--seed")
@@ -109,7 +109,7 @@ def _check_flags(args: argparse.Namespace, file_data: dict) -> None:
     if args.duration_s is not None:
         check_duration(args.duration_s, "--duration-s")
         log_period = args.log_period_s if args.log_period_s is not None else file_data.get("log_period_s", 1e-3)
-        if isinstance(log_period, (int, float)) and args.duration_s < MIN_LOGGED_SAMPLES * log_period:
+        if is_real(log_period) and args.duration_s < MIN_LOGGED_SAMPLES * log_period:  # else refused by its key
             raise Ur5FaultError(f"--duration-s {args.duration_s:g} holds fewer than {MIN_LOGGED_SAMPLES} log periods "
                                 f"of {log_period:g} s: a run's features take speeds and accelerations of its "
                                 "logged samples; give a longer run or --log-period-s")

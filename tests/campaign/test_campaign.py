@@ -28,7 +28,7 @@ from ur5fault.errors import ParameterError, UnknownNameError
 from ur5fault.health.features import FEATURE_UNITS
 from ur5fault.sim.params import load_params
 
-from conftest import REPO
+from conftest import REPO, as_numpy
 
 EXEC_COLUMNS = ["wall_s_batch", "batch_size"]  # execution metadata, not results
 
@@ -692,6 +692,28 @@ def test_numpy_numbers_in_a_campaign_are_its_plain_numbers(tmp_path):
     assert "!!python" not in camp.text and yaml.safe_load(camp.text)["duration_s"] == 3.0
     assert camp == build_campaign({"duration_s": 3.0, "threshold_mm": 1, "batch_size": 2}, "t.yaml",
                                   text=camp.text)
+
+
+def test_a_grid_of_numpy_numbers_is_the_grid_of_the_numbers_they_hold():
+    """A swept trajectory with an `np.int64` seed stopped the campaign with a TypeError (int64 is not JSON
+    serializable); the runs, identities, text and manifest mapping of numpy numbers are those of the numbers."""
+    from ur5fault.campaign.identity import Identities
+
+    grid = {"name": "g", "base": {"seed": 3, "payload_kg": 1.0}, "duration_s": 2.0, "save_timeseries": False,
+            "sweep": {"backlash.joint": [1, 2], "backlash.backlash_deg": [0.0, 0.1],
+                      "trajectory": [{"name": "random_pick_and_place", "seed": 5},
+                                     {"name": "random_pick_and_place", "seed": 6, "tool_tilt_deg": 2}]},
+            "zip": [{"payload_kg": [1.0, 2.0], "seed": [1, 2]}]}
+    plain, numpy = build_campaign(grid, "g.yaml"), build_campaign(as_numpy(grid), "g.yaml")
+    assert [r.run_id for r in numpy.runs] == [r.run_id for r in plain.runs]
+    ids_plain, ids_numpy = Identities(plain), Identities(numpy)
+    assert [ids_numpy.identity(r) for r in numpy.runs] == [ids_plain.identity(r) for r in plain.runs]
+    assert numpy == plain and numpy.text == plain.text and "!!python" not in numpy.text
+    assert json.dumps(numpy.data, sort_keys=True) == json.dumps(plain.data, sort_keys=True)
+    assert {type(v) for r in numpy.runs for v in r.cond["trajectory"].values()} == {str, int}
+    with pytest.raises(ParameterError, match=r"sweep.trajectory\[1\]: .* repeats \[0\]"):
+        build_campaign({"sweep": {"trajectory": [{"name": "random_pick_and_place", "seed": np.int64(3)},
+                                                 {"name": "random_pick_and_place", "seed": 3.0}]}}, "t.yaml")
 
 
 @pytest.mark.parametrize("camp, kwargs, message", [

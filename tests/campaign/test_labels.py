@@ -123,12 +123,20 @@ def test_split_edge_cases():
     ({"test_fraction": 1.0}, ParameterError, "split.test_fraction = 1.0 must be a number in [0, 1)"),
     ({"test_fraction": "a"}, ParameterError, "split.test_fraction = 'a' must be a number in [0, 1)"),
     ({"seed": -2}, ParameterError, "split.seed = -2 must be a non-negative integer"),
+    ({"seed": np.True_}, ParameterError, "split.seed = np.True_ must be a non-negative integer"),
+    ({"test_fraction": True}, ParameterError, "split.test_fraction = True must be a number in [0, 1)"),
     ([0.2], ParameterError, "split must be a mapping"),
 ])
 def test_split_rule_validation(data, exc, message):
     with pytest.raises(exc) as info:
         parse_split(data, "c.yaml")
     assert str(info.value).startswith("c.yaml") and message in str(info.value)
+
+
+def test_a_split_of_numpy_numbers_is_the_split_of_the_numbers_they_hold():
+    """`split: {seed: np.int64(2)}` (a mapping built from numpy results) was refused as no integer."""
+    rule = parse_split({"by": "seed", "test_fraction": np.float32(0.5), "seed": np.int64(2)}, "c.yaml")
+    assert rule == SplitRule("seed", 0.5, 2) and type(rule.seed) is int and type(rule.test_fraction) is float
 
 
 # ----------------------------------------------------------------------------- in a campaign

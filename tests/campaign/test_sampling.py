@@ -14,8 +14,11 @@ import pytest
 
 from ur5fault.campaign import build_campaign, run_campaign, status
 from ur5fault.campaign.design import parse_dist, unit_design
+from ur5fault.campaign.identity import Identities
 from ur5fault.campaign.labels import fault_labels
 from ur5fault.errors import ParameterError, UnknownNameError
+
+from conftest import as_numpy
 
 SPEC = {
     "name": "s",
@@ -194,6 +197,15 @@ def test_distributions_map_the_unit_interval():
     assert parse_dist(5, "x").value(0.3) == 5 and not parse_dist(5, "x").drawn
 
 
+def test_distributions_of_numpy_numbers_give_the_python_numbers_they_hold():
+    """`{integers: [np.int64(0), np.int64(3)]}` was refused as no numbers; a numpy choice or fixed value was drawn as
+    the numpy scalar itself, which run ids hash by its text."""
+    d = parse_dist({"integers": [np.int64(0), np.int64(3)], "step": np.float64(1.0)}, "x")
+    assert d == parse_dist({"integers": [0, 3], "step": 1.0}, "x") and type(d.value(0.5)) is int
+    for spec in ({"choices": [np.float32(0.5), np.int64(2)]}, np.float64(0.5), [np.float64(0.5), np.float64(0.5)]):
+        assert {type(v) for v in parse_dist(spec, "x").bounds()} <= {int, float}, spec
+
+
 # ----------------------------------------------------------------------------- end to end
 TINY = {
     "name": "tiny", "duration_s": 0.05, "batch_size": 16,
@@ -339,3 +351,37 @@ def test_a_swept_value_given_twice_is_refused():
                             "sweep.backlash.joint[1]: 2 repeats [0] ('shoulder_lift_joint')")):
         with pytest.raises(ParameterError, match=re.escape(message)):
             build_campaign({"name": "dup", "sweep": sweep}, "d.yaml")
+
+
+def test_a_sample_of_numpy_numbers_is_the_sample_of_the_numbers_they_hold():
+    """A campaign mapping built in a notebook from numpy results: `sample.n = np.int64(40)` was refused as no integer,
+    `integers: [np.int64(0), ...]` as no numbers, `split.seed` likewise; its runs, their identities, its text and the
+    manifest's mapping are the ones of the plain numbers."""
+    spec = copy.deepcopy(SPEC)
+    spec["sample"]["n"] = 40
+    spec["sample"]["conditions"]["temperature_C"] = {"choices": [20.0, 30.0]}
+    spec.update(split={"by": "trajectory_seed", "test_fraction": 0.3, "seed": 2}, threshold_mm=0.7, batch_size=8,
+                base={"seed": 1, "payload_kg": 1.5}, twin_residuals=True)
+    plain, numpy = build_campaign(spec, "s.yaml"), build_campaign(as_numpy(spec), "s.yaml")
+    assert [r.run_id for r in numpy.runs] == [r.run_id for r in plain.runs]
+    ids_plain, ids_numpy = Identities(plain), Identities(numpy)
+    assert [ids_numpy.identity(r) for r in numpy.runs] == [ids_plain.identity(r) for r in plain.runs]
+    assert numpy.text == plain.text and "!!python" not in numpy.text
+    assert json.dumps(numpy.data, sort_keys=True) == json.dumps(plain.data, sort_keys=True)  # np.int64: TypeError
+    assert numpy == plain
+    values = [v for r in numpy.runs for part in (r.cond, r.cond["trajectory"], dict(r.faults)) for v in part.values()]
+    assert {type(v) for v in values} == {int, float, str, dict}
+
+
+@pytest.mark.parametrize("path, value, message", [
+    ("n", np.True_, "sample.n = np.True_ must be an integer in [1, 1000000]"),
+    ("seed", True, "sample.seed = True must be a non-negative integer"),
+    ("faults__healthy", {"weight": np.True_}, "sample.faults.healthy.weight = np.True_ must be a positive number"),
+    ("conditions__seed", {"integers": [np.False_, 9]}, "integers = [False, 9] must be a list [lo, hi] of two numbers"),
+    ("conditions__seed", {"choices": [np.int64(1), True]}, "conditions.seed: seed = True must be a non-negative"),
+    ("conditions__payload_kg", {"uniform": [0.0, 2.0], "step": np.True_}, "step = np.True_ must be a positive number"),
+])
+def test_a_bool_is_no_number_of_a_sample(path, value, message):
+    with pytest.raises(ParameterError) as info:
+        build_campaign(sample_with(**{path: value}), "s.yaml")
+    assert message in str(info.value)

@@ -22,7 +22,8 @@ pytest.importorskip("sklearn")
 pytest.importorskip("skops")
 
 from ur5fault.cli import main  # noqa: E402
-from ur5fault.health.diagnosis.score import COMPUTABLE, MAX_VIF  # noqa: E402
+from ur5fault.errors import ConfigFileError  # noqa: E402
+from ur5fault.health.diagnosis.score import COMPUTABLE, MAX_VIF, check_schema  # noqa: E402
 from ur5fault.health.diagnostics import joint_kind  # noqa: E402
 from ur5fault.health.diagnostics.calibration import fit_calibration  # noqa: E402
 from ur5fault.health.diagnostics.data import load_dataset  # noqa: E402
@@ -287,6 +288,17 @@ def test_detector_whose_schema_does_not_match_is_refused(logs, detector, tmp_pat
     err = capsys.readouterr().err.strip()
     assert rc == 2 and err.startswith("ur5fault: error:") and words in err and len(err.splitlines()) == 1
     assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize("window_s", [True, "5", float("nan"), 0.0])
+def test_a_schema_without_a_window_length_in_seconds_is_refused(window_s):
+    """`window_s: true` in an edited schema.json passed as a window of 1 s (a bool counted as a number)."""
+    from ur5fault.health.diagnostics.saved import SCHEMA_FORMAT
+
+    schema = {"schema_format": SCHEMA_FORMAT, "classes": {"detector": {}}, "inputs": [{"name": sorted(COMPUTABLE)[0]}]}
+    assert check_schema({**schema, "window_s": np.float64(5.0)}, "d") == 5.0
+    with pytest.raises(ConfigFileError, match=r"^d: the schema does not say the training runs' duration \(window_s\)"):
+        check_schema({**schema, "window_s": window_s}, "d")
 
 
 @pytest.mark.parametrize("argv, words", [

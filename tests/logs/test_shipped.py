@@ -3,6 +3,8 @@ checkout's data/ links to, each set with its README (and the Kufieta runs with t
 
 from __future__ import annotations
 
+import re
+
 import pytest
 
 from ur5fault.errors import UnknownNameError
@@ -20,6 +22,17 @@ def test_every_shipped_log_file_has_a_name_and_every_name_a_file():
     for folder in ("nist-ur5", "kufieta-ur5"):
         assert (LOGS_DIR / folder / "README.md").is_file()
     assert (LOGS_DIR / "kufieta-ur5" / "LICENSE-Apache-2.0.txt").is_file()  # Apache-2.0, section 4
+
+
+def test_the_shipped_readmes_say_where_the_files_they_point_at_are():
+    """The Kufieta README (installed with the logs) said "see docs/validation.md", which an installed package does not
+    hold: a pointer into the checkout's docs/ or bench/ says it is in the source repository."""
+    readmes = sorted(LOGS_DIR.glob("*/README.md"))
+    assert len(readmes) == 2
+    for readme in readmes:
+        text = " ".join(readme.read_text().split())
+        for m in re.finditer(r"\b(?:docs|bench)/[\w./-]*\w", text):
+            assert text[m.end():].startswith(" in the ur5fault source repository"), (readme.parent.name, m.group())
 
 
 def test_a_checkouts_data_folder_is_the_shipped_files():

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import yaml
 
 from ur5fault.errors import ParameterError
 from ur5fault.util.yamlsafe import dump, loads, plain
@@ -27,7 +28,40 @@ def test_numpy_values_are_written_as_plain_yaml():
 def test_plain_leaves_python_values_alone():
     data = {"a": [1, 2.5, "x", None, True], "b": {"c": 1}}
     assert plain(data) == data
-    assert dump(data) == dump(plain(data))
+    assert dump(data) == "a:\n- 1\n- 2.5\n- x\n- null\n- true\nb:\n  c: 1\n"
+
+
+def test_nested_numpy_values_are_written_as_the_yaml_their_numbers_make():
+    """Against YAML written by hand (not against ``dump(plain(data))``, which ``dump`` is): numpy numbers of every
+    width, bools, arrays of two dimensions and none, inside dicts and tuples nested in each other."""
+    data = {"outer": {"inner": {"gain": np.float32(0.5), "n": np.uint8(7), "flags": (np.bool_(False), True)},
+                      "grid": np.array([[1, 2], [3, 4]], dtype=np.int16),
+                      "pair": (np.float64(-1e-9), (np.int64(2),))},
+            "empty": np.array([])}
+    text = dump(data)
+    assert text == ("empty: []\n"
+                    "outer:\n"
+                    "  grid:\n"
+                    "  - - 1\n"
+                    "    - 2\n"
+                    "  - - 3\n"
+                    "    - 4\n"
+                    "  inner:\n"
+                    "    flags:\n"
+                    "    - false\n"
+                    "    - true\n"
+                    "    gain: 0.5\n"
+                    "    n: 7\n"
+                    "  pair:\n"
+                    "  - -1.0e-09\n"
+                    "  - - 2\n")
+    assert "!!" not in text
+    expected = {"empty": [], "outer": {"grid": [[1, 2], [3, 4]], "inner": {"flags": [False, True], "gain": 0.5, "n": 7},
+                                       "pair": [-1e-9, [2]]}}
+    for back in (yaml.safe_load(text), loads(text)):
+        assert back == expected
+        assert type(back["outer"]["inner"]["n"]) is int and type(back["outer"]["inner"]["gain"]) is float
+        assert type(back["outer"]["inner"]["flags"][0]) is bool and type(back["outer"]["grid"][0][0]) is int
 
 
 def test_a_value_yaml_cannot_write_is_refused_by_name():

@@ -12,6 +12,8 @@ from typing import Any
 import numpy as np
 
 from ..errors import ParameterError, UnknownNameError
+from ..util.checks import is_integer, is_real
+from ..util.yamlsafe import plain
 
 METHODS = ("lhs", "sobol")
 DIST_KEYS = ("uniform", "log", "integers", "choices")
@@ -58,31 +60,34 @@ def parse_dist(spec: Any, where: str) -> Dist:
     if isinstance(spec, list):
         spec = {"uniform": spec}
     if not isinstance(spec, Mapping):
-        return Dist("fixed", (spec,))
+        return Dist("fixed", (plain(spec),))
     keys = [k for k in spec if k in DIST_KEYS]
     extra = [k for k in spec if k not in DIST_KEYS + ("step",)]
     if extra or len(keys) != 1:
         bad = extra[0] if extra else "/".join(keys) or "(none)"
         raise UnknownNameError("distribution", bad, DIST_KEYS, where)
     kind, args = keys[0], spec[keys[0]]
+    if isinstance(args, list):  # numpy numbers (a list built in Python) as the Python numbers they hold
+        args = [plain(v) for v in args]
     step = spec.get("step")
-    if step is not None and (isinstance(step, bool) or not isinstance(step, (int, float)) or not step > 0):
+    if step is not None and (not is_real(step) or not step > 0):
         raise ParameterError(f"{where}: step = {step!r} must be a positive number")
+    step = float(step) if step is not None else None
     if kind == "choices":
         if not isinstance(args, list) or not args:
             raise ParameterError(f"{where}: choices must be a non-empty list")
         return Dist("choices", tuple(args), step)
     if (not isinstance(args, list) or len(args) != 2
-            or any(isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) for v in args)):
+            or any(not is_real(v) or not math.isfinite(v) for v in args)):
         raise ParameterError(f"{where}: {kind} = {args!r} must be a list [lo, hi] of two numbers")
     lo, hi = args
-    if kind == "integers" and not (isinstance(lo, int) and isinstance(hi, int)):
+    if kind == "integers" and not (is_integer(lo) and is_integer(hi)):
         raise ParameterError(f"{where}: integers = {args!r} must be two integers")
     if not lo <= hi:
         raise ParameterError(f"{where}: {kind} = {args!r} needs lo <= hi")
     if kind == "log" and not lo > 0:
         raise ParameterError(f"{where}: log = {args!r} needs 0 < lo <= hi")
-    return Dist(kind, (lo, hi), float(step) if step is not None else None)
+    return Dist(kind, (lo, hi), step)
 
 
 def unit_design(method: str, n: int, d: int, seed: int) -> np.ndarray:

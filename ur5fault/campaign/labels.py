@@ -37,6 +37,7 @@ import numpy as np
 from ..errors import ParameterError, UnknownNameError
 from ..sim.effect_types import EffectKey
 from ..sim.effects import REGISTRY, EffectSpec
+from ..util.checks import is_integer, is_real
 
 SPLIT_KEYS = ("by", "test_fraction", "seed")
 #: group keys of the split: the trajectory's seed option (runs on a fixed trajectory are grouped by its
@@ -67,10 +68,10 @@ def parse_split(data: Any, where: str) -> SplitRule:
     if by not in SPLIT_BY:
         raise UnknownNameError("split group", by, SPLIT_BY, f"{where}: split.by")
     frac = data.get("test_fraction", SplitRule.test_fraction)
-    if isinstance(frac, bool) or not isinstance(frac, (int, float)) or not 0.0 <= frac < 1.0:
+    if not is_real(frac) or not 0.0 <= frac < 1.0:
         raise ParameterError(f"{where}: split.test_fraction = {frac!r} must be a number in [0, 1)")
     seed = data.get("seed", SplitRule.seed)
-    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+    if not is_integer(seed) or seed < 0:
         raise ParameterError(f"{where}: split.seed = {seed!r} must be a non-negative integer")
     return SplitRule(str(by), float(frac), int(seed))
 

@@ -19,6 +19,7 @@ from ..sim.axes import joint_index
 from ..sim.effect_types import EffectKey
 from ..sim.effects import REGISTRY, EffectSpec, effects_of_keys
 from ..util.checks import check_number, short
+from ..util.yamlsafe import plain
 
 CONDITION_KEYS = ("seed", "payload_kg", "temperature_C", "trajectory")
 #: largest grid expanded at all (checked from the list lengths before expanding; assumption: a
@@ -89,7 +90,7 @@ def check_value(key: Any, value: Any, where: str) -> Any:
     if key == "trajectory":
         refuse_trajectory_payload(value, where)
         parse_trajectory(value, where)
-        return value if isinstance(value, str) else dict(value)
+        return value if isinstance(value, str) else plain(dict(value))  # numpy options: the numbers they hold
     ek = EffectKey.parse(key)
     if ek is None or ek.effect not in REGISTRY:
         valid = list(CONDITION_KEYS) + [f"{e}.<param>" for e in REGISTRY]

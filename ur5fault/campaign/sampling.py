@@ -56,6 +56,8 @@ from ..errors import ParameterError, UnknownNameError, Ur5FaultError
 from ..sim.axes import joint_index
 from ..sim.effect_types import EffectKey, EffectParam
 from ..sim.effects import REGISTRY, effects_of_keys, make_effect
+from ..util.checks import is_integer, is_real
+from ..util.yamlsafe import plain
 from .design import METHODS, SIGNIFICANT_DIGITS, Dist, parse_dist, unit_design
 from .runs import CONDITION_KEYS, MAX_RUNS, refuse_trajectory_payload
 
@@ -92,7 +94,7 @@ def _parse_kind(name: str, spec: Any, where: str) -> FaultKind:
         if key not in KIND_KEYS:
             raise UnknownNameError("key", key, KIND_KEYS, where)
     w = spec.get("weight", 1)
-    if isinstance(w, bool) or not isinstance(w, (int, float)) or not 0 < w < math.inf:
+    if not is_real(w) or not 0 < w < math.inf:
         raise ParameterError(f"{where}.weight = {w!r} must be a positive number")
     if name == "healthy":
         if "size" in spec or "direction" in spec:
@@ -107,7 +109,7 @@ def _parse_kind(name: str, spec: Any, where: str) -> FaultKind:
     if direction not in DIRECTIONS:
         raise UnknownNameError("direction", direction, DIRECTIONS, f"{where}.direction")
     for s in size.bounds():
-        if isinstance(s, bool) or not isinstance(s, (int, float)) or s <= 0:
+        if not is_real(s) or s <= 0:
             raise ParameterError(f"{where}.size: {s!r} must be a positive number ({p.name} deviation"
                                  f"{p.unit_text(' in {}')})")
         for sign in _signs(direction):
@@ -128,7 +130,7 @@ def _check_condition(key: str, dist: Dist, where: str) -> None:
         return
     for v in dist.bounds():
         if key == "seed":
-            if isinstance(v, bool) or not isinstance(v, int) or v < 0:
+            if not is_integer(v) or v < 0:
                 raise ParameterError(f"{where}: seed = {v!r} must be a non-negative integer")
         elif key == "payload_kg":
             make_effect("payload", where=where, mass_kg=v)
@@ -154,7 +156,7 @@ def _condition_key(key: str, where: str) -> None:
 def _trajectory_dists(spec: Any, where: str) -> tuple[Any, dict[str, Dist]]:
     """The trajectory's fixed spec and its drawn options."""
     if not isinstance(spec, Mapping):
-        return spec, {}
+        return plain(spec), {}
     refuse_trajectory_payload(spec, where)
     fixed, drawn = {}, {}
     for k, v in spec.items():
@@ -162,7 +164,7 @@ def _trajectory_dists(spec: Any, where: str) -> tuple[Any, dict[str, Dist]]:
         if d.drawn and d.kind not in ("integers", "choices"):
             raise ParameterError(f"{where}.{k}: trajectory options are drawn from integers or choices only "
                                  f"(runs must share trajectories to step in lockstep batches)")
-        (drawn if d.drawn else fixed)[k] = d if d.drawn else v
+        (drawn if d.drawn else fixed)[k] = d if d.drawn else plain(v)
     return fixed, drawn
 
 
@@ -223,13 +225,13 @@ def parse_sample(spec: Any, cond0: Mapping[str, Any], loc: str) -> SamplePlan:
         if key not in SAMPLE_KEYS:
             raise UnknownNameError("key", key, SAMPLE_KEYS, loc)
     n = spec.get("n")
-    if isinstance(n, bool) or not isinstance(n, int) or not 1 <= n <= MAX_RUNS:
+    if not is_integer(n) or not 1 <= n <= MAX_RUNS:
         raise ParameterError(f"{loc}.n = {n!r} must be an integer in [1, {MAX_RUNS}]")
     method = spec.get("method", "lhs")
     if method not in METHODS:
         raise UnknownNameError("sampling method", method, METHODS, f"{loc}.method")
     seed = spec.get("seed", 0)
-    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+    if not is_integer(seed) or seed < 0:
         raise ParameterError(f"{loc}.seed = {seed!r} must be a non-negative integer")
     faults = spec.get("faults") or {"healthy": {}}
     if not isinstance(faults, Mapping):
@@ -245,8 +247,8 @@ def parse_sample(spec: Any, cond0: Mapping[str, Any], loc: str) -> SamplePlan:
                              "each joint once")
     twin_kinds = _twin_kinds(spec.get("twins", "all"), kinds, loc)
     cond_dists, traj_fixed, traj_drawn = _condition_dists(spec.get("conditions") or {}, cond0, kinds, loc)
-    return SamplePlan(n, method, seed, tuple(kinds), tuple(joints), frozenset(twin_kinds), cond_dists, traj_fixed,
-                      traj_drawn)
+    return SamplePlan(int(n), method, int(seed), tuple(kinds), tuple(joints), frozenset(twin_kinds), cond_dists,
+                      traj_fixed, traj_drawn)
 
 
 def _twin_kinds(twins: Any, kinds: Sequence[FaultKind], loc: str) -> set[str]:

@@ -62,7 +62,7 @@ from ..sim.axes import JOINT_NAMES
 from ..sim.effects import EffectSpec
 from ..sim.params import NOMINAL_JOINT_TEMPERATURE_C, deep_merge, load_params, read_yaml
 from ..util.checks import check_bool, check_int, check_name, check_number, check_text, short
-from ..util.yamlsafe import dump
+from ..util.yamlsafe import dump, plain
 from .labels import SplitRule, parse_split
 from .runs import CampaignRun, check_value, grid_runs, sweep_axes, trajectory_specs
 from .sampling import sample_runs
@@ -248,7 +248,7 @@ def build_campaign(data: Mapping[str, Any], where: str, text: str = "", path: Pa
     name = check_text(data["name"], f"{where}: name") if data.get("name") is not None else (
         path.stem if path else "campaign")
     out_dir = out_folder(data, where, out, name)
-    resolved = {**dict(data), "base": {**dict(base), "params": params}}
+    resolved = plain({**dict(data), "base": {**dict(base), "params": params}})  # the manifest's JSON: no numpy
     return Campaign(name, path, text or dump(data, where), out_dir, base_effects, params,
                     tuple(runs.values()), tuple(swept), thr, bs, lp, save_ts, dur, resolved,
                     parse_split(data.get("split"), where), twin_res, motor_enc, com_twins, notes)

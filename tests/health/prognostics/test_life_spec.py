@@ -2,11 +2,16 @@
 
 from __future__ import annotations
 
+import json
+
+import numpy as np
 import pytest
 
 from ur5fault.cli import main
 from ur5fault.errors import ParameterError, UnknownNameError
 from ur5fault.health.prognostics.spec import build_life, is_life_file, split_units
+
+from conftest import as_numpy
 
 BASE = {"name": "t", "life": {"units": 20, "seed": 3, "interval_cycles": 1000, "max_cycles": 10000,
                               "duty": {"trajectories": ["pick_and_place"], "payload_kg": [0.5, 2.0]}}}
@@ -44,6 +49,7 @@ def test_fleet_draws_are_deterministic_and_do_not_depend_on_fleet_size():
     ({"wear": {"backlash_rate_deg_per_MJ": "fast"}}, r"^t: life.wear.backlash_rate_deg_per_MJ = 'fast' must be a "
                                                      r"number in \(0, 1\]$"),
     ({"wear": {"rate": 1}}, "life.wear"),
+    ({"wear": {"unit_sigma": np.True_}}, r"^t: life.wear.unit_sigma = np.True_ must be a number in \[0, 2\]$"),
     ({"duty": {"payload_kg": [2, 1]}}, "life.duty.payload_kg"),
     ({"duty": {"trajectories": ["nowhere"]}}, "trajector"),
     ({"lifetime": 3}, "lifetime"),
@@ -51,6 +57,18 @@ def test_fleet_draws_are_deterministic_and_do_not_depend_on_fleet_size():
 def test_bad_life_files_are_refused_naming_the_key(life, match):
     with pytest.raises((ParameterError, UnknownNameError), match=match):
         build_life(_with(**life), "t")
+
+
+def test_a_life_file_of_numpy_numbers_is_the_one_of_the_numbers_they_hold():
+    """A life mapping built from numpy results: `wear: {friction_per_deg: np.int64(5)}` was refused as no number, and
+    the manifest's copy of the mapping held `np.int64(20)` as the text "20" (JSON's default=str), which a status check
+    rebuilding the campaign from it refuses; a unit's trajectory kept its numpy option."""
+    spec = _with(wear={"friction_per_deg": 5, "unit_sigma": 0.3},
+                 duty={"trajectories": [{"name": "random_pick_and_place", "seed": 3}], "payload_kg": [0.5, 2.0]})
+    plain, numpy = build_life(spec, "t"), build_life(as_numpy(spec), "t")
+    assert numpy == plain and numpy.text == plain.text and json.dumps(numpy.data) == json.dumps(plain.data)
+    assert numpy.data["life"]["units"] == 20 and type(numpy.wear.friction_per_deg) is int
+    assert type(numpy.units[0].trajectory["seed"]) is int
 
 
 @pytest.mark.parametrize("out", [5, ["a", "b"], ""])

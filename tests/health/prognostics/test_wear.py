@@ -88,10 +88,19 @@ def test_gear_work_of_a_constant_torque_at_constant_speed():
 
 
 @pytest.mark.parametrize("field, value", [("unit_sigma", -0.1), ("work_scale_MJ", 0.0),
-                                          ("backlash_rate_deg_per_MJ", float("nan")), ("stiffness_floor", 2.0)])
+                                          ("backlash_rate_deg_per_MJ", float("nan")), ("stiffness_floor", 2.0),
+                                          ("friction_per_deg", True), ("unit_sigma", np.False_)])
 def test_bad_constants_are_refused_by_name(field, value):
     with pytest.raises(ParameterError, match=f"life.wear.{field}"):
         WearLaw(**{field: value})
+
+
+def test_numpy_constants_are_the_python_numbers_they_hold():
+    """`WearLaw(friction_per_deg=np.int64(5))` was refused as no number, and an `np.float64` constant was kept as
+    itself, whose repr (part of the twin cache's key) is not the float's."""
+    law = WearLaw(friction_per_deg=np.int64(5), unit_sigma=np.float64(0.3), stiffness_floor=np.float32(0.5))
+    assert law == WearLaw(friction_per_deg=5, unit_sigma=0.3, stiffness_floor=0.5)
+    assert repr(law) == repr(WearLaw(friction_per_deg=5, unit_sigma=0.3, stiffness_floor=0.5))
 
 
 def test_wear_kinds_are_the_effects_wear_puts_on_a_unit():

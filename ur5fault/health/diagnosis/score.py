@@ -45,6 +45,7 @@ import pandas as pd
 
 from ...errors import ConfigFileError
 from ...sim.axes import N_JOINTS
+from ...util.checks import is_real
 from ..diagnostics import calibration, joint_kind
 from ..diagnostics.data import CONTEXT_COLUMNS, SIM_ONLY_PREFIX
 from ..diagnostics.kind_call import MERGED_KINDS, NOISE_RATIO
@@ -107,7 +108,7 @@ def check_schema(schema: dict[str, Any], where: str) -> float:
     if "detector" not in schema.get("classes", {}):
         raise ConfigFileError(f"{where}: holds no detector")
     window = schema.get("window_s")
-    if not isinstance(window, (int, float)) or not math.isfinite(window) or window <= 0:
+    if not is_real(window) or not math.isfinite(window) or window <= 0:
         raise ConfigFileError(f"{where}: the schema does not say the training runs' duration (window_s): saved "
                               "before `ur5fault diagnose` existed; run `ur5fault benchmark` on the campaign again")
     names = [c.get("name") for c in schema.get("inputs", [])]

@@ -45,7 +45,7 @@ from ...seed_paper import PAPER_TCP_MM
 from ...sim.effects import REGISTRY
 from ...sim.params import JOINT_TEMPERATURE_RANGE_C, NOMINAL_JOINT_TEMPERATURE_C, load_params, read_yaml
 from ...util.checks import check_int, check_number, check_text, short
-from ...util.yamlsafe import dump
+from ...util.yamlsafe import dump, plain
 from ..features import FEATURE_UNITS
 from .wear import WearLaw, stream
 
@@ -221,6 +221,7 @@ def build_life(data: Mapping[str, Any], where: str, text: str = "", path: Path |
     if not isinstance(trajs, list) or not trajs:
         raise ParameterError(f"{where}: life.duty.trajectories must be a non-empty list of trajectories")
     durations = [parse_trajectory(t, f"{where}: life.duty.trajectories[{k}]").duration_s for k, t in enumerate(trajs)]
+    trajs = plain(trajs)  # numpy options (a mapping built in Python) as the numbers they hold
     mass = REGISTRY["payload"].param("mass_kg")
     payload = _range(duty.get("payload_kg", 1.0), f"{where}: life.duty.payload_kg", mass.lo, mass.hi, "kg")
     temperature = _range(duty.get("temperature_C", NOMINAL_JOINT_TEMPERATURE_C), f"{where}: life.duty.temperature_C",
@@ -245,7 +246,7 @@ def build_life(data: Mapping[str, Any], where: str, text: str = "", path: Path |
     return LifeCampaign(name, out_dir, tuple(units), seed, interval, max_cycles, Failure(str(feature), thr), wear,
                         batch, log_period, frac, split_seed, duration,
                         text or dump(data, where, sort_keys=False),
-                        json.loads(json.dumps(data, default=str)), path)
+                        json.loads(json.dumps(plain(data), default=str)), path)
 
 
 def split_units(n_units: int, test_fraction: float, seed: int) -> list[str]:

@@ -36,6 +36,8 @@ from numpy.typing import NDArray
 from ...errors import ParameterError
 from ...sim.axes import N_JOINTS
 from ...sim.effects import EffectSpec, make_effect
+from ...util.checks import is_real
+from ...util.yamlsafe import plain
 
 DEG = math.pi / 180.0
 #: purposes of the random streams of one unit (the last entry of their seed key)
@@ -78,12 +80,13 @@ class WearLaw:
     def __post_init__(self) -> None:
         for name, (lo, hi, lo_closed) in self.RANGES.items():
             v = getattr(self, name)
-            number = isinstance(v, (int, float)) and not isinstance(v, bool)
+            number = is_real(v)  # a numpy number too, kept as the Python number it holds (cache keys, manifests)
             ok = number and math.isfinite(v) and (lo <= v if lo_closed else lo < v) and v <= hi
             if not ok:
                 span = f"{'[' if lo_closed else '('}{lo:g}, {hi:g}]"
                 raise ParameterError(f"life.wear.{name} = {v!r} "
                                      + (f"is out of range {span}" if number else f"must be a number in {span}"))
+            object.__setattr__(self, name, plain(v))
 
     @classmethod
     def from_mapping(cls, data: Mapping[str, Any] | None, where: str = "life.wear") -> WearLaw:
