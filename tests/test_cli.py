@@ -160,6 +160,15 @@ def test_version_matches_installed_metadata():
     assert r.stdout.startswith(f"ur5fault {version('ur5fault')} (mujoco {version('mujoco')}")
 
 
+def test_python_dash_m_ur5fault_is_the_command():
+    """``python -m ur5fault`` (a newcomer's first try without the script on PATH) runs the same command, exit
+    status included."""
+    r = subprocess.run([sys.executable, "-m", "ur5fault", "--version"], capture_output=True, text=True, timeout=600)
+    assert r.returncode == 0 and r.stdout == run("--version").stdout
+    bad = subprocess.run([sys.executable, "-m", "ur5fault", "nosuch"], capture_output=True, text=True, timeout=600)
+    assert bad.returncode == 2 and "ur5fault: error:" in bad.stderr
+
+
 def _summaries(parser) -> dict[str, str]:
     """The commands of ``parser`` with the one-line help ``ur5fault --help`` lists, in its order."""
     import argparse

@@ -31,8 +31,8 @@ def register(sub) -> None:
                    help="with --twin: calibrate the twin's boundary on the failed training units of the unit's own "
                         "duty cycle, shrunk towards all tasks' (task), that corrected by the units of nearby "
                         "directions of growth (direction; the one to use when the twin's model may be off, "
-                        "docs/prognostics.md), or at once on up to 16 failed training units of all tasks, every "
-                        "m-th (pooled, the default; 14 of the 100-unit fleet's)")
+                        "ur5fault's docs/prognostics.md), or at once on up to 16 failed training units of all tasks, "
+                        "every m-th (pooled, the default; 14 of the 100-unit fleet's)")
     p.add_argument("--twin-friction", choices=("learned", "law"),
                    help="with --twin: the friction rise per degree of clearance and per 10^6 cycles the twin gives a "
                         "worn joint: learned per unit from its inspections (learned, the default: maps fitted on the "

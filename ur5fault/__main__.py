@@ -1,0 +1,7 @@
+"""``python -m ur5fault``: the ``ur5fault`` command (:func:`ur5fault.cli.main`)."""
+
+import sys
+
+from .cli import main
+
+sys.exit(main())
