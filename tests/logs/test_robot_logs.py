@@ -110,28 +110,81 @@ def test_nan_inside_an_optional_column_drops_it_with_a_note(tmp_path):
     assert any("target_torque missing from data row 501" in s and "not used" in s for s in log.notes)
 
 
-def test_a_few_rows_without_a_required_value_are_read_as_ticks_the_robot_did_not_log(tmp_path):
-    """A recorder that lost a value lost the tick: rows with NaN or inf in a required column, up to 5 in a row (the
-    gap a missing row may leave), are dropped and filled on the tick grid like missing rows, left out of every
-    RMS figure (``logged`` False), with a note; 6 in a row are refused in one line saying where to cut."""
+def test_a_few_rows_without_a_required_value_are_ticks_the_robot_did_not_log(tmp_path):
+    """A recorder that lost a value lost the tick: rows with NaN or inf in a required column stay where they are
+    (the tick grid and every row number are the file's), their values interpolated in time for the replay and the
+    ticks left out of every RMS figure (``logged`` False), with a note."""
     df = _frame()
-    df.loc[500:502, "actual_current_2"] = np.nan  # 3 rows
+    df.loc[500:502, "actual_current_2"] = np.nan  # data rows 501..503
     df.loc[700, "target_q_0"] = np.inf
-    df.loc[0, "actual_q_1"] = np.nan  # at the start: the log begins a tick later
     log = _read(tmp_path, df)
-    assert log.t_s.size == 999 and not log.logged[[499, 500, 501, 699]].any() and log.logged.sum() == 995
-    # the filled ticks are the line between their neighbours (sign: UR's current sign applied by the reader)
-    i = df["actual_current_2"].to_numpy()
-    np.testing.assert_allclose(np.abs(log.current_A[499:502, 2]), np.abs(i[499] + (i[503] - i[499]) * np.arange(1, 4)
-                                                                          / 4), rtol=1e-9)
-    assert ("log.csv: 5 data row(s) with NaN or inf in target_q_0, actual_q_1, actual_current_2 (from data row 1; at "
-            "most 3 in a row): read as ticks the robot did not log, interpolated for the replay and left out of every "
-            "RMS figure") in log.notes
-    df.loc[500:505, "actual_current_2"] = np.nan  # 6 rows in a row
-    with pytest.raises(LogFormatError, match=r"^log.csv: NaN or inf in actual_current_2 in data rows 501..506 \(6 "
-                                             r"rows in a row; up to 5 are read as ticks the robot did not log\); cut "
-                                             r"the log there into two logs \(data rows 1..500 and 507..1000\)"):
+    assert log.t_s.size == 1000 and np.allclose(np.diff(log.t_s), 0.008)
+    assert list(np.flatnonzero(~log.logged)) == [500, 501, 502, 700]
+    i = df["actual_current_2"].to_numpy()  # the filled values lie on the line between the neighbours
+    np.testing.assert_allclose(np.abs(log.current_A[500:503, 2]),
+                               np.abs(i[499] + (i[503] - i[499]) * np.arange(1, 4) / 4), rtol=1e-9)
+    q = df["target_q_0"].to_numpy()
+    assert log.q_target_rad[700, 0] == pytest.approx((q[699] + q[701]) / 2, rel=1e-9)
+    assert ("log.csv: 4 data row(s) with NaN or inf in target_q_0, actual_current_2 (from data row 501; at most 3 in "
+            "a row): values interpolated for the replay, those ticks left out of every RMS figure") in log.notes
+
+
+def test_rows_without_a_value_and_missing_ticks_beside_them_count_together_as_one_gap(tmp_path):
+    """At most 5 ticks in a row without a whole reading, whether rows are missing or hold NaN: the refusal counts
+    both and names the file's rows, where to cut."""
+    df = _frame()
+    df.loc[500:505, "actual_current_2"] = np.nan  # 6 rows
+    with pytest.raises(LogFormatError) as err:
         _read(tmp_path, df)
+    assert str(err.value) == (
+        "log.csv: NaN or inf in actual_current_2 in data rows 501..506: 6 ticks in a row without a whole reading, "
+        "more than the 5 interpolated; cut the log there into two logs (data rows 1..500 and 507..1000), which "
+        "identify, discrepancy and monitor take together as logs of one robot")
+    df = _frame().drop(index=[300, 301, 302])  # 3 ticks missing after data row 300 of the file
+    df.loc[303:305, "actual_current_0"] = np.nan  # and the next 3 rows (data rows 301..303 of the file) without
+    with pytest.raises(LogFormatError, match=r"^log.csv: NaN or inf in actual_current_0 in data rows 301..303: 6 "
+                                             r"ticks in a row without a whole reading \(with the ticks missing beside "
+                                             r"them\), more than the 5 interpolated; cut the log there into two logs "
+                                             r"\(data rows 1..300 and 304..997\)"):
+        _read(tmp_path, df)
+    df.loc[304:305, "actual_current_0"] = 0.1  # 1 row without a value beside the 3 missing ticks: 4 in a row
+    log = _read(tmp_path, df)
+    assert log.t_s.size == 1000 and int((~log.logged).sum()) == 4
+
+
+def test_rows_without_a_value_at_the_ends(tmp_path):
+    """At the start the log is refused with the rows to cut to (the replay starts from the first row's state); at
+    the end, within 1 s, the rows are cut with a note."""
+    df = _frame()
+    df.loc[0:1, "actual_q_1"] = np.nan
+    with pytest.raises(LogFormatError, match=r"^log.csv: NaN or inf in actual_q_1 in data rows 1..2, the log's first: "
+                                             r"the replay starts from the first row's state; cut the log to data rows "
+                                             r"3..1000$"):
+        _read(tmp_path, df)
+    df = _frame()
+    df.loc[990:, "actual_current_5"] = np.nan
+    log = _read(tmp_path, df)
+    assert log.t_s.size == 990 and log.logged is None
+    assert "log.csv: NaN or inf in actual_current_5 in the last 10 data row(s); the log cut to rows 1..990" in log.notes
+    df = _frame()
+    df.loc[800:, "actual_current_5"] = np.nan  # 1.6 s
+    with pytest.raises(LogFormatError, match=r"in data rows 801..1000, the log's last 1.6 s \(more than the 1 s cut by "
+                                             r"itself\); cut the log to data rows 1..800$"):
+        _read(tmp_path, df)
+
+
+def test_a_row_without_a_value_at_a_wrap_is_filled_on_the_continuous_angle(tmp_path):
+    """A joint logged folded into (-pi, pi] wraps between two rows; a NaN row there is filled after the angle is
+    made continuous, not halfway across the turn."""
+    df = _frame()
+    t = df["time"].to_numpy()
+    q = 3.0 + 0.05 * t  # crosses pi at 2.8 s
+    df["actual_q_5"] = np.angle(np.exp(1j * q))
+    df["target_q_5"] = df["actual_q_5"] - 1e-4
+    k = int(np.argmax(np.abs(np.diff(df["actual_q_5"].to_numpy())) > 3)) + 1  # the first row after the wrap
+    df.loc[k, "actual_q_5"] = np.nan
+    log = _read(tmp_path, df)
+    np.testing.assert_allclose(log.q_actual_rad[k, 5] - log.q_actual_rad[0, 5], 0.05 * t[k], atol=1e-9)
 
 
 def test_gaps_filled_on_the_grid_only_where_rows_are_missing(tmp_path):
@@ -420,13 +473,14 @@ def test_nan_in_a_required_column_is_named_with_its_column_and_extent(tmp_path):
 
     n = pd.read_csv(_first_12_s_of_test(tmp_path)).shape[0]
     for column, rows, said in (("actual_current_2", slice(None), "at data row 1 (every row)"),
-                               ("actual_current_2", slice(900, 1276), "in data rows 901..1276 (376 rows in a row; up "
-                                                                      "to 5 are read as ticks the robot did not log); "
-                                                                      f"cut the log there into two logs (data rows "
-                                                                      f"1..900 and 1277..{n})"),
-                               ("target_q_4", list(range(7, 13)), "in data rows 8..13 (6 rows in a row; up to 5 are "
-                                                                  "read as ticks the robot did not log); cut the log "
-                                                                  f"there into two logs (data rows 1..7 and 14..{n})")):
+                               ("actual_current_2", slice(900, 1276), "in data rows 901..1276: 376 ticks in a row "
+                                                                      "without a whole reading, more than the 5 "
+                                                                      "interpolated; cut the log there into two logs "
+                                                                      f"(data rows 1..900 and 1277..{n})"),
+                               ("target_q_4", list(range(7, 13)), "in data rows 8..13: 6 ticks in a row without a "
+                                                                  "whole reading, more than the 5 interpolated; cut "
+                                                                  f"the log there into two logs (data rows 1..7 and "
+                                                                  f"14..{n})")):
         with pytest.raises(LogFormatError) as err:
             read_log(_first_12_s_of_test(tmp_path, nan_rows(column, rows)), "rtde", **KW)
         assert str(err.value) == (f"test12.csv: NaN or inf in {column} {said}, which identify, discrepancy and "

@@ -175,9 +175,7 @@ def check_sampling(src: str, t: NDArray, length: MinLength | None = None) -> Non
         alone = f"; leave out a part of {' or '.join(short)} ({length.why})" if short else ""
         raise LogFormatError(f"{src}: a gap of {dt[k]:.3g} s after t = {t[k] - t[0]:.3f} s (data row {k + 1}): "
                              f"{missing} ticks of {tick * 1e3:.3g} ms missing in a row, more than the {MAX_GAP_TICKS} "
-                             f"interpolated; cut the log at the gap into two logs (data rows 1..{k + 1} and "
-                             f"{k + 2}..{t.size}), which identify, discrepancy and monitor take together as logs of "
-                             f"one robot{alone}")
+                             f"interpolated; {regular.cut_in_two(k + 1, k + 2, t.size, 'at the gap')}{alone}")
     duration = float(t[-1] - t[0])
     if duration > MAX_DURATION_S:
         raise LogFormatError(f"{src}: {duration:.0f} s long, above the {MAX_DURATION_S:g} s one simulation may "

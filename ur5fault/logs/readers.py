@@ -126,23 +126,28 @@ def _assemble(src: str, t: NDArray, required: Mapping[str, NDArray], optional: M
     ``"actual_qd"`` (rad/s, for the unit check only), ``"target_current"``, ``"temperature"``, ``"tcp"``,
     ``"target_torque"``; ``notes``: the reader's own (:func:`_have`'s), said before the assembly's; ``columns``: the
     file's columns of ``"time"`` and of each required array, named where a value is NaN (a few rows of NaN in
-    a required array are read as ticks the robot did not log: :func:`.regular.unreadable_rows`)."""
+    a required array are interpolated and marked not logged: :func:`.regular.unreadable_rows`)."""
     plausible.check_finite(src, {"time": t}, columns)
     notes = list(notes)
-    keep = regular.unreadable_rows(src, required, columns, plausible.MAX_GAP_TICKS, notes)
-    if keep is not None:  # a few rows without a value: ticks the robot did not log, as a missing row
-        t, required = t[keep], {k: v[keep] for k, v in required.items()}
-        optional = {k: None if v is None else v[keep] for k, v in optional.items()}
-    rows, opt = regular.complete_optional(src, t, optional, notes)
-    t = t[rows]
-    req = {k: v[rows] for k, v in required.items()}
-    opt = {k: None if v is None else v[rows] for k, v in opt.items()}
+    required = dict(required)
     for k, label in zip(("target_q", "actual_q"), labels):  # before anything interpolates across a wrap
-        req[k], wrapped = unwrap_joints(req[k])
+        fin = np.isfinite(required[k]).all(axis=1)  # a row without a value is filled after (unreadable_rows)
+        q = np.array(required[k], dtype=float)
+        q[fin], wrapped = unwrap_joints(q[fin]) if fin.any() else (q[fin], [])
+        required[k] = q
         if wrapped:
             joints = ", ".join(str(j + 1) for j in wrapped)
             notes.append(f"{src}: {label} of joint(s) {joints} wrap around (a jump of a whole turn between two rows): "
                          "made continuous")
+    # a few rows without a required value: interpolated in place, marked not logged on the tick grid (on_ticks)
+    upto, required, unread = regular.unreadable_rows(src, t, required, columns, plausible.MAX_GAP_TICKS, notes)
+    t, required = t[upto], {k: v[upto] for k, v in required.items()}
+    optional = {k: None if v is None else v[upto] for k, v in optional.items()}
+    rows, opt = regular.complete_optional(src, t, optional, notes)
+    t = t[rows]
+    req = {k: v[rows] for k, v in required.items()}
+    opt = {k: None if v is None else v[rows] for k, v in opt.items()}
+    unread = None if unread is None or not unread[rows].any() else unread[rows]
     plausible.check_increasing(src, t)
     opt["temperature"] = regular.unrecorded_temperature(src, opt["temperature"], notes)
     plausible.check_temperature_units(src, opt["temperature"])
@@ -156,8 +161,8 @@ def _assemble(src: str, t: NDArray, required: Mapping[str, NDArray], optional: M
         notes.append(f"{src}: at rest (every target speed 0) the logged target is the previous measured position, "
                      "as a CB2 controller logs it: the twin is commanded there to the robot's own reading, not to the "
                      "pose the robot holds (ur5fault's docs/validation.md, \"A CB2 log's target at rest\")")
-    keep = {**req, **{k: v for k, v in opt.items() if k not in ("target_qd", "actual_qd")}}
-    grid, a, logged = regular.on_ticks(src, t, keep, notes)
+    arrays = {**req, **{k: v for k, v in opt.items() if k not in ("target_qd", "actual_qd")}}
+    grid, a, logged = regular.on_ticks(src, t, arrays, notes, unread)
     cur_t = a["target_current"]
     return _checked(MeasuredLog(
         source=src, t_s=grid, q_target_rad=a["target_q"], q_actual_rad=a["actual_q"],

@@ -62,38 +62,77 @@ def finite_span(arr: NDArray) -> tuple[int, int] | None:
     return int(idx[0]), int(idx[-1]) + 1
 
 
-def unreadable_rows(src: str, required: Mapping[str, NDArray], columns: Mapping[str, Sequence[str]] | None,
-                    max_rows: int, notes: list[str]) -> NDArray | None:
-    """The rows to keep ``(n,)`` of a log whose required arrays (name -> ``(n, k)``) hold NaN or inf in stretches of
-    at most ``max_rows`` rows in a row: those rows are read as ticks the robot did not log (a recorder that lost a
-    value lost the tick; the replay interpolates it as a missing row, :func:`on_ticks`), with a note; ``None`` when
-    every value is finite. A longer stretch (or a column with no value at all) is refused in one line naming its
-    column and rows. ``columns``: name -> the file's column of each array column (else ``name_j``)."""
+def unreadable_rows(src: str, t: NDArray, required: Mapping[str, NDArray],
+                    columns: Mapping[str, Sequence[str]] | None, max_ticks: int, notes: list[str]
+                    ) -> tuple[slice, dict[str, NDArray], NDArray | None]:
+    """Rows whose required value (a target, a reading, a current) is NaN or inf: a tick the recorder lost a value of.
+
+    Returns the rows to keep (all but such rows at the end, within :data:`MAX_CUT_S`), the required arrays
+    (name -> ``(n, k)``) with each missing value interpolated in time from its column's finite rows, and the mask of
+    rows that had one (``None``: every value finite). The rows stay where they are (every row number said later is
+    the file's, and the tick grid is the file's); :func:`on_ticks` marks them not logged. Refused in one line: a
+    column with no value; a stretch of such rows that, with the ticks missing beside it, leaves more than
+    ``max_ticks`` ticks in a row without a whole reading (as a gap of missing rows alone may not,
+    :func:`.plausible.check_sampling`); such rows at the start (the replay starts from the first row: the message
+    names the rows to cut to), or at the end over more than :data:`MAX_CUT_S`. ``columns``: name -> the file's column
+    of each array column. ``t`` increasing (else the interpolation is meaningless and the log refused after)."""
     labels = {k: list((columns or {}).get(k) or [f"{k}_{j}" for j in range(a.shape[1])]) for k, a in required.items()}
-    bad_cols = {k: ~np.isfinite(a) for k, a in required.items()}
-    bad = np.zeros(next(iter(required.values())).shape[0], dtype=bool)
-    for b in bad_cols.values():
-        bad |= b.any(axis=1)
+    missing = {k: ~np.isfinite(a) for k, a in required.items()}
+    bad = np.any([m.any(axis=1) for m in missing.values()], axis=0)
     if not bad.any():
-        return None
+        return slice(0, t.size), dict(required), None
+    for k, m in missing.items():
+        for j in np.flatnonzero(m.all(axis=0)):
+            raise LogFormatError(f"{src}: NaN or inf in {labels[k][j]} at data row 1 (every row)")
+
+    def named(rows: slice) -> str:
+        cols = [labels[k][j] for k, m in missing.items() for j in np.flatnonzero(m[rows].any(axis=0))]
+        return ", ".join(cols[:3]) + (f" and {len(cols) - 3} more" if len(cols) > 3 else "")
+
+    ok = np.flatnonzero(~bad)
+    first, last = int(ok[0]), int(ok[-1])
+    if first > 0:
+        raise LogFormatError(f"{src}: NaN or inf in {named(slice(0, first))} in data rows 1..{first}, the log's "
+                             f"first: the replay starts from the first row's state; cut the log to data rows "
+                             f"{first + 1}..{t.size}")
+    if t[-1] - t[last] > MAX_CUT_S:
+        raise LogFormatError(f"{src}: NaN or inf in {named(slice(last + 1, None))} in data rows {last + 2}..{t.size}, "
+                             f"the log's last {t[-1] - t[last]:.3g} s (more than the {MAX_CUT_S:g} s cut by itself); "
+                             f"cut the log to data rows 1..{last + 1}")
     edges = np.flatnonzero(np.diff(np.concatenate([[0], bad.astype(np.int8), [0]])))
-    starts, stops = edges[::2], edges[1::2]
-    i = int(np.argmax(stops - starts))
-    a, b = int(starts[i]), int(stops[i])
-    if b - a > max_rows or bad.all():
-        name, j = next((k, int(np.flatnonzero(m[a:b].any(axis=0))[0])) for k, m in bad_cols.items() if m[a:b].any())
-        if bad_cols[name][:, j].all():
-            raise LogFormatError(f"{src}: NaN or inf in {labels[name][j]} at data row 1 (every row)")
-        raise LogFormatError(f"{src}: NaN or inf in {labels[name][j]} in data rows {a + 1}..{b} ({b - a} rows in a "
-                             f"row; up to {max_rows} are read as ticks the robot did not log); cut the log there into "
-                             f"two logs (data rows 1..{a} and {b + 1}..{bad.size}), which identify, discrepancy and "
-                             "monitor take together as logs of one robot")
-    named = list(dict.fromkeys(labels[k][j] for k, m in bad_cols.items() for j in np.flatnonzero(m.any(axis=0))))
-    shown = ", ".join(named[:3]) + (f" and {len(named) - 3} more" if len(named) > 3 else "")
-    notes.append(f"{src}: {int(bad.sum())} data row(s) with NaN or inf in {shown} (from data row "
-                 f"{int(starts[0]) + 1}; at most {int((stops - starts).max())} in a row): read as ticks the robot did "
-                 "not log, interpolated for the replay and left out of every RMS figure")
-    return ~bad
+    k = ticks(t)[0]
+    for a, b in zip(edges[::2], edges[1::2]):
+        if b <= last and k[b] - k[a - 1] - 1 > max_ticks:  # the ticks between the readable rows around it
+            gap = int(k[b] - k[a - 1] - 1)
+            beside = " (with the ticks missing beside them)" if gap > b - a else ""
+            raise LogFormatError(f"{src}: NaN or inf in {named(slice(a, b))} in data rows {a + 1}..{b}: {gap} ticks in "
+                                 f"a row without a whole reading{beside}, more than the {max_ticks} interpolated; "
+                                 + cut_in_two(int(a), int(b) + 1, t.size))
+    keep = slice(0, last + 1)
+    filled = {}
+    for k, a in required.items():
+        a = a.copy()
+        for j in np.flatnonzero(missing[k][keep].any(axis=0)):
+            fin = np.isfinite(a[keep, j])
+            a[: last + 1, j] = np.interp(t[keep], t[keep][fin], a[keep, j][fin])
+        filled[k] = a
+    inside = bad[keep]
+    if last + 1 < t.size:
+        notes.append(f"{src}: NaN or inf in {named(slice(last + 1, None))} in the last {t.size - last - 1} data "
+                     f"row(s); the log cut to rows 1..{last + 1}")
+    if inside.any():
+        runs = np.diff(np.flatnonzero(np.diff(np.concatenate([[0], inside.astype(np.int8), [0]]))))[::2]
+        notes.append(f"{src}: {int(inside.sum())} data row(s) with NaN or inf in {named(keep)} (from data row "
+                     f"{int(np.flatnonzero(inside)[0]) + 1}; at most {int(runs.max())} in a row): values interpolated "
+                     "for the replay, those ticks left out of every RMS figure")
+    return keep, filled, bad[keep] if inside.any() else None
+
+
+def cut_in_two(a: int, b: int, n: int, where: str = "there") -> str:
+    """The advice for a log with a stretch it cannot use between data rows ``a`` and ``b`` (1-based, the last row
+    before it and the first after it) of ``n``."""
+    return (f"cut the log {where} into two logs (data rows 1..{a} and {b}..{n}), which identify, discrepancy and "
+            "monitor take together as logs of one robot")
 
 
 def complete_optional(src: str, t: NDArray, groups: Mapping[str, NDArray | None],
@@ -154,12 +193,13 @@ def controller_tick(mean_tick_s: float) -> float:
     return round(mean_tick_s / TICK_RESOLUTION_S) * TICK_RESOLUTION_S
 
 
-def on_ticks(src: str, t: NDArray, arrays: dict[str, NDArray | None], notes: list[str]
-             ) -> tuple[NDArray, dict[str, NDArray | None], NDArray | None]:
+def on_ticks(src: str, t: NDArray, arrays: dict[str, NDArray | None], notes: list[str],
+             unread: NDArray | None = None) -> tuple[NDArray, dict[str, NDArray | None], NDArray | None]:
     """Put the rows of ``t`` (increasing, checked for gaps) on the controller tick grid.
 
-    Returns the grid times (from 0), every array on the grid (interpolated at missing ticks) and the mask of
-    ticks the log really holds (``None`` when none is missing)."""
+    ``unread`` ``(n,)``: rows whose required values were interpolated (:func:`unreadable_rows`): not logged. Returns
+    the grid times (from 0), every array on the grid (interpolated at missing ticks) and the mask of ticks the log
+    really holds (``None`` when it holds all)."""
     k, mean = ticks(t)
     off = np.abs((t - t[0]) - k * mean)
     if off.max() > MAX_JITTER_PERIODS * mean:
@@ -171,16 +211,15 @@ def on_ticks(src: str, t: NDArray, arrays: dict[str, NDArray | None], notes: lis
         notes.append(f"{src}: the log's clock gives a mean tick of {mean * 1e3:.4g} ms; replayed on the "
                      f"controller's {p * 1e3:.4g} ms tick (time scaled by {p / mean:.4f})")
     grid = np.arange(k[-1] + 1) * p
-    if k.size == grid.size:
-        return grid, arrays, None
-    missing = grid.size - k.size
-    notes.append(f"{src}: {missing} of {grid.size} controller ticks ({p * 1e3:.3g} ms) missing in gaps of up to "
-                 f"{int(np.diff(k).max()) - 1}; setpoints and readings interpolated there for the replay, "
-                 "left out of every RMS figure")
-    out = {name: None if a is None else _interp(grid, k * p, a) for name, a in arrays.items()}
     logged = np.zeros(grid.size, dtype=bool)
-    logged[k] = True
-    return grid, out, logged
+    logged[k] = True if unread is None else ~unread
+    if k.size < grid.size:
+        missing = grid.size - k.size
+        notes.append(f"{src}: {missing} of {grid.size} controller ticks ({p * 1e3:.3g} ms) missing in gaps of up to "
+                     f"{int(np.diff(k).max()) - 1}; setpoints and readings interpolated there for the replay, "
+                     "left out of every RMS figure")
+        arrays = {name: None if a is None else _interp(grid, k * p, a) for name, a in arrays.items()}
+    return grid, arrays, None if logged.all() else logged
 
 
 def _interp(grid: NDArray, t: NDArray, a: NDArray) -> NDArray:
