@@ -190,10 +190,11 @@ class Baseline:
             if styles is not None and (len(styles) != len(runs) or any(v not in REST_TARGETS for v in styles)):
                 raise ValueError(f"rest_targets {styles!r} is not one of {REST_TARGETS} per segment")
             motion = data.get("motion_max")  # absent: written before baseline.json recorded it, as the payloads
-            motion = None if motion is None else np.array([[float(motion[q][j]) for j in JOINT_NAMES]
-                                                           for q in QUANTITIES])
-            if motion is not None and not (np.isfinite(motion).all() and (motion >= 0).all()):
-                raise ValueError("motion_max holds a negative or non-finite value")
+            if motion is not None:
+                values = [motion[q][j] for q in QUANTITIES for j in JOINT_NAMES]
+                if not all(is_real(v) and np.isfinite(v) and v >= 0 for v in values):
+                    raise ValueError("motion_max holds a value that is no finite number >= 0")
+                motion = np.array(values, float).reshape(len(QUANTITIES), N_JOINTS)
             loads = data.get("payloads_kg")
             if loads is not None and (len(loads) != len(runs) or any(
                     p is not None and not (is_real(p) and np.isfinite(p) and p >= 0)

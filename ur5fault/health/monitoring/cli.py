@@ -106,10 +106,12 @@ def cmd_monitor(args: argparse.Namespace) -> int:
         print(f"note: {args.baseline_stats} does not record its runs' target at rest (written by an earlier "
               f"version): whether the logs are of its runs' controller is not checked; rebuild it with "
               f"--baseline-logs to have it checked", file=sys.stderr)
-    if stats is not None and (stats.motion_max is None or stats.payloads_kg is None):  # the same, for coverage
-        print(f"note: {args.baseline_stats} does not record its runs' motion range and payloads (written by an "
-              f"earlier version): whether a log moves faster or carries another payload than they did is not "
-              f"said; rebuild it with --baseline-logs to have it said", file=sys.stderr)
+    unrecorded = [] if stats is None else [what for what, v in (("motion range", stats.motion_max),
+                                                                 ("payloads", stats.payloads_kg)) if v is None]
+    if unrecorded:  # the same, for what the baseline runs covered (coverage.py)
+        print(f"note: {args.baseline_stats} does not record its runs' {' and '.join(unrecorded)} (written by an "
+              f"earlier version): whether a log leaves them is not said; rebuild it with --baseline-logs to have it "
+              f"said", file=sys.stderr)
     notes = assumption_notes([*healthy, *logs], temps, others=recorded)
     for line in notes:
         print(f"note: {line}", file=sys.stderr)
