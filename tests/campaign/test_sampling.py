@@ -373,13 +373,23 @@ def test_a_sample_of_numpy_numbers_is_the_sample_of_the_numbers_they_hold():
     assert {type(v) for v in values} == {int, float, str, dict}
 
 
+def test_numpy_arrays_are_the_lists_they_hold_in_a_sample():
+    """`payload_kg: np.array([0.5, 2.0])` (a range built in a notebook) was a fixed value, refused as "must be a
+    number"; as a list it is a uniform range, as its arguments too."""
+    for spec, listed in ((np.array([0.5, 2.0]), [0.5, 2.0]),
+                         ({"uniform": np.array([0.5, 2.0])}, {"uniform": [0.5, 2.0]})):
+        assert (build_campaign(sample_with(conditions__payload_kg=spec), "s.yaml")
+                == build_campaign(sample_with(conditions__payload_kg=listed), "s.yaml"))
+
+
 @pytest.mark.parametrize("path, value, message", [
     ("n", np.True_, "sample.n = np.True_ must be an integer in [1, 1000000]"),
     ("seed", True, "sample.seed = True must be a non-negative integer"),
     ("faults__healthy", {"weight": np.True_}, "sample.faults.healthy.weight = np.True_ must be a positive number"),
     ("conditions__seed", {"integers": [np.False_, 9]}, "integers = [False, 9] must be a list [lo, hi] of two numbers"),
     ("conditions__seed", {"choices": [np.int64(1), True]}, "conditions.seed: seed = True must be a non-negative"),
-    ("conditions__payload_kg", {"uniform": [0.0, 2.0], "step": np.True_}, "step = np.True_ must be a positive number"),
+    ("conditions__payload_kg", {"uniform": [0.0, 2.0], "step": np.True_}, "step = np.True_ must be a positive"),
+    ("conditions__payload_kg", {"uniform": [0.0, 2.0], "step": np.inf}, "step = inf must be a positive finite number"),
 ])
 def test_a_bool_is_no_number_of_a_sample(path, value, message):
     with pytest.raises(ParameterError) as info:

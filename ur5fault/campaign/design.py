@@ -56,7 +56,9 @@ class Dist:
 
 
 def parse_dist(spec: Any, where: str) -> Dist:
-    """A distribution from YAML (see the module docstring)."""
+    """A distribution from YAML (see the module docstring); from Python, numpy arrays count as the lists they hold."""
+    if isinstance(spec, np.ndarray):
+        spec = plain(spec)
     if isinstance(spec, list):
         spec = {"uniform": spec}
     if not isinstance(spec, Mapping):
@@ -67,11 +69,13 @@ def parse_dist(spec: Any, where: str) -> Dist:
         bad = extra[0] if extra else "/".join(keys) or "(none)"
         raise UnknownNameError("distribution", bad, DIST_KEYS, where)
     kind, args = keys[0], spec[keys[0]]
+    if isinstance(args, np.ndarray):
+        args = plain(args)
     if isinstance(args, list):  # numpy numbers (a list built in Python) as the Python numbers they hold
         args = [plain(v) for v in args]
     step = spec.get("step")
-    if step is not None and (not is_real(step) or not step > 0):
-        raise ParameterError(f"{where}: step = {step!r} must be a positive number")
+    if step is not None and (not is_real(step) or not 0 < step < math.inf):
+        raise ParameterError(f"{where}: step = {step!r} must be a positive finite number")
     step = float(step) if step is not None else None
     if kind == "choices":
         if not isinstance(args, list) or not args:
