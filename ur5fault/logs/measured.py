@@ -36,9 +36,10 @@ class MeasuredLog:
 
     ``current_A`` is in joint-positive sense; optional arrays are ``None`` when absent. The rows are on the
     controller's tick grid; ``logged`` marks the ticks the robot wrote whole (``None``: all of them; a tick
-    missing from the file, or a row of it with a required value NaN, is not: see :mod:`.regular`). ``payload_kg`` / ``tcp_offset_m`` are ``None`` when the log does not say them and the
-    caller did not either: unknown, never a silent default (``ur5fault discrepancy`` fits it and says so; the other
-    workflows refuse such a log with one line, :meth:`require_payload`).
+    missing from the file, or a row of it with a required value NaN, is not: see :mod:`.regular`).
+    ``payload_kg`` / ``tcp_offset_m`` are ``None`` when the log does not say them and the caller did not either:
+    unknown, never a silent default (``ur5fault discrepancy`` fits it and says so; the other workflows refuse such
+    a log with one line, :meth:`require_payload`).
     ``notes``: what the reader assumed or left out, one line each, for the user and the records.
     """
 
