@@ -114,7 +114,7 @@ def diagnose(log: MeasuredLog, detector_dir: str | Path, params_overrides: dict 
     reused likewise; ``baseline``: the robot's own healthy baseline (:func:`robot_baseline`), which every input
     is referred to before it is scored (None: the inputs are scored as they are)."""
     from ..diagnostics.envelope import outside_notes
-    from ..diagnostics.saved import NEAR_CHANCE_AUC, detector_test_auc, load_models, twin_format_notes
+    from ..diagnostics.saved import NEAR_CHANCE_AUC, detector_test_auc, load_models, twin_format_notes, unverified_notes
 
     models, schema = load_models(detector_dir)
     window_s = check_schema(schema, str(detector_dir))
@@ -167,6 +167,7 @@ def diagnose(log: MeasuredLog, detector_dir: str | Path, params_overrides: dict 
     if log.q_motor_rad is None:
         notes.append("no motor encoders in the log: every encoder-mismatch feature is missing (NaN) and the "
                      "detector scores without them; backlash, resolver offset and gear stiffness cannot be told")
+    notes.extend(unverified_notes(detector_dir))
     notes.extend(twin_format_notes(schema))
     notes.extend(outside_notes(schema, context, log.source))
     auc = detector_test_auc(detector_dir)

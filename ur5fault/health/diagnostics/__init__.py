@@ -40,7 +40,7 @@ from .models import Models, fit_models
 from .predictions import FILE as PREDICTIONS_FILE
 from .predictions import test_predictions
 from .report import write_report
-from .saved import MODELS_DIR, check_inputs, load_models, save_models
+from .saved import MODELS_DIR, check_inputs, load_models, save_models, unverified_notes
 from .thresholds import backlash_thresholds
 from .transfer import against_training_split, mean_run_duration_s, refuse_training_runs, setup_notes
 
@@ -219,6 +219,8 @@ def run_benchmark(campaign_dir: str | Path, out: str | Path | None = None, *, se
         out_dir = (Path(test_dir) if Path(test_dir).is_dir() else Path(test_dir).parent) / "benchmark_transfer"
     else:
         out_dir = base / ("benchmark_shuffled" if shuffle_labels else "benchmark")
+    if campaign_dir.is_dir() and not (campaign_dir / "features.parquet").exists():
+        load_features(campaign_dir)  # says what the folder is (a life campaign's, or none yet) before its --out
     check_new_output(out_dir, folder=True, results=RESULT_FILES, replace=replace)  # before reading or training
     features = load_features(campaign_dir)
     thr = PAPER_TCP_MM
@@ -245,7 +247,7 @@ def run_benchmark(campaign_dir: str | Path, out: str | Path | None = None, *, se
         metrics, figures = evaluate(features, seed=seed, threshold_mm=thr, source=str(test_dir), saved=saved,
                                     test_features=other, with_importance=False)
         metrics.pop("_models")
-        metrics["notes"] = setup_notes(saved[1], test_dir, other)
+        metrics["notes"] = unverified_notes(base / "benchmark") + setup_notes(saved[1], test_dir, other)
         if saved[0].joint_kind is not None:  # how far apart, against the motions drawn (transfer.py)
             metrics["transfer"] = against_training_split(features, other, saved, seed, str(test_dir))
         with result_folder(out_dir, RESULT_FILES, replace):  # one set: a stop between files is marked

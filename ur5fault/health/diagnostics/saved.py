@@ -50,6 +50,7 @@ from ...util import provenance
 from ...util.io import (
     StoredFileError,
     check_stored,
+    checksum_path,
     file_sha256,
     read_json_stored,
     remove_stale_temporaries,
@@ -186,6 +187,20 @@ def _benchmark_report(folder: Path) -> dict[str, Any]:
                 return {}
             return data if isinstance(data, dict) else {}
     return {}
+
+
+def unverified_notes(folder: str | Path) -> list[str]:
+    """A note when the saved classifiers' schema (which holds the classifiers' SHA-256, the operating point and the
+    inputs) has no checksum file beside it: copied without it, or edited by hand, it is read unverified (as
+    ``monitor --baseline-stats`` says of a baseline.json)."""
+    folder = Path(folder)
+    if not (folder / SCHEMA_FILE).exists() and (folder / MODELS_DIR / SCHEMA_FILE).exists():
+        folder = folder / MODELS_DIR
+    schema = folder / SCHEMA_FILE
+    if not schema.exists() or checksum_path(schema).exists():
+        return []
+    return [f"{schema}: no {checksum_path(schema).name} beside it; read unverified (its operating point, inputs and "
+            f"the classifiers' checksum as they are in the file); {RESAVE} to have it checked"]
 
 
 def load_models(folder: str | Path) -> tuple[Models, dict[str, Any]]:
