@@ -187,3 +187,15 @@ def test_sim_log_round_trip(tmp_path):
     np.testing.assert_array_equal(log.q_actual_rad, res["q_FB_rad"][0])
     np.testing.assert_array_equal(log.current_A, res["i_FB_A"][0])
     assert log.temperature_C.shape == (res.t_s.size, 6)
+
+
+def test_logs_of_two_controllers_are_told_by_their_target_at_rest_and_a_log_never_at_rest_tells_nothing():
+    """A CB2 logs the previous reading as its target at rest, a CB3 a fixed setpoint: one note names both groups
+    (diagnose's baseline uses it too); a log that never stands still (``None``) neither adds nor removes one."""
+    from ur5fault.logs.measured import controllers_note
+
+    assert controllers_note([("a.csv", "reading"), ("b.csv", "reading"), ("c.csv", None)]) == []
+    assert controllers_note([("n.csv", "setpoint"), ("c.csv", None)]) == []
+    assert controllers_note([("a.csv", "reading"), ("n.csv", "setpoint"), ("c.csv", None), ("b.csv", "reading")]) == [
+        "the target at rest is the previous reading in a.csv, b.csv (as a CB2 controller logs it) and a fixed "
+        "setpoint in n.csv (as a CB3's): logs of two controllers, likely two robots, under one model"]

@@ -162,13 +162,18 @@ def assumption_notes(logs: Sequence[MeasuredLog], joint_temperature_C,
             out.append(f"{named[0]}: {text}")
         else:
             out.append(f"{len(named)} logs ({', '.join(named)}): {text}")
-    named = [*others, *((lg.source, lg.rest_target) for lg in logs)]
+    return out + controllers_note([*others, *((lg.source, lg.rest_target) for lg in logs)])
+
+
+def controllers_note(named: Sequence[tuple[str, str | None]]) -> list[str]:
+    """A note when logs ``(name, rest_target)`` are of two controllers: a CB2's target at rest is the previous
+    reading, a CB3's a fixed setpoint (:attr:`MeasuredLog.rest_target`; ``None``: never at rest, not told)."""
     styles = {s: [name for name, style in named if style == s] for s in ("reading", "setpoint")}
-    if all(styles.values()):
-        out.append(f"the target at rest is the previous reading in {', '.join(styles['reading'])} (as a CB2 "
-                   f"controller logs it) and a fixed setpoint in {', '.join(styles['setpoint'])} (as a CB3's): logs "
-                   "of two controllers, likely two robots, under one model")
-    return out
+    if not all(styles.values()):
+        return []
+    return [f"the target at rest is the previous reading in {', '.join(styles['reading'])} (as a CB2 controller "
+            f"logs it) and a fixed setpoint in {', '.join(styles['setpoint'])} (as a CB3's): logs of two controllers, "
+            "likely two robots, under one model"]
 
 
 def same_period(a_s: float, b_s: float) -> bool:

@@ -34,6 +34,7 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
     from ...config import Overlay
     from ...errors import ParameterError
     from ...logs.length import check_files_length, check_logs_length
+    from ...logs.measured import controllers_note
     from ...logs.options import log_entries, read_entry, refuse_hold_out, refuse_unknown_payload
     from ...logs.same_samples import refuse_same_samples
     from ...twin.replay import refuse_log_owned
@@ -85,6 +86,8 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
         temps = load_params(overrides=params).joint_temperature_C
         for line in dict.fromkeys(n for g in healthy for n in g.assumptions(temps)):
             print(f"note: baseline {line}", file=sys.stderr)
+        for line in controllers_note([(g.source, g.rest_target) for g in (log, *healthy)]):
+            print(f"note: {line}", file=sys.stderr)  # its threshold would be read off another robot's logs
     baseline = robot_baseline(healthy, args.detector, params, effects) if healthy else None
     d = diagnose(log, args.detector, params, effects, baseline=baseline)
     for n in d["notes"]:
