@@ -193,6 +193,19 @@ def test_cli_missing_folder_is_one_line_exit_2(tmp_path, capsys):
     assert err.startswith("ur5fault: error: ") and err.count("\n") == 1 and "no such feature table" in err
 
 
+def test_cli_on_a_life_campaign_folder_names_the_command_that_benchmarks_it(tmp_path, capsys):
+    """A life campaign's folder (inspections, no feature table; prognose's report already in its benchmark/): the
+    one line says what the folder is and which command benchmarks it, before any word on --out."""
+    life = tmp_path / "life3"
+    (life / "benchmark").mkdir(parents=True)
+    (life / "benchmark" / "report.md").write_text("prognose's report\n")
+    (life / "manifest.json").write_text('{"name": "life3", "kind": "life", "state": "complete"}')
+    assert main(["benchmark", str(life)]) == 2
+    err = capsys.readouterr().err
+    assert err == (f"ur5fault: error: {life}: a life campaign's folder (inspections over the units' lives, no "
+                   f"feature table of runs); `ur5fault prognose {life}` benchmarks it\n")
+
+
 # ----------------------------------------------------------------------------- feature sets and saved classifiers
 def with_twin(df: pd.DataFrame, seed: int = 1, informative: bool = True) -> pd.DataFrame:
     """The synthetic table with twin residual columns: noise, and on faulty runs a backlash estimate on
