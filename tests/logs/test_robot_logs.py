@@ -512,3 +512,20 @@ def test_the_readers_called_directly_make_the_checks_read_log_makes(tmp_path):
                        match=r"test12.csv: the measured position of joint 2 .* departs from its target"):
         read_rtde(_first_12_s_of_test(tmp_path, freeze), **KW)
     read_nist(NIST_LOG)  # the real log passes as before
+
+
+def test_a_log_read_with_the_wrong_format_names_the_right_one(tmp_path):
+    """A newcomer's first try: the NIST log as rtde, a Kufieta run as nist: the one line says which layout the
+    columns are and the --format that reads it; a sim read of a CSV names the CSV formats."""
+    with pytest.raises(LogFormatError, match=r"missing required column 'timestamp' \(or 'time'\): the time \[s\]; "
+                                             r"its columns are the nist layout's: give --format nist$"):
+        read_log(NIST_LOG, "rtde", **KW)
+    with pytest.raises(LogFormatError, match=r"missing required column 'ROBOT_TIME' \(and 18 more\); its columns are "
+                                             r"the rtde layout's: give --format rtde$"):
+        read_log(KUFIETA_DIR / "TEST.csv.gz", "nist")
+    with pytest.raises(LogFormatError, match=r"a robot's CSV log: --format rtde, or nist for the NIST layout\)$"):
+        read_log(NIST_LOG, "sim")
+    df = _frame().rename(columns={"time": "t"})  # neither layout's: no hint
+    df.to_csv(tmp_path / "x.csv", index=False)
+    with pytest.raises(LogFormatError, match=r"missing required column 'timestamp' \(or 'time'\): the time \[s\]$"):
+        read_log(tmp_path / "x.csv", "rtde", **KW)

@@ -35,11 +35,23 @@ NIST_TOOL_OFFSET_M = (-0.001, -0.001, 0.1856)  # fitted on the NIST log (tests/s
 NIST_PAYLOAD_KG = 0.726  # 1.6 lb, from the NIST run name
 
 
-def _require(columns: Sequence[str], required: Sequence[str], source: str) -> None:
+def _require(columns: Sequence[str], required: Sequence[str], source: str, fmt: str = "") -> None:
     missing = [c for c in required if c not in columns]
     if missing:
-        raise LogFormatError(f"{source}: missing required column {missing[0]!r}" +
-                             (f" (and {len(missing) - 1} more)" if len(missing) > 1 else ""))
+        more = f" (and {len(missing) - 1} more)" if len(missing) > 1 else ""
+        raise LogFormatError(f"{source}: missing required column {missing[0]!r}{more}{layout_hint(columns, fmt)}")
+
+
+#: a column each layout's files carry, lower case (how a file read with the wrong --format is told)
+LAYOUT_MARKS = {"nist": "robot_time", "rtde": "actual_q_0"}
+
+
+def layout_hint(columns: Sequence[str], fmt: str) -> str:
+    """``"; its columns are the X layout's: give --format X"`` when a file read as ``fmt`` carries another
+    layout's mark column (:data:`LAYOUT_MARKS`), else ``""``."""
+    names = {c.lower() for c in columns}
+    other = [f for f, mark in LAYOUT_MARKS.items() if f != fmt and mark in names]
+    return f"; its columns are the {other[0]} layout's: give --format {other[0]}" if other else ""
 
 
 def _joint_numbers(columns: Sequence[str], pattern: str) -> list[int]:
@@ -194,7 +206,7 @@ def read_nist(path: str | Path, length: plausible.MinLength | None = None) -> Me
     pos_t = [f"ROBOT_TARGET_JOINT_POSITIONS (J{j})" for j in range(1, 7)]
     pos_a = [f"ROBOT_ACTUAL_JOINT_POSITIONS (J{j})" for j in range(1, 7)]
     cur_a = [f"ROBOT_ACTUAL_JOINT_CURRENT (J{j})" for j in range(1, 7)]
-    _require(cols, ["ROBOT_TIME", *pos_t, *pos_a, *cur_a], src)
+    _require(cols, ["ROBOT_TIME", *pos_t, *pos_a, *cur_a], src, "nist")
     plausible.check_joint_count(src, _joint_numbers(cols, r"ROBOT_ACTUAL_JOINT_POSITIONS \(J(\d+)\)"), 1)
     part: list[str] = []
     cur_t = _have(cols, [f"ROBOT_TARGET_JOITN_CURRENT (J{j})" for j in range(1, 7)], part, src)
@@ -266,8 +278,9 @@ def read_rtde(path: str | Path, payload_kg: float | None = None,
     time_col = next((c for c in RTDE_TIME_COLUMNS if c in cols), None)
     if time_col is None:
         raise LogFormatError(f"{src}: missing required column {RTDE_TIME_COLUMNS[0]!r} (or "
-                             f"{' or '.join(repr(c) for c in RTDE_TIME_COLUMNS[1:])}): the time [s]")
-    _require(cols, [*qt, *qa, *ia], src)
+                             f"{' or '.join(repr(c) for c in RTDE_TIME_COLUMNS[1:])}): the time [s]"
+                             + layout_hint(layout.columns, "rtde"))
+    _require(cols, [*qt, *qa, *ia], src, "rtde")
     plausible.check_joint_count(src, _joint_numbers(cols, r"actual_q_(\d+)"), 0)
     part: list[str] = []
     ct = _have(cols, [f"target_current_{j}" for j in range(6)], part, src)
@@ -309,7 +322,8 @@ def read_sim(path: str | Path, length: plausible.MinLength | None = None) -> Mea
     src = path.name
     if path.suffix.lower() == ".csv" or path.name.lower().endswith(".csv.gz"):
         raise LogFormatError(f"{src}: the sim format reads the Parquet file `ur5fault simulate --out FILE.parquet` "
-                             "writes; a CSV of it has no place for the run's payload, tool and temperatures")
+                             "writes; a CSV of it has no place for the run's payload, tool and temperatures (a robot's "
+                             "CSV log: --format rtde, or nist for the NIST layout)")
     if path.is_file():  # a campaign's time series carries its checksum: a changed byte is refused, not fitted
         check_stored(path, RESIMULATE)
     try:
