@@ -58,7 +58,7 @@ def reading_rows(log) -> np.ndarray:
     before them, on every joint (to the files' precision, the reader's ``SAME_POSITION_RAD``; the ticks the reader
     filled in, ``MeasuredLog.logged``, skipped: a recorder that dropped rows). Found on the log as read, which
     keeps no target speeds."""
-    from ur5fault.logs.readers import SAME_POSITION_RAD
+    from ur5fault.logs.rest_target import SAME_POSITION_RAD
 
     prev = previous_written(log)
     same = np.all(np.abs(log.q_target_rad - log.q_actual_rad[np.maximum(prev, 0)]) < SAME_POSITION_RAD, axis=1)
@@ -85,10 +85,10 @@ def held_pose(log):
 
 def follows_reading(t: np.ndarray, target: np.ndarray, actual: np.ndarray, target_speed: np.ndarray) -> dict:
     """Rows at rest (every target speed exactly 0, after the first row): how many, how many of them one tick after
-    the previous row (the reader's rule, ``logs.readers.rest_target_rows``), the share of those whose target equals
+    the previous row (the reader's rule, ``logs.rest_target.rest_target_rows``), the share of those whose target equals
     the previous reading on every joint, and how many of those that do not are the first row of a stretch at
     rest."""
-    from ur5fault.logs.readers import rest_target_rows
+    from ur5fault.logs.rest_target import rest_target_rows
 
     at_rest = np.all(target_speed == 0.0, axis=1)
     sel, same = rest_target_rows(t, target, actual, target_speed)  # rows 1..n-1

@@ -237,7 +237,7 @@ def test_a_cb2_target_at_rest_that_follows_the_reading_is_said():
     """Where every target speed is 0, the CB2 runs log the previous reading as the target (counted here from the
     files with pandas); the reader says so once per log, and not for NIST's CB3 log, whose setpoint at rest is
     fixed, nor for a log whose target at rest holds a pose while the reading wanders."""
-    from ur5fault.logs.readers import rest_target_style
+    from ur5fault.logs.rest_target import rest_target_style
 
     path = KUFIETA_DIR / "TEST.csv.gz"
     df = pd.read_csv(path)

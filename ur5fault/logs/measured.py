@@ -62,7 +62,7 @@ class MeasuredLog:
     #: ``(n_samples,)`` bool: whether the gripper holds the payload at each sample (ur5fault's own logs record
     #: it); ``None``: the log does not say, and the payload is taken as held throughout
     payload_held: NDArray | None = None
-    #: what the log's target is while the arm stands (:func:`.readers.rest_target_style`): ``"reading"`` (the
+    #: what the log's target is while the arm stands (:func:`.rest_target.rest_target_style`): ``"reading"`` (the
     #: previous measured position, as a CB2 controller logs it), ``"setpoint"`` (a fixed pose, as a CB3), ``None``
     #: (not seen); logs of one robot's controller share it
     rest_target: str | None = None

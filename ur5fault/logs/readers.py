@@ -14,7 +14,6 @@ before a log is returned; every problem is one :class:`~ur5fault.errors.LogForma
 from __future__ import annotations
 
 import json
-import re
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
@@ -25,7 +24,9 @@ from ..errors import LogFormatError, ParameterError, UnknownNameError
 from ..sim.effects import REGISTRY
 from ..util.checks import check_number
 from . import plausible, regular
+from .columns import have, joint_numbers, layout_hint, match_case, require, stack
 from .measured import MeasuredLog
+from .rest_target import rest_target_style
 from .source import check_log_memory, read_columns, sniff
 from .wrap import unwrap_joints
 
@@ -33,99 +34,6 @@ from .wrap import unwrap_joints
 UR_CURRENT_SIGN = np.array([1.0, 1.0, 1.0, 1.0, 1.0, 1.0])
 NIST_TOOL_OFFSET_M = (-0.001, -0.001, 0.1856)  # fitted on the NIST log (tests/sim/test_nist_fk.py)
 NIST_PAYLOAD_KG = 0.726  # 1.6 lb, from the NIST run name
-
-
-def _require(columns: Sequence[str], required: Sequence[str], source: str, fmt: str = "") -> None:
-    missing = [c for c in required if c not in columns]
-    if missing:
-        more = f" (and {len(missing) - 1} more)" if len(missing) > 1 else ""
-        raise LogFormatError(f"{source}: missing required column {missing[0]!r}{more}{layout_hint(columns, fmt)}")
-
-
-#: a column each layout's files carry, lower case (how a file read with the wrong --format is told)
-LAYOUT_MARKS = {"nist": "robot_time", "rtde": "actual_q_0"}
-
-
-def layout_hint(columns: Sequence[str], fmt: str) -> str:
-    """``"; its columns are the X layout's: give --format X"`` when a file read as ``fmt`` carries another
-    layout's mark column (:data:`LAYOUT_MARKS`), else ``""``."""
-    names = {c.lower() for c in columns}
-    other = [f for f, mark in LAYOUT_MARKS.items() if f != fmt and mark in names]
-    return f"; its columns are the {other[0]} layout's: give --format {other[0]}" if other else ""
-
-
-def _joint_numbers(columns: Sequence[str], pattern: str) -> list[int]:
-    rx = re.compile(pattern, re.IGNORECASE)
-    return [int(m.group(1)) for c in columns if (m := rx.fullmatch(c))]
-
-
-def _have(columns: Sequence[str], wanted: Sequence[str], partial: list[str] | None = None,
-          src: str = "") -> list[str]:
-    """``wanted`` where every one of them is a column, else none; a group present in part is said in ``partial``
-    (a note: one misspelt header otherwise drops the group's other columns without a word)."""
-    if all(c in columns for c in wanted):
-        return list(wanted)
-    present = [c for c in wanted if c in columns]
-    if present and partial is not None:
-        missing = [c for c in wanted if c not in columns]
-        partial.append(f"{src}: {len(present)} of the {len(wanted)} columns {wanted[0]}..{wanted[-1]} are present "
-                       f"(missing: {', '.join(missing)}): the group is not used")
-    return []
-
-
-def _match_case(columns: Sequence[str], known: Sequence[str], src: str) -> dict[str, str]:
-    """Header column -> the name of ``known`` it spells in another case (``TIME``, ``Actual_Q_0``); a name two
-    columns spell (``actual_q_2`` and ``ACTUAL_Q_2``) is refused, both named."""
-    by_lower: dict[str, list[str]] = {}
-    for c in columns:
-        by_lower.setdefault(c.lower(), []).append(c)
-    rename = {}
-    for name in known:
-        found = by_lower.get(name.lower(), [])
-        if len(found) > 1:
-            raise LogFormatError(f"{src}: columns {found[0]!r} and {found[1]!r} differ only in case: which one is "
-                                 "meant cannot be told; rename or drop one")
-        if found and found[0] != name:
-            rename[found[0]] = name
-    return rename
-
-
-def _stack(data: Mapping[str, NDArray], cols: Sequence[str]) -> NDArray | None:
-    return np.column_stack([data[c] for c in cols]) if cols else None
-
-
-#: a log whose target at rest follows its reading: at least this many rows at rest, and this share of them
-#: (the CB2 runs of data/kufieta-ur5: 99.0-100 % of 328-1,872 rows, every one but the first of each stretch at
-#: rest; NIST's CB3 log: 0 of 2,523)
-REST_TARGET_MIN_ROWS, REST_TARGET_MIN_SHARE = 25, 0.9
-#: positions equal to the file's precision (the CB2 files write 6 decimals of a radian)
-SAME_POSITION_RAD = 1e-9
-
-
-def rest_target_rows(t: NDArray, target_q: NDArray, actual_q: NDArray, target_qd: NDArray) -> tuple[NDArray, NDArray]:
-    """``(rest, same)``, each ``(n - 1,)`` for rows ``1..n-1``: the row is at rest (every target speed exactly 0)
-    and one tick after the previous row (the tick grid of :func:`.regular.ticks`; a row after a gap has no previous
-    reading to equal), and its target equals the previous row's measured position on every joint."""
-    k, _ = regular.ticks(t)
-    rest = np.all(target_qd[1:] == 0.0, axis=1) & (np.diff(k) == 1)
-    same = np.all(np.abs(target_q[1:] - actual_q[:-1]) < SAME_POSITION_RAD, axis=1)
-    return rest, same
-
-
-def rest_target_style(t: NDArray, target_q: NDArray, actual_q: NDArray, target_qd: NDArray | None) -> str | None:
-    """What the log's target is where every target speed is exactly 0 (:func:`rest_target_rows`): ``"reading"``,
-    the previous tick's measured position on every joint, as in the CB2 runs of data/kufieta-ur5 (there the first
-    row of each stretch at rest carries the pose the move was commanded to, and every later one the previous
-    reading; the controller holds the pose: docs/validation.md, "A CB2 log's target at rest"); ``"setpoint"``, a
-    fixed pose, as NIST's CB3 log; ``None``: too few rows at rest to tell, or no target speeds."""
-    if target_qd is None or target_q.shape[0] < 3:
-        return None
-    rest, same = rest_target_rows(t, target_q, actual_q, target_qd)
-    if int(rest.sum()) < REST_TARGET_MIN_ROWS:
-        return None
-    share = float(same[rest].mean())
-    return "reading" if share >= REST_TARGET_MIN_SHARE else "setpoint" if share <= 1.0 - REST_TARGET_MIN_SHARE \
-        else None
 
 
 def _assemble(src: str, t: NDArray, required: Mapping[str, NDArray], optional: Mapping[str, NDArray | None],
@@ -206,21 +114,21 @@ def read_nist(path: str | Path, length: plausible.MinLength | None = None) -> Me
     pos_t = [f"ROBOT_TARGET_JOINT_POSITIONS (J{j})" for j in range(1, 7)]
     pos_a = [f"ROBOT_ACTUAL_JOINT_POSITIONS (J{j})" for j in range(1, 7)]
     cur_a = [f"ROBOT_ACTUAL_JOINT_CURRENT (J{j})" for j in range(1, 7)]
-    _require(cols, ["ROBOT_TIME", *pos_t, *pos_a, *cur_a], src, "nist")
-    plausible.check_joint_count(src, _joint_numbers(cols, r"ROBOT_ACTUAL_JOINT_POSITIONS \(J(\d+)\)"), 1)
+    require(cols, ["ROBOT_TIME", *pos_t, *pos_a, *cur_a], src, "nist")
+    plausible.check_joint_count(src, joint_numbers(cols, r"ROBOT_ACTUAL_JOINT_POSITIONS \(J(\d+)\)"), 1)
     part: list[str] = []
-    cur_t = _have(cols, [f"ROBOT_TARGET_JOITN_CURRENT (J{j})" for j in range(1, 7)], part, src)
-    temp = _have(cols, [f"ROBOT_JOINT_TEMP (J{j})" for j in range(1, 7)], part, src)
-    tcp = _have(cols, [f"ROBOT_CARTESIAN_COORD_TOOL ({a})" for a in "xyz"], part, src)
-    vel_t = _have(cols, [f"ROBOT_TARGET_JOINT_VELOCITIES (J{j})" for j in range(1, 7)], part, src)
-    vel_a = _have(cols, [f"ROBOT_ACTUAL_JOINT_VELOCITIES (J{j})" for j in range(1, 7)], part, src)
-    torq = _have(cols, [f"ROBOT_TARGET_JOINT_TORQUES (J{j})" for j in range(1, 7)], part, src)
+    cur_t = have(cols, [f"ROBOT_TARGET_JOITN_CURRENT (J{j})" for j in range(1, 7)], part, src)
+    temp = have(cols, [f"ROBOT_JOINT_TEMP (J{j})" for j in range(1, 7)], part, src)
+    tcp = have(cols, [f"ROBOT_CARTESIAN_COORD_TOOL ({a})" for a in "xyz"], part, src)
+    vel_t = have(cols, [f"ROBOT_TARGET_JOINT_VELOCITIES (J{j})" for j in range(1, 7)], part, src)
+    vel_a = have(cols, [f"ROBOT_ACTUAL_JOINT_VELOCITIES (J{j})" for j in range(1, 7)], part, src)
+    torq = have(cols, [f"ROBOT_TARGET_JOINT_TORQUES (J{j})" for j in range(1, 7)], part, src)
     d = read_columns(path, src, layout,
                      ["ROBOT_TIME", *pos_t, *pos_a, *cur_a, *cur_t, *temp, *tcp, *vel_t, *vel_a, *torq])
-    required = {"target_q": np.radians(_stack(d, pos_t)), "actual_q": np.radians(_stack(d, pos_a)),
-                "actual_current": _stack(d, cur_a)}
-    optional = {"target_qd": _stack(d, vel_t), "actual_qd": _stack(d, vel_a), "target_current": _stack(d, cur_t),
-                "temperature": _stack(d, temp), "tcp": _stack(d, tcp), "target_torque": _stack(d, torq)}
+    required = {"target_q": np.radians(stack(d, pos_t)), "actual_q": np.radians(stack(d, pos_a)),
+                "actual_current": stack(d, cur_a)}
+    optional = {"target_qd": stack(d, vel_t), "actual_qd": stack(d, vel_a), "target_current": stack(d, cur_t),
+                "temperature": stack(d, temp), "tcp": stack(d, tcp), "target_torque": stack(d, torq)}
     columns = {"time": ["ROBOT_TIME"], "target_q": pos_t, "actual_q": pos_a, "actual_current": cur_a}
     return _assemble(src, d["ROBOT_TIME"], required, optional, "degrees",
                      ("target positions", "actual positions"), length, part, columns, payload_kg=NIST_PAYLOAD_KG,
@@ -272,7 +180,7 @@ def read_rtde(path: str | Path, payload_kg: float | None = None,
     qa = [f"actual_q_{j}" for j in range(6)]
     ia = [f"actual_current_{j}" for j in range(6)]
     groups = ("target_current", "joint_temperatures", "actual_TCP_pose", "target_qd", "actual_qd", "target_moment")
-    rename = _match_case(layout.columns, [*RTDE_TIME_COLUMNS, *qt, *qa, *ia,
+    rename = match_case(layout.columns, [*RTDE_TIME_COLUMNS, *qt, *qa, *ia,
                                           *(f"{name}_{j}" for name in groups for j in range(6))], src)
     cols = tuple(rename.get(c, c) for c in layout.columns)  # names as the reader knows them
     time_col = next((c for c in RTDE_TIME_COLUMNS if c in cols), None)
@@ -280,22 +188,22 @@ def read_rtde(path: str | Path, payload_kg: float | None = None,
         raise LogFormatError(f"{src}: missing required column {RTDE_TIME_COLUMNS[0]!r} (or "
                              f"{' or '.join(repr(c) for c in RTDE_TIME_COLUMNS[1:])}): the time [s]"
                              + layout_hint(layout.columns, "rtde"))
-    _require(cols, [*qt, *qa, *ia], src, "rtde")
-    plausible.check_joint_count(src, _joint_numbers(cols, r"actual_q_(\d+)"), 0)
+    require(cols, [*qt, *qa, *ia], src, "rtde")
+    plausible.check_joint_count(src, joint_numbers(cols, r"actual_q_(\d+)"), 0)
     part: list[str] = []
-    ct = _have(cols, [f"target_current_{j}" for j in range(6)], part, src)
-    temp = _have(cols, [f"joint_temperatures_{j}" for j in range(6)], part, src)
-    tcp = _have(cols, [f"actual_TCP_pose_{j}" for j in range(3)], part, src)
-    vt = _have(cols, [f"target_qd_{j}" for j in range(6)], part, src)
-    va = _have(cols, [f"actual_qd_{j}" for j in range(6)], part, src)
-    tm = _have(cols, [f"target_moment_{j}" for j in range(6)], part, src)
+    ct = have(cols, [f"target_current_{j}" for j in range(6)], part, src)
+    temp = have(cols, [f"joint_temperatures_{j}" for j in range(6)], part, src)
+    tcp = have(cols, [f"actual_TCP_pose_{j}" for j in range(3)], part, src)
+    vt = have(cols, [f"target_qd_{j}" for j in range(6)], part, src)
+    va = have(cols, [f"actual_qd_{j}" for j in range(6)], part, src)
+    tm = have(cols, [f"target_moment_{j}" for j in range(6)], part, src)
     in_file = {v: k for k, v in rename.items()}
     wanted = [time_col, *qt, *qa, *ia, *ct, *temp, *tcp, *vt, *va, *tm]
     d = read_columns(path, src, layout, [in_file.get(c, c) for c in wanted])
     d = {rename.get(c, c): v for c, v in d.items()}
-    required = {"target_q": _stack(d, qt), "actual_q": _stack(d, qa), "actual_current": _stack(d, ia)}
-    optional = {"target_qd": _stack(d, vt), "actual_qd": _stack(d, va), "target_current": _stack(d, ct),
-                "temperature": _stack(d, temp), "tcp": _stack(d, tcp), "target_torque": _stack(d, tm)}
+    required = {"target_q": stack(d, qt), "actual_q": stack(d, qa), "actual_current": stack(d, ia)}
+    optional = {"target_qd": stack(d, vt), "actual_qd": stack(d, va), "target_current": stack(d, ct),
+                "temperature": stack(d, temp), "tcp": stack(d, tcp), "target_torque": stack(d, tm)}
     columns = {"time": [time_col], "target_q": qt, "actual_q": qa, "actual_current": ia}
     columns = {k: [in_file.get(c, c) for c in v] for k, v in columns.items()}  # as the file spells them
     return _assemble(src, d[time_col], required, optional, "radians", length=length, notes=part, columns=columns,
@@ -333,10 +241,10 @@ def read_sim(path: str | Path, length: plausible.MinLength | None = None) -> Mea
         raise LogFormatError(f"{src}: cannot read as Parquet ({' '.join(str(exc).split())[:160]})") from None
     names = schema.names
     cols = lambda name: [f"{name}_j{j}" for j in range(1, 7)]  # noqa: E731
-    _require(names, ["t_s", *cols("q_set_rad"), *cols("q_FB_rad"), *cols("i_FB_A")], src)
-    plausible.check_joint_count(src, _joint_numbers(names, r"q_FB_rad_j(\d+)"), 1)
-    tcp = _have(names, ["tcp_x_m", "tcp_y_m", "tcp_z_m"])
-    qm = _have(names, cols("q_M_FB_rad"))
+    require(names, ["t_s", *cols("q_set_rad"), *cols("q_FB_rad"), *cols("i_FB_A")], src)
+    plausible.check_joint_count(src, joint_numbers(names, r"q_FB_rad_j(\d+)"), 1)
+    tcp = have(names, ["tcp_x_m", "tcp_y_m", "tcp_z_m"])
+    qm = have(names, cols("q_M_FB_rad"))
     wanted = ["t_s", *cols("q_set_rad"), *cols("q_FB_rad"), *cols("i_FB_A"), *tcp, *qm]
     check_log_memory(src, n_rows, len(wanted))
     try:
@@ -347,8 +255,8 @@ def read_sim(path: str | Path, length: plausible.MinLength | None = None) -> Mea
     if n_rows == 0:
         raise LogFormatError(f"{src}: no samples")
     t = d["t_s"]
-    arrays = {"q_set_rad": _stack(d, cols("q_set_rad")), "q_FB_rad": _stack(d, cols("q_FB_rad")),
-              "i_FB_A": _stack(d, cols("i_FB_A"))}
+    arrays = {"q_set_rad": stack(d, cols("q_set_rad")), "q_FB_rad": stack(d, cols("q_FB_rad")),
+              "i_FB_A": stack(d, cols("i_FB_A"))}
     plausible.check_finite(src, {"time": t, **arrays}, {"time": ["t_s"], **{k: cols(k) for k in arrays}})
     plausible.check_increasing(src, t)
     plausible.check_range(src, arrays["q_FB_rad"])
@@ -370,7 +278,7 @@ def read_sim(path: str | Path, length: plausible.MinLength | None = None) -> Mea
         raise LogFormatError(f"{src}: malformed ur5fault metadata ({exc})") from None
     return _checked(MeasuredLog(
         source=src, t_s=t, q_target_rad=arrays["q_set_rad"], q_actual_rad=arrays["q_FB_rad"],
-        current_A=arrays["i_FB_A"], tcp_m=_stack(d, tcp), q_motor_rad=_stack(d, qm), temperature_C=temp_arr,
+        current_A=arrays["i_FB_A"], tcp_m=stack(d, tcp), q_motor_rad=stack(d, qm), temperature_C=temp_arr,
         payload_kg=payload, tcp_offset_m=offset, payload_held=held, simulated=True,  # type: ignore[arg-type]
     ))
 
