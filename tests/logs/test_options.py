@@ -49,7 +49,10 @@ def test_manifest_with_per_log_options(tmp_path):
     ("logs: [a.csv]\nspeed: 3\n", "robot.yaml: unknown key 'speed'"),
     ("speed: 3\n", "robot.yaml: read as a manifest of logs (a .yaml or .yml file among the logs is one): unknown key "
                    "'speed'"),
-    ("format: rtde\nlogs: [{path: a.csv, payload: 1}]\n", "logs[0]: unknown key 'payload'"),
+    ("format: rtde\nlogs: [{path: a.csv, payload: 1}]\n", "logs[0]: unknown key 'payload' (did you mean "
+                                                         "'payload_kg'?) (keys: path, format, payload_kg"),
+    ("payload: 1\nlogs: [a.csv]\n", "robot.yaml: unknown key 'payload' (did you mean 'payload_kg'?) (keys: format, "
+                                    "payload_kg, tcp_offset_m, logs)"),
     # the manifest's key, not the command line's flag (was "logs[0]: --payload-kg applies to --format rtde only")
     ("format: nist\nlogs: [{path: a.csv, payload_kg: 1}]\n", "robot.yaml: logs[0]: payload_kg applies to rtde logs "
                                                             "only (or with payload_kg: unknown)"),
@@ -266,8 +269,8 @@ def test_commands_that_cannot_fit_it_refuse_an_unknown_payload(tmp_path, capsys,
     rc = main([command, str(RUN1), "--format", "rtde", *extra])
     err = capsys.readouterr().err.strip().splitlines()
     assert rc == 2 and len(err) == 1, err
-    assert "payload unknown (no --payload-kg, or --payload-kg unknown): this command needs the payload stated" \
-        in err[0], err
+    assert ("payload unknown (no --payload-kg nor a manifest's payload_kg, or either given as unknown): this "
+            "command needs the payload stated") in err[0], err
     # a stated mass without its position: the advice does not offer the unknown payload this command refuses
     rc = main([command, str(RUN1), "--format", "rtde", "--payload-kg", "0", *extra])
     err = capsys.readouterr().err.strip().splitlines()

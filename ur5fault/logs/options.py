@@ -27,6 +27,7 @@ manifest among its logs is refused as such).
 from __future__ import annotations
 
 import argparse
+import difflib
 import dataclasses
 import os
 from collections.abc import Sequence
@@ -181,6 +182,14 @@ def _same(a, b) -> bool:
     return a == b
 
 
+def _unknown_key(key: object, keys: Sequence[str]) -> str:
+    """``unknown key 'payload' (did you mean 'payload_kg'?) (keys: ...)``: a manifest's key as the YAML validators
+    name one."""
+    close = difflib.get_close_matches(str(key), keys, n=2, cutoff=0.6)
+    hint = f" (did you mean {' or '.join(map(repr, close))}?)" if close else ""
+    return f"unknown key {key!r}{hint} (keys: {', '.join(keys)})"
+
+
 def _manifest(path: Path, args: argparse.Namespace, held: Sequence[str], used: set[str]) -> list[LogEntry]:
     """The logs of the manifest ``path``, then the command line's ``held`` (``--hold-out``; paths as given, each
     with the manifest's defaults); ``used`` collects the command-line options some log took."""
@@ -189,7 +198,7 @@ def _manifest(path: Path, args: argparse.Namespace, held: Sequence[str], used: s
     where = f"{path.name}: " + ("" if isinstance(data, dict) and "logs" in data else f"{READ_AS_MANIFEST}: ")
     bad = sorted(set(data) - set(MANIFEST_KEYS))
     if bad:
-        raise ParameterError(f"{where}unknown key {bad[0]!r} (keys: {', '.join(MANIFEST_KEYS)})")
+        raise ParameterError(f"{where}{_unknown_key(bad[0], MANIFEST_KEYS)}")
     logs = data.get("logs")
     if not isinstance(logs, list) or not logs:
         raise ParameterError(f"{where}'logs' must be a list of at least one log ({{path: FILE, ...}} or FILE)")
@@ -201,7 +210,7 @@ def _manifest(path: Path, args: argparse.Namespace, held: Sequence[str], used: s
             raise ParameterError(f"{w}a log is a file name or a mapping with 'path'")
         bad = sorted(set(item) - set(LOG_KEYS))
         if bad:
-            raise ParameterError(f"{w}unknown key {bad[0]!r} (keys: {', '.join(LOG_KEYS)})")
+            raise ParameterError(f"{w}{_unknown_key(bad[0], LOG_KEYS)}")
         if Path(str(item["path"])).suffix.lower() in MANIFEST_SUFFIXES:  # it was read as a log: "missing column"
             raise ParameterError(f"{w}{item['path']}: a manifest cannot list another manifest; list that manifest's "
                                  "logs here, or give it alone")
@@ -294,7 +303,8 @@ def refuse_unknown_payload(entries: Sequence[LogEntry]) -> None:
 
 
 def _unknown_payload(src: str) -> str:
-    return f"{src}: payload unknown (no --payload-kg, or --payload-kg unknown): {UNKNOWN_PAYLOAD}"
+    return (f"{src}: payload unknown (no --payload-kg nor a manifest's payload_kg, or either given as unknown): "
+            f"{UNKNOWN_PAYLOAD}")
 
 
 def _no_position(src: str, allow_unknown: bool) -> str:
