@@ -27,8 +27,8 @@ manifest among its logs is refused as such).
 from __future__ import annotations
 
 import argparse
-import difflib
 import dataclasses
+import difflib
 import os
 from collections.abc import Sequence
 from pathlib import Path
