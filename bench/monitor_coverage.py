@@ -6,7 +6,7 @@ baseline runs covered"): the coverage notes of ``ur5fault monitor`` on the Kufie
 The packaged model (no overlay; the notes read the logs' targets and stated payloads only, not the residual).
 Each of the six undisturbed runs of :data:`FIT` is judged against a baseline of the other five (leave one out);
 TEST, the pushed Movement_No5 run and the standstill run against all six. Prints the baseline's largest target
-speed and acceleration per joint and each run's verdict and coverage notes (the other notes are left out).
+speed per joint and each run's verdict and coverage notes (the other notes are left out).
 """
 
 from __future__ import annotations
@@ -34,7 +34,6 @@ def main() -> None:
         obs[name] = observe(log, {}, (), screen_s=BASELINE_SCREEN_S, jobs=args.jobs)
     every = fit_baseline([obs[n] for n in FIT], "packaged")
     print("largest target speed [rad/s]:", every.motion_max[0].round(3).tolist())
-    print("largest target acceleration [rad/s^2]:", every.motion_max[1].round(3).tolist())
     cases = [(n, fit_baseline([obs[m] for m in FIT if m != n], "packaged")) for n in FIT]
     for name, base in cases + [(n, every) for n in OTHER]:
         entry = assess(base, obs[name])

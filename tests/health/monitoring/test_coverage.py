@@ -1,6 +1,6 @@
-"""A monitored log that leaves what its baseline runs covered is said to: a joint moved faster or accelerated harder
-than any baseline run did, for half a second or more, beyond a 10 % margin; a payload outside the runs' own. The
-baseline records both in baseline.json; a file written before it did loads and says nothing. No verdict moves."""
+"""A monitored log that leaves what its baseline runs covered is said to: a joint moved faster than any baseline run
+did, for half a second or more, beyond a 10 % margin; a payload outside the runs' own. The baseline records both in
+baseline.json; a file written before it did loads and says nothing. No verdict moves."""
 
 import dataclasses
 import json
@@ -33,9 +33,8 @@ def notes_of(baseline, obs) -> list[str]:
     return assess(baseline, obs)["notes"]
 
 
-def test_the_baseline_records_the_largest_speed_and_acceleration_and_the_payloads(baseline):
-    np.testing.assert_array_equal(baseline.motion_max[0], [0.5, 0.5, 0.6, 0.5, 0.5, 0.5])
-    np.testing.assert_array_equal(baseline.motion_max[1], np.zeros(6))
+def test_the_baseline_records_the_largest_speed_and_the_payloads(baseline):
+    np.testing.assert_array_equal(baseline.motion_max, [[0.5, 0.5, 0.6, 0.5, 0.5, 0.5]])
     assert baseline.payloads_kg == (0.0, 0.0)
 
 
@@ -60,12 +59,12 @@ def test_motion_within_the_margin_or_too_briefly_beyond_it_is_not_named(baseline
     assert notes_of(baseline, dataclasses.replace(part("x", noise(12), speed=s), payload_kg=0.0)) == []
 
 
-def test_a_harder_acceleration_is_named(baseline):
-    obs = part("acc", noise(13))
+def test_the_acceleration_is_not_compared(baseline):
+    """On a log with ticks missing the target's second difference beside a filled tick is the straight-line
+    filling's kink (coverage.py): a log accelerating harder than the baseline runs gets no note."""
     acc = np.zeros((2000, 6))
     acc[500:700, 4] = 3.0  # 1.6 s on wrist_2, the baseline runs never accelerated
-    (note,) = notes_of(baseline, dataclasses.replace(obs, accel_rad_s2=acc, payload_kg=0.0))
-    assert "wrist_2_joint accel up to 3 rad/s^2 (1.6 s more than 10% above the baseline runs' largest, 0)" in note
+    assert notes_of(baseline, dataclasses.replace(part("acc", noise(13)), accel_rad_s2=acc, payload_kg=0.0)) == []
 
 
 def test_samples_the_robot_did_not_log_are_not_counted(baseline):
@@ -75,21 +74,6 @@ def test_samples_the_robot_did_not_log_are_not_counted(baseline):
     logged = np.ones(2000, bool)
     logged[1000:1250] = False  # filled in a gap: no motion the robot reported
     assert notes_of(baseline, dataclasses.replace(obs, logged=logged)) == []
-
-
-def test_differences_beside_a_tick_the_robot_did_not_log_are_not_the_robots_motion(baseline):
-    """The speed and acceleration are central differences of the target, filled in a straight line over ticks the
-    robot did not log: within one tick (speed) or two (acceleration) of such a tick they are not counted, in a
-    baseline run's largest value nor in a monitored log's."""
-    acc = np.zeros((2000, 6))
-    logged = np.ones(2000, bool)
-    for g in range(100, 1900, 10):  # a tick missing every 10: 72 % of the samples within two ticks of one
-        logged[g] = False
-        acc[g - 2 : g + 3, 4] = 3.0  # the filling's artefact on wrist_2, 1.8 s of it where it was logged
-    obs = dataclasses.replace(part("gappy", noise(17)), accel_rad_s2=acc, logged=logged, payload_kg=0.0)
-    assert notes_of(baseline, obs) == []
-    gappy = fit_baseline([obs, dataclasses.replace(part("b", noise(18)), payload_kg=0.0)], "sha")
-    assert gappy.motion_max[1, 4] == 0.0
 
 
 def test_a_baseline_recording_the_motion_but_not_the_payloads_says_the_motion(baseline, tmp_path):
@@ -118,7 +102,10 @@ def test_coverage_round_trips_and_an_earlier_file_says_nothing(baseline, tmp_pat
     path = tmp_path / "baseline.json"
     path.write_text(json.dumps(baseline.to_json()))
     data = json.loads(path.read_text())
-    assert data["motion_max"]["speed_rad_s"]["elbow_joint"] == 0.6 and data["payloads_kg"] == [0.0, 0.0]
+    speeds_written = {"shoulder_pan_joint": 0.5, "shoulder_lift_joint": 0.5, "elbow_joint": 0.6, "wrist_1_joint": 0.5,
+                      "wrist_2_joint": 0.5, "wrist_3_joint": 0.5}
+    assert data["motion_max"] == {"speed_rad_s": speeds_written}
+    assert data["payloads_kg"] == [0.0, 0.0]
     back = Baseline.load(path)
     np.testing.assert_array_equal(back.motion_max, baseline.motion_max)
     assert back.payloads_kg == (0.0, 0.0)
@@ -136,10 +123,9 @@ def test_coverage_round_trips_and_an_earlier_file_says_nothing(baseline, tmp_pat
     ("payloads_kg", [0.0], "payloads_kg"),  # not one per run
     ("payloads_kg", [0.0, -1.0], "payloads_kg"),
     ("payloads_kg", [0.0, True], "payloads_kg"),
-    ("motion_max", {"speed_rad_s": {}, "accel_rad_s2": {}}, "motion_max|KeyError"),
-    ("motion_max", {q: dict.fromkeys(("shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint", "wrist_1_joint",
-                                      "wrist_2_joint", "wrist_3_joint"), "0.6") for q in ("speed_rad_s",
-                                                                                          "accel_rad_s2")},
+    ("motion_max", {"speed_rad_s": {}}, "motion_max|KeyError"),
+    ("motion_max", {"speed_rad_s": dict.fromkeys(("shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint",
+                                                  "wrist_1_joint", "wrist_2_joint", "wrist_3_joint"), "0.6")},
      "motion_max"),  # a string is no number
 ])
 def test_a_broken_coverage_record_is_refused(baseline, tmp_path, key, value, message):

@@ -86,8 +86,8 @@ class Baseline:
     (:mod:`.paired`; empty: the baseline runs do not repeat each other); ``rest_targets``: per baseline run what
     its target is while the arm stands (:attr:`.observe.Observed.rest_target`: the controller's style, so that a
     log of another controller is told with ``--baseline-stats`` as with ``--baseline-logs``; ``None``: not
-    recorded, a ``baseline.json`` written before it was); ``motion_max`` ``(2, 6)``: the largest target speed
-    [rad/s] and acceleration [rad/s^2] per joint of the runs, ``payloads_kg``: per run its stated payload [kg]
+    recorded, a ``baseline.json`` written before it was); ``motion_max`` ``(1, 6)``: the largest target speed
+    [rad/s] per joint of the runs (:data:`.coverage.QUANTITIES`), ``payloads_kg``: per run its stated payload [kg]
     (what the runs covered, :mod:`.coverage`; ``None``: not recorded, as ``rest_targets``)."""
 
     overlay_sha256: str
