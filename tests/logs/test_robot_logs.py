@@ -173,6 +173,15 @@ def test_rows_without_a_value_at_the_ends(tmp_path):
         _read(tmp_path, df)
 
 
+def test_every_row_without_a_value_in_one_column_or_another_is_one_line(tmp_path):
+    df = _frame()
+    df.loc[df.index[::2], "actual_current_2"] = np.nan
+    df.loc[df.index[1::2], "actual_current_3"] = np.nan
+    with pytest.raises(LogFormatError, match=r"^log.csv: NaN or inf in every data row \(in actual_current_2, "
+                                             r"actual_current_3\): no row holds a whole reading$"):
+        _read(tmp_path, df)
+
+
 def test_a_row_without_a_value_at_a_wrap_is_filled_on_the_continuous_angle(tmp_path):
     """A joint logged folded into (-pi, pi] wraps between two rows; a NaN row there is filled after the angle is
     made continuous, not halfway across the turn."""

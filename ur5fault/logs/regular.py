@@ -90,6 +90,9 @@ def unreadable_rows(src: str, t: NDArray, required: Mapping[str, NDArray],
         return ", ".join(cols[:3]) + (f" and {len(cols) - 3} more" if len(cols) > 3 else "")
 
     ok = np.flatnonzero(~bad)
+    if ok.size == 0:  # every row lacks a value, in one column or another
+        raise LogFormatError(f"{src}: NaN or inf in every data row (in {named(slice(None))}): no row holds a whole "
+                             "reading")
     first, last = int(ok[0]), int(ok[-1])
     if first > 0:
         raise LogFormatError(f"{src}: NaN or inf in {named(slice(0, first))} in data rows 1..{first}, the log's "
