@@ -23,7 +23,15 @@ from ...errors import ConfigFileError, ParameterError
 from ...seed_paper import PAPER_TCP_MM
 from ...util.results import check_new_output, result_folder
 from .calibration import fit_calibration, test_reliability
-from .data import CONTEXT_COLUMNS, FEATURE_SETS, Dataset, has_twin_features, load_dataset, load_features
+from .data import (
+    CONTEXT_COLUMNS,
+    FEATURE_SETS,
+    Dataset,
+    has_twin_features,
+    load_dataset,
+    load_features,
+    refuse_life_folder,
+)
 from .limit_metrics import for_dataset
 from .metrics import (
     FROM_OUT_OF_FOLD,
@@ -219,8 +227,7 @@ def run_benchmark(campaign_dir: str | Path, out: str | Path | None = None, *, se
         out_dir = (Path(test_dir) if Path(test_dir).is_dir() else Path(test_dir).parent) / "benchmark_transfer"
     else:
         out_dir = base / ("benchmark_shuffled" if shuffle_labels else "benchmark")
-    if campaign_dir.is_dir() and not (campaign_dir / "features.parquet").exists():
-        load_features(campaign_dir)  # says what the folder is (a life campaign's, or none yet) before its --out
+    refuse_life_folder(campaign_dir)  # said before a word on --out, where prognose writes its report too
     check_new_output(out_dir, folder=True, results=RESULT_FILES, replace=replace)  # before reading or training
     features = load_features(campaign_dir)
     thr = PAPER_TCP_MM

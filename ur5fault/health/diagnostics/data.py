@@ -56,9 +56,7 @@ def load_features(path: Path) -> pd.DataFrame:
 
     p = path / "features.parquet" if path.is_dir() else path
     if not p.exists():
-        if path.is_dir() and _is_life_folder(path):
-            raise ConfigFileError(f"{path}: a life campaign's folder (inspections over the units' lives, no feature "
-                                  f"table of runs); `ur5fault prognose {path}` benchmarks it")
+        refuse_life_folder(path)
         raise ConfigFileError(f"{p}: no such feature table (run `ur5fault campaign run` first)")
     check_stored(p, REBUILD_FEATURES)  # a changed byte would change features silently: refused before reading
     check_table_of_manifest(p, REBUILD_FEATURES)  # an earlier campaign's table left by a rerun that stopped
@@ -154,13 +152,18 @@ def load_dataset(features: pd.DataFrame | str | Path, feature_set: str = "paper"
     return Dataset(train, test, tuple(inputs), {str(k): int(v) for k, v in n_dropped.items()}, empty)
 
 
-def _is_life_folder(folder: Path) -> bool:
-    """A life campaign's output folder: its inspections, or a manifest of kind ``life``."""
+def refuse_life_folder(path: Path) -> None:
+    """Refuse a life campaign's output folder (its inspections, or a manifest of kind ``life``) in one line naming
+    the command that benchmarks it: it holds no feature table of runs."""
     import json
 
-    if (folder / "inspections.parquet").exists():
-        return True
+    if not path.is_dir() or (path / "features.parquet").exists():
+        return
+    life = (path / "inspections.parquet").exists()
     try:
-        return json.loads((folder / "manifest.json").read_text()).get("kind") == "life"
+        life = life or json.loads((path / "manifest.json").read_text()).get("kind") == "life"
     except (OSError, ValueError, AttributeError):
-        return False
+        pass
+    if life:
+        raise ConfigFileError(f"{path}: a life campaign's folder (inspections over the units' lives, no feature "
+                              f"table of runs); `ur5fault prognose {path}` benchmarks it")
