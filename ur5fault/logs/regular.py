@@ -103,32 +103,32 @@ def unreadable_rows(src: str, t: NDArray, required: Mapping[str, NDArray],
                              f"the log's last {t[-1] - t[last]:.3g} s (more than the {MAX_CUT_S:g} s cut by itself); "
                              f"cut the log to data rows 1..{last + 1}")
     edges = np.flatnonzero(np.diff(np.concatenate([[0], bad.astype(np.int8), [0]])))
-    k = ticks(t)[0]
-    for a, b in zip(edges[::2], edges[1::2]):
-        if b <= last and k[b] - k[a - 1] - 1 > max_ticks:  # the ticks between the readable rows around it
-            gap = int(k[b] - k[a - 1] - 1)
+    stretches = [(int(a), int(b)) for a, b in zip(edges[::2], edges[1::2]) if b <= last]  # the trailing one is cut
+    tick = ticks(t)[0]
+    for a, b in stretches:
+        gap = int(tick[b] - tick[a - 1] - 1)  # the ticks between the readable rows around it
+        if gap > max_ticks:
             beside = " (with the ticks missing beside them)" if gap > b - a else ""
             raise LogFormatError(f"{src}: NaN or inf in {named(slice(a, b))} in data rows {a + 1}..{b}: {gap} ticks in "
                                  f"a row without a whole reading{beside}, more than the {max_ticks} interpolated; "
-                                 + cut_in_two(int(a), int(b) + 1, t.size))
+                                 + cut_in_two(a, b + 1, t.size))
     keep = slice(0, last + 1)
     filled = {}
-    for k, a in required.items():
-        a = a.copy()
-        for j in np.flatnonzero(missing[k][keep].any(axis=0)):
-            fin = np.isfinite(a[keep, j])
-            a[: last + 1, j] = np.interp(t[keep], t[keep][fin], a[keep, j][fin])
-        filled[k] = a
+    for name, arr in required.items():
+        arr = arr.copy()
+        for j in np.flatnonzero(missing[name][keep].any(axis=0)):
+            fin = np.isfinite(arr[keep, j])
+            arr[keep, j] = np.interp(t[keep], t[keep][fin], arr[keep, j][fin])
+        filled[name] = arr
     inside = bad[keep]
     if last + 1 < t.size:
         notes.append(f"{src}: NaN or inf in {named(slice(last + 1, None))} in the last {t.size - last - 1} data "
                      f"row(s); the log cut to rows 1..{last + 1}")
-    if inside.any():
-        runs = np.diff(np.flatnonzero(np.diff(np.concatenate([[0], inside.astype(np.int8), [0]]))))[::2]
+    if stretches:
         notes.append(f"{src}: {int(inside.sum())} data row(s) with NaN or inf in {named(keep)} (from data row "
-                     f"{int(np.flatnonzero(inside)[0]) + 1}; at most {int(runs.max())} in a row): values interpolated "
-                     "for the replay, those ticks left out of every RMS figure")
-    return keep, filled, bad[keep] if inside.any() else None
+                     f"{stretches[0][0] + 1}; at most {max(b - a for a, b in stretches)} in a row): values "
+                     "interpolated for the replay, those ticks left out of every RMS figure")
+    return keep, filled, inside if stretches else None
 
 
 def cut_in_two(a: int, b: int, n: int, where: str = "there") -> str:
