@@ -12,6 +12,7 @@ from pathlib import Path
 
 from .errors import Ur5FaultError
 from .util import progress
+from .util.usage import examples
 
 #: the run configuration and overlay formats, shown by `ur5fault simulate --help` (a wheel carries no docs/)
 RUN_CONFIG_HELP = """\
@@ -274,7 +275,11 @@ def register(sub) -> None:
     s = sub.add_parser("simulate", help="run one configuration and write its time series to Parquet or CSV",
                        description="Simulate one run and write its time series (one row per log sample). "
                                    "Command-line options override the --config file.",
-                       epilog=RUN_CONFIG_HELP, formatter_class=argparse.RawDescriptionHelpFormatter)
+                       **examples("ur5fault simulate --backlash shoulder_lift_joint:0.1 --out shoulder.parquet",
+                                  "ur5fault simulate --effect coulomb_friction@elbow:scale=1.5 --duration-s 5 --out "
+                                  "elbow.csv",
+                                  "ur5fault simulate --model nist.yaml --out identified.parquet    # an overlay of "
+                                  "identify or discrepancy", before=RUN_CONFIG_HELP))
     s.add_argument("--config", metavar="RUN.yaml",
                    help="run configuration YAML (format below; default: none, every key at its default)")
     s.add_argument("--model", metavar="OVERLAY.yaml",
@@ -302,14 +307,20 @@ def register(sub) -> None:
     s.add_argument("--replace", action="store_true", help="replace an earlier file at --out (default: refused)")
     s.add_argument("--quiet", action="store_true", help="no progress bar")
     s.set_defaults(func=cmd_simulate)
-    e = sub.add_parser("effects", help="list the effect registry")
+    e = sub.add_parser("effects", help="list the effect registry",
+                       **examples("ur5fault effects",
+                                  "ur5fault simulate --effect current_sensor_offset@wrist_1:offset_A=0.1"))
     e.set_defaults(func=cmd_effects)
     d = sub.add_parser("data", help="the real UR5 logs shipped with ur5fault (NIST CB3, Kufieta CB2): names, formats, "
-                                    "paths")
+                                    "paths",
+                       **examples("ur5fault data", "ur5fault data kufieta/TEST",
+                                  'ur5fault identify "$(ur5fault data nist)" --format nist --out nist.yaml'))
     d.add_argument("name", nargs="?", help="print the path of this log (or of every run of a group, one per line), "
                                            "e.g. nist, kufieta/TEST, kufieta")
     d.set_defaults(func=cmd_data)
-    sh = sub.add_parser("show", help="draw one run: setpoint vs resolver, encoder mismatch, currents, TCP deviation")
+    sh = sub.add_parser("show", help="draw one run: setpoint vs resolver, encoder mismatch, currents, TCP deviation",
+                        **examples("ur5fault show shoulder.parquet                   # -> shoulder.png",
+                                   "ur5fault show shoulder.parquet --out figures/shoulder.png"))
     sh.add_argument("target", help="a time-series Parquet or CSV file (from `simulate`, or a campaign's timeseries/), "
                                    "or the run_id of a run in the campaign folder --campaign (re-simulated if not "
                                    "saved)")

@@ -7,6 +7,7 @@ import sys
 from pathlib import Path
 
 from ..util.io import json_text
+from ..util.usage import examples
 from .spec import shipped_campaigns
 
 
@@ -14,7 +15,11 @@ def register(sub) -> None:
     c = sub.add_parser("campaign", help="run a YAML fault campaign into Parquet feature tables")
     csub = c.add_subparsers(dest="campaign_command", metavar="{run,status}", parser_class=type(c))
     c.set_defaults(func=lambda args: _usage(c))
-    r = csub.add_parser("run", help="run (or resume) a campaign")
+    r = csub.add_parser("run", help="run (or resume) a campaign",
+                        **examples("ur5fault campaign run default    # campaigns/default.yaml, shipped -> "
+                                   "results/default/",
+                                   "ur5fault campaign run paper --duration-s 2 --out trial    # a quick trial",
+                                   "ur5fault campaign status results/default"))
     r.add_argument("file", metavar="FILE|NAME",
                    help="campaign YAML, or the name of a campaign shipped with ur5fault: "
                         f"{', '.join(shipped_campaigns())} (e.g. `ur5fault campaign run paper`)")
@@ -39,10 +44,14 @@ def register(sub) -> None:
     r.add_argument("--replace-changed", action="store_true", dest="replace_changed",
                    help="re-simulate stored runs of OUT made under other settings (default: stop and name them)")
     r.set_defaults(func=cmd_run)
-    s = csub.add_parser("status", help="what a campaign folder holds, every run file verified (exit 1 on problems)")
+    s = csub.add_parser("status", help="what a campaign folder holds, every run file verified (exit 1 on problems)",
+                        **examples("ur5fault campaign status results/default"))
     s.add_argument("dir", help="campaign output folder, e.g. results/paper")
     s.set_defaults(func=cmd_status)
-    p = sub.add_parser("plot", help="draw the paper's backlash figures and a severity figure per swept effect (PNG)")
+    p = sub.add_parser("plot", help="draw the paper's backlash figures and a severity figure per swept effect (PNG)",
+                       **examples("ur5fault campaign run paper && ur5fault plot results/paper    # -> "
+                                  "results/paper/plots/",
+                                  "ur5fault plot results/paper --feature current_spike_max_A"))
     p.add_argument("dir", help="campaign output folder")
     p.add_argument("--feature", default="tcp_dev_max_mm",
                    help="feature of the severity figures and heat maps: a features.parquet column, or a per-joint "

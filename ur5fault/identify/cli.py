@@ -9,12 +9,17 @@ import sys
 from pathlib import Path
 
 from ..logs.options import add_log_options
+from ..util.usage import KUFIETA, KUFIETA_RUNS, examples, shipped
 from .loop import SWEEP_WINDOW_S
 from .stats import MAX_BOOT, N_BOOT
 
 
 def register(sub) -> None:
-    d = sub.add_parser("identify", help="re-derive the measured drive parameters from a log (parameter overlay)")
+    d = sub.add_parser("identify", help="re-derive the measured drive parameters from a log (parameter overlay)",
+                       **examples(f"ur5fault identify {shipped('nist')} --format nist --out nist.yaml",
+                                  f"ur5fault identify {KUFIETA_RUNS} {KUFIETA} --out kufieta.yaml    # two runs of "
+                                  "one robot, jointly",
+                                  "ur5fault simulate --model nist.yaml --out identified.parquet"))
     add_log_options(d, ("nist", "rtde"))
     d.add_argument("--out", required=True, metavar="PARAMS.yaml",
                    help="parameter overlay YAML to write (accepted by --model; missing folders are created)")

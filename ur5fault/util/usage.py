@@ -20,4 +20,26 @@ def missing_command(parser: argparse.ArgumentParser) -> int:
     return EXIT_USAGE
 
 
-__all__ = ["EXIT_USAGE", "missing_command"]
+#: the options that read a shipped Kufieta run (``ur5fault data`` lists them), its payload stated as 0 kg
+KUFIETA = "--format rtde --payload-kg 0 --tcp-offset-m 0 0 0"
+
+
+def shipped(name: str) -> str:
+    """A shipped log's path as a shell finds it: ``"$(ur5fault data NAME)"``."""
+    return f'"$(ur5fault data {name})"'
+
+
+#: two runs of the shipped Kufieta robot, a baseline or a joint fit in the examples
+KUFIETA_RUNS = f"{shipped('kufieta/Movement_No3_Acc')} {shipped('kufieta/Movement_No4_Acc')}"
+
+
+def examples(*lines: str, before: str = "") -> dict:
+    """``add_parser`` keywords giving a command's help an ``examples:`` section of command lines, kept as written
+    (``before``: an epilog they follow).  Every line runs as shown from an empty folder with the wheel installed
+    (the shipped logs through ``"$(ur5fault data NAME)"``); ``tests/test_cli_examples.py`` parses each."""
+    text = "examples:\n" + "\n".join(f"  {line}" for line in lines)
+    return {"epilog": f"{before.rstrip()}\n\n{text}" if before else text,
+            "formatter_class": argparse.RawDescriptionHelpFormatter}
+
+
+__all__ = ["EXIT_USAGE", "KUFIETA", "KUFIETA_RUNS", "examples", "missing_command", "shipped"]

@@ -7,11 +7,16 @@ import argparse
 import copy
 
 from ...logs.options import add_log_options
+from ...util.usage import KUFIETA, KUFIETA_RUNS, examples, shipped
 
 
 def register(sub) -> None:
     d = sub.add_parser("diagnose", help="score a measured log with the classifiers `ur5fault benchmark` saved: "
-                                        "p(fault) per window and joint, likeliest kinds and sizes")
+                                        "p(fault) per window and joint, likeliest kinds and sizes",
+                       **examples("ur5fault campaign run diagnostics_urlog --yes && ur5fault benchmark "
+                                  "results/diagnostics_urlog    # a detector for UR logs (8 ms, no motor encoders)",
+                                  f"ur5fault diagnose {shipped('kufieta/TEST')} {KUFIETA} --detector "
+                                  f"results/diagnostics_urlog/benchmark --baseline-logs {KUFIETA_RUNS} --out diag"))
     add_log_options(d, ("rtde", "nist", "sim"), several=False)
     d.add_argument("--model", help="model overlay YAML of the robot (e.g. model.yaml of `ur5fault discrepancy`; "
                                    "default: none, the nominal model)")

@@ -10,6 +10,7 @@ import sys
 from pathlib import Path
 
 from ...logs.options import add_log_options
+from ...util.usage import KUFIETA, KUFIETA_RUNS, examples, shipped
 
 #: what `monitor` writes into --out (report.py); one of them there is an earlier result
 RESULT_FILES = ("monitor.json", "baseline.json", "report.md")
@@ -17,7 +18,12 @@ RESULT_FILES = ("monitor.json", "baseline.json", "report.md")
 
 def register(sub) -> None:
     p = sub.add_parser("monitor", help="compare new logs of a robot with its fitted baseline: consistent, changed "
-                                       "or anomaly")
+                                       "or anomaly",
+                       **examples(f"ur5fault identify {KUFIETA_RUNS} {KUFIETA} --out kufieta.yaml",
+                                  f"ur5fault monitor {shipped('kufieta/Movement_No5_Acc_slow_w_disturbance')} "
+                                  f"{KUFIETA} --baseline kufieta.yaml --baseline-logs {KUFIETA_RUNS} --out mon",
+                                  f"ur5fault monitor {shipped('kufieta/TEST')} {KUFIETA} --baseline kufieta.yaml "
+                                  "--baseline-stats mon/baseline.json --out mon2    # its statistics reused"))
     add_log_options(p, ("rtde", "nist", "sim"))
     p.add_argument("--baseline", required=True, metavar="MODEL.yaml",
                    help="the robot's fitted model overlay (model.yaml of ur5fault discrepancy, or identify's)")

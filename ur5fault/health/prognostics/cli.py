@@ -6,6 +6,8 @@ import argparse
 import sys
 from pathlib import Path
 
+from ...util.usage import examples
+
 #: `campaign run` options a life campaign does not take (named in the error instead of ignored)
 _NOT_FOR_LIFE = {"model": "--model", "save_timeseries": "--save-timeseries", "threshold_mm": "--threshold-mm",
                  "duration_s": "--duration-s (set duration_s in the file)"}
@@ -13,7 +15,12 @@ _NOT_FOR_LIFE = {"model": "--model", "save_timeseries": "--save-timeseries", "th
 
 def register(sub) -> None:
     p = sub.add_parser("prognose", help="benchmark remaining-useful-life estimators on a life campaign's held-out "
-                                        "units (report.md, metrics.json, figures)")
+                                        "units (report.md, metrics.json, figures)",
+                       **examples("ur5fault campaign run prognostics    # a fleet worn to failure -> "
+                                  "results/prognostics/fleet",
+                                  "ur5fault prognose results/prognostics/fleet --out results/prognostics/benchmark",
+                                  "ur5fault prognose results/prognostics/fleet --twin --replace    # with the "
+                                  "twin's clearance estimates"))
     p.add_argument("dir", help="life campaign folder (with inspections.parquet), e.g. results/prognostics/fleet")
     p.add_argument("--out", help="report folder (default: DIR/benchmark)")
     p.add_argument("--replace", action="store_true",
