@@ -13,6 +13,7 @@ import shlex
 import pytest
 
 from ur5fault.cli import COMMAND_GROUPS, build_parser
+from ur5fault.errors import UnknownNameError
 from ur5fault.logs.shipped import shipped_log
 
 SHIPPED = re.compile(r'"\$\(ur5fault data ([^)]+)\)"')
@@ -74,5 +75,5 @@ def test_a_wrong_example_would_fail():
     """The check above can fail: an option the command does not take is refused by the same parse."""
     with pytest.raises(SystemExit):
         PARSER.parse_args(_argv('ur5fault identify "$(ur5fault data nist)" --formt nist --out x.yaml'))
-    with pytest.raises(Exception):
+    with pytest.raises(UnknownNameError):
         _argv('ur5fault identify "$(ur5fault data no_such_log)" --format nist --out x.yaml')

@@ -630,3 +630,17 @@ def test_cli_prints_the_by_joint_detectors_auc_beside_the_run_level_one(tmp_path
     metrics["detection_by_joint"] = None  # no by-joint detector (too few single-joint faults): the line as before
     assert main(["benchmark", str(tmp_path)]) == 0
     assert "detection ROC AUC 1.000; joint accuracy 0.750; fault-kind accuracy 0.500" in capsys.readouterr().out
+
+
+def test_inputs_left_out_one_sentence_per_reason():
+    """A UR-log campaign leaves out ~90 motor-encoder columns: one sentence per reason, a per-joint feature once."""
+    from ur5fault.health.diagnostics.report import left_out
+
+    left = {f"enc_mismatch_max_rad_j{j}": "no value in the train split" for j in range(1, 7)}
+    left |= {"twin_mismatch_offset_rad_j2": "no value in the train split",
+             "twin_mismatch_offset_rad_j5": "no value in the train split",
+             "payload_kg": "no value in the test split"}
+    assert left_out(left) == (" Left out (no value in the train split), 8 inputs: enc_mismatch_max_rad_j1-6, "
+                              "twin_mismatch_offset_rad_j2/5. Left out (no value in the test split), 1 input: "
+                              "payload_kg.")
+    assert left_out({}) == ""

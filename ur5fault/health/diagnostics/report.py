@@ -4,6 +4,7 @@ and the figures as PNG."""
 from __future__ import annotations
 
 import math
+import re
 from pathlib import Path
 from typing import Any
 
@@ -25,6 +26,22 @@ def _f(v: Any, fmt: str = ".3f") -> str:
     return "-" if v is None or (isinstance(v, float) and not math.isfinite(v)) else format(v, fmt)
 
 
+def left_out(inputs: dict[str, str]) -> str:
+    """The input columns left out, one sentence per reason, a per-joint feature named once (``name_j*`` and its
+    joints): a UR-log campaign leaves out some 90 motor-encoder columns, which a sentence each buried the report in."""
+    by_why: dict[str, dict[str, list[str]]] = {}
+    for column, why in inputs.items():
+        base, joint = (column[:-3], column[-1]) if re.fullmatch(r".+_j[1-6]", column) else (column, "")
+        by_why.setdefault(why, {}).setdefault(base, []).append(joint)
+    text = ""
+    for why, bases in by_why.items():
+        names = [base if joints == [""] else f"{base}_j{'1-6' if len(joints) == 6 else '/'.join(sorted(joints))}"
+                 for base, joints in bases.items()]
+        n = sum(len(j) for j in bases.values())
+        text += f" Left out ({why}), {n} input{'s' if n != 1 else ''}: {', '.join(names)}."
+    return text
+
+
 def markdown(m: dict[str, Any]) -> str:
     """The report text from the metrics."""
     d, det, loc, kind, bl = m["dataset"], m["detection"], m["localisation"], m["kind"], m["backlash"]
@@ -35,7 +52,7 @@ def markdown(m: dict[str, Any]) -> str:
         f"split groups, by {d['split_by']}; no group on both sides); {sum(d['n_dropped_not_ok'].values())} runs "
         f"left out (not ok). Inputs: {len(d['inputs'])} ({d['n_features']} health features from the robot's own "
         f"signals and {', '.join(d['context'])}). Classifier: gradient-boosted trees, fixed hyper-parameters."
-        + "".join(f" Left out: {c} ({why})." for c, why in d.get("inputs_left_out", {}).items())
+        + left_out(d.get("inputs_left_out", {}))
         + (" **Control run: training labels shuffled.**" if m["shuffled_labels"] else "")
         + "".join(f" **Note:** {n}." for n in m.get("notes", [])),
         "",
