@@ -21,7 +21,9 @@ def register(sub) -> None:
                                        "or anomaly",
                        **examples(f"ur5fault identify {KUFIETA_RUNS} {KUFIETA} --out kufieta.yaml",
                                   f"ur5fault monitor {shipped('kufieta/Movement_No5_Acc_slow_w_disturbance')} "
-                                  f"{KUFIETA} --baseline kufieta.yaml --baseline-logs {KUFIETA_RUNS} --out mon",
+                                  f"{KUFIETA} --baseline kufieta.yaml --baseline-logs "
+                                  f"{shipped('kufieta/Movement_No5_Acc_slow_no_disturbance')} {KUFIETA_RUNS} --out "
+                                  "mon    # pushed by hand: anomaly, 9 events",
                                   f"ur5fault monitor {shipped('kufieta/TEST')} {KUFIETA} --baseline kufieta.yaml "
                                   "--baseline-stats mon/baseline.json --out mon2    # its statistics reused"))
     add_log_options(p, ("rtde", "nist", "sim"))
