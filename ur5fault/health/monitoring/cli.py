@@ -24,8 +24,9 @@ def register(sub) -> None:
                                   f"{KUFIETA} --baseline kufieta.yaml --baseline-logs "
                                   f"{shipped('kufieta/Movement_No5_Acc_slow_no_disturbance')} {KUFIETA_RUNS} --out "
                                   "mon    # pushed by hand: anomaly, 9 events",
-                                  f"ur5fault monitor {shipped('kufieta/TEST')} {KUFIETA} --baseline kufieta.yaml "
-                                  "--baseline-stats mon/baseline.json --out mon2    # its statistics reused"))
+                                  f"ur5fault monitor {shipped('kufieta/Movement_No1')} {KUFIETA} --baseline "
+                                  "kufieta.yaml --baseline-stats mon/baseline.json --out mon2    # its statistics "
+                                  "reused; notes where the log moves faster than the baseline runs"))
     add_log_options(p, ("rtde", "nist", "sim"))
     p.add_argument("--baseline", required=True, metavar="MODEL.yaml",
                    help="the robot's fitted model overlay (model.yaml of ur5fault discrepancy, or identify's)")
