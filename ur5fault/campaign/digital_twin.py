@@ -10,7 +10,8 @@ twin share their conditions, hence one digital twin.  Twins are simulated in the
 masses (:func:`regressor_runs`), whose motor currents and gear torques are the twin fits' regressors, and (option
 ``twin_com_twins``) at each grid mass above zero three more with the payload's centre of mass shifted, the current
 fit's CoM columns
-(:mod:`ur5fault.health.twin_regressors`).
+(:mod:`ur5fault.health.twin_regressors`). :func:`regressor_grid` and :func:`add_twin_features` turn a simulated
+batch's twins into each run's twin residual features.
 """
 
 from __future__ import annotations
@@ -18,6 +19,9 @@ from __future__ import annotations
 import hashlib
 import json
 from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
 
 from ..sim.effects import EffectSpec, make_effect
 from .runs import CampaignRun
@@ -85,3 +89,47 @@ def twin_runs(camp: Campaign, batch: Sequence[CampaignRun]) -> dict[str, tuple[i
     for rc in batch:
         out.setdefault(twin_id(rc), (twin_seed(int(rc.cond["seed"])), twin_effects(camp, rc)))
     return out
+
+
+def regressor_grid(res, grid, grid_at: dict[str, int], temperature_C: float, qd, params, com_twins: bool):
+    """The batch's :class:`~ur5fault.health.twin_regressors.RegressorGrid` from its noise-free twins (``grid_at``:
+    run id -> index in ``res``), with the centre-of-mass columns of its CoM twins (zero at 0 kg) where the
+    campaign simulates them (``com_twins``: its ``twin_com_twins``)."""
+    from ..health.twin_regressors import COM_AXES, RegressorGrid, com_difference
+
+    base = [grid_at[regressor_id(kg)] for kg in grid]
+    i_a = res["i_q_A"][base]
+    com = None
+    if com_twins:
+        com = np.zeros((*i_a.shape, len(COM_AXES)))
+        for g, kg in enumerate(grid):
+            if kg > 0:
+                com[g] = com_difference(res["i_q_A"][[grid_at[regressor_id(kg, ax)] for ax in COM_AXES]], i_a[g])
+    return RegressorGrid(np.asarray(grid), temperature_C, i_a, res["T_gear_Nm"][base], qd, params, com)
+
+
+def add_twin_features(row: dict[str, Any], res, i: int, k: int, params, cond: dict[str, Any], held, motion,
+                       regressors) -> None:
+    """The twin residual features of run ``i`` against its digital twin ``k`` of the same batch (NaN, and the
+    run not ``ok``, when the twin or a noise-free regressor twin failed); ``cond``: the run's conditions (its
+    configured payload mass and temperature, known to the robot); ``held``: when the gripper holds the payload
+    (the centre-of-mass columns of the current fit); ``motion``: the batch's ``commanded_motion``;
+    ``regressors``: the batch's :class:`~ur5fault.health.twin_regressors.RegressorGrid`, or the ``(status,
+    reason)`` of its twin that failed."""
+    from ..health.twin_features import FEATURE_UNITS as TWIN_UNITS
+    from ..health.twin_features import twin_features
+
+    if res.status[k] != "ok" or isinstance(regressors, tuple):
+        row.update(dict.fromkeys(TWIN_UNITS, float("nan")))
+        if row["status"] == "ok":
+            row["status"], row["reason"] = ((res.status[k], f"digital twin: {res.reason[k]}") if res.status[k] != "ok"
+                                            else regressors)
+        return
+    payload_kg = float(cond["payload_kg"])
+    i_a, torque = regressors.signals(payload_kg, float(cond["temperature_C"]))
+    names = ("q_FB_rad", "q_M_FB_rad", "i_FB_A")
+    row.update(twin_features(res.t_s, res.q_set_rad, {n: res[n][i] for n in names},
+                             {**{n: res[n][k] for n in names}, "i_q_A": i_a, "T_gear_Nm": torque,
+                              **({} if regressors.com_A_per_m is None
+                                 else {"com_A_per_m": regressors.com_columns(payload_kg)})},
+                             params, payload_kg, held, motion))

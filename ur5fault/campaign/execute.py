@@ -39,7 +39,7 @@ from ..util.lock import Lock
 from ..util.parallel import one_blas_thread, return_freed_memory
 from ..util.progress import campaign_progress
 from .batches import plan_batches
-from .digital_twin import regressor_runs, twin_id, twin_runs
+from .digital_twin import add_twin_features, regressor_grid, regressor_runs, twin_id, twin_runs
 from .identity import DRIVE, STEPPER, Identities
 from .identity import run_effects as _effects_of
 from .labels import assign_splits, refresh_labels, row_labels
@@ -115,7 +115,7 @@ def _simulate_batch(camp: Campaign, batch: Sequence[CampaignRun], ts_dir: str | 
             regressors = (res.status[failed[0]], f"noise-free regressor twin {specs[failed[0]].run_id}: "
                                                  f"{res.reason[failed[0]]}")
         else:
-            regressors = _regressor_grid(res, grid, grid_at, grid_temp, motion.qd, sim.params, camp.twin_com_twins)
+            regressors = regressor_grid(res, grid, grid_at, grid_temp, motion.qd, sim.params, camp.twin_com_twins)
     held = traj.gripped(res.t_s)  # when the gripper holds the payload: the batch's trajectory
     rows = []
     for i, rc in enumerate(batch):
@@ -148,56 +148,11 @@ def _simulate_batch(camp: Campaign, batch: Sequence[CampaignRun], ts_dir: str | 
         for key in FEATURE_UNITS:  # every file has the full schema (tcp_dev_* is NaN without a sound twin)
             row.setdefault(key, float("nan"))
         if camp.twin_residuals:
-            _add_twin_features(row, res, i, twin_index[twin_id(rc)], sim.params, rc.cond, held, motion, regressors)
+            add_twin_features(row, res, i, twin_index[twin_id(rc)], sim.params, rc.cond, held, motion, regressors)
         if not camp.motor_encoders:  # logged like a UR robot: what the motor encoder gives is unknown
             row.update({k: float("nan") for k in row if needs_motor_encoders(k)})
         rows.append(row)
     return rows
-
-
-def _regressor_grid(res, grid, grid_at: dict[str, int], temperature_C: float, qd, params, com_twins: bool):
-    """The batch's :class:`~ur5fault.health.twin_regressors.RegressorGrid` from its noise-free twins (``grid_at``:
-    run id -> index in ``res``), with the centre-of-mass columns of its CoM twins (zero at 0 kg) where the
-    campaign simulates them (``com_twins``: its ``twin_com_twins``)."""
-    from ..health.twin_regressors import COM_AXES, RegressorGrid, com_difference
-    from .digital_twin import regressor_id
-
-    base = [grid_at[regressor_id(kg)] for kg in grid]
-    i_a = res["i_q_A"][base]
-    com = None
-    if com_twins:
-        com = np.zeros((*i_a.shape, len(COM_AXES)))
-        for g, kg in enumerate(grid):
-            if kg > 0:
-                com[g] = com_difference(res["i_q_A"][[grid_at[regressor_id(kg, ax)] for ax in COM_AXES]], i_a[g])
-    return RegressorGrid(np.asarray(grid), temperature_C, i_a, res["T_gear_Nm"][base], qd, params, com)
-
-
-def _add_twin_features(row: dict[str, Any], res, i: int, k: int, params, cond: dict[str, Any], held, motion,
-                       regressors) -> None:
-    """The twin residual features of run ``i`` against its digital twin ``k`` of the same batch (NaN, and the
-    run not ``ok``, when the twin or a noise-free regressor twin failed); ``cond``: the run's conditions (its
-    configured payload mass and temperature, known to the robot); ``held``: when the gripper holds the payload
-    (the centre-of-mass columns of the current fit); ``motion``: the batch's ``commanded_motion``;
-    ``regressors``: the batch's :class:`~ur5fault.health.twin_regressors.RegressorGrid`, or the ``(status,
-    reason)`` of its twin that failed."""
-    from ..health.twin_features import FEATURE_UNITS as TWIN_UNITS
-    from ..health.twin_features import twin_features
-
-    if res.status[k] != "ok" or isinstance(regressors, tuple):
-        row.update(dict.fromkeys(TWIN_UNITS, float("nan")))
-        if row["status"] == "ok":
-            row["status"], row["reason"] = ((res.status[k], f"digital twin: {res.reason[k]}") if res.status[k] != "ok"
-                                            else regressors)
-        return
-    payload_kg = float(cond["payload_kg"])
-    i_a, torque = regressors.signals(payload_kg, float(cond["temperature_C"]))
-    names = ("q_FB_rad", "q_M_FB_rad", "i_FB_A")
-    row.update(twin_features(res.t_s, res.q_set_rad, {n: res[n][i] for n in names},
-                             {**{n: res[n][k] for n in names}, "i_q_A": i_a, "T_gear_Nm": torque,
-                              **({} if regressors.com_A_per_m is None
-                                 else {"com_A_per_m": regressors.com_columns(payload_kg)})},
-                             params, payload_kg, held, motion))
 
 
 def run_campaign(camp: Campaign, out: Path | None = None, *, jobs: int | None = None, backend: str = "loky",
