@@ -10,7 +10,8 @@ import pytest
 
 from ur5fault.cli import main
 from ur5fault.errors import ParameterError
-from ur5fault.logs.options import add_log_options, log_entries, read_entry, read_log_options
+from ur5fault.logs.options import add_log_options, log_entries
+from ur5fault.logs.read_entries import read_entry, read_log_options
 
 from conftest import KUFIETA_DIR, NIST_LOG
 

@@ -54,7 +54,8 @@ def cmd_discrepancy(args: argparse.Namespace) -> int:
     from ..errors import ParameterError
     from ..logs.length import check_files_length, check_logs_length
     from ..logs.measured import assumption_notes
-    from ..logs.options import log_entries, read_log_options
+    from ..logs.options import log_entries
+    from ..logs.read_entries import read_log_options
     from ..sim.params import load_params
     from ..twin.replay import refuse_log_owned
     from ..util.checks import check_count, check_number

@@ -43,7 +43,8 @@ def cmd_identify(args: argparse.Namespace) -> int:
     from ..errors import ParameterError
     from ..logs.length import check_files_length, check_logs_length
     from ..logs.measured import assumption_notes
-    from ..logs.options import log_entries, read_log_options
+    from ..logs.options import log_entries
+    from ..logs.read_entries import read_log_options
     from ..sim.params import load_params
     from ..util.io import write_json_atomic, write_text_atomic
     from ..util.results import check_new_output, file_lock

@@ -40,7 +40,8 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
     from ...errors import ParameterError
     from ...logs.length import check_files_length, check_logs_length
     from ...logs.measured import controllers_note
-    from ...logs.options import log_entries, read_entry, refuse_hold_out, refuse_unknown_payload
+    from ...logs.options import log_entries, refuse_hold_out
+    from ...logs.read_entries import read_entry, refuse_unknown_payload
     from ...logs.same_samples import refuse_same_samples
     from ...twin.replay import refuse_log_owned
     from ...util.results import check_new_output, result_folder

@@ -55,7 +55,8 @@ def cmd_monitor(args: argparse.Namespace) -> int:
     from ...errors import ParameterError
     from ...logs.length import check_files_length, check_logs_length
     from ...logs.measured import assumption_notes, same_period
-    from ...logs.options import log_entries, read_log_options, refuse_hold_out, refuse_unknown_payload
+    from ...logs.options import log_entries, refuse_hold_out
+    from ...logs.read_entries import read_log_options, refuse_unknown_payload
     from ...logs.same_samples import refuse_same_samples
     from ...sim.params import load_params
     from ...twin.replay import refuse_log_owned
