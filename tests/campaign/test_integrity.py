@@ -421,6 +421,19 @@ def test_the_advised_command_carries_yes_where_the_campaign_needed_it():
     assert rerun_command({**base, "n_steps_total": int(CONFIRM_RUN_STEPS) + 1}, Path("out")).endswith(" --yes")
 
 
+def test_the_advised_command_of_a_life_campaign_carries_yes_as_campaign_run_asks_it():
+    """A life manifest records no run or step count: `campaign status` advised the command without --yes for every
+    fleet, which `campaign run` refuses for one over 1000 runs or 2e9 steps (an empty `life:` section's default)."""
+    from ur5fault.campaign.verify import rerun_command
+
+    from tiny_fleet import TINY
+
+    for data, yes in ((TINY, False), ({"name": "empty", "life": {}}, True), ({"name": "none", "life": None}, True),
+                      ({"name": "bad", "life": {"units": "many"}}, False), ("not a campaign", False)):
+        manifest = {"kind": "life", "campaign_file": "/c/life.yaml", "campaign_data": data}
+        assert rerun_command(manifest, Path("out")).endswith(" --yes") is yes, data
+
+
 def test_a_feature_table_without_its_checksum_is_refused_where_status_calls_it_bad(tmp_path, done):
     """After `rm features.parquet.sha256`, `campaign status` said bad (exit 1) while `plot` and CampaignResult read
     the table without a word: the readers now refuse it too, and a rerun rewrites it."""

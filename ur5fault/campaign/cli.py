@@ -39,8 +39,8 @@ def register(sub) -> None:
                    help="TCP acceptability threshold of the summary [mm] (default: the file's threshold_mm, else 0.5)")
     r.add_argument("--quiet", action="store_true", help="no progress bar")
     r.add_argument("--yes", action="store_true",
-                   help="start a large campaign (over 1000 runs or 2e9 physics steps; a life campaign: over 2e9 "
-                        "steps if no unit fails early) without asking")
+                   help="start a large campaign (over 1000 runs or 2e9 physics steps; a life campaign: if no unit "
+                        "fails early) without asking")
     r.add_argument("--replace-changed", action="store_true", dest="replace_changed",
                    help="re-simulate stored runs of OUT made under other settings (default: stop and name them)")
     r.set_defaults(func=cmd_run)

@@ -217,8 +217,18 @@ def rerun_command(manifest: dict[str, Any], out: Path) -> str | None:
 
 def _large(manifest: dict[str, Any]) -> bool:
     """Whether the campaign a manifest records needed ``--yes`` (:func:`.limits.confirmation_needed`'s bounds on its
-    runs and steps; a life campaign's bound is on steps it does not record: it says so when it stops early)."""
+    runs and steps; a life campaign's, which its manifest does not record, on the fleet it records, as
+    ``campaign run`` decides it: prognostics.spec.confirmation_needed)."""
     from .limits import beyond_confirmation
+
+    if manifest.get("kind") == "life":
+        from ..health.prognostics.spec import build_life, confirmation_needed
+
+        try:
+            return confirmation_needed(build_life(manifest.get("campaign_data"), "manifest.json",
+                                                  str(manifest.get("campaign_text", "")))) is not None
+        except (Ur5FaultError, AttributeError, TypeError):  # no fleet to size: life_status names the problem
+            return False
 
     def number(v) -> float:  # a manifest edited by hand: a value that is no count counts as none
         return float(v) if isinstance(v, (int, float)) and not isinstance(v, bool) else 0.0

@@ -150,13 +150,14 @@ def test_bad_model_one_line(tmp_path):
 @pytest.mark.slow
 def test_a_baseline_run_monitored_against_its_own_statistics_refused(monitored):
     """One of the baseline's runs monitored against the baseline.json it is part of: it would pair with its own
-    samples at lag 0 and never change; refused with one line naming the run."""
+    samples at lag 0 and never change; refused with one line naming the run (before its replay: the baseline the
+    real replays built records its runs' samples)."""
     tmp, model, _, out, _ = monitored
     own = tmp / "Movement_No2_14s.csv"  # one of the fixture's baseline logs
     r = run(str(own), *RTDE, "--baseline", str(model), "--baseline-stats", str(out / "baseline.json"),
             "--out", str(tmp / "self"), "--jobs", "2")
     assert r.returncode == 2, r.stderr
-    last = r.stderr.strip().splitlines()[-1]  # after the replay's notes (the log's clock)
+    last = r.stderr.strip().splitlines()[-1]  # after the reader's notes (the log's clock), if any
     assert last.startswith("ur5fault: error:") and "is one of the baseline's runs" in last
     assert "Movement_No2_14s.csv: the same samples" in last and "Traceback" not in r.stderr
     assert r.stderr.count("ur5fault: error:") == 1
@@ -176,3 +177,44 @@ def test_a_log_of_another_rate_than_its_baseline_is_refused_before_any_replay(tm
     err = [line for line in r.stderr.strip().splitlines() if not line.startswith("note: ")]
     assert len(err) == 1 and "slow.csv: logged every 16 ms, the baseline's runs every 8 ms" in err[0], r.stderr
     assert "build one from healthy logs at this rate with --baseline-logs" in err[0]
+
+
+def test_a_baseline_run_given_again_is_refused_before_any_replay(tmp_path, monkeypatch, capsys):
+    """`monitor RUN --baseline-stats baseline.json` with RUN one of the runs baseline.json was built from was refused
+    only after RUN's replay (minutes on a long log): its samples' SHA-256, recorded in baseline.json, now refuses it
+    before any replay, in the same line. The replays are stand-ins (their residual noise): the baseline is built
+    through the command, the refusal must come with the replay patched to fail."""
+    import dataclasses
+    import importlib
+
+    from tests.health.monitoring.test_monitoring import noise, part
+    from ur5fault.cli import main
+
+    def stand_in(log, params=None, effects=(), **kw):  # what observe keeps of a whole log, its residual noise
+        o = part(log.source, noise(len(log.source), log.t_s.size - 1), target=log.q_target_rad[1:])
+        return dataclasses.replace(o, rest_target=log.rest_target, payload_kg=log.payload_kg,
+                                   samples_sha256=log.content_sha256())
+
+    observe_module = importlib.import_module("ur5fault.health.monitoring.observe")  # the package exports the function
+    model = tmp_path / "model.yaml"
+    model.write_text("params: {}\neffects: []\n")
+    base = [head(tmp_path, n, 6.0) for n in ("Movement_No1", "Movement_No2", "Movement_No4_Acc")]
+    monkeypatch.setattr(observe_module, "observe", stand_in)
+    built = tmp_path / "built"
+    assert main(["monitor", str(base[2]), *RTDE, "--baseline", str(model), "--baseline-logs", *map(str, base[:2]),
+                 "--out", str(built), "--jobs", "1"]) == 0
+    capsys.readouterr()
+
+    def replayed(*args, **kw):
+        raise AssertionError("replayed")
+
+    monkeypatch.setattr(observe_module, "observe", replayed)
+    monkeypatch.setattr(observe_module, "LogReplay", replayed)
+    out = tmp_path / "self"
+    assert main(["monitor", str(base[1]), *RTDE, "--baseline", str(model), "--baseline-stats",
+                 str(built / "baseline.json"), "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0] == (
+        "ur5fault: error: Movement_No2_6s.csv is one of the baseline's runs (Movement_No2_6s.csv: the same samples); "
+        "judged against itself it pairs at lag 0 and can never change: monitor it against a baseline without it"), err
+    assert not out.exists()

@@ -211,7 +211,7 @@ def test_a_baseline_of_one_run_is_refused_in_python_and_from_baseline_json(tmp_p
     with pytest.raises(ParameterError, match=why):  # 0.16 s: under the replay's first 0.25 s, nothing judged
         fit_baseline([part("one", noise(1)), part("blip", noise(2, n=20))], "sha")
     two = fit_baseline([part("a", noise(1)), part("b", noise(2))], "sha").to_json()
-    for key in ("rest_targets", "motion_max", "payloads_kg"):  # not recorded by the versions that wrote one run
+    for key in ("rest_targets", "motion_max", "payloads_kg", "samples_sha256"):  # not recorded by one-run versions
         two.pop(key, None)
     one = {**two, "segments": two["segments"][:1], "task_runs": two["task_runs"][:1]}
     path = tmp_path / "baseline.json"
@@ -249,6 +249,33 @@ def test_baseline_json_records_its_runs_target_at_rest_for_the_two_controllers_n
     with pytest.raises(ParameterError, match="not a valid monitor baseline.*rest_targets"):
         Baseline.load(path)
 
+
+def test_baseline_json_records_its_runs_samples_and_refuses_a_log_of_them_before_its_replay(tmp_path):
+    """The SHA-256 of each whole run's samples rides in baseline.json (a part's is not recorded), so that a log that
+    is one of the runs is refused from its samples alone (verdict.refuse_baseline_runs, called before any replay);
+    a baseline.json written before it recorded them still loads and refuses nothing there (assess does, after)."""
+    from ur5fault.health.monitoring.verdict import refuse_baseline_runs
+    from ur5fault.logs import MeasuredLog
+
+    q = np.cumsum(np.full((10, 6), 0.01), axis=0)
+    logs = [MeasuredLog(f"run{k}.csv", np.arange(10) * PERIOD, q, q + 1e-4 * k, q) for k in range(3)]
+    runs = [dataclasses.replace(part(lg.source, noise(k)), samples_sha256=lg.content_sha256())
+            for k, lg in enumerate(logs[:2])]
+    path = tmp_path / "baseline.json"
+    path.write_text(json.dumps(fit_baseline([*runs, part("a part", noise(5))], "sha").to_json()))
+    back = Baseline.load(path)
+    assert back.samples_sha256 == (logs[0].content_sha256(), logs[1].content_sha256(), None)
+    with pytest.raises(ParameterError, match=r"^run1.csv is one of the baseline's runs \(run1.csv: the same samples\)"):
+        refuse_baseline_runs(back, [logs[2], logs[1]])
+    refuse_baseline_runs(back, [logs[2]])  # another recording of the same motion: judged
+    older = json.loads(path.read_text())
+    del older["samples_sha256"]
+    path.write_text(json.dumps(older))
+    assert Baseline.load(path).samples_sha256 is None and "samples_sha256" not in Baseline.load(path).to_json()
+    refuse_baseline_runs(Baseline.load(path), logs)
+    path.write_text(json.dumps({**older, "samples_sha256": ["0" * 64, None]}))  # not one per run
+    with pytest.raises(ParameterError, match="not a valid monitor baseline.*samples_sha256"):
+        Baseline.load(path)
 
 @pytest.mark.slow
 def test_nist_rest_consistent_with_its_first_part_despite_the_wrist_3_offset_drift(nist_path):

@@ -137,6 +137,45 @@ def test_a_life_campaign_that_could_run_for_days_starts_only_with_yes(tmp_path, 
     assert upper_bound(load_life(small)) == (6, 6 * 12_000_000)
 
 
+
+@pytest.mark.parametrize("life", ["life: {}", "life:", "life: {seed: 3}"])
+def test_a_life_section_that_leaves_the_fleet_to_its_defaults_starts_only_with_yes(tmp_path, capsys, monkeypatch,
+                                                                                   life):
+    """`life: {}` ran the 100-unit default fleet (up to 5200 runs, 1.35e9 steps) without a word, under the 2e9 steps a
+    life campaign's --yes was asked at (a newcomer probe): refused as any campaign over 1000 runs, in one line naming
+    the default fleet and how to state another; --yes starts it (and its resume advice carries --yes)."""
+    import ur5fault.health.prognostics.fleet as fleet
+
+    started = []
+    monkeypatch.setattr(fleet, "run_life", lambda camp, out, **kw: started.append(camp) or {"state": "interrupted"})
+    f = tmp_path / "empty.yaml"
+    f.write_text(f"name: empty\n{life}\n")
+    out = tmp_path / "o"
+    assert main(["campaign", "run", str(f), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("ur5fault: error: life campaign empty: up to 5200 runs (100 units x up to 51 inspections")
+    assert err.count("\n") == 1 and "more than 1000 runs or 2e+09 steps needs --yes to start" in err, err
+    assert ("life.units, life.interval_cycles, life.max_cycles not given: the defaults size this fleet (100 units "
+            "inspected every 80000 cycles up to 4000000 cycles): state them in the file's life section, or give --yes "
+            "to run it") in err
+    assert not started and not out.exists()
+    assert main(["campaign", "run", str(f), "--out", str(out), "--yes"]) == 1  # the stub stops it early
+    assert len(started) == 1 and len(started[0].units) == 100
+    assert capsys.readouterr().out.strip().endswith(f"--out {out} --yes")
+
+
+def test_a_life_campaign_over_1000_runs_starts_only_with_yes_as_a_fault_campaign(tmp_path, capsys):
+    """One rule for both kinds (campaign.limits.beyond_confirmation): over 1000 runs, however few steps each; the
+    size stated in full, so no word of defaults."""
+    f = tmp_path / "many.yaml"
+    f.write_text("name: many\nduration_s: 0.2\nlife: {units: 30, interval_cycles: 200000, max_cycles: 8000000}\n")
+    assert main(["campaign", "run", str(f), "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "up to 1260 runs (30 units x up to 41 inspections" in err, err
+    # 30 units x (41 inspections + a reference) x 4000 steps (0.2 s at 50 us): 5.04e6, far below 2e9
+    assert "5.04e+06 physics steps" in err and "needs --yes to start" in err and "not given" not in err
+    assert not (tmp_path / "o").exists()
+
 def test_cli_prognose_without_inspections_is_one_line_exit_2(tmp_path, capsys):
     assert main(["prognose", str(tmp_path / "nowhere")]) == 2
     err = capsys.readouterr().err

@@ -43,7 +43,8 @@ from .observe import Observed
 #: (:func:`.effective.run_design_effect`); 8: the paired statistics on 0.5 s blocks, ``n_blocks`` the effective
 #: number of independent ones (a float: their autocorrelation accounted for, :mod:`.effective`) and their
 #: ``design_effect``; 7 counted each independent 2 s difference once, 6 twice. ``rest_targets`` (the runs' target
-#: at rest) was added within 9: optional, absent in the files written before it (read as not recorded)
+#: at rest) was added within 9: optional, absent in the files written before it (read as not recorded); so were
+#: ``samples_sha256`` (the runs' samples, :func:`.verdict.refuse_baseline_runs`)
 FORMAT = "ur5fault-monitor-baseline-9"
 #: a baseline is fitted on at least this many healthy observations (runs, or parts of logs) with judged samples:
 #: the event limits' tail is fitted on each normalised by the spread fitted on the others (leave one out,
@@ -88,7 +89,8 @@ class Baseline:
     log of another controller is told with ``--baseline-stats`` as with ``--baseline-logs``; ``None``: not
     recorded, a ``baseline.json`` written before it was); ``motion_max`` ``(1, 6)``: the largest target speed
     [rad/s] per joint of the runs (:data:`.coverage.QUANTITIES`), ``payloads_kg``: per run its stated payload [kg]
-    (what the runs covered, :mod:`.coverage`; ``None``: not recorded, as ``rest_targets``)."""
+    (what the runs covered, :mod:`.coverage`; ``None``: not recorded, as ``rest_targets``); ``samples_sha256``: per
+    run the SHA-256 of its log's samples (:attr:`.observe.Observed.samples_sha256`; ``None``: not recorded)."""
 
     overlay_sha256: str
     period_s: float
@@ -108,6 +110,7 @@ class Baseline:
     rest_targets: tuple[str | None, ...] | None = None
     motion_max: NDArray | None = None
     payloads_kg: tuple[float | None, ...] | None = None
+    samples_sha256: tuple[str | None, ...] | None = None
 
     @property
     def task_runs(self) -> list[int]:
@@ -150,7 +153,8 @@ class Baseline:
                 **({} if self.motion_max is None else
                    {"motion_max": {q: {JOINT_NAMES[j]: float(self.motion_max[i, j]) for j in range(N_JOINTS)}
                                    for i, q in enumerate(QUANTITIES)}}),
-                **({} if self.payloads_kg is None else {"payloads_kg": list(self.payloads_kg)})}
+                **({} if self.payloads_kg is None else {"payloads_kg": list(self.payloads_kg)}),
+                **({} if self.samples_sha256 is None else {"samples_sha256": list(self.samples_sha256)})}
 
     @classmethod
     def from_json(cls, data: Any, where: str) -> Baseline:
@@ -200,6 +204,10 @@ class Baseline:
                     p is not None and not (is_real(p) and np.isfinite(p) and p >= 0)
                     for p in loads)):
                 raise ValueError(f"payloads_kg {loads!r} is not a payload [kg] or null per segment")
+            shas = data.get("samples_sha256")  # absent: written before baseline.json recorded it
+            if shas is not None and (len(shas) != len(runs) or any(
+                    v is not None and not (isinstance(v, str) and len(v) == 64) for v in shas)):
+                raise ValueError("samples_sha256 is not a SHA-256 or null per segment")
             if len(runs) < MIN_RUNS:  # written by a version that fitted one run
                 raise ParameterError(f"{where}: built from {len(runs)} healthy run(s) ({', '.join(data['segments'])});"
                                      f" a baseline needs at least {MIN_RUNS}: {MIN_RUNS_WHY}; rebuild it with "
@@ -213,7 +221,8 @@ class Baseline:
                        {str(k): (json_float(v["mean"]), json_float(v["variance"]), json_float(v["n_blocks"]),
                                  json_float(v["design_effect"])) for k, v in data["paired_candidates"].items()},
                        None if styles is None else tuple(styles), motion,
-                       None if loads is None else tuple(None if p is None else float(p) for p in loads))
+                       None if loads is None else tuple(None if p is None else float(p) for p in loads),
+                       None if shas is None else tuple(shas))
         except ParameterError:
             raise  # already one line saying what to do (ParameterError is a ValueError)
         except (KeyError, TypeError, ValueError, AttributeError) as exc:
@@ -281,4 +290,4 @@ def fit_baseline(healthy: Sequence[Observed], overlay_sha: str) -> Baseline:
     return Baseline(overlay_sha, period, tuple(o.name for o in healthy), scale, tail, quantum, cands,
                     tuple(o.target_rad for o in healthy), tuple(task_residual(o) for o in healthy), t_scale, t_tail,
                     float(slow), c_scale, c_tail, paired_cands, tuple(o.rest_target for o in healthy),
-                    envelope(healthy), tuple(o.payload_kg for o in healthy))
+                    envelope(healthy), tuple(o.payload_kg for o in healthy), tuple(o.samples_sha256 for o in healthy))

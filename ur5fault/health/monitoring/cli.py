@@ -65,7 +65,7 @@ def cmd_monitor(args: argparse.Namespace) -> int:
     from .baseline import MIN_RUNS, MIN_RUNS_WHY, Baseline, fit_baseline, overlay_sha256
     from .observe import BASELINE_SCREEN_S, observe
     from .report import write
-    from .verdict import assess
+    from .verdict import assess, refuse_baseline_runs
 
     jobs = (os.cpu_count() or 1) if args.jobs is None else args.jobs
     if jobs < 1:
@@ -100,6 +100,8 @@ def cmd_monitor(args: argparse.Namespace) -> int:
     healthy = read_log_options(base_args, others=[args], role="a baseline log")[0] if base_args is not None else []
     check_logs_length([*logs, *healthy], "monitor")
     refuse_same_samples([("monitored", logs), ("a baseline log", healthy)])  # a run cannot judge itself
+    if stats is not None:  # nor one of the runs baseline.json was built from: before any replay
+        refuse_baseline_runs(stats, logs)
     if base_args is not None and len(healthy) < MIN_RUNS:  # before any replay
         raise ParameterError(f"--baseline-logs: {len(healthy)} healthy run given; a baseline needs at least "
                              f"{MIN_RUNS}: {MIN_RUNS_WHY}")

@@ -81,6 +81,9 @@ class Observed:
             ``--baseline-stats`` too.
         payload_kg: the log's stated payload [kg] (``None``: not stated); a baseline records its runs'
             (:attr:`.baseline.Baseline.payloads_kg`, :mod:`.coverage`).
+        samples_sha256: the SHA-256 of the whole log's samples (:meth:`ur5fault.logs.MeasuredLog.content_sha256`;
+            ``None`` for a part); a baseline records its runs', so that a log that is one of them is refused
+            before its replay (:func:`.verdict.refuse_baseline_runs`).
     """
 
     name: str
@@ -101,6 +104,7 @@ class Observed:
     stribeck_speed_rad_s: float | None = None
     rest_target: str | None = None
     payload_kg: float | None = None
+    samples_sha256: str | None = None
 
     @property
     def n(self) -> int:
@@ -150,7 +154,8 @@ def observe(log: MeasuredLog, params_overrides: dict | None = None, effects: Seq
                     tuple(kept), X[:, lo : lo + m] if kept else np.zeros((0, *e.shape)), e, qd, qdd,
                     (meas[:, 1] - base.q_rad[:hi])[lo:hi],
                     quanta(log.q_actual_rad), log.q_target_rad[1 : n_all + 1][lo:hi].copy(),
-                    rp.sigma[0].copy(), stribeck_speed(rp.params), log.rest_target, log.payload_kg)
+                    rp.sigma[0].copy(), stribeck_speed(rp.params), log.rest_target, log.payload_kg,
+                    log.content_sha256() if part_s is None else None)
 
 
 def quanta(q_rad: NDArray) -> NDArray:

@@ -11,7 +11,7 @@ from numpy.typing import NDArray
 from ...discrepancy.model import SCREEN_S
 from ...discrepancy.statistics import MIN_Z
 from ...errors import ParameterError
-from ...logs.measured import same_period
+from ...logs.measured import MeasuredLog, same_period
 from ...sim.axes import JOINT_NAMES, N_JOINTS
 from . import paired
 from .baseline import Baseline
@@ -172,6 +172,26 @@ def weak_change_test(baseline: Baseline, judged: str | None, share: float) -> li
             + (", or baseline runs repeating this log's task" if judged == "all" else "")]
 
 
+def own_run(log: str, run: str) -> ParameterError:
+    """The refusal of a monitored ``log`` that is the baseline's ``run``."""
+    return ParameterError(f"{log} is one of the baseline's runs ({run}: the same samples); judged against itself it "
+                          "pairs at lag 0 and can never change: monitor it against a baseline without it")
+
+
+def refuse_baseline_runs(baseline: Baseline, logs: Sequence[MeasuredLog]) -> None:
+    """Before any replay: a log whose samples are one of the baseline's runs' (their SHA-256,
+    :attr:`.baseline.Baseline.samples_sha256`) refused with :func:`own_run`'s line. :func:`assess` still tells a
+    part of a run, and a run of a ``baseline.json`` that does not record them, after the replay
+    (:func:`baseline_run_of`)."""
+    if baseline.samples_sha256 is None:
+        return
+    runs = {sha: name for name, sha in zip(baseline.segments, baseline.samples_sha256) if sha is not None}
+    for log in logs:
+        run = runs.get(log.content_sha256())
+        if run is not None:
+            raise own_run(log.source, run)
+
+
 def baseline_run_of(baseline: Baseline, obs: Observed) -> str | None:
     """The baseline run ``obs`` is (part of), if any: its joint targets found verbatim, from its first second of
     motion (:data:`~.task.CONTEXT_S`) on, in that run's, **and** its current residual equal to that run's over the
@@ -211,10 +231,8 @@ def assess(baseline: Baseline, obs: Observed, channels: Sequence[str] = DEFAULT_
     if unknown or not channels:
         raise ParameterError(f"event channels {list(channels)}: choose from {list(CHANNELS)}")
     run = baseline_run_of(baseline, obs)
-    if run is not None:
-        raise ParameterError(f"{obs.name} is one of the baseline's runs ({run}: the same samples); judged against "
-                             f"itself it pairs at lag 0 and can never change: monitor it against a baseline "
-                             f"without it")
+    if run is not None:  # a part of a run, or a run of a baseline.json that does not record its samples' SHA-256
+        raise own_run(obs.name, run)
     hs, limits_at, judged, _ = transients_and_limits(baseline, obs, channels)
     lims = limits_at(1.0)
     events, over = find_events(obs.t_s, hs, lims, judged)

@@ -80,8 +80,8 @@ def _what_is_there(folder: Path) -> str:
         return (f"{folder} holds the fault campaign {name!r}, not a life campaign; run one into another folder "
                 "(`ur5fault campaign run prognostics --out NEW_DIR --yes`)")
     return (f"the life campaign {name!r} in {folder} has not finished (state {m.get('state', '?')!r}): resume it "
-            f"with `ur5fault campaign run {campaign} --out {folder}` (with --yes for a fleet that could take over 2e9 "
-            f"steps; `ur5fault campaign status {folder}` shows how far it got)")
+            f"with `ur5fault campaign run {campaign} --out {folder}` (with --yes for a fleet that could take over 1000 "
+            f"runs or 2e9 steps; `ur5fault campaign status {folder}` shows how far it got)")
 
 
 #: where the twin's friction rise per degree of clearance and per 10^6 cycles comes from: "learned" from the

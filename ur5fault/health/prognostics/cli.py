@@ -54,19 +54,18 @@ def cmd_life_run(args: argparse.Namespace) -> int:
     """``campaign run`` of a life campaign file."""
     import shlex
 
-    from ...campaign.limits import CONFIRM_RUN_STEPS
     from ...errors import ParameterError
     from .fleet import run_life
-    from .spec import check_life_limits, load_life
+    from .spec import confirmation_needed, load_life
 
     for attr, flag in _NOT_FOR_LIFE.items():
         if getattr(args, attr, None):
             raise ParameterError(f"{flag} does not apply to a life campaign ({args.file} has a `life:` section)")
     camp = load_life(args.file, args.out)
-    bound, steps = check_life_limits(camp)
-    large = steps > CONFIRM_RUN_STEPS
-    if large and not args.yes:  # as a fault campaign: a typo more likely than intent
-        raise ParameterError(f"{bound}; more than {CONFIRM_RUN_STEPS:g} steps needs --yes to start")
+    why = confirmation_needed(camp)
+    large = why is not None
+    if large and not args.yes:  # as a fault campaign: a typo (or a forgotten section) more likely than intent
+        raise ParameterError(why)
     m = run_life(camp, camp.out, jobs=args.jobs, backend=args.backend, scheduler=args.scheduler,
                  progress=not args.quiet, replace_changed=args.replace_changed)
     if m["state"] != "complete":

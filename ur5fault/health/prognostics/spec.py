@@ -51,6 +51,8 @@ from .wear import WearLaw, stream
 
 LIFE_FILE_KEYS = ("name", "out", "life", "split", "batch_size", "log_period_s", "duration_s")
 LIFE_KEYS = ("units", "seed", "interval_cycles", "max_cycles", "failure", "wear", "duty")
+#: the keys of ``life:`` that size the fleet (its units and their inspections); one left out takes its default
+SIZE_KEYS = ("units", "interval_cycles", "max_cycles")
 DUTY_KEYS = ("trajectories", "payload_kg", "temperature_C")
 #: the paper's acceptability limit of a pick-and-place: 0.5 mm TCP deviation from the healthy robot
 #: random stream purpose of a unit's duty draw (wear.py uses 0..2)
@@ -150,6 +152,27 @@ def check_life_limits(camp: LifeCampaign) -> tuple[str, float]:
         raise ParameterError(f"{bound}; above the limit of {MAX_RUN_STEPS:g} physics steps: fewer units, a longer "
                              "interval_cycles or a lower max_cycles")
     return bound, steps
+
+
+def confirmation_needed(camp: LifeCampaign) -> str | None:
+    """Why ``campaign run`` needs --yes to start ``camp``, or None: a fault campaign's rule
+    (``campaign.limits.beyond_confirmation``) on its :func:`upper_bound`, which :func:`check_life_limits` states.
+    Where the file left the fleet's size to the defaults (an empty ``life:``), the reason says what that default
+    fleet is and how to state another."""
+    from ...campaign.limits import CONFIRM_RUN_STEPS, CONFIRM_RUNS, beyond_confirmation
+
+    bound, steps = check_life_limits(camp)
+    runs, _ = upper_bound(camp)
+    if not beyond_confirmation(runs, steps):
+        return None
+    why = f"{bound}; more than {CONFIRM_RUNS} runs or {CONFIRM_RUN_STEPS:g} steps needs --yes to start"
+    given = camp.data.get("life") if isinstance(camp.data.get("life"), Mapping) else {}
+    unstated = [f"life.{k}" for k in SIZE_KEYS if k not in given]
+    if unstated:
+        why += (f"; {', '.join(unstated)} not given: the defaults size this fleet ({len(camp.units)} units inspected "
+                f"every {camp.interval_cycles} cycles up to {camp.max_cycles} cycles): state "
+                f"{'them' if len(unstated) > 1 else 'it'} in the file's life section, or give --yes to run it")
+    return why
 
 
 def is_life_file(path: str | Path) -> bool:

@@ -6,10 +6,12 @@ the search runs: the resolved robot parameters of the twin's model (its overlay 
 effects, the wear law, the failure criterion, log period, duration, noise seed, drive and stepper, the search
 constants and the package version.  Each entry is keyed by the SHA-256 of all of them, so a changed model,
 setup or search can never read another's radius; the file holds only radii, written atomically with a
-SHA-256 sidecar.  A cache whose bytes changed since it was written (a changed digit would be a wrong radius,
-read silently) is set aside with a warning and its radii simulated again.  A file that is not shaped as a cache (a
-JSON object of exactly a version and radii: a manifest or a schema given by mistake, or a cache damaged past
-parsing) is refused, never overwritten: the one case where a human removes it.
+SHA-256 sidecar after every :data:`RAYS_PER_WRITE` rays simulated, so that a run stopped partway (Ctrl-C,
+SIGTERM, a kill) keeps every group it finished and its rerun simulates only the rest.  A cache whose bytes
+changed since it was written (a changed digit would be a wrong radius, read silently; a stop between the
+sidecar's rename and the file's) is set aside with a warning and its radii simulated again.  A file that is
+not shaped as a cache (a JSON object of exactly a version and radii: a manifest or a schema given by mistake,
+or a cache damaged past parsing) is refused, never overwritten: the one case where a human removes it.
 """
 
 from __future__ import annotations
@@ -32,6 +34,10 @@ _log = logging.getLogger(__name__)
 
 #: format of the file (a change of the key's contents bumps it)
 VERSION = 1
+#: rays of one task whose radii are simulated together and then written to the file (assumption: a run stopped
+#: partway loses at most this many rays' searches, ~10 simulated duty cycles each; the coarse stage of 8 rays,
+#: len(COARSE) points each, still fills more than one lockstep batch of twin_boundary.BATCH runs)
+RAYS_PER_WRITE = 8
 
 
 def setup_key(setup: tb.TwinSetup) -> str:
@@ -114,11 +120,22 @@ class RadiusCache:
             keys.append(ray_key(shas[ident], dataclasses.replace(r, friction_per_deg=None, friction_per_Mcycle=None)))
         todo = [i for i, k in enumerate(keys) if k not in self.entries]
         self.hits += len(rays) - len(todo)
-        self.misses += len(todo)
-        if todo:
-            new = tb.failure_radii(setup, [rays[i] for i in todo])
-            self.entries.update({keys[i]: float(v) for i, v in zip(todo, new, strict=True)})
-            # Python's JSON: an infinite radius (the ray's run stopped: failed) is not "no value", and only this
-            # class reads the file
-            write_json_atomic(self.path, {"version": VERSION, "radii": self.entries}, checksum=True, strict=False)
+        for group in _groups(rays, todo):
+            new = tb.failure_radii(setup, [rays[i] for i in group])
+            self.entries.update({keys[i]: float(v) for i, v in zip(group, new, strict=True)})
+            self.misses += len(group)
+            self._write()
         return np.array([self.entries[k] for k in keys])
+
+    def _write(self) -> None:
+        # Python's JSON: an infinite radius (the ray's run stopped: failed) is not "no value", and only this class
+        # reads the file
+        write_json_atomic(self.path, {"version": VERSION, "radii": self.entries}, checksum=True, strict=False)
+
+
+def _groups(rays: Sequence[tb.Ray], todo: Sequence[int]) -> list[list[int]]:
+    """``todo`` (indices into ``rays``) in groups of at most :data:`RAYS_PER_WRITE` rays of one task, in order."""
+    by_task: dict[str, list[int]] = {}
+    for i in todo:
+        by_task.setdefault(rays[i].trajectory, []).append(i)
+    return [g[k : k + RAYS_PER_WRITE] for g in by_task.values() for k in range(0, len(g), RAYS_PER_WRITE)]
