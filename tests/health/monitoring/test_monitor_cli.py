@@ -218,3 +218,59 @@ def test_a_baseline_run_given_again_is_refused_before_any_replay(tmp_path, monke
         "ur5fault: error: Movement_No2_6s.csv is one of the baseline's runs (Movement_No2_6s.csv: the same samples); "
         "judged against itself it pairs at lag 0 and can never change: monitor it against a baseline without it"), err
     assert not out.exists()
+
+
+def test_progress_counts_each_replay_once_and_quiet_switches_it_off(tmp_path, monkeypatch, capsys):
+    """`monitor` was silent for minutes while it replayed its logs: a bar of logs replayed (each once: the baseline
+    runs screened, the monitored logs not), off with --quiet. Stand-in replays, as in the test above."""
+    import dataclasses
+    import importlib
+
+    from tests.health.monitoring.test_monitoring import noise, part
+    from ur5fault.cli import main
+    from ur5fault.util import progress
+
+    calls = []
+
+    def stand_in(log, params=None, effects=(), **kw):
+        calls.append((log.source, "screen_s" in kw))
+        o = part(log.source, noise(len(log.source), log.t_s.size - 1), target=log.q_target_rad[1:])
+        return dataclasses.replace(o, rest_target=log.rest_target, payload_kg=log.payload_kg,
+                                   samples_sha256=log.content_sha256())
+
+    bars = []
+
+    class Bar:  # tqdm counts nothing when stderr is no terminal (here): a bar that does
+        n = 0
+
+        def __enter__(self):
+            return self
+
+        def __exit__(self, *exc):
+            return False
+
+        def update(self, k):
+            self.n += k
+
+    def recorded(total, desc, unit="it", enabled=True, **kw):
+        b = Bar()
+        bars.append((total, desc, enabled, b))
+        return b
+
+    monkeypatch.setattr(importlib.import_module("ur5fault.health.monitoring.observe"), "observe", stand_in)
+    monkeypatch.setattr(progress, "bar", recorded)
+    model = tmp_path / "model.yaml"
+    model.write_text("params: {}\neffects: []\n")
+    base = [head(tmp_path, n, 6.0) for n in ("Movement_No1", "Movement_No2", "Movement_No4_Acc")]
+    assert main(["monitor", str(base[2]), *RTDE, "--baseline", str(model), "--baseline-logs", *map(str, base[:2]),
+                 "--out", str(tmp_path / "a"), "--jobs", "1"]) == 0
+    assert calls == [(base[0].name, True), (base[1].name, True), (base[2].name, False)]
+    total, desc, enabled, b = bars[-1]
+    assert (total, desc, enabled, b.n) == (3, "monitor: logs replayed", True, 3)
+    calls.clear()
+    assert main(["monitor", str(base[2]), *RTDE, "--baseline", str(model), "--baseline-stats",
+                 str(tmp_path / "a" / "baseline.json"), "--out", str(tmp_path / "b"), "--quiet"]) == 0
+    assert calls == [(base[2].name, False)]
+    total, _, enabled, b = bars[-1]
+    assert (total, enabled, b.n) == (1, False, 1)
+    capsys.readouterr()

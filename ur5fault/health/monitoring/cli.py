@@ -10,6 +10,7 @@ import sys
 from pathlib import Path
 
 from ...logs.options import add_log_options
+from ...util import progress
 from ...util.usage import KUFIETA, KUFIETA_RUNS, examples, shipped
 
 #: what `monitor` writes into --out (report.py); one of them there is an earlier result
@@ -47,6 +48,7 @@ def register(sub) -> None:
                    help="the residuals events are judged on: current (default) and/or position (the measured "
                         "tracking error less the twin's; each at half the false-alarm probability when both)")
     p.add_argument("--jobs", type=int, help="worker processes for the simulation batches (default: all cores)")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=cmd_monitor)
 
 
@@ -128,10 +130,16 @@ def cmd_monitor(args: argparse.Namespace) -> int:
     for line in notes:
         print(f"note: {line}", file=sys.stderr)
     params, effects = dict(overlay.params), overlay.effects
+    replays = (healthy if stats is None else []) + logs  # each replayed once: the work of this command
+    with progress.bar(len(replays), "monitor: logs replayed", "log", enabled=not args.quiet) as pbar:
+        seen = []
+        for g in replays:
+            screen = {"screen_s": BASELINE_SCREEN_S} if stats is None and len(seen) < len(healthy) else {}
+            seen.append(observe(g, params, effects, jobs=jobs, **screen))
+            pbar.update(1)
     if stats is None:
-        stats = fit_baseline([observe(g, params, effects, screen_s=BASELINE_SCREEN_S, jobs=jobs)
-                              for g in healthy], sha)
-    observed = [observe(g, params, effects, jobs=jobs) for g in logs]
+        stats = fit_baseline(seen[:len(healthy)], sha)
+    observed = seen[len(seen) - len(logs):]
     channels = tuple(dict.fromkeys(args.event_channels))
     entries = [assess(stats, o, channels) for o in observed]
     with result_folder(args.out, RESULT_FILES, args.replace) as out:  # one set: a stop between files is marked
