@@ -97,7 +97,8 @@ def logs(tmp_path_factory) -> dict[str, Path]:
 
 
 def _diagnose(log: Path, detector: Path, out: Path) -> dict:
-    assert main(["diagnose", str(log), "--format", "sim", "--detector", str(detector), "--out", str(out)]) == 0
+    assert main(["diagnose", str(log), "--format", "sim", "--detector", str(detector), "--out", str(out),
+                 "--quiet"]) == 0
     return json.loads((out / "diagnosis.json").read_text())
 
 

@@ -7,6 +7,7 @@ import argparse
 import copy
 
 from ...logs.options import add_log_options
+from ...util import progress
 from ...util.usage import KUFIETA, KUFIETA_RUNS, examples, shipped
 
 
@@ -30,6 +31,7 @@ def register(sub) -> None:
     d.add_argument("--out", required=True, help="output folder (diagnosis.json, report.md, diagnosis.png; created)")
     d.add_argument("--replace", action="store_true",
                    help="replace an earlier result at --out (default: refused, nothing a user made is lost silently)")
+    d.add_argument("--quiet", action="store_true", help="no progress bar")
     d.set_defaults(func=cmd_diagnose)
 
 
@@ -94,8 +96,11 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
             print(f"note: baseline {line}", file=sys.stderr)
         for line in controllers_note([(g.source, g.rest_target) for g in (log, *healthy)]):
             print(f"note: {line}", file=sys.stderr)  # its threshold would be read off another robot's logs
-    baseline = robot_baseline(healthy, args.detector, params, effects) if healthy else None
-    d = diagnose(log, args.detector, params, effects, baseline=baseline)
+    with progress.bar(len(healthy) + 1, "diagnose: logs replayed", "log", enabled=not args.quiet) as pbar:
+        baseline = robot_baseline(healthy, args.detector, params, effects) if healthy else None
+        pbar.update(len(healthy))
+        d = diagnose(log, args.detector, params, effects, baseline=baseline)
+        pbar.update(1)
     for n in d["notes"]:
         print(f"note: {n}", file=sys.stderr)
     with result_folder(args.out, results, args.replace) as out:  # one set: a stop between files is marked
