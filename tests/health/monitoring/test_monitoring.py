@@ -383,3 +383,28 @@ def test_a_joint_judged_against_a_limit_far_above_the_others_is_called_out():
     healthy = {"current": np.array([0.9, 1.1, 0.8, 0.3, 0.6 * BLIND_FACTOR * 0.7, 0.2])}
     assert blind_joints(healthy) == []
     assert blind_joints({"current": np.full(6, np.nan)}) == []  # nothing judged: nothing said
+
+
+def test_a_limit_above_every_current_the_joint_draws_is_called_out_where_the_median_is_far_out_too():
+    """A newcomer's baseline of two runs of other tasks: TEST judged against current limits of 8.65 / 54.9 / 11.3 /
+    0.77 / 0.20 / 0.53 A (report.md), a +3 A bump of 2 s on the base "consistent", and only the shoulder named (54.9
+    is 10 x the median, which the other far-out joints raise). A limit above the largest current the joint draws in
+    the log is named too; the position channel has no such bound."""
+    from ur5fault.health.monitoring.observe import peak_current
+    from ur5fault.health.monitoring.verdict import blind_joints
+
+    limits = np.array([8.65, 54.9, 11.3, 0.766, 0.198, 0.532])
+    peak = np.array([2.1, 5.3, 2.4, 0.9, 0.6, 0.3])
+    typical = {"current": limits, "position": np.full(6, 2e-4)}
+    assert [n.split(":")[0] for n in blind_joints(typical)] == ["shoulder_lift_joint"]  # the median rule alone
+    notes = blind_joints(typical, peak)
+    assert [n.split(":")[0] for n in notes] == ["shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint",
+                                                 "wrist_3_joint"], notes
+    assert "limit of 8.65 A at this log's motion, above the largest current it draws in this log (2.1 A)" in notes[0]
+    assert "12 x the joints' median (4.71 A)" in notes[1] and "largest" not in notes[1]  # once, the median's words
+    # a working baseline (the pushed run against its undisturbed repeat, report.md): nothing said
+    assert blind_joints({"current": np.array([0.581, 1.25, 0.466, 0.161, 0.0896, 0.0693])}, peak) == []
+    # the peak over logged samples only; a joint never logged is NaN, and nothing is said of it
+    cur = np.array([[1.0, -2.0], [-3.0, 0.5], [9.0, 9.0]])
+    assert peak_current(cur, np.array([True, True, False])).tolist() == [3.0, 2.0]
+    assert blind_joints({"current": np.array([5.0, 0.1])}, np.array([np.nan, 0.2])) == []

@@ -84,6 +84,9 @@ class Observed:
         samples_sha256: the SHA-256 of the whole log's samples (:meth:`ur5fault.logs.MeasuredLog.content_sha256`;
             ``None`` for a part); a baseline records its runs', so that a log that is one of them is refused
             before its replay (:func:`.verdict.refuse_baseline_runs`).
+        current_peak_A: the largest measured current of each joint over the part's logged samples ``(6,)`` [A]
+            (``None``: not kept, e.g. a part observed before it was): an event limit above it is called out
+            (:func:`.verdict.blind_joints`).
     """
 
     name: str
@@ -105,6 +108,7 @@ class Observed:
     rest_target: str | None = None
     payload_kg: float | None = None
     samples_sha256: str | None = None
+    current_peak_A: NDArray | None = None
 
     @property
     def n(self) -> int:
@@ -155,7 +159,14 @@ def observe(log: MeasuredLog, params_overrides: dict | None = None, effects: Seq
                     (meas[:, 1] - base.q_rad[:hi])[lo:hi],
                     quanta(log.q_actual_rad), log.q_target_rad[1 : n_all + 1][lo:hi].copy(),
                     rp.sigma[0].copy(), stribeck_speed(rp.params), log.rest_target, log.payload_kg,
-                    log.content_sha256() if part_s is None else None)
+                    log.content_sha256() if part_s is None else None, peak_current(meas[lo:hi, 0],
+                                                                             log.logged_rows()[1 : n_all + 1][lo:hi]))
+
+
+def peak_current(current_A: NDArray, logged: NDArray) -> NDArray:
+    """``(6,)``: each joint's largest absolute measured current over the logged samples [A] (NaN: none logged)."""
+    a = np.abs(np.asarray(current_A, float)[np.asarray(logged, bool)])
+    return np.nanmax(a, axis=0) if a.size and np.isfinite(a).any() else np.full(np.shape(current_A)[1], np.nan)
 
 
 def quanta(q_rad: NDArray) -> NDArray:

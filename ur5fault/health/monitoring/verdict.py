@@ -244,7 +244,7 @@ def assess(baseline: Baseline, obs: Observed, channels: Sequence[str] = DEFAULT_
     return {"log": obs.name, "verdict": verdict, "changes": changes, "events": events,
             "event_limit_median": {c: {JOINT_NAMES[j]: float(v[j]) for j in range(N_JOINTS)}
                                    for c, v in typical.items()},
-            "notes": blind_joints(typical) + weak_change_test(baseline, block_judged, block_share)
+            "notes": blind_joints(typical, obs.current_peak_A) + weak_change_test(baseline, block_judged, block_share)
             + ([] if baseline.motion_max is None else motion_notes(baseline.motion_max, obs))
             + ([] if baseline.payloads_kg is None else payload_notes(baseline.payloads_kg, obs))}
 
@@ -256,16 +256,30 @@ def assess(baseline: Baseline, obs: Observed, channels: Sequence[str] = DEFAULT_
 BLIND_FACTOR = 10.0
 
 
-def blind_joints(typical: dict[str, NDArray]) -> list[str]:
+def blind_joints(typical: dict[str, NDArray], current_peak_A: NDArray | None = None) -> list[str]:
     """A note per channel and joint whose typical (median) event limit is :data:`BLIND_FACTOR` times the joints'
-    median or more: events there are judged against a limit the rest of the arm would never need."""
+    median or more (events there are judged against a limit the rest of the arm would never need), or, on the
+    current channel, above the largest current the joint draws in the log (``current_peak_A``, :attr:`.observe.
+    Observed.current_peak_A`): a disturbance would have to exceed everything the joint carries to be an event. The
+    second holds where the first cannot: when several joints' limits are far out, their median is too (two baseline
+    runs of other tasks put the base, shoulder and elbow at 9-55 A on a log drawing 2-5 A, and only the shoulder
+    was named)."""
     notes = []
     for c, v in typical.items():
         unit = UNITS[c]
         mid = float(np.nanmedian(v)) if np.isfinite(v).any() else np.nan
-        for j in np.flatnonzero(np.isfinite(v) & (v >= BLIND_FACTOR * mid)) if mid > 0 else []:
+        peak = np.full(v.shape, np.nan) if c != "current" or current_peak_A is None else np.asarray(current_peak_A)
+        for j in range(v.size):
+            if not np.isfinite(v[j]):
+                continue
+            if mid > 0 and v[j] >= BLIND_FACTOR * mid:
+                why = f"{v[j] / mid:.0f} x the joints' median ({mid:.3g} {unit})"
+            elif np.isfinite(peak[j]) and v[j] > peak[j]:
+                why = f"above the largest current it draws in this log ({peak[j]:.3g} {unit})"
+            else:
+                continue
             notes.append(f"{JOINT_NAMES[j]}: its {c} events are judged against a limit of {v[j]:.3g} {unit} at this "
-                         f"log's motion, {v[j] / mid:.0f} x the joints' median ({mid:.3g} {unit}): the baseline runs "
-                         "do not tell its spread (they hardly move it, or disagree); an event smaller than that is not "
-                         "seen there: give baseline runs that move it as this log does")
+                         f"log's motion, {why}: the baseline runs do not tell its spread (they hardly move it, or "
+                         "disagree); an event smaller than that is not seen there: give baseline runs that move it as "
+                         "this log does")
     return notes
