@@ -644,3 +644,42 @@ def test_inputs_left_out_one_sentence_per_reason():
                               "twin_mismatch_offset_rad_j2/5. Left out (no value in the test split), 1 input: "
                               "payload_kg.")
     assert left_out({}) == ""
+
+
+def test_stages_on_a_bar_and_quiet_switches_it_off(tmp_path, monkeypatch, capsys):
+    """`benchmark` ran for minutes without a word (544 s with --features both) and refused --quiet: its stages now
+    go on a bar (on a terminal), named as they start; --quiet switches it off."""
+    from ur5fault.health import diagnostics
+    from ur5fault.health.diagnostics import run_benchmark
+    from ur5fault.util import progress
+
+    seen = []
+
+    class Bar:
+        def __init__(self, total, desc, unit="it", enabled=True, **kw):
+            seen.append(("bar", total, desc, enabled))
+
+        def update(self, k):
+            seen.append(("update", k))
+
+        def set_description(self, desc):
+            seen.append(("desc", desc))
+
+        def close(self):
+            seen.append(("close",))
+
+    monkeypatch.setattr(progress, "bar", Bar)
+    train_dir = tmp_path / "train"
+    train_dir.mkdir()
+    with_twin(synthetic()).to_parquet(train_dir / "features.parquet")
+    run_benchmark(train_dir, compare=False, progress=True)
+    assert seen == [("bar", 2, "benchmark: training and scoring", True), ("update", 1),
+                    ("desc", "benchmark: writing the report"), ("update", 1), ("close",)]
+    metrics = {"notes": [], "dataset": {"n_train": 10, "n_test": 4}, "feature_set": "both", "shuffled_labels": False,
+               "detection": {"auc_all": 1.0}, "detection_by_joint": None, "localisation": {"accuracy": 0.75},
+               "kind": {"accuracy": 0.5}, "backlash": {"per_joint": {}}, "out": str(tmp_path)}
+    given = []
+    monkeypatch.setattr(diagnostics, "run_benchmark", lambda *a, **k: given.append(k["progress"]) or metrics)
+    assert main(["benchmark", str(train_dir)]) == 0 and main(["benchmark", str(train_dir), "--quiet"]) == 0
+    assert given == [True, False]
+    capsys.readouterr()

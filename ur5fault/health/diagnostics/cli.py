@@ -35,6 +35,7 @@ def register(sub) -> None:
                         "default: train and score on DIR's own split)")
     b.add_argument("--jobs", type=int, help="worker processes for the feature sets' comparison, run beside the "
                                             "main training (default: all cores available; 1: one after the other)")
+    b.add_argument("--quiet", action="store_true", help="no progress bar")
     b.set_defaults(func=cmd_benchmark)
 
 
@@ -54,7 +55,8 @@ def cmd_benchmark(args: argparse.Namespace) -> int:
     jobs, _ = effective_jobs(args.jobs)  # the campaigns' rule: at least 1, at most the cores available
     m = run_benchmark(args.dir, args.out, seed=args.seed, shuffle_labels=args.shuffle_labels,
                       feature_set=args.features, test_dir=args.test,
-                      jobs=jobs, replace=args.replace)  # the report folder checked before any training
+                      jobs=jobs, replace=args.replace,
+                      progress=not args.quiet)  # the report folder checked before any training
     for note in m.get("notes", []):
         print(f"ur5fault: note: {note}", file=sys.stderr)
     det, loc, kind = m["detection"], m["localisation"], m["kind"]

@@ -31,7 +31,7 @@ RESULT_FILES = ("report.md", "metrics.json", PREDICTIONS_FILE, MODELS_DIR)
 
 def run_benchmark(campaign_dir: str | Path, out: str | Path | None = None, *, seed: int = 0,
                   shuffle_labels: bool = False, feature_set: str | None = None, test_dir: str | Path | None = None,
-                  compare: bool = True, jobs: int = 1, replace: bool = True) -> dict[str, Any]:
+                  compare: bool = True, jobs: int = 1, replace: bool = True, progress: bool = False) -> dict[str, Any]:
     """``ur5fault benchmark``: evaluate a campaign folder and write ``report.md``, ``metrics.json``, the figures
     and the trained classifiers (``models/``) into ``out`` (default ``<campaign_dir>/benchmark``); return the
     metrics.
@@ -46,6 +46,7 @@ def run_benchmark(campaign_dir: str | Path, out: str | Path | None = None, *, se
             chosen set (1: all in this process, one after the other; the figures are the same either way).
         replace: replace an earlier report and classifiers in the report folder (False: refused in one line
             before any work, as `ur5fault benchmark` does without --replace).
+        progress: a bar of the stages on stderr (on a terminal; ``ur5fault benchmark`` without --quiet).
     """
     campaign_dir = Path(campaign_dir)
     base = campaign_dir if campaign_dir.is_dir() else campaign_dir.parent
@@ -76,6 +77,7 @@ def run_benchmark(campaign_dir: str | Path, out: str | Path | None = None, *, se
         if shuffle_labels:
             raise ParameterError("--shuffle-labels trains new classifiers; --test scores saved ones: use one of them")
         test_dir = Path(test_dir)
+        bar = _Stages(progress, "scoring the saved classifiers", "writing the report")
         saved = load_models(base / "benchmark")
         other = load_features(test_dir)
         refuse_training_runs(features, other, campaign_dir, test_dir)
@@ -85,18 +87,23 @@ def run_benchmark(campaign_dir: str | Path, out: str | Path | None = None, *, se
         metrics["notes"] = unverified_notes(base / "benchmark") + setup_notes(saved[1], test_dir, other)
         if saved[0].joint_kind is not None:  # how far apart, against the motions drawn (transfer.py)
             metrics["transfer"] = against_training_split(features, other, saved, seed, str(test_dir))
+        bar.next()
         with result_folder(out_dir, RESULT_FILES, replace):  # one set: a stop between files is marked
             write_report(metrics, figures, out_dir)
+        bar.close()
         metrics["out"] = str(out_dir)
         return metrics
     compare = compare and has_twin_features(features)
     # the chosen set's classifiers are its trained row of the comparison: trained once, here
     reused = None if shuffle_labels else feature_set
+    bar = _Stages(progress, "training and scoring", *(["the feature sets compared"] if compare else []),
+                  "writing the report")
     pending = (_start_comparison(features, seed, thr, str(campaign_dir), jobs, reused) if compare and jobs > 1
                else None)
     metrics, figures = evaluate(features, seed=seed, shuffle_labels=shuffle_labels, threshold_mm=thr,
                                 source=str(campaign_dir), feature_set=feature_set, calibrate=not shuffle_labels)
     models = metrics.pop("_models")
+    bar.next()
     if compare:
         reuse = None if reused is None else (reused, dataclasses.replace(models, calibrator=None))
         if pending is None:
@@ -106,10 +113,32 @@ def run_benchmark(campaign_dir: str | Path, out: str | Path | None = None, *, se
             if reuse is not None:
                 rows[reused]["trained"] = _compared(features, seed, False, thr, str(campaign_dir), *reuse)
             metrics["comparison"] = {fs: {k: rows[fs][k] for k in ("trained", "shuffled")} for fs in FEATURE_SETS}
+        bar.next()
     with result_folder(out_dir, RESULT_FILES, replace):  # the report and the classifiers, one set
         _write_trained(metrics, figures, out_dir, models, features, feature_set, shuffle_labels, man)
+    bar.close()
     metrics["out"] = str(out_dir)
     return metrics
+
+
+class _Stages:
+    """The benchmark's stages on one bar (:mod:`ur5fault.util.progress`), the current one named."""
+
+    def __init__(self, enabled: bool, *names: str) -> None:
+        from ...util import progress
+
+        self.names, self.k = names, 0
+        self.bar = progress.bar(len(names), f"benchmark: {names[0]}", "stage", enabled=enabled)
+
+    def next(self) -> None:
+        self.k += 1
+        self.bar.update(1)
+        if self.k < len(self.names):
+            self.bar.set_description(f"benchmark: {self.names[self.k]}")
+
+    def close(self) -> None:
+        self.next()
+        self.bar.close()
 
 
 def _write_trained(metrics: dict[str, Any], figures: dict, out_dir: Path, models: Models, features: pd.DataFrame,
