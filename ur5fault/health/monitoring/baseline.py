@@ -87,8 +87,9 @@ class Baseline:
     (:mod:`.paired`; empty: the baseline runs do not repeat each other); ``rest_targets``: per baseline run what
     its target is while the arm stands (:attr:`.observe.Observed.rest_target`: the controller's style, so that a
     log of another controller is told with ``--baseline-stats`` as with ``--baseline-logs``; ``None``: not
-    recorded, a ``baseline.json`` written before it was); ``motion_max`` ``(1, 6)``: the largest target speed
-    [rad/s] per joint of the runs (:data:`.coverage.QUANTITIES`), ``payloads_kg``: per run its stated payload [kg]
+    recorded, a ``baseline.json`` written before it was); ``motion_max`` ``(2, 6)``: per joint the runs' largest
+    target speed and other joints' speed while it stands [rad/s] (:data:`.coverage.QUANTITIES`; NaN: not
+    recorded), ``payloads_kg``: per run its stated payload [kg]
     (what the runs covered, :mod:`.coverage`; ``None``: not recorded, as ``rest_targets``); ``samples_sha256``: per
     run the SHA-256 of its log's samples (:attr:`.observe.Observed.samples_sha256`; ``None``: not recorded)."""
 
@@ -152,7 +153,8 @@ class Baseline:
                 **({} if self.rest_targets is None else {"rest_targets": list(self.rest_targets)}),
                 **({} if self.motion_max is None else
                    {"motion_max": {q: {JOINT_NAMES[j]: float(self.motion_max[i, j]) for j in range(N_JOINTS)}
-                                   for i, q in enumerate(QUANTITIES)}}),
+                                   for i, q in enumerate(QUANTITIES)
+                                   if np.isfinite(self.motion_max[i]).all()}}),  # not recorded: left out
                 **({} if self.payloads_kg is None else {"payloads_kg": list(self.payloads_kg)}),
                 **({} if self.samples_sha256 is None else {"samples_sha256": list(self.samples_sha256)})}
 
@@ -194,11 +196,14 @@ class Baseline:
             if styles is not None and (len(styles) != len(runs) or any(v not in REST_TARGETS for v in styles)):
                 raise ValueError(f"rest_targets {styles!r} is not one of {REST_TARGETS} per segment")
             motion = data.get("motion_max")  # absent: written before baseline.json recorded it, as the payloads
-            if motion is not None:
-                values = [motion[q][j] for q in QUANTITIES for j in JOINT_NAMES]
+            if motion is not None:  # a quantity added since the file was written is NaN there (not compared)
+                if not isinstance(motion, dict) or QUANTITIES[0] not in motion:
+                    raise ValueError(f"motion_max does not hold {QUANTITIES[0]}")
+                values = [motion[q][j] for q in QUANTITIES if q in motion for j in JOINT_NAMES]
                 if not all(is_real(v) and np.isfinite(v) and v >= 0 for v in values):
                     raise ValueError("motion_max holds a value that is no finite number >= 0")
-                motion = np.array(values, float).reshape(len(QUANTITIES), N_JOINTS)
+                motion = np.array([[motion[q][j] if q in motion else np.nan for j in JOINT_NAMES]
+                                   for q in QUANTITIES], float)
             loads = data.get("payloads_kg")
             if loads is not None and (len(loads) != len(runs) or any(
                     p is not None and not (is_real(p) and np.isfinite(p) and p >= 0)

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 import copy
+import math
 import os
 import sys
 from pathlib import Path
@@ -122,6 +123,8 @@ def cmd_monitor(args: argparse.Namespace) -> int:
               f"--baseline-logs to have it checked", file=sys.stderr)
     unrecorded = [] if stats is None else [what for what, v in (("motion range", stats.motion_max),
                                                                  ("payloads", stats.payloads_kg)) if v is None]
+    if stats is not None and stats.motion_max is not None and not all(map(math.isfinite, stats.motion_max.flat)):
+        unrecorded.append("other joints' speed while a joint stands")  # recorded since 2026-12-02
     if unrecorded:  # the same, for what the baseline runs covered (coverage.py)
         print(f"note: {args.baseline_stats} does not record its runs' {' and '.join(unrecorded)} (written by an "
               f"earlier version): whether a log leaves them is not said; rebuild it with --baseline-logs to have it "
