@@ -222,12 +222,14 @@ def cmd_show(args: argparse.Namespace) -> int:
     from .logs.readers import RESIMULATE
     from .plotting import run_figure
     from .util.io import check_stored, check_writable, write_figure_atomic
+    from .util.results import check_new_output
 
     target = Path(args.target)
     if args.out is not None:  # before reading or re-simulating anything
         check_writable(args.out)
         if Path(args.out).suffix.lower() != ".png":
             raise ConfigFileError(f"--out {args.out}: the figure is written as PNG; give a .png file name")
+        check_new_output(args.out, replace=args.replace)  # an earlier figure, or a user's own file
     if target.suffix.lower() in OUT_SUFFIXES or target.is_file():
         import pandas as pd
 
@@ -237,7 +239,7 @@ def cmd_show(args: argparse.Namespace) -> int:
         if not target.is_file():
             raise ConfigFileError(f"{target}: no such file")
         png = Path(args.out) if args.out else target.with_suffix(".png")
-        check_writable(png)  # the default place too: a folder in the way is one line, before reading
+        check_new_output(png, replace=args.replace)  # the default place too: one line, before reading
         csv = target.suffix.lower() == ".csv"
         check_stored(target, RESIMULATE)  # a campaign's time series carries its checksum: never drawn damaged
         try:
@@ -257,11 +259,11 @@ def cmd_show(args: argparse.Namespace) -> int:
                                   f"ur5fault show {target} --campaign DIR")
         result = CampaignResult.load(Path(args.campaign or "."))
         row = result.run(args.target)
+        png = Path(args.out) if args.out else result.out / "plots" / f"show_{row['run_id']}.png"
+        check_new_output(png, replace=args.replace)  # before reading or re-simulating the run
         twin = row.get("twin_run_id", row["run_id"])
         series = result.time_series([row["run_id"], twin])
         fig = run_figure(series[row["run_id"]], twin=series[twin] if twin != row["run_id"] else None)
-        png = Path(args.out) if args.out else result.out / "plots" / f"show_{row['run_id']}.png"
-        check_writable(png)
     png.parent.mkdir(parents=True, exist_ok=True)
     write_figure_atomic(fig, png)
     print(f"wrote {png}")
@@ -326,4 +328,5 @@ def register(sub) -> None:
                                    "saved)")
     sh.add_argument("--campaign", help="campaign output folder of a RUN_ID (default: this folder)")
     sh.add_argument("--out", help="PNG file (default: FILE.png beside the file, or CAMPAIGN/plots/show_RUN_ID.png)")
+    sh.add_argument("--replace", action="store_true", help="replace an earlier file at --out (default: refused)")
     sh.set_defaults(func=cmd_show)

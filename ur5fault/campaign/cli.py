@@ -58,6 +58,8 @@ def register(sub) -> None:
                         "feature without _j{j} (e.g. current_spike_max_A: read on the faulty joint); "
                         "default tcp_dev_max_mm")
     p.add_argument("--out", help="folder for the PNG files (default: DIR/plots)")
+    p.add_argument("--replace", action="store_true",
+                   help="replace the figures of an earlier plot in that folder (default: refused, naming the first)")
     p.set_defaults(func=cmd_plot)
 
 
@@ -129,8 +131,9 @@ def cmd_status(args: argparse.Namespace) -> int:
 
 
 def cmd_plot(args: argparse.Namespace) -> int:
-    from ..plotting import FIGURE_STEMS, drawn_and_failed, save
+    from ..plotting import FIGURE_STEMS, drawn_and_failed, figure_stems, save
     from ..util.io import check_writable
+    from ..util.results import check_new_output
     from .result import CampaignResult
 
     if args.out is not None:
@@ -138,6 +141,8 @@ def cmd_plot(args: argparse.Namespace) -> int:
     result = CampaignResult.load(Path(args.dir))
     plot_dir = Path(args.out) if args.out else result.out / "plots"
     check_writable(plot_dir, folder=True)  # the default place too
+    for stem in figure_stems(result, args.feature):  # an earlier plot's figure (or a user's file) is not lost silently
+        check_new_output(plot_dir / f"{stem}.png", replace=args.replace)
     figures, messages, failures = drawn_and_failed(result, args.feature)
     written = save(figures, plot_dir)
     for path in written:
