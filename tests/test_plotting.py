@@ -327,6 +327,37 @@ def test_show_and_plot_refuse_to_replace_an_earlier_figure_before_any_work(tmp_p
     assert capsys.readouterr().out.count("wrote ") == 6
 
 
+def test_show_names_the_columns_it_draws_that_hold_no_finite_value(tmp_path, capsys):
+    """A time series whose column is all inf or NaN was drawn with its curves silently missing: one note on stderr
+    names such columns. A column finite in part (a run stopped early is NaN after its stop) is drawn as far as it goes
+    and not named, and a column the figure does not draw is not named either."""
+    from ur5fault.cli import main
+
+    csv = tmp_path / "s1.csv"
+    assert main(["simulate", "--duration-s", "0.05", "--quiet", "--out", str(csv)]) == 0
+    df = pd.read_csv(csv)
+    capsys.readouterr()
+    assert main(["show", str(csv)]) == 0
+    assert "note" not in capsys.readouterr().err  # every column finite
+    df["q_FB_rad_j1"] = np.inf
+    df.loc[len(df) // 2:, [c for c in df.columns if c.startswith("i_FB_A_")]] = np.nan  # stopped half way
+    df[[c for c in df.columns if c.startswith("T_gear_Nm")][0]] = np.nan  # not drawn
+    df.to_csv(csv, index=False)
+    assert main(["show", str(csv), "--replace"]) == 0
+    cap = capsys.readouterr()
+    assert cap.err.splitlines() == ["note: no finite value in q_FB_rad_j1 (NaN or inf in every row): its curves are "
+                                    "missing from the figure"], cap.err
+    assert cap.out.startswith("wrote ")
+    from ur5fault.run_cli import _note_empty_columns
+
+    df[[c for c in df.columns if c.startswith("q_FB_rad_")]] = np.nan  # a run stopped before its first logged sample
+    df.attrs["ur5fault"] = {"status": "diverged"}
+    _note_empty_columns(df, None)
+    assert capsys.readouterr().err == ("note: no finite value in q_FB_rad_j1, q_FB_rad_j2, q_FB_rad_j3, q_FB_rad_j4, "
+                                       "q_FB_rad_j5, q_FB_rad_j6 (NaN or inf in every row; the run's status: "
+                                       "diverged): their curves are missing from the figure\n")
+
+
 def test_plot_campaign_writes_png_files(tmp_path, two):
     paths = plot_campaign(two.out, plot_dir=tmp_path)
     assert len(paths) == 6 and all(p.stat().st_size > 10_000 for p in paths)

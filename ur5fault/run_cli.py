@@ -246,7 +246,7 @@ def cmd_show(args: argparse.Namespace) -> int:
             series = pd.read_csv(target) if csv else pd.read_parquet(target)
         except (OSError, ValueError) as exc:
             raise ConfigFileError(f"{target}: cannot read as {'CSV' if csv else 'Parquet'} ({exc})") from None
-        fig = run_figure(series)
+        twin = None
     else:
         from .campaign.result import CampaignResult
 
@@ -261,13 +261,29 @@ def cmd_show(args: argparse.Namespace) -> int:
         row = result.run(args.target)
         png = Path(args.out) if args.out else result.out / "plots" / f"show_{row['run_id']}.png"
         check_new_output(png, replace=args.replace)  # before reading or re-simulating the run
-        twin = row.get("twin_run_id", row["run_id"])
-        series = result.time_series([row["run_id"], twin])
-        fig = run_figure(series[row["run_id"]], twin=series[twin] if twin != row["run_id"] else None)
+        twin_id = row.get("twin_run_id", row["run_id"])
+        tables = result.time_series([row["run_id"], twin_id])
+        series, twin = tables[row["run_id"]], tables[twin_id] if twin_id != row["run_id"] else None
+    fig = run_figure(series, twin=twin)
+    _note_empty_columns(series, twin)
     png.parent.mkdir(parents=True, exist_ok=True)
     write_figure_atomic(fig, png)
     print(f"wrote {png}")
     return 0
+
+
+def _note_empty_columns(series, twin) -> None:
+    """``show``: one note on stderr naming the drawn columns with no finite value (their curves are missing from the
+    figure); a column finite in part (a run stopped early) is drawn as far as it goes and not named."""
+    from .plotting.run import columns_without_values
+
+    empty = columns_without_values(series, twin)
+    if empty:
+        named = ", ".join(empty[:6]) + (f" and {len(empty) - 6} more" if len(empty) > 6 else "")
+        status = series.attrs.get("ur5fault", {}).get("status")
+        run = f"; the run's status: {status}" if status not in (None, "ok") else ""
+        print(f"note: no finite value in {named} (NaN or inf in every row{run}): "
+              f"{'its curves are' if len(empty) == 1 else 'their curves are'} missing from the figure", file=sys.stderr)
 
 
 def register(sub) -> None:
