@@ -281,6 +281,83 @@ def test_plot_and_show_commands(tmp_path, two, capsys):
         assert message in err and err.startswith("ur5fault: error: ") and len(err.strip().splitlines()) == 1, err
 
 
+def test_show_and_plot_refuse_to_replace_an_earlier_figure_before_any_work(tmp_path, two, capsys, monkeypatch):
+    """``show --out mine.png`` replaced a user's own file and ``plot`` an earlier plot's figures silently, where every
+    other command refuses an earlier result unless given --replace: now one line naming the file, before reading,
+    re-simulating or drawing anything; --replace writes it."""
+    import ur5fault.plotting
+    from ur5fault.cli import main
+
+    def one_line_refusal(args, path):
+        assert main(args) == 2
+        err = capsys.readouterr().err
+        assert err.startswith("ur5fault: error: ") and len(err.strip().splitlines()) == 1, err
+        assert f"{path}: an earlier result is there; give --replace to replace it" in err, err
+
+    run_id = two.features.loc[two.features["fault"] == "backlash", "run_id"].iloc[0]
+    run = tmp_path / "r.parquet"
+    shutil.copy(two.out / "timeseries" / f"{run_id}.parquet", run)
+    mine = tmp_path / "mine.png"
+    mine.write_text("notes\n")
+    one_line_refusal(["show", str(run), "--out", str(mine)], mine)
+    (tmp_path / "r.png").write_text("notes\n")  # the default place, beside the file
+    one_line_refusal(["show", str(run)], tmp_path / "r.png")
+    (tmp_path / "bad.parquet").write_bytes(b"not parquet")  # refused before it is read
+    (tmp_path / "bad.png").write_text("notes\n")
+    one_line_refusal(["show", str(tmp_path / "bad.parquet")], tmp_path / "bad.png")
+    assert mine.read_text() == (tmp_path / "r.png").read_text() == "notes\n"
+    assert main(["show", str(run), "--out", str(mine), "--replace"]) == 0
+    assert mine.read_bytes().startswith(b"\x89PNG")
+
+    copy = tmp_path / "c"
+    shutil.copytree(two.out, copy)
+    shown = copy / "plots" / f"show_{run_id}.png"
+    shown.parent.mkdir()
+    shown.write_text("notes\n")
+    monkeypatch.setattr(CampaignResult, "time_series", lambda *a: pytest.fail("read or re-simulated"))
+    one_line_refusal(["show", run_id, "--campaign", str(copy)], shown)
+    monkeypatch.undo()
+    assert main(["plot", str(copy)]) == 0  # a file of another name in the folder (show's) is left alone
+    assert shown.read_text() == "notes\n"
+    capsys.readouterr()
+    monkeypatch.setattr(ur5fault.plotting, "drawn_and_failed", lambda *a: pytest.fail("drawn"))
+    one_line_refusal(["plot", str(copy)], copy / "plots" / "fig3_tcp_deviation_alpha0.1.png")
+    monkeypatch.undo()
+    assert main(["plot", str(copy), "--replace"]) == 0
+    assert capsys.readouterr().out.count("wrote ") == 6
+
+
+def test_show_names_the_columns_it_draws_that_hold_no_finite_value(tmp_path, capsys):
+    """A time series whose column is all inf or NaN was drawn with its curves silently missing: one note on stderr
+    names such columns. A column finite in part (a run stopped early is NaN after its stop) is drawn as far as it goes
+    and not named, and a column the figure does not draw is not named either."""
+    from ur5fault.cli import main
+
+    csv = tmp_path / "s1.csv"
+    assert main(["simulate", "--duration-s", "0.05", "--quiet", "--out", str(csv)]) == 0
+    df = pd.read_csv(csv)
+    capsys.readouterr()
+    assert main(["show", str(csv)]) == 0
+    assert "note" not in capsys.readouterr().err  # every column finite
+    df["q_FB_rad_j1"] = np.inf
+    df.loc[len(df) // 2:, [c for c in df.columns if c.startswith("i_FB_A_")]] = np.nan  # stopped half way
+    df[[c for c in df.columns if c.startswith("T_gear_Nm")][0]] = np.nan  # not drawn
+    df.to_csv(csv, index=False)
+    assert main(["show", str(csv), "--replace"]) == 0
+    cap = capsys.readouterr()
+    assert cap.err.splitlines() == ["note: no finite value in q_FB_rad_j1 (NaN or inf in every row): its curves are "
+                                    "missing from the figure"], cap.err
+    assert cap.out.startswith("wrote ")
+    from ur5fault.run_cli import _note_empty_columns
+
+    df[[c for c in df.columns if c.startswith("q_FB_rad_")]] = np.nan  # a run stopped before its first logged sample
+    df.attrs["ur5fault"] = {"status": "diverged"}
+    _note_empty_columns(df, None)
+    assert capsys.readouterr().err == ("note: no finite value in q_FB_rad_j1, q_FB_rad_j2, q_FB_rad_j3, q_FB_rad_j4, "
+                                       "q_FB_rad_j5, q_FB_rad_j6 (NaN or inf in every row; the run's status: "
+                                       "diverged): their curves are missing from the figure\n")
+
+
 def test_plot_campaign_writes_png_files(tmp_path, two):
     paths = plot_campaign(two.out, plot_dir=tmp_path)
     assert len(paths) == 6 and all(p.stat().st_size > 10_000 for p in paths)
@@ -375,7 +452,7 @@ def test_figures_not_redrawn_are_said_to_be_an_earlier_plots(tmp_path, two, caps
     b = bytearray(f.read_bytes())
     b[len(b) // 2] ^= 0x01
     f.write_bytes(bytes(b))
-    assert main(["plot", str(copy)]) == 0
+    assert main(["plot", str(copy), "--replace"]) == 0
     cap = capsys.readouterr()
     assert not [line for line in cap.out.splitlines() if "not redrawn" in line], cap.out
     warned = [r.getMessage() for r in caplog.records if f.name in r.getMessage()]
@@ -385,7 +462,7 @@ def test_figures_not_redrawn_are_said_to_be_an_earlier_plots(tmp_path, two, caps
     m["campaign_data"]["duration_s"] = -1.0
     manifest.write_text(json.dumps(m))
     (copy / "manifest.json.sha256").unlink()
-    assert main(["plot", str(copy)]) == 1  # figures the campaign has were not drawn: a script must see it
+    assert main(["plot", str(copy), "--replace"]) == 1  # figures the campaign has were not drawn: a script must see it
     cap = capsys.readouterr()
     out = cap.out.splitlines()
     bad = [line for line in cap.err.splitlines() if "duration_s" in line]

@@ -222,12 +222,14 @@ def cmd_show(args: argparse.Namespace) -> int:
     from .logs.readers import RESIMULATE
     from .plotting import run_figure
     from .util.io import check_stored, check_writable, write_figure_atomic
+    from .util.results import check_new_output
 
     target = Path(args.target)
     if args.out is not None:  # before reading or re-simulating anything
         check_writable(args.out)
         if Path(args.out).suffix.lower() != ".png":
             raise ConfigFileError(f"--out {args.out}: the figure is written as PNG; give a .png file name")
+        check_new_output(args.out, replace=args.replace)  # an earlier figure, or a user's own file
     if target.suffix.lower() in OUT_SUFFIXES or target.is_file():
         import pandas as pd
 
@@ -237,14 +239,14 @@ def cmd_show(args: argparse.Namespace) -> int:
         if not target.is_file():
             raise ConfigFileError(f"{target}: no such file")
         png = Path(args.out) if args.out else target.with_suffix(".png")
-        check_writable(png)  # the default place too: a folder in the way is one line, before reading
+        check_new_output(png, replace=args.replace)  # the default place too: one line, before reading
         csv = target.suffix.lower() == ".csv"
         check_stored(target, RESIMULATE)  # a campaign's time series carries its checksum: never drawn damaged
         try:
             series = pd.read_csv(target) if csv else pd.read_parquet(target)
         except (OSError, ValueError) as exc:
             raise ConfigFileError(f"{target}: cannot read as {'CSV' if csv else 'Parquet'} ({exc})") from None
-        fig = run_figure(series)
+        twin = None
     else:
         from .campaign.result import CampaignResult
 
@@ -257,15 +259,31 @@ def cmd_show(args: argparse.Namespace) -> int:
                                   f"ur5fault show {target} --campaign DIR")
         result = CampaignResult.load(Path(args.campaign or "."))
         row = result.run(args.target)
-        twin = row.get("twin_run_id", row["run_id"])
-        series = result.time_series([row["run_id"], twin])
-        fig = run_figure(series[row["run_id"]], twin=series[twin] if twin != row["run_id"] else None)
         png = Path(args.out) if args.out else result.out / "plots" / f"show_{row['run_id']}.png"
-        check_writable(png)
+        check_new_output(png, replace=args.replace)  # before reading or re-simulating the run
+        twin_id = row.get("twin_run_id", row["run_id"])
+        tables = result.time_series([row["run_id"], twin_id])
+        series, twin = tables[row["run_id"]], tables[twin_id] if twin_id != row["run_id"] else None
+    fig = run_figure(series, twin=twin)
+    _note_empty_columns(series, twin)
     png.parent.mkdir(parents=True, exist_ok=True)
     write_figure_atomic(fig, png)
     print(f"wrote {png}")
     return 0
+
+
+def _note_empty_columns(series, twin) -> None:
+    """``show``: one note on stderr naming the drawn columns with no finite value (their curves are missing from the
+    figure); a column finite in part (a run stopped early) is drawn as far as it goes and not named."""
+    from .plotting.run import columns_without_values
+
+    empty = columns_without_values(series, twin)
+    if empty:
+        named = ", ".join(empty[:6]) + (f" and {len(empty) - 6} more" if len(empty) > 6 else "")
+        status = series.attrs.get("ur5fault", {}).get("status")
+        run = f"; the run's status: {status}" if status not in (None, "ok") else ""
+        print(f"note: no finite value in {named} (NaN or inf in every row{run}): "
+              f"{'its curves are' if len(empty) == 1 else 'their curves are'} missing from the figure", file=sys.stderr)
 
 
 def register(sub) -> None:
@@ -326,4 +344,5 @@ def register(sub) -> None:
                                    "saved)")
     sh.add_argument("--campaign", help="campaign output folder of a RUN_ID (default: this folder)")
     sh.add_argument("--out", help="PNG file (default: FILE.png beside the file, or CAMPAIGN/plots/show_RUN_ID.png)")
+    sh.add_argument("--replace", action="store_true", help="replace an earlier file at --out (default: refused)")
     sh.set_defaults(func=cmd_show)

@@ -50,3 +50,24 @@ def test_a_users_copy_in_the_working_folder_wins_by_either_name(name, tmp_path, 
 def test_a_shipped_name_without_a_copy_is_the_shipped_campaign(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     assert len(load_campaign("paper", tmp_path / "out").runs) == 19
+
+
+def test_campaign_show_prints_a_shipped_campaign_to_copy(tmp_path, monkeypatch, capsys):
+    """A wheel user could not see or copy a shipped campaign (the README pointed into the installed package): `ur5fault
+    campaign show NAME` prints its file, whose copy loads as the same campaign; an unknown name is one line naming the
+    shipped ones. The shipped file is printed even beside a user's file of that name (that one they have)."""
+    from ur5fault.cli import main
+
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "paper.yaml").write_text("name: mine\n")
+    for path in FILES:
+        assert main(["campaign", "show", path.stem]) == 0
+        assert capsys.readouterr().out == path.read_text(encoding="utf-8"), path.name
+    assert main(["campaign", "show", "default.yaml"]) == 0
+    (tmp_path / "my.yaml").write_text(capsys.readouterr().out)
+    copy, shipped = load_campaign(tmp_path / "my.yaml", tmp_path / "a"), load_campaign("default", tmp_path / "a")
+    assert copy.name == "default" and [r.run_id for r in copy.runs] == [r.run_id for r in shipped.runs]
+    assert main(["campaign", "show", "defaul"]) == 2
+    cap = capsys.readouterr()
+    assert cap.out == "" and cap.err == ("ur5fault: error: unknown shipped campaign 'defaul' (did you mean "
+                                         f"'default'?); valid: {', '.join(f.stem for f in FILES)}\n")

@@ -105,8 +105,8 @@ def test_sample_rate_limits(tmp_path, period, ok):
 
 @pytest.mark.parametrize("step_ticks, ok", [(6, True), (7, False)])
 def test_gap_limit(tmp_path, step_ticks, ok):
-    """Up to 5 ticks missing in a row are interpolated (a step of 6 ticks); a refused gap says where to cut the log,
-    and which part is too short to keep."""
+    """Up to 5 ticks missing in a row are interpolated (a step of 6 ticks); a refused gap says where to cut the log
+    and which parts are long enough to keep: here neither."""
     frame = rtde_frame()
     frame.loc[500:, "timestamp"] += (step_ticks - 1) * 0.008
     p = _write_text(tmp_path / "log.csv", frame.to_csv(index=False))
@@ -114,9 +114,8 @@ def test_gap_limit(tmp_path, step_ticks, ok):
         assert read_rtde(p).logged.sum() == 1000
     else:
         msg = (r"a gap of 0.056 s after t = 3.992 s \(data row 500\): 6 ticks of 8 ms missing in a row, more than "
-               r"the 5 interpolated; cut the log at the gap into two logs \(data rows 1..500 and 501..1000\), which "
-               r"identify, discrepancy and monitor take together as logs of one robot; leave out a part of 3.99 s "
-               r"or 3.99 s \(fitting needs at least 5 s and 250 samples\)$")
+               r"the 5 interpolated; neither side of it is long enough to use as a log of its own: data rows 1..500 "
+               r"cover 3.99 s and 501..1000 3.99 s \(fitting needs at least 5 s and 250 samples\)$")
         with pytest.raises(LogFormatError, match=msg):
             read_rtde(p)
 

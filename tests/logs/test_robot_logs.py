@@ -138,18 +138,48 @@ def test_rows_without_a_value_and_missing_ticks_beside_them_count_together_as_on
         _read(tmp_path, df)
     assert str(err.value) == (
         "log.csv: NaN or inf in actual_current_2 in data rows 501..506: 6 ticks in a row without a whole reading, "
-        "more than the 5 interpolated; cut the log there into two logs (data rows 1..500 and 507..1000), which "
-        "identify, discrepancy and monitor take together as logs of one robot")
+        "more than the 5 interpolated; neither side of it is long enough to use as a log of its own: data rows "
+        "1..500 cover 3.99 s and 507..1000 3.94 s (fitting needs at least 5 s and 250 samples)")
     df = _frame().drop(index=[300, 301, 302])  # 3 ticks missing after data row 300 of the file
     df.loc[303:305, "actual_current_0"] = np.nan  # and the next 3 rows (data rows 301..303 of the file) without
     with pytest.raises(LogFormatError, match=r"^log.csv: NaN or inf in actual_current_0 in data rows 301..303: 6 "
                                              r"ticks in a row without a whole reading \(with the ticks missing beside "
-                                             r"them\), more than the 5 interpolated; cut the log there into two logs "
-                                             r"\(data rows 1..300 and 304..997\)"):
+                                             r"them\), more than the 5 interpolated; keep data rows 304..997 \(cut "
+                                             r"the log there\): data rows 1..300 cover 2.39 s in 300 samples, too "
+                                             r"short to use"):
         _read(tmp_path, df)
     df.loc[304:305, "actual_current_0"] = 0.1  # 1 row without a value beside the 3 missing ticks: 4 in a row
     log = _read(tmp_path, df)
     assert log.t_s.size == 1000 and int((~log.logged).sum()) == 4
+
+
+def test_the_advice_to_cut_names_only_the_parts_long_enough_to_use(tmp_path):
+    """NaN in data rows 501..511 of Movement_No4_Acc was refused with "cut the log there into two logs (data rows
+    1..500 and 512..2844)", and the first part (4 s) was then refused as shorter than a log must be: the advice
+    names the part to keep and the part to drop, and says so where neither side is long enough."""
+    df = pd.read_csv(KUFIETA_DIR / "Movement_No4_Acc.csv.gz")
+    n, t = len(df), df["time"].to_numpy()
+    cut = df.copy()
+    cut.loc[500:510, "actual_current_1"] = np.nan  # data rows 501..511
+    with pytest.raises(LogFormatError) as err:
+        _read(tmp_path, cut)
+    assert str(err.value).endswith(
+        f"more than the 5 interpolated; keep data rows 512..{n} (cut the log there): data rows 1..500 cover "
+        f"{t[499] - t[0]:.3g} s in 500 samples, too short to use (fitting needs at least 5 s and 250 samples)"), err
+    assert _read(tmp_path, df.iloc[511:]).t_s.size > 2000  # the part it keeps is a log
+    with pytest.raises(LogFormatError, match="fitting needs at least 5 s"):
+        _read(tmp_path, df.iloc[:500])  # the part it drops is not
+    cut = df.copy()
+    cut.loc[n - 501:n - 490, "actual_current_1"] = np.nan  # the short part at the end
+    with pytest.raises(LogFormatError, match=rf"; keep data rows 1..{n - 501} \(cut the log there\): data rows "
+                                             rf"{n - 488}..{n} cover [0-9.]+ s in 489 samples, too short to use"):
+        _read(tmp_path, cut)
+    short = _frame()
+    short.loc[500:505, "actual_current_2"] = np.nan  # 4 s either side
+    with pytest.raises(LogFormatError, match=r"more than the 5 interpolated; neither side of it is long enough to use "
+                                             r"as a log of its own: data rows 1..500 cover 3.99 s and 507..1000 3.94 s "
+                                             r"\(fitting needs at least 5 s and 250 samples\)$"):
+        _read(tmp_path, short)
 
 
 def test_rows_without_a_value_at_the_ends(tmp_path):
@@ -484,17 +514,18 @@ def test_nan_in_a_required_column_is_named_with_its_column_and_extent(tmp_path):
     for column, rows, said in (("actual_current_2", slice(None), "at data row 1 (every row)"),
                                ("actual_current_2", slice(900, 1276), "in data rows 901..1276: 376 ticks in a row "
                                                                       "without a whole reading, more than the 5 "
-                                                                      "interpolated; cut the log there into two logs "
-                                                                      f"(data rows 1..900 and 1277..{n})"),
+                                                                      "interpolated; keep data rows 1..900 (cut the "
+                                                                      f"log there): data rows 1277..{n} cover 1.79 s "
+                                                                      f"in {n - 1276} samples, too short to use "
+                                                                      "(fitting needs at least 5 s and 250 samples)"),
                                ("target_q_4", list(range(7, 13)), "in data rows 8..13: 6 ticks in a row without a "
-                                                                  "whole reading, more than the 5 interpolated; cut "
-                                                                  f"the log there into two logs (data rows 1..7 and "
-                                                                  f"14..{n})")):
+                                                                  "whole reading, more than the 5 interpolated; keep "
+                                                                  f"data rows 14..{n} (cut the log there): data rows "
+                                                                  "1..7 cover 0.048 s in 7 samples, too short to use "
+                                                                  "(fitting needs at least 5 s and 250 samples)")):
         with pytest.raises(LogFormatError) as err:
             read_log(_first_12_s_of_test(tmp_path, nan_rows(column, rows)), "rtde", **KW)
-        assert str(err.value) == (f"test12.csv: NaN or inf in {column} {said}, which identify, discrepancy and "
-                                  "monitor take together as logs of one robot"
-                                  if "cut" in said else f"test12.csv: NaN or inf in {column} {said}")
+        assert str(err.value) == f"test12.csv: NaN or inf in {column} {said}"
     df = pd.read_csv(NIST_LOG).iloc[:1000]
     df["ROBOT_ACTUAL_JOINT_CURRENT (J3)"] = np.nan
     df.to_csv(tmp_path / "nist.csv", index=False)

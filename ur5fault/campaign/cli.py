@@ -1,4 +1,4 @@
-"""``ur5fault campaign run|status`` and ``ur5fault plot``."""
+"""``ur5fault campaign run|status|show`` and ``ur5fault plot``."""
 
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ from .spec import shipped_campaigns
 
 def register(sub) -> None:
     c = sub.add_parser("campaign", help="run a YAML fault campaign into Parquet feature tables")
-    csub = c.add_subparsers(dest="campaign_command", metavar="{run,status}", parser_class=type(c))
+    csub = c.add_subparsers(dest="campaign_command", metavar="{run,status,show}", parser_class=type(c))
     c.set_defaults(func=lambda args: _usage(c))
     r = csub.add_parser("run", help="run (or resume) a campaign",
                         **examples("ur5fault campaign run default    # campaigns/default.yaml, shipped -> "
@@ -48,6 +48,13 @@ def register(sub) -> None:
                         **examples("ur5fault campaign status results/default"))
     s.add_argument("dir", help="campaign output folder, e.g. results/paper")
     s.set_defaults(func=cmd_status)
+    sh = csub.add_parser("show", help="print a campaign file shipped with ur5fault (redirect it to a file to edit a "
+                                      "copy)",
+                         **examples("ur5fault campaign show default    # > my.yaml: an editable copy, then "
+                                    "ur5fault campaign run my.yaml",
+                                    "ur5fault campaign show paper"))
+    sh.add_argument("name", metavar="NAME", help=f"a shipped campaign: {', '.join(shipped_campaigns())}")
+    sh.set_defaults(func=cmd_show)
     p = sub.add_parser("plot", help="draw the paper's backlash figures and a severity figure per swept effect (PNG)",
                        **examples("ur5fault campaign run paper && ur5fault plot results/paper    # -> "
                                   "results/paper/plots/",
@@ -58,11 +65,13 @@ def register(sub) -> None:
                         "feature without _j{j} (e.g. current_spike_max_A: read on the faulty joint); "
                         "default tcp_dev_max_mm")
     p.add_argument("--out", help="folder for the PNG files (default: DIR/plots)")
+    p.add_argument("--replace", action="store_true",
+                   help="replace the figures of an earlier plot in that folder (default: refused, naming the first)")
     p.set_defaults(func=cmd_plot)
 
 
 def _usage(parser: argparse.ArgumentParser) -> int:
-    """``ur5fault campaign`` without run or status (:func:`..util.usage.missing_command`)."""
+    """``ur5fault campaign`` without run, status or show (:func:`..util.usage.missing_command`)."""
     from ..util.usage import missing_command
 
     return missing_command(parser)
@@ -128,9 +137,24 @@ def cmd_status(args: argparse.Namespace) -> int:
     return 1 if runs.get("bad") or runs.get("changed") or stale or damaged else 0
 
 
+def cmd_show(args: argparse.Namespace) -> int:
+    """The text of a shipped campaign file on stdout (``ur5fault campaign show default > my.yaml``: a copy to edit,
+    which a wheel user cannot otherwise reach inside the installed package)."""
+    from ..errors import UnknownNameError
+    from .spec import SHIPPED_DIR
+
+    names = shipped_campaigns()
+    name = args.name[: -len(".yaml")] if args.name.endswith(".yaml") else args.name
+    if name not in names:
+        raise UnknownNameError("shipped campaign", args.name, names)
+    sys.stdout.write((SHIPPED_DIR / f"{name}.yaml").read_text(encoding="utf-8"))
+    return 0
+
+
 def cmd_plot(args: argparse.Namespace) -> int:
-    from ..plotting import FIGURE_STEMS, drawn_and_failed, save
+    from ..plotting import FIGURE_STEMS, drawn_and_failed, figure_stems, save
     from ..util.io import check_writable
+    from ..util.results import check_new_output
     from .result import CampaignResult
 
     if args.out is not None:
@@ -138,6 +162,8 @@ def cmd_plot(args: argparse.Namespace) -> int:
     result = CampaignResult.load(Path(args.dir))
     plot_dir = Path(args.out) if args.out else result.out / "plots"
     check_writable(plot_dir, folder=True)  # the default place too
+    for stem in figure_stems(result, args.feature):  # an earlier plot's figure (or a user's file) is not lost silently
+        check_new_output(plot_dir / f"{stem}.png", replace=args.replace)
     figures, messages, failures = drawn_and_failed(result, args.feature)
     written = save(figures, plot_dir)
     for path in written:

@@ -171,11 +171,9 @@ def check_sampling(src: str, t: NDArray, length: MinLength | None = None) -> Non
     k = int(np.argmax(np.diff(ticks)))
     missing = int(ticks[k + 1] - ticks[k]) - 1
     if missing > MAX_GAP_TICKS:
-        short = [f"{a:.3g} s" for a in (t[k] - t[0], t[-1] - t[k + 1]) if a + 0.5 * period < length.duration_s]
-        alone = f"; leave out a part of {' or '.join(short)} ({length.why})" if short else ""
         raise LogFormatError(f"{src}: a gap of {dt[k]:.3g} s after t = {t[k] - t[0]:.3f} s (data row {k + 1}): "
                              f"{missing} ticks of {tick * 1e3:.3g} ms missing in a row, more than the {MAX_GAP_TICKS} "
-                             f"interpolated; {regular.cut_in_two(k + 1, k + 2, t.size, 'at the gap')}{alone}")
+                             f"interpolated; {regular.cut_in_two(t, k + 1, k + 2, length, 'at the gap')}")
     duration = float(t[-1] - t[0])
     if duration > MAX_DURATION_S:
         raise LogFormatError(f"{src}: {duration:.0f} s long, above the {MAX_DURATION_S:g} s one simulation may "

@@ -60,7 +60,8 @@ def _assemble(src: str, t: NDArray, required: Mapping[str, NDArray], optional: M
             notes.append(f"{src}: {label} of joint(s) {joints} wrap around (a jump of a whole turn between two rows): "
                          "made continuous")
     # a few rows without a required value: interpolated in place, marked not logged on the tick grid (on_ticks)
-    upto, required, unread = regular.unreadable_rows(src, t, required, columns, plausible.MAX_GAP_TICKS, notes)
+    upto, required, unread = regular.unreadable_rows(src, t, required, columns, plausible.MAX_GAP_TICKS,
+                                                     length or plausible.FIT_LENGTH, notes)
     t, required = t[upto], {k: v[upto] for k, v in required.items()}
     optional = {k: None if v is None else v[upto] for k, v in optional.items()}
     rows, opt = regular.complete_optional(src, t, optional, notes)

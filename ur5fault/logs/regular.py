@@ -29,11 +29,15 @@ is a tick the recorder lost a value of: up to as many rows in a row as a gap may
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import LogFormatError
+
+if TYPE_CHECKING:
+    from .plausible import MinLength
 
 #: longest stretch [s] cut from the start or end of a log so that an optional column group is complete
 #: (1 s: the replay's own start-up transient is of that order, and it stays a small share of a 5 s log)
@@ -63,8 +67,8 @@ def finite_span(arr: NDArray) -> tuple[int, int] | None:
 
 
 def unreadable_rows(src: str, t: NDArray, required: Mapping[str, NDArray],
-                    columns: Mapping[str, Sequence[str]] | None, max_ticks: int, notes: list[str]
-                    ) -> tuple[slice, dict[str, NDArray], NDArray | None]:
+                    columns: Mapping[str, Sequence[str]] | None, max_ticks: int, length: MinLength,
+                    notes: list[str]) -> tuple[slice, dict[str, NDArray], NDArray | None]:
     """Rows whose required value (a target, a reading, a current) is NaN or inf: a tick the recorder lost a value of.
 
     Returns the rows to keep (all but such rows at the end, within :data:`MAX_CUT_S`), the required arrays
@@ -75,7 +79,8 @@ def unreadable_rows(src: str, t: NDArray, required: Mapping[str, NDArray],
     ``max_ticks`` ticks in a row without a whole reading (as a gap of missing rows alone may not,
     :func:`.plausible.check_sampling`); such rows at the start (the replay starts from the first row: the message
     names the rows to cut to), or at the end over more than :data:`MAX_CUT_S`. ``columns``: name -> the file's column
-    of each array column. ``t`` increasing (else the interpolation is meaningless and the log refused after)."""
+    of each array column; ``length``: the least a log must cover (the parts a refusal advises to keep,
+    :func:`cut_in_two`). ``t`` increasing (else the interpolation is meaningless and the log refused after)."""
     labels = {k: list((columns or {}).get(k) or [f"{k}_{j}" for j in range(a.shape[1])]) for k, a in required.items()}
     missing = {k: ~np.isfinite(a) for k, a in required.items()}
     bad = np.any([m.any(axis=1) for m in missing.values()], axis=0)
@@ -111,7 +116,7 @@ def unreadable_rows(src: str, t: NDArray, required: Mapping[str, NDArray],
             beside = " (with the ticks missing beside them)" if gap > b - a else ""
             raise LogFormatError(f"{src}: NaN or inf in {named(slice(a, b))} in data rows {a + 1}..{b}: {gap} ticks in "
                                  f"a row without a whole reading{beside}, more than the {max_ticks} interpolated; "
-                                 + cut_in_two(a, b + 1, t.size))
+                                 + cut_in_two(t, a, b + 1, length))
     keep = slice(0, last + 1)
     filled = {}
     for name, arr in required.items():
@@ -131,11 +136,29 @@ def unreadable_rows(src: str, t: NDArray, required: Mapping[str, NDArray],
     return keep, filled, inside if stretches else None
 
 
-def cut_in_two(a: int, b: int, n: int, where: str = "there") -> str:
-    """The advice for a log with a stretch it cannot use between data rows ``a`` and ``b`` (1-based, the last row
-    before it and the first after it) of ``n``."""
-    return (f"cut the log {where} into two logs (data rows 1..{a} and {b}..{n}), which identify, discrepancy and "
-            "monitor take together as logs of one robot")
+def cut_in_two(t: NDArray, a: int, b: int, length: MinLength, where: str = "there") -> str:
+    """The advice for a log of times ``t`` with a stretch it cannot use between data rows ``a`` and ``b`` (1-based, the
+    last row before it and the first after it): the parts to keep, those at least ``length`` long (a part short of it
+    by less than half a sample period counts, as :func:`.plausible.check_sampling` counts it); a part too short is
+    named as such, to drop, and where neither is long enough that is said instead."""
+    n = t.size
+    period = float(np.median(np.diff(t))) if n > 1 else 0.0
+    parts = [(1, a), (b, n)]
+    cover = {p: float(t[p[1] - 1] - t[p[0] - 1]) for p in parts}
+    usable = [p for p in parts if cover[p] + 0.5 * period >= length.duration_s and p[1] - p[0] + 1 >= length.samples]
+
+    def rows(p: tuple[int, int]) -> str:
+        return f"{p[0]}..{p[1]}"
+
+    if len(usable) == 2:
+        return (f"cut the log {where} into two logs (data rows {rows(parts[0])} and {rows(parts[1])}), which identify, "
+                "discrepancy and monitor take together as logs of one robot")
+    if usable:
+        short = parts[1 - parts.index(usable[0])]
+        return (f"keep data rows {rows(usable[0])} (cut the log {where}): data rows {rows(short)} cover "
+                f"{cover[short]:.3g} s in {short[1] - short[0] + 1} samples, too short to use ({length.why})")
+    return (f"neither side of it is long enough to use as a log of its own: data rows {rows(parts[0])} cover "
+            f"{cover[parts[0]]:.3g} s and {rows(parts[1])} {cover[parts[1]]:.3g} s ({length.why})")
 
 
 def complete_optional(src: str, t: NDArray, groups: Mapping[str, NDArray | None],

@@ -24,8 +24,8 @@ from .paper import check_result, fig3_tcp_deviation, fig4_shoulder_current
 from .run import run_figure
 from .severity import heatmap, severity_figure
 
-__all__ = ["FIGURE_STEMS", "campaign_figures", "fig3_tcp_deviation", "fig4_shoulder_current", "heatmap",
-           "drawn_and_failed", "plot_campaign", "run_figure", "save", "severity_figure"]
+__all__ = ["FIGURE_STEMS", "campaign_figures", "fig3_tcp_deviation", "fig4_shoulder_current", "figure_stems",
+           "heatmap", "drawn_and_failed", "plot_campaign", "run_figure", "save", "severity_figure"]
 
 _log = logging.getLogger(__name__)
 
@@ -33,6 +33,26 @@ _log = logging.getLogger(__name__)
 
 #: the beginnings of the file names of :func:`campaign_figures`' figures
 FIGURE_STEMS = ("fig3_", "fig4_", "severity_", "heatmap_")
+#: the file stems of the paper's Fig. 3 and Fig. 4 (:func:`drawn_and_failed`)
+FIG3_STEM, FIG4_STEM = f"fig3_tcp_deviation_alpha{PAPER_BACKLASH_DEG:g}", "fig4_shoulder_current"
+
+
+def _severity_stem(effect: str, feature: str) -> str:
+    return f"severity_{effect}_{feature}"
+
+
+def _heatmap_stem(effect: str, feature: str) -> str:
+    return f"heatmap_{effect}_{feature}"
+
+
+def figure_stems(result: CampaignResult, feature: str = "tcp_dev_max_mm") -> list[str]:
+    """The file stems of the figures :func:`drawn_and_failed` would draw of ``result``, without drawing them (from
+    its swept effects): what ``ur5fault plot`` would write, checked for earlier files before any work."""
+    sweeps, _ = result.sweeps()
+    stems = [FIG3_STEM, FIG4_STEM] if "backlash" in sweeps else []
+    for effect, sweep in sweeps.items():
+        stems += [_severity_stem(effect, feature)] + ([_heatmap_stem(effect, feature)] if sweep.per_joint else [])
+    return stems
 
 
 def campaign_figures(result: CampaignResult, feature: str = "tcp_dev_max_mm") -> tuple[dict[str, Figure], list[str]]:
@@ -66,9 +86,8 @@ def drawn_and_failed(result: CampaignResult, feature: str = "tcp_dev_max_mm") ->
     sweeps, skipped = result.sweeps()
     messages += [f"no figure for {why}" for why in skipped.values()]
     if "backlash" in sweeps:
-        for name, draw in ((f"fig3_tcp_deviation_alpha{PAPER_BACKLASH_DEG:g}",
-                            lambda: fig3_tcp_deviation(result, PAPER_BACKLASH_DEG)),
-                           ("fig4_shoulder_current", lambda: fig4_shoulder_current(result))):
+        for name, draw in ((FIG3_STEM, lambda: fig3_tcp_deviation(result, PAPER_BACKLASH_DEG)),
+                           (FIG4_STEM, lambda: fig4_shoulder_current(result))):
             try:
                 figures[name] = draw()
             except StoredResultError as exc:  # its runs can be neither read nor simulated again
@@ -77,10 +96,10 @@ def drawn_and_failed(result: CampaignResult, feature: str = "tcp_dev_max_mm") ->
                 messages.append(str(exc))
     healthy = result.features[(result.features["fault"] == HEALTHY) & (result.features["status"] == "ok")]
     for effect, sweep in sweeps.items():
-        figures[f"severity_{effect}_{feature}"] = severity_figure(sweep, feature, healthy=healthy,
+        figures[_severity_stem(effect, feature)] = severity_figure(sweep, feature, healthy=healthy,
                                                                   threshold_mm=result.threshold_mm)
         if sweep.per_joint:
-            figures[f"heatmap_{effect}_{feature}"] = heatmap(sweep, feature)
+            figures[_heatmap_stem(effect, feature)] = heatmap(sweep, feature)
     if not sweeps and not skipped:
         messages.append(f"{result.out}: the campaign sweeps no effect ({', '.join(result.swept_keys) or 'nothing'})")
     return figures, messages, failures

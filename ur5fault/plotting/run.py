@@ -53,6 +53,19 @@ def _gear_ratio(value: object) -> np.ndarray:
     return ratio
 
 
+def columns_without_values(series: pd.DataFrame, twin: pd.DataFrame | None = None) -> list[str]:
+    """The columns :func:`run_figure` draws that hold no finite value at all (NaN or inf in every row): their curves
+    are missing from the figure. A column finite in some rows (a run stopped early: NaN after its stop) is drawn
+    there and not named; the twin's are named ``twin COLUMN``."""
+    drawn = ["t_s", *_joint_cols("q_set_rad"), *_joint_cols("q_FB_rad"), *_joint_cols("i_FB_A")]
+    for group in (_joint_cols("q_M_FB_rad"), [*TCP_COLUMNS, "tcp_des_x_m", "tcp_des_y_m", "tcp_des_z_m"]):
+        if all(c in series.columns for c in group):  # as run_figure draws them: a group only whole
+            drawn += group
+    tables = [("", series, drawn)] + ([("twin ", twin, TCP_COLUMNS)] if twin is not None else [])
+    return [f"{prefix}{c}" for prefix, table, cols in tables for c in cols if c in table.columns
+            and not np.isfinite(pd.to_numeric(table[c], errors="coerce").to_numpy(dtype=float)).any()]
+
+
 def run_figure(series: pd.DataFrame, twin: pd.DataFrame | None = None, *, gear_ratio: Sequence[float] | None = None,
                title: str | None = None, axes: Sequence[Axes] | None = None) -> Figure:
     """Draw one run.
