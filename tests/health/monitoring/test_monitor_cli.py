@@ -92,7 +92,14 @@ def test_baseline_stats_reused_and_refused_under_another_overlay(monitored):
     assert "does not record" not in r.stderr  # this version's file records what it covered
     older = tmp / "older.json"  # written before baseline.json recorded the runs' motion range and payloads
     data = json.loads((out / "baseline.json").read_text())
-    assert data["payloads_kg"] == [0.0] * 5 and set(data["motion_max"]) == {"speed_rad_s"}
+    assert data["payloads_kg"] == [0.0] * 5 and set(data["motion_max"]) == {"speed_rad_s",
+                                                                              "others_speed_standing_rad_s"}
+    speed_only = tmp / "speed_only.json"  # written before it recorded the joints standing while others move
+    speed_only.write_text(json.dumps({**data, "motion_max": {"speed_rad_s": data["motion_max"]["speed_rad_s"]}}))
+    r = run(str(logs[0]), *RTDE, "--baseline", str(model), "--baseline-stats", str(speed_only), "--out",
+            str(tmp / "s"), "--jobs", "2")
+    assert r.returncode == 0 and ("speed_only.json does not record its runs' other joints' speed while a joint "
+                                  "stands (written by an earlier version)") in r.stderr, r.stderr
     older.write_text(json.dumps({k: v for k, v in data.items() if k not in ("motion_max", "payloads_kg")}))
     r = run(str(logs[0]), *RTDE, "--baseline", str(model), "--baseline-stats", str(older), "--out", str(tmp / "o"),
             "--jobs", "2")
