@@ -77,3 +77,28 @@ def test_a_wrong_example_would_fail():
         PARSER.parse_args(_argv('ur5fault identify "$(ur5fault data nist)" --formt nist --out x.yaml'))
     with pytest.raises(UnknownNameError):
         _argv('ur5fault identify "$(ur5fault data no_such_log)" --format nist --out x.yaml')
+
+
+def test_a_shipped_campaign_run_in_an_example_carries_yes_where_it_needs_it():
+    """Parsing cannot tell that `ur5fault campaign run prognostics` is refused without --yes (over 1000 runs): each
+    example that runs a shipped campaign carries --yes exactly where `campaign run` would ask for it."""
+    from ur5fault.campaign import load_campaign
+    from ur5fault.campaign.limits import confirmation_needed, estimate
+    from ur5fault.campaign.spec import shipped_campaigns
+    from ur5fault.health.prognostics.spec import confirmation_needed as life_confirmation
+    from ur5fault.health.prognostics.spec import is_life_file, load_life
+
+    seen = 0
+    for parser in COMMANDS.values():
+        for line in _examples(parser):
+            argv = _argv(line)
+            if argv[:2] != ["campaign", "run"] or argv[2] not in shipped_campaigns():
+                continue
+            name, jobs = argv[2], 2
+            if is_life_file(name):
+                why = life_confirmation(load_life(name))
+            else:
+                why = confirmation_needed(load_campaign(name), estimate(load_campaign(name), jobs))
+            assert ("--yes" in argv) == (why is not None), (line, why)
+            seen += 1
+    assert seen >= 5

@@ -50,8 +50,8 @@ def register(sub) -> None:
     s.set_defaults(func=cmd_status)
     sh = csub.add_parser("show", help="print a campaign file shipped with ur5fault (redirect it to a file to edit a "
                                       "copy)",
-                         **examples("ur5fault campaign show default    # > my.yaml: an editable copy, then "
-                                    "ur5fault campaign run my.yaml",
+                         **examples("ur5fault campaign show default    # > my.yaml: an editable copy (give it its "
+                                    "own name and out:), then ur5fault campaign run my.yaml",
                                     "ur5fault campaign show paper"))
     sh.add_argument("name", metavar="NAME", help=f"a shipped campaign: {', '.join(shipped_campaigns())}")
     sh.set_defaults(func=cmd_show)

@@ -16,7 +16,7 @@ _NOT_FOR_LIFE = {"model": "--model", "save_timeseries": "--save-timeseries", "th
 def register(sub) -> None:
     p = sub.add_parser("prognose", help="benchmark remaining-useful-life estimators on a life campaign's held-out "
                                         "units (report.md, metrics.json, figures)",
-                       **examples("ur5fault campaign run prognostics    # a fleet worn to failure -> "
+                       **examples("ur5fault campaign run prognostics --yes    # a fleet worn to failure -> "
                                   "results/prognostics/fleet",
                                   "ur5fault prognose results/prognostics/fleet --out results/prognostics/benchmark",
                                   "ur5fault prognose results/prognostics/fleet --twin --replace    # with the "
