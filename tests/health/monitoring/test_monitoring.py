@@ -389,18 +389,19 @@ def test_a_limit_above_every_current_the_joint_draws_is_called_out_where_the_med
     """A newcomer's baseline of two runs of other tasks: TEST judged against current limits of 8.65 / 54.9 / 11.3 /
     0.77 / 0.20 / 0.53 A (report.md), a +3 A bump of 2 s on the base "consistent", and only the shoulder named (54.9
     is 10 x the median, which the other far-out joints raise). A limit above the largest current the joint draws in
-    the log is named too; the position channel has no such bound."""
+    the log is named too (TEST's peaks; wrist_1's limit is just above its 0.764 A); the position channel has no such
+    bound."""
     from ur5fault.health.monitoring.observe import peak_current
     from ur5fault.health.monitoring.verdict import blind_joints
 
     limits = np.array([8.65, 54.9, 11.3, 0.766, 0.198, 0.532])
-    peak = np.array([2.1, 5.3, 2.4, 0.9, 0.6, 0.3])
+    peak = np.array([1.30, 7.52, 3.02, 0.764, 0.54, 0.61])  # TEST's largest |current| per joint
     typical = {"current": limits, "position": np.full(6, 2e-4)}
     assert [n.split(":")[0] for n in blind_joints(typical)] == ["shoulder_lift_joint"]  # the median rule alone
     notes = blind_joints(typical, peak)
     assert [n.split(":")[0] for n in notes] == ["shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint",
-                                                 "wrist_3_joint"], notes
-    assert "limit of 8.65 A at this log's motion, above the largest current it draws in this log (2.1 A)" in notes[0]
+                                                 "wrist_1_joint"], notes
+    assert "limit of 8.65 A at this log's motion, above the largest current it draws in this log (1.3 A)" in notes[0]
     assert "12 x the joints' median (4.71 A)" in notes[1] and "largest" not in notes[1]  # once, the median's words
     # a working baseline (the pushed run against its undisturbed repeat, report.md): nothing said
     assert blind_joints({"current": np.array([0.581, 1.25, 0.466, 0.161, 0.0896, 0.0693])}, peak) == []
@@ -408,3 +409,25 @@ def test_a_limit_above_every_current_the_joint_draws_is_called_out_where_the_med
     cur = np.array([[1.0, -2.0], [-3.0, 0.5], [9.0, 9.0]])
     assert peak_current(cur, np.array([True, True, False])).tolist() == [3.0, 2.0]
     assert blind_joints({"current": np.array([5.0, 0.1])}, np.array([np.nan, 0.2])) == []
+
+
+def test_the_peak_rule_holds_only_for_joints_the_log_moves():
+    """A joint the log holds still draws its holding current and noise (the standstill run's wrists: 0.05 A), under
+    any limit a spread gives: not called blind for that (the review's case). Its peak is left out; a moved joint's
+    is kept."""
+    from ur5fault.health.monitoring.verdict import blind_joints, moved_peak
+
+    speed = np.full((2000, 6), 0.5)
+    speed[:, 4:] = 0.0  # wrist_2 and wrist_3 never move
+    speed[:30, 3] = 0.5  # (wrist_1 moves throughout)
+    obs = dataclasses.replace(part("still wrists", noise(5), speed=speed),
+                              current_peak_A=np.array([2.0, 7.5, 3.0, 0.8, 0.056, 0.05]))
+    peak = moved_peak(obs)
+    np.testing.assert_array_equal(np.isnan(peak), [False, False, False, False, True, True])
+    limits = {"current": np.array([0.58, 1.25, 0.47, 0.16, 0.2, 0.2])}
+    assert blind_joints(limits, obs.current_peak_A) != []  # the raw peaks would call the still wrists blind
+    assert blind_joints(limits, peak) == []
+    brief = speed.copy()
+    brief[:50, 4] = 0.3  # 0.4 s of motion: under the half second a coverage note needs
+    assert np.isnan(moved_peak(dataclasses.replace(obs, speed_rad_s=brief, moving=brief > 1e-3))[4])
+    assert moved_peak(dataclasses.replace(obs, current_peak_A=None)) is None

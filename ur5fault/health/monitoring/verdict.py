@@ -17,7 +17,7 @@ from . import paired
 from .baseline import Baseline
 from .changes import BLOCK_S, bar, block_reference, estimates, find_changes, keep_mask, strongest
 from .conditions import motion_limit
-from .coverage import motion_notes, payload_notes
+from .coverage import MIN_BEYOND_S, motion_notes, payload_notes
 from .event_fit import segment
 from .events import (
     CHANNELS,
@@ -244,7 +244,7 @@ def assess(baseline: Baseline, obs: Observed, channels: Sequence[str] = DEFAULT_
     return {"log": obs.name, "verdict": verdict, "changes": changes, "events": events,
             "event_limit_median": {c: {JOINT_NAMES[j]: float(v[j]) for j in range(N_JOINTS)}
                                    for c, v in typical.items()},
-            "notes": blind_joints(typical, obs.current_peak_A) + weak_change_test(baseline, block_judged, block_share)
+            "notes": blind_joints(typical, moved_peak(obs)) + weak_change_test(baseline, block_judged, block_share)
             + ([] if baseline.motion_max is None else motion_notes(baseline.motion_max, obs))
             + ([] if baseline.payloads_kg is None else payload_notes(baseline.payloads_kg, obs))}
 
@@ -254,6 +254,16 @@ def assess(baseline: Baseline, obs: Observed, channels: Sequence[str] = DEFAULT_
 #: rest is a spread its baseline runs could not estimate (two runs that hardly move it: wrist_2 at 29,191 x its
 #: spread, a 5 A bump of 0.5 s on it judged consistent, where the same bump on the base was an event)
 BLIND_FACTOR = 10.0
+
+
+def moved_peak(obs: Observed) -> NDArray | None:
+    """``obs.current_peak_A`` where the joint's target moves for :data:`.coverage.MIN_BEYOND_S` or more of the
+    logged samples, NaN elsewhere: a joint the log holds still draws no more than its holding current and noise
+    (0.05 A on the standstill run's wrists), under any limit a spread can give, which says nothing of blindness."""
+    if obs.current_peak_A is None:
+        return None
+    moved = (obs.moving & obs.logged[:, None]).sum(axis=0) * obs.period_s >= MIN_BEYOND_S
+    return np.where(moved, obs.current_peak_A, np.nan)
 
 
 def blind_joints(typical: dict[str, NDArray], current_peak_A: NDArray | None = None) -> list[str]:
