@@ -155,7 +155,8 @@ def test_a_joint_standing_while_the_others_move_is_named_where_no_baseline_run_d
     s[500:1000, 4] = 0.0  # 4 s
     (note,) = notes_of(baseline, dataclasses.replace(part("still", noise(20), speed=s), payload_kg=0.0))
     assert note.startswith("moves beyond what the baseline runs covered: wrist_2_joint standing while other joints "
-                           "move at up to 0.6 rad/s (4.0 s more than 10% above the baseline runs' largest, 0)"), note
+                           "move at up to 0.6 rad/s (4.0 s more than 10% above the baseline runs' largest, 0; above "
+                           "0.05 rad/s, where the others count as moving)"), note
     assert "rest on motion the baseline runs did not show" in note
     brief = speeds(2000, 0.6)
     brief[500:550, 4] = 0.0  # 0.4 s

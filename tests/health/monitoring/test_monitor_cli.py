@@ -281,3 +281,35 @@ def test_progress_counts_each_replay_once_and_quiet_switches_it_off(tmp_path, mo
     total, _, enabled, b = bars[-1]
     assert (total, enabled, b.n) == (1, False, 1)
     capsys.readouterr()
+
+
+def test_a_baseline_refused_is_refused_before_the_monitored_logs_are_replayed(tmp_path, monkeypatch, capsys):
+    """The baseline is fitted as soon as its runs are replayed: a refusal of it (here a stand-in one) comes before
+    minutes of the monitored logs' replays (the review found the fit moved after them with the progress bar)."""
+    import dataclasses
+    import importlib
+
+    from tests.health.monitoring.test_monitoring import noise, part
+    from ur5fault.cli import main
+    from ur5fault.errors import ParameterError
+
+    replayed = []
+
+    def stand_in(log, params=None, effects=(), **kw):
+        replayed.append(log.source)
+        o = part(log.source, noise(len(log.source), log.t_s.size - 1), target=log.q_target_rad[1:])
+        return dataclasses.replace(o, rest_target=log.rest_target, payload_kg=log.payload_kg,
+                                   samples_sha256=log.content_sha256())
+
+    def refused(runs, sha):
+        raise ParameterError("baseline refused (stand-in)")
+
+    monkeypatch.setattr(importlib.import_module("ur5fault.health.monitoring.observe"), "observe", stand_in)
+    monkeypatch.setattr(importlib.import_module("ur5fault.health.monitoring.baseline"), "fit_baseline", refused)
+    model = tmp_path / "model.yaml"
+    model.write_text("params: {}\neffects: []\n")
+    base = [head(tmp_path, n, 6.0) for n in ("Movement_No1", "Movement_No2", "Movement_No4_Acc")]
+    assert main(["monitor", str(base[2]), *RTDE, "--baseline", str(model), "--baseline-logs", *map(str, base[:2]),
+                 "--out", str(tmp_path / "a"), "--quiet"]) == 2
+    assert replayed == [base[0].name, base[1].name]
+    assert "baseline refused (stand-in)" in capsys.readouterr().err

@@ -19,7 +19,7 @@ from .data import (
     load_features,
     refuse_life_folder,
 )
-from .evaluate import evaluate
+from .evaluation import evaluate
 from .models import Models
 from .predictions import FILE as PREDICTIONS_FILE
 from .report import write_report
@@ -77,52 +77,53 @@ def run_benchmark(campaign_dir: str | Path, out: str | Path | None = None, *, se
         if shuffle_labels:
             raise ParameterError("--shuffle-labels trains new classifiers; --test scores saved ones: use one of them")
         test_dir = Path(test_dir)
-        bar = _Stages(progress, "scoring the saved classifiers", "writing the report")
-        saved = load_models(base / "benchmark")
-        other = load_features(test_dir)
-        refuse_training_runs(features, other, campaign_dir, test_dir)
-        metrics, figures = evaluate(features, seed=seed, threshold_mm=thr, source=str(test_dir), saved=saved,
-                                    test_features=other, with_importance=False)
-        metrics.pop("_models")
-        metrics["notes"] = unverified_notes(base / "benchmark") + setup_notes(saved[1], test_dir, other)
-        if saved[0].joint_kind is not None:  # how far apart, against the motions drawn (transfer.py)
-            metrics["transfer"] = against_training_split(features, other, saved, seed, str(test_dir))
-        bar.next()
-        with result_folder(out_dir, RESULT_FILES, replace):  # one set: a stop between files is marked
-            write_report(metrics, figures, out_dir)
-        bar.close()
+        with _Stages(progress, "scoring the saved classifiers", "writing the report") as bar:
+            saved = load_models(base / "benchmark")
+            other = load_features(test_dir)
+            refuse_training_runs(features, other, campaign_dir, test_dir)
+            metrics, figures = evaluate(features, seed=seed, threshold_mm=thr, source=str(test_dir), saved=saved,
+                                        test_features=other, with_importance=False)
+            metrics.pop("_models")
+            metrics["notes"] = unverified_notes(base / "benchmark") + setup_notes(saved[1], test_dir, other)
+            if saved[0].joint_kind is not None:  # how far apart, against the motions drawn (transfer.py)
+                metrics["transfer"] = against_training_split(features, other, saved, seed, str(test_dir))
+            bar.next()
+            with result_folder(out_dir, RESULT_FILES, replace):  # one set: a stop between files is marked
+                write_report(metrics, figures, out_dir)
+            bar.next()
         metrics["out"] = str(out_dir)
         return metrics
     compare = compare and has_twin_features(features)
     # the chosen set's classifiers are its trained row of the comparison: trained once, here
     reused = None if shuffle_labels else feature_set
-    bar = _Stages(progress, "training and scoring", *(["the feature sets compared"] if compare else []),
-                  "writing the report")
-    pending = (_start_comparison(features, seed, thr, str(campaign_dir), jobs, reused) if compare and jobs > 1
-               else None)
-    metrics, figures = evaluate(features, seed=seed, shuffle_labels=shuffle_labels, threshold_mm=thr,
-                                source=str(campaign_dir), feature_set=feature_set, calibrate=not shuffle_labels)
-    models = metrics.pop("_models")
-    bar.next()
-    if compare:
-        reuse = None if reused is None else (reused, dataclasses.replace(models, calibrator=None))
-        if pending is None:
-            metrics["comparison"] = compare_feature_sets(features, seed, thr, str(campaign_dir), reuse)
-        else:
-            rows = {fs: {k: f.result() for k, f in row.items()} for fs, row in pending.items()}
-            if reuse is not None:
-                rows[reused]["trained"] = _compared(features, seed, False, thr, str(campaign_dir), *reuse)
-            metrics["comparison"] = {fs: {k: rows[fs][k] for k in ("trained", "shuffled")} for fs in FEATURE_SETS}
+    with _Stages(progress, "training and scoring", *(["the feature sets compared"] if compare else []),
+                 "writing the report") as bar:
+        pending = (_start_comparison(features, seed, thr, str(campaign_dir), jobs, reused) if compare and jobs > 1
+                   else None)
+        metrics, figures = evaluate(features, seed=seed, shuffle_labels=shuffle_labels, threshold_mm=thr,
+                                    source=str(campaign_dir), feature_set=feature_set, calibrate=not shuffle_labels)
+        models = metrics.pop("_models")
         bar.next()
-    with result_folder(out_dir, RESULT_FILES, replace):  # the report and the classifiers, one set
-        _write_trained(metrics, figures, out_dir, models, features, feature_set, shuffle_labels, man)
-    bar.close()
+        if compare:
+            reuse = None if reused is None else (reused, dataclasses.replace(models, calibrator=None))
+            if pending is None:
+                metrics["comparison"] = compare_feature_sets(features, seed, thr, str(campaign_dir), reuse)
+            else:
+                rows = {fs: {k: f.result() for k, f in row.items()} for fs, row in pending.items()}
+                if reuse is not None:
+                    rows[reused]["trained"] = _compared(features, seed, False, thr, str(campaign_dir), *reuse)
+                metrics["comparison"] = {fs: {k: rows[fs][k] for k in ("trained", "shuffled")} for fs in FEATURE_SETS}
+            bar.next()
+        with result_folder(out_dir, RESULT_FILES, replace):  # the report and the classifiers, one set
+            _write_trained(metrics, figures, out_dir, models, features, feature_set, shuffle_labels, man)
+        bar.next()
     metrics["out"] = str(out_dir)
     return metrics
 
 
 class _Stages:
-    """The benchmark's stages on one bar (:mod:`ur5fault.util.progress`), the current one named."""
+    """The benchmark's stages on one bar (:mod:`ur5fault.util.progress`), the current one named; closed however its
+    ``with`` block ends (an error's one line is not printed onto an open bar)."""
 
     def __init__(self, enabled: bool, *names: str) -> None:
         from ...util import progress
@@ -136,8 +137,10 @@ class _Stages:
         if self.k < len(self.names):
             self.bar.set_description(f"benchmark: {self.names[self.k]}")
 
-    def close(self) -> None:
-        self.next()
+    def __enter__(self) -> _Stages:
+        return self
+
+    def __exit__(self, *exc) -> None:
         self.bar.close()
 
 
@@ -220,4 +223,4 @@ def summary(m: dict[str, Any]) -> dict[str, Any]:
     }
 
 
-__all__ = ["evaluate", "load_dataset", "load_features", "run_benchmark"]
+__all__ = ["RESULT_FILES", "compare_feature_sets", "run_benchmark", "summary"]

@@ -135,14 +135,14 @@ def cmd_monitor(args: argparse.Namespace) -> int:
     params, effects = dict(overlay.params), overlay.effects
     replays = (healthy if stats is None else []) + logs  # each replayed once: the work of this command
     with progress.bar(len(replays), "monitor: logs replayed", "log", enabled=not args.quiet) as pbar:
-        seen = []
-        for g in replays:
-            screen = {"screen_s": BASELINE_SCREEN_S} if stats is None and len(seen) < len(healthy) else {}
-            seen.append(observe(g, params, effects, jobs=jobs, **screen))
-            pbar.update(1)
-    if stats is None:
-        stats = fit_baseline(seen[:len(healthy)], sha)
-    observed = seen[len(seen) - len(logs):]
+        def replayed(group, **kw):
+            for g in group:
+                yield observe(g, params, effects, jobs=jobs, **kw)
+                pbar.update(1)
+
+        if stats is None:  # fitted (or refused) before the monitored logs are replayed
+            stats = fit_baseline(list(replayed(healthy, screen_s=BASELINE_SCREEN_S)), sha)
+        observed = list(replayed(logs))
     channels = tuple(dict.fromkeys(args.event_channels))
     entries = [assess(stats, o, channels) for o in observed]
     with result_folder(args.out, RESULT_FILES, args.replace) as out:  # one set: a stop between files is marked

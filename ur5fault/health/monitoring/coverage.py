@@ -91,9 +91,11 @@ def motion_notes(limit: NDArray, obs: Observed) -> list[str]:
         with np.errstate(invalid="ignore"):
             beyond = x > np.maximum((1.0 + MARGIN) * limit[i], FLOOR[q])
         for j in np.flatnonzero(beyond.sum(axis=0) * obs.period_s >= MIN_BEYOND_S):
+            floor = (f"; above {FLOOR[q]:g} rad/s, where the others count as moving"
+                     if FLOOR[q] > (1.0 + MARGIN) * limit[i, j] else "")
             parts.append(SAID[q].format(joint=JOINT_NAMES[j], value=np.nanmax(x[:, j]))
                          + f" ({beyond[:, j].sum() * obs.period_s:.1f} s more than {MARGIN:.0%} above the baseline "
-                         f"runs' largest, {limit[i, j]:.3g})")
+                         f"runs' largest, {limit[i, j]:.3g}{floor})")
     if not parts:
         return []
     return ["moves beyond what the baseline runs covered: " + "; ".join(parts) + ". Its limits there rest on motion "
