@@ -320,9 +320,18 @@ def test_show_and_plot_refuse_to_replace_an_earlier_figure_before_any_work(tmp_p
     assert main(["plot", str(copy)]) == 0  # a file of another name in the folder (show's) is left alone
     assert shown.read_text() == "notes\n"
     capsys.readouterr()
-    monkeypatch.setattr(ur5fault.plotting, "drawn_and_failed", lambda *a: pytest.fail("drawn"))
-    one_line_refusal(["plot", str(copy)], copy / "plots" / "fig3_tcp_deviation_alpha0.1.png")
+    monkeypatch.setattr(ur5fault.plotting, "drawn_and_failed", lambda *a, **k: pytest.fail("drawn"))
+    # the paper's figures do not depend on the feature: kept; the first figure that does is refused
+    first = next(s for s in ur5fault.plotting.figure_stems(CampaignResult.load(copy)) if s.startswith("severity_"))
+    one_line_refusal(["plot", str(copy)], copy / "plots" / f"{first}.png")
     monkeypatch.undo()
+    # another feature's figures (the help's second example): drawn, the paper's kept from the earlier plot, said so
+    fig3 = copy / "plots" / "fig3_tcp_deviation_alpha0.1.png"
+    before = fig3.read_bytes()
+    assert main(["plot", str(copy), "--feature", "current_spike_max_A"]) == 0
+    out = capsys.readouterr().out
+    assert f"{fig3}: from an earlier plot, not redrawn now" in out and "severity_" in out
+    assert fig3.read_bytes() == before
     assert main(["plot", str(copy), "--replace"]) == 0
     assert capsys.readouterr().out.count("wrote ") == 6
 

@@ -152,7 +152,7 @@ def cmd_show(args: argparse.Namespace) -> int:
 
 
 def cmd_plot(args: argparse.Namespace) -> int:
-    from ..plotting import FIGURE_STEMS, drawn_and_failed, figure_stems, save
+    from ..plotting import FIG3_STEM, FIG4_STEM, FIGURE_STEMS, drawn_and_failed, figure_stems, save
     from ..util.io import check_writable
     from ..util.results import check_new_output
     from .result import CampaignResult
@@ -162,9 +162,13 @@ def cmd_plot(args: argparse.Namespace) -> int:
     result = CampaignResult.load(Path(args.dir))
     plot_dir = Path(args.out) if args.out else result.out / "plots"
     check_writable(plot_dir, folder=True)  # the default place too
-    for stem in figure_stems(result, args.feature):  # an earlier plot's figure (or a user's file) is not lost silently
-        check_new_output(plot_dir / f"{stem}.png", replace=args.replace)
-    figures, messages, failures = drawn_and_failed(result, args.feature)
+    # the paper's figures do not depend on --feature: an earlier plot's are kept (said below) where another feature's
+    # figures are asked for; any other figure there (or a user's file of its name) is not lost silently
+    kept = {s for s in (FIG3_STEM, FIG4_STEM) if not args.replace and (plot_dir / f"{s}.png").exists()}
+    for stem in figure_stems(result, args.feature):
+        if stem not in kept:
+            check_new_output(plot_dir / f"{stem}.png", replace=args.replace)
+    figures, messages, failures = drawn_and_failed(result, args.feature, skip=kept)
     written = save(figures, plot_dir)
     for path in written:
         print(f"wrote {path}")

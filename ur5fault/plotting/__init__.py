@@ -10,6 +10,7 @@ why the others are missing; :func:`save` writes figures as PNG.
 from __future__ import annotations
 
 import logging
+from collections.abc import Collection
 from pathlib import Path
 
 import numpy as np
@@ -24,8 +25,8 @@ from .paper import check_result, fig3_tcp_deviation, fig4_shoulder_current
 from .run import run_figure
 from .severity import heatmap, severity_figure
 
-__all__ = ["FIGURE_STEMS", "campaign_figures", "fig3_tcp_deviation", "fig4_shoulder_current", "figure_stems",
-           "heatmap", "drawn_and_failed", "plot_campaign", "run_figure", "save", "severity_figure"]
+__all__ = ["FIG3_STEM", "FIG4_STEM", "FIGURE_STEMS", "campaign_figures", "fig3_tcp_deviation", "fig4_shoulder_current",
+           "figure_stems", "heatmap", "drawn_and_failed", "plot_campaign", "run_figure", "save", "severity_figure"]
 
 _log = logging.getLogger(__name__)
 
@@ -66,11 +67,12 @@ def campaign_figures(result: CampaignResult, feature: str = "tcp_dev_max_mm") ->
     return figures, messages + failures
 
 
-def drawn_and_failed(result: CampaignResult, feature: str = "tcp_dev_max_mm") -> tuple[dict[str, Figure], list[str],
-                                                                                        list[str]]:
+def drawn_and_failed(result: CampaignResult, feature: str = "tcp_dev_max_mm", skip: Collection[str] = ()
+                     ) -> tuple[dict[str, Figure], list[str], list[str]]:
     """:func:`campaign_figures` with the figures the campaign cannot have (its design: nothing to draw) apart from
     those it could not draw (a run that can be neither read nor simulated again): ``(figures, cannot_have,
-    failed)``."""
+    failed)``. ``skip``: the paper's figures (:data:`FIG3_STEM`, :data:`FIG4_STEM`) not to draw (kept from an
+    earlier plot: they do not depend on ``feature``)."""
     check_result(result, "campaign_figures")
     check_feature(feature, "campaign_figures")
     if result.features.empty:
@@ -88,6 +90,8 @@ def drawn_and_failed(result: CampaignResult, feature: str = "tcp_dev_max_mm") ->
     if "backlash" in sweeps:
         for name, draw in ((FIG3_STEM, lambda: fig3_tcp_deviation(result, PAPER_BACKLASH_DEG)),
                            (FIG4_STEM, lambda: fig4_shoulder_current(result))):
+            if name in skip:
+                continue
             try:
                 figures[name] = draw()
             except StoredResultError as exc:  # its runs can be neither read nor simulated again
