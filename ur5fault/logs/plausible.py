@@ -82,6 +82,11 @@ class MinLength:
     samples: int
     why: str
 
+    def covered_by(self, duration_s: float, samples: int, period_s: float) -> bool:
+        """Whether ``samples`` samples spanning ``duration_s`` [s] are this long; a span short of ``duration_s`` by
+        less than half a sample period counts (its samples' own periods would reach it)."""
+        return duration_s + 0.5 * period_s >= self.duration_s and samples >= self.samples
+
 
 #: what ``identify``, ``discrepancy`` and ``monitor`` need (they fit on a share of the log and judge the rest)
 FIT_LENGTH = MinLength(MIN_DURATION_S, MIN_SAMPLES,
@@ -178,7 +183,7 @@ def check_sampling(src: str, t: NDArray, length: MinLength | None = None) -> Non
     if duration > MAX_DURATION_S:
         raise LogFormatError(f"{src}: {duration:.0f} s long, above the {MAX_DURATION_S:g} s one simulation may "
                              "cover; cut the log into pieces")
-    if duration + 0.5 * period < length.duration_s or t.size < length.samples:
+    if not length.covered_by(duration, t.size, period):
         raise LogFormatError(f"{src}: {duration:.3g} s and {t.size} samples; {length.why}")
 
 

@@ -138,14 +138,14 @@ def unreadable_rows(src: str, t: NDArray, required: Mapping[str, NDArray],
 
 def cut_in_two(t: NDArray, a: int, b: int, length: MinLength, where: str = "there") -> str:
     """The advice for a log of times ``t`` with a stretch it cannot use between data rows ``a`` and ``b`` (1-based, the
-    last row before it and the first after it): the parts to keep, those at least ``length`` long (a part short of it
-    by less than half a sample period counts, as :func:`.plausible.check_sampling` counts it); a part too short is
+    last row before it and the first after it): the parts to keep, those at least ``length`` long
+    (:meth:`.plausible.MinLength.covered_by`, as :func:`.plausible.check_sampling` counts it); a part too short is
     named as such, to drop, and where neither is long enough that is said instead."""
     n = t.size
     period = float(np.median(np.diff(t))) if n > 1 else 0.0
     parts = [(1, a), (b, n)]
     cover = {p: float(t[p[1] - 1] - t[p[0] - 1]) for p in parts}
-    usable = [p for p in parts if cover[p] + 0.5 * period >= length.duration_s and p[1] - p[0] + 1 >= length.samples]
+    usable = [p for p in parts if length.covered_by(cover[p], p[1] - p[0] + 1, period)]
 
     def rows(p: tuple[int, int]) -> str:
         return f"{p[0]}..{p[1]}"

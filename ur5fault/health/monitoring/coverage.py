@@ -62,11 +62,9 @@ def measured(obs: Observed) -> tuple[NDArray, ...]:
     """``obs``'s :data:`QUANTITIES` ``(n, 6)`` each, 0 where the robot did not log the tick: each joint's target
     speed, and the largest of the other joints' where the joint's own target stands (``obs.moving`` false)."""
     speed = np.where(obs.logged[:, None], obs.speed_rad_s, 0.0)
-    n, nj = speed.shape
     others = np.zeros_like(speed)
-    for j in range(nj):
-        if n:
-            others[:, j] = np.delete(speed, j, axis=1).max(axis=1) if nj > 1 else 0.0
+    for j in range(speed.shape[1]):  # (speeds are >= 0: no other joint, or no sample, is 0)
+        others[:, j] = np.delete(speed, j, axis=1).max(axis=1, initial=0.0)
     return speed, np.where(obs.moving, 0.0, others)
 
 
