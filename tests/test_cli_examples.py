@@ -85,8 +85,7 @@ def test_a_shipped_campaign_run_in_an_example_carries_yes_where_it_needs_it():
     from ur5fault.campaign import load_campaign
     from ur5fault.campaign.limits import confirmation_needed, estimate
     from ur5fault.campaign.spec import shipped_campaigns
-    from ur5fault.health.prognostics.spec import confirmation_needed as life_confirmation
-    from ur5fault.health.prognostics.spec import is_life_file, load_life
+    from ur5fault.health.prognostics.spec import is_life_file, life_confirmation_needed, load_life
 
     seen = 0
     for parser in COMMANDS.values():
@@ -96,7 +95,7 @@ def test_a_shipped_campaign_run_in_an_example_carries_yes_where_it_needs_it():
                 continue
             name, jobs = argv[2], 2
             if is_life_file(name):
-                why = life_confirmation(load_life(name))
+                why = life_confirmation_needed(load_life(name))
             else:
                 why = confirmation_needed(load_campaign(name), estimate(load_campaign(name), jobs))
             assert ("--yes" in argv) == (why is not None), (line, why)

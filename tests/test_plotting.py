@@ -292,7 +292,11 @@ def test_show_and_plot_refuse_to_replace_an_earlier_figure_before_any_work(tmp_p
         assert main(args) == 2
         err = capsys.readouterr().err
         assert err.startswith("ur5fault: error: ") and len(err.strip().splitlines()) == 1, err
-        assert f"{path}: an earlier result is there; give --replace to replace it" in err, err
+        if "--out" in args:
+            assert f"--out {path}: an earlier result is there; give --replace to replace it" in err, err
+        else:  # the default place: said so, and --out not named as if the user had given it
+            assert err == (f"ur5fault: error: {path}: an earlier result is there (the default place, as no --out "
+                           "was given); give --replace to replace it, or choose another place with --out\n"), err
 
     run_id = two.features.loc[two.features["fault"] == "backlash", "run_id"].iloc[0]
     run = tmp_path / "r.parquet"
@@ -306,8 +310,10 @@ def test_show_and_plot_refuse_to_replace_an_earlier_figure_before_any_work(tmp_p
     (tmp_path / "bad.png").write_text("notes\n")
     one_line_refusal(["show", str(tmp_path / "bad.parquet")], tmp_path / "bad.png")
     assert mine.read_text() == (tmp_path / "r.png").read_text() == "notes\n"
+    capsys.readouterr()
     assert main(["show", str(run), "--out", str(mine), "--replace"]) == 0
     assert mine.read_bytes().startswith(b"\x89PNG")
+    assert capsys.readouterr().out == f"replaced {mine}\n"  # as `simulate` says it
 
     copy = tmp_path / "c"
     shutil.copytree(two.out, copy)
@@ -333,7 +339,8 @@ def test_show_and_plot_refuse_to_replace_an_earlier_figure_before_any_work(tmp_p
     assert f"{fig3}: from an earlier plot, not redrawn now" in out and "severity_" in out
     assert fig3.read_bytes() == before
     assert main(["plot", str(copy), "--replace"]) == 0
-    assert capsys.readouterr().out.count("wrote ") == 6
+    out = capsys.readouterr().out
+    assert out.count("replaced ") == 6 and "wrote " not in out, out  # every figure was there: replaced, said so
 
 
 def test_show_names_the_columns_it_draws_that_hold_no_finite_value(tmp_path, capsys):
@@ -356,7 +363,7 @@ def test_show_names_the_columns_it_draws_that_hold_no_finite_value(tmp_path, cap
     cap = capsys.readouterr()
     assert cap.err.splitlines() == ["note: no finite value in q_FB_rad_j1 (NaN or inf in every row): its curves are "
                                     "missing from the figure"], cap.err
-    assert cap.out.startswith("wrote ")
+    assert cap.out.startswith("replaced ")  # the figure of the first `show`
     from ur5fault.run_cli import _note_empty_columns
 
     df[[c for c in df.columns if c.startswith("q_FB_rad_")]] = np.nan  # a run stopped before its first logged sample
@@ -477,7 +484,7 @@ def test_figures_not_redrawn_are_said_to_be_an_earlier_plots(tmp_path, two, caps
     bad = [line for line in cap.err.splitlines() if "duration_s" in line]
     assert len(bad) == 1 and bad[0].startswith("ur5fault: error: ") and "neither read nor simulated again" in bad[0], \
         cap.err
-    assert any(line.startswith("wrote ") and "severity_" in line for line in out), out  # what could be drawn was
+    assert any(line.startswith("replaced ") and "severity_" in line for line in out), out  # what could be drawn was
     stale = sorted(line for line in out if line.endswith("from an earlier plot, not redrawn now"))
     assert [s.split("/")[-1].split(".png")[0][:4] for s in stale] == ["fig3", "fig4"], out
 

@@ -239,7 +239,7 @@ def cmd_show(args: argparse.Namespace) -> int:
         if not target.is_file():
             raise ConfigFileError(f"{target}: no such file")
         png = Path(args.out) if args.out else target.with_suffix(".png")
-        check_new_output(png, replace=args.replace)  # the default place too: one line, before reading
+        check_new_output(png, replace=args.replace, default_place=args.out is None)  # one line, before reading
         csv = target.suffix.lower() == ".csv"
         check_stored(target, RESIMULATE)  # a campaign's time series carries its checksum: never drawn damaged
         try:
@@ -260,15 +260,16 @@ def cmd_show(args: argparse.Namespace) -> int:
         result = CampaignResult.load(Path(args.campaign or "."))
         row = result.run(args.target)
         png = Path(args.out) if args.out else result.out / "plots" / f"show_{row['run_id']}.png"
-        check_new_output(png, replace=args.replace)  # before reading or re-simulating the run
+        check_new_output(png, replace=args.replace, default_place=args.out is None)  # before reading or re-simulating
         twin_id = row.get("twin_run_id", row["run_id"])
         tables = result.time_series([row["run_id"], twin_id])
         series, twin = tables[row["run_id"]], tables[twin_id] if twin_id != row["run_id"] else None
     fig = run_figure(series, twin=twin)
     _note_empty_columns(series, twin)
     png.parent.mkdir(parents=True, exist_ok=True)
+    replaced = png.exists()  # with --replace (else refused above): said as `simulate` says it
     write_figure_atomic(fig, png)
-    print(f"wrote {png}")
+    print(f"{'replaced' if replaced else 'wrote'} {png}")
     return 0
 
 

@@ -203,6 +203,33 @@ def test_rows_without_a_value_at_the_ends(tmp_path):
         _read(tmp_path, df)
 
 
+def test_the_advice_to_cut_a_log_at_its_ends_names_only_a_usable_rest(tmp_path):
+    """NaN at a log's start, or over more than 1 s at its end, was refused with "cut the log to data rows ..." whatever
+    the rest's length, which the next reading then refused as too short (the advice for a stretch in the middle
+    already checked it): a rest shorter than a log must be is said to leave no usable part."""
+    df = _frame()  # 1000 rows, 8 s
+    df.loc[0:399, "actual_q_1"] = np.nan
+    with pytest.raises(LogFormatError, match=r"the replay starts from the first row's state; the rest, data rows "
+                                             r"401..1000, covers 4.79 s in 600 samples, too short to use \(fitting "
+                                             r"needs at least 5 s and 250 samples\): no usable part remains$"):
+        _read(tmp_path, df)
+    with pytest.raises(LogFormatError, match="fitting needs at least 5 s"):
+        _read(tmp_path, _frame().iloc[400:])  # it is not: the advice was right
+    df = _frame()
+    df.loc[600:, "actual_current_5"] = np.nan  # 3.2 s
+    with pytest.raises(LogFormatError, match=r"the log's last 3.2 s \(more than the 1 s cut by itself\); the rest, "
+                                             r"data rows 1..600, covers 4.79 s in 600 samples, too short to use "
+                                             r"\(fitting needs at least 5 s and 250 samples\): no usable part "
+                                             r"remains$"):
+        _read(tmp_path, df)
+    df = _frame()
+    df.loc[0:1, "actual_q_1"] = np.nan
+    df.loc[800:, "actual_current_5"] = np.nan  # both ends: the rest is between them
+    with pytest.raises(LogFormatError, match=r"data rows 1..2, the log's first: the replay starts from the first "
+                                             r"row's state; cut the log to data rows 3..800$"):
+        _read(tmp_path, df)
+
+
 def test_every_row_without_a_value_in_one_column_or_another_is_one_line(tmp_path):
     df = _frame()
     df.loc[df.index[::2], "actual_current_2"] = np.nan

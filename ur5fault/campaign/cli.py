@@ -167,11 +167,12 @@ def cmd_plot(args: argparse.Namespace) -> int:
     kept = {s for s in (FIG3_STEM, FIG4_STEM) if not args.replace and (plot_dir / f"{s}.png").exists()}
     for stem in figure_stems(result, args.feature):
         if stem not in kept:
-            check_new_output(plot_dir / f"{stem}.png", replace=args.replace)
+            check_new_output(plot_dir / f"{stem}.png", replace=args.replace, default_place=args.out is None)
     figures, messages, failures = drawn_and_failed(result, args.feature, skip=kept)
+    earlier = {stem for stem in figures if (plot_dir / f"{stem}.png").exists()}  # with --replace: said as replaced
     written = save(figures, plot_dir)
-    for path in written:
-        print(f"wrote {path}")
+    for stem, path in zip(figures, written):
+        print(f"{'replaced' if stem in earlier else 'wrote'} {path}")
     for message in dict.fromkeys(messages):  # what the campaign cannot have
         print(message)
     for failure in dict.fromkeys(failures):  # Fig. 3 and Fig. 4 read the same runs: one reason, said once

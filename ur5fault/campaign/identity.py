@@ -65,7 +65,7 @@ def twin_format(camp: Campaign) -> int | None:
     """The twin residual features' version a campaign computes; None without them."""
     return twin_format_of(camp.twin_com_twins) if camp.twin_residuals else None
 #: the simulator configuration campaigns run with: passed to the engine by every campaign kind
-#: (campaign/execute.py, health/prognostics/fleet.py) and recorded here, so the identity names what ran
+#: (campaign/execute.py, health/prognostics/life_inspection.py) and recorded here, so the identity names what ran
 DRIVE, STEPPER = "numba", "compiled"
 
 

@@ -105,9 +105,15 @@ def beyond_confirmation(n_runs: float, run_steps: float) -> bool:
     return n_runs > CONFIRM_RUNS or run_steps > CONFIRM_RUN_STEPS
 
 
+def needs_yes_because(cost: str) -> str:
+    """The refusal of a campaign :func:`beyond_confirmation`: ``cost`` (what it would run, as a sentence) and the
+    rule, for a fault campaign (:func:`confirmation_needed`) and a life campaign
+    (``health.prognostics.spec.life_confirmation_needed``) alike."""
+    return f"{cost}; more than {CONFIRM_RUNS} runs or {CONFIRM_RUN_STEPS:g} steps needs --yes to start"
+
+
 def confirmation_needed(camp: Campaign, est: CostEstimate) -> str | None:
-    """Why this campaign needs ``--yes`` (too many runs or steps), or None."""
+    """Why this fault campaign needs ``--yes`` (too many runs or steps), or None."""
     if beyond_confirmation(est.n_runs, est.run_steps):
-        return (f"campaign {camp.name}: {est.describe()}; more than {CONFIRM_RUNS} runs or {CONFIRM_RUN_STEPS:g} "
-                "steps needs --yes to start")
+        return needs_yes_because(f"campaign {camp.name}: {est.describe()}")
     return None

@@ -218,15 +218,15 @@ def rerun_command(manifest: dict[str, Any], out: Path) -> str | None:
 def _large(manifest: dict[str, Any]) -> bool:
     """Whether the campaign a manifest records needed ``--yes`` (:func:`.limits.confirmation_needed`'s bounds on its
     runs and steps; a life campaign's, which its manifest does not record, on the fleet it records, as
-    ``campaign run`` decides it: prognostics.spec.confirmation_needed)."""
+    ``campaign run`` decides it: prognostics.spec.life_confirmation_needed)."""
     from .limits import beyond_confirmation
 
     if manifest.get("kind") == "life":
-        from ..health.prognostics.spec import build_life, confirmation_needed
+        from ..health.prognostics.spec import build_life, life_confirmation_needed
 
         try:
-            return confirmation_needed(build_life(manifest.get("campaign_data"), "manifest.json",
-                                                  str(manifest.get("campaign_text", "")))) is not None
+            return life_confirmation_needed(build_life(manifest.get("campaign_data"), "manifest.json",
+                                                       str(manifest.get("campaign_text", "")))) is not None
         except (Ur5FaultError, AttributeError, TypeError):  # no fleet to size: life_status names the problem
             return False
 

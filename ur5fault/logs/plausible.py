@@ -16,7 +16,8 @@ Limits and their reasons:
   to cut the log at, as two logs of one robot;
 - at least :data:`MIN_DURATION_S` seconds and :data:`MIN_SAMPLES` samples (the discrepancy
   workflow fits on a share of the log and judges on the rest; a 3-row log once produced a
-  "finding" and NaN; ``ur5fault diagnose``, which fits nothing, asks instead for one window of its
+  "finding" and NaN; ``ur5fault monitor`` asks the same of the logs it judges, said as judging,
+  :data:`JUDGE_LENGTH`; ``ur5fault diagnose``, which fits nothing, asks instead for one window of its
   detector, a :class:`MinLength` of its own), and at most the run length a simulation may have
   (:data:`ur5fault.sim.budget.MAX_DURATION_S`);
 - exactly six joints;
@@ -88,9 +89,18 @@ class MinLength:
         return duration_s + 0.5 * period_s >= self.duration_s and samples >= self.samples
 
 
-#: what ``identify``, ``discrepancy`` and ``monitor`` need (they fit on a share of the log and judge the rest)
-FIT_LENGTH = MinLength(MIN_DURATION_S, MIN_SAMPLES,
-                       f"fitting needs at least {MIN_DURATION_S:g} s and {MIN_SAMPLES} samples")
+def usable_length(need: str) -> MinLength:
+    """The one length rule (:data:`MIN_DURATION_S`, :data:`MIN_SAMPLES`), its refusal saying what needs it
+    (``need``: "fitting", "judging")."""
+    return MinLength(MIN_DURATION_S, MIN_SAMPLES,
+                     f"{need} needs at least {MIN_DURATION_S:g} s and {MIN_SAMPLES} samples")
+
+
+#: what ``identify`` and ``discrepancy`` need of a log, and ``monitor`` of a baseline log (they fit on a share of the
+#: log and judge the rest; the monitor's limits are fitted on its baseline logs)
+FIT_LENGTH = usable_length("fitting")
+#: what ``monitor`` needs of a log it judges (it fits nothing to it): the same rule, not said as fitting
+JUDGE_LENGTH = usable_length("judging")
 #: joints count as moving above this speed [rad/s] (3 deg/s, far above standstill noise) and
 #: need this many moving samples for the units check
 UNITS_CHECK_SPEED_RAD_S = 0.05

@@ -83,10 +83,10 @@ def _named(log: MeasuredLog, name: str) -> MeasuredLog:
     return dataclasses.replace(log, source=name, notes=notes)
 
 
-def _read_named(e: LogEntry, name: str, allow_unknown: bool) -> MeasuredLog:
+def _read_named(e: LogEntry, name: str, allow_unknown: bool, length: MinLength | None) -> MeasuredLog:
     """:func:`read_entry`, its refusal naming the log by ``name`` (:func:`names_of`), not its bare file name."""
     try:
-        return read_entry(e, allow_unknown=allow_unknown)
+        return read_entry(e, length, allow_unknown=allow_unknown)
     except (ParameterError, LogFormatError) as exc:  # messages that start with the file's name
         text = str(exc)
         if name == e.path.name or not text.startswith(e.path.name):
@@ -95,15 +95,17 @@ def _read_named(e: LogEntry, name: str, allow_unknown: bool) -> MeasuredLog:
 
 
 def read_log_options(args: argparse.Namespace, *, allow_unknown: bool = False,
-                     others: Sequence[argparse.Namespace] = (), role: str = "fitted"
-                     ) -> tuple[list[MeasuredLog], list[MeasuredLog]]:
+                     others: Sequence[argparse.Namespace] = (), role: str = "fitted",
+                     length: MinLength | None = None) -> tuple[list[MeasuredLog], list[MeasuredLog]]:
     """The logs to fit and the logs held out whole, read and checked; ``allow_unknown``: logs whose payload is
     unknown are returned as such (:func:`read_entry`), for a caller that fits it; ``others``: as
-    :func:`log_entries`'s. The logs are named among this group's files (:func:`names_of`). One recording given twice
-    (under two names, or ``role`` and held out) is refused (:func:`refuse_same_samples`)."""
+    :func:`log_entries`'s; ``length``: as :func:`read_entry`'s (default what fitting needs). The logs are named
+    among this group's files (:func:`names_of`). One recording given twice (under two names, or ``role`` and held
+    out) is refused (:func:`refuse_same_samples`)."""
     entries = log_entries(args, *others)
     names = names_of([e.path for e in entries])  # among this group's files: a log's name is the same whatever else
-    logs = [(_named(_read_named(e, names[e.path], allow_unknown), names[e.path]), e.hold_out) for e in entries]
+    logs = [(_named(_read_named(e, names[e.path], allow_unknown, length), names[e.path]), e.hold_out)
+            for e in entries]
     fitted, held = [g for g, h in logs if not h], [g for g, h in logs if h]
     refuse_same_samples([(role, fitted), ("held out", held)])
     return fitted, held

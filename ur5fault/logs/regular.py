@@ -77,10 +77,11 @@ def unreadable_rows(src: str, t: NDArray, required: Mapping[str, NDArray],
     the file's, and the tick grid is the file's); :func:`on_ticks` marks them not logged. Refused in one line: a
     column with no value; a stretch of such rows that, with the ticks missing beside it, leaves more than
     ``max_ticks`` ticks in a row without a whole reading (as a gap of missing rows alone may not,
-    :func:`.plausible.check_sampling`); such rows at the start (the replay starts from the first row: the message
-    names the rows to cut to), or at the end over more than :data:`MAX_CUT_S`. ``columns``: name -> the file's column
-    of each array column; ``length``: the least a log must cover (the parts a refusal advises to keep,
-    :func:`cut_in_two`). ``t`` increasing (else the interpolation is meaningless and the log refused after)."""
+    :func:`.plausible.check_sampling`); such rows at the start (the replay starts from the first row), or at the end
+    over more than :data:`MAX_CUT_S`, the message naming the rows to cut to where they are long enough
+    (:func:`keep_rows`). ``columns``: name -> the file's column of each array column; ``length``: the least a log
+    must cover (the parts a refusal advises to keep, :func:`keep_rows`, :func:`cut_in_two`). ``t`` increasing (else
+    the interpolation is meaningless and the log refused after)."""
     labels = {k: list((columns or {}).get(k) or [f"{k}_{j}" for j in range(a.shape[1])]) for k, a in required.items()}
     missing = {k: ~np.isfinite(a) for k, a in required.items()}
     bad = np.any([m.any(axis=1) for m in missing.values()], axis=0)
@@ -99,14 +100,15 @@ def unreadable_rows(src: str, t: NDArray, required: Mapping[str, NDArray],
         raise LogFormatError(f"{src}: NaN or inf in every data row (in {named(slice(None))}): no row holds a whole "
                              "reading")
     first, last = int(ok[0]), int(ok[-1])
-    if first > 0:
+    long_tail = t[-1] - t[last] > MAX_CUT_S
+    if first > 0:  # the rest up to the tail, when that is not cut by itself
         raise LogFormatError(f"{src}: NaN or inf in {named(slice(0, first))} in data rows 1..{first}, the log's "
-                             f"first: the replay starts from the first row's state; cut the log to data rows "
-                             f"{first + 1}..{t.size}")
-    if t[-1] - t[last] > MAX_CUT_S:
+                             f"first: the replay starts from the first row's state; "
+                             + keep_rows(t, first + 1, last + 1 if long_tail else t.size, length))
+    if long_tail:
         raise LogFormatError(f"{src}: NaN or inf in {named(slice(last + 1, None))} in data rows {last + 2}..{t.size}, "
                              f"the log's last {t[-1] - t[last]:.3g} s (more than the {MAX_CUT_S:g} s cut by itself); "
-                             f"cut the log to data rows 1..{last + 1}")
+                             + keep_rows(t, 1, last + 1, length))
     edges = np.flatnonzero(np.diff(np.concatenate([[0], bad.astype(np.int8), [0]])))
     stretches = [(int(a), int(b)) for a, b in zip(edges[::2], edges[1::2]) if b <= last]  # the trailing one is cut
     tick = ticks(t)[0]
@@ -136,16 +138,33 @@ def unreadable_rows(src: str, t: NDArray, required: Mapping[str, NDArray],
     return keep, filled, inside if stretches else None
 
 
+def _cover(t: NDArray, part: tuple[int, int], length: MinLength) -> tuple[float, bool]:
+    """The span [s] of data rows ``part`` (1-based, both included) of a log of times ``t``, and whether that part is
+    at least ``length`` long (:meth:`.plausible.MinLength.covered_by`, as :func:`.plausible.check_sampling` counts it,
+    on the whole log's median period)."""
+    period = float(np.median(np.diff(t))) if t.size > 1 else 0.0
+    cover = float(t[part[1] - 1] - t[part[0] - 1])
+    return cover, length.covered_by(cover, part[1] - part[0] + 1, period)
+
+
+def keep_rows(t: NDArray, lo: int, hi: int, length: MinLength) -> str:
+    """The advice for a log of times ``t`` of which only data rows ``lo``..``hi`` (1-based, both included) can be used:
+    to cut it to them where they are at least ``length`` long, else that no usable part remains (and why)."""
+    cover, usable = _cover(t, (lo, hi), length)
+    if usable:
+        return f"cut the log to data rows {lo}..{hi}"
+    return (f"the rest, data rows {lo}..{hi}, covers {cover:.3g} s in {hi - lo + 1} samples, too short to use "
+            f"({length.why}): no usable part remains")
+
+
 def cut_in_two(t: NDArray, a: int, b: int, length: MinLength, where: str = "there") -> str:
     """The advice for a log of times ``t`` with a stretch it cannot use between data rows ``a`` and ``b`` (1-based, the
-    last row before it and the first after it): the parts to keep, those at least ``length`` long
-    (:meth:`.plausible.MinLength.covered_by`, as :func:`.plausible.check_sampling` counts it); a part too short is
-    named as such, to drop, and where neither is long enough that is said instead."""
-    n = t.size
-    period = float(np.median(np.diff(t))) if n > 1 else 0.0
-    parts = [(1, a), (b, n)]
-    cover = {p: float(t[p[1] - 1] - t[p[0] - 1]) for p in parts}
-    usable = [p for p in parts if length.covered_by(cover[p], p[1] - p[0] + 1, period)]
+    last row before it and the first after it): the parts to keep, those at least ``length`` long (:func:`_cover`); a
+    part too short is named as such, to drop, and where neither is long enough that is said instead."""
+    parts = [(1, a), (b, t.size)]
+    covered = {p: _cover(t, p, length) for p in parts}
+    cover = {p: c for p, (c, _) in covered.items()}
+    usable = [p for p in parts if covered[p][1]]
 
     def rows(p: tuple[int, int]) -> str:
         return f"{p[0]}..{p[1]}"

@@ -38,14 +38,15 @@ INCOMPLETE_MARK = ".incomplete"
 
 def check_new_output(path: str | Path, *, folder: bool = False, results: tuple[str, ...] = (),
                      replace: bool = False, suffixes: tuple[str, ...] = (), option: str = "--out",
-                     note: bool = True, holding_lock: bool = False) -> Path:
+                     note: bool = True, holding_lock: bool = False, default_place: bool = False) -> Path:
     """:func:`check_writable`, then refuse to lose an earlier result silently: a file ``path`` that exists, or a
     ``folder`` holding any of the file names ``results`` (its own result files; other files are left alone), is
     refused unless ``replace``.  A folder still holding :data:`INCOMPLETE_MARK` holds a result cut short (its
     writer stopped between its files): not an earlier result, replaced (said in a warning when ``note``), unless a
     process holds the folder's lock now (it is being written: refused); ``holding_lock``: the caller holds it.
     ``suffixes``: the file name must end with one of them (case-insensitive).  Missing parent folders are fine: the
-    writers create them."""
+    writers create them.  ``default_place``: the user gave no ``option``, ``path`` is where the command writes without
+    it (the refusal says so, and does not name ``option`` as given)."""
     path = check_writable(path, folder=folder)
     if suffixes and path.suffix.lower() not in suffixes:
         raise OutputError(f"{option} {path}: unknown file type {path.suffix or '(no suffix)'!r}; give a "
@@ -67,6 +68,9 @@ def check_new_output(path: str | Path, *, folder: bool = False, results: tuple[s
     earlier = [path] if not folder and path.exists() else [path / n for n in results
                                                            if (path / n).exists() and n not in cut_short]
     if earlier:
+        if default_place:
+            raise OutputError(f"{earlier[0]}: an earlier result is there (the default place, as no {option} was "
+                              f"given); give {REPLACE_OPTION} to replace it, or choose another place with {option}")
         raise OutputError(f"{option} {earlier[0]}: an earlier result is there; give {REPLACE_OPTION} to replace it, "
                           f"or another {option}")
     return path

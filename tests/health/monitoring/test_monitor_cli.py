@@ -154,6 +154,25 @@ def test_bad_model_one_line(tmp_path):
     assert r.returncode == 2 and r.stderr.startswith("ur5fault: error:") and "Traceback" not in r.stderr
 
 
+def test_a_short_log_is_refused_as_too_short_to_judge_a_short_baseline_log_to_fit(tmp_path, capsys):
+    """A monitored log under 5 s was refused with "fitting needs at least 5 s", though monitor fits nothing to the
+    logs it judges: the same rule said as judging; a baseline log, which the limits are fitted on, as fitting."""
+    from ur5fault.cli import main
+
+    model = tmp_path / "model.yaml"
+    model.write_text("params: {}\neffects: []\n")
+    short, log = head(tmp_path, "Movement_No2", 3.0), head(tmp_path, "Movement_No1", 6.0)
+    base = [str(head(tmp_path, n, 6.0)) for n in ("Movement_No4_Acc", "Movement_No8_Singularity_Free_1")]
+    for monitored, baseline, need in ((short, base, "judging"), (log, [*base, str(short)], "fitting")):
+        capsys.readouterr()
+        assert main(["monitor", str(monitored), *RTDE, "--baseline", str(model), "--baseline-logs", *baseline,
+                     "--out", str(tmp_path / "out"), "--quiet"]) == 2
+        err = [line for line in capsys.readouterr().err.strip().splitlines() if not line.startswith("note: ")]
+        assert len(err) == 1 and err[0].startswith(f"ur5fault: error: {short.name}: 2.9"), err
+        assert err[0].endswith(f"; {need} needs at least 5 s and 250 samples"), err
+    assert not (tmp_path / "out").exists()
+
+
 @pytest.mark.slow
 def test_a_baseline_run_monitored_against_its_own_statistics_refused(monitored):
     """One of the baseline's runs monitored against the baseline.json it is part of: it would pair with its own

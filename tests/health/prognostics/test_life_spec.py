@@ -175,6 +175,14 @@ def test_a_life_campaign_over_1000_runs_starts_only_with_yes_as_a_fault_campaign
     # 30 units x (41 inspections + a reference) x 4000 steps (0.2 s at 50 us): 5.04e6, far below 2e9
     assert "5.04e+06 physics steps" in err and "needs --yes to start" in err and "not given" not in err
     assert not (tmp_path / "o").exists()
+    # one name, one meaning: the fault campaign's reason is campaign.limits.confirmation_needed(camp, estimate), the
+    # life campaign's its own name; both end in the one sentence of the rule
+    import ur5fault.health.prognostics.spec as spec
+    from ur5fault.campaign.limits import needs_yes_because
+
+    assert not hasattr(spec, "confirmation_needed")
+    why = spec.life_confirmation_needed(spec.load_life(f))
+    assert err == f"ur5fault: error: {why}\n" and why.endswith(needs_yes_because("")[1:]), why
 
 def test_cli_prognose_without_inspections_is_one_line_exit_2(tmp_path, capsys):
     assert main(["prognose", str(tmp_path / "nowhere")]) == 2

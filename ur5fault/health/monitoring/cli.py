@@ -59,6 +59,7 @@ def cmd_monitor(args: argparse.Namespace) -> int:
     from ...logs.length import check_files_length, check_logs_length
     from ...logs.measured import assumption_notes, same_period
     from ...logs.options import log_entries, refuse_hold_out
+    from ...logs.plausible import JUDGE_LENGTH
     from ...logs.read_entries import read_log_options, refuse_unknown_payload
     from ...logs.same_samples import refuse_same_samples
     from ...sim.params import load_params
@@ -99,7 +100,7 @@ def cmd_monitor(args: argparse.Namespace) -> int:
         refuse_hold_out(group, where)
         refuse_unknown_payload(group)  # before any log is read
     check_files_length([e.path for group in entries for e in group], "monitor")
-    logs, _ = read_log_options(args, others=groups[1:], role="monitored")
+    logs, _ = read_log_options(args, others=groups[1:], role="monitored", length=JUDGE_LENGTH)  # nothing fitted
     healthy = read_log_options(base_args, others=[args], role="a baseline log")[0] if base_args is not None else []
     check_logs_length([*logs, *healthy], "monitor")
     refuse_same_samples([("monitored", logs), ("a baseline log", healthy)])  # a run cannot judge itself

@@ -1,6 +1,7 @@
 """``ur5fault prognose DIR``: fit the RUL estimators on the training units of a life campaign, predict
 at every inspection of the held-out units before their failure, judge the goals, and write ``metrics.json``
-(every number), ``report.md`` (report.py) and the figures beside each other."""
+(every number), ``report.md`` (report.py) and the figures beside each other.  The table is read by life_table.py,
+the estimators fitted and run by prediction.py."""
 
 from __future__ import annotations
 
@@ -8,40 +9,29 @@ import time
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-import numpy as np
-import pandas as pd
-
-from ...campaign.store import check_table_of_manifest, read_manifest
 from ...errors import ConfigFileError
-from ...util.io import (
-    StoredFileError,
-    read_parquet_stored,
-    write_figure_atomic,
-    write_json_atomic,
-    write_parquet_atomic,
-    write_text_atomic,
-)
+from ...util.io import write_figure_atomic, write_json_atomic, write_parquet_atomic, write_text_atomic
 from ...util.results import check_new_output, result_folder
 from ..diagnostics.report import clean
 from . import metrics as M
-from .clearance_rul import ClearanceRUL
 from .figures import health_index_paths, rul_alpha_cone
-from .joint_index import JOINTS, JointHealthIndex
 from .life_store import life_stats
+from .life_table import NEEDED, RECORDED_COLUMNS, check_recorded, load_inspections
+from .prediction import ESTIMATORS, TWIN_FRICTION, predict
 from .report import markdown
-from .rul import LinearRUL, PopulationRUL, TaskHealthIndex, WienerRUL
 from .spec import Failure
 from .twin_boundary import TwinSetup
 from .twin_cache import RadiusCache
-from .twin_friction import FrictionRise
-from .twin_rul import CALIBRATION_UNITS_PER_TASK, TwinRUL
 from .wear import WEAR_KINDS
 
 if TYPE_CHECKING:
     from ...config import Overlay
 
-NEEDED = ("unit_id", "inspection", "cycles", "split", "rul_cycles", "eol_cycles", "censored", "failed")
-ESTIMATORS = ("wiener", "linear", "wiener_joint", "clearance", "twin", "naive")
+#: this module's :func:`run_prognose`; the rest re-exported where callers (and tests) have imported it from (the
+#: benchmark calls ``load_inspections`` and ``predict`` through this module)
+__all__ = ["BASELINE", "ESTIMATORS", "NEEDED", "RECORDED_COLUMNS", "RESULT_FILES", "TWIN", "TWIN_FRICTION",
+           "load_inspections", "predict", "run_prognose"]
+
 #: the estimator the issue's goals are judged on when the twin did not run (the others are shown beside it)
 BASELINE = "wiener"
 #: ... and when it ran: its only inputs per unit are the inspections' health features (clearance and friction maps
@@ -50,182 +40,8 @@ BASELINE = "wiener"
 TWIN = "twin"
 
 
-def load_inspections(folder: Path) -> tuple[pd.DataFrame, dict[str, Any]]:
-    """The inspections table and manifest of a life-campaign folder (one-line errors)."""
-    path = Path(folder) / "inspections.parquet"
-    if not path.is_file():
-        raise ConfigFileError(f"{path}: not found; {_what_is_there(Path(folder))}")
-    remake = f"run the life campaign into {folder} again (`ur5fault campaign run CAMPAIGN.yaml --out DIR`)"
-    df = read_parquet_stored(path, remake)
-    missing = [c for c in NEEDED if c not in df.columns]
-    if missing:
-        raise ConfigFileError(f"{path}: column {missing[0]!r} missing; not the inspections of a life campaign")
-    manifest, damaged = read_manifest(Path(folder))
-    if damaged:  # a manifest that changed on disk would give a wrong wear law and inputs: refused
-        raise StoredFileError(f"{Path(folder) / 'manifest.json'}: {damaged}; {remake}")
-    check_table_of_manifest(path, remake, manifest)  # an earlier fleet's table left by a rerun that stopped
-    return df, manifest
-
-
-def _what_is_there(folder: Path) -> str:
-    """What to do about a folder without an inspections table, from what its manifest says it holds."""
-    from ...campaign.store import read_manifest
-
-    m = read_manifest(folder)[0]
-    if not m:  # nothing ran here (or not ur5fault, or a manifest that fails its checksum)
-        return (f"run a life campaign into {folder} first (a shipped one: `ur5fault campaign run prognostics --out "
-                f"{folder} --yes`, or prognostics_small)")
-    name, campaign = m.get("name", "?"), m.get("campaign_file") or "its campaign file"
-    if m.get("kind") != "life":
-        return (f"{folder} holds the fault campaign {name!r}, not a life campaign; run one into another folder "
-                "(`ur5fault campaign run prognostics --out NEW_DIR --yes`)")
-    return (f"the life campaign {name!r} in {folder} has not finished (state {m.get('state', '?')!r}): resume it "
-            f"with `ur5fault campaign run {campaign} --out {folder}` (with --yes for a fleet that could take over 1000 "
-            f"runs or 2e9 steps; `ur5fault campaign status {folder}` shows how far it got)")
-
-
-#: where the twin's friction rise per degree of clearance and per 10^6 cycles comes from: "learned" from the
-#: inspections (twin_friction.py), or the fleet's wear "law" as the manifest states it
-TWIN_FRICTION = ("learned", "law")
-
-
-def predict(df: pd.DataFrame, failure: Failure, seed: int = 0, twin: TwinSetup | None = None,
-            twin_calibration: str = "pooled", twin_cache: RadiusCache | None = None, twin_friction: str = "learned"
-            ) -> tuple[dict[str, pd.DataFrame], dict[str, Any], np.ndarray]:
-    """Fit on the failed training units; predict at every pre-failure inspection of the failed test units.
-    ``twin``: also the estimator whose failure boundary the digital twin simulates (twin_rul.py; minutes);
-    ``twin_friction``: one of :data:`TWIN_FRICTION`.
-
-    Returns the prediction tables per estimator, the fitted constants, and the health index of every row.
-    """
-    # a unit failed at its first inspection (unworn) shows no degradation to fit or predict: left out of both
-    unworn = set(df.loc[~df["censored"] & (df["eol_cycles"] == 0), "unit_id"])
-    failed = df[~df["censored"] & ~df["unit_id"].isin(unworn)]
-    train, test = failed[failed["split"] == "train"], failed[failed["split"] == "test"]
-    n_tr, n_te = train["unit_id"].nunique(), test["unit_id"].nunique()
-    if n_tr < 3 or n_te < 1:
-        raise ConfigFileError(
-            f"{n_tr} failed training and {n_te} failed test units with a degradation path: need at least 3 and 1 "
-            "(a larger fleet or a longer max_cycles"
-            + (f"; {len(unworn)} units met the failure criterion {failure.feature} >= {failure.threshold:g} at their "
-               "first inspection, unworn: the healthy robot meets it on their task, raise life.failure.threshold"
-               if unworn else "") + ")")
-    hi_model = TaskHealthIndex(failure.feature, failure.threshold).fit(train)
-    hi_all = hi_model.transform(df)
-    hi_of = pd.Series(hi_all, index=df.index)
-    hist = {uid: (g["cycles"].to_numpy(float), hi_of[g.index].to_numpy()) for uid, g in
-            df.sort_values("cycles").groupby("unit_id")}
-    wiener = WienerRUL(seed).fit([hist[u][0] for u in train["unit_id"].unique()],
-                                 [hist[u][1] for u in train["unit_id"].unique()], hi_model.failure_level_,
-                                 hi_model.residual_sd_)
-    train_ids = train["unit_id"].unique()
-    linear = LinearRUL(seed).fit([hist[u][0] for u in train_ids], [hist[u][1] for u in train_ids])
-    # the per-joint index (joint_index.py) under the same Wiener estimator, reported beside the baseline
-    # (only where the fleet records per-joint clearances to fit its first stage on)
-    joint_model = wiener_j = clear = None
-    if all(f"backlash_deg_j{j}" in df.columns for j in JOINTS):
-        # the clearance-space estimator (clearance_rul.py): per-joint growth meets the task's failure boundary
-        clear = ClearanceRUL(seed=seed).fit(train)
-        a_of = clear.clearances(df)
-        hist_a = {uid: (g["cycles"].to_numpy(float), a_of[df.index.get_indexer(g.index)], str(g["trajectory"].iloc[0])
-                        if "trajectory" in g.columns else "") for uid, g in df.sort_values("cycles").groupby("unit_id")}
-        joint_model = JointHealthIndex(failure.feature, failure.threshold).fit(train)
-        hj_of = pd.Series(joint_model.transform(df), index=df.index)
-        hist_j = {uid: (g["cycles"].to_numpy(float), hj_of[g.index].to_numpy()) for uid, g in
-                  df.sort_values("cycles").groupby("unit_id")}
-        wiener_j = WienerRUL(seed).fit([hist_j[u][0] for u in train_ids], [hist_j[u][1] for u in train_ids],
-                                       joint_model.failure_level_, joint_model.residual_sd_)
-    naive = PopulationRUL().fit(train.groupby("unit_id")["eol_cycles"].first().to_numpy())
-    twin_rul, twin_pred, friction, rises = None, {}, None, None
-    if twin is not None and clear is not None:
-        cond = {str(uid): (str(g["trajectory"].iloc[0]), float(g["payload_kg"].iloc[0]),
-                           float(g["temperature_C"].iloc[0])) for uid, g in df.groupby("unit_id")}
-        try:
-            if twin_friction == "learned":
-                friction = FrictionRise().fit(train, clear)
-                y_of = friction.rises(df)
-                rises = {str(uid): y_of[df.index.get_indexer(g.index)]
-                         for uid, g in df.sort_values("cycles").groupby("unit_id")}
-            per_task = 0 if twin_calibration == "pooled" else CALIBRATION_UNITS_PER_TASK
-            twin_rul = TwinRUL(twin, clear, seed, twin_calibration, twin_cache, per_task, friction).calibrate(
-                {u: cond[u] for u in map(str, train_ids)})
-        except ValueError as exc:
-            raise ConfigFileError(f"--twin: {exc}") from None
-        sound = test[test["rul_cycles"] > 0].groupby("unit_id").size()   # a unit's inspections before failure
-        twin_pred = twin_rul.predict_units({str(uid): (cond[str(uid)], hist_a[uid][0][:k], hist_a[uid][1][:k])
-                                            for uid, k in sound.items()}, rises)
-    rows: dict[str, list] = {name: [] for name in ESTIMATORS}
-    for uid, g in test.sort_values("cycles").groupby("unit_id"):
-        n_all, h_all = hist[uid]
-        for k, (_, r) in enumerate(g.iterrows()):
-            if r["rul_cycles"] <= 0:
-                continue  # the failure inspection itself: nothing left to predict
-            base = {"unit_id": uid, "cycles": r["cycles"], "eol_cycles": r["eol_cycles"], "rul_true": r["rul_cycles"]}
-            if k == 0:  # no history yet: the population's residual life
-                w = lin = naive.predict(r["cycles"])
-                wj = w if wiener_j else None
-                cl = w if clear else None
-                tw = w if twin_rul else None
-            else:
-                w = wiener.predict(n_all[: k + 1], h_all[: k + 1])
-                lin = linear.predict(n_all[: k + 1], h_all[: k + 1])
-                wj = wiener_j.predict(hist_j[uid][0][: k + 1], hist_j[uid][1][: k + 1]) if wiener_j else None
-                cl = clear.predict(hist_a[uid][2], hist_a[uid][0][: k + 1], hist_a[uid][1][: k + 1]) if clear else None
-                tw = twin_pred[str(uid)][k - 1] if twin_rul else None
-            for name, e in (("linear", lin), ("wiener", w), ("wiener_joint", wj), ("clearance", cl), ("twin", tw),
-                            ("naive", naive.predict(r["cycles"]))):
-                if e is not None:
-                    rows[name].append({**base, "rul_est": e[0], "rul_lo": e[1], "rul_hi": e[2]})
-    pred = {name: pd.DataFrame(v) for name, v in rows.items() if v}
-    fitted = {
-        "health_index": {"features": hi_model.features_, "coef_pooled": hi_model.coef_.tolist(),
-                         "tasks_with_own_index": sorted(hi_model.by_task_),
-                         "failure_level": hi_model.failure_level_,
-                         "residual_sd": hi_model.residual_sd_, "criterion": failure.feature,
-                         "threshold": failure.threshold},
-        "wiener": {"theta_mean_per_cycle": wiener.theta_mean_, "theta_sd_per_cycle": wiener.theta_sd_,
-                   "sigma2_per_cycle": wiener.sigma2_},
-        "linear": {"failure_level": linear.level_, "failure_level_sd": linear.level_sd_,
-                   "prior_mean_intercept": float(linear.prior_mean_[0]),
-                   "prior_mean_slope_per_cycle": float(linear.prior_mean_[1]),
-                   "prior_sd_intercept": float(linear.prior_cov_[0, 0] ** 0.5),
-                   "prior_sd_slope_per_cycle": float(linear.prior_cov_[1, 1] ** 0.5),
-                   "measurement_sd": linear.meas_var_**0.5, "process_var_per_cycle": linear.proc_var_},
-        "wiener_joint": None if joint_model is None else {"index_residual_sd": joint_model.residual_sd_,
-                         "lever_arms_per_deg": {t: v[:-1].tolist() for t, v in joint_model.lever_.items()},
-                         "theta_mean_per_cycle": wiener_j.theta_mean_, "sigma2_per_cycle": wiener_j.sigma2_},
-        "clearance": None if clear is None else {"kernel_kappa": clear.kappa_,
-                      "loo_rmse_log_radius_by_kappa": {f"{k:g}": v for k, v in clear.loo_rmse_log_radius_.items()},
-                      "boundary_log_sd_by_task": clear.boundary_sd_},
-        "twin": None if twin_rul is None else {
-            "calibration": twin_rul.calibration,
-            "log_radius_bias_sd_rays_by_checkpoint": {str(c): list(v) for c, v in twin_rul.calibration_.items()},
-            "log_radius_by_task_by_checkpoint": {str(c): v.to_dict() for c, v in twin_rul.task_calibration_.items()},
-            "calibration_residuals_task_checkpoint_log_ratio": twin_rul.calibration_residuals_,
-            "radius_cache": None if twin_cache is None else {"path": str(twin_cache.path), "hits": twin_cache.hits,
-                                                             "simulated": twin_cache.misses},
-            "n_calibration_units": twin_rul.n_calibration_units_, "n_calibration_rays": twin_rul.n_calibration_rays_,
-            "n_twin_rays_test": twin_rul.n_twin_rays_,
-            "friction": {"source": twin_friction,
-                         "law": {"friction_per_deg": twin.wear.friction_per_deg,
-                                 "friction_per_Mcycle": twin.wear.friction_per_Mcycle},
-                         "learned": None if friction is None else {
-                             **friction.summary(),
-                             "test_rays_friction_per_deg_mean_sd_per_Mcycle_mean_sd": twin_rul.friction_rays_,
-                             "calibration_rays_friction_per_deg_mean_sd_per_Mcycle_mean_sd":
-                                 twin_rul.calibration_friction_}},
-            "model": None if twin.model is None else {"params": dict(twin.model.params),
-                                                      "effects": [e.describe() for e in twin.model.effects]}},
-        "naive": {"train_eol_cycles": naive.eol_.tolist()},
-        "n_train_units": int(n_tr), "n_test_units": int(n_te),
-    }
-    return pred, fitted, hi_all
-
-
 #: what a prognose benchmark writes into its report folder; one of them there is an earlier result
 RESULT_FILES = ("report.md", "metrics.json")
-#: columns every inspection of a fleet holds a finite value in (its duty cycles and true clearances)
-RECORDED_COLUMNS = ("cycles", *(f"backlash_deg_j{j}" for j in range(1, 7)))
 
 
 def run_prognose(folder: Path, out: Path | None = None, *, seed: int = 0, twin: bool = False,
@@ -249,17 +65,7 @@ def run_prognose(folder: Path, out: Path | None = None, *, seed: int = 0, twin: 
     check_new_output(out, folder=True, results=RESULT_FILES, replace=replace)  # before reading or simulating
     df, manifest = load_inspections(folder)
     failure = Failure(**manifest["failure"]) if isinstance(manifest.get("failure"), dict) else Failure()
-    # the criterion every label is read off, and the fleet's own record of each inspection (its cycles and true
-    # wear, which every inspection has): a gap is no fleet's as the campaign wrote it (a table edited by hand)
-    ok = df[df["status"] == "ok"] if "status" in df else df  # a stopped run has failed whatever its features
-    checked = [(failure.feature, ok, "the failure criterion's feature", "the labels are read off it")]
-    checked += [(c, df, "the fleet's record", "the estimators read it") for c in RECORDED_COLUMNS]
-    for col, rows, what, why in checked:
-        bad = int((~np.isfinite(pd.to_numeric(rows[col], errors="coerce"))).sum()) if col in rows else 0
-        if bad:
-            raise ConfigFileError(f"{folder}: {what} {col} is missing (NaN) or infinite in {bad} inspection(s); "
-                                  f"{why}: run the life campaign again into this folder (it verifies the stored "
-                                  "inspections and rebuilds the table)")
+    check_recorded(folder, df, failure)  # what the labels and estimators read: no gap
     setup = None
     if twin:
         if "wear" not in manifest or "identity_inputs" not in manifest:

@@ -56,13 +56,13 @@ def cmd_life_run(args: argparse.Namespace) -> int:
 
     from ...errors import ParameterError
     from .fleet import run_life
-    from .spec import confirmation_needed, load_life
+    from .spec import life_confirmation_needed, load_life
 
     for attr, flag in _NOT_FOR_LIFE.items():
         if getattr(args, attr, None):
             raise ParameterError(f"{flag} does not apply to a life campaign ({args.file} has a `life:` section)")
     camp = load_life(args.file, args.out)
-    why = confirmation_needed(camp)
+    why = life_confirmation_needed(camp)
     large = why is not None
     if large and not args.yes:  # as a fault campaign: a typo (or a forgotten section) more likely than intent
         raise ParameterError(why)

@@ -20,7 +20,7 @@ _RUN_NAME = re.compile(r"^u(\d+)_i(\d+)$")
 
 def life_status(out: Path, manifest: dict[str, Any], info: dict[str, Any]) -> dict[str, Any]:
     """Add to ``info`` (folder, state, lock from the generic status) what a life folder holds."""
-    from .fleet import resume_state
+    from .life_resume import resume_state
 
     out = Path(out)
     info["kind"] = "life"

@@ -154,18 +154,19 @@ def check_life_limits(camp: LifeCampaign) -> tuple[str, float]:
     return bound, steps
 
 
-def confirmation_needed(camp: LifeCampaign) -> str | None:
-    """Why ``campaign run`` needs --yes to start ``camp``, or None: a fault campaign's rule
-    (``campaign.limits.beyond_confirmation``) on its :func:`upper_bound`, which :func:`check_life_limits` states.
+def life_confirmation_needed(camp: LifeCampaign) -> str | None:
+    """Why ``campaign run`` needs --yes to start the life campaign ``camp``, or None: a fault campaign's rule and
+    words (``campaign.limits.beyond_confirmation``, ``needs_yes_because``; a fault campaign's own reason:
+    ``campaign.limits.confirmation_needed``) on its :func:`upper_bound`, which :func:`check_life_limits` states.
     Where the file left the fleet's size to the defaults (an empty ``life:``), the reason says what that default
     fleet is and how to state another."""
-    from ...campaign.limits import CONFIRM_RUN_STEPS, CONFIRM_RUNS, beyond_confirmation
+    from ...campaign.limits import beyond_confirmation, needs_yes_because
 
     bound, steps = check_life_limits(camp)
     runs, _ = upper_bound(camp)
     if not beyond_confirmation(runs, steps):
         return None
-    why = f"{bound}; more than {CONFIRM_RUNS} runs or {CONFIRM_RUN_STEPS:g} steps needs --yes to start"
+    why = needs_yes_because(bound)
     given = camp.data.get("life") if isinstance(camp.data.get("life"), Mapping) else {}
     unstated = [f"life.{k}" for k in SIZE_KEYS if k not in given]
     if unstated:

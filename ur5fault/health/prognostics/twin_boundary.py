@@ -5,7 +5,7 @@ meets the failure criterion.
 A point at radius ``s`` along the unit direction ``d`` is the wear state ``alpha = s d`` [deg per joint],
 with the friction and stiffness the wear law couples to it (wear.py: ``friction_scale``,
 ``stiffness_scale``; the lubricant-ageing term at the cycles ``s / speed`` the unit needs to get there),
-simulated on the duty cycle exactly as a fleet inspection is (fleet.inspect_batch: the same simulator,
+simulated on the duty cycle exactly as a fleet inspection is (life_inspection.inspect_batch: the same simulator,
 stepper, drive, log period and duration); the criterion is the campaign's failure feature of that run
 against the twin's run of the same unit with no wear (the healthy reference), a run that stops or
 diverges counting as failed, as in the fleet.  The twin is the model the fleet was generated with: the
