@@ -95,6 +95,7 @@ def cmd_prognose(args: argparse.Namespace) -> int:
 
     from ...config import Overlay, check_seed
     from ...errors import ParameterError
+    from ...util.results import written
     from .benchmark import run_prognose
 
     t0 = time.perf_counter()
@@ -115,5 +116,6 @@ def cmd_prognose(args: argparse.Namespace) -> int:
         print(f"  {name}: RUL RMSE [cycles] at life fraction {rm}; alpha-lambda accuracy (alpha 0.2, lambda 0.5) "
               f"{r['alpha_lambda_accuracy']:.2f}; median prognostic horizon "
               f"{r['prognostic_horizon_cycles_median']:.4g} cycles")
-    print(f"wrote {m['out']}/report.md, metrics.json and figures in {time.perf_counter() - t0:.1f} s", file=sys.stderr)
+    print(f"{written(m['replaced'])} {m['out']}/report.md, metrics.json and figures in "
+          f"{time.perf_counter() - t0:.1f} s", file=sys.stderr)
     return 0
