@@ -17,11 +17,12 @@ from . import metrics as M
 from .figures import health_index_paths, rul_alpha_cone
 from .life_store import life_stats
 from .life_table import NEEDED, RECORDED_COLUMNS, check_recorded, load_inspections
-from .prediction import ESTIMATORS, TWIN_FRICTION, predict
+from .prediction import ESTIMATORS, predict
 from .report import markdown
 from .spec import Failure
 from .twin_boundary import TwinSetup
 from .twin_cache import RadiusCache
+from .twin_choices import TWIN_FRICTION
 from .wear import WEAR_KINDS
 
 if TYPE_CHECKING:

@@ -7,6 +7,7 @@ import sys
 from pathlib import Path
 
 from ...util.usage import examples
+from .twin_choices import TWIN_FRICTION
 
 #: `campaign run` options a life campaign does not take (named in the error instead of ignored)
 _NOT_FOR_LIFE = {"model": "--model", "save_timeseries": "--save-timeseries", "threshold_mm": "--threshold-mm",
@@ -40,7 +41,7 @@ def register(sub) -> None:
                         "directions of growth (direction; the one to use when the twin's model may be off, "
                         "ur5fault's docs/prognostics.md), or at once on up to 16 failed training units of all tasks, "
                         "every m-th (pooled, the default; 14 of the 100-unit fleet's)")
-    p.add_argument("--twin-friction", choices=("learned", "law"),
+    p.add_argument("--twin-friction", choices=TWIN_FRICTION,
                    help="with --twin: the friction rise per degree of clearance and per 10^6 cycles the twin gives a "
                         "worn joint: learned per unit from its inspections (learned, the default: maps fitted on the "
                         "training units' measured friction) or the wear law's constants in the fleet's manifest (law)")
