@@ -52,7 +52,7 @@ def run_prognose(folder: Path, out: Path | None = None, *, seed: int = 0, twin: 
     """The benchmark on a life-campaign folder; returns the metrics written to ``out/metrics.json`` (default ``out``:
     ``folder/benchmark``), and ``replaced``: whether they replaced an earlier report there (not in the file).
     ``twin_model``: the overlay the twin runs instead of the packaged model (a model error the twin carries);
-    ``twin_calibration``: one of twin_rul.CALIBRATIONS; ``twin_cache``: the file of the twin's
+    ``twin_calibration``: one of :data:`.twin_choices.CALIBRATIONS`; ``twin_cache``: the file of the twin's
     radii (twin_cache.py), default ``out/twin_radii.json``; ``twin_friction``: one of :data:`TWIN_FRICTION`;
     ``replace``: replace an earlier report in ``out`` (False: refused in one line before any work, as `ur5fault
     prognose` does without --replace; the twin's radius cache there is a cache, read and extended either way)."""

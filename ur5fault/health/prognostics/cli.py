@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 
 from ...util.usage import examples
-from .twin_choices import TWIN_FRICTION
+from .twin_choices import CALIBRATIONS, TWIN_FRICTION
 
 #: `campaign run` options a life campaign does not take (named in the error instead of ignored)
 _NOT_FOR_LIFE = {"model": "--model", "save_timeseries": "--save-timeseries", "threshold_mm": "--threshold-mm",
@@ -35,7 +35,7 @@ def register(sub) -> None:
     p.add_argument("--model", metavar="OVERLAY",
                    help="with --twin: the model overlay YAML the twin runs (default: the packaged model, the one the "
                         "fleet was simulated with); e.g. a robot's fitted model, or parameters off by a model error")
-    p.add_argument("--twin-calibration", choices=("direction", "task", "pooled"),
+    p.add_argument("--twin-calibration", choices=CALIBRATIONS,
                    help="with --twin: calibrate the twin's boundary on the failed training units of the unit's own "
                         "duty cycle, shrunk towards all tasks' (task), that corrected by the units of nearby "
                         "directions of growth (direction; the one to use when the twin's model may be off, "
