@@ -241,6 +241,24 @@ def test_a_command_starts_without_the_other_commands_modules(args, absent):
     assert r.returncode == 0 and r.stdout.strip().splitlines()[-1] == "[]", (r.stdout, r.stderr)
 
 
+def test_prognose_offers_the_twin_choices_its_estimators_accept_and_its_help_stays_light():
+    """`--twin-friction` and `--twin-calibration` wrote ("learned", "law") and ("direction", "task", "pooled") again
+    beside the estimators' own constants: one place (twin_choices.py, which imports nothing, so that building the
+    parser loads no estimator: 1.4 s of numpy, pandas and MuJoCo on `prognose --help`)."""
+    from ur5fault.cli import build_parser
+    from ur5fault.health.prognostics import twin_rul
+    from ur5fault.health.prognostics.benchmark import TWIN_FRICTION
+
+    sub = next(a for a in build_parser([".health.prognostics.cli"])._actions if a.dest == "command")
+    choices = {a.dest: a.choices for a in sub.choices["prognose"]._actions if a.choices}
+    assert choices == {"twin_friction": TWIN_FRICTION, "twin_calibration": twin_rul.CALIBRATIONS}
+    script = ("import sys\nfrom ur5fault.cli import main\ntry:\n    main(['prognose', '--help'])\n"
+              "except SystemExit:\n    pass\n"
+              "print([m for m in sys.modules if m.split('.')[0] in ('numpy', 'pandas', 'mujoco', 'scipy')])\n")
+    r = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0 and r.stdout.strip().splitlines()[-1] == "[]", (r.stdout, r.stderr)
+
+
 def test_the_command_line_module_imports_little_before_main():
     """Until main() sets up its handlers, Ctrl-C prints a traceback: `import ur5fault.cli` (the console script's
     first line) took 0.9 s importing the simulator, then 40 ms importing importlib.metadata for __version__."""

@@ -135,3 +135,25 @@ def test_simulate_summary_of_a_protective_stop_is_strict_json(tmp_path, capsys):
     summary = json.loads(cap.out, parse_constant=refuse)
     assert summary["status"] == "protective_stop" and summary["peak_current_A"] is None
     assert "RuntimeWarning" not in cap.err and "All-NaN" not in cap.err
+
+
+def test_identify_says_replaced_for_the_files_replace_replaced(tmp_path, capsys, monkeypatch):
+    """`identify --replace` said "wrote" over the user's earlier overlay, where simulate, show and plot say
+    "replaced". The fit is a stand-in: what is checked is the closing line."""
+    from types import SimpleNamespace
+
+    import ur5fault.identify
+
+    fitted = SimpleNamespace(payloads=[], notes=[], table=lambda: "estimates", to_json=lambda: {"estimates": []},
+                             to_yaml=lambda params: "params: {}\n")
+    monkeypatch.setattr(ur5fault.identify, "identify", lambda *a, **kw: fitted)
+    out, js = tmp_path / "p.yaml", tmp_path / "p.json"
+    out.write_text("an earlier overlay\n")
+    args = ["identify", str(NIST_LOG), "--format", "nist", "--out", str(out), "--json", str(js), "--quiet"]
+    assert main([*args, "--replace"]) == 0
+    assert capsys.readouterr().out.splitlines()[-1] == f"replaced {out}; wrote {js}"
+    assert out.read_text() == "params: {}\n"
+    assert main([*args, "--replace"]) == 0
+    assert capsys.readouterr().out.splitlines()[-1] == f"replaced {out}, {js}"
+    assert main([*args[:4], "--quiet", "--out", str(tmp_path / "new.yaml")]) == 0
+    assert capsys.readouterr().out.splitlines()[-1] == f"wrote {tmp_path / 'new.yaml'}"

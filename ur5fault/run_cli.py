@@ -39,6 +39,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     from .config import Overlay, build_run_config, repeats_of
     from .sim.engine import RunSpec, Simulator
     from .sim.params import read_yaml
+    from .util.results import written
 
     file_data = dict(read_yaml(Path(args.config))) if args.config else {}
     where = Path(args.config).name if args.config else "command line"
@@ -86,8 +87,8 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     else:
         res.to_parquet(out)
     # prose on stderr, the one data line (the run's summary as JSON) on stdout: `simulate ... | jq` works
-    verb = "replaced" if replaced else "wrote"
-    sys.stderr.write(f"{verb} {out} ({res.t_s.size} samples x {len(res.to_pandas(0).columns)} columns)\n")
+    sys.stderr.write(f"{written(replaced)} {out} ({res.t_s.size} samples x {len(res.to_pandas(0).columns)} "
+                     "columns)\n")
     sys.stderr.write("effects: " + ("; ".join(res.effects[0]) or "none (healthy)") + "\n")
     print(json.dumps(res.summary(0), indent=None, allow_nan=False))  # strict JSON: jq reads it
     return 0 if res.status[0] == "ok" else 1
@@ -222,7 +223,7 @@ def cmd_show(args: argparse.Namespace) -> int:
     from .logs.readers import RESIMULATE
     from .plotting import run_figure
     from .util.io import check_stored, check_writable, write_figure_atomic
-    from .util.results import check_new_output
+    from .util.results import check_new_output, present, said_written
 
     target = Path(args.target)
     if args.out is not None:  # before reading or re-simulating anything
@@ -267,9 +268,9 @@ def cmd_show(args: argparse.Namespace) -> int:
     fig = run_figure(series, twin=twin)
     _note_empty_columns(series, twin)
     png.parent.mkdir(parents=True, exist_ok=True)
-    replaced = png.exists()  # with --replace (else refused above): said as `simulate` says it
+    earlier = present([png])  # with --replace (else refused above): said as replaced
     write_figure_atomic(fig, png)
-    print(f"{'replaced' if replaced else 'wrote'} {png}")
+    print(said_written([png], earlier))
     return 0
 
 

@@ -299,6 +299,23 @@ def test_benchmark_refuses_no_worker(tmp_path, capsys):
     assert err.count("\n") == 1 and "--jobs 0: must be a whole number of at least 1" in err
 
 
+@pytest.mark.slow  # 40 s: two trainings
+def test_a_report_replaced_with_replace_is_said_replaced(tmp_path, capsys):
+    """`benchmark --replace` over an earlier report said "wrote", where simulate, show and plot say "replaced"; so
+    does scoring saved classifiers on another campaign (--test) into its earlier transfer report."""
+    d, other = tmp_path / "c", tmp_path / "o"
+    d.mkdir()
+    other.mkdir()
+    with_twin(synthetic(n_groups=6)).to_parquet(d / "features.parquet")
+    with_twin(synthetic(n_groups=3, seed=7), seed=8).to_parquet(other / "features.parquet")
+    for args, out in ((["--features", "twin"], d / "benchmark"),
+                      (["--test", str(other)], other / "benchmark_transfer")):
+        for replace, said in (([], "wrote"), (["--replace"], "replaced")):
+            assert main(["benchmark", str(d), *args, "--quiet", *replace]) == 0
+            last = capsys.readouterr().err.splitlines()[-1]
+            assert last.startswith(f"{said} {out}/report.md, metrics.json and figures in "), last
+
+
 def test_scoring_needs_saved_classifiers_and_their_columns(tmp_path, capsys):
     d = tmp_path / "c"
     d.mkdir()

@@ -503,6 +503,14 @@ def test_a_gap_is_judged_in_whole_missing_ticks_alike_in_both_formats(tmp_path, 
         f"gap.csv: a gap of 0.056 s after t = {df[time].iloc[936] - t0:.3f} s (data row 937): 6 ticks of 8 ms "
         "missing in a row, more than the 5 interpolated; cut the log at the gap into two logs (data rows 1..937 and "
         "938..1869), which identify, discrepancy and monitor take together as logs of one robot")
+    # diagnose reads one log: told the part to keep (the longer), not two logs it would take together
+    from ur5fault.health.diagnosis.windows import window_length
+
+    with pytest.raises(LogFormatError) as err:
+        read_log(p, fmt, length=window_length(5.0), **kw)
+    assert str(err.value).endswith(
+        "more than the 5 interpolated; keep data rows 1..937 (cut the log at the gap), the longer part; data rows "
+        "938..1869 are long enough to be read as a log of their own too"), err
 
 
 def test_rtde_column_names_are_matched_whatever_their_case(tmp_path):

@@ -12,7 +12,7 @@ import pytest
 
 from ur5fault.util.io import OutputError
 from ur5fault.util.lock import LOCK_NAME, FolderLockedError, Lock
-from ur5fault.util.results import INCOMPLETE_MARK, check_new_output, result_folder
+from ur5fault.util.results import INCOMPLETE_MARK, check_new_output, present, result_folder, said_written
 
 RESULTS = ("report.md", "summary.json")
 
@@ -167,3 +167,17 @@ def test_a_file_of_a_set_cut_short_is_not_read_as_a_result(tmp_path):
             Overlay.load(folder / "model.yaml")
         (folder / "model.yaml").write_text("params: {}\n")
     assert Overlay.load(out / "model.yaml").params == {}
+
+
+def test_the_closing_line_says_replaced_for_the_files_that_were_there(tmp_path):
+    """`identify --replace` said "wrote" over a file the user had, where simulate, show and plot said "replaced":
+    every command's closing line says, in the order written, which files it replaced and which it wrote."""
+    a, b, c = (tmp_path / n for n in ("a.yaml", "b.json", "c.md"))
+    b.write_text("mine\n")
+    earlier = present([a, b, c])
+    assert earlier == {b}
+    assert said_written([a, b, c], earlier, " in 3 s") == f"wrote {a}; replaced {b}; wrote {c} in 3 s"
+    assert said_written([b, a, c], earlier) == f"replaced {b}; wrote {a}, {c}"
+    assert said_written([str(a), str(c)]) == f"wrote {a}, {c}"  # nothing there before
+    assert said_written([a, b], {a, b}) == f"replaced {a}, {b}"
+

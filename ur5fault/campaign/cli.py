@@ -154,7 +154,7 @@ def cmd_show(args: argparse.Namespace) -> int:
 def cmd_plot(args: argparse.Namespace) -> int:
     from ..plotting import FIG3_STEM, FIG4_STEM, FIGURE_STEMS, drawn_and_failed, figure_stems, save
     from ..util.io import check_writable
-    from ..util.results import check_new_output
+    from ..util.results import check_new_output, present, said_written
     from .result import CampaignResult
 
     if args.out is not None:
@@ -169,15 +169,15 @@ def cmd_plot(args: argparse.Namespace) -> int:
         if stem not in kept:
             check_new_output(plot_dir / f"{stem}.png", replace=args.replace, default_place=args.out is None)
     figures, messages, failures = drawn_and_failed(result, args.feature, skip=kept)
-    earlier = {stem for stem in figures if (plot_dir / f"{stem}.png").exists()}  # with --replace: said as replaced
-    written = save(figures, plot_dir)
-    for stem, path in zip(figures, written):
-        print(f"{'replaced' if stem in earlier else 'wrote'} {path}")
+    earlier = present(plot_dir / f"{stem}.png" for stem in figures)  # with --replace: said as replaced
+    drawn = save(figures, plot_dir)
+    for path in drawn:
+        print(said_written([path], earlier))
     for message in dict.fromkeys(messages):  # what the campaign cannot have
         print(message)
     for failure in dict.fromkeys(failures):  # Fig. 3 and Fig. 4 read the same runs: one reason, said once
         print(f"ur5fault: error: {failure}", file=sys.stderr)
     ours = {p for stem in FIGURE_STEMS for p in plot_dir.glob(f"{stem}*.png")}  # not `show`'s, nor a user's
-    for path in sorted(ours - set(written)):  # not redrawn: not to be taken for this plot's
+    for path in sorted(ours - set(drawn)):  # not redrawn: not to be taken for this plot's
         print(f"{path}: from an earlier plot, not redrawn now")
     return 1 if failures else 0  # a figure the campaign has was not drawn: not a success to a script

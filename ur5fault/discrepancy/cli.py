@@ -59,7 +59,7 @@ def cmd_discrepancy(args: argparse.Namespace) -> int:
     from ..sim.params import load_params
     from ..twin.replay import refuse_log_owned
     from ..util.checks import check_count, check_number
-    from ..util.results import check_new_output
+    from ..util.results import check_new_output, present, said_written
     from .model import FIT_FRACTION_RANGE, DiscrepancyModel
     from .report import RESULT_FILES, summary, write_report
 
@@ -88,6 +88,7 @@ def cmd_discrepancy(args: argparse.Namespace) -> int:
               overlay.effects if overlay else (), hold_out=held,
               on_payload=lambda line: print(line, file=sys.stderr, flush=True))
     log = model.replay_.log
+    earlier = present(Path(args.out) / name for name in RESULT_FILES)  # with --replace: said as replaced
     paths = write_report(model, Path(args.out), replace=args.replace)
     summ = summary(model)
     print(f"{log.source}: {log.t_s[-1]:.1f} s at {1 / log.period_s:.0f} Hz")
@@ -102,5 +103,5 @@ def cmd_discrepancy(args: argparse.Namespace) -> int:
     for u in summ["unexplained"]:
         print(f"unexplained: {u['signal']} on {u['joint']} (held-out RMS {u['rms_held_out']:.3g}, "
               f"largest {u['largest_where']})")
-    print(f"wrote {', '.join(str(p) for p in paths[:3])} in {summ['wall_s']:.0f} s")
+    print(said_written(paths[:3], earlier, f" in {summ['wall_s']:.0f} s"))
     return 0

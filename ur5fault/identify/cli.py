@@ -47,7 +47,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
     from ..logs.read_entries import read_log_options
     from ..sim.params import load_params
     from ..util.io import write_json_atomic, write_text_atomic
-    from ..util.results import check_new_output, file_lock
+    from ..util.results import check_new_output, file_lock, present, said_written
     from . import identify
 
     if not 20 <= args.bootstrap <= MAX_BOOT:
@@ -86,14 +86,14 @@ def cmd_identify(args: argparse.Namespace) -> int:
         print(f"note: {line}", file=sys.stderr)
     out = Path(args.out)
     text = result.to_yaml(params)  # checked as --model reads it before any lock is taken
+    written = [out, *([Path(args.json)] if args.json else [])]
     with contextlib.ExitStack() as held:
-        for path, option in ((out, "--out"), (Path(args.json) if args.json else None, "--json")):
-            if path is not None:  # again, under the file's lock: another run may have written it while this one fitted
-                held.enter_context(file_lock(path))
-                check_new_output(path, replace=args.replace, option=option)
+        for path, option in zip(written, ("--out", "--json")):  # again, under the file's lock: another run may
+            held.enter_context(file_lock(path))  # have written it while this one fitted
+            check_new_output(path, replace=args.replace, option=option)
+        earlier = present(written)  # with --replace (else refused above): said as replaced
         write_text_atomic(out, text)
         if args.json:
             write_json_atomic(Path(args.json), {**result.to_json(), "log_assumptions": notes})
-    written = [str(out), *([args.json] if args.json else [])]
-    print(f"wrote {', '.join(written)}")
+    print(said_written(written, earlier))
     return 0

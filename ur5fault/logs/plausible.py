@@ -13,7 +13,7 @@ Limits and their reasons:
   real run), a longer stretch is a straight line the robot did not move. A gap counted in seconds
   against 5 median periods refused a NIST log whose clock (10578 s) left a 4-tick gap at
   5.0000000002 periods, while a Kufieta log with the same gap passed; a refused gap names the rows
-  to cut the log at, as two logs of one robot;
+  to cut the log at, as two logs of one robot (to ``diagnose``, which reads one log, the part to keep);
 - at least :data:`MIN_DURATION_S` seconds and :data:`MIN_SAMPLES` samples (the discrepancy
   workflow fits on a share of the log and judges on the rest; a 3-row log once produced a
   "finding" and NaN; ``ur5fault monitor`` asks the same of the logs it judges, said as judging,
@@ -77,11 +77,13 @@ MIN_SAMPLES = 250
 @dataclasses.dataclass(frozen=True)
 class MinLength:
     """The least a log must cover for a command: ``duration_s`` and ``samples``, and the reason, said when a log
-    is refused."""
+    is refused. ``one_log``: the command reads one log (``diagnose``), so a log with a gap it cannot use is advised
+    as the part to keep (:func:`.regular.cut_in_two`), not as two logs it takes together."""
 
     duration_s: float
     samples: int
     why: str
+    one_log: bool = False
 
     def covered_by(self, duration_s: float, samples: int, period_s: float) -> bool:
         """Whether ``samples`` samples spanning ``duration_s`` [s] are this long; a span short of ``duration_s`` by

@@ -160,7 +160,9 @@ def keep_rows(t: NDArray, lo: int, hi: int, length: MinLength) -> str:
 def cut_in_two(t: NDArray, a: int, b: int, length: MinLength, where: str = "there") -> str:
     """The advice for a log of times ``t`` with a stretch it cannot use between data rows ``a`` and ``b`` (1-based, the
     last row before it and the first after it): the parts to keep, those at least ``length`` long (:func:`_cover`); a
-    part too short is named as such, to drop, and where neither is long enough that is said instead."""
+    part too short is named as such, to drop, and where neither is long enough that is said instead.  Both long
+    enough: two logs the command takes together, or, for a command that reads one log (``length.one_log``:
+    ``diagnose``), the longer part to keep, the other named as a log of its own."""
     parts = [(1, a), (b, t.size)]
     covered = {p: _cover(t, p, length) for p in parts}
     cover = {p: c for p, (c, _) in covered.items()}
@@ -169,6 +171,10 @@ def cut_in_two(t: NDArray, a: int, b: int, length: MinLength, where: str = "ther
     def rows(p: tuple[int, int]) -> str:
         return f"{p[0]}..{p[1]}"
 
+    if len(usable) == 2 and length.one_log:
+        keep = max(parts, key=lambda p: cover[p])
+        return (f"keep data rows {rows(keep)} (cut the log {where}), the longer part; data rows "
+                f"{rows(parts[1 - parts.index(keep)])} are long enough to be read as a log of their own too")
     if len(usable) == 2:
         return (f"cut the log {where} into two logs (data rows {rows(parts[0])} and {rows(parts[1])}), which identify, "
                 "discrepancy and monitor take together as logs of one robot")

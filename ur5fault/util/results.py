@@ -22,7 +22,7 @@ import json
 import logging
 import os
 import socket
-from collections.abc import Iterator
+from collections.abc import Collection, Iterable, Iterator, Sequence
 from pathlib import Path
 
 from ..errors import StoredResultError
@@ -75,6 +75,33 @@ def check_new_output(path: str | Path, *, folder: bool = False, results: tuple[s
                           f"or another {option}")
     return path
 
+
+def present(paths: Iterable[str | Path]) -> set[Path]:
+    """Those of ``paths`` that exist now: taken before a command writes them, the files its closing line says it
+    replaced (:func:`said_written`)."""
+    return {Path(p) for p in paths if Path(p).exists()}
+
+
+def written(replaced: bool) -> str:
+    """The verb of a command's closing line for what it wrote: ``replaced`` for a file that was there before (an
+    earlier result :data:`REPLACE_OPTION` replaced), else ``wrote``."""
+    return "replaced" if replaced else "wrote"
+
+
+def said_written(paths: Sequence[str | Path], earlier: Collection[str | Path] = (), tail: str = "") -> str:
+    """A command's closing line: ``wrote A, B`` + ``tail``, those of ``paths`` in ``earlier`` (:func:`present`
+    before they were written) said as replaced, in the order of ``paths``: ``replaced A; wrote B``.  Every command
+    writing a file the user names says it so (``simulate``, ``show``, ``plot``, ``identify``, ``discrepancy``,
+    ``monitor``, ``diagnose``)."""
+    had = {Path(p) for p in earlier}
+    runs: list[tuple[bool, list[str]]] = []
+    for p in paths:
+        old = Path(p) in had
+        if runs and runs[-1][0] == old:
+            runs[-1][1].append(str(p))
+        else:
+            runs.append((old, [str(p)]))
+    return "; ".join(f"{written(old)} {', '.join(names)}" for old, names in runs) + tail
 
 
 def check_whole(path: str | Path, remake: str) -> None:

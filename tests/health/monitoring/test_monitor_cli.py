@@ -302,6 +302,34 @@ def test_progress_counts_each_replay_once_and_quiet_switches_it_off(tmp_path, mo
     capsys.readouterr()
 
 
+def test_a_result_replaced_with_replace_is_said_replaced(tmp_path, monkeypatch, capsys):
+    """`monitor --replace` over an earlier result said "wrote", where simulate, show and plot say "replaced".
+    Stand-in replays, as in the tests above: what is checked is the closing line."""
+    import dataclasses
+    import importlib
+
+    from tests.health.monitoring.test_monitoring import noise, part
+    from ur5fault.cli import main
+
+    def stand_in(log, params=None, effects=(), **kw):
+        o = part(log.source, noise(len(log.source), log.t_s.size - 1), target=log.q_target_rad[1:])
+        return dataclasses.replace(o, rest_target=log.rest_target, payload_kg=log.payload_kg,
+                                   samples_sha256=log.content_sha256())
+
+    monkeypatch.setattr(importlib.import_module("ur5fault.health.monitoring.observe"), "observe", stand_in)
+    model = tmp_path / "model.yaml"
+    model.write_text("params: {}\neffects: []\n")
+    base = [head(tmp_path, n, 6.0) for n in ("Movement_No1", "Movement_No2", "Movement_No4_Acc")]
+    out = tmp_path / "out"
+    args = ["monitor", str(base[2]), *RTDE, "--baseline", str(model), "--baseline-logs", *map(str, base[:2]),
+            "--out", str(out), "--jobs", "1", "--quiet"]
+    files = ", ".join(str(out / n) for n in ("monitor.json", "baseline.json", "report.md"))
+    assert main(args) == 0
+    assert capsys.readouterr().out.splitlines()[-1] == f"wrote {files}"
+    assert main([*args, "--replace"]) == 0
+    assert capsys.readouterr().out.splitlines()[-1] == f"replaced {files}"
+
+
 def test_a_baseline_refused_is_refused_before_the_monitored_logs_are_replayed(tmp_path, monkeypatch, capsys):
     """The baseline is fitted as soon as its runs are replayed: a refusal of it (here a stand-in one) comes before
     minutes of the monitored logs' replays (the review found the fit moved after them with the progress bar)."""

@@ -73,6 +73,20 @@ def test_benchmark_is_deterministic_under_its_seed(tmp_path):
     assert a["goals"]["baseline"] == "wiener"  # without the twin, the feature-only baseline is judged
 
 
+def test_a_report_replaced_with_replace_is_said_replaced(tmp_path, capsys):
+    """`prognose --replace` over an earlier report said "wrote", where simulate, show and plot say "replaced"."""
+    fleet = tmp_path / "fleet"
+    fleet.mkdir()
+    synthetic_fleet(12, 1).to_parquet(fleet / "inspections.parquet")
+    out = tmp_path / "bench"
+    assert main(["prognose", str(fleet), "--out", str(out)]) == 0
+    assert capsys.readouterr().err.splitlines()[-1].startswith(f"wrote {out}/report.md, metrics.json and figures in ")
+    assert main(["prognose", str(fleet), "--out", str(out), "--replace"]) == 0
+    last = capsys.readouterr().err.splitlines()[-1]
+    assert last.startswith(f"replaced {out}/report.md, metrics.json and figures in "), last
+    assert "replaced" not in json.loads((out / "metrics.json").read_text())  # said, not stored
+
+
 def test_a_folder_without_inspections_gets_advice_it_can_follow(tmp_path, capsys):
     """A fault campaign's folder, an unfinished life campaign's and a plain file: each refused in one line that says
     what the folder holds (the advice to run a life campaign into it was refused by `campaign run` there)."""

@@ -37,6 +37,7 @@ def register(sub) -> None:
 
 def cmd_diagnose(args: argparse.Namespace) -> int:
     import sys
+    from pathlib import Path
 
     from ...config import Overlay
     from ...errors import ParameterError
@@ -46,7 +47,7 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
     from ...logs.read_entries import read_entry, refuse_unknown_payload
     from ...logs.same_samples import refuse_same_samples
     from ...twin.replay import refuse_log_owned
-    from ...util.results import check_new_output, result_folder
+    from ...util.results import check_new_output, present, result_folder, said_written
     from ..diagnostics.classifier import require_sklearn
     from ..diagnostics.saved import load_models
     from . import diagnose, robot_baseline
@@ -103,6 +104,7 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
         pbar.update(1)
     for n in d["notes"]:
         print(f"note: {n}", file=sys.stderr)
+    earlier = present(Path(args.out) / name for name in results)  # with --replace: said as replaced
     with result_folder(args.out, results, args.replace) as out:  # one set: a stop between files is marked
         paths = write_diagnosis(d, out)
     print(f"{d['log']}: {d['n_flagged']} of {d['n_windows']} windows of {d['detector']['window_s']:.3g} s flagged "
@@ -110,5 +112,5 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
           f"{max(w['p_fault'] for w in d['windows']):.3f}")
     if baseline is not None:
         print(f"baseline: {baseline.n_windows} windows of {len(baseline.logs)} healthy log(s)")
-    print(f"wrote {', '.join(str(p) for p in paths)}")
+    print(said_written(paths, earlier))
     return 0

@@ -71,7 +71,7 @@ def window_length(window_s: float) -> MinLength:
     """What ``ur5fault diagnose`` needs of a log: one whole window of ``window_s`` (the detector's training runs'
     duration), nothing more - it fits nothing to the log."""
     return MinLength(window_s, MIN_WINDOW_SAMPLES, f"`ur5fault diagnose` needs at least one window of {window_s:g} s "
-                                                   "(the detector's training runs' duration)")
+                                                   "(the detector's training runs' duration)", one_log=True)
 
 
 def inflation(cols: list[NDArray]) -> list[float]:

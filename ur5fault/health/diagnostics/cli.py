@@ -45,6 +45,7 @@ def cmd_benchmark(args: argparse.Namespace) -> int:
     from ...campaign.limits import effective_jobs
     from ...errors import ParameterError
     from ...util.checks import check_int
+    from ...util.results import written
     from . import run_benchmark
 
     t0 = time.perf_counter()
@@ -70,5 +71,6 @@ def cmd_benchmark(args: argparse.Namespace) -> int:
         a90 = v["alpha_90_deg"]
         why = v.get("note", f"{v['n_test']} test runs")
         print(f"  backlash J{j}: " + (f"alpha_90 = {a90:.3g} deg" if math.isfinite(a90) else f"no alpha_90 ({why})"))
-    print(f"wrote {m['out']}/report.md, metrics.json and figures in {time.perf_counter() - t0:.1f} s", file=sys.stderr)
+    print(f"{written(m['replaced'])} {m['out']}/report.md, metrics.json and figures in "
+          f"{time.perf_counter() - t0:.1f} s", file=sys.stderr)
     return 0

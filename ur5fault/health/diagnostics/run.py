@@ -11,7 +11,7 @@ import pandas as pd
 
 from ...errors import ConfigFileError, ParameterError
 from ...seed_paper import PAPER_TCP_MM
-from ...util.results import check_new_output, result_folder
+from ...util.results import check_new_output, present, result_folder
 from .data import (
     FEATURE_SETS,
     has_twin_features,
@@ -34,7 +34,7 @@ def run_benchmark(campaign_dir: str | Path, out: str | Path | None = None, *, se
                   compare: bool = True, jobs: int = 1, replace: bool = True, progress: bool = False) -> dict[str, Any]:
     """``ur5fault benchmark``: evaluate a campaign folder and write ``report.md``, ``metrics.json``, the figures
     and the trained classifiers (``models/``) into ``out`` (default ``<campaign_dir>/benchmark``); return the
-    metrics.
+    metrics, with ``out`` and ``replaced`` (whether they replaced an earlier result there), which the file has not.
 
     Args:
         feature_set: the inputs (default: ``both`` when the table has twin residual features, else ``paper``).
@@ -88,10 +88,11 @@ def run_benchmark(campaign_dir: str | Path, out: str | Path | None = None, *, se
             if saved[0].joint_kind is not None:  # how far apart, against the motions drawn (transfer.py)
                 metrics["transfer"] = against_training_split(features, other, saved, seed, str(test_dir))
             bar.next()
+            replaced = bool(present(out_dir / name for name in RESULT_FILES))  # with replace: said as replaced
             with result_folder(out_dir, RESULT_FILES, replace):  # one set: a stop between files is marked
                 write_report(metrics, figures, out_dir)
             bar.next()
-        metrics["out"] = str(out_dir)
+        metrics["out"], metrics["replaced"] = str(out_dir), replaced
         return metrics
     compare = compare and has_twin_features(features)
     # the chosen set's classifiers are its trained row of the comparison: trained once, here
@@ -114,10 +115,11 @@ def run_benchmark(campaign_dir: str | Path, out: str | Path | None = None, *, se
                     rows[reused]["trained"] = _compared(features, seed, False, thr, str(campaign_dir), *reuse)
                 metrics["comparison"] = {fs: {k: rows[fs][k] for k in ("trained", "shuffled")} for fs in FEATURE_SETS}
             bar.next()
+        replaced = bool(present(out_dir / name for name in RESULT_FILES))  # with replace: said as replaced
         with result_folder(out_dir, RESULT_FILES, replace):  # the report and the classifiers, one set
             _write_trained(metrics, figures, out_dir, models, features, feature_set, shuffle_labels, man)
         bar.next()
-    metrics["out"] = str(out_dir)
+    metrics["out"], metrics["replaced"] = str(out_dir), replaced
     return metrics
 
 

@@ -65,7 +65,7 @@ def cmd_monitor(args: argparse.Namespace) -> int:
     from ...sim.params import load_params
     from ...twin.replay import refuse_log_owned
     from ...util.io import checksum_path
-    from ...util.results import check_new_output, result_folder
+    from ...util.results import check_new_output, present, result_folder, said_written
     from .baseline import MIN_RUNS, MIN_RUNS_WHY, Baseline, fit_baseline, overlay_sha256
     from .observe import BASELINE_SCREEN_S, observe
     from .report import write
@@ -146,11 +146,12 @@ def cmd_monitor(args: argparse.Namespace) -> int:
         observed = list(replayed(logs))
     channels = tuple(dict.fromkeys(args.event_channels))
     entries = [assess(stats, o, channels) for o in observed]
+    earlier = present(Path(args.out) / name for name in RESULT_FILES)  # with --replace: said as replaced
     with result_folder(args.out, RESULT_FILES, args.replace) as out:  # one set: a stop between files is marked
         paths = write(out, stats, observed, entries, args.baseline, channels, verified, notes)
     for e in entries:
         print(f"{e['log']}: {e['verdict']} ({len(e['changes'])} changes, {len(e['events'])} events)")
         for line in e["notes"]:
             print(f"note: {e['log']}: {line}", file=sys.stderr)
-    print(f"wrote {', '.join(str(p) for p in paths[:2])}, {paths[-1]}")
+    print(said_written([*paths[:2], paths[-1]], earlier))
     return 0

@@ -11,17 +11,18 @@ from typing import TYPE_CHECKING, Any
 
 from ...errors import ConfigFileError
 from ...util.io import write_figure_atomic, write_json_atomic, write_parquet_atomic, write_text_atomic
-from ...util.results import check_new_output, result_folder
+from ...util.results import check_new_output, present, result_folder
 from ..diagnostics.report import clean
 from . import metrics as M
 from .figures import health_index_paths, rul_alpha_cone
 from .life_store import life_stats
 from .life_table import NEEDED, RECORDED_COLUMNS, check_recorded, load_inspections
-from .prediction import ESTIMATORS, TWIN_FRICTION, predict
+from .prediction import ESTIMATORS, predict
 from .report import markdown
 from .spec import Failure
 from .twin_boundary import TwinSetup
 from .twin_cache import RadiusCache
+from .twin_choices import TWIN_FRICTION
 from .wear import WEAR_KINDS
 
 if TYPE_CHECKING:
@@ -49,9 +50,9 @@ def run_prognose(folder: Path, out: Path | None = None, *, seed: int = 0, twin: 
                  twin_cache: Path | None = None, twin_friction: str = "learned",
                  replace: bool = True) -> dict[str, Any]:
     """The benchmark on a life-campaign folder; returns the metrics written to ``out/metrics.json`` (default ``out``:
-    ``folder/benchmark``).
+    ``folder/benchmark``), and ``replaced``: whether they replaced an earlier report there (not in the file).
     ``twin_model``: the overlay the twin runs instead of the packaged model (a model error the twin carries);
-    ``twin_calibration``: one of twin_rul.CALIBRATIONS; ``twin_cache``: the file of the twin's
+    ``twin_calibration``: one of :data:`.twin_choices.CALIBRATIONS`; ``twin_cache``: the file of the twin's
     radii (twin_cache.py), default ``out/twin_radii.json``; ``twin_friction``: one of :data:`TWIN_FRICTION`;
     ``replace``: replace an earlier report in ``out`` (False: refused in one line before any work, as `ur5fault
     prognose` does without --replace; the twin's radius cache there is a cache, read and extended either way)."""
@@ -122,6 +123,7 @@ def run_prognose(folder: Path, out: Path | None = None, *, seed: int = 0, twin: 
     figures = {"rul_alpha_cone": rul_alpha_cone(pred), "health_index": health_index_paths(df, hi,
                                                                                         fitted["health_index"]
                                                                                         ["failure_level"])}
+    replaced = bool(present(out / name for name in RESULT_FILES))  # with replace: said as replaced
     with result_folder(out, RESULT_FILES, replace):  # one set: a stop between files is marked
         names = []
         for name, fig in figures.items():
@@ -135,4 +137,5 @@ def run_prognose(folder: Path, out: Path | None = None, *, seed: int = 0, twin: 
         m = clean(m)
         write_json_atomic(out / "metrics.json", m)
         write_text_atomic(out / "report.md", markdown(m))
+    m["replaced"] = replaced
     return m

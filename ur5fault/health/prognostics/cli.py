@@ -7,6 +7,7 @@ import sys
 from pathlib import Path
 
 from ...util.usage import examples
+from .twin_choices import CALIBRATIONS, TWIN_FRICTION
 
 #: `campaign run` options a life campaign does not take (named in the error instead of ignored)
 _NOT_FOR_LIFE = {"model": "--model", "save_timeseries": "--save-timeseries", "threshold_mm": "--threshold-mm",
@@ -34,13 +35,13 @@ def register(sub) -> None:
     p.add_argument("--model", metavar="OVERLAY",
                    help="with --twin: the model overlay YAML the twin runs (default: the packaged model, the one the "
                         "fleet was simulated with); e.g. a robot's fitted model, or parameters off by a model error")
-    p.add_argument("--twin-calibration", choices=("direction", "task", "pooled"),
+    p.add_argument("--twin-calibration", choices=CALIBRATIONS,
                    help="with --twin: calibrate the twin's boundary on the failed training units of the unit's own "
                         "duty cycle, shrunk towards all tasks' (task), that corrected by the units of nearby "
                         "directions of growth (direction; the one to use when the twin's model may be off, "
                         "ur5fault's docs/prognostics.md), or at once on up to 16 failed training units of all tasks, "
                         "every m-th (pooled, the default; 14 of the 100-unit fleet's)")
-    p.add_argument("--twin-friction", choices=("learned", "law"),
+    p.add_argument("--twin-friction", choices=TWIN_FRICTION,
                    help="with --twin: the friction rise per degree of clearance and per 10^6 cycles the twin gives a "
                         "worn joint: learned per unit from its inspections (learned, the default: maps fitted on the "
                         "training units' measured friction) or the wear law's constants in the fleet's manifest (law)")
@@ -95,6 +96,7 @@ def cmd_prognose(args: argparse.Namespace) -> int:
 
     from ...config import Overlay, check_seed
     from ...errors import ParameterError
+    from ...util.results import written
     from .benchmark import run_prognose
 
     t0 = time.perf_counter()
@@ -115,5 +117,6 @@ def cmd_prognose(args: argparse.Namespace) -> int:
         print(f"  {name}: RUL RMSE [cycles] at life fraction {rm}; alpha-lambda accuracy (alpha 0.2, lambda 0.5) "
               f"{r['alpha_lambda_accuracy']:.2f}; median prognostic horizon "
               f"{r['prognostic_horizon_cycles_median']:.4g} cycles")
-    print(f"wrote {m['out']}/report.md, metrics.json and figures in {time.perf_counter() - t0:.1f} s", file=sys.stderr)
+    print(f"{written(m['replaced'])} {m['out']}/report.md, metrics.json and figures in "
+          f"{time.perf_counter() - t0:.1f} s", file=sys.stderr)
     return 0

@@ -20,9 +20,6 @@ from .twin_friction import FrictionRise
 from .twin_rul import CALIBRATION_UNITS_PER_TASK, TwinRUL
 
 ESTIMATORS = ("wiener", "linear", "wiener_joint", "clearance", "twin", "naive")
-#: where the twin's friction rise per degree of clearance and per 10^6 cycles comes from: "learned" from the
-#: inspections (twin_friction.py), or the fleet's wear "law" as the manifest states it
-TWIN_FRICTION = ("learned", "law")
 
 
 def predict(df: pd.DataFrame, failure: Failure, seed: int = 0, twin: TwinSetup | None = None,
@@ -30,7 +27,7 @@ def predict(df: pd.DataFrame, failure: Failure, seed: int = 0, twin: TwinSetup |
             ) -> tuple[dict[str, pd.DataFrame], dict[str, Any], np.ndarray]:
     """Fit on the failed training units; predict at every pre-failure inspection of the failed test units.
     ``twin``: also the estimator whose failure boundary the digital twin simulates (twin_rul.py; minutes);
-    ``twin_friction``: one of :data:`TWIN_FRICTION`.
+    ``twin_friction``: one of :data:`.twin_choices.TWIN_FRICTION`.
 
     Returns the prediction tables per estimator, the fitted constants, and the health index of every row.
     """

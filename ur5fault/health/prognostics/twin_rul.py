@@ -50,6 +50,7 @@ from .clearance_rul import ClearanceRUL
 from .rul import N_DRAWS, Q_HI, Q_LO, grid_rul
 from .twin_boundary import Ray, TwinSetup, failure_radii
 from .twin_calibration import TaskCalibration, direction_bias, task_calibration
+from .twin_choices import CALIBRATIONS
 from .wear import WearLaw
 
 if TYPE_CHECKING:
@@ -68,9 +69,6 @@ CALIBRATION_UNITS = 16
 #: units of the default fleet's smallest task, so that its two elbow-led units are among them; each costs ~10
 #: simulated duty cycles per checkpoint it lived past)
 CALIBRATION_UNITS_PER_TASK = 12
-#: ways of calibrating the twin (TwinRUL.calibration): "direction" the task's calibration corrected by its
-#: calibration units of nearby directions of growth, "task" the task's, "pooled" all tasks' at once
-CALIBRATIONS = ("direction", "task", "pooled")
 
 #: (trajectory JSON, payload [kg], cell temperature [degC]) of a unit
 Conditions = tuple[str, float, float]
