@@ -8,7 +8,7 @@ import numpy as np
 
 from tests.health.monitoring.test_monitoring import PERIOD, STRIBECK_RAD_S, part
 from ur5fault.health.monitoring import assess, fit_baseline
-from ur5fault.health.monitoring.conditions import MOVING, REST, REVERSAL, SLOW, condition
+from ur5fault.health.monitoring.conditions import MOVING, REST, REVERSAL, SLOW, STANDING, condition
 
 N_JOINTS = 6
 
@@ -121,7 +121,8 @@ def test_a_creeping_reversal_the_baseline_does_not_show_is_judged_no_tighter_tha
 
 
 def test_conditions_of_a_stop_a_creep_and_a_standing_arm():
-    """The codes on a hand-made target: a fast move, a stop (settling), a creep back, the arm standing."""
+    """The codes on a hand-made target: a fast move, a stop (settling), a creep back (the other joints standing
+    while it creeps), the arm standing."""
     n = 1000
     v = np.zeros((n, 6))
     v[:200] = 0.5  # 1.6 s at 0.5 rad/s
@@ -130,6 +131,7 @@ def test_conditions_of_a_stop_a_creep_and_a_standing_arm():
     cond = condition(np.abs(v) > 1e-3, np.abs(v), q, PERIOD, STRIBECK_RAD_S)
     assert (cond[:200] == MOVING).all()
     assert (cond[300:480, 0] == REVERSAL).all()  # moved back against its last fast motion
-    assert (cond[300:480, 1:] == MOVING).all()  # standing while shoulder_pan creeps: not the arm at rest
+    assert (cond[200:220] == MOVING).all()  # settling after the move
+    assert (cond[300:480, 1:] == STANDING).all()  # standing while shoulder_pan creeps: not the arm at rest
     assert (cond[600:] == REST).all()  # 0.8 s after the creep ended
     assert SLOW not in cond[600:]
