@@ -21,11 +21,15 @@ their own spread and tail from the baseline runs' slow samples.
 *Standing*: a joint whose own target holds (not moving, creeping or settling) while other joints move. Its
 current carries the coupling and the pose change of the moving links (gravity and inertia through the links it
 holds), which the twin does not reproduce exactly, and that error is set by the others' motion and the pose, not by
-the joint's own speed and acceleration, the moving condition's features (on the Kufieta runs the standing joints'
-residual spread differs by run 2-10 x and hardly follows the others' speed or acceleration: correlations of the
-squared transient with either -0.1 to 0.35 per joint, docs/monitoring.md). So it gets a constant spread and tail of
-its own, fitted on the baseline's standing samples of that joint; with too few of them (a baseline that never
-stands that joint while others move) its samples are judged by the widest limit the joint has (below).
+the joint's own speed and acceleration, the moving condition's features (on the seven undisturbed Kufieta runs a
+standing joint's transient differs between runs by 3-40 x in RMS, and its square hardly follows the others'
+largest speed or acceleration: correlations -0.09 to 0.35 per joint; docs/monitoring.md). So it gets a constant
+spread and tail of its own, fitted on the baseline's standing samples of that joint, and is judged by the wider of
+that and the limit a moving joint has there (the all-motions fit and the moving condition's, which judged these
+samples before this condition existed): where a few baseline runs hold it, the quietest of them can set its spread
+alone (a baseline of No1, No3_Acc and the quiet No5 run put shoulder_lift's limit at 0.035 A, where TEST stands
+it with 0.27 A), and the leave-one-out tail cannot see that. With too few standing samples, the widest limit the
+joint has (below).
 
 *Moving*: the rest (a joint moving faster, or settling after its own motion).
 
@@ -149,7 +153,8 @@ def motion_limit(feats: NDArray, cond: NDArray, judged: NDArray, coef: NDArray, 
     sample and joint the spread and tail of its condition (``cond_coef`` ``(5, 6, 4)``, ``cond_tail``
     ``(5, 6, 3)``), a moving joint the wider of its condition's and that fitted on all samples
     (``coef`` ``(6, 4)``, ``tail`` ``(6, 3)``: anchored where the moving samples' own fit extrapolates to
-    no spread, at a stop); where the baseline has none for a condition of that joint (NaN: too few samples of
+    no spread, at a stop), a standing joint the wider of its condition's and a moving joint's (module docstring);
+    where the baseline has none for a condition of that joint (NaN: too few samples of
     it), the widest limit of the statistics the joint has there (all motions and every condition; a moving
     sample without moving statistics: the all-motions fit, which was fitted on the moving samples among others):
     a condition the baseline did not show is judged no tighter than any it did. The multiplier: every
@@ -161,7 +166,7 @@ def motion_limit(feats: NDArray, cond: NDArray, judged: NDArray, coef: NDArray, 
     have = np.isfinite(cond_coef).all(axis=2) & np.isfinite(cond_tail).all(axis=2)  # (k, 6)
     own = have[cond, np.arange(N_JOINTS)[None, :]]  # (n, 6)
     which = np.where(own, cond + 1, 0)  # 0: all motions (a moving joint, or widened)
-    widen = ~own | (cond == MOVING)
+    widen = ~own | (cond == MOVING) | (cond == STANDING)
     step = max(1, int(round(WINDOW_S / period_s)))
     chances = 0
     for a in range(0, n, step):
@@ -174,5 +179,7 @@ def motion_limit(feats: NDArray, cond: NDArray, judged: NDArray, coef: NDArray, 
                      for c, t in [(coef, tail)] + models])  # (1 + k, n, 6)
     lims[1:][~np.broadcast_to(have[:, None, :], lims[1:].shape)] = 0.0
     out = np.take_along_axis(lims, which[None], axis=0)[0]
-    widest = np.where(cond == MOVING, np.maximum(lims[0], lims[MOVING + 1]), lims.max(axis=0))
+    moving = np.maximum(lims[0], lims[MOVING + 1])  # a moving joint, and a standing one never below it
+    widest = np.where(cond == MOVING, moving,
+                      np.where((cond == STANDING) & own, np.maximum(moving, out), lims.max(axis=0)))
     return np.where(widen, widest, out)
