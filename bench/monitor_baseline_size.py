@@ -35,6 +35,11 @@ Measured that day (overlay identified on No3_Acc + No4_Acc): logs flagged 21 of 
 does (on No1, No2, No3_Acc, No4_Acc, No8; its parameters, not its effects): 13 of 105, 17 of 140, 12 of 105, 6 of
 42, 0 of 7. Every flagged event but those on a joint moved beyond the baseline runs (which carry the coverage note)
 lies where the named joint's own target stands while other joints move.
+
+Later that day a standing joint got its own motion condition and a joint the log holds still is no longer judged
+for a gain, torque constant, friction or backlash change (docs/monitoring.md, "A standing joint's own condition"):
+under the first overlay 20 of 105, 21 of 140, 13 of 105, 3 of 42, 0 of 7 flagged, no change at any k; under the
+second 10 of 105, 23 of 140 (worse), 8 of 105, 3 of 42, 0 of 7.
 """
 
 from __future__ import annotations

@@ -8,7 +8,7 @@ import numpy as np
 
 from tests.health.monitoring.test_monitoring import PERIOD, STRIBECK_RAD_S, part
 from ur5fault.health.monitoring import assess, fit_baseline
-from ur5fault.health.monitoring.conditions import MOVING, REST, REVERSAL, SLOW, condition
+from ur5fault.health.monitoring.conditions import MOVING, REST, REVERSAL, SLOW, STANDING, condition
 
 N_JOINTS = 6
 
@@ -121,7 +121,8 @@ def test_a_creeping_reversal_the_baseline_does_not_show_is_judged_no_tighter_tha
 
 
 def test_conditions_of_a_stop_a_creep_and_a_standing_arm():
-    """The codes on a hand-made target: a fast move, a stop (settling), a creep back, the arm standing."""
+    """The codes on a hand-made target: a fast move, a stop (settling), a creep back (the other joints standing
+    while it creeps), the arm standing."""
     n = 1000
     v = np.zeros((n, 6))
     v[:200] = 0.5  # 1.6 s at 0.5 rad/s
@@ -130,6 +131,34 @@ def test_conditions_of_a_stop_a_creep_and_a_standing_arm():
     cond = condition(np.abs(v) > 1e-3, np.abs(v), q, PERIOD, STRIBECK_RAD_S)
     assert (cond[:200] == MOVING).all()
     assert (cond[300:480, 0] == REVERSAL).all()  # moved back against its last fast motion
-    assert (cond[300:480, 1:] == MOVING).all()  # standing while shoulder_pan creeps: not the arm at rest
+    assert (cond[200:220] == MOVING).all()  # settling after the move
+    assert (cond[300:480, 1:] == STANDING).all()  # standing while shoulder_pan creeps: not the arm at rest
     assert (cond[600:] == REST).all()  # 0.8 s after the creep ended
     assert SLOW not in cond[600:]
+
+
+def test_a_standing_joint_is_judged_no_tighter_than_a_moving_joint_at_its_features():
+    """The limit of a standing joint is the wider of its own condition's and a moving joint's there (the
+    all-motions fit and the moving condition's): a standing spread fitted on a quiet baseline run alone
+    (0.01 A) does not narrow it below the moving statistics' constant (0.05 A); where the standing spread is the
+    wider (0.2 A), it holds."""
+    from ur5fault.health.monitoring.conditions import CONDITIONS, motion_limit
+
+    n = 500
+    feats = np.zeros((n, 6, 4))
+    feats[..., 0] = 1.0  # the constant feature; a standing joint's speed and acceleration are 0
+    cond = np.full((n, 6), STANDING)
+    judged = np.ones(n, bool)
+    tail = np.tile([3.0, 0.5, 0.1], (6, 1))  # (u0, beta, p0): one tail for every statistics
+    coef = np.zeros((6, 4))
+    coef[:, 0] = 0.05**2
+    cond_coef = np.full((len(CONDITIONS), 6, 4), np.nan)
+    cond_tail = np.full((len(CONDITIONS), 6, 3), np.nan)
+    cond_coef[MOVING], cond_tail[MOVING] = coef, tail
+    cond_coef[STANDING] = 0.0
+    cond_coef[STANDING, :, 0] = [0.01**2] * 3 + [0.2**2] * 3
+    cond_tail[STANDING] = tail
+    lim = motion_limit(feats, cond, judged, coef, tail, cond_coef, cond_tail, PERIOD, 0.01)
+    moving = motion_limit(feats, np.full((n, 6), MOVING), judged, coef, tail, cond_coef, cond_tail, PERIOD, 0.01)
+    np.testing.assert_allclose(lim[:, :3], moving[:, :3])  # the quiet standing spread does not narrow it
+    np.testing.assert_allclose(lim[:, 3:], moving[:, 3:] * 0.2 / 0.05)  # the wider standing spread holds

@@ -180,7 +180,7 @@ def test_baseline_round_trip_and_refusals(tmp_path):
         Baseline.load(path)
     # the earlier format (current channel only, keys "scale" / "tail" at the top) is refused, not misread
     path.write_text(json.dumps({**b.to_json(), "format": "ur5fault-monitor-baseline-2"}))
-    with pytest.raises(ParameterError, match="ur5fault-monitor-baseline-2.*expected 'ur5fault-monitor-baseline-9'"):
+    with pytest.raises(ParameterError, match="ur5fault-monitor-baseline-2.*expected 'ur5fault-monitor-baseline-10'"):
         Baseline.load(path)
     # the last format (no task runs) likewise: rebuilt, not read without its pairing
     path.write_text(json.dumps({**b.to_json(), "format": "ur5fault-monitor-baseline-3"}))

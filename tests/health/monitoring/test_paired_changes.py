@@ -350,3 +350,45 @@ def test_the_block_tests_reference_counts_the_logs_noise_once():
     for bad in ((0.0, -1.0, 0.1, 3.0), (0.0, 1.0, 0.1, 0.5), (float("nan"), 1.0, 0.1, 3.0)):
         with pytest.raises(ValueError):
             Reference(*bad)
+
+
+
+def sweep(name: str, rates: np.ndarray, seed: int, gain: float = 1.0, seconds: float = 20.0):
+    """A run of a sweep from C at ``rates`` [rad/s] per joint whose twin is right but for the noise: the measured
+    current ``gain`` x the simulated one (gravity at the pose, friction at the speed: :func:`currents`) + noise."""
+    target = C + np.outer(np.arange(round(seconds / PERIOD)) * PERIOD, rates)
+    sim = currents(target)[0]
+    obs = run(name, target, seed, gain)
+    meas = gain * sim + np.random.default_rng(seed).normal(0.0, SIGMA_A, sim.shape)
+    e = np.zeros_like(obs.e)
+    e[:, :6] = (meas - sim) / SIGMA_A
+    return dataclasses.replace(obs, residual_A=meas - sim, e=e)
+
+
+def test_a_joint_the_log_holds_still_is_judged_for_an_offset_not_a_gain(monkeypatch):
+    """Baseline: two healthy runs of slow sweeps (every joint moving). A log of another sweep with a 30 % gain on
+    shoulder_lift's current sensor is "changed" there by a gain when the log moves that joint; where the log holds
+    shoulder_lift at one pose its current is a holding current, which a gain and an offset shift alike: no gain
+    is named there, not even as an alternative (the shift is read as an offset if at all), and a note names the
+    joint. Without the rule (monkeypatched away) the held joint's gain is named beside the offset."""
+    from ur5fault.health.monitoring import changes
+
+    b = fit_baseline([sweep(f"b{k}", np.linspace(0.02 + 0.01 * k, 0.05, 6), k) for k in range(2)], "sha")
+    rates = np.linspace(0.03, 0.06, 6)
+    moved = assess(b, sweep("moved", rates, 50, gain=1.3))
+    assert [(c["joint"], c["effect"]) for c in moved["changes"]] == [("shoulder_lift_joint", "current_sensor_gain")]
+    assert not any("held still" in note for note in moved["notes"]), moved["notes"]
+    rates[1] = 0.0
+    log = sweep("held", rates, 50, gain=1.3)
+    out = assess(b, log)
+    assert named(out) <= {"current_sensor_offset"}, out["changes"]
+    (note,) = [note for note in out["notes"] if "held still" in note]
+    assert note.startswith("shoulder_lift_joint: held still"), note
+    monkeypatch.setattr(changes, "NEEDS_OWN_MOTION", ())
+    assert "current_sensor_gain" in named(assess(b, log))
+
+
+def named(out: dict) -> set[str]:
+    """The effects a monitor entry names on shoulder_lift, its changes' alternatives included."""
+    return {e for c in out["changes"] if c["joint"] == "shoulder_lift_joint"
+            for e in [c["effect"]] + [a["effect"] for a in c["alternatives"]]}

@@ -39,13 +39,14 @@ from .event_fit import fit_events, fit_task, segment, task_residual
 from .events import CHANNELS, FEATURES, LEVEL_S, SMOOTH_S, WINDOW_S
 from .observe import Observed
 
-#: 9: the paired statistics' ``design_effect`` the larger of their autocorrelation's and the runs' as clusters
+#: 10: a fifth motion condition, a joint standing while others move (:mod:`.conditions`); 9: the paired
+#: statistics' ``design_effect`` the larger of their autocorrelation's and the runs' as clusters
 #: (:func:`.effective.run_design_effect`); 8: the paired statistics on 0.5 s blocks, ``n_blocks`` the effective
 #: number of independent ones (a float: their autocorrelation accounted for, :mod:`.effective`) and their
 #: ``design_effect``; 7 counted each independent 2 s difference once, 6 twice. ``rest_targets`` (the runs' target
 #: at rest) was added within 9: optional, absent in the files written before it (read as not recorded); so were
 #: ``samples_sha256`` (the runs' samples, :func:`.verdict.refuse_baseline_runs`)
-FORMAT = "ur5fault-monitor-baseline-9"
+FORMAT = "ur5fault-monitor-baseline-10"
 #: a baseline is fitted on at least this many healthy observations (runs, or parts of logs) with judged samples:
 #: the event limits' tail is fitted on each normalised by the spread fitted on the others (leave one out,
 #: :func:`.event_fit.fit_channel`); a single one is judged by its own fit, which can leave a spread of 0 where it
@@ -78,7 +79,7 @@ class Baseline:
     tail of its current's transient against the other runs and its own repeats where they repeat its task (NaN:
     they do not, over :data:`~.event_fit.MIN_TASK_S`; no log is then paired with that run): the spread of *that task*;
     ``slow_rad_s``: the overlay's Stribeck speed, where the slow condition ends (:mod:`.conditions`);
-    ``cond_scale`` ``(2, 4, 6, 4)``, ``cond_tail`` ``(2, 4, 6, 3)``: per channel and motion condition
+    ``cond_scale`` ``(2, 5, 6, 4)``, ``cond_tail`` ``(2, 5, 6, 3)``: per channel and motion condition
     (:data:`~.conditions.CONDITIONS`) the spread and tail fitted on that condition's samples alone (NaN: under
     :data:`~.conditions.MIN_CONDITION_S` of it on that joint; the samples are then judged by the widest limit);
     ``paired_candidates``: ``{label: (mean, variance, k_eff, DE)}`` of the coefficient fitted to the difference

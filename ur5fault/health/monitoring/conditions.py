@@ -8,8 +8,7 @@ model's error at that pose. A push is a departure from that level. So at rest th
 residual less its running median over :data:`~.events.LEVEL_S` *within the same rest stretch* (the window cut at
 the stretch's ends and padded with the nearest value there, which follows a monotone drift exactly, as the
 centred median does inside): the model's error of the motion before or after the rest does not enter the level.
-Rest is the arm's, not one joint's: while another joint moves, a joint that holds still still carries the
-coupling and the pose change of the moving links, which the twin does not reproduce exactly.
+Rest is the arm's, not one joint's: while another joint moves, a joint that holds still is *standing*.
 
 *Slow.* A target speed below the friction law's Stribeck speed (``1 / stribeck_rate_s_per_rad`` of the model
 overlay: 0.1 rad/s packaged, where the breakaway excess of ``tanh(rate |w|)`` has fallen to 24 %) is neither rest
@@ -19,8 +18,20 @@ the controller's jitter, :data:`~.task.TARGET_JITTER_RAD`, over :data:`~.task.CO
 creep at 1 mrad/s hovers about the rest speed) and is not within :data:`~.events.SETTLE_S` of faster motion get
 their own spread and tail from the baseline runs' slow samples.
 
-*Moving*: the rest (a joint moving faster or settling after it, and a joint standing while others move: its load
-changes with theirs), judged as before.
+*Standing*: a joint whose own target holds (not moving, creeping or settling) while other joints move. Its
+current carries the coupling and the pose change of the moving links (gravity and inertia through the links it
+holds), which the twin does not reproduce exactly, and that error is set by the others' motion and the pose, not by
+the joint's own speed and acceleration, the moving condition's features (on the seven undisturbed Kufieta runs a
+standing joint's transient differs between runs by 3-40 x in RMS, and its square hardly follows the others'
+largest speed or acceleration: correlations -0.09 to 0.35 per joint; docs/monitoring.md). So it gets a constant
+spread and tail of its own, fitted on the baseline's standing samples of that joint, and is judged by the wider of
+that and the limit a moving joint has there (the all-motions fit and the moving condition's, which judged these
+samples before this condition existed): where a few baseline runs hold it, the quietest of them can set its spread
+alone (a baseline of No1, No3_Acc and the quiet No5 run put shoulder_lift's limit at 0.035 A, where TEST stands
+it with 0.27 A), and the leave-one-out tail cannot see that. With too few standing samples, the widest limit the
+joint has (below).
+
+*Moving*: the rest (a joint moving faster, or settling after its own motion).
 
 *Reversal.* A slow stretch (as above) in which the joint's target moves back, against the direction of its last
 motion above the Stribeck speed, by more than the controller's jitter (:data:`~.task.TARGET_JITTER_RAD`): the
@@ -29,15 +40,15 @@ and breaks away while the twin's smooth sign does not (Movement_No1's wrist_2 at
 condition: its error is not that of a joint moving slowly one way.
 
 Every condition gets a spread and a tail fitted on the baseline samples of that condition alone (leave one run out
-for the tail, :func:`~.event_fit.fit_channel`): constant per joint at rest, slow and reversing, the model on speed
-and acceleration (:mod:`.events`) moving. A moving joint is judged by the wider of its own and the model fitted
+for the tail, :func:`~.event_fit.fit_channel`): constant per joint at rest, slow, reversing and standing, the model on
+speed and acceleration (:mod:`.events`) moving. A moving joint is judged by the wider of its own and the model fitted
 on all samples (fitted on the moving samples alone, the constant and moving terms are not
 anchored and extrapolate to no spread at a stop). A joint whose
 baseline holds fewer than :data:`MIN_CONDITION_S` of a condition has no statistics for it (NaN) and its samples
 in that condition are judged by the widest limit of the statistics it has there (all motions pooled, and the
 other conditions; a moving joint without moving statistics by the all-motions fit, which holds its moving samples):
 widened, not narrowed to a condition the baseline did not show. Shapes: ``(n, 6)`` per sample
-and joint; per condition scale ``(4, 6, 4)``, tail ``(4, 6, 3)``.
+and joint; per condition scale ``(5, 6, 4)``, tail ``(5, 6, 3)``.
 """
 
 from __future__ import annotations
@@ -50,12 +61,12 @@ from .events import LEVEL_S, SETTLE_S, WINDOW_S, multiplier, settled_moving, sig
 from .task import CONTEXT_S, TARGET_JITTER_RAD
 
 #: the motion conditions, in code order
-CONDITIONS = ("rest", "slow", "reversal", "moving")
-REST, SLOW, REVERSAL, MOVING = range(4)
+CONDITIONS = ("rest", "slow", "reversal", "moving", "standing")
+REST, SLOW, REVERSAL, MOVING, STANDING = range(5)
 #: the conditions whose spread is constant per joint (:func:`constant`): within them the features barely vary, and
 #: a fit on them extrapolates to no spread where they vanish; the moving condition keeps the spread model on speed
 #: and acceleration (:mod:`.events`)
-CONSTANT_SPREAD = (REST, SLOW, REVERSAL)
+CONSTANT_SPREAD = (REST, SLOW, REVERSAL, STANDING)
 #: a joint's condition has statistics only when the baseline holds at least this much of it [s] (40 windows of
 #: WINDOW_S, 4 above the tail's 90 % quantile: the task statistics' bar, :data:`~.event_fit.MIN_TASK_S`)
 MIN_CONDITION_S = 10.0
@@ -82,6 +93,7 @@ def condition(moving: NDArray, speed_rad_s: NDArray, target_rad: NDArray, period
     shifted = np.concatenate([np.repeat(target_rad[:1], k, axis=0), target_rad, np.repeat(target_rad[-1:], k, axis=0)])
     creeping = np.abs(shifted[2 * k :] - shifted[: -2 * k]) > TARGET_JITTER_RAD  # moved over CONTEXT_S
     out = np.where(~fast & (moving | creeping), SLOW, MOVING).astype(np.int8)
+    out[(out == MOVING) & ~fast & ~settled_moving(moving, period_s)] = STANDING  # its own target holds, others move
     out[rest] = REST
     back = max(1, int(round(SETTLE_S / period_s)))
     for j in range(out.shape[1]):
@@ -128,7 +140,7 @@ def constant(feats: NDArray) -> NDArray:
 
 
 def enough(cond: NDArray, ok: NDArray, period_s: float) -> NDArray:
-    """``(4, 6)``: which conditions a baseline's judged samples ``ok`` ``(n,)`` (pooled over its runs: ``cond``
+    """``(5, 6)``: which conditions a baseline's judged samples ``ok`` ``(n,)`` (pooled over its runs: ``cond``
     and ``ok`` concatenated) hold at least :data:`MIN_CONDITION_S` of, per joint."""
     return np.array([((cond == k) & ok[:, None]).sum(axis=0) * period_s >= MIN_CONDITION_S
                      for k in range(len(CONDITIONS))])
@@ -138,10 +150,11 @@ def motion_limit(feats: NDArray, cond: NDArray, judged: NDArray, coef: NDArray, 
                  cond_tail: NDArray, period_s: float, p_log: float, floor: NDArray | float = 0.0,
                  chances_share: float = 1.0) -> NDArray:
     """The limit ``(n, 6)`` of one channel where it is judged by the motion (not a paired baseline run): per
-    sample and joint the spread and tail of its condition (``cond_coef`` ``(4, 6, 4)``, ``cond_tail``
-    ``(4, 6, 3)``), a moving joint the wider of its condition's and that fitted on all samples
+    sample and joint the spread and tail of its condition (``cond_coef`` ``(5, 6, 4)``, ``cond_tail``
+    ``(5, 6, 3)``), a moving joint the wider of its condition's and that fitted on all samples
     (``coef`` ``(6, 4)``, ``tail`` ``(6, 3)``: anchored where the moving samples' own fit extrapolates to
-    no spread, at a stop); where the baseline has none for a condition of that joint (NaN: too few samples of
+    no spread, at a stop), a standing joint the wider of its condition's and a moving joint's (module docstring);
+    where the baseline has none for a condition of that joint (NaN: too few samples of
     it), the widest limit of the statistics the joint has there (all motions and every condition; a moving
     sample without moving statistics: the all-motions fit, which was fitted on the moving samples among others):
     a condition the baseline did not show is judged no tighter than any it did. The multiplier: every
@@ -153,7 +166,7 @@ def motion_limit(feats: NDArray, cond: NDArray, judged: NDArray, coef: NDArray, 
     have = np.isfinite(cond_coef).all(axis=2) & np.isfinite(cond_tail).all(axis=2)  # (k, 6)
     own = have[cond, np.arange(N_JOINTS)[None, :]]  # (n, 6)
     which = np.where(own, cond + 1, 0)  # 0: all motions (a moving joint, or widened)
-    widen = ~own | (cond == MOVING)
+    widen = ~own | (cond == MOVING) | (cond == STANDING)
     step = max(1, int(round(WINDOW_S / period_s)))
     chances = 0
     for a in range(0, n, step):
@@ -166,5 +179,7 @@ def motion_limit(feats: NDArray, cond: NDArray, judged: NDArray, coef: NDArray, 
                      for c, t in [(coef, tail)] + models])  # (1 + k, n, 6)
     lims[1:][~np.broadcast_to(have[:, None, :], lims[1:].shape)] = 0.0
     out = np.take_along_axis(lims, which[None], axis=0)[0]
-    widest = np.where(cond == MOVING, np.maximum(lims[0], lims[MOVING + 1]), lims.max(axis=0))
+    moving = np.maximum(lims[0], lims[MOVING + 1])  # a moving joint, and a standing one never below it
+    widest = np.where(cond == MOVING, moving,
+                      np.where((cond == STANDING) & own, np.maximum(moving, out), lims.max(axis=0)))
     return np.where(widen, widest, out)

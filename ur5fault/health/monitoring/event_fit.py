@@ -53,7 +53,7 @@ def fit_events(segs: list[tuple[NDArray, NDArray, NDArray, NDArray]], period_s: 
                ) -> tuple[NDArray, NDArray, NDArray, NDArray]:
     """Per channel, spread coefficients ``(6, 4)`` on all segments and the tail ``(6, 3)`` of the normalised
     window maxima, stacked ``(2, 6, 4)``, ``(2, 6, 3)``; and the same per motion condition on its samples alone,
-    ``(2, 4, 6, 4)``, ``(2, 4, 6, 3)``, NaN for a joint with under :data:`~.conditions.MIN_CONDITION_S` of the
+    ``(2, 5, 6, 4)``, ``(2, 5, 6, 3)``, NaN for a joint with under :data:`~.conditions.MIN_CONDITION_S` of the
     condition (:mod:`.conditions`). With two or more segments each segment is normalised by the spread fitted on
     the others (leave one out), so the tail holds how far a healthy run the model was not fitted on strays, not
     how well it fits its own."""

@@ -15,7 +15,17 @@ from ...logs.measured import MeasuredLog, same_period
 from ...sim.axes import JOINT_NAMES, N_JOINTS
 from . import paired
 from .baseline import Baseline
-from .changes import BLOCK_S, bar, block_reference, estimates, find_changes, keep_mask, strongest
+from .changes import (
+    BLOCK_S,
+    NEEDS_OWN_MOTION,
+    bar,
+    block_reference,
+    estimates,
+    find_changes,
+    keep_mask,
+    still_joints,
+    strongest,
+)
 from .conditions import motion_limit
 from .coverage import MIN_BEYOND_S, motion_notes, payload_notes
 from .event_fit import segment
@@ -245,8 +255,23 @@ def assess(baseline: Baseline, obs: Observed, channels: Sequence[str] = DEFAULT_
             "event_limit_median": {c: {JOINT_NAMES[j]: float(v[j]) for j in range(N_JOINTS)}
                                    for c, v in typical.items()},
             "notes": blind_joints(typical, moved_peak(obs)) + weak_change_test(baseline, block_judged, block_share)
+            + still_note(obs)
             + ([] if baseline.motion_max is None else motion_notes(baseline.motion_max, obs))
             + ([] if baseline.payloads_kg is None else payload_notes(baseline.payloads_kg, obs))}
+
+
+def still_note(obs: Observed) -> list[str]:
+    """A note naming the joints the change test does not judge for the effects that need their own motion
+    (:func:`.changes.still_joints`), or none."""
+    still = [JOINT_NAMES[j] for j in np.flatnonzero(still_joints(obs))]
+    if not still:
+        return []
+    kinds = ", ".join(k.replace("_", " ") for k in NEEDS_OWN_MOTION)
+    part_s = obs.e.shape[0] * obs.period_s
+    return [f"{', '.join(still)}: held still in the part the change test reads (first {part_s:.0f} s), "
+            f"so not judged for a change of {kinds}: a held joint's current is its holding torque plus the "
+            "static friction it stopped against, which the log does not show (only a current-sensor offset and the "
+            "gear stiffness are judged there)"]
 
 
 #: a joint whose typical event limit is this many times the median of the six joints' is called out: a healthy
