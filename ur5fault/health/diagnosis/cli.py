@@ -78,8 +78,8 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
     refuse_unknown_payload([*entries, *base])  # before the models are loaded and the logs read
     require_sklearn()
     results = (JSON_FILE, REPORT_FILE, FIGURE_FILE)
-    check_new_output(args.out, folder=True, results=results, replace=args.replace)
     window_s = check_schema(load_models(args.detector)[1], args.detector)  # refused before the replay
+    check_new_output(args.out, folder=True, results=results, replace=args.replace)  # after the input's refusals
     overlay = Overlay.load(args.model) if args.model else None
     params, effects = (dict(overlay.params), overlay.effects) if overlay else (None, ())
     refuse_log_owned(params, effects, [])  # a payload in the overlay: before any log is read
