@@ -220,6 +220,10 @@ def load_models(folder: str | Path) -> tuple[Models, dict[str, Any]]:
         if _benchmark_report(folder).get("shuffled_labels") is True:  # the control run saves none
             raise ConfigFileError(f"{folder}: a shuffled-label control (`benchmark --shuffle-labels`), which saves no "
                                   "classifiers; give the folder of the benchmark run without it")
+        inner = Path(folder) / "benchmark"  # a campaign folder given for its report folder
+        if (inner / MODELS_DIR / CLASSIFIERS_FILE).exists() and (inner / MODELS_DIR / SCHEMA_FILE).exists():
+            raise ConfigFileError(f"{folder}: no saved classifiers ({CLASSIFIERS_FILE} and {SCHEMA_FILE}); "
+                                  f"did you mean {inner} (where `ur5fault benchmark` saved them)?")
         raise ConfigFileError(f"{folder}: no saved classifiers ({CLASSIFIERS_FILE} and {SCHEMA_FILE}); "
                               "run `ur5fault benchmark` on a campaign first")
     schema = read_json_stored(schema_path, RESAVE)
