@@ -454,7 +454,8 @@ def test_a_wrong_detector_is_refused_before_an_earlier_report(logs, tmp_path, ca
     out = tmp_path / "o"
     out.mkdir()
     (out / "report.md").write_text("earlier")
-    rc = main(["diagnose", str(logs["healthy"]), "--format", "sim", "--detector", str(tmp_path / "none"),
+    (tmp_path / "camp").mkdir()  # an existing folder of the wrong kind (a missing one: the --out check first)
+    rc = main(["diagnose", str(logs["healthy"]), "--format", "sim", "--detector", str(tmp_path / "camp"),
                "--out", str(out)])
     err = capsys.readouterr().err.strip()
     assert rc == 2 and "no saved classifiers" in err and "earlier result" not in err, err

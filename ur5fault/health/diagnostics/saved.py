@@ -203,15 +203,9 @@ def unverified_notes(folder: str | Path) -> list[str]:
             f"the classifiers' checksum as they are in the file); {RESAVE} to have it checked"]
 
 
-def load_models(folder: str | Path) -> tuple[Models, dict[str, Any]]:
-    """The saved classifiers and their schema from a ``models`` folder (or the report folder holding one).
-
-    Raises:
-        ConfigFileError: no saved models there, or the file holds a type outside scikit-learn and numpy.
-        StoredFileError: a file changed since it was saved, or the two files come from different saves.
-    """
-    import skops.io as sio
-
+def models_folder(folder: str | Path) -> Path:
+    """The ``models`` folder of ``folder`` (itself, or the report folder holding one), refused in one line where
+    it holds no saved classifiers (what :func:`load_models` reads; cheap: ``diagnose`` checks it before --out)."""
     folder = Path(folder)
     if not (folder / SCHEMA_FILE).exists() and (folder / MODELS_DIR / SCHEMA_FILE).exists():
         folder = folder / MODELS_DIR
@@ -226,6 +220,20 @@ def load_models(folder: str | Path) -> tuple[Models, dict[str, Any]]:
                                   f"did you mean {inner} (where `ur5fault benchmark` saved them)?")
         raise ConfigFileError(f"{folder}: no saved classifiers ({CLASSIFIERS_FILE} and {SCHEMA_FILE}); "
                               "run `ur5fault benchmark` on a campaign first")
+    return folder
+
+
+def load_models(folder: str | Path) -> tuple[Models, dict[str, Any]]:
+    """The saved classifiers and their schema from a ``models`` folder (or the report folder holding one).
+
+    Raises:
+        ConfigFileError: no saved models there, or the file holds a type outside scikit-learn and numpy.
+        StoredFileError: a file changed since it was saved, or the two files come from different saves.
+    """
+    import skops.io as sio
+
+    folder = models_folder(folder)
+    path, schema_path = folder / CLASSIFIERS_FILE, folder / SCHEMA_FILE
     schema = read_json_stored(schema_path, RESAVE)
     if not isinstance(schema, dict):
         raise ConfigFileError(f"{schema_path}: not a schema of saved classifiers (not a JSON object); {RESAVE}")
