@@ -434,6 +434,33 @@ def test_real_nist_log_few_seconds_diagnosed_without_motor_encoders(detector, tm
                 assert est["confounded"] and est["variance_inflation"] > MAX_VIF
 
 
+def test_a_campaign_folder_given_as_the_detector_points_at_its_benchmark(tmp_path):
+    """`--detector DIR` of a campaign folder whose DIR/benchmark holds the classifiers said only "no saved
+    classifiers ...; run ur5fault benchmark" (a newcomer probe)."""
+    from ur5fault.health.diagnostics.saved import CLASSIFIERS_FILE, MODELS_DIR, load_models
+
+    models = tmp_path / "camp" / "benchmark" / MODELS_DIR
+    models.mkdir(parents=True)
+    with pytest.raises(ConfigFileError, match="run `ur5fault benchmark`"):
+        load_models(tmp_path / "camp")
+    for name in (CLASSIFIERS_FILE, SCHEMA_FILE):
+        (models / name).write_text("{}")
+    with pytest.raises(ConfigFileError, match=f"did you mean {tmp_path / 'camp' / 'benchmark'} "):
+        load_models(tmp_path / "camp")
+
+
+def test_a_wrong_detector_is_refused_before_an_earlier_report(logs, tmp_path, capsys):
+    """The input's refusal first, with its real reason; the --out/--replace check after (a newcomer probe)."""
+    out = tmp_path / "o"
+    out.mkdir()
+    (out / "report.md").write_text("earlier")
+    (tmp_path / "camp").mkdir()  # an existing folder of the wrong kind (a missing one: the --out check first)
+    rc = main(["diagnose", str(logs["healthy"]), "--format", "sim", "--detector", str(tmp_path / "camp"),
+               "--out", str(out)])
+    err = capsys.readouterr().err.strip()
+    assert rc == 2 and "no saved classifiers" in err and "earlier result" not in err, err
+
+
 def test_a_shuffled_label_control_given_as_the_detector_is_named(tmp_path, capsys):
     """`--detector` of a `benchmark --shuffle-labels` folder said only "no saved classifiers" (a newcomer probe)."""
     (tmp_path / "metrics.json").write_text(json.dumps({"shuffled_labels": True}))

@@ -108,6 +108,18 @@ def test_a_folder_without_inspections_gets_advice_it_can_follow(tmp_path, capsys
         assert len(err) == 1 and words in err[0], err
 
 
+def test_a_fault_campaign_folder_is_refused_before_its_earlier_benchmark(tmp_path, capsys):
+    """`prognose DIR` of a fault campaign whose DIR/benchmark holds `ur5fault benchmark`'s report was refused with
+    "--out DIR/benchmark/report.md: an earlier result is there; give --replace", not why (a newcomer probe)."""
+    fault = tmp_path / "fault"
+    (fault / "benchmark").mkdir(parents=True)
+    (fault / "manifest.json").write_text(json.dumps({"name": "default", "kind": "fault", "state": "complete"}))
+    (fault / "benchmark" / "report.md").write_text("a diagnostics report")
+    assert main(["prognose", str(fault)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "not a life campaign" in err[0] and "earlier result" not in err[0], err
+
+
 def test_a_gap_in_the_failure_feature_is_named_not_blamed_on_the_fleet_size(tmp_path, capsys):
     """A NaN in tcp_dev_max_mm of a hand-edited table was refused with the estimators' numpy message and the advice
     "(a larger fleet, shorter inspection intervals or a longer max_cycles)", which no fleet size fixes."""

@@ -49,7 +49,7 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
     from ...twin.replay import refuse_log_owned
     from ...util.results import check_new_output, present, result_folder, said_written
     from ..diagnostics.classifier import require_sklearn
-    from ..diagnostics.saved import load_models
+    from ..diagnostics.saved import load_models, models_folder
     from . import diagnose, robot_baseline
     from .report import FIGURE_FILE, JSON_FILE, REPORT_FILE, write_diagnosis
     from .score import check_schema
@@ -78,6 +78,8 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
     refuse_unknown_payload([*entries, *base])  # before the models are loaded and the logs read
     require_sklearn()
     results = (JSON_FILE, REPORT_FILE, FIGURE_FILE)
+    if Path(args.detector).exists():  # a folder of the wrong kind: its own reason before a word on --out
+        models_folder(args.detector)
     check_new_output(args.out, folder=True, results=results, replace=args.replace)
     window_s = check_schema(load_models(args.detector)[1], args.detector)  # refused before the replay
     overlay = Overlay.load(args.model) if args.model else None

@@ -117,7 +117,8 @@ def _report(d: dict[str, Any]) -> str:
              _baseline(d.get("baseline"), d["flag_threshold"]["from"] == ROBOT_THRESHOLD_FROM,
                        d["flag_threshold"].get("p_fault")), "",
              f"**{d['n_flagged']} of {d['n_windows']} windows flagged.**", "",
-             "| window [s] | p(fault) | flagged | likeliest joint | likeliest kinds there (size, interval) |",
+             "| window [s] | p(fault) | flagged | likeliest joint "
+             "| likeliest kinds there (size; the two halves' estimates) |",
              "| --- | --- | --- | --- | --- |"]
     for w in d["windows"]:
         js = [j for j in w["joints"] if j["p_fault_joint"] is not None]
@@ -127,7 +128,7 @@ def _report(d: dict[str, Any]) -> str:
             kinds = "; ".join(
                 f"{k['kind']} {k['p_given_fault']:.2f}" + (" (cannot tell)" if k["cannot_tell"] else
                                                             f" ({_fmt(k['size'], k['unit'])}" +
-                                                            (f", {k['interval'][0]:.3g}..{k['interval'][1]:.3g})"
+                                                            (f"; halves {k['interval'][0]:.3g}..{k['interval'][1]:.3g})"
                                                              if k["interval"] else ")"))
                 for k in top["kinds"])
             noise = top.get("current_noise_ratio_rest")

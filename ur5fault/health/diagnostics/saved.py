@@ -203,6 +203,26 @@ def unverified_notes(folder: str | Path) -> list[str]:
             f"the classifiers' checksum as they are in the file); {RESAVE} to have it checked"]
 
 
+def models_folder(folder: str | Path) -> Path:
+    """The ``models`` folder of ``folder`` (itself, or the report folder holding one), refused in one line where
+    it holds no saved classifiers (what :func:`load_models` reads; cheap: ``diagnose`` checks it before --out)."""
+    folder = Path(folder)
+    if not (folder / SCHEMA_FILE).exists() and (folder / MODELS_DIR / SCHEMA_FILE).exists():
+        folder = folder / MODELS_DIR
+    path, schema_path = folder / CLASSIFIERS_FILE, folder / SCHEMA_FILE
+    if not path.exists() or not schema_path.exists():
+        if _benchmark_report(folder).get("shuffled_labels") is True:  # the control run saves none
+            raise ConfigFileError(f"{folder}: a shuffled-label control (`benchmark --shuffle-labels`), which saves no "
+                                  "classifiers; give the folder of the benchmark run without it")
+        inner = Path(folder) / "benchmark"  # a campaign folder given for its report folder
+        if (inner / MODELS_DIR / CLASSIFIERS_FILE).exists() and (inner / MODELS_DIR / SCHEMA_FILE).exists():
+            raise ConfigFileError(f"{folder}: no saved classifiers ({CLASSIFIERS_FILE} and {SCHEMA_FILE}); "
+                                  f"did you mean {inner} (where `ur5fault benchmark` saved them)?")
+        raise ConfigFileError(f"{folder}: no saved classifiers ({CLASSIFIERS_FILE} and {SCHEMA_FILE}); "
+                              "run `ur5fault benchmark` on a campaign first")
+    return folder
+
+
 def load_models(folder: str | Path) -> tuple[Models, dict[str, Any]]:
     """The saved classifiers and their schema from a ``models`` folder (or the report folder holding one).
 
@@ -212,16 +232,8 @@ def load_models(folder: str | Path) -> tuple[Models, dict[str, Any]]:
     """
     import skops.io as sio
 
-    folder = Path(folder)
-    if not (folder / SCHEMA_FILE).exists() and (folder / MODELS_DIR / SCHEMA_FILE).exists():
-        folder = folder / MODELS_DIR
+    folder = models_folder(folder)
     path, schema_path = folder / CLASSIFIERS_FILE, folder / SCHEMA_FILE
-    if not path.exists() or not schema_path.exists():
-        if _benchmark_report(folder).get("shuffled_labels") is True:  # the control run saves none
-            raise ConfigFileError(f"{folder}: a shuffled-label control (`benchmark --shuffle-labels`), which saves no "
-                                  "classifiers; give the folder of the benchmark run without it")
-        raise ConfigFileError(f"{folder}: no saved classifiers ({CLASSIFIERS_FILE} and {SCHEMA_FILE}); "
-                              "run `ur5fault benchmark` on a campaign first")
     schema = read_json_stored(schema_path, RESAVE)
     if not isinstance(schema, dict):
         raise ConfigFileError(f"{schema_path}: not a schema of saved classifiers (not a JSON object); {RESAVE}")

@@ -16,7 +16,7 @@ from ..diagnostics.report import clean
 from . import metrics as M
 from .figures import health_index_paths, rul_alpha_cone
 from .life_store import life_stats
-from .life_table import NEEDED, RECORDED_COLUMNS, check_recorded, load_inspections
+from .life_table import NEEDED, RECORDED_COLUMNS, check_recorded, load_inspections, refuse_other_folder
 from .prediction import ESTIMATORS, predict
 from .report import markdown
 from .spec import Failure
@@ -63,6 +63,7 @@ def run_prognose(folder: Path, out: Path | None = None, *, seed: int = 0, twin: 
     if folder.exists() and not folder.is_dir():  # before the output folder inside it is checked
         raise ConfigFileError(f"{folder}: a file, not a folder: give the folder a life campaign ran into")
     out = Path(out) if out is not None else folder / "benchmark"  # as `ur5fault benchmark DIR` writes DIR/benchmark
+    refuse_other_folder(folder)  # a folder of another kind (a fault campaign's): its reason before a word on --out
     check_new_output(out, folder=True, results=RESULT_FILES, replace=replace)  # before reading or simulating
     df, manifest = load_inspections(folder)
     failure = Failure(**manifest["failure"]) if isinstance(manifest.get("failure"), dict) else Failure()

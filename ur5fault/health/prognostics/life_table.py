@@ -37,6 +37,13 @@ def load_inspections(folder: Path) -> tuple[pd.DataFrame, dict[str, Any]]:
     return df, manifest
 
 
+def refuse_other_folder(folder: Path) -> None:
+    """Refuse an existing folder without an inspections table (a fault campaign's, an unfinished life campaign's)
+    with what it holds, as :func:`load_inspections` does: cheap, so said before the output place is checked."""
+    if Path(folder).is_dir() and not (Path(folder) / "inspections.parquet").is_file():
+        raise ConfigFileError(f"{Path(folder) / 'inspections.parquet'}: not found; {_what_is_there(Path(folder))}")
+
+
 def _what_is_there(folder: Path) -> str:
     """What to do about a folder without an inspections table, from what its manifest says it holds."""
     from ...campaign.store import read_manifest
