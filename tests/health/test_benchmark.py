@@ -638,7 +638,7 @@ def test_cli_prints_the_by_joint_detectors_auc_beside_the_run_level_one(tmp_path
     metrics = {"notes": [], "dataset": {"n_train": 10, "n_test": 4}, "feature_set": "both", "shuffled_labels": False,
                "detection": {"auc_all": 1.0}, "detection_by_joint": {"auc_all": 0.5},
                "localisation": {"accuracy": 0.75}, "kind": {"accuracy": 0.5}, "backlash": {"per_joint": {}},
-               "out": str(tmp_path)}
+               "out": str(tmp_path), "replaced": False}
     monkeypatch.setattr(diagnostics, "run_benchmark", lambda *a, **k: metrics)
     assert main(["benchmark", str(tmp_path)]) == 0
     out = capsys.readouterr().out
@@ -694,7 +694,8 @@ def test_stages_on_a_bar_and_quiet_switches_it_off(tmp_path, monkeypatch, capsys
                     ("desc", "benchmark: writing the report"), ("update", 1), ("close",)]
     metrics = {"notes": [], "dataset": {"n_train": 10, "n_test": 4}, "feature_set": "both", "shuffled_labels": False,
                "detection": {"auc_all": 1.0}, "detection_by_joint": None, "localisation": {"accuracy": 0.75},
-               "kind": {"accuracy": 0.5}, "backlash": {"per_joint": {}}, "out": str(tmp_path)}
+               "kind": {"accuracy": 0.5}, "backlash": {"per_joint": {}}, "out": str(tmp_path),
+               "replaced": False}
     given = []
     monkeypatch.setattr(diagnostics, "run_benchmark", lambda *a, **k: given.append(k["progress"]) or metrics)
     assert main(["benchmark", str(train_dir)]) == 0 and main(["benchmark", str(train_dir), "--quiet"]) == 0
