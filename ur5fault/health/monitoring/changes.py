@@ -82,11 +82,15 @@ class Estimate:
     reason: str
 
 
+def moved_s(obs: Observed, rows: int | None = None) -> NDArray:
+    """``(6,)``: how long each joint's target moves over the logged samples of the first ``rows`` (all: None) [s]."""
+    return (obs.moving[:rows] & obs.logged[:rows, None]).sum(axis=0) * obs.period_s
+
+
 def still_joints(obs: Observed) -> NDArray:
     """``(6,)``: the joints whose target moves for less than :data:`MIN_OWN_MOTION_S` of the logged samples of the
     screened part (the samples the change test reads)."""
-    m = obs.e.shape[0]
-    return (obs.moving[:m] & obs.logged[:m, None]).sum(axis=0) * obs.period_s < MIN_OWN_MOTION_S
+    return moved_s(obs, obs.e.shape[0]) < MIN_OWN_MOTION_S
 
 
 def keep_mask(obs: Observed, over: NDArray) -> NDArray:

@@ -23,6 +23,7 @@ from .changes import (
     estimates,
     find_changes,
     keep_mask,
+    moved_s,
     still_joints,
     strongest,
 )
@@ -287,7 +288,7 @@ def moved_peak(obs: Observed) -> NDArray | None:
     (0.05 A on the standstill run's wrists), under any limit a spread can give, which says nothing of blindness."""
     if obs.current_peak_A is None:
         return None
-    moved = (obs.moving & obs.logged[:, None]).sum(axis=0) * obs.period_s >= MIN_BEYOND_S
+    moved = moved_s(obs) >= MIN_BEYOND_S
     return np.where(moved, obs.current_peak_A, np.nan)
 
 
