@@ -299,6 +299,35 @@ def test_benchmark_refuses_no_worker(tmp_path, capsys):
     assert err.count("\n") == 1 and "--jobs 0: must be a whole number of at least 1" in err
 
 
+def test_a_wrong_test_folder_is_refused_before_the_saved_classifiers_are_loaded(tmp_path, monkeypatch, capsys):
+    """`benchmark DIR --test nodir` loaded the saved classifiers (30 s for the diagnostics campaign's) before saying
+    that nodir does not exist: a missing folder, a life campaign's folder and a run's time series given for --test
+    are refused in one line first, as they are when given for DIR."""
+    from ur5fault.health.diagnostics import run
+
+    def not_now(*args, **kwargs):
+        raise AssertionError("the saved classifiers were loaded before --test was checked")
+
+    monkeypatch.setattr(run, "load_models", not_now)
+    d = tmp_path / "c"
+    d.mkdir()
+    with_twin(synthetic()).to_parquet(d / "features.parquet")
+    life = tmp_path / "life"
+    life.mkdir()
+    (life / "manifest.json").write_text('{"name": "life", "kind": "life", "state": "complete"}')
+    pd.DataFrame({"t_s": [0.0, 0.001], "q_FB_rad_j1": [0.0, 0.0]}).to_parquet(tmp_path / "run.parquet")
+    for other, said in (
+            (tmp_path / "nodir", f"{tmp_path / 'nodir'}: no such feature table (run `ur5fault campaign run` first)"),
+            (life, f"{life}: a life campaign's folder (inspections over the units' lives, no feature table of runs); "
+                   f"`ur5fault prognose {life}` benchmarks it"),
+            (tmp_path / "run.parquet", f"--test {tmp_path / 'run.parquet'}: a run's time series (`ur5fault "
+                                       "simulate`), not a campaign's feature table: give a campaign folder, e.g. "
+                                       "results/diagnostics")):
+        assert main(["benchmark", str(d), "--test", str(other), "--out", str(tmp_path / "rep")]) == 2
+        cap = capsys.readouterr()
+        assert cap.out == "" and cap.err == f"ur5fault: error: {said}\n"
+
+
 @pytest.mark.slow  # 40 s: two trainings
 def test_a_report_replaced_with_replace_is_said_replaced(tmp_path, capsys):
     """`benchmark --replace` over an earlier report said "wrote", where simulate, show and plot say "replaced"; so
