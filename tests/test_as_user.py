@@ -125,7 +125,7 @@ def test_shipped_campaigns_by_name_from_any_folder(tmp_path, monkeypatch):
     with pytest.raises(ConfigFileError, match="nope: no such file, and no shipped campaign of that name "
                                               r"\(shipped: default, diagnostics, diagnostics_other_motions, "
                                               r"diagnostics_reduced, diagnostics_urlog, paper, prognostics, "
-                                              r"prognostics_small\)"):
+                                              r"prognostics_small; `ur5fault campaign list` describes them\)"):
         load_campaign("nope")
     # a folder of that name (the campaign's own --out) is not the campaign file: `campaign run paper --out paper`
     # resumed by the same command read the folder ("paper: cannot read (Is a directory)")

@@ -144,7 +144,7 @@ def test_refusals_name_what_the_user_typed(tmp_path):
 
 
 @pytest.mark.parametrize("args, commands", [((), "(simulate, effects, data, show, campaign,"),
-                                            (("campaign",), "(run, status, show)")])
+                                            (("campaign",), "(run, status, show, list)")])
 def test_a_group_without_its_command_ends_its_help_with_one_error_line(args, commands):
     r = run(*args)
     assert r.returncode == 2 and "usage:" in r.stderr

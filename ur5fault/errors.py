@@ -12,6 +12,18 @@ import difflib
 from collections.abc import Iterable
 
 
+def close_names(name: object, choices: Iterable[str], n: int = 3) -> list[str]:
+    """The ``choices`` a mistyped ``name`` is likely meant to be (at most ``n``, closest first; none for a name that
+    is not a string): the "did you mean" of every unknown-name message."""
+    return difflib.get_close_matches(name, list(choices), n=n, cutoff=0.6) if isinstance(name, str) else []
+
+
+def did_you_mean(name: object, choices: Iterable[str], n: int = 3) -> str:
+    """``" (did you mean 'default'?)"``, or ``""`` when no choice is close to ``name``."""
+    close = close_names(name, choices, n)
+    return f" (did you mean {' or '.join(map(repr, close))}?)" if close else ""
+
+
 class Ur5FaultError(Exception):
     """Base class of every error ur5fault raises on bad input."""
 
@@ -29,9 +41,8 @@ class UnknownNameError(Ur5FaultError, KeyError):
     def __init__(self, kind: str, name: object, choices: Iterable[str], where: str = "") -> None:
         self.kind, self.name, self.choices = kind, name, sorted(choices)
         loc = f"{where}: " if where else ""
-        close = difflib.get_close_matches(str(name), self.choices, n=3, cutoff=0.6) if isinstance(name, str) else []
-        hint = f" (did you mean {' or '.join(map(repr, close))}?)" if close else ""
-        super().__init__(f"{loc}unknown {kind} {name!r}{hint}; valid: {', '.join(self.choices)}")
+        super().__init__(f"{loc}unknown {kind} {name!r}{did_you_mean(name, self.choices)}; valid: "
+                         f"{', '.join(self.choices)}")
 
 
 class ConfigFileError(Ur5FaultError, ValueError):

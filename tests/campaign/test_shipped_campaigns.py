@@ -71,3 +71,40 @@ def test_campaign_show_prints_a_shipped_campaign_to_copy(tmp_path, monkeypatch, 
     cap = capsys.readouterr()
     assert cap.out == "" and cap.err == ("ur5fault: error: unknown shipped campaign 'defaul' (did you mean "
                                          f"'default'?); valid: {', '.join(f.stem for f in FILES)}\n")
+
+
+def test_campaign_list_names_every_shipped_campaign_with_its_opening_sentence(capsys):
+    """A newcomer had no way to see which campaigns ship (a name was guessed at `campaign run`): `ur5fault campaign
+    list` prints one line per shipped file, its name and the first sentence of the comment the file opens with."""
+    from ur5fault.cli import main
+
+    assert main(["campaign", "list"]) == 0
+    cap = capsys.readouterr()
+    lines = cap.out.splitlines()
+    assert cap.err == "" and [line.split()[0] for line in lines[:len(FILES)]] == [f.stem for f in FILES]
+    for path, line in zip(FILES, lines):
+        comment = " ".join(" ".join(t[1:] for t in path.read_text().splitlines() if t.startswith("#")).split())
+        about = line[len(path.stem):].strip()
+        assert about and about.endswith(".") and comment.startswith(about), (path.name, about)
+    assert lines[FILES.index(CAMPAIGNS / "paper.yaml")].split(None, 1)[1] == (
+        "The seed paper's figures: Fig. 3, alpha = 0.1 deg on each joint in turn; Fig. 4, the shoulder at several "
+        "alpha.")
+    assert lines[len(FILES):] == ["", "run one: ur5fault campaign run NAME; its whole file (a copy to edit): "
+                                      "ur5fault campaign show NAME > my.yaml"]
+
+
+@pytest.mark.parametrize("typed, meant", [("defualt", "default"), ("papr.yaml", "paper")])
+def test_a_mistyped_shipped_campaign_name_gets_did_you_mean(typed, meant, tmp_path, monkeypatch, capsys):
+    """`campaign run defualt` listed every shipped name without saying which was meant: a near miss is named, with
+    the command that lists them; a name near none still lists them all."""
+    from ur5fault.cli import main
+
+    monkeypatch.chdir(tmp_path)
+    assert main(["campaign", "run", typed]) == 2
+    cap = capsys.readouterr()
+    assert cap.out == "" and cap.err == (f"ur5fault: error: {typed}: no such file, and no shipped campaign of that "
+                                         f"name; did you mean {meant!r}? (`ur5fault campaign list` lists them)\n")
+    assert main(["campaign", "run", "zzz"]) == 2
+    assert capsys.readouterr().err == ("ur5fault: error: zzz: no such file, and no shipped campaign of that name "
+                                       f"(shipped: {', '.join(f.stem for f in FILES)}; `ur5fault campaign list` "
+                                       "describes them)\n")

@@ -299,6 +299,35 @@ def test_benchmark_refuses_no_worker(tmp_path, capsys):
     assert err.count("\n") == 1 and "--jobs 0: must be a whole number of at least 1" in err
 
 
+def test_a_wrong_test_folder_is_refused_before_the_saved_classifiers_are_loaded(tmp_path, monkeypatch, capsys):
+    """`benchmark DIR --test nodir` loaded the saved classifiers (30 s for the diagnostics campaign's) before saying
+    that nodir does not exist: a missing folder, a life campaign's folder and a run's time series given for --test
+    are refused in one line first, as they are when given for DIR."""
+    from ur5fault.health.diagnostics import run
+
+    def not_now(*args, **kwargs):
+        raise AssertionError("the saved classifiers were loaded before --test was checked")
+
+    monkeypatch.setattr(run, "load_models", not_now)
+    d = tmp_path / "c"
+    d.mkdir()
+    with_twin(synthetic()).to_parquet(d / "features.parquet")
+    life = tmp_path / "life"
+    life.mkdir()
+    (life / "manifest.json").write_text('{"name": "life", "kind": "life", "state": "complete"}')
+    pd.DataFrame({"t_s": [0.0, 0.001], "q_FB_rad_j1": [0.0, 0.0]}).to_parquet(tmp_path / "run.parquet")
+    for other, said in (
+            (tmp_path / "nodir", f"{tmp_path / 'nodir'}: no such feature table (run `ur5fault campaign run` first)"),
+            (life, f"{life}: a life campaign's folder (inspections over the units' lives, no feature table of runs); "
+                   f"`ur5fault prognose {life}` benchmarks it"),
+            (tmp_path / "run.parquet", f"--test {tmp_path / 'run.parquet'}: a run's time series (`ur5fault "
+                                       "simulate`), not a campaign's feature table: give a campaign folder, e.g. "
+                                       "results/diagnostics")):
+        assert main(["benchmark", str(d), "--test", str(other), "--out", str(tmp_path / "rep")]) == 2
+        cap = capsys.readouterr()
+        assert cap.out == "" and cap.err == f"ur5fault: error: {said}\n"
+
+
 @pytest.mark.slow  # 40 s: two trainings
 def test_a_report_replaced_with_replace_is_said_replaced(tmp_path, capsys):
     """`benchmark --replace` over an earlier report said "wrote", where simulate, show and plot say "replaced"; so
@@ -312,8 +341,10 @@ def test_a_report_replaced_with_replace_is_said_replaced(tmp_path, capsys):
                       (["--test", str(other)], other / "benchmark_transfer")):
         for replace, said in (([], "wrote"), (["--replace"], "replaced")):
             assert main(["benchmark", str(d), *args, "--quiet", *replace]) == 0
-            last = capsys.readouterr().err.splitlines()[-1]
+            cap = capsys.readouterr()  # the result line on stdout, as every command's (was on stderr)
+            last = cap.out.splitlines()[-1]
             assert last.startswith(f"{said} {out}/report.md, metrics.json and figures in "), last
+            assert "metrics.json and figures" not in cap.err
 
 
 def test_scoring_needs_saved_classifiers_and_their_columns(tmp_path, capsys):
@@ -641,9 +672,12 @@ def test_cli_prints_the_by_joint_detectors_auc_beside_the_run_level_one(tmp_path
                "out": str(tmp_path), "replaced": False}
     monkeypatch.setattr(diagnostics, "run_benchmark", lambda *a, **k: metrics)
     assert main(["benchmark", str(tmp_path)]) == 0
-    out = capsys.readouterr().out
+    cap = capsys.readouterr()
+    out = cap.out
     said = "detection ROC AUC 1.000 (by joint, the detector `ur5fault diagnose` uses: 0.500); joint accuracy 0.750"
     assert said in out
+    # the closing line on stdout with the scores, as campaign run's and diagnose's (it was on stderr); no note here
+    assert out.splitlines()[-1].startswith(f"wrote {tmp_path}/report.md, metrics.json and figures in ") and not cap.err
     metrics["detection_by_joint"] = None  # no by-joint detector (too few single-joint faults): the line as before
     assert main(["benchmark", str(tmp_path)]) == 0
     assert "detection ROC AUC 1.000; joint accuracy 0.750; fault-kind accuracy 0.500" in capsys.readouterr().out

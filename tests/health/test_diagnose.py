@@ -260,6 +260,24 @@ def test_p_fault_is_the_calibrated_by_joint_score_and_grows_with_the_offset(logs
     assert told >= 1
 
 
+def test_the_console_line_says_which_number_is_p_fault_and_which_the_raw_score(logs, detector, calibrated_detector,
+                                                                              tmp_path, capsys):
+    """`diagnose` printed `p(fault) > 0.976` and, in a note, `the threshold 0.963` without saying that the first is
+    the calibrated probability and the second the detector's raw score it is read at; the line names both."""
+    for det, calibrated in ((calibrated_detector, True), (detector, False)):
+        capsys.readouterr()
+        d = _diagnose(logs["healthy"], det, tmp_path / str(calibrated))
+        out = capsys.readouterr().out
+        ft = d["flag_threshold"]
+        scale = (f"the calibrated probability at the detector's raw-score threshold {ft['score']:.3f}" if calibrated
+                 else "the detector's raw-score threshold itself (no calibration saved)")
+        assert out.startswith(f"{d['log']}: {d['n_flagged']} of {d['n_windows']} windows of "
+                              f"{d['detector']['window_s']:.3g} s flagged (p(fault) > {ft['p_fault']:.3f}, {scale}: "
+                              "the training runs' 5 % false-alarm point); largest p(fault) "), out
+        # two different numbers where calibrated (else the test could not tell them apart), one where not
+        assert (f"{ft['p_fault']:.3f}" != f"{ft['score']:.3f}") == calibrated
+
+
 def _rewrite_schema(src: Path, dst: Path, **changes) -> Path:
     import shutil
 

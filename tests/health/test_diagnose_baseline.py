@@ -200,7 +200,7 @@ def test_baseline_logs_are_used_and_reported_and_without_them_nothing_changes(lo
     report = (tmp_path / "with" / "report.md").read_text()
     assert "Baseline: 4 windows of 2 healthy log(s)" in report
     # which joint's healthy window the robot's threshold is: said where that threshold is the bar, not otherwise
-    said = f"is {t['set_by_joint']}'s score in a held-out healthy window" in report
+    said = f"is {t['set_by_joint']}'s raw score in a held-out healthy window" in report
     assert said == (d["flag_threshold"]["score"] > d["detector"]["threshold_5pct_false_alarms"]), report
     assert "No baseline of this robot" in (tmp_path / "plain" / "report.md").read_text()
     # the size estimates are the window's own, whatever the baseline

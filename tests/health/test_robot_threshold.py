@@ -94,8 +94,9 @@ def test_the_joint_whose_healthy_windows_set_the_threshold_is_named(monkeypatch)
     s = t.summary()
     assert s["set_by_joint"] == "elbow_joint" and s["held_out_max_by_joint"]["wrist_1_joint"] == pytest.approx(1.55)
     text = set_by_sentence(s)
-    assert text.startswith("the threshold 15.500 is elbow_joint's score in a held-out healthy window; each joint's "
-                           "largest held-out healthy score: shoulder_pan_joint 1.55,") and "elbow_joint 15.50" in text
+    assert text.startswith("the raw-score threshold 15.500 (the detector's score, before calibration to p(fault)) is "
+                           "elbow_joint's raw score in a held-out healthy window; each joint's largest held-out "
+                           "healthy raw score: shoulder_pan_joint 1.55,") and "elbow_joint 15.50" in text
     assert set_by_sentence({"score": 1.0}) == ""  # a summary without the joints (written before) says nothing
 
 
@@ -117,7 +118,8 @@ def test_with_enough_windows_the_joint_at_the_conformal_rank_is_named(monkeypatc
     assert t.rank == 39 and t.score == pytest.approx(np.sort(t.held_out_scores)[38])
     assert t.score < max(t.held_out_scores)
     assert t.set_by_joint == 3 and t.held_out_max_by_joint[3] > t.score
-    assert set_by_sentence(t.summary()).startswith(f"the threshold {t.score:.3f} is wrist_1_joint's score")
+    assert set_by_sentence(t.summary()).startswith(f"the raw-score threshold {t.score:.3f} (the detector's score, "
+                                                   "before calibration to p(fault)) is wrist_1_joint's raw score")
 
 
 def test_the_report_names_the_joint_only_where_the_robots_threshold_is_the_bar():
@@ -130,7 +132,8 @@ def test_the_report_names_the_joint_only_where_the_robots_threshold_is_the_bar()
     t = {"n_held_out_windows": 4, "groups": ["a", "b"], "rank": 5, "score": 0.97, "false_alarm_bound": 0.2,
          "held_out_max_by_joint": {"wrist_2_joint": 0.97, "wrist_1_joint": 0.1}, "set_by_joint": "wrist_2_joint"}
     b = {"rules": rules, "robot_threshold": t, "n_windows": 4, "logs": ["a", "b"], "mapping": "m", "reference": "r"}
-    said = "the threshold 0.970 is wrist_2_joint's score in a held-out healthy window"
+    said = ("the raw-score threshold 0.970 (the detector's score, before calibration to p(fault)) is wrist_2_joint's "
+            "raw score in a held-out healthy window")
     assert said in _baseline(b, robot_bar=True) and "wrist_1_joint 0.10" in _baseline(b, robot_bar=True)
     assert said not in _baseline(b, robot_bar=False) and "The robot's own threshold" in _baseline(b, False)
 

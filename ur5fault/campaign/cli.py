@@ -1,4 +1,4 @@
-"""``ur5fault campaign run|status|show`` and ``ur5fault plot``."""
+"""``ur5fault campaign run|status|show|list`` and ``ur5fault plot``."""
 
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ from .spec import shipped_campaigns
 
 def register(sub) -> None:
     c = sub.add_parser("campaign", help="run a YAML fault campaign into Parquet feature tables")
-    csub = c.add_subparsers(dest="campaign_command", metavar="{run,status,show}", parser_class=type(c))
+    csub = c.add_subparsers(dest="campaign_command", metavar="{run,status,show,list}", parser_class=type(c))
     c.set_defaults(func=lambda args: _usage(c))
     r = csub.add_parser("run", help="run (or resume) a campaign",
                         **examples("ur5fault campaign run default    # campaigns/default.yaml, shipped -> "
@@ -55,6 +55,9 @@ def register(sub) -> None:
                                     "ur5fault campaign show paper"))
     sh.add_argument("name", metavar="NAME", help=f"a shipped campaign: {', '.join(shipped_campaigns())}")
     sh.set_defaults(func=cmd_show)
+    ls = csub.add_parser("list", help="the campaigns shipped with ur5fault, one a line: its name and what it is",
+                         **examples("ur5fault campaign list", "ur5fault campaign run paper    # one of them"))
+    ls.set_defaults(func=cmd_list)
     p = sub.add_parser("plot", help="draw the paper's backlash figures and a severity figure per swept effect (PNG)",
                        **examples("ur5fault campaign run paper && ur5fault plot results/paper    # -> "
                                   "results/paper/plots/",
@@ -71,7 +74,7 @@ def register(sub) -> None:
 
 
 def _usage(parser: argparse.ArgumentParser) -> int:
-    """``ur5fault campaign`` without run, status or show (:func:`..util.usage.missing_command`)."""
+    """``ur5fault campaign`` without run, status, show or list (:func:`..util.usage.missing_command`)."""
     from ..util.usage import missing_command
 
     return missing_command(parser)
@@ -148,6 +151,19 @@ def cmd_show(args: argparse.Namespace) -> int:
     if name not in names:
         raise UnknownNameError("shipped campaign", args.name, names)
     sys.stdout.write((SHIPPED_DIR / f"{name}.yaml").read_text(encoding="utf-8"))
+    return 0
+
+
+def cmd_list(args: argparse.Namespace) -> int:
+    """The shipped campaigns on stdout, one a line: the name and the first sentence of its file's opening comment."""
+    from .spec import shipped_campaign_about
+
+    names = shipped_campaigns()
+    width = max(map(len, names))
+    for name in names:
+        print(f"{name:{width}s}  {shipped_campaign_about(name)}".rstrip())
+    print("\nrun one: ur5fault campaign run NAME; its whole file (a copy to edit): "
+          "ur5fault campaign show NAME > my.yaml")
     return 0
 
 

@@ -38,6 +38,7 @@ from __future__ import annotations
 import dataclasses
 import hashlib
 import os
+import re
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -120,6 +121,19 @@ def shipped_campaigns() -> list[str]:
     return sorted(p.stem for p in SHIPPED_DIR.glob("*.yaml"))
 
 
+def shipped_campaign_about(name: str) -> str:
+    """What the shipped campaign ``name`` is, in one line: the first sentence of the comment its file opens with
+    (``""`` for a file that opens with none); ``ur5fault campaign list`` prints it beside the name."""
+    comment = []
+    for line in (SHIPPED_DIR / f"{name}.yaml").read_text(encoding="utf-8").splitlines():
+        if not line.startswith("#"):
+            break
+        comment.append(line[1:])
+    text = " ".join(" ".join(comment).split())
+    # a sentence ends at . ! or ? before a capital or a `command` ("Fig. 3" and "s.d. with" do not end one)
+    return re.split(r"(?<=[.!?])\s+(?=[A-Z`])", text, maxsplit=1)[0]
+
+
 def resolve_campaign(path: str | Path) -> Path:
     """A campaign file: an existing path, or the name of a shipped campaign (``paper`` or ``paper.yaml``).
 
@@ -140,10 +154,14 @@ def resolve_campaign(path: str | Path) -> Path:
     shipped = SHIPPED_DIR / (p.name if p.suffix in (".yaml", ".yml") else f"{p.name}.yaml")
     if shipped.is_file():
         return shipped
-    from ..errors import ConfigFileError
+    from ..errors import ConfigFileError, close_names
 
+    names = shipped_campaigns()
+    close = close_names(p.stem if p.suffix in (".yaml", ".yml") else p.name, names)  # a mistyped shipped name
+    hint = (f"; did you mean {' or '.join(map(repr, close))}? (`ur5fault campaign list` lists them)" if close else
+            f" (shipped: {', '.join(names)}; `ur5fault campaign list` describes them)")
     raise ConfigFileError(f"{p}: {'a folder, not a campaign file' if p.is_dir() else 'no such file'}, and no shipped "
-                          f"campaign of that name (shipped: {', '.join(shipped_campaigns())})")
+                          f"campaign of that name{hint}")
 
 
 def load_campaign(path: str | Path, out: str | Path | None = None, overlay: str | Path | None = None,

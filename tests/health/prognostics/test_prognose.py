@@ -80,10 +80,14 @@ def test_a_report_replaced_with_replace_is_said_replaced(tmp_path, capsys):
     synthetic_fleet(12, 1).to_parquet(fleet / "inspections.parquet")
     out = tmp_path / "bench"
     assert main(["prognose", str(fleet), "--out", str(out)]) == 0
-    assert capsys.readouterr().err.splitlines()[-1].startswith(f"wrote {out}/report.md, metrics.json and figures in ")
+    cap = capsys.readouterr()  # the result line on stdout, as every command's (was on stderr)
+    assert cap.out.splitlines()[-1].startswith(f"wrote {out}/report.md, metrics.json and figures in ")
+    assert "metrics.json and figures" not in cap.err
     assert main(["prognose", str(fleet), "--out", str(out), "--replace"]) == 0
-    last = capsys.readouterr().err.splitlines()[-1]
+    cap = capsys.readouterr()
+    last = cap.out.splitlines()[-1]
     assert last.startswith(f"replaced {out}/report.md, metrics.json and figures in "), last
+    assert "metrics.json and figures" not in cap.err
     assert "replaced" not in json.loads((out / "metrics.json").read_text())  # said, not stored
 
 

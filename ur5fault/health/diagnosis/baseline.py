@@ -161,9 +161,10 @@ def set_by_sentence(threshold: dict[str, Any]) -> str:
     if not by_joint or joint is None:
         return ""
     listed = ", ".join(f"{n} {v:.2f}" for n, v in by_joint.items())
-    return (f"the threshold {threshold['score']:.3f} is {joint}'s score in a held-out healthy window; each joint's "
-            f"largest held-out healthy score: {listed}; on a joint whose healthy windows stay far below the threshold "
-            "a fault is flagged only once its score passes it")
+    return (f"the raw-score threshold {threshold['score']:.3f} (the detector's score, before calibration to p(fault)) "
+            f"is {joint}'s raw score in a held-out healthy window; each joint's largest held-out healthy raw score: "
+            f"{listed}; on a joint whose healthy windows stay far below the threshold a fault is flagged only once its "
+            "score passes it")
 
 
 @dataclasses.dataclass(frozen=True)

@@ -109,8 +109,11 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
     earlier = present(Path(args.out) / name for name in results)  # with --replace: said as replaced
     with result_folder(args.out, results, args.replace) as out:  # one set: a stop between files is marked
         paths = write_diagnosis(d, out)
+    ft = d["flag_threshold"]  # p(fault) and the raw score it was calibrated from: two numbers, each named
+    scale = (f"the calibrated probability at the detector's raw-score threshold {ft['score']:.3f}"
+             if d["detector"]["calibrated"] else "the detector's raw-score threshold itself (no calibration saved)")
     print(f"{d['log']}: {d['n_flagged']} of {d['n_windows']} windows of {d['detector']['window_s']:.3g} s flagged "
-          f"(p(fault) > {d['flag_threshold']['p_fault']:.3f}: {d['flag_threshold']['from']}); largest p(fault) "
+          f"(p(fault) > {ft['p_fault']:.3f}, {scale}: {ft['from']}); largest p(fault) "
           f"{max(w['p_fault'] for w in d['windows']):.3f}")
     if baseline is not None:
         print(f"baseline: {baseline.n_windows} windows of {len(baseline.logs)} healthy log(s)")

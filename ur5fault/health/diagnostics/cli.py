@@ -72,5 +72,5 @@ def cmd_benchmark(args: argparse.Namespace) -> int:
         why = v.get("note", f"{v['n_test']} test runs")
         print(f"  backlash J{j}: " + (f"alpha_90 = {a90:.3g} deg" if math.isfinite(a90) else f"no alpha_90 ({why})"))
     print(f"{written(m['replaced'])} {m['out']}/report.md, metrics.json and figures in "
-          f"{time.perf_counter() - t0:.1f} s", file=sys.stderr)
+          f"{time.perf_counter() - t0:.1f} s")  # on stdout, as every command's result line (simulate's aside)
     return 0

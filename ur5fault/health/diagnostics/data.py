@@ -89,6 +89,18 @@ class Dataset:
         return getattr(self, side)[list(self.inputs)].to_numpy(dtype=float)
 
 
+def _missing_labels(features: pd.DataFrame) -> list[str]:
+    return [c for c in LABEL_COLUMNS + ("status",) if c not in features and c != "fault_size_unit"]
+
+
+def refuse_time_series(features: pd.DataFrame, where: str = "") -> None:
+    """Refuse a run's time series (``ur5fault simulate``'s file) given for a campaign's feature table, in one line
+    (``where``: its prefix, e.g. ``"--test run.parquet: "``)."""
+    if "t_s" in features and _missing_labels(features):
+        raise ConfigFileError(f"{where}a run's time series (`ur5fault simulate`), not a campaign's feature table: "
+                              "give a campaign folder, e.g. results/diagnostics")
+
+
 def load_dataset(features: pd.DataFrame | str | Path, feature_set: str = "paper") -> Dataset:
     """Split a feature table (or a campaign folder / features.parquet path) into a :class:`Dataset` with the
     inputs of ``feature_set`` (one of :data:`FEATURE_SETS`).
@@ -99,10 +111,8 @@ def load_dataset(features: pd.DataFrame | str | Path, feature_set: str = "paper"
     """
     if not isinstance(features, pd.DataFrame):
         features = load_features(Path(features))
-    missing = [c for c in LABEL_COLUMNS + ("status",) if c not in features and c != "fault_size_unit"]
-    if missing and "t_s" in features:  # a run's time series, not a campaign's table of features
-        raise ConfigFileError("a run's time series (`ur5fault simulate`), not a campaign's feature table: give a "
-                              "campaign folder, e.g. results/diagnostics")
+    refuse_time_series(features)
+    missing = _missing_labels(features)
     if missing:
         raise ConfigFileError(f"feature table lacks {', '.join(missing)}: made before the label columns; "
                               f"rerun the campaign into a new folder")

@@ -18,12 +18,13 @@ from .data import (
     load_dataset,
     load_features,
     refuse_life_folder,
+    refuse_time_series,
 )
 from .evaluation import evaluate
 from .models import Models
 from .predictions import FILE as PREDICTIONS_FILE
 from .report import write_report
-from .saved import MODELS_DIR, load_models, save_models, unverified_notes
+from .saved import MODELS_DIR, load_models, models_folder, save_models, unverified_notes
 from .transfer import against_training_split, mean_run_duration_s, refuse_training_runs, setup_notes
 
 RESULT_FILES = ("report.md", "metrics.json", PREDICTIONS_FILE, MODELS_DIR)
@@ -59,6 +60,15 @@ def run_benchmark(campaign_dir: str | Path, out: str | Path | None = None, *, se
     refuse_life_folder(campaign_dir)  # said before a word on --out, where prognose writes its report too
     check_new_output(out_dir, folder=True, results=RESULT_FILES, replace=replace)  # before reading or training
     features = load_features(campaign_dir)
+    if test_dir is not None:  # the other campaign checked before the saved classifiers are loaded (30 s for the
+        # diagnostics campaign's): a mistyped --test was refused only after them
+        if shuffle_labels:
+            raise ParameterError("--shuffle-labels trains new classifiers; --test scores saved ones: use one of them")
+        test_dir = Path(test_dir)
+        other = load_features(test_dir)  # there, a campaign's feature table (not a life campaign's folder)
+        refuse_time_series(other, f"--test {test_dir}: ")
+        models_folder(base / "benchmark")  # classifiers saved there (the cheap part of load_models' check)
+        refuse_training_runs(features, other, campaign_dir, test_dir)
     thr = PAPER_TCP_MM
     manifest = campaign_dir / "manifest.json"
     man: dict[str, Any] = {}
@@ -74,13 +84,8 @@ def run_benchmark(campaign_dir: str | Path, out: str | Path | None = None, *, se
     if feature_set is None:
         feature_set = "both" if has_twin_features(features) else "paper"
     if test_dir is not None:
-        if shuffle_labels:
-            raise ParameterError("--shuffle-labels trains new classifiers; --test scores saved ones: use one of them")
-        test_dir = Path(test_dir)
         with _Stages(progress, "scoring the saved classifiers", "writing the report") as bar:
             saved = load_models(base / "benchmark")
-            other = load_features(test_dir)
-            refuse_training_runs(features, other, campaign_dir, test_dir)
             metrics, figures = evaluate(features, seed=seed, threshold_mm=thr, source=str(test_dir), saved=saved,
                                         test_features=other, with_importance=False)
             metrics.pop("_models")

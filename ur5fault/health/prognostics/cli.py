@@ -118,5 +118,5 @@ def cmd_prognose(args: argparse.Namespace) -> int:
               f"{r['alpha_lambda_accuracy']:.2f}; median prognostic horizon "
               f"{r['prognostic_horizon_cycles_median']:.4g} cycles")
     print(f"{written(m['replaced'])} {m['out']}/report.md, metrics.json and figures in "
-          f"{time.perf_counter() - t0:.1f} s", file=sys.stderr)
+          f"{time.perf_counter() - t0:.1f} s")  # on stdout, as every command's result line (simulate's aside)
     return 0
