@@ -261,6 +261,7 @@ def test_saved_classifiers_round_trip_and_score_another_campaign(tmp_path):
     assert [c["name"] for c in schema["inputs"]] == list(ds.inputs)
     assert schema["training_set_sha256"] == training_hash(ds) and schema["ur5fault_version"]
     assert schema["training_ranges"] == {"payload_kg": [1.0, 1.0], "temperature_C": [28.0, 28.0]}
+    assert schema["training_range_gaps"] == {"payload_kg": 0.0, "temperature_C": 0.0}  # one value each: no margin
     from ur5fault.health.diagnostics.limits import DEFAULT_Z, LimitCalibration
 
     # the detection limits' calibration: read off the training runs, saved for ur5fault diagnose, reported
@@ -659,6 +660,27 @@ def test_a_log_beyond_the_training_conditions_is_noted():
     assert outside_notes(schema, {"payload_kg": 3.0, "temperature_C": 15.0}, "log.csv") == []
     assert "temperature_C 8 degC outside" in outside_notes(schema, {"temperature_C": 8.0}, "x")[0]
     assert outside_notes({}, {"payload_kg": 4.5}, "log.csv") == []
+
+
+def test_a_value_just_beyond_the_sampled_extreme_is_covered():
+    """The shipped diagnose example (0 kg) was told it lies outside training runs drawn from 0 kg whose smallest
+    draw was 0.0027 kg: a value beyond the range by no more than the largest gap between neighbouring training values
+    is not said; beyond it, it is; classifiers saved without the gaps keep no margin."""
+    import pandas as pd
+
+    from ur5fault.health.diagnostics.envelope import outside_notes, training_range_gaps, training_ranges
+
+    train = pd.DataFrame({"payload_kg": [0.0027, 0.01, 0.5, 1.0, 2.99],
+                          "temperature_C": [20.0, 20.0, 30.0, 25.0, 40.0]})
+    gaps = training_range_gaps(train)
+    assert gaps == pytest.approx({"payload_kg": 1.99, "temperature_C": 10.0})
+    schema = {"training_ranges": training_ranges(train), "training_range_gaps": gaps}
+    assert outside_notes(schema, {"payload_kg": 0.0, "temperature_C": 15.0}, "log.csv") == []
+    assert outside_notes(schema, {"payload_kg": 4.9, "temperature_C": 50.0}, "log.csv") == []  # within 1.99, 10 beyond
+    notes = outside_notes(schema, {"payload_kg": 5.0, "temperature_C": 9.0}, "log.csv")
+    assert [n.split(" outside")[0] for n in notes] == ["log.csv: payload_kg 5 kg", "log.csv: temperature_C 9 degC"]
+    old = {"training_ranges": schema["training_ranges"]}  # saved before the gaps: the range itself
+    assert outside_notes(old, {"payload_kg": 0.0}, "log.csv")[0].startswith("log.csv: payload_kg 0 kg outside")
 
 
 def test_cli_prints_the_by_joint_detectors_auc_beside_the_run_level_one(tmp_path, capsys, monkeypatch):

@@ -7,6 +7,13 @@ smallest) value they were trained on, so a 4.5 kg payload scored by classifiers 
 probability of a 3 kg run: an extrapolation nobody measured.  The schema records each condition's range over the
 training runs (``training_ranges``); ``ur5fault diagnose`` and ``ur5fault benchmark --test`` say where they leave
 it.  Classifiers saved before the record say nothing.
+
+A value just beyond the training runs' extreme is as covered as one inside: the extremes of sampled conditions are
+themselves where the draws happened to fall (a campaign drawing payloads from 0 kg trains on 0.0027 kg at least,
+and ``diagnose``'s example at 0 kg was told it lies outside).  So the schema also records each condition's largest
+gap between neighbouring training values (``training_range_gaps``), and a value is said to lie outside only when
+it is further beyond the range than that gap: no nearer to a trained value would make it better covered than the
+trained values are inside.  Classifiers saved before this record use no margin.
 """
 
 from __future__ import annotations
@@ -35,20 +42,37 @@ def training_ranges(train: pd.DataFrame) -> dict[str, list[float]]:
     return out
 
 
+def training_range_gaps(train: pd.DataFrame) -> dict[str, float]:
+    """``{condition: largest gap}`` between neighbouring distinct values over the training runs (0 for a condition
+    with one value), for the conditions :func:`training_ranges` records."""
+    out = {}
+    for c in CONTEXT_COLUMNS:
+        if c in train:
+            v = pd.to_numeric(train[c], errors="coerce").to_numpy(float)
+            v = np.unique(v[np.isfinite(v)])
+            if v.size:
+                out[c] = float(np.diff(v).max()) if v.size > 1 else 0.0
+    return out
+
+
 def outside_notes(schema: Mapping[str, Any], values: Mapping[str, Any] | pd.DataFrame, where: str) -> list[str]:
     """One note per condition of ``values`` (a log's value, or another campaign's column) outside the schema's
-    ``training_ranges``; none where the schema has no record."""
+    ``training_ranges`` by more than its ``training_range_gaps`` (module docstring; none recorded: no margin); none
+    where the schema has no record."""
     ranges = schema.get("training_ranges")
     if not isinstance(ranges, Mapping):
         return []
+    gaps = schema.get("training_range_gaps")
+    gaps = gaps if isinstance(gaps, Mapping) else {}
     notes = []
     for c, rng in ranges.items():
         if c not in values or not isinstance(rng, (list, tuple)) or len(rng) != 2:
             continue
         lo, hi = float(rng[0]), float(rng[1])
+        margin = float(gaps.get(c, 0.0) or 0.0)
         v = np.atleast_1d(pd.to_numeric(pd.Series(np.ravel(values[c])), errors="coerce").to_numpy(float))
         v = v[np.isfinite(v)]
-        out = v[(v < lo) | (v > hi)]
+        out = v[(v < lo - margin) | (v > hi + margin)]
         if not out.size:
             continue
         unit = UNITS.get(c, "")
