@@ -28,11 +28,10 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import difflib
 from collections.abc import Sequence
 from pathlib import Path
 
-from ..errors import ParameterError
+from ..errors import ParameterError, did_you_mean
 from ..util.checks import check_bool
 from ..util.yamlsafe import read_yaml
 from .readers import check_payload_and_tool
@@ -181,9 +180,7 @@ def _same(a, b) -> bool:
 def _unknown_key(key: object, keys: Sequence[str]) -> str:
     """``unknown key 'payload' (did you mean 'payload_kg'?) (keys: ...)``: a manifest's key as the YAML validators
     name one."""
-    close = difflib.get_close_matches(str(key), keys, n=2, cutoff=0.6)
-    hint = f" (did you mean {' or '.join(map(repr, close))}?)" if close else ""
-    return f"unknown key {key!r}{hint} (keys: {', '.join(keys)})"
+    return f"unknown key {key!r}{did_you_mean(key, keys, n=2)} (keys: {', '.join(keys)})"
 
 
 def _manifest(path: Path, args: argparse.Namespace, held: Sequence[str], used: set[str]) -> list[LogEntry]:
