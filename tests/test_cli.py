@@ -259,6 +259,33 @@ def test_prognose_offers_the_twin_choices_its_estimators_accept_and_its_help_sta
     assert r.returncode == 0 and r.stdout.strip().splitlines()[-1] == "[]", (r.stdout, r.stderr)
 
 
+def test_the_other_commands_choices_are_the_constants_their_code_checks():
+    """`monitor --event-channels`, `benchmark --features` and `campaign run --backend` write their choices as
+    literals in the parser (the modules holding the constants import numpy and pandas, which `--help` should not):
+    each literal must equal the constant the code behind it accepts, or a new choice is refused by the parser."""
+    import argparse
+
+    from ur5fault.cli import build_parser
+    from ur5fault.health.diagnostics.data import FEATURE_SETS
+    from ur5fault.health.monitoring.events import CHANNELS
+
+    parser = build_parser()
+    sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+
+    def choices(*path):
+        p = sub.choices[path[0]]
+        for name in path[1:]:
+            p = next(a for a in p._actions if isinstance(a, argparse._SubParsersAction)).choices[name]
+        return {a.dest: tuple(a.choices) for a in p._actions if a.choices and not isinstance(
+            a, argparse._SubParsersAction)}
+
+    assert choices("monitor")["event_channels"] == CHANNELS
+    assert choices("benchmark")["features"] == FEATURE_SETS
+    from ur5fault.campaign.workers import BACKENDS
+
+    assert choices("campaign", "run")["backend"] == BACKENDS
+
+
 def test_the_command_line_module_imports_little_before_main():
     """Until main() sets up its handlers, Ctrl-C prints a traceback: `import ur5fault.cli` (the console script's
     first line) took 0.9 s importing the simulator, then 40 ms importing importlib.metadata for __version__."""

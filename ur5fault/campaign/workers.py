@@ -16,6 +16,9 @@ from ..util.checks import check_count
 from ..util.parallel import iter_tasks, watch_parent
 from .limits import effective_jobs
 
+#: where campaign work can run: loky, processes on this machine; dask, a Dask cluster (``campaign run --backend``
+#: writes them as a literal so that its help imports nothing: tests/test_cli.py holds the two equal)
+BACKENDS = ("loky", "dask")
 #: seconds to wait for a Dask scheduler to answer (distributed's own default is 30 s)
 DASK_CONNECT_TIMEOUT_S = 10.0
 
@@ -23,8 +26,8 @@ DASK_CONNECT_TIMEOUT_S = 10.0
 def check_backend(backend: str, scheduler: str | None, jobs: int | None) -> tuple[int, str | None]:
     """The worker count for ``backend`` (``"loky"``: at most the cores available, with a note when capped;
     ``"dask"``: as given), after checking the backend and that Dask, and only Dask, has a scheduler address."""
-    if backend not in ("loky", "dask"):
-        raise ParameterError(f"backend = {backend!r} is not valid; choose one of: loky, dask")
+    if backend not in BACKENDS:
+        raise ParameterError(f"backend = {backend!r} is not valid; choose one of: {', '.join(BACKENDS)}")
     if backend == "dask" and not scheduler:
         raise ParameterError("--backend dask needs --scheduler ADDRESS (e.g. tcp://127.0.0.1:8786)")
     if backend != "dask" and scheduler:
