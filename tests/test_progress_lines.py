@@ -124,3 +124,11 @@ def test_quiet_campaign_progress_writes_nothing(capsys):
     report(3, 1.0)
     report.close()
     assert capsys.readouterr().err == ""
+
+
+def test_an_error_inside_the_bar_leaves_its_own_line_alone():
+    out = io.StringIO()
+    with pytest.raises(ValueError), progress.bar(3, "diagnose: logs replayed", "log", file=out) as b:
+        b.update(1)
+        raise ValueError("the one line the command prints")
+    assert out.getvalue() == ""

@@ -126,8 +126,11 @@ class LineBar:
     def __enter__(self) -> LineBar:
         return self
 
-    def __exit__(self, *exc) -> None:
-        self.close()
+    def __exit__(self, exc_type, *exc) -> None:
+        if exc_type is None:
+            self.close()
+        else:  # the error's own line says why it stopped, not a count before it
+            self.closed = True
 
 
 def fraction_callback(pbar) -> Callable[[float], None]:
