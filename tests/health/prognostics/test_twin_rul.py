@@ -35,7 +35,7 @@ def _closed_form(monkeypatch, crit) -> list[int]:
     """Replace the simulation by ``crit(ray, radius)``; return the batch sizes asked for."""
     calls: list[int] = []
 
-    def fake(setup, traj, pts):
+    def fake(setup, traj, pts, done=None):  # done: the progress, unused here
         calls.append(len(pts))
         return np.array([crit(ray, s) for ray, s in pts])
 

@@ -116,10 +116,12 @@ class TwinRUL:
         from ...util import progress
 
         n = self.cache.missing(self.setup, rays) if self.cache is not None else len(rays)
-        with progress.bar(n, f"prognose: twin boundary, {what}", "ray", enabled=self.progress and n > 0) as pbar:
+        on = self.progress and n > 0
+        with progress.bar(n, f"prognose: twin boundary, {what}", "ray", enabled=on) as pbar:
+            tick = pbar.update if on else None
             if self.cache is not None:
-                return self.cache.radii(self.setup, rays, pbar.update)
-            return failure_radii(self.setup, rays, pbar.update)
+                return self.cache.radii(self.setup, rays, tick)
+            return failure_radii(self.setup, rays, tick)
 
     def _ray(self, cond: Conditions, d: NDArray, speed: float, task: str, n: NDArray, a: NDArray,
              rises: NDArray | None) -> Ray:
