@@ -132,3 +132,12 @@ def test_an_error_inside_the_bar_leaves_its_own_line_alone():
         b.update(1)
         raise ValueError("the one line the command prints")
     assert out.getvalue() == ""
+
+
+def test_a_count_in_parts_reads_with_one_decimal():
+    out, clock = io.StringIO(), Clock()
+    b = progress.bar(16, "prognose: twin boundary, calibration", "ray", file=out, clock=clock)
+    clock.t += 37
+    b.update(1.6111)
+    assert out.getvalue() == ("prognose: twin boundary, calibration: 1.6/16 rays (10 %), 0:37 elapsed, "
+                              "about 5:30 left\n")  # 14.39 rays at 37 s / 1.61

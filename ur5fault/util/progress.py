@@ -49,6 +49,11 @@ def _interactive(file: TextIO | None) -> bool:
         return False
 
 
+def _number(x: float) -> str:
+    """A count: ``12``, or ``1.6`` of a count in parts (the twin's rays, the discrepancy's stages)."""
+    return f"{x:.0f}" if float(x).is_integer() else f"{x:.1f}"
+
+
 def _clock_text(seconds: float) -> str:
     """``0:41``, ``12:05``, ``1:02:03``."""
     s = max(0, round(seconds))
@@ -80,7 +85,7 @@ class LineBar:
             count = f"{100 * n:.0f} %"
         else:
             unit = self.unit if self.unit == "it" or self.unit.endswith("s") else self.unit + "s"
-            count = f"{n:.4g}/{total:.4g} {unit}" + (f" ({100 * n / total:.0f} %)" if total else "")
+            count = f"{_number(n)}/{_number(total)} {unit}" + (f" ({100 * n / total:.0f} %)" if total else "")
         elapsed = self.clock() - self.start
         text = f"{self.desc}: {count}, {_clock_text(elapsed)} elapsed"
         done = n - self.initial
