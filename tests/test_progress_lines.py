@@ -141,3 +141,17 @@ def test_a_count_in_parts_reads_with_one_decimal():
     b.update(1.6111)
     assert out.getvalue() == ("prognose: twin boundary, calibration: 1.6/16 rays (10 %), 0:37 elapsed, "
                               "about 5:30 left\n")  # 14.39 rays at 37 s / 1.61
+
+
+def test_parts_that_add_up_to_the_total_end_without_a_time_left():
+    """The twin's 16 rays as 3 stages of 8 batches, 2/3 of a ray each: in float a hair short of 16 (the real
+    log read '16/16 rays (100 %), 1:54 elapsed, about 0:00 left' and then the final line again)."""
+    out, clock = io.StringIO(), Clock()
+    b = progress.bar(16, "prognose: twin boundary, calibration", "ray", file=out, clock=clock)
+    for _ in range(24):
+        clock.t += 10
+        b.update(16 / 3 / 8)
+    b.close()
+    lines = out.getvalue().splitlines()
+    assert lines[-1] == "prognose: twin boundary, calibration: 16/16 rays (100 %), 4:00 elapsed"
+    assert lines.count(lines[-1]) == 1 and all("left" not in ln for ln in lines if "16/16" in ln)

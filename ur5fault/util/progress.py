@@ -51,7 +51,8 @@ def _interactive(file: TextIO | None) -> bool:
 
 def _number(x: float) -> str:
     """A count: ``12``, or ``1.6`` of a count in parts (the twin's rays, the discrepancy's stages)."""
-    return f"{x:.0f}" if float(x).is_integer() else f"{x:.1f}"
+    r = round(float(x), 1)
+    return f"{r:.0f}" if r.is_integer() else f"{r:.1f}"
 
 
 def _clock_text(seconds: float) -> str:
@@ -81,6 +82,8 @@ class LineBar:
 
     def line(self, final: bool = False) -> str:
         n, total = self.n, self.total
+        if total and math.isclose(n, total, rel_tol=1e-9):  # a count in parts adds up to the total in float
+            n = total
         if total and math.isclose(total, 1.0):  # a fraction (simulate): the share alone
             count = f"{100 * n:.0f} %"
         else:
