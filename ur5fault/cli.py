@@ -5,7 +5,7 @@ own subcommands (``run_cli.py``: simulate, effects, data, show; ``campaign/cli.p
 Bad input prints one line ``ur5fault: error: ...`` naming the problem and the valid
 choices, and exits with status 2; never a traceback.  ``-v`` (before or after the
 subcommand) shows the library's ``logging`` messages at INFO, ``-vv`` at DEBUG;
-``--quiet`` switches the progress bar off.
+``--quiet`` switches the progress off (a bar on a terminal, plain lines in a log: util/progress.py).
 """
 
 from __future__ import annotations

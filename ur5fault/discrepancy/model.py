@@ -74,7 +74,7 @@ class DiscrepancyModel:
         kinds: restrict the library's effect kinds (default: the whole registry).
         jobs: worker processes for lockstep batches.
         refiner: ``"secant"`` or ``"minimize"`` (see :func:`ur5fault.discrepancy.refinement.polish`).
-        progress: show a progress bar (tqdm; silent when not interactive).
+        progress: show the progress (util/progress.py: a bar on a terminal, plain lines in a log).
         screen_s: length of the log's first part the library is screened and the dictionary selected on
             [s] (None: the whole fitting part); refinement and judgement use the whole fitting part.
         likelihood: ``"pooled"`` (one variance for every channel, the default), ``"per_channel"`` (each

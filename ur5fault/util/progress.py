@@ -1,21 +1,144 @@
-"""One progress implementation for every long task (simulate, campaigns, the discrepancy search):
-tqdm's ``auto`` flavour, which draws a widget in a notebook and a bar on a terminal, and stays
-silent when the output is not interactive (a CI log, a file) or when the caller asks for quiet.
+"""One progress implementation for every long task (simulate, campaigns, the discrepancy search, the twin):
+tqdm's ``auto`` flavour, which draws a widget in a notebook and a bar on a terminal; when the output is not
+interactive (``nohup ... > log 2>&1``, a CI job, a notebook's ``!ur5fault`` cell, a cluster job) sparse plain
+lines instead (:class:`LineBar`: no carriage returns, no ANSI codes, so a log file stays readable); nothing when
+the caller asks for quiet (``--quiet``, ``enabled=False``).
 """
 
 from __future__ import annotations
 
+import math
+import sys
+import time
 from collections.abc import Callable
-from typing import Any
+from typing import Any, TextIO
+
+#: seconds between two plain progress lines off a terminal: a job of minutes shows it is moving, one of hours
+#: writes a few hundred lines, not one per update
+LINE_INTERVAL_S = 30.0
 
 
-def bar(total: float, desc: str, unit: str = "it", enabled: bool = True, **kwargs: Any):
-    """A tqdm bar; ``enabled=False`` (``--quiet``) or a non-interactive stream gives a silent one."""
+def bar(total: float, desc: str, unit: str = "it", enabled: bool = True, *, file: TextIO | None = None,
+        clock: Callable[[], float] | None = None, **kwargs: Any):
+    """A progress bar: tqdm on a terminal or in a notebook, a :class:`LineBar` on any other stream (``file``,
+    default stderr); ``enabled=False`` (``--quiet``) gives a silent tqdm.  ``clock``: the line bar's clock (default
+    ``time.monotonic``; tests);
+    ``kwargs``: tqdm's (``bar_format``, ...), which a line bar does not need."""
     from tqdm.auto import tqdm
 
-    # disable=None: tqdm switches itself off when stderr is not a terminal (no log spam in CI)
+    if enabled and not _interactive(file):
+        return LineBar(total, desc, unit, file=file, clock=clock)
+    if file is not None:
+        kwargs["file"] = file
+    # disable=None: interactive here, but tqdm still checks its stream (a terminal) itself, as before
     return tqdm(total=total, desc=desc, unit=unit, disable=None if enabled else True, dynamic_ncols=True,
                 **kwargs)
+
+
+def _interactive(file: TextIO | None) -> bool:
+    """Whether tqdm draws here: a notebook kernel (its widget), or a stream that is a terminal."""
+    from tqdm.autonotebook import tqdm as auto
+    from tqdm.std import tqdm as std
+
+    if auto is not std and file is None:  # tqdm.auto chose the notebook widget
+        return True
+    stream = sys.stderr if file is None else file
+    try:
+        return bool(stream.isatty())
+    except (AttributeError, ValueError):  # no isatty, or a closed stream
+        return False
+
+
+def _number(x: float) -> str:
+    """A count: ``12``, or ``1.6`` of a count in parts (the twin's rays, the discrepancy's stages)."""
+    r = round(float(x), 1)
+    return f"{r:.0f}" if r.is_integer() else f"{r:.1f}"
+
+
+def _clock_text(seconds: float) -> str:
+    """``0:41``, ``12:05``, ``1:02:03``."""
+    s = max(0, round(seconds))
+    h, rest = divmod(s, 3600)
+    m, s = divmod(rest, 60)
+    return f"{h}:{m:02d}:{s:02d}" if h else f"{m}:{s:02d}"
+
+
+class LineBar:
+    """The part of tqdm's interface the commands use (``n``, ``total``, ``update``, ``refresh``, ``reset``,
+    ``set_description``, ``close``, ``with``), written as a plain line such as
+    ``campaign: 12/31 runs (39 %), 0:41 elapsed, about 1:03 left`` at most every :data:`LINE_INTERVAL_S`
+    seconds and once more when closed."""
+
+    def __init__(self, total: float, desc: str, unit: str = "it", *, file: TextIO | None = None,
+                 clock: Callable[[], float] | None = None) -> None:
+        self.total, self.desc, self.unit = total, desc, unit
+        self.file, self.clock = file, clock or time.monotonic
+        self.n: float = 0
+        #: the count already done when counting started (a resumed campaign's runs on disk): not in the rate
+        self.initial: float = 0
+        self.start = self.last = self.clock()
+        self.closed = False
+        self.written = ""
+
+    def line(self, final: bool = False) -> str:
+        n, total = self.n, self.total
+        if total and math.isclose(n, total, rel_tol=1e-9):  # a count in parts adds up to the total in float
+            n = total
+        if total and math.isclose(total, 1.0):  # a fraction (simulate): the share alone
+            count = f"{100 * n:.0f} %"
+        else:
+            unit = self.unit if self.unit == "it" or self.unit.endswith("s") else self.unit + "s"
+            count = f"{_number(n)}/{_number(total)} {unit}" + (f" ({100 * n / total:.0f} %)" if total else "")
+        elapsed = self.clock() - self.start
+        text = f"{self.desc}: {count}, {_clock_text(elapsed)} elapsed"
+        done = n - self.initial
+        if not final and total and 0 < done and n < total:
+            text += f", about {_clock_text((total - n) * elapsed / done)} left"
+        return text
+
+    def _write(self, final: bool = False) -> None:
+        text = self.line(final)
+        if final and text == self.written:  # the line just written already said it all
+            return
+        stream = sys.stderr if self.file is None else self.file
+        stream.write(text + "\n")
+        stream.flush()
+        self.last, self.written = self.clock(), text
+
+    def refresh(self) -> None:
+        """A line if :data:`LINE_INTERVAL_S` has passed since the last (or the start)."""
+        if not self.closed and self.clock() - self.last >= LINE_INTERVAL_S:
+            self._write()
+
+    def update(self, k: float = 1) -> None:
+        self.n += k
+        self.refresh()
+
+    def reset(self, total: float | None = None) -> None:
+        self.n, self.initial = 0, 0
+        if total is not None:
+            self.total = total
+        self.start = self.last = self.clock()
+
+    def set_description(self, desc: str, refresh: bool = True) -> None:
+        self.desc = desc
+        if refresh:
+            self.refresh()
+
+    def close(self) -> None:
+        """The final line (once; not again if the last line written was it)."""
+        if not self.closed:
+            self._write(final=True)
+            self.closed = True
+
+    def __enter__(self) -> LineBar:
+        return self
+
+    def __exit__(self, exc_type, *exc) -> None:
+        if exc_type is None:
+            self.close()
+        else:  # the error's own line says why it stopped, not a count before it
+            self.closed = True
 
 
 def fraction_callback(pbar) -> Callable[[float], None]:
@@ -29,7 +152,8 @@ def fraction_callback(pbar) -> Callable[[float], None]:
 
 
 class CampaignProgress:
-    """Reports finished runs of a campaign: to a tqdm bar, to a callback ``(done, total, eta_s)``, or nowhere."""
+    """Reports finished runs of a campaign: to a bar (:func:`bar`), to a callback ``(done, total, eta_s)``, or
+    nowhere."""
 
     def __init__(self, progress: bool | Callable[[int, int, float], None], total: int) -> None:
         self.total = total
@@ -47,6 +171,8 @@ class CampaignProgress:
         elif self.bar is not None:
             if self.bar.n == 0 and done and self.start_done == done:
                 self.bar.reset(total=self.total)
+                if isinstance(self.bar, LineBar):
+                    self.bar.initial = done  # its "left" from this invocation's rate, not the stored runs'
                 self.bar.update(done)  # runs already on disk from an earlier invocation
             else:
                 self.bar.update(done - self.bar.n)

@@ -29,7 +29,7 @@ def _closed_form(monkeypatch) -> list[int]:
     search was given (one entry per (ray, radius) point's ray, by id)."""
     seen: list[int] = []
 
-    def fake(setup, traj, pts):
+    def fake(setup, traj, pts, done=None):  # done: the progress, unused here
         seen.extend(id(ray) for ray, _ in pts)
         return np.array([0.5 * s * (ray.direction[1] + 5 * ray.direction[2]) for ray, s in pts])
 
@@ -42,11 +42,11 @@ def _stop_after(monkeypatch, n_groups: int) -> list[int]:
     size of each group it simulated."""
     real, sizes = TB.failure_radii, []
 
-    def counted(setup, rays):
+    def counted(setup, rays, progress=None):
         if len(sizes) == n_groups:
             raise KeyboardInterrupt
         sizes.append(len(rays))
-        return real(setup, rays)
+        return real(setup, rays, progress)
 
     monkeypatch.setattr(TB, "failure_radii", counted)
     return sizes

@@ -64,7 +64,7 @@ def _twin_on(monkeypatch, scale_b: float) -> list[int]:
     (a model error that moves task b's boundary alone: its radius is 1/scale_b of the true one)."""
     calls: list[int] = []
 
-    def fake(setup, traj, pts):
+    def fake(setup, traj, pts, done=None):  # done: the progress, unused here
         calls.append(len(pts))
         k = scale_b if traj == "b" else 1.0
         return np.array([k * 0.5 * s * (LEVER[2] * r.direction[1] + LEVER[3] * r.direction[2]) for r, s in pts])
@@ -112,7 +112,7 @@ def _rays() -> list[Ray]:
 def test_the_radius_cache_simulates_each_ray_once_per_model_and_setup(monkeypatch, tmp_path):
     calls = []
 
-    def fake(setup, traj, pts):
+    def fake(setup, traj, pts, done=None):  # done: the progress, unused here
         calls.append(len(pts))
         return np.array([5.0 * s for _, s in pts])
 
@@ -208,7 +208,7 @@ def test_the_direction_calibration_corrects_a_twin_error_that_depends_on_the_dir
     """The twin's criterion 1.3 x too large on elbow-led directions only (a model error that moves the elbow's
     jump): one bias per task leaves the elbow-led units early and the shoulder-led ones late (measured -0.077
     and +0.088 of life at half-life), the direction calibration removes both (-0.002, +0.004)."""
-    def fake(setup, traj, pts):
+    def fake(setup, traj, pts, done=None):  # done: the progress, unused here
         return np.array([(1.3 if r.direction[2] > r.direction[1] else 1.0) * 0.5 * s
                          * (LEVER[2] * r.direction[1] + LEVER[3] * r.direction[2]) for r, s in pts])
 

@@ -112,7 +112,7 @@ def test_the_twin_runs_the_learned_rise_not_the_law_it_was_told(monkeypatch, tmp
     fr = FrictionRise().fit(train, clear)
     seen: list[tuple[float, float]] = []
 
-    def fake(setup, traj, pts):
+    def fake(setup, traj, pts, done=None):  # done: the progress, unused here
         seen.extend((setup.wear.friction_per_deg, ray.law(setup.wear).friction_per_deg) for ray, _ in pts)
         return np.array([5.0 * s for _, s in pts])
 
@@ -195,7 +195,7 @@ def _fleet_dir(tmp_path):
 def test_prognose_twin_learns_the_rise_by_default_and_runs_the_law_when_asked(monkeypatch, tmp_path, how):
     ran: list[float] = []
 
-    def fake(setup, traj, pts):                # the synthetic fleet's boundary, b2 + 5 b3 = 1 deg
+    def fake(setup, traj, pts, done=None):  # the synthetic fleet's boundary, b2 + 5 b3 = 1 deg
         ran.extend(ray.law(setup.wear).friction_per_deg for ray, _ in pts)
         return np.array([0.5 * s * (ray.direction[1] + 5 * ray.direction[2]) for ray, s in pts])
 

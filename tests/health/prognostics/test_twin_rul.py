@@ -35,7 +35,7 @@ def _closed_form(monkeypatch, crit) -> list[int]:
     """Replace the simulation by ``crit(ray, radius)``; return the batch sizes asked for."""
     calls: list[int] = []
 
-    def fake(setup, traj, pts):
+    def fake(setup, traj, pts, done=None):  # done: the progress, unused here
         calls.append(len(pts))
         return np.array([crit(ray, s) for ray, s in pts])
 
@@ -68,6 +68,43 @@ def test_a_jump_is_located_within_the_refined_bracket_and_far_guesses_are_extend
 def test_a_ray_that_never_fails_reports_its_last_radius_as_a_bound(monkeypatch):
     _closed_form(monkeypatch, lambda ray, s: 0.0)
     assert failure_radii(SETUP, [_ray(1, 1, 0.1)])[0] == pytest.approx(max(TB.ABOVE) * 0.1)
+
+
+def test_the_search_reports_its_progress_a_ray_at_a_time(monkeypatch, tmp_path, capsys):
+    """`prognose --twin` ran its boundary simulations for minutes without a word off a terminal: the search now
+    reports each simulated batch as a share of its rays (a third of a ray per stage), on a bar or plain lines,
+    the rays in the radius cache not counted."""
+    from ur5fault.health.prognostics.twin_cache import RadiusCache
+    from ur5fault.util import progress
+
+    batches = []
+
+    def fake(setup, traj, pts, done=None):
+        batches.append(done is not None)
+        if done is not None:
+            done(len(pts))
+        return np.array([5.0 * s for _, s in pts])
+
+    monkeypatch.setattr(TB, "_criteria", fake)
+    rays = [_ray(1, 1, 0.03), _ray(2, 1, 0.05), _ray(1, 2, 0.01, traj="other")]
+    steps = []
+    radii = failure_radii(SETUP, rays, steps.append)
+    assert sum(steps) == pytest.approx(len(rays)) and all(0 < s <= 2 / TB.STAGES for s in steps)
+    assert np.array_equal(failure_radii(SETUP, rays), radii) and batches[-1] is False  # no callback: none asked for
+    monkeypatch.setattr(progress, "LINE_INTERVAL_S", 0.0)  # every update a line (captured stderr: no terminal)
+    train = linear_wear_fleet(40, 0, "a")
+    clear = ClearanceRUL(ridge=1e-8).fit(train)
+    cond = {u: ("task", 1.0, 25.0) for u in train["unit_id"].unique()}
+    cache = RadiusCache(tmp_path / "radii.json")
+    twin = TwinRUL(SETUP, clear, cache=cache, progress=True).calibrate(cond)
+    lines = capsys.readouterr().err.splitlines()
+    n = twin.n_calibration_rays_
+    assert lines[0].startswith("prognose: twin boundary, calibration: ") and f"/{n} rays (" in lines[0]
+    assert lines[-1].startswith(f"prognose: twin boundary, calibration: {n}/{n} rays (100 %), ")
+    assert all("\r" not in ln and "\x1b" not in ln for ln in lines)
+    TwinRUL(SETUP, clear, cache=cache, progress=True).calibrate(cond)  # every ray cached: nothing to report
+    TwinRUL(SETUP, clear, cache=RadiusCache(tmp_path / "other.json")).calibrate(cond)  # progress off
+    assert capsys.readouterr().err == ""
 
 
 def test_twin_rul_of_a_linear_drift_with_a_known_boundary(monkeypatch):

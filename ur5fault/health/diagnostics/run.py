@@ -47,7 +47,7 @@ def run_benchmark(campaign_dir: str | Path, out: str | Path | None = None, *, se
             chosen set (1: all in this process, one after the other; the figures are the same either way).
         replace: replace an earlier report and classifiers in the report folder (False: refused in one line
             before any work, as `ur5fault benchmark` does without --replace).
-        progress: a bar of the stages on stderr (on a terminal; ``ur5fault benchmark`` without --quiet).
+        progress: the stages on stderr (a bar on a terminal, lines in a log; ``ur5fault benchmark`` without --quiet).
     """
     campaign_dir = Path(campaign_dir)
     base = campaign_dir if campaign_dir.is_dir() else campaign_dir.parent

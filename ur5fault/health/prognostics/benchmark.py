@@ -48,14 +48,16 @@ RESULT_FILES = ("report.md", "metrics.json")
 def run_prognose(folder: Path, out: Path | None = None, *, seed: int = 0, twin: bool = False,
                  twin_model: Overlay | None = None, twin_calibration: str = "pooled",
                  twin_cache: Path | None = None, twin_friction: str = "learned",
-                 replace: bool = True) -> dict[str, Any]:
+                 replace: bool = True, progress: bool = False) -> dict[str, Any]:
     """The benchmark on a life-campaign folder; returns the metrics written to ``out/metrics.json`` (default ``out``:
     ``folder/benchmark``), and ``replaced``: whether they replaced an earlier report there (not in the file).
     ``twin_model``: the overlay the twin runs instead of the packaged model (a model error the twin carries);
     ``twin_calibration``: one of :data:`.twin_choices.CALIBRATIONS`; ``twin_cache``: the file of the twin's
     radii (twin_cache.py), default ``out/twin_radii.json``; ``twin_friction``: one of :data:`TWIN_FRICTION`;
     ``replace``: replace an earlier report in ``out`` (False: refused in one line before any work, as `ur5fault
-    prognose` does without --replace; the twin's radius cache there is a cache, read and extended either way)."""
+    prognose` does without --replace; the twin's radius cache there is a cache, read and extended either way);
+    ``progress``: report the twin's simulations on stderr (a bar on a terminal, lines elsewhere; `ur5fault prognose`
+    without --quiet)."""
     if twin_friction not in TWIN_FRICTION:
         raise ConfigFileError(f"twin friction must be one of {', '.join(TWIN_FRICTION)}, not {twin_friction!r}")
     t0 = time.perf_counter()
@@ -80,7 +82,7 @@ def run_prognose(folder: Path, out: Path | None = None, *, seed: int = 0, twin: 
         setup = TwinSetup.from_manifest(manifest, seed, twin_model)
     cache = RadiusCache(twin_cache if twin_cache is not None else out / "twin_radii.json") if twin else None
     try:
-        pred, fitted, hi = predict(df, failure, seed, setup, twin_calibration, cache, twin_friction)
+        pred, fitted, hi = predict(df, failure, seed, setup, twin_calibration, cache, twin_friction, progress)
     except ConfigFileError as exc:  # predict's own refusal (too few failed units) already says what to change
         beyond = manifest.get("n_censored_beyond_model") or 0
         raise ConfigFileError(f"{folder}: {exc}" + (

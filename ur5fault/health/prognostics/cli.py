@@ -48,6 +48,9 @@ def register(sub) -> None:
     p.add_argument("--twin-cache", metavar="FILE",
                    help="with --twin: file of the twin's simulated failure radii, keyed by model, setup and ray, "
                         "read and extended (default: OUT/twin_radii.json)")
+    p.add_argument("--quiet", action="store_true",
+                   help="with --twin: no progress of the twin's simulations (a bar on a terminal, sparse lines in a "
+                        "log)")
     p.set_defaults(func=cmd_prognose)
 
 
@@ -109,7 +112,8 @@ def cmd_prognose(args: argparse.Namespace) -> int:
     m = run_prognose(Path(args.dir), Path(args.out) if args.out else None, seed=args.seed, twin=args.twin,
                      twin_model=model, twin_calibration=args.twin_calibration or "pooled",
                      twin_cache=Path(args.twin_cache) if args.twin_cache else None,
-                     twin_friction=args.twin_friction or "learned", replace=args.replace)
+                     twin_friction=args.twin_friction or "learned", replace=args.replace,
+                     progress=not args.quiet)
     print(f"{m['dataset']['n_train_units']} train / {m['dataset']['n_test_units']} test units")
     for name in m["estimators"]:
         r = m["estimators"][name]

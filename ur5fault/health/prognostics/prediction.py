@@ -23,11 +23,12 @@ ESTIMATORS = ("wiener", "linear", "wiener_joint", "clearance", "twin", "naive")
 
 
 def predict(df: pd.DataFrame, failure: Failure, seed: int = 0, twin: TwinSetup | None = None,
-            twin_calibration: str = "pooled", twin_cache: RadiusCache | None = None, twin_friction: str = "learned"
-            ) -> tuple[dict[str, pd.DataFrame], dict[str, Any], np.ndarray]:
+            twin_calibration: str = "pooled", twin_cache: RadiusCache | None = None, twin_friction: str = "learned",
+            progress: bool = False) -> tuple[dict[str, pd.DataFrame], dict[str, Any], np.ndarray]:
     """Fit on the failed training units; predict at every pre-failure inspection of the failed test units.
     ``twin``: also the estimator whose failure boundary the digital twin simulates (twin_rul.py; minutes);
-    ``twin_friction``: one of :data:`.twin_choices.TWIN_FRICTION`.
+    ``twin_friction``: one of :data:`.twin_choices.TWIN_FRICTION`; ``progress``: report the twin's simulations
+    on stderr (util/progress.py).
 
     Returns the prediction tables per estimator, the fitted constants, and the health index of every row.
     """
@@ -80,7 +81,8 @@ def predict(df: pd.DataFrame, failure: Failure, seed: int = 0, twin: TwinSetup |
                 rises = {str(uid): y_of[df.index.get_indexer(g.index)]
                          for uid, g in df.sort_values("cycles").groupby("unit_id")}
             per_task = 0 if twin_calibration == "pooled" else CALIBRATION_UNITS_PER_TASK
-            twin_rul = TwinRUL(twin, clear, seed, twin_calibration, twin_cache, per_task, friction).calibrate(
+            twin_rul = TwinRUL(twin, clear, seed, twin_calibration, twin_cache, per_task, friction,
+                               progress).calibrate(
                 {u: cond[u] for u in map(str, train_ids)})
         except ValueError as exc:
             raise ConfigFileError(f"--twin: {exc}") from None

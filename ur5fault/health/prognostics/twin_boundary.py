@@ -25,7 +25,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import logging
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -47,6 +47,8 @@ ABOVE = (2.2, 3.0, 4.0)
 REFINE = 3
 #: runs per lockstep batch (as the fleet's default batch_size)
 BATCH = 32
+#: the search's stages per ray (coarse, extended, refined): each is a third of a ray's share of the progress
+STAGES = 3
 
 _log = logging.getLogger(__name__)
 
@@ -95,9 +97,10 @@ class Ray:
         return dataclasses.replace(wear, **own) if own else wear
 
 
-def _criteria(setup: TwinSetup, trajectory: str, points: Sequence[tuple[Ray, float]]) -> NDArray:
+def _criteria(setup: TwinSetup, trajectory: str, points: Sequence[tuple[Ray, float]],
+              done: Callable[[int], None] | None = None) -> NDArray:
     """The failure feature of each (ray, radius) point, its own reference run beside it; NaN-free:
-    a run that stops or diverges reads +inf (failed)."""
+    a run that stops or diverges reads +inf (failed).  ``done``: called with the points of each batch simulated."""
     from ...campaign.identity import DRIVE, STEPPER
     from ...config import parse_trajectory
     from ...sim.effects import make_effect
@@ -140,6 +143,8 @@ def _criteria(setup: TwinSetup, trajectory: str, points: Sequence[tuple[Ray, flo
                              res.tcp_m[k], res.tcp_des_m[k], refs[(ray.payload_kg, ray.temperature_C)])
             out[i] = float(f.get(setup.failure.feature, np.inf))
         todo = todo[len(at_point):]
+        if done is not None:
+            done(len(at_point))
     return out
 
 
@@ -154,28 +159,38 @@ def _crossing(scales: NDArray, values: NDArray, threshold: float) -> tuple[float
     return float(s[k - 1]), float(v[k - 1]), float(s[k]), float(v[k])
 
 
-def failure_radii(setup: TwinSetup, rays: Sequence[Ray]) -> NDArray:
+def failure_radii(setup: TwinSetup, rays: Sequence[Ray], progress: Callable[[float], None] | None = None) -> NDArray:
     """The clearance radius [deg] at which each ray first meets the failure criterion on its duty cycle
-    (the last radius searched, a lower bound, where it never does)."""
+    (the last radius searched, a lower bound, where it never does).  ``progress``: called with the rays' worth
+    of search done since its last call (a share of the task's rays per batch simulated; ``len(rays)`` in all),
+    e.g. a progress bar's ``update`` (util/progress.py)."""
     by_task: dict[str, list[int]] = {}
     for i, ray in enumerate(rays):
         by_task.setdefault(ray.trajectory, []).append(i)
     out = np.zeros(len(rays))
     for traj, idx in by_task.items():
-        out[idx] = _TaskSearch(setup, traj, [rays[i] for i in idx]).radii()
+        out[idx] = _TaskSearch(setup, traj, [rays[i] for i in idx], progress).radii()
     return out
 
 
 class _TaskSearch:
     """The radius search of the rays of one task, each stage one batched simulation."""
 
-    def __init__(self, setup: TwinSetup, trajectory: str, rays: Sequence[Ray]) -> None:
+    def __init__(self, setup: TwinSetup, trajectory: str, rays: Sequence[Ray],
+                 progress: Callable[[float], None] | None = None) -> None:
         self.setup, self.trajectory, self.rays = setup, trajectory, list(rays)
         self.seen: list[tuple[list[float], list[float]]] = [([], []) for _ in rays]
+        self.progress = progress
 
     def search(self, plan: dict[int, NDArray]) -> None:
+        """One of the :data:`STAGES` stages: the criterion at the radii ``plan`` gives per ray."""
         pts = [(self.rays[i], float(s)) for i, ss in plan.items() for s in ss]
-        val = _criteria(self.setup, self.trajectory, pts) if pts else np.zeros(0)
+        share = len(self.rays) / STAGES  # this stage's worth of the progress, spread over its points
+        # the simulation told of each batch it finishes only where progress is reported
+        kw = {} if self.progress is None else {"done": lambda k: self.progress(share * k / len(pts))}
+        val = _criteria(self.setup, self.trajectory, pts, **kw) if pts else np.zeros(0)
+        if self.progress is not None and not pts:
+            self.progress(share)
         k = 0
         for i, ss in plan.items():
             self.seen[i][0].extend(float(s) for s in ss)

@@ -107,7 +107,24 @@ class RadiusCache:
                     raise ConfigFileError(f"{self.path}: a radius that is not a number; remove the cache") from None
         self.hits = self.misses = 0
 
-    def radii(self, setup: tb.TwinSetup, rays: Sequence[tb.Ray]) -> NDArray:
+    def missing(self, setup: tb.TwinSetup, rays: Sequence[tb.Ray]) -> int:
+        """How many of ``rays`` :meth:`radii` would simulate (not in the cache)."""
+        return sum(k not in self.entries for k in self._keys(setup, rays))
+
+    def radii(self, setup: tb.TwinSetup, rays: Sequence[tb.Ray], progress=None) -> NDArray:
+        """The failure radius of each ray: from the cache, else simulated (``progress``: as
+        :func:`.twin_boundary.failure_radii`'s, over the simulated rays alone) and written to it."""
+        keys = self._keys(setup, rays)
+        todo = [i for i, k in enumerate(keys) if k not in self.entries]
+        self.hits += len(rays) - len(todo)
+        for group in _groups(rays, todo):
+            new = tb.failure_radii(setup, [rays[i] for i in group], progress)
+            self.entries.update({keys[i]: float(v) for i, v in zip(group, new, strict=True)})
+            self.misses += len(group)
+            self._write()
+        return np.array([self.entries[k] for k in keys])
+
+    def _keys(self, setup: tb.TwinSetup, rays: Sequence[tb.Ray]) -> list[str]:
         # a ray with its own friction rise is keyed as a plain ray under the law it runs (so the radius depends
         # on the law simulated, not on the constants the twin was told and did not use)
         shas: dict[tuple, str] = {}
@@ -118,14 +135,7 @@ class RadiusCache:
             if ident not in shas:
                 shas[ident] = setup_key(dataclasses.replace(setup, wear=law))
             keys.append(ray_key(shas[ident], dataclasses.replace(r, friction_per_deg=None, friction_per_Mcycle=None)))
-        todo = [i for i, k in enumerate(keys) if k not in self.entries]
-        self.hits += len(rays) - len(todo)
-        for group in _groups(rays, todo):
-            new = tb.failure_radii(setup, [rays[i] for i in group])
-            self.entries.update({keys[i]: float(v) for i, v in zip(group, new, strict=True)})
-            self.misses += len(group)
-            self._write()
-        return np.array([self.entries[k] for k in keys])
+        return keys
 
     def _write(self) -> None:
         # Python's JSON: an infinite radius (the ray's run stopped: failed) is not "no value", and only this class

@@ -104,13 +104,24 @@ class TwinRUL:
     units_per_task: int = 0
     #: the friction rise learned per unit (twin_friction.py), used in place of the wear law's; ``None``: the law's
     friction: FrictionRise | None = None
+    #: report the boundary's simulations (minutes) on stderr: a bar on a terminal, lines elsewhere (util/progress.py)
+    progress: bool = False
 
     def __post_init__(self) -> None:
         if self.calibration not in CALIBRATIONS:
             raise ValueError(f"calibration must be one of {', '.join(CALIBRATIONS)}, not {self.calibration!r}")
 
-    def _radii(self, rays: Sequence[Ray]) -> NDArray:
-        return self.cache.radii(self.setup, rays) if self.cache is not None else failure_radii(self.setup, rays)
+    def _radii(self, rays: Sequence[Ray], what: str) -> NDArray:
+        """The twin's failure radius along each ray, the rays simulated (not cached) counted on a progress bar."""
+        from ...util import progress
+
+        n = self.cache.missing(self.setup, rays) if self.cache is not None else len(rays)
+        on = self.progress and n > 0
+        with progress.bar(n, f"prognose: twin boundary, {what}", "ray", enabled=on) as pbar:
+            tick = pbar.update if on else None
+            if self.cache is not None:
+                return self.cache.radii(self.setup, rays, tick)
+            return failure_radii(self.setup, rays, tick)
 
     def _ray(self, cond: Conditions, d: NDArray, speed: float, task: str, n: NDArray, a: NDArray,
              rises: NDArray | None) -> Ray:
@@ -159,7 +170,7 @@ class TwinRUL:
         if len(rays) < 2:
             raise ValueError("the twin estimator needs at least two calibration directions: failed training units "
                              f"sound at inspection {CHECKPOINTS[0]} or later")
-        resid = np.asarray(log_reached) - np.log(self._radii(rays))
+        resid = np.asarray(log_reached) - np.log(self._radii(rays, "calibration"))
         at_arr, task_arr = np.asarray(at), np.asarray(tasks)
         self.calibration_residuals_ = list(zip(tasks, at, resid.tolist(), strict=True))
         self.calibration_directions_ = np.array([r.direction for r in rays])
@@ -217,7 +228,7 @@ class TwinRUL:
                     ray_checkpoint.append(k)
                     current = len(rays) - 1
                 plan[uid].append((k, current, mean, cov))
-        radii = self._radii(rays) if rays else np.zeros(0)
+        radii = self._radii(rays, "test units") if rays else np.zeros(0)
         self.n_twin_rays_ = len(rays)
         out: dict[str, list[tuple]] = {}
         for uid, steps in plan.items():
