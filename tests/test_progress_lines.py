@@ -155,3 +155,36 @@ def test_parts_that_add_up_to_the_total_end_without_a_time_left():
     lines = out.getvalue().splitlines()
     assert lines[-1] == "prognose: twin boundary, calibration: 16/16 rays (100 %), 4:00 elapsed"
     assert lines.count(lines[-1]) == 1 and all("left" not in ln for ln in lines if "16/16" in ln)
+
+
+def test_nothing_reads_as_done_before_it_is():
+    """15.96 of 16 rays read '16/16 rays (100 %) ... about 0:01 left' (a review's catch): the count is rounded down
+    and the share held at 99 % until the total is reached."""
+    out, clock = io.StringIO(), Clock()
+    b = progress.bar(16, "prognose: twin boundary, test units", "ray", file=out, clock=clock)
+    clock.t += 60
+    b.update(15.96)
+    assert out.getvalue() == "prognose: twin boundary, test units: 15.9/16 rays (99 %), 1:00 elapsed, about 0:00 left\n"
+
+
+def test_a_count_of_one_reads_as_a_count_not_a_share():
+    """Only simulate's fraction of a run (fraction_callback) reads as a share: a count whose total is 1 (diagnose
+    replaying one log) read '100 %' where '1/1 logs' was meant."""
+    out, clock = io.StringIO(), Clock()
+    b = progress.bar(1, "diagnose: logs replayed", "log", file=out, clock=clock)
+    b.update(1)
+    b.close()
+    assert out.getvalue() == "diagnose: logs replayed: 1/1 logs (100 %), 0:00 elapsed\n"
+
+
+def test_the_benchmark_stages_write_no_count_before_an_error(capsys):
+    """`benchmark` failing inside its stages printed 'benchmark: a: 0/2 stages (0 %), ...' before its one error
+    line (a review's catch): the stages close their bar as the bar's own `with` does."""
+    from ur5fault.health.diagnostics.run import _Stages
+
+    with pytest.raises(ValueError), _Stages(True, "features", "training"):
+        raise ValueError("the one line the command prints")
+    assert capsys.readouterr().err == ""
+    with _Stages(True, "features", "training") as stages:
+        stages.next()
+    assert capsys.readouterr().err == "benchmark: training: 1/2 stages (50 %), 0:00 elapsed\n"

@@ -79,7 +79,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     replaced = out.exists()
     sim = Simulator(cfg.params)
     with progress.bar(1.0, "simulate", "run", enabled=not args.quiet,
-                      bar_format="{desc}: {percentage:3.0f}%|{bar}| {elapsed}<{remaining}") as pbar:
+                      bar_format=progress.PERCENT_FORMAT) as pbar:
         res = sim.run(cfg.trajectory, [RunSpec("run", cfg.seed, cfg.effects)], log_period_s=cfg.log_period_s,
                       duration_s=cfg.duration_s, progress=progress.fraction_callback(pbar))
     if out.suffix.lower() == ".csv":
@@ -325,7 +325,7 @@ def register(sub) -> None:
                    help="output file, Parquet (with the run's metadata) or CSV by its suffix; missing folders are "
                         "created (default run.parquet)")
     s.add_argument("--replace", action="store_true", help="replace an earlier file at --out (default: refused)")
-    s.add_argument("--quiet", action="store_true", help="no progress bar")
+    s.add_argument("--quiet", action="store_true", help="no progress (a bar on a terminal, plain lines in a log)")
     s.set_defaults(func=cmd_simulate)
     e = sub.add_parser("effects", help="list the effect registry",
                        **examples("ur5fault effects",

@@ -50,6 +50,10 @@ def test_a_users_copy_in_the_working_folder_wins_by_either_name(name, tmp_path, 
 def test_a_shipped_name_without_a_copy_is_the_shipped_campaign(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     assert len(load_campaign("paper", tmp_path / "out").runs) == 19
+    # by either suffix: `campaign run paper.yml` was refused with "no shipped campaign of that name; did you mean
+    # 'paper'?" (the lookup kept the .yml)
+    for name in ("paper.yaml", "paper.yml"):
+        assert len(load_campaign(name, tmp_path / "out").runs) == 19
 
 
 def test_campaign_show_prints_a_shipped_campaign_to_copy(tmp_path, monkeypatch, capsys):

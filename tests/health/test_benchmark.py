@@ -664,8 +664,9 @@ def test_a_log_beyond_the_training_conditions_is_noted():
 
 def test_a_value_just_beyond_the_sampled_extreme_is_covered():
     """The shipped diagnose example (0 kg) was told it lies outside training runs drawn from 0 kg whose smallest
-    draw was 0.0027 kg: a value beyond the range by no more than the largest gap between neighbouring training values
-    is not said; beyond it, it is; classifiers saved without the gaps keep no margin."""
+    draw was 0.0027 kg: a value beyond the range by no more than half the largest gap between neighbouring training
+    values (no further from a trained value than some inside are) is not said; beyond it, it is; classifiers saved
+    without the gaps, or with a gap that is no finite number >= 0, keep no margin."""
     import pandas as pd
 
     from ur5fault.health.diagnostics.envelope import outside_notes, training_range_gaps, training_ranges
@@ -675,12 +676,16 @@ def test_a_value_just_beyond_the_sampled_extreme_is_covered():
     gaps = training_range_gaps(train)
     assert gaps == pytest.approx({"payload_kg": 1.99, "temperature_C": 10.0})
     schema = {"training_ranges": training_ranges(train), "training_range_gaps": gaps}
-    assert outside_notes(schema, {"payload_kg": 0.0, "temperature_C": 15.0}, "log.csv") == []
-    assert outside_notes(schema, {"payload_kg": 4.9, "temperature_C": 50.0}, "log.csv") == []  # within 1.99, 10 beyond
-    notes = outside_notes(schema, {"payload_kg": 5.0, "temperature_C": 9.0}, "log.csv")
-    assert [n.split(" outside")[0] for n in notes] == ["log.csv: payload_kg 5 kg", "log.csv: temperature_C 9 degC"]
-    old = {"training_ranges": schema["training_ranges"]}  # saved before the gaps: the range itself
-    assert outside_notes(old, {"payload_kg": 0.0}, "log.csv")[0].startswith("log.csv: payload_kg 0 kg outside")
+    assert outside_notes(schema, {"payload_kg": 0.0, "temperature_C": 15.5}, "log.csv") == []
+    assert outside_notes(schema, {"payload_kg": 3.9, "temperature_C": 44.5}, "log.csv") == []  # within 0.995, 5
+    notes = outside_notes(schema, {"payload_kg": 4.0, "temperature_C": 14.5}, "log.csv")
+    assert [n.split(" outside")[0] for n in notes] == ["log.csv: payload_kg 4 kg", "log.csv: temperature_C 14.5 degC"]
+    for bad in ({}, {"payload_kg": float("nan")}, {"payload_kg": -1.0}, {"payload_kg": "wide"}, {"payload_kg": True}):
+        old = {"training_ranges": schema["training_ranges"], "training_range_gaps": bad}  # no margin
+        assert outside_notes(old, {"payload_kg": 0.0}, "log.csv")[0].startswith("log.csv: payload_kg 0 kg outside")
+        assert outside_notes(old, {"payload_kg": 1.5}, "log.csv") == []
+    assert outside_notes({"training_ranges": schema["training_ranges"]}, {"payload_kg": 0.0}, "x")[0].startswith(
+        "x: payload_kg 0 kg outside")
 
 
 def test_cli_prints_the_by_joint_detectors_auc_beside_the_run_level_one(tmp_path, capsys, monkeypatch):

@@ -37,7 +37,7 @@ def register(sub) -> None:
     r.add_argument("--save-timeseries", action="store_true", help="also write each run's time series")
     r.add_argument("--threshold-mm", type=float,
                    help="TCP acceptability threshold of the summary [mm] (default: the file's threshold_mm, else 0.5)")
-    r.add_argument("--quiet", action="store_true", help="no progress bar")
+    r.add_argument("--quiet", action="store_true", help="no progress (a bar on a terminal, plain lines in a log)")
     r.add_argument("--yes", action="store_true",
                    help="start a large campaign (over 1000 runs or 2e9 physics steps; a life campaign: if no unit "
                         "fails early) without asking")
@@ -159,7 +159,7 @@ def cmd_list(args: argparse.Namespace) -> int:
     from .spec import shipped_campaign_about
 
     names = shipped_campaigns()
-    width = max(map(len, names))
+    width = max(map(len, names), default=0)
     for name in names:
         print(f"{name:{width}s}  {shipped_campaign_about(name)}".rstrip())
     print("\nrun one: ur5fault campaign run NAME; its whole file (a copy to edit): "

@@ -151,7 +151,7 @@ def resolve_campaign(path: str | Path) -> Path:
         for own in (p.with_name(f"{p.name}.yaml"), p.with_name(f"{p.name}.yml")):
             if own.is_file():
                 return own
-    shipped = SHIPPED_DIR / (p.name if p.suffix in (".yaml", ".yml") else f"{p.name}.yaml")
+    shipped = SHIPPED_DIR / (f"{p.stem}.yaml" if p.suffix in (".yaml", ".yml") else f"{p.name}.yaml")  # paper.yml too
     if shipped.is_file():
         return shipped
     from ..errors import ConfigFileError, close_names

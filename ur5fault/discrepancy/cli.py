@@ -33,7 +33,7 @@ def register(sub) -> None:
     d.add_argument("--max-terms", type=int, default=4,
                    help="most terms discovered outside the library (default 4; 0: library only)")
     d.add_argument("--jobs", type=int, help="worker processes for the simulation batches (default: all cores)")
-    d.add_argument("--quiet", action="store_true", help="no progress bar")
+    d.add_argument("--quiet", action="store_true", help="no progress (a bar on a terminal, plain lines in a log)")
     d.set_defaults(func=cmd_discrepancy)
 
 

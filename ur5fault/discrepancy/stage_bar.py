@@ -12,7 +12,7 @@ class StageBar:
         from ..util import progress
 
         self.bar = progress.bar(len(self.NAMES), "discrepancy", "stage", enabled=enabled,
-                                bar_format="{desc}: {percentage:3.0f}%|{bar}| {elapsed}<{remaining}")
+                                bar_format=progress.PERCENT_FORMAT)
         self.k = 0
 
     def start(self, name: str):

@@ -13,6 +13,9 @@ import time
 from collections.abc import Callable
 from typing import Any, TextIO
 
+#: tqdm's format for a bar whose count is a share or counted in parts (simulate's fraction of a run, the
+#: discrepancy's stages, the twin's rays in thirds): the share alone, not a float count such as 3.3333333/16
+PERCENT_FORMAT = "{desc}: {percentage:3.0f}%|{bar}| {elapsed}<{remaining}"
 #: seconds between two plain progress lines off a terminal: a job of minutes shows it is moving, one of hours
 #: writes a few hundred lines, not one per update
 LINE_INTERVAL_S = 30.0
@@ -50,9 +53,16 @@ def _interactive(file: TextIO | None) -> bool:
 
 
 def _number(x: float) -> str:
-    """A count: ``12``, or ``1.6`` of a count in parts (the twin's rays, the discrepancy's stages)."""
-    r = round(float(x), 1)
+    """A count: ``12``, or ``1.6`` of a count in parts (the twin's rays, the discrepancy's stages), rounded down
+    (15.96 of 16 reads 15.9, not a finished 16)."""
+    r = math.floor(10 * float(x) + 1e-9) / 10
     return f"{r:.0f}" if r.is_integer() else f"{r:.1f}"
+
+
+def _percent(n: float, total: float) -> int:
+    """``n`` of ``total`` in whole per cent, 99 at most until it is done (99.6 % is not a finished 100)."""
+    pct = round(100 * n / total)
+    return min(pct, 99) if n < total else pct
 
 
 def _clock_text(seconds: float) -> str:
@@ -79,16 +89,18 @@ class LineBar:
         self.start = self.last = self.clock()
         self.closed = False
         self.written = ""
+        #: the count is a share of one (:func:`fraction_callback`: simulate's run), written as a percentage alone
+        self.fraction = False
 
     def line(self, final: bool = False) -> str:
         n, total = self.n, self.total
         if total and math.isclose(n, total, rel_tol=1e-9):  # a count in parts adds up to the total in float
             n = total
-        if total and math.isclose(total, 1.0):  # a fraction (simulate): the share alone
-            count = f"{100 * n:.0f} %"
+        if self.fraction:  # a share of one run (simulate): the share alone
+            count = f"{_percent(n, 1.0)} %"
         else:
             unit = self.unit if self.unit == "it" or self.unit.endswith("s") else self.unit + "s"
-            count = f"{_number(n)}/{_number(total)} {unit}" + (f" ({100 * n / total:.0f} %)" if total else "")
+            count = f"{_number(n)}/{_number(total)} {unit}" + (f" ({_percent(n, total)} %)" if total else "")
         elapsed = self.clock() - self.start
         text = f"{self.desc}: {count}, {_clock_text(elapsed)} elapsed"
         done = n - self.initial
@@ -142,7 +154,10 @@ class LineBar:
 
 
 def fraction_callback(pbar) -> Callable[[float], None]:
-    """Adapter for :meth:`ur5fault.sim.engine.Simulator.run`'s ``progress(fraction)`` on a bar of total 1."""
+    """Adapter for :meth:`ur5fault.sim.engine.Simulator.run`'s ``progress(fraction)`` on a bar of total 1 (a line
+    bar then writes the share alone)."""
+    if isinstance(pbar, LineBar):
+        pbar.fraction = True
 
     def update(frac: float) -> None:
         pbar.n = round(min(max(frac, 0.0), 1.0), 4)

@@ -31,7 +31,7 @@ def register(sub) -> None:
     d.add_argument("--out", required=True, help="output folder (diagnosis.json, report.md, diagnosis.png; created)")
     d.add_argument("--replace", action="store_true",
                    help="replace an earlier result at --out (default: refused, nothing a user made is lost silently)")
-    d.add_argument("--quiet", action="store_true", help="no progress bar")
+    d.add_argument("--quiet", action="store_true", help="no progress (a bar on a terminal, plain lines in a log)")
     d.set_defaults(func=cmd_diagnose)
 
 

@@ -35,7 +35,7 @@ def register(sub) -> None:
                         "default: train and score on DIR's own split)")
     b.add_argument("--jobs", type=int, help="worker processes for the feature sets' comparison, run beside the "
                                             "main training (default: all cores available; 1: one after the other)")
-    b.add_argument("--quiet", action="store_true", help="no progress bar")
+    b.add_argument("--quiet", action="store_true", help="no progress (a bar on a terminal, plain lines in a log)")
     b.set_defaults(func=cmd_benchmark)
 
 

@@ -148,7 +148,7 @@ class _Stages:
         return self
 
     def __exit__(self, *exc) -> None:
-        self.bar.close()
+        self.bar.__exit__(*exc)  # closed either way; a line bar writes no count before an error's own line
 
 
 def _write_trained(metrics: dict[str, Any], figures: dict, out_dir: Path, models: Models, features: pd.DataFrame,

@@ -22,7 +22,7 @@
   :class:`.limits.LimitCalibration`: the detection limits of ``ur5fault diagnose``; absent from classifiers saved
   before it, whose diagnosis then leaves the limits out), and the range of the payload and the temperature over the
   training runs (``training_ranges``, :mod:`.envelope`: ``diagnose`` and ``benchmark --test`` say where they leave
-  it by more than the largest gap between neighbouring training values, ``training_range_gaps``).
+  it by more than half the largest gap between neighbouring training values, ``training_range_gaps``).
 
 Both files are written with SHA-256 sidecars (``<name>.sha256``) and ``schema.json`` records the SHA-256 of
 the ``classifiers.skops`` it was saved with (``classifiers_sha256``): :func:`load_models` refuses, in one line
@@ -156,7 +156,7 @@ def save_models(models: Models, ds: Dataset, feature_set: str, threshold_score: 
         "healthy_training_inputs": healthy_reference(ds.train, ds.inputs),
         # each known condition's range over the training runs (envelope.py: a log or campaign beyond it is said)
         "training_ranges": training_ranges(ds.train),
-        # and its largest gap between neighbouring training values: a value beyond the range by less is not said
+        # and its largest gap between neighbouring values: a value beyond the range by less than half is not said
         "training_range_gaps": training_range_gaps(ds.train),
         # the spread of the twin estimates' t values on the healthy training runs (ur5fault diagnose's detection
         # limits, limits.py); absent: saved before it, or a table without the estimates' SEs

@@ -49,7 +49,7 @@ def register(sub) -> None:
                    help="the residuals events are judged on: current (default) and/or position (the measured "
                         "tracking error less the twin's; each at half the false-alarm probability when both)")
     p.add_argument("--jobs", type=int, help="worker processes for the simulation batches (default: all cores)")
-    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument("--quiet", action="store_true", help="no progress (a bar on a terminal, plain lines in a log)")
     p.set_defaults(func=cmd_monitor)
 
 

@@ -117,7 +117,8 @@ class TwinRUL:
 
         n = self.cache.missing(self.setup, rays) if self.cache is not None else len(rays)
         on = self.progress and n > 0
-        with progress.bar(n, f"prognose: twin boundary, {what}", "ray", enabled=on) as pbar:
+        with progress.bar(n, f"prognose: twin boundary, {what}", "ray", enabled=on,
+                          bar_format=progress.PERCENT_FORMAT) as pbar:  # counted in thirds of a ray
             tick = pbar.update if on else None
             if self.cache is not None:
                 return self.cache.radii(self.setup, rays, tick)
