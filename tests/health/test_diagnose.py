@@ -421,6 +421,23 @@ def test_detection_limits_are_z_spread_se_of_each_window_or_cannot_tell_with_why
     assert "Smallest fault each joint's motion could show" in (tmp_path / "h" / "report.md").read_text()
 
 
+def test_a_log_sampled_a_whole_number_of_times_faster_is_taken_at_the_training_rate(detector, tmp_path):
+    """A log at 0.5 ms against a detector trained on 1 ms logs was scored with features off its scale (a note
+    only): every 2nd sample is what a 1 ms logger writes, so diagnose keeps those and says so; its windows and
+    features are then those of the 1 ms log of the same run."""
+    fast, slow = tmp_path / "fast.parquet", tmp_path / "slow.parquet"
+    for path, period in ((fast, "0.0005"), (slow, "0.001")):
+        assert main(["simulate", "--duration-s", str(LOG_S), "--seed", "3", "--log-period-s", period, "--out",
+                     str(path), "--quiet"]) == 0
+    d = _diagnose(fast, detector, tmp_path / "f")
+    assert d["log_period_s"] == pytest.approx(0.001)
+    assert any("every 2nd sample kept, as the detector's training runs were logged every 1 ms" in n
+               for n in d["notes"]), d["notes"]
+    assert not any("not on the scale the detector learned" in n for n in d["notes"]), d["notes"]
+    ref = _diagnose(slow, detector, tmp_path / "s")  # the same run logged every 1 ms: the same samples, p(fault)
+    assert [w["p_fault"] for w in d["windows"]] == pytest.approx([w["p_fault"] for w in ref["windows"]], abs=1e-9)
+
+
 NIST_LOG = Path(__file__).resolve().parents[2] / "data" / "nist-ur5" / "ur5testresult_halfspeed_payload1.6lb_1.csv.gz"
 
 

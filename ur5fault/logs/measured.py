@@ -133,12 +133,29 @@ class MeasuredLog:
         sel = (t >= t0_s) & (t < t1_s)
         if sel.sum() < 2:
             raise LogFormatError(f"{self.source}: window [{t0_s}, {t1_s}) s holds fewer than 2 samples")
+        kw = self._rows(sel)
+        kw["t_s"] = kw["t_s"] - kw["t_s"][0]
+        return MeasuredLog(**kw)
+
+    def every(self, k: int, note: str = "") -> MeasuredLog:
+        """Every ``k``-th sample, from the ``k``-th: what a logger ``k`` times slower on the same clock would have
+        written (the samples are instantaneous readings, not averages; a log whose first sample is one tick after
+        its clock's zero, as the simulator writes them, then gives exactly the slower logger's samples), ``note``
+        added to :attr:`notes`."""
+        if k < 1:
+            raise ValueError(f"every({k}): k must be at least 1")
+        kw = self._rows(slice(k - 1, None, k))
+        if note:
+            kw["notes"] = (*self.notes, note)
+        return MeasuredLog(**kw)
+
+    def _rows(self, rows) -> dict:
+        """The log's fields as keyword arguments, every per-sample array cut to ``rows`` (a mask or a slice)."""
         kw = {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
         for key, v in kw.items():
             if isinstance(v, np.ndarray) and v.shape[:1] == self.t_s.shape:
-                kw[key] = v[sel]
-        kw["t_s"] = kw["t_s"] - kw["t_s"][0]
-        return MeasuredLog(**kw)
+                kw[key] = v[rows]
+        return kw
 
 
 def assumption_notes(logs: Sequence[MeasuredLog], joint_temperature_C,

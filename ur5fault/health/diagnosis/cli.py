@@ -51,6 +51,7 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
     from ..diagnostics.classifier import require_sklearn
     from ..diagnostics.saved import load_models, models_folder
     from . import diagnose, robot_baseline
+    from .rate import at_training_rate
     from .report import FIGURE_FILE, JSON_FILE, REPORT_FILE, write_diagnosis
     from .score import check_schema
     from .windows import window_length
@@ -81,13 +82,15 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
     if Path(args.detector).exists():  # a folder of the wrong kind: its own reason before a word on --out
         models_folder(args.detector)
     check_new_output(args.out, folder=True, results=results, replace=args.replace)
-    window_s = check_schema(load_models(args.detector)[1], args.detector)  # refused before the replay
+    schema = load_models(args.detector)[1]
+    window_s = check_schema(schema, args.detector)  # refused before the replay
     overlay = Overlay.load(args.model) if args.model else None
     params, effects = (dict(overlay.params), overlay.effects) if overlay else (None, ())
     refuse_log_owned(params, effects, [])  # a payload in the overlay: before any log is read
     check_files_length([e.path for e in (*entries, *base)], "diagnose")
-    log = read_entry(entries[0], window_length(window_s))
-    healthy = [read_entry(e, window_length(window_s)) for e in base]
+    # a log sampled a whole number of times faster than the training runs: at their rate (rate.py)
+    log = at_training_rate(read_entry(entries[0], window_length(window_s)), schema.get("log_period_s"))
+    healthy = [at_training_rate(read_entry(e, window_length(window_s)), schema.get("log_period_s")) for e in base]
     check_logs_length([log, *healthy], "diagnose")
     refuse_same_samples([("diagnosed", [log]), ("a baseline log", healthy)])  # a copy under another name too
     refuse_log_owned(params, effects, [log, *healthy])  # another tool: before the logs' notes
