@@ -746,6 +746,9 @@ def test_stages_on_a_bar_and_quiet_switches_it_off(tmp_path, monkeypatch, capsys
         def close(self):
             seen.append(("close",))
 
+        def __exit__(self, *exc):  # as tqdm's and the line bar's: closes (the line bar silently after an error)
+            self.close()
+
     monkeypatch.setattr(progress, "bar", Bar)
     train_dir = tmp_path / "train"
     train_dir.mkdir()
