@@ -151,13 +151,14 @@ def resolve_campaign(path: str | Path) -> Path:
         for own in (p.with_name(f"{p.name}.yaml"), p.with_name(f"{p.name}.yml")):
             if own.is_file():
                 return own
-    shipped = SHIPPED_DIR / (f"{p.stem}.yaml" if p.suffix in (".yaml", ".yml") else f"{p.name}.yaml")  # paper.yml too
+    name = p.stem if p.suffix in (".yaml", ".yml") else p.name  # the shipped name asked for (paper.yml too)
+    shipped = SHIPPED_DIR / f"{name}.yaml"
     if shipped.is_file():
         return shipped
     from ..errors import ConfigFileError, close_names
 
     names = shipped_campaigns()
-    close = close_names(p.stem if p.suffix in (".yaml", ".yml") else p.name, names)  # a mistyped shipped name
+    close = close_names(name, names)  # a mistyped shipped name
     hint = (f"; did you mean {' or '.join(map(repr, close))}? (`ur5fault campaign list` lists them)" if close else
             f" (shipped: {', '.join(names)}; `ur5fault campaign list` describes them)")
     raise ConfigFileError(f"{p}: {'a folder, not a campaign file' if p.is_dir() else 'no such file'}, and no shipped "

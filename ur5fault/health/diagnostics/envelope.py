@@ -34,29 +34,28 @@ from .data import CONTEXT_COLUMNS
 UNITS = {"payload_kg": "kg", "temperature_C": "degC"}
 
 
-def training_ranges(train: pd.DataFrame) -> dict[str, list[float]]:
-    """``{condition: [smallest, largest]}`` over the training runs, for the conditions the table holds."""
-    out = {}
-    for c in CONTEXT_COLUMNS:
-        if c in train:
-            v = pd.to_numeric(train[c], errors="coerce").to_numpy(float)
-            v = v[np.isfinite(v)]
-            if v.size:
-                out[c] = [float(v.min()), float(v.max())]
-    return out
-
-
-def training_range_gaps(train: pd.DataFrame) -> dict[str, float]:
-    """``{condition: largest gap}`` between neighbouring distinct values over the training runs (0 for a condition
-    with one value), for the conditions :func:`training_ranges` records."""
+def _training_values(train: pd.DataFrame) -> dict[str, np.ndarray]:
+    """``{condition: its distinct finite values over the training runs, sorted}`` for the conditions the table holds
+    with at least one."""
     out = {}
     for c in CONTEXT_COLUMNS:
         if c in train:
             v = pd.to_numeric(train[c], errors="coerce").to_numpy(float)
             v = np.unique(v[np.isfinite(v)])
             if v.size:
-                out[c] = float(np.diff(v).max()) if v.size > 1 else 0.0
+                out[c] = v
     return out
+
+
+def training_ranges(train: pd.DataFrame) -> dict[str, list[float]]:
+    """``{condition: [smallest, largest]}`` over the training runs, for the conditions the table holds."""
+    return {c: [float(v[0]), float(v[-1])] for c, v in _training_values(train).items()}
+
+
+def training_range_gaps(train: pd.DataFrame) -> dict[str, float]:
+    """``{condition: largest gap}`` between neighbouring distinct values over the training runs (0 for a condition
+    with one value), for the conditions :func:`training_ranges` records."""
+    return {c: float(np.diff(v).max()) if v.size > 1 else 0.0 for c, v in _training_values(train).items()}
 
 
 def _half_gap(gap: Any) -> float:
