@@ -190,7 +190,8 @@ def diagnose(log: MeasuredLog, detector_dir: str | Path, params_overrides: dict 
                      + ("" if robot.rank <= robot.n else
                         f" (fewer than {int(round(1 / robot.alpha)) - 1} windows: the largest held-out score)")
                      + ("; it is below the training runs' threshold, which is kept" if robot.score <= thr else
-                        f"; {set_by}" if (set_by := set_by_sentence(robot.summary())) else ""))
+                        f"; {set_by}" if (set_by := set_by_sentence(robot.summary(), models.calibrator is not None))
+                        else ""))
     p_thr = thr
     p_flag = flag_thr
     if models.calibrator is None:
