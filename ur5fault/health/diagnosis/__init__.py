@@ -59,7 +59,7 @@ def replay_twin(log: MeasuredLog, params_overrides: dict | None = None, base_eff
                     *((c, f"noise-free twin's replay with the payload CoM shifted along {ax}")
                       for c, ax in zip(com, COM_AXES))):
         if not r.ok:
-            raise ParameterError(f"{log.source}: the {what} failed ({r.status}); check the log and the model")
+            raise ParameterError(f"{log.source}: the {what} failed ({r.failure})")
     columns = (com_difference(np.stack([c.current_true_A for c in com]), quiet.current_true_A) if com
                else np.zeros((*quiet.current_true_A.shape, len(COM_AXES))) if com_twins else None)
     return replay, dataclasses.replace(rep, current_true_A=quiet.current_true_A, torque_gear_Nm=quiet.torque_gear_Nm,
