@@ -238,6 +238,9 @@ class RivalPlan:
 
     rows: tuple[tuple[Finding, NDArray, Candidate, NDArray], ...] = ()
     effect_sets: tuple[tuple[EffectSpec, ...], ...] = ()
+    #: the log's readings and the final model's weighted residual over the whole log (None without rows)
+    meas: NDArray | None = None
+    e_after: NDArray | None = None
 
 
 def rival_plan(rp: LogReplay, lib_X: NDArray, lib_drift: Drift | None, candidates: Sequence[Candidate],
@@ -269,7 +272,7 @@ def rival_plan(rp: LogReplay, lib_X: NDArray, lib_drift: Drift | None, candidate
                               own_variance=own_variance):
             plan.append((f, change, candidates[r], th))
     specs = {id(f): tuple(g.spec() for g in kept if g is not f) for f in kept}
-    return RivalPlan(tuple(plan), tuple(specs[id(f)] + (c.spec(th),) for f, _, c, th in plan))
+    return RivalPlan(tuple(plan), tuple(specs[id(f)] + (c.spec(th),) for f, _, c, th in plan), meas, e_after)
 
 
 def list_rivals(rp: LogReplay, lib_X: NDArray, lib_drift: Drift | None, candidates: Sequence[Candidate],
@@ -287,8 +290,7 @@ def list_rivals(rp: LogReplay, lib_X: NDArray, lib_drift: Drift | None, candidat
     plan = rival_plan(rp, lib_X, lib_drift, candidates, findings, first_J, found, after, n_scr, skip, own_variance)
     if not plan.rows:
         return
-    meas = rp.measured(rp.n_samples)
-    e_after = weighted(meas, after.y, rp.sigma)
+    meas, e_after = plan.meas, plan.e_after
     sims = rp.run(plan.effect_sets, rp.n_samples, progress)
     torque = after.torque_gear_Nm
     for (f, change, cand, th), sim in zip(plan.rows, sims):
