@@ -77,24 +77,35 @@ def test_campaign_show_prints_a_shipped_campaign_to_copy(tmp_path, monkeypatch, 
                                          f"'default'?); valid: {', '.join(f.stem for f in FILES)}\n")
 
 
-def test_campaign_list_names_every_shipped_campaign_with_its_opening_sentence(capsys):
+def test_campaign_list_names_every_shipped_campaign_with_its_opening_sentence(capsys, monkeypatch):
     """A newcomer had no way to see which campaigns ship (a name was guessed at `campaign run`): `ur5fault campaign
-    list` prints one line per shipped file, its name and the first sentence of the comment the file opens with."""
+    list` prints each shipped file's name and the first sentence of the comment the file opens with, wrapped to the
+    terminal under its start (the longer ones ran to 380 characters on one line)."""
     from ur5fault.cli import main
 
+    monkeypatch.setenv("COLUMNS", "90")
     assert main(["campaign", "list"]) == 0
     cap = capsys.readouterr()
     lines = cap.out.splitlines()
-    assert cap.err == "" and [line.split()[0] for line in lines[:len(FILES)]] == [f.stem for f in FILES]
-    for path, line in zip(FILES, lines):
+    entries = []  # each campaign's lines joined: a line that does not start with a name continues the one above
+    for line in lines:
+        if not line:
+            break
+        if line.startswith(" "):
+            entries[-1] += " " + line.strip()
+        else:
+            entries.append(line)
+    assert cap.err == "" and all(len(line) <= 90 for line in lines), max(map(len, lines))
+    assert [e.split()[0] for e in entries] == [f.stem for f in FILES]
+    for path, entry in zip(FILES, entries):
         comment = " ".join(" ".join(t[1:] for t in path.read_text().splitlines() if t.startswith("#")).split())
-        about = line[len(path.stem):].strip()
+        about = entry[len(path.stem):].strip()
         assert about and about.endswith(".") and comment.startswith(about), (path.name, about)
-    assert lines[FILES.index(CAMPAIGNS / "paper.yaml")].split(None, 1)[1] == (
+    assert entries[FILES.index(CAMPAIGNS / "paper.yaml")].split(None, 1)[1] == (
         "The seed paper's figures: Fig. 3, alpha = 0.1 deg on each joint in turn; Fig. 4, the shoulder at several "
         "alpha.")
-    assert lines[len(FILES):] == ["", "run one: ur5fault campaign run NAME; its whole file (a copy to edit): "
-                                      "ur5fault campaign show NAME > my.yaml"]
+    assert lines[len(lines) - 3:] == ["", "run one: ur5fault campaign run NAME",
+                                      "its whole file, a copy to edit: ur5fault campaign show NAME > my.yaml"]
 
 
 @pytest.mark.parametrize("typed, meant", [("defualt", "default"), ("papr.yaml", "paper")])

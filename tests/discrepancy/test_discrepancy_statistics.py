@@ -167,6 +167,16 @@ def test_library_candidates_are_linearised_about_the_model_being_fitted():
     assert [(c.x0, c.probe) for c in payload] == [(0.7, 1.2)]
 
 
+def test_a_payload_near_the_rated_five_kg_is_probed_lighter():
+    """A log at 5 kg (the UR5's rated payload, the payload effect's top) was refused "payload.mass_kg = 5.5 is out
+    of range [0, 5] kg" by the screening's probe 0.5 kg heavier, a value the user never gave: within 0.5 kg of the
+    top the probe is 0.5 kg lighter."""
+    from ur5fault.discrepancy.library import candidates
+
+    probes = {kg: [c.probe for c in candidates(kg) if c.effect == "payload"] for kg in (4.5, 4.6, 5.0)}
+    assert probes == {4.5: [5.0], 4.6: [pytest.approx(4.1)], 5.0: [4.5]}
+
+
 def test_a_value_below_its_limit_reads_below_it():
     """A drop reason read "z 4.0 < 4" (3.96 to one decimal)."""
     from ur5fault.discrepancy.statistics import below

@@ -136,3 +136,38 @@ def test_alternatives_replayed_after_the_judgement_equal_those_of_the_probe_batc
     steps.alternatives_of_kept(rp1, ref, again, n_fit)
     assert rp1.n_simulated == 1  # the kept finding's alternative only
     np.testing.assert_array_equal(again[0].alternatives[0][1], th_want)
+
+
+@pytest.mark.slow  # two whole fits of a 4 s log
+def test_rivals_prefetched_beside_the_rescreen_are_taken_and_change_nothing(short_log, monkeypatch):
+    """With ``jobs=2`` part of the rivals' replays start on a worker before the re-screen (``model.py``,
+    :func:`rivals.rival_plan`); when the re-screen leaves the final model as it is, ``list_rivals`` takes every one
+    of them: the same summary and overlay as ``jobs=1``, and no replay simulated that the fit does not use (the run
+    count one less than one process's, the starting model's prefetch, as in the test above).  The short log's fit
+    has no rivals of its own, so each kept finding is given one by the linearised preselection here: its joint's
+    first library candidate not listed already, at a small size."""
+    from ur5fault.discrepancy import rivals
+
+    def one_rival(lib_X, e_s, n_s, cands, lcols, listed, joint, own_variance=False):
+        for r, c in enumerate(cands):
+            if c.joint == joint and joint is not None and c.label not in listed and c.n_coef == 1:
+                return [(r, np.full(c.n_coef, 0.01))]
+        return []
+
+    monkeypatch.setattr(rivals, "in_place", one_rival)
+    prefetched: list[int] = []
+    plain_prefetch = LogReplay.prefetch
+
+    def counted(self, effect_sets, n=None):
+        if self.jobs > 1:  # with one process a prefetch starts nothing
+            prefetched.append(len(effect_sets))
+        return plain_prefetch(self, effect_sets, n)
+
+    monkeypatch.setattr(LogReplay, "prefetch", counted)
+    one = DiscrepancyModel(jobs=1).fit(short_log)
+    two = DiscrepancyModel(jobs=2).fit(short_log)
+    n_rivals = sum(1 for f in one.findings_ if f.kept and f.candidate.joint is not None)
+    assert n_rivals >= 3 and (n_rivals - 1) // 2 in prefetched  # rivals planned, some of them prefetched
+    assert _found(summary(one)) == _found(summary(two))
+    assert one.overlay() == two.overlay()
+    assert two.n_simulated_runs_ == one.n_simulated_runs_ - 1

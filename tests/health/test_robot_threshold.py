@@ -98,6 +98,10 @@ def test_the_joint_whose_healthy_windows_set_the_threshold_is_named(monkeypatch)
                            "elbow_joint's raw score in a held-out healthy window; each joint's largest held-out "
                            "healthy raw score: shoulder_pan_joint 1.55,") and "elbow_joint 15.50" in text
     assert set_by_sentence({"score": 1.0}) == ""  # a summary without the joints (written before) says nothing
+    # a detector saved without a calibration has no p(fault) to be "before": its own score is said to be the bar
+    uncal = set_by_sentence(s, calibrated=False)
+    assert uncal.startswith("the raw-score threshold 15.500 (the detector's own score: it was saved without a "
+                            "calibration to p(fault)) is elbow_joint's raw score") and "before calibration" not in uncal
 
 
 def test_with_enough_windows_the_joint_at_the_conformal_rank_is_named(monkeypatch):

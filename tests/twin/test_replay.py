@@ -218,3 +218,22 @@ def test_the_parameters_of_a_log_whose_tool_is_unknown_are_refused_in_one_line()
     for call in (log_overrides, replay_params):
         with pytest.raises(ParameterError, match="payload and tool offset"):
             call(unknown)
+
+
+def test_a_failed_replay_says_what_its_status_means():
+    """`monitor` with a payload its drives could not carry said only "the replay under the baseline model failed
+    (protective_stop)": a failed replay's one line now says what stopped it and what to check."""
+    from ur5fault.sim.loops import PROTECTIVE_STOP_RAD
+    from ur5fault.twin.replay import Replayed
+
+    z = np.zeros((2, 2, 6))
+    q = np.zeros((2, 6))
+
+    def replayed(status):
+        return Replayed(status, z, q, q, q, q)
+
+    assert replayed("ok").failure == ""
+    stop = replayed("protective_stop").failure
+    assert stop.startswith(f"protective stop: the simulated arm fell more than {PROTECTIVE_STOP_RAD:g} rad behind the "
+                           "log's targets") and "--payload-kg" in stop
+    assert replayed("diverged").failure.startswith("diverged: the simulation ran away")

@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import argparse
+import shutil
 import sys
+import textwrap
 from pathlib import Path
 
 from ..util.io import json_text
@@ -160,10 +162,15 @@ def cmd_list(args: argparse.Namespace) -> int:
 
     names = shipped_campaigns()
     width = max(map(len, names), default=0)
+    # each description wrapped to the terminal (100 columns off one), indented under its start
+    columns = max(shutil.get_terminal_size((100, 24)).columns, width + 40)
     for name in names:
-        print(f"{name:{width}s}  {shipped_campaign_about(name)}".rstrip())
-    print("\nrun one: ur5fault campaign run NAME; its whole file (a copy to edit): "
-          "ur5fault campaign show NAME > my.yaml")
+        about = textwrap.wrap(shipped_campaign_about(name), columns - width - 2) or [""]
+        print(f"{name:{width}s}  {about[0]}".rstrip())
+        for line in about[1:]:
+            print(" " * (width + 2) + line)
+    print("\nrun one: ur5fault campaign run NAME\n"
+          "its whole file, a copy to edit: ur5fault campaign show NAME > my.yaml")
     return 0
 
 

@@ -14,7 +14,7 @@ from ..util.usage import KUFIETA, KUFIETA_RUNS, examples, shipped
 
 def register(sub) -> None:
     d = sub.add_parser("discrepancy", help="find, name and fix where the model and a measured log disagree",
-                       **examples(f"ur5fault discrepancy {shipped('nist')} --format nist --out fit    # about 40 s "
+                       **examples(f"ur5fault discrepancy {shipped('nist')} --format nist --out fit    # 40-70 s "
                                   "on 2 cores",
                                   f"ur5fault discrepancy {KUFIETA_RUNS} {KUFIETA} --hold-out {shipped('kufieta/TEST')} "
                                   "--out kfit",

@@ -53,7 +53,7 @@ PROBES: dict[tuple[str, str], float | None] = {
     ("current_sensor_offset", "offset_A"): 0.1,
     ("cogging", "amplitude_Nm"): 0.02,
     ("delay", "delay_ms"): 4.0,
-    ("payload", "mass_kg"): None,  # the log's payload + PAYLOAD_PROBE_KG
+    ("payload", "mass_kg"): None,  # the log's payload + PAYLOAD_PROBE_KG (- within 0.5 kg of the range's top)
     ("payload_com", "dx_m"): 0.05, ("payload_com", "dy_m"): 0.05, ("payload_com", "dz_m"): 0.05,
 }
 PAYLOAD_PROBE_KG = 0.5
@@ -83,8 +83,9 @@ def candidates(payload_kg: float, joints: Sequence[int] = range(N_JOINTS),
         eff = REGISTRY[name]
         for j in (joints if eff.per_joint else [None]):
             x0, at = eff.param(par).absent, probe
-            if name == "payload":
-                x0, at = payload_kg, payload_kg + PAYLOAD_PROBE_KG
+            if name == "payload":  # probed heavier, or lighter where heavier leaves the effect's range (5 kg)
+                x0 = payload_kg
+                at = x0 + PAYLOAD_PROBE_KG if x0 + PAYLOAD_PROBE_KG <= eff.param(par).hi else x0 - PAYLOAD_PROBE_KG
             elif name == "viscous_temperature":  # linearised about the model's coefficient
                 x0 = params.friction.viscous_temp_coeff_per_K[0 if j is None else j]
             elif name == "friction_share":  # no "absent" value: about the model's share, probed at the far end

@@ -39,7 +39,7 @@ from .payload import PAYLOAD_KINDS, payload_kinds_screened, resolve_payloads
 from .refinement import FindingSet, Refined, polish
 from .replay_noise import null_residuals
 from .rescreen import rescreen
-from .rivals import list_rivals, noise_hints
+from .rivals import list_rivals, noise_hints, rival_plan
 from .search import columns_of
 from .stage_bar import StageBar
 from .weighting import OwnVariance, VarianceGroups
@@ -194,6 +194,13 @@ class DiscrepancyModel:
             rp.prefetch([ref.alt_sets[a] for a in steps.kept_alternatives(ref, kept)], n_fit)
             after = self._polish(rp, kept, ref.first, ref.finding_set, prog, drift) if kept else ref.nominal
             steps.alternatives_of_kept(rp, ref, kept, n_fit, drift, prog)
+            # the rivals' replays as the final model stands: (n - 1) // 2 of the n start on a worker beside the
+            # re-screen's replay, taken below when the re-screen leaves that model as it is; list_rivals simulates
+            # the rest over both processes, of which the worker gets one more: never more than its share when the
+            # re-screen replays nothing
+            plan = rival_plan(rp, lib.X, lib.drift, lib.candidates, jr.findings, ref.first.J if ref.first else None,
+                              ref.found, after, n_scr, own_variance=own)
+            rp.prefetch(plan.effect_sets[: (len(plan.effect_sets) - 1) // 2], rp.n_samples)
             # a finding dropped on the held-out part or at the final check gives its joint's place back
             again = rescreen(rp, lib.X, lib.drift, lib.candidates, jr.findings, after, n_scr, n_fit, drift,
                              self.max_effects, prog, own)

@@ -50,6 +50,16 @@ def size(f: Finding) -> float:
     return _amplitude(f)[0] * c.to_param
 
 
+#: how to read a finding's bracket, once above the findings of ``report.md``
+HOW_TO_READ = ("Each finding: its size with a 95 % interval, then [z: the size over its standard error; delta BIC: "
+               "how much better the fitting part is explained with it (below -10: strong evidence); held out: removes "
+               "N % of its change: on the held-out part, the drop of the residual's sum of squares over the sum of "
+               "squares of the change the finding makes there. 100 %: the residual left is orthogonal to the change, "
+               "its size fits; above 100 %: more of its shape is left, the held-out part would take it larger; "
+               "0-100 %: smaller; below 0: it makes the held-out part worse]. Then the effects this log cannot tell "
+               "from it, and what would.")
+
+
 def sentence(f: Finding) -> str:
     """One line a robotics engineer reads: what, where, how big (95 % interval), and how sure."""
     c = f.candidate
@@ -251,7 +261,7 @@ def _markdown(model: DiscrepancyModel, summ: dict[str, Any], figs: list[Path]) -
     lines += [f"- {rec.line()}" for rec in model.payload_.values()]
     lib = [sentence(f) for f in model.effects_]
     terms = [sentence(f) for f in model.terms_]
-    lines += ["", "## Effects of the library found", ""]
+    lines += ["", "## Effects of the library found", "", HOW_TO_READ, ""]
     lines += [f"- {s}" for s in lib] or ["- none"]
     lines += ["", "## Terms discovered outside the library (added to model.yaml as data-driven effects)", ""]
     lines += [f"- {s}" for s in terms] or ["- none"]

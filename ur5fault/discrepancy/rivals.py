@@ -38,6 +38,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..sim.axes import N_JOINTS
+from ..sim.effects import EffectSpec
 from ..twin.replay import LogReplay, Replayed
 from ..twin.residuals import conditions, noise_ratio, stencils
 from .candidates import Candidate
@@ -230,21 +231,27 @@ def in_place(X: NDArray, e_place: NDArray, e_named: NDArray, candidates: Sequenc
     return out
 
 
-def list_rivals(rp: LogReplay, lib_X: NDArray, lib_drift: Drift | None, candidates: Sequence[Candidate],
-                findings: Sequence[Finding], first_J: NDArray | None, found: Sequence[Candidate], after: Replayed,
-                n_scr: int, n_fit: int, drift: Drift | None, skip: Sequence[Finding] = (),
-                progress: Callable[[float], None] | None = None, own_variance: OwnVariance = False) -> None:
-    """Give every kept finding (but those in ``skip``, judged already) its rivals (module docstring): each
-    listed one goes to ``f.rivals`` and to ``f.alternatives``.
+@dataclasses.dataclass(frozen=True)
+class RivalPlan:
+    """The rivals :func:`list_rivals` simulates: per rival its finding, the finding's change, the candidate and its
+    linearised coefficients, and the effect set replayed (the final model with the rival in the finding's place)."""
 
-    Args:
-        lib_X: the library's columns on the screened part (drift removed); ``candidates`` their candidates.
-        first_J: the refinement's secant Jacobian ``(n_coef, n, n_channels)`` of the candidates ``found``.
-        after: the replay of the final model.
-    """
+    rows: tuple[tuple[Finding, NDArray, Candidate, NDArray], ...] = ()
+    effect_sets: tuple[tuple[EffectSpec, ...], ...] = ()
+    #: the log's readings and the final model's weighted residual over the whole log (None without rows)
+    meas: NDArray | None = None
+    e_after: NDArray | None = None
+
+
+def rival_plan(rp: LogReplay, lib_X: NDArray, lib_drift: Drift | None, candidates: Sequence[Candidate],
+               findings: Sequence[Finding], first_J: NDArray | None, found: Sequence[Candidate], after: Replayed,
+               n_scr: int, skip: Sequence[Finding] = (), own_variance: OwnVariance = False) -> RivalPlan:
+    """Step 1 of the module docstring for every kept finding (but those in ``skip``): the rivals to simulate.  A
+    pure function of its arguments, so the plan made before the re-screen is the one :func:`list_rivals` makes
+    after it when the re-screen leaves the final model as it is (its replays can then start early, prefetched)."""
     kept = [f for f in findings if f.kept]
     if first_J is None or not kept:
-        return
+        return RivalPlan()
     meas = rp.measured(rp.n_samples)
     e_after = weighted(meas, after.y, rp.sigma)
     fcols = columns_of(found)
@@ -264,12 +271,29 @@ def list_rivals(rp: LogReplay, lib_X: NDArray, lib_drift: Drift | None, candidat
         for r, th in in_place(lib_X, e_s, n_s, candidates, lcols, listed, f.candidate.joint,
                               own_variance=own_variance):
             plan.append((f, change, candidates[r], th))
-    if not plan:
-        return
     specs = {id(f): tuple(g.spec() for g in kept if g is not f) for f in kept}
-    sims = rp.run([specs[id(f)] + (c.spec(th),) for f, _, c, th in plan], rp.n_samples, progress)
+    return RivalPlan(tuple(plan), tuple(specs[id(f)] + (c.spec(th),) for f, _, c, th in plan), meas, e_after)
+
+
+def list_rivals(rp: LogReplay, lib_X: NDArray, lib_drift: Drift | None, candidates: Sequence[Candidate],
+                findings: Sequence[Finding], first_J: NDArray | None, found: Sequence[Candidate], after: Replayed,
+                n_scr: int, n_fit: int, drift: Drift | None, skip: Sequence[Finding] = (),
+                progress: Callable[[float], None] | None = None, own_variance: OwnVariance = False) -> None:
+    """Give every kept finding (but those in ``skip``, judged already) its rivals (module docstring): each
+    listed one goes to ``f.rivals`` and to ``f.alternatives``.
+
+    Args:
+        lib_X: the library's columns on the screened part (drift removed); ``candidates`` their candidates.
+        first_J: the refinement's secant Jacobian ``(n_coef, n, n_channels)`` of the candidates ``found``.
+        after: the replay of the final model.
+    """
+    plan = rival_plan(rp, lib_X, lib_drift, candidates, findings, first_J, found, after, n_scr, skip, own_variance)
+    if not plan.rows:
+        return
+    meas, e_after = plan.meas, plan.e_after
+    sims = rp.run(plan.effect_sets, rp.n_samples, progress)
     torque = after.torque_gear_Nm
-    for (f, change, cand, th), sim in zip(plan, sims):
+    for (f, change, cand, th), sim in zip(plan.rows, sims):
         if not sim.ok:
             continue
         e_place = e_after + change

@@ -27,7 +27,7 @@ from ..errors import ParameterError
 from ..logs import MeasuredLog
 from ..sim.axes import JOINT_NAMES
 from ..sim.effects import EffectSpec
-from ..sim.engine import RunSpec, Simulator
+from ..sim.engine import PROTECTIVE_STOP_RAD, RunSpec, Simulator
 from ..sim.params import JOINT_TEMPERATURE_RANGE_C, RobotParams, deep_merge, load_params
 from ..sim.terms import sensor_temperature_term
 
@@ -102,6 +102,19 @@ class Replayed:
     @property
     def ok(self) -> bool:
         return self.status == "ok"
+
+    @property
+    def failure(self) -> str:
+        """What a failed replay's status means, for the one line that refuses it ("" when it is ok)."""
+        if self.ok:
+            return ""
+        if self.status == "protective_stop":
+            return (f"protective stop: the simulated arm fell more than {PROTECTIVE_STOP_RAD:g} rad behind the log's "
+                    "targets, a payload or effect its drives cannot carry through this motion (check --payload-kg and "
+                    "the model) or targets that jump")
+        if self.status == "diverged":
+            return "diverged: the simulation ran away (a model or effect outside the range it holds for)"
+        return self.status
 
     @property
     def current_A(self) -> NDArray:

@@ -51,8 +51,11 @@ def test_monitor_json_schema(monitored):
     assert list(data) == ["logs", "notes"]
     assert [e["log"] for e in data["logs"]] == [p.name for p in logs]
     for e in data["logs"]:
-        assert set(e) == {"log", "verdict", "changes", "events", "event_limit_median", "notes"}
+        assert set(e) == {"log", "verdict", "changes", "events", "event_limit_median", "events_not_seen", "notes"}
         assert set(e["event_limit_median"]["current"]) == set(JOINT_NAMES)
+        # each joint whose events are not seen is the subject of a note
+        assert all(any(n.startswith(f"{s.split()[0]}: its {s.split()[1]} events") for n in e["notes"])
+                   for s in e["events_not_seen"])
         assert e["verdict"] in ("consistent", "changed", "anomaly")
         for ev in e["events"]:
             assert set(ev) == {"t_start_s", "t_end_s", "joints", "channels", "peak_A", "peak_rad"}

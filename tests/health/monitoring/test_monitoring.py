@@ -411,6 +411,22 @@ def test_a_limit_above_every_current_the_joint_draws_is_called_out_where_the_med
     assert blind_joints({"current": np.array([5.0, 0.1])}, np.array([np.nan, 0.2])) == []
 
 
+def test_the_joints_whose_events_are_not_seen_stand_beside_the_verdict():
+    """A newcomer read "consistent (0 changes, 0 events)" on a Kufieta run whose shoulder_lift events were judged
+    against a limit of 107 A (17 x the median): only a note on stderr said it. The joints the notes name are listed
+    in monitor.json's ``events_not_seen`` and on the console line beside the verdict, the same joints as the notes."""
+    from ur5fault.health.monitoring.verdict import blind_joints, unseen
+
+    limits = np.array([8.65, 54.9, 11.3, 0.766, 0.198, 0.532])
+    peak = np.array([1.30, 7.52, 3.02, 0.764, 0.54, 0.61])
+    typical = {"current": limits, "position": np.array([2e-4, 2e-4, 2e-4, 2e-4, 2e-4, 9e-3])}
+    names = unseen(typical, peak)
+    assert names == ["shoulder_pan_joint current", "shoulder_lift_joint current", "elbow_joint current",
+                     "wrist_1_joint current", "wrist_3_joint position"]
+    assert [n.split(":")[0] for n in blind_joints(typical, peak)] == [n.split()[0] for n in names]
+    assert unseen({"current": np.array([0.581, 1.25, 0.466, 0.161, 0.0896, 0.0693])}, peak) == []
+
+
 def test_the_peak_rule_holds_only_for_joints_the_log_moves():
     """A joint the log holds still draws its holding current and noise (the standstill run's wrists: 0.05 A), under
     any limit a spread gives: not called blind for that (the review's case). Its peak is left out; a moved joint's

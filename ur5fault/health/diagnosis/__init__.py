@@ -59,7 +59,7 @@ def replay_twin(log: MeasuredLog, params_overrides: dict | None = None, base_eff
                     *((c, f"noise-free twin's replay with the payload CoM shifted along {ax}")
                       for c, ax in zip(com, COM_AXES))):
         if not r.ok:
-            raise ParameterError(f"{log.source}: the {what} failed ({r.status}); check the log and the model")
+            raise ParameterError(f"{log.source}: the {what} failed ({r.failure})")
     columns = (com_difference(np.stack([c.current_true_A for c in com]), quiet.current_true_A) if com
                else np.zeros((*quiet.current_true_A.shape, len(COM_AXES))) if com_twins else None)
     return replay, dataclasses.replace(rep, current_true_A=quiet.current_true_A, torque_gear_Nm=quiet.torque_gear_Nm,
@@ -190,7 +190,8 @@ def diagnose(log: MeasuredLog, detector_dir: str | Path, params_overrides: dict 
                      + ("" if robot.rank <= robot.n else
                         f" (fewer than {int(round(1 / robot.alpha)) - 1} windows: the largest held-out score)")
                      + ("; it is below the training runs' threshold, which is kept" if robot.score <= thr else
-                        f"; {set_by}" if (set_by := set_by_sentence(robot.summary())) else ""))
+                        f"; {set_by}" if (set_by := set_by_sentence(robot.summary(), models.calibrator is not None))
+                        else ""))
     p_thr = thr
     p_flag = flag_thr
     if models.calibrator is None:

@@ -154,14 +154,17 @@ class RobotThreshold:
 ROBOT_THRESHOLD_FROM = "the robot's own healthy baseline windows, held out (baseline.robot_threshold)"
 
 
-def set_by_sentence(threshold: dict[str, Any]) -> str:
+def set_by_sentence(threshold: dict[str, Any], calibrated: bool = True) -> str:
     """Which joint's healthy window the robot's threshold is, and each joint's largest held-out healthy score, from
-    :meth:`RobotThreshold.summary` (empty where it does not say)."""
+    :meth:`RobotThreshold.summary` (empty where it does not say); ``calibrated``: whether the detector maps its raw
+    score to p(fault) (a detector saved without a calibration does not)."""
     by_joint, joint = threshold.get("held_out_max_by_joint") or {}, threshold.get("set_by_joint")
     if not by_joint or joint is None:
         return ""
     listed = ", ".join(f"{n} {v:.2f}" for n, v in by_joint.items())
-    return (f"the raw-score threshold {threshold['score']:.3f} (the detector's score, before calibration to p(fault)) "
+    what = ("the detector's score, before calibration to p(fault)" if calibrated else
+            "the detector's own score: it was saved without a calibration to p(fault)")
+    return (f"the raw-score threshold {threshold['score']:.3f} ({what}) "
             f"is {joint}'s raw score in a held-out healthy window; each joint's largest held-out healthy raw score: "
             f"{listed}; on a joint whose healthy windows stay far below the threshold a fault is flagged only once its "
             "score passes it")

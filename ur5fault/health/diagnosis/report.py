@@ -47,10 +47,11 @@ def _fmt(v: float | None, unit: str) -> str:
     return "-" if v is None else f"{v:.3g} {unit}"
 
 
-def _baseline(b: dict[str, Any] | None, robot_bar: bool = False, p_fault: float | None = None) -> str:
+def _baseline(b: dict[str, Any] | None, robot_bar: bool = False, p_fault: float | None = None,
+              calibrated: bool = True) -> str:
     """The sentence saying which baseline the inputs were referred to (or that there was none); ``robot_bar``: the
     robot's own threshold is the one windows are flagged above (not the training runs', which is higher), at
-    ``p_fault`` on the table's scale."""
+    ``p_fault`` on the table's scale; ``calibrated``: whether the detector maps its raw score to p(fault)."""
     if b is None:
         return ("No baseline of this robot: the inputs are scored as they are, against the simulated healthy "
                 "training runs only (a real robot's model error then reads as a fault: `--baseline-logs`).")
@@ -65,7 +66,7 @@ def _baseline(b: dict[str, Any] | None, robot_bar: bool = False, p_fault: float 
              + "; a healthy window like them exceeds it with probability "
              f"{t['false_alarm_bound']:.2g}); windows are flagged above it and the training runs' threshold."
              + (f" As a window's score is its joints' largest, {set_by}."
-                if robot_bar and (set_by := set_by_sentence(t)) else ""))
+                if robot_bar and (set_by := set_by_sentence(t, calibrated)) else ""))
     return (f"Baseline: {b['n_windows']} windows of {len(b['logs'])} healthy log(s) of the robot "
             f"({', '.join(b['logs'])}); every input referred to it ({b['mapping']}): {n['scaled']} scaled, "
             f"{n['shifted']} shifted, {n['shifted_zero_spread']} shifted (zero spread in the baseline), "
@@ -115,7 +116,7 @@ def _report(d: dict[str, Any]) -> str:
              f"{'calibrated' if det['calibrated'] else 'NOT calibrated: the detector saved no calibration'}; "
              "the run-level detector's reading is in diagnosis.json).", "",
              _baseline(d.get("baseline"), d["flag_threshold"]["from"] == ROBOT_THRESHOLD_FROM,
-                       d["flag_threshold"].get("p_fault")), "",
+                       d["flag_threshold"].get("p_fault"), det["calibrated"]), "",
              f"**{d['n_flagged']} of {d['n_windows']} windows flagged.**", "",
              "| window [s] | p(fault) | flagged | likeliest joint "
              "| likeliest kinds there (size; the two halves' estimates) |",

@@ -24,7 +24,7 @@ from .evaluation import evaluate
 from .models import Models
 from .predictions import FILE as PREDICTIONS_FILE
 from .report import write_report
-from .saved import MODELS_DIR, load_models, models_folder, save_models, unverified_notes
+from .saved import MODELS_DIR, check_saved_inputs, load_models, save_models, unverified_notes
 from .transfer import against_training_split, mean_run_duration_s, refuse_training_runs, setup_notes
 
 RESULT_FILES = ("report.md", "metrics.json", PREDICTIONS_FILE, MODELS_DIR)
@@ -67,7 +67,7 @@ def run_benchmark(campaign_dir: str | Path, out: str | Path | None = None, *, se
         test_dir = Path(test_dir)
         other = load_features(test_dir)  # there, a campaign's feature table (not a life campaign's folder)
         refuse_time_series(other, f"--test {test_dir}: ")
-        models_folder(base / "benchmark")  # classifiers saved there (the cheap part of load_models' check)
+        check_saved_inputs(base / "benchmark", other, str(test_dir))  # classifiers there, with these inputs
         refuse_training_runs(features, other, campaign_dir, test_dir)
     thr = PAPER_TCP_MM
     manifest = campaign_dir / "manifest.json"

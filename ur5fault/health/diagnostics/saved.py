@@ -225,6 +225,15 @@ def models_folder(folder: str | Path) -> Path:
     return folder
 
 
+def check_saved_inputs(folder: str | Path, features: pd.DataFrame, where: str) -> None:
+    """:func:`check_inputs` of ``features`` against the schema in ``folder`` (as :func:`models_folder` takes it)
+    before the classifiers are loaded (about 30 s for the diagnostics campaign's): a campaign without their inputs
+    is refused at once.  A schema this cannot read is left to :func:`load_models`, which refuses it."""
+    schema = read_json_stored(models_folder(folder) / SCHEMA_FILE, RESAVE)
+    if isinstance(schema, dict) and isinstance(schema.get("inputs"), list):
+        check_inputs(features, schema, where)
+
+
 def load_models(folder: str | Path) -> tuple[Models, dict[str, Any]]:
     """The saved classifiers and their schema from a ``models`` folder (or the report folder holding one).
 

@@ -150,7 +150,8 @@ def cmd_monitor(args: argparse.Namespace) -> int:
     with result_folder(args.out, RESULT_FILES, args.replace) as out:  # one set: a stop between files is marked
         paths = write(out, stats, observed, entries, args.baseline, channels, verified, notes)
     for e in entries:
-        print(f"{e['log']}: {e['verdict']} ({len(e['changes'])} changes, {len(e['events'])} events)")
+        blind = f"; events not seen on {', '.join(e['events_not_seen'])}: note below" if e["events_not_seen"] else ""
+        print(f"{e['log']}: {e['verdict']} ({len(e['changes'])} changes, {len(e['events'])} events{blind})")
         for line in e["notes"]:
             print(f"note: {e['log']}: {line}", file=sys.stderr)
     print(said_written([*paths[:2], paths[-1]], earlier))

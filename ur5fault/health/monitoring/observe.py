@@ -143,11 +143,11 @@ def observe(log: MeasuredLog, params_overrides: dict | None = None, effects: Seq
     # the screen simulates samples 1..lo+m; its baseline run is the replay itself there
     base, X, kept = screen(rp, lo + m, cands)
     if not base.ok:
-        raise ParameterError(f"{log.source}: the replay under the baseline model failed ({base.status})")
+        raise ParameterError(f"{log.source}: the replay under the baseline model failed ({base.failure})")
     if hi > lo + m:
         base = rp.run([()], hi)[0]
         if not base.ok:
-            raise ParameterError(f"{log.source}: the replay under the baseline model failed ({base.status})")
+            raise ParameterError(f"{log.source}: the replay under the baseline model failed ({base.failure})")
     meas = rp.measured(hi)
     e = weighted(meas[lo : lo + m], base.y[lo : lo + m], rp.sigma)
     qd_all = np.gradient(log.q_target_rad, log.period_s, axis=0)

@@ -114,7 +114,9 @@ def markdown(baseline: Baseline, entries: Sequence[dict[str, Any]], figs: Sequen
                   f"({' and '.join(ev['channels'])}), peak {ev['peak_A']:.2f} A, {ev['peak_rad'] * 1e3:.3f} mrad"
                   for ev in e["events"]]
         if not e["changes"] and not e["events"]:
-            lines.append("- nothing beyond what the baseline runs showed")
+            lines.append("- nothing beyond what the baseline runs showed" + (
+                f" (events not seen on {', '.join(e['events_not_seen'])}: note below)" if e.get("events_not_seen")
+                else ""))
         if paired_s:
             lines.append(f"- current judged against a baseline run repeating its task on {paired_s[k][0]:.1f} of "
                          f"{paired_s[k][1]:.1f} s (elsewhere against the baseline's spread at its motion)")
