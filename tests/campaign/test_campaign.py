@@ -379,17 +379,52 @@ def test_edited_campaign_never_reuses_old_results(tmp_path, tiny_done, edit, ove
     pd.testing.assert_frame_equal(_results(got), _results(fresh))
 
 
-def test_changed_condition_makes_new_runs(tmp_path, tiny_done):
-    """A condition is part of the run_id: new runs are simulated, the old files are left as strays."""
-    from ur5fault.campaign import status
+@pytest.mark.parametrize("edit, difference", [
+    ({"base": ", temperature_C: 30.0"}, "base.temperature_C: absent from the folder's manifest"),
+    ({"levels": "0.1"}, "sweep.backlash.backlash_deg: 2 entries in the folder's manifest, 1 now"),
+], ids=["condition", "dropped_level"])
+def test_edited_campaign_never_replaces_another_versions_results(tmp_path, tiny_done, edit, difference):
+    """A condition is part of the run_id: an edit that leaves the stored runs outside the campaign (a condition
+    changed, a level dropped) would replace the folder's table by another version's, its runs left as strays; it is
+    refused naming the first difference, and with replace_changed it equals a fresh run, the old files strays."""
+    from ur5fault.campaign import CampaignChangedError, status
 
     out = _copy_done(tiny_done, tmp_path)
-    camp = load_campaign(tiny(tmp_path, base=", temperature_C: 30.0"))
-    run_quiet(camp, out)
+    before = {p.name: p.read_bytes() for p in out.glob("*.*")}
+    camp = load_campaign(tiny(tmp_path, **edit))
+    with pytest.raises(CampaignChangedError) as e:
+        run_quiet(camp, out)
+    msg = str(e.value)
+    assert difference in msg and "another version of campaign 'tiny'" in msg and "--replace-changed" in msg, msg
+    assert "\n" not in msg
+    assert before == {p.name: p.read_bytes() for p in out.glob("*.*")}  # table and manifest untouched
+    n_old = len(list((out / "runs").glob("*.parquet")))
+    run_quiet(camp, out, replace_changed=True)
     run_quiet(camp, tmp_path / "fresh")
     got, fresh = (pd.read_parquet(p / "features.parquet") for p in (out, tmp_path / "fresh"))
     pd.testing.assert_frame_equal(_results(got), _results(fresh))
-    assert status(out)["runs"] == {"ok": 3, "missing": 0, "bad": 0, "changed": 0, "stray": 3}
+    runs = status(out)["runs"]
+    assert runs["ok"] == len(camp.runs) and runs["changed"] == runs["bad"] == 0
+    assert runs["ok"] + runs["stray"] == len(list((out / "runs").glob("*.parquet"))) >= n_old
+
+
+def test_a_replaced_campaign_resumes_and_extends_without_the_flag(tmp_path, tiny_done):
+    """After --replace-changed the folder holds the new version: rerunning it, or adding a level to it, needs no
+    flag (the earlier version's strays are not its runs)."""
+    out = _copy_done(tiny_done, tmp_path)
+    run_quiet(load_campaign(tiny(tmp_path, base=", temperature_C: 30.0")), out, replace_changed=True)
+    run_quiet(load_campaign(tiny(tmp_path, base=", temperature_C: 30.0")), out)
+    run_quiet(load_campaign(tiny(tmp_path, base=", temperature_C: 30.0", levels="0.1, 0.2, 0.3")), out)
+    assert len(pd.read_parquet(out / "features.parquet")) == 4
+
+
+def test_cli_refuses_an_edited_campaign_in_one_line(tmp_path, tiny_done):
+    out = _copy_done(tiny_done, tmp_path)
+    f = tiny(tmp_path, base=", temperature_C: 35.0")
+    r = subprocess.run([sys.executable, "-m", "ur5fault.cli", "campaign", "run", str(f), "--out", str(out),
+                        "--quiet", "--jobs", "1"], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1, r.stderr
+    assert "base.temperature_C" in r.stderr and "--replace-changed" in r.stderr and not r.stdout
 
 
 def test_identity_covers_the_package_version(tmp_path, tiny_done, monkeypatch):

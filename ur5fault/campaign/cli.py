@@ -44,7 +44,8 @@ def register(sub) -> None:
                    help="start a large campaign (over 1000 runs or 2e9 physics steps; a life campaign: if no unit "
                         "fails early) without asking")
     r.add_argument("--replace-changed", action="store_true", dest="replace_changed",
-                   help="re-simulate stored runs of OUT made under other settings (default: stop and name them)")
+                   help="re-simulate stored runs of OUT made under other settings, or replace there the results "
+                        "of another version of the campaign (default: stop and name the first difference)")
     r.set_defaults(func=cmd_run)
     s = csub.add_parser("status", help="what a campaign folder holds, every run file verified (exit 1 on problems)",
                         **examples("ur5fault campaign status results/default"))

@@ -6,7 +6,9 @@ Before anything is simulated the campaign's cost is checked (:mod:`.limits`) and
 must be writable.  On a rerun into an existing folder every stored run is verified
 (:mod:`.verify`): sound results made under the same settings are kept, bad files are reported
 and re-simulated, and results made under other settings stop the campaign with the first
-difference named (``replace_changed=True`` re-simulates them instead).  On an interruption
+difference named (``replace_changed=True`` re-simulates them instead); so does an edited campaign whose runs
+leave out stored runs of the campaign the folder's manifest records (``replace_changed=True``: they are left as
+strays).  On an interruption
 (Ctrl-C, SIGTERM) the loky workers are stopped and the lock released; a worker whose parent
 process dies (even by SIGKILL) exits within about two seconds (it checks every second).
 """
@@ -25,7 +27,7 @@ from typing import Any
 import numpy as np
 
 from ..config import parse_trajectory
-from ..errors import ParameterError
+from ..errors import ParameterError, Ur5FaultError
 from ..sim.params import load_params
 from ..util.checks import as_bool, short
 from ..util.io import (
@@ -40,19 +42,20 @@ from ..util.parallel import one_blas_thread, return_freed_memory
 from ..util.progress import campaign_progress
 from .batches import plan_batches
 from .digital_twin import add_twin_features, regressor_grid, regressor_runs, twin_id, twin_runs
-from .identity import DRIVE, STEPPER, Identities
+from .identity import DRIVE, STEPPER, Identities, first_difference
 from .identity import run_effects as _effects_of
 from .labels import assign_splits, refresh_labels, row_labels
 from .limits import check_limits, estimate
 from .manifest import build_manifest
 from .runs import CampaignRun
-from .spec import Campaign
+from .spec import Campaign, build_campaign
 from .store import (
     SUBFOLDERS,
     BadRunFilesError,
     CampaignChangedError,
     check_timeseries_file,
     consolidate,
+    read_manifest,
     run_path,
     timeseries_path,
     write_run_file,
@@ -165,11 +168,13 @@ def run_campaign(camp: Campaign, out: Path | None = None, *, jobs: int | None = 
         jobs: worker processes (default, and at most: the cores available; a cap is noted).
         backend: ``"loky"`` (local processes) or ``"dask"`` (``scheduler`` address required).
         progress: print a progress line to stderr, or a callback ``(done, total, eta_s)``.
-        replace_changed: re-simulate stored runs made under other settings instead of stopping.
+        replace_changed: re-simulate stored runs made under other settings, and replace the results of another
+            version of the campaign (its run files left as strays), instead of stopping.
         note: receives one-line notes (jobs capped, bad files re-simulated); None: silent.
 
     Raises:
-        CampaignChangedError: stored runs were made under other settings (first difference named).
+        CampaignChangedError: stored runs were made under other settings, or ``out`` holds another version of the
+            campaign (first difference named).
         FolderLockedError: another process writes ``out``.
         ParameterError: a bad argument (named with its value), the campaign exceeds a limit (memory, steps), or a
             bad backend/scheduler.
@@ -227,6 +232,35 @@ def _other_campaign(out: Path, name: str) -> str | None:
     return recorded if isinstance(recorded, str) and recorded != name else None
 
 
+def _earlier_version(out: Path, camp: Campaign, stray: Sequence[str]) -> str | None:
+    """What makes the campaign ``out``'s manifest records another version of ``camp``, one whose stored runs this
+    run would leave behind as strays and whose feature table it would replace (a condition, a trajectory or a
+    payload edited, a level dropped): its first difference and how many of its stored runs ``camp`` lacks.
+
+    None where no stored run of the recorded campaign is lost: the same campaign (a resume), one that extends it
+    (swept levels added: only the new runs are simulated), or a folder whose manifest holds no campaign this
+    ur5fault can rebuild (a damaged or absent one is rewritten by the run as before; runs of another ur5fault
+    differ by their identity, refused by the scan)."""
+    if not stray:
+        return None
+    manifest, _ = read_manifest(out)
+    data = manifest.get("campaign_data")
+    if not isinstance(data, dict):
+        return None
+    try:
+        earlier = build_campaign(data, "manifest.json", str(manifest.get("campaign_text", "")), None, out,
+                                 model_effects=None)
+    except Ur5FaultError:
+        return None
+    stored = {Path(name).stem for name in stray}
+    lost = [rc.run_id for rc in earlier.runs if rc.run_id in stored]
+    if not lost:
+        return None
+    why = (first_difference(data, dict(camp.data), was="the folder's manifest")
+           or f"run {lost[0]} of the folder's manifest is not a run of this campaign")
+    return f"{why}; {len(lost)} of its stored run(s) are not runs of this campaign"
+
+
 def _run_locked(camp: Campaign, out: Path, jobs: int, backend: str, client, progress, save_ts: bool,
                 replace_changed: bool, say: Callable[[str], None], capped: str | None) -> dict[str, Any]:
     with Lock(out):  # notes only from here: an error before is the one line a user sees
@@ -243,6 +277,15 @@ def _run_locked(camp: Campaign, out: Path, jobs: int, backend: str, client, prog
             raise CampaignChangedError(
                 f"{run_path(out, rid)}: made under other settings ({why}); {len(found.changed)} stored run(s) differ "
                 "from this campaign: use another --out, or --replace-changed to re-simulate them")
+        earlier = _earlier_version(out, camp, found.stray)
+        if earlier and not replace_changed:
+            raise CampaignChangedError(
+                f"{out}: holds the results of another version of campaign {camp.name!r} ({earlier}): use another "
+                "--out, or --replace-changed to simulate this campaign there (the earlier version's run files are "
+                "then left as strays)")
+        if earlier:
+            say(f"{out}: replacing the results of another version of campaign {camp.name!r} ({earlier}; "
+                "--replace-changed): its run files are left as strays")
         for rid, why in found.bad[:5]:
             say(f"{run_path(out, rid)}: {why}; simulating it again")
         if len(found.bad) > 5:

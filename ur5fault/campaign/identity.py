@@ -158,28 +158,29 @@ class Identities:
                 "inputs": {**self.common, **own}}
 
 
-def first_difference(recorded: Any, expected: Any, path: str = "") -> str | None:
-    """``"duration_s: 1.5 in the file, 0.7 now"`` for the first input that differs, else None."""
+def first_difference(recorded: Any, expected: Any, path: str = "", was: str = "the file") -> str | None:
+    """``"duration_s: 1.5 in the file, 0.7 now"`` for the first input that differs, else None; ``was`` names where
+    ``recorded`` is kept (a run file; or a folder's manifest, for the campaigns themselves)."""
     if isinstance(recorded, Mapping) and isinstance(expected, Mapping):
         keys = [k for k in INPUT_ORDER if k in recorded or k in expected] if not path else []
         keys += sorted((set(recorded) | set(expected)) - set(keys), key=str)
         for k in keys:
             if k not in recorded or k not in expected:
-                side = "the file" if k not in recorded else "this campaign"
+                side = was if k not in recorded else "this campaign"
                 return f"{path}{k}: absent from {side}"
-            d = first_difference(recorded[k], expected[k], f"{path}{k}.")
+            d = first_difference(recorded[k], expected[k], f"{path}{k}.", was)
             if d:
                 return d
         return None
     if isinstance(recorded, list) and isinstance(expected, list):
-        base = 1 if path.startswith("params.") else 0  # per-joint parameters count joints from 1
+        base = 1 if path.startswith(("params.", "base.params.")) else 0  # per-joint parameters count joints from 1
         for i, (a, b) in enumerate(zip(recorded, expected)):
-            d = first_difference(a, b, f"{path.rstrip('.')}[{i + base}].")
+            d = first_difference(a, b, f"{path.rstrip('.')}[{i + base}].", was)
             if d:
                 return d
         if len(recorded) != len(expected):
-            return f"{path.rstrip('.')}: {len(recorded)} entries in the file, {len(expected)} now"
+            return f"{path.rstrip('.')}: {len(recorded)} entries in {was}, {len(expected)} now"
         return None
     if json.dumps(recorded, sort_keys=True) != json.dumps(expected, sort_keys=True):
-        return f"{path.rstrip('.')}: {short(recorded)} in the file, {short(expected)} now"
+        return f"{path.rstrip('.')}: {short(recorded)} in {was}, {short(expected)} now"
     return None
