@@ -75,6 +75,10 @@ class Trajectory:
             attached from an event with ``gripped=True`` until the next release.
         payload_gripped_at_start: whether the payload is held at ``t = 0``.
         default_payload_kg: payload mass used when a run does not set one [kg].
+
+    The schedule (events, held at start) says *when* the gripper holds the payload and never depends on its
+    mass: a run's payload effect replaces the mass only, so a schedule that held nothing at 0 kg would drop
+    the mass a run asks for.
     """
 
     name: str
