@@ -411,6 +411,35 @@ def test_simulate_command_line_effects_replace_the_files_and_errors_name_their_s
     assert "pay.yaml: effects[0]: payload (mass_kg=2) and payload_kg = 1 both set the payload" in err
 
 
+def test_simulate_trajectory_flag_keeps_the_files_options_for_the_same_motion_and_notes_them_for_another(
+        tmp_path, capsys):
+    """--trajectory pick_and_place over a file's {name: pick_and_place, speed_scale: 0.5} ran at the default speed,
+    silently, and the file recorded only the name: the options are kept, and the metadata records them (not the
+    trajectory's default mass, which the run's payload_kg replaces); another motion drops them, said so."""
+    import json
+
+    import pyarrow.parquet as pq
+
+    from ur5fault.cli import main
+
+    def options(path):
+        meta = json.loads(pq.read_schema(path).metadata[b"ur5fault"])
+        return meta["trajectory"], meta["trajectory_options"]
+
+    cfg = tmp_path / "ss.yaml"
+    cfg.write_text("trajectory: {name: pick_and_place, speed_scale: 0.5}\n")
+    out = tmp_path / "r.parquet"
+    assert main(["simulate", "--config", str(cfg), "--trajectory", "pick_and_place", "--duration-s", "0.05",
+                 "--quiet", "--out", str(out)]) == 0
+    assert "note" not in capsys.readouterr().err
+    assert options(out) == ("pick_and_place", {"speed_scale": 0.5, "setpoint_period_s": 0.008})
+    assert main(["simulate", "--config", str(cfg), "--trajectory", "joint_sweep", "--duration-s", "0.05",
+                 "--quiet", "--out", str(out), "--replace"]) == 0
+    assert ("note: the command line's --trajectory joint_sweep replaces ss.yaml's trajectory 'pick_and_place' and "
+            "its options (speed_scale: 0.5); joint_sweep runs with its defaults") in capsys.readouterr().err
+    assert options(out) == ("joint_sweep", {"speed_scale": 1.0})
+
+
 def test_a_run_past_its_trajectory_is_noted_and_plot_of_a_file_is_named(tmp_path):
     """Found trying the wheel as a newcomer: a --duration-s past the trajectory's end ran silently (the robot holds
     its last setpoint), and `plot RUN.parquet` called the file a campaign folder without a features table."""

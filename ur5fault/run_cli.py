@@ -8,6 +8,7 @@ import argparse
 import json
 import math
 import sys
+from collections.abc import Mapping
 from pathlib import Path
 
 from .errors import Ur5FaultError
@@ -147,7 +148,7 @@ def _over_file(file_data: dict, given: dict, cli_items: list, where: str) -> dic
     refuse_repeats(cli_specs, "command line: effects")
     for key, flag in (("payload_kg", "--payload-kg"), ("temperature_C", "--temperature-C")):  # the one typed
         refuse_condition_effects(cli_specs, "command line: effects", {key: given.get(key)}, f" ({flag})")
-    data = {**file_data, **given}
+    data = {**file_data, **given, **_trajectory_over_file(file_data.get("trajectory"), given.get("trajectory"), where)}
     by_key = {effect_key(e): e for e in cli_specs}
     kept = []
     for item, spec in zip(file_items or [], file_specs):
@@ -168,6 +169,21 @@ def _over_file(file_data: dict, given: dict, cli_items: list, where: str) -> dic
             data.pop(key)
     data["effects"] = kept + cli_items
     return data
+
+
+def _trajectory_over_file(file_spec, name: str | None, where: str) -> dict:
+    """``--trajectory NAME`` over the file's ``trajectory``: the file's options kept when it names the same motion
+    (``--trajectory pick_and_place`` over ``{name: pick_and_place, speed_scale: 0.5}`` runs at half speed); when it
+    names another, the command line wins, as it does for every key, and a note says which options went."""
+    if name is None or not isinstance(file_spec, Mapping) or "name" not in file_spec:
+        return {}
+    if file_spec["name"] == name:
+        return {"trajectory": file_spec}
+    options = ", ".join(f"{k}: {v!r}" for k, v in file_spec.items() if k != "name")
+    if options:
+        print(f"note: the command line's --trajectory {name} replaces {where}'s trajectory {file_spec['name']!r} "
+              f"and its options ({options}); {name} runs with its defaults", file=sys.stderr)
+    return {}
 
 
 def _parse_effect_arg(spec: str) -> dict:

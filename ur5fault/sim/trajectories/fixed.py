@@ -22,6 +22,7 @@ from .base import (
     check_pose,
     dwell,
     movej,
+    records_options,
 )
 
 # Pick-and-place waypoints [rad], tool pointing down (z axis of the TCP = -z of the base within 1e-3).
@@ -51,6 +52,7 @@ def check_speed_scale(speed_scale: float, where: str = "speed_scale") -> float:
     return float(speed_scale)
 
 
+@records_options
 def pick_and_place(
     payload_kg: float = 2.0,
     speed_scale: float = 1.0,
@@ -91,6 +93,7 @@ def pick_and_place(
     return Trajectory("pick_and_place", ts, q, tuple(events), False, float(payload_kg))
 
 
+@records_options
 def hold(q_rad=PICK_APPROACH, seconds: float = 1.0, payload_kg: float = 0.0) -> Trajectory:
     """Stand still at ``q_rad`` (six joint angles [rad]) for ``seconds`` (useful for noise and drift checks),
     the gripper closed throughout: it carries whatever payload the run sets (none at the default 0 kg)."""
@@ -101,6 +104,7 @@ def hold(q_rad=PICK_APPROACH, seconds: float = 1.0, payload_kg: float = 0.0) -> 
     return Trajectory("hold", CB3_SETPOINT_PERIOD_S, np.vstack([q, q[-1:]]), (), True, payload_kg)
 
 
+@records_options
 def joint_sweep(speed_scale: float = 1.0, payload_kg: float = 1.0) -> Trajectory:
     """Every joint out and back twice, the gripper closed throughout (it carries whatever payload the run sets,
     1 kg unless given); about 10 s.
