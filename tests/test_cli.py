@@ -384,6 +384,12 @@ def test_simulate_command_line_effects_replace_the_files_and_errors_name_their_s
     assert main(["simulate", "--effect", "payload:mass_kg=1", "--effect", "payload:mass_kg=2", "--out", str(out),
                  "--replace"]) == 2
     assert capsys.readouterr().err.strip().endswith("give each effect once")
+    # --effect and --backlash are numbered in the order typed (every --backlash came first)
+    assert main(["simulate", "--effect", "backlash@elbow:backlash_deg=0.1", "--backlash", "elbow:0.2", "--out",
+                 str(out), "--replace"]) == 2
+    assert capsys.readouterr().err.strip() == (
+        "ur5fault: error: command line: effects[1]: backlash on elbow_joint (backlash_deg=0.2) repeats effects[0] "
+        "(backlash on elbow_joint (backlash_deg=0.1)); give each effect once per joint")
     # the file's own repeat is the file's error under its own indices, whatever the command line adds
     rep = tmp_path / "rep.yaml"
     rep.write_text("effects: [{effect: backlash, joint: 1, backlash_deg: 0.1}, {effect: coulomb_friction, joint: 2, "

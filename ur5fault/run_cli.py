@@ -49,16 +49,10 @@ def cmd_simulate(args: argparse.Namespace) -> int:
                                        ("payload_kg", args.payload_kg), ("temperature_C", args.temperature_C),
                                        ("duration_s", args.duration_s), ("log_period_s", args.log_period_s))
              if val is not None}
-    effects: list = []  # the command line's, validated apart from the file's so that errors name their source
-    for spec in args.backlash or []:
-        joint, _, deg = spec.partition(":")
-        try:
-            value = float(deg)
-        except ValueError:
-            raise Ur5FaultError(f"--backlash {spec!r}: expected JOINT:DEGREES, e.g. shoulder_lift_joint:0.1") from None
-        effects.append({"effect": "backlash", "joint": joint, "backlash_deg": value})
-    for spec in args.effect or []:
-        effects.append(_parse_effect_arg(spec))
+    # the command line's, validated apart from the file's so that errors name their source; in the order typed
+    # (--backlash and --effect append to one list), so that effects[i] is the i-th typed
+    effects = [_parse_backlash_arg(spec) if flag == "--backlash" else _parse_effect_arg(spec)
+               for flag, spec in args.cli_effects or []]
     data = _over_file(file_data, given, effects, where)
     overlay = Overlay.load(args.model) if args.model else None
     flags = {key: "--" + key.replace("_", "-") for key in given if key != "trajectory"}  # --temperature-C kept
@@ -184,6 +178,16 @@ def _trajectory_over_file(file_spec, name: str | None, where: str) -> dict:
         print(f"note: the command line's --trajectory {name} replaces {where}'s trajectory {file_spec['name']!r} "
               f"and its options ({options}); {name} runs with its defaults", file=sys.stderr)
     return {}
+
+
+def _parse_backlash_arg(spec: str) -> dict:
+    """``joint:degrees`` -> backlash effect mapping."""
+    joint, _, deg = spec.partition(":")
+    try:
+        value = float(deg)
+    except ValueError:
+        raise Ur5FaultError(f"--backlash {spec!r}: expected JOINT:DEGREES, e.g. shoulder_lift_joint:0.1") from None
+    return {"effect": "backlash", "joint": joint, "backlash_deg": value}
 
 
 def _parse_effect_arg(spec: str) -> dict:
@@ -321,9 +325,11 @@ def register(sub) -> None:
     s.add_argument("--model", metavar="OVERLAY.yaml",
                    help="model overlay YAML (only params and effects, format below), e.g. from `ur5fault discrepancy` "
                         "or `ur5fault identify` (default: none, the nominal model)")
-    s.add_argument("--backlash", action="append", metavar="JOINT:DEG",
+    s.add_argument("--backlash", action="append", dest="cli_effects", metavar="JOINT:DEG",
+                   type=lambda spec: ("--backlash", spec),
                    help="backlash fault, e.g. shoulder_lift_joint:0.1 (repeatable; default: none)")
-    s.add_argument("--effect", action="append", metavar="NAME[@JOINT]:K=V,...",
+    s.add_argument("--effect", action="append", dest="cli_effects", metavar="NAME[@JOINT]:K=V,...",
+                   type=lambda spec: ("--effect", spec),
                    help="any registered effect, e.g. coulomb_friction@elbow:scale=1.5 (see `ur5fault effects`; "
                         "repeatable; default: none, a healthy run)")
     s.add_argument("--trajectory", choices=list(TRAJECTORIES),
