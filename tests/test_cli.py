@@ -446,6 +446,22 @@ def test_simulate_trajectory_flag_keeps_the_files_options_for_the_same_motion_an
     assert options(out) == ("joint_sweep", {"speed_scale": 1.0})
 
 
+def test_show_of_a_robot_log_says_it_is_one_and_which_commands_read_it(tmp_path, capsys):
+    """Found from the wheel: `ur5fault show LOG.csv.gz` said 'cannot read as Parquet (... magic bytes ...)'."""
+    import gzip
+
+    from ur5fault.cli import main
+
+    log = tmp_path / "robot.csv.gz"
+    with gzip.open(log, "wt") as f:
+        f.write("timestamp,actual_q_0,target_q_0\n0.0,0.1,0.1\n0.008,0.1,0.1\n")
+    assert main(["show", str(log)]) == 2
+    assert capsys.readouterr().err.strip() == (
+        f"ur5fault: error: {log}: a robot log (CSV), not a ur5fault time series; `ur5fault show` reads simulate's "
+        "Parquet (or CSV) output; for a robot log use identify, discrepancy, monitor or diagnose with --format "
+        "nist|rtde")
+
+
 def test_a_run_past_its_trajectory_is_noted_and_plot_of_a_file_is_named(tmp_path):
     """Found trying the wheel as a newcomer: a --duration-s past the trajectory's end ran silently (the robot holds
     its last setpoint), and `plot RUN.parquet` called the file a campaign folder without a features table."""

@@ -180,6 +180,26 @@ def _trajectory_over_file(file_spec, name: str | None, where: str) -> dict:
     return {}
 
 
+def _refuse_robot_log(target: Path) -> None:
+    """``show`` draws a run of ``simulate`` (Parquet, or CSV with its columns); a robot log (CSV text, plain or
+    gzip), which it would call unreadable Parquet, is named as one with the commands that read it. From the first
+    bytes: whatever is neither is left to the reader's own error."""
+    from .errors import ConfigFileError, LogFormatError
+    from .logs.source import sniff
+
+    with open(target, "rb") as f:
+        if f.read(4) == b"PAR1":
+            return
+    try:
+        columns = sniff(target, str(target)).columns
+    except LogFormatError:
+        return
+    if "t_s" not in columns or "q_set_rad_j1" not in columns:
+        raise ConfigFileError(f"{target}: a robot log (CSV), not a ur5fault time series; `ur5fault show` reads "
+                              "simulate's Parquet (or CSV) output; for a robot log use identify, discrepancy, monitor "
+                              "or diagnose with --format nist|rtde")
+
+
 def _parse_backlash_arg(spec: str) -> dict:
     """``joint:degrees`` -> backlash effect mapping."""
     joint, _, deg = spec.partition(":")
@@ -263,6 +283,7 @@ def cmd_show(args: argparse.Namespace) -> int:
         check_new_output(png, replace=args.replace, default_place=args.out is None)  # one line, before reading
         csv = target.suffix.lower() == ".csv"
         check_stored(target, RESIMULATE)  # a campaign's time series carries its checksum: never drawn damaged
+        _refuse_robot_log(target)
         try:
             series = pd.read_csv(target) if csv else pd.read_parquet(target)
         except (OSError, ValueError) as exc:
