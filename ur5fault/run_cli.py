@@ -354,7 +354,8 @@ def register(sub) -> None:
                    help="any registered effect, e.g. coulomb_friction@elbow:scale=1.5 (see `ur5fault effects`; "
                         "repeatable; default: none, a healthy run)")
     s.add_argument("--trajectory", choices=list(TRAJECTORIES),
-                   help="trajectory (default pick_and_place; options of a trajectory: --config)")
+                   help="trajectory (default pick_and_place; options of a trajectory: --config, whose options are "
+                        "kept when it names the same one)")
     s.add_argument("--seed", type=int, help="sensor-noise seed (default 0)")
     s.add_argument("--payload-kg", type=float, dest="payload_kg",
                    help="gripped mass [kg] (default: the trajectory's, 2.0 for pick_and_place)")
