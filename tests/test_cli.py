@@ -384,6 +384,12 @@ def test_simulate_command_line_effects_replace_the_files_and_errors_name_their_s
     assert main(["simulate", "--effect", "payload:mass_kg=1", "--effect", "payload:mass_kg=2", "--out", str(out),
                  "--replace"]) == 2
     assert capsys.readouterr().err.strip().endswith("give each effect once")
+    # --effect and --backlash are numbered in the order typed (every --backlash came first)
+    assert main(["simulate", "--effect", "backlash@elbow:backlash_deg=0.1", "--backlash", "elbow:0.2", "--out",
+                 str(out), "--replace"]) == 2
+    assert capsys.readouterr().err.strip() == (
+        "ur5fault: error: command line: effects[1]: backlash on elbow_joint (backlash_deg=0.2) repeats effects[0] "
+        "(backlash on elbow_joint (backlash_deg=0.1)); give each effect once per joint")
     # the file's own repeat is the file's error under its own indices, whatever the command line adds
     rep = tmp_path / "rep.yaml"
     rep.write_text("effects: [{effect: backlash, joint: 1, backlash_deg: 0.1}, {effect: coulomb_friction, joint: 2, "
@@ -409,6 +415,51 @@ def test_simulate_command_line_effects_replace_the_files_and_errors_name_their_s
     assert main(["simulate", "--config", str(pay), "--out", str(out), "--replace"]) == 2
     err = capsys.readouterr().err
     assert "pay.yaml: effects[0]: payload (mass_kg=2) and payload_kg = 1 both set the payload" in err
+
+
+def test_simulate_trajectory_flag_keeps_the_files_options_for_the_same_motion_and_notes_them_for_another(
+        tmp_path, capsys):
+    """--trajectory pick_and_place over a file's {name: pick_and_place, speed_scale: 0.5} ran at the default speed,
+    silently, and the file recorded only the name: the options are kept, and the metadata records them (not the
+    trajectory's default mass, which the run's payload_kg replaces); another motion drops them, said so."""
+    import json
+
+    import pyarrow.parquet as pq
+
+    from ur5fault.cli import main
+
+    def options(path):
+        meta = json.loads(pq.read_schema(path).metadata[b"ur5fault"])
+        return meta["trajectory"], meta["trajectory_options"]
+
+    cfg = tmp_path / "ss.yaml"
+    cfg.write_text("trajectory: {name: pick_and_place, speed_scale: 0.5}\n")
+    out = tmp_path / "r.parquet"
+    assert main(["simulate", "--config", str(cfg), "--trajectory", "pick_and_place", "--duration-s", "0.05",
+                 "--quiet", "--out", str(out)]) == 0
+    assert "note" not in capsys.readouterr().err
+    assert options(out) == ("pick_and_place", {"speed_scale": 0.5, "setpoint_period_s": 0.008})
+    assert main(["simulate", "--config", str(cfg), "--trajectory", "joint_sweep", "--duration-s", "0.05",
+                 "--quiet", "--out", str(out), "--replace"]) == 0
+    assert ("note: the command line's --trajectory joint_sweep replaces ss.yaml's trajectory 'pick_and_place' and "
+            "its options (speed_scale: 0.5); joint_sweep runs with its defaults") in capsys.readouterr().err
+    assert options(out) == ("joint_sweep", {"speed_scale": 1.0})
+
+
+def test_show_of_a_robot_log_says_it_is_one_and_which_commands_read_it(tmp_path, capsys):
+    """Found from the wheel: `ur5fault show LOG.csv.gz` said 'cannot read as Parquet (... magic bytes ...)'."""
+    import gzip
+
+    from ur5fault.cli import main
+
+    log = tmp_path / "robot.csv.gz"
+    with gzip.open(log, "wt") as f:
+        f.write("timestamp,actual_q_0,target_q_0\n0.0,0.1,0.1\n0.008,0.1,0.1\n")
+    assert main(["show", str(log)]) == 2
+    assert capsys.readouterr().err.strip() == (
+        f"ur5fault: error: {log}: a robot log (CSV), not a ur5fault time series; `ur5fault show` reads simulate's "
+        "Parquet (or CSV) output; for a robot log use identify, discrepancy, monitor or diagnose with --format "
+        "nist|rtde")
 
 
 def test_a_run_past_its_trajectory_is_noted_and_plot_of_a_file_is_named(tmp_path):

@@ -8,6 +8,7 @@ import argparse
 import json
 import math
 import sys
+from collections.abc import Mapping
 from pathlib import Path
 
 from .errors import Ur5FaultError
@@ -48,16 +49,10 @@ def cmd_simulate(args: argparse.Namespace) -> int:
                                        ("payload_kg", args.payload_kg), ("temperature_C", args.temperature_C),
                                        ("duration_s", args.duration_s), ("log_period_s", args.log_period_s))
              if val is not None}
-    effects: list = []  # the command line's, validated apart from the file's so that errors name their source
-    for spec in args.backlash or []:
-        joint, _, deg = spec.partition(":")
-        try:
-            value = float(deg)
-        except ValueError:
-            raise Ur5FaultError(f"--backlash {spec!r}: expected JOINT:DEGREES, e.g. shoulder_lift_joint:0.1") from None
-        effects.append({"effect": "backlash", "joint": joint, "backlash_deg": value})
-    for spec in args.effect or []:
-        effects.append(_parse_effect_arg(spec))
+    # the command line's, validated apart from the file's so that errors name their source; in the order typed
+    # (--backlash and --effect append to one list), so that effects[i] is the i-th typed
+    effects = [_parse_backlash_arg(spec) if flag == "--backlash" else _parse_effect_arg(spec)
+               for flag, spec in args.cli_effects or []]
     data = _over_file(file_data, given, effects, where)
     overlay = Overlay.load(args.model) if args.model else None
     flags = {key: "--" + key.replace("_", "-") for key in given if key != "trajectory"}  # --temperature-C kept
@@ -147,7 +142,7 @@ def _over_file(file_data: dict, given: dict, cli_items: list, where: str) -> dic
     refuse_repeats(cli_specs, "command line: effects")
     for key, flag in (("payload_kg", "--payload-kg"), ("temperature_C", "--temperature-C")):  # the one typed
         refuse_condition_effects(cli_specs, "command line: effects", {key: given.get(key)}, f" ({flag})")
-    data = {**file_data, **given}
+    data = {**file_data, **given, **_trajectory_over_file(file_data.get("trajectory"), given.get("trajectory"), where)}
     by_key = {effect_key(e): e for e in cli_specs}
     kept = []
     for item, spec in zip(file_items or [], file_specs):
@@ -168,6 +163,51 @@ def _over_file(file_data: dict, given: dict, cli_items: list, where: str) -> dic
             data.pop(key)
     data["effects"] = kept + cli_items
     return data
+
+
+def _trajectory_over_file(file_spec, name: str | None, where: str) -> dict:
+    """``--trajectory NAME`` over the file's ``trajectory``: the file's options kept when it names the same motion
+    (``--trajectory pick_and_place`` over ``{name: pick_and_place, speed_scale: 0.5}`` runs at half speed); when it
+    names another, the command line wins, as it does for every key, and a note says which options went."""
+    if name is None or not isinstance(file_spec, Mapping) or "name" not in file_spec:
+        return {}
+    if file_spec["name"] == name:
+        return {"trajectory": file_spec}
+    options = ", ".join(f"{k}: {v!r}" for k, v in file_spec.items() if k != "name")
+    if options:
+        print(f"note: the command line's --trajectory {name} replaces {where}'s trajectory {file_spec['name']!r} "
+              f"and its options ({options}); {name} runs with its defaults", file=sys.stderr)
+    return {}
+
+
+def _refuse_robot_log(target: Path) -> None:
+    """``show`` draws a run of ``simulate`` (Parquet, or CSV with its columns); a robot log (CSV text, plain or
+    gzip), which it would call unreadable Parquet, is named as one with the commands that read it. From the first
+    bytes: whatever is neither is left to the reader's own error."""
+    from .errors import ConfigFileError, LogFormatError
+    from .logs.source import sniff
+
+    with open(target, "rb") as f:
+        if f.read(4) == b"PAR1":
+            return
+    try:
+        columns = sniff(target, str(target)).columns
+    except LogFormatError:
+        return
+    if "t_s" not in columns or "q_set_rad_j1" not in columns:
+        raise ConfigFileError(f"{target}: a robot log (CSV), not a ur5fault time series; `ur5fault show` reads "
+                              "simulate's Parquet (or CSV) output; for a robot log use identify, discrepancy, monitor "
+                              "or diagnose with --format nist|rtde")
+
+
+def _parse_backlash_arg(spec: str) -> dict:
+    """``joint:degrees`` -> backlash effect mapping."""
+    joint, _, deg = spec.partition(":")
+    try:
+        value = float(deg)
+    except ValueError:
+        raise Ur5FaultError(f"--backlash {spec!r}: expected JOINT:DEGREES, e.g. shoulder_lift_joint:0.1") from None
+    return {"effect": "backlash", "joint": joint, "backlash_deg": value}
 
 
 def _parse_effect_arg(spec: str) -> dict:
@@ -243,6 +283,7 @@ def cmd_show(args: argparse.Namespace) -> int:
         check_new_output(png, replace=args.replace, default_place=args.out is None)  # one line, before reading
         csv = target.suffix.lower() == ".csv"
         check_stored(target, RESIMULATE)  # a campaign's time series carries its checksum: never drawn damaged
+        _refuse_robot_log(target)
         try:
             series = pd.read_csv(target) if csv else pd.read_parquet(target)
         except (OSError, ValueError) as exc:
@@ -305,13 +346,16 @@ def register(sub) -> None:
     s.add_argument("--model", metavar="OVERLAY.yaml",
                    help="model overlay YAML (only params and effects, format below), e.g. from `ur5fault discrepancy` "
                         "or `ur5fault identify` (default: none, the nominal model)")
-    s.add_argument("--backlash", action="append", metavar="JOINT:DEG",
+    s.add_argument("--backlash", action="append", dest="cli_effects", metavar="JOINT:DEG",
+                   type=lambda spec: ("--backlash", spec),
                    help="backlash fault, e.g. shoulder_lift_joint:0.1 (repeatable; default: none)")
-    s.add_argument("--effect", action="append", metavar="NAME[@JOINT]:K=V,...",
+    s.add_argument("--effect", action="append", dest="cli_effects", metavar="NAME[@JOINT]:K=V,...",
+                   type=lambda spec: ("--effect", spec),
                    help="any registered effect, e.g. coulomb_friction@elbow:scale=1.5 (see `ur5fault effects`; "
                         "repeatable; default: none, a healthy run)")
     s.add_argument("--trajectory", choices=list(TRAJECTORIES),
-                   help="trajectory (default pick_and_place; options of a trajectory: --config)")
+                   help="trajectory (default pick_and_place; options of a trajectory: --config, whose options are "
+                        "kept when it names the same one)")
     s.add_argument("--seed", type=int, help="sensor-noise seed (default 0)")
     s.add_argument("--payload-kg", type=float, dest="payload_kg",
                    help="gripped mass [kg] (default: the trajectory's, 2.0 for pick_and_place)")

@@ -261,6 +261,16 @@ def test_failed_run_recorded_and_campaign_goes_on(tmp_path):
     assert (df[df["fault"] == "healthy"]["status"] == "ok").all()
 
 
+def test_a_hold_campaign_carries_each_swept_payload(tmp_path):
+    """trajectory: hold with payload_kg swept over [0, 5] wrote two identical feature rows labelled 0 and 5 kg: hold's
+    gripper held nothing at its own default 0 kg, so the run's payload was never attached."""
+    camp = build_campaign({"trajectory": "hold", "duration_s": 0.3, "sweep": {"payload_kg": [0.0, 5.0]}}, "t.yaml")
+    run_campaign(camp, tmp_path / "o", jobs=1, progress=False)
+    df = pd.read_parquet(tmp_path / "o" / "features.parquet").sort_values("payload_kg")
+    assert df["payload_kg"].tolist() == [0.0, 5.0]
+    assert df["tcp_track_max_mm"].iloc[0] != df["tcp_track_max_mm"].iloc[1]
+
+
 def test_manifest(small_reference):
     import json
 

@@ -108,6 +108,15 @@ def test_start_is_at_rest_in_equilibrium():
     assert abs(last[1]) > 1.0  # the shoulder really holds the arm and payload against gravity
 
 
+def test_a_run_payload_is_carried_by_a_hold_at_its_default_0_kg():
+    """hold's default payload is 0 kg; a run's payload effect (simulate --payload-kg, a campaign's payload_kg) gives
+    the mass, and the gripper holds it from the start (it was dropped: 0 and 5 kg gave identical runs)."""
+    res = Simulator().run(hold(seconds=0.1), [RunSpec(f"{kg}", 0, (make_effect("payload", mass_kg=kg),))
+                                              for kg in (0.0, 5.0)], duration_s=0.02)
+    i = np.abs(res["i_q_A"][:, :, 1]).mean(axis=1)  # the shoulder's holding current
+    assert i[1] > i[0] + 0.5
+
+
 def test_resolver_offset_starts_held_not_as_a_step():
     """A resolver offset o has been in the reading since the robot was switched on: at rest the position loop
     holds the reading on the setpoint, so the true link sits at setpoint - o from the first sample, and the

@@ -340,3 +340,15 @@ def test_numpy_numbers_build_the_same_motions():
     assert a.payload_events == b.payload_events and type(a.default_payload_kg) is float
     t = Trajectory("x", np.float64(0.008), np.zeros((3, 6)), ((np.float64(0.01), np.True_),), np.False_)
     assert t.payload_events == ((0.01, True),) and type(t.payload_events[0][1]) is bool
+
+
+@pytest.mark.parametrize("name", ["pick_and_place", "hold", "joint_sweep", "random_pick_and_place"])
+def test_grip_schedule_does_not_depend_on_the_payload_mass(name):
+    """When the gripper holds the payload is the motion's; its mass is the run's (a payload effect replaces the
+    trajectory's default mass only). hold at its default 0 kg held nothing, so a run's --payload-kg 5 was dropped."""
+    from ur5fault.sim.trajectories import get_trajectory
+
+    light, heavy = get_trajectory(name, payload_kg=0.0), get_trajectory(name, payload_kg=5.0)
+    assert (light.payload_gripped_at_start, light.payload_events) == (heavy.payload_gripped_at_start,
+                                                                       heavy.payload_events)
+    assert light.gripped(np.linspace(0.0, light.duration_s, 50)).any(), f"{name} never holds a payload"

@@ -211,7 +211,7 @@ REGISTRY: dict[str, Effect] = {
         ),
         Effect(
             "payload",
-            "mass gripped during the pick-and-place",
+            "mass the gripper holds (when the trajectory grips it; hold and joint_sweep: throughout)",
             (EffectParam("mass_kg", "kg", 0.0, 5.0, None, "mass while gripped"),),
             False,
             ap.payload,

@@ -180,6 +180,8 @@ class SimResult:
             "log_period_s": float(t_log[1] - t_log[0]) if t_log.size > 1 else float(t_log[0]),
             "duration_s": float(t_log[-1]) if t_log.size else 0.0,
             "trajectory": traj.name,
+            # what it was built with, defaults filled in; not its default mass: the mass that ran is payload_kg
+            "trajectory_options": {k: v for k, v in traj.options if k != "payload_kg"},
             # when the gripper held the payload (the log's reader gives its twin the same schedule)
             "payload_gripped_at_start": bool(traj.payload_gripped_at_start),
             "payload_events": [[float(t), bool(g)] for t, g in traj.payload_events],

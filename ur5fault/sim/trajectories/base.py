@@ -12,7 +12,10 @@ forward as the velocity setpoint.
 from __future__ import annotations
 
 import dataclasses
+import functools
+import inspect
 import math
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -75,6 +78,13 @@ class Trajectory:
             attached from an event with ``gripped=True`` until the next release.
         payload_gripped_at_start: whether the payload is held at ``t = 0``.
         default_payload_kg: payload mass used when a run does not set one [kg].
+        options: the options the motion was built with, defaults filled in (``(name, value)`` pairs of plain
+            Python values; :func:`records_options`, random_pick_and_place its own), written to outputs with the
+            name; empty when built directly.
+
+    The schedule (events, held at start) says *when* the gripper holds the payload and never depends on its
+    mass: a run's payload effect replaces the mass only, so a schedule that held nothing at 0 kg would drop
+    the mass a run asks for.
     """
 
     name: str
@@ -83,6 +93,7 @@ class Trajectory:
     payload_events: tuple[tuple[float, bool], ...] = ()
     payload_gripped_at_start: bool = False
     default_payload_kg: float = 0.0
+    options: tuple[tuple[str, Any], ...] = ()
 
     def __post_init__(self) -> None:
         name = self.name
@@ -137,6 +148,22 @@ class Trajectory:
         for te, g in self.payload_events:
             state = np.where(t >= te, g, state)
         return state
+
+
+def records_options(fn: Callable[..., Trajectory]) -> Callable[..., Trajectory]:
+    """Decorate a trajectory function so that the motion it returns records the options it was built with, the
+    defaults filled in (a run's metadata names the motion that ran, not only its name)."""
+    signature = inspect.signature(fn)
+
+    @functools.wraps(fn)
+    def build(*args: Any, **kwargs: Any) -> Trajectory:
+        traj = fn(*args, **kwargs)
+        bound = signature.bind(*args, **kwargs)
+        bound.apply_defaults()
+        options = tuple((k, v if isinstance(v, str) else np.asarray(v).tolist()) for k, v in bound.arguments.items())
+        return dataclasses.replace(traj, options=options)
+
+    return build
 
 
 def _checked_events(events: Any, where: str) -> tuple[tuple[float, bool], ...]:

@@ -22,6 +22,7 @@ from .base import (
     check_pose,
     dwell,
     movej,
+    records_options,
 )
 
 # Pick-and-place waypoints [rad], tool pointing down (z axis of the TCP = -z of the base within 1e-3).
@@ -51,6 +52,7 @@ def check_speed_scale(speed_scale: float, where: str = "speed_scale") -> float:
     return float(speed_scale)
 
 
+@records_options
 def pick_and_place(
     payload_kg: float = 2.0,
     speed_scale: float = 1.0,
@@ -91,17 +93,21 @@ def pick_and_place(
     return Trajectory("pick_and_place", ts, q, tuple(events), False, float(payload_kg))
 
 
+@records_options
 def hold(q_rad=PICK_APPROACH, seconds: float = 1.0, payload_kg: float = 0.0) -> Trajectory:
-    """Stand still at ``q_rad`` (six joint angles [rad]) for ``seconds`` (useful for noise and drift checks)."""
+    """Stand still at ``q_rad`` (six joint angles [rad]) for ``seconds`` (useful for noise and drift checks),
+    the gripper closed throughout: it carries whatever payload the run sets (none at the default 0 kg)."""
     q_rad = check_pose(q_rad, "hold: q_rad")
     seconds = check_option("hold", "seconds", seconds)
     payload_kg = check_option("hold", "payload_kg", payload_kg)
     q = dwell(q_rad, seconds, CB3_SETPOINT_PERIOD_S)
-    return Trajectory("hold", CB3_SETPOINT_PERIOD_S, np.vstack([q, q[-1:]]), (), payload_kg > 0, payload_kg)
+    return Trajectory("hold", CB3_SETPOINT_PERIOD_S, np.vstack([q, q[-1:]]), (), True, payload_kg)
 
 
+@records_options
 def joint_sweep(speed_scale: float = 1.0, payload_kg: float = 1.0) -> Trajectory:
-    """Every joint out and back twice, holding a payload throughout; about 10 s.
+    """Every joint out and back twice, the gripper closed throughout (it carries whatever payload the run sets,
+    1 kg unless given); about 10 s.
 
     The outward pose leans the arm over the top, so the shoulder and elbow gravity torques
     change sign (-41 -> +20 N*m and -19 -> +2 N*m with 1 kg); every joint reverses its velocity.
@@ -117,4 +123,4 @@ def joint_sweep(speed_scale: float = 1.0, payload_kg: float = 1.0) -> Trajectory
     for target in (out_, back, out_, home):
         parts.append(movej(parts[-1][-1], target, v, a, ts))
     parts.append(dwell(home, 0.4, ts))
-    return Trajectory("joint_sweep", ts, np.concatenate(parts), (), payload_kg > 0, float(payload_kg))
+    return Trajectory("joint_sweep", ts, np.concatenate(parts), (), True, float(payload_kg))

@@ -129,7 +129,8 @@ def _build(seed: int, payload_kg: float, tool_tilt_deg: float) -> Trajectory:
     hold(release_s, False)
     go(place_app)
     parts.append(dwell(place_app, REST_S, ts))
-    return Trajectory("random_pick_and_place", ts, np.concatenate(parts), tuple(events), False, payload_kg)
+    options = (("seed", seed), ("payload_kg", payload_kg), ("tool_tilt_deg", tool_tilt_deg))  # one cached build
+    return Trajectory("random_pick_and_place", ts, np.concatenate(parts), tuple(events), False, payload_kg, options)
 
 
 def _draw_poses(rng: np.random.Generator, kin: TcpKinematics, tilt_rng: np.random.Generator | None,
