@@ -446,7 +446,7 @@ def test_simulate_trajectory_flag_keeps_the_files_options_for_the_same_motion_an
     assert options(out) == ("joint_sweep", {"speed_scale": 1.0})
 
 
-def test_show_of_a_robot_log_says_it_is_one_and_which_commands_read_it(tmp_path, capsys):
+def test_show_of_a_robot_log_says_it_is_one_and_which_commands_read_it(tmp_path, capsys, monkeypatch):
     """Found from the wheel: `ur5fault show LOG.csv.gz` said 'cannot read as Parquet (... magic bytes ...)'."""
     import gzip
 
@@ -457,9 +457,18 @@ def test_show_of_a_robot_log_says_it_is_one_and_which_commands_read_it(tmp_path,
         f.write("timestamp,actual_q_0,target_q_0\n0.0,0.1,0.1\n0.008,0.1,0.1\n")
     assert main(["show", str(log)]) == 2
     assert capsys.readouterr().err.strip() == (
-        f"ur5fault: error: {log}: a robot log (CSV), not a ur5fault time series; `ur5fault show` reads simulate's "
-        "Parquet (or CSV) output; for a robot log use identify, discrepancy, monitor or diagnose with --format "
-        "nist|rtde")
+        f"ur5fault: error: {log}: not a ur5fault time series (a CSV without simulate's t_s and q_set_rad_j1 columns); "
+        "`ur5fault show` reads simulate's Parquet (or CSV) output; a robot log is read by identify, discrepancy, "
+        "monitor or diagnose with --format nist|rtde")
+
+    # a file it cannot open is left to the reader's own one line (a permission error raised a traceback here)
+    from ur5fault import run_cli
+
+    def refused(*args, **kwargs):
+        raise PermissionError(13, "Permission denied")
+
+    monkeypatch.setattr(run_cli, "open", refused, raising=False)
+    assert run_cli._refuse_robot_log(log) is None
 
 
 def test_a_run_past_its_trajectory_is_noted_and_plot_of_a_file_is_named(tmp_path):

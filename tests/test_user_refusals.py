@@ -106,6 +106,13 @@ def test_another_campaign_does_not_take_over_a_campaign_folder(tmp_path, capsys)
     assert json.loads((out / "manifest.json").read_text())["name"] == "first"
     assert main(["campaign", "run", str(b), "--jobs", "1", "--quiet", "--replace-changed"]) == 0
     assert json.loads((out / "manifest.json").read_text())["name"] == "second"
+    # a third campaign of other runs: not called "another version" of this one (the review found the note naming
+    # the new campaign as the folder's earlier version)
+    c = _write(tmp_path, "c.yaml", TINY.format(name="third", out=out).replace("seed: [1]", "seed: [2]"))
+    capsys.readouterr()
+    assert main(["campaign", "run", str(c), "--jobs", "1", "--replace-changed"]) == 0
+    err = capsys.readouterr().err
+    assert "another version of campaign" not in err, err
 
 
 def test_a_typo_of_life_is_told(tmp_path, capsys):

@@ -187,17 +187,20 @@ def _refuse_robot_log(target: Path) -> None:
     from .errors import ConfigFileError, LogFormatError
     from .logs.source import sniff
 
-    with open(target, "rb") as f:
-        if f.read(4) == b"PAR1":
-            return
+    try:
+        with open(target, "rb") as f:
+            if f.read(4) == b"PAR1":
+                return
+    except OSError:  # unreadable: the reader's own one line says why
+        return
     try:
         columns = sniff(target, str(target)).columns
     except LogFormatError:
         return
     if "t_s" not in columns or "q_set_rad_j1" not in columns:
-        raise ConfigFileError(f"{target}: a robot log (CSV), not a ur5fault time series; `ur5fault show` reads "
-                              "simulate's Parquet (or CSV) output; for a robot log use identify, discrepancy, monitor "
-                              "or diagnose with --format nist|rtde")
+        raise ConfigFileError(f"{target}: not a ur5fault time series (a CSV without simulate's t_s and q_set_rad_j1 "
+                              "columns); `ur5fault show` reads simulate's Parquet (or CSV) output; a robot log is read "
+                              "by identify, discrepancy, monitor or diagnose with --format nist|rtde")
 
 
 def _parse_backlash_arg(spec: str) -> dict:

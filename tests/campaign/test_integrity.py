@@ -285,7 +285,7 @@ def test_a_damaged_time_series_is_never_read_as_a_log_or_drawn(tmp_path, capsys)
     assert err.count("\n") == 1 and "differ from the checksum" in err and not (tmp_path / "s.png").exists()
 
 
-def test_time_series_of_other_settings_or_another_run_are_never_read_as_this_runs(tmp_path, caplog):
+def test_time_series_of_other_settings_or_another_run_are_never_read_as_this_runs(tmp_path, caplog, monkeypatch):
     """CampaignResult.time_series (what `plot` and `show --campaign` draw) read any file under timeseries/ whose
     sidecar matched: after `--replace-changed` without saved time series the earlier settings' files were drawn as
     the new runs (a 2 s campaign drawn from 1 s files), and a run's file copied over another's (no sidecar) was drawn
@@ -322,6 +322,15 @@ def test_time_series_of_other_settings_or_another_run_are_never_read_as_this_run
     res = CampaignResult.load(out)
     assert res.time_series([a])[a]["t_s"].max() < 0.21
     assert "not saved" in repr(res)
+    assert "stored under other settings than this ur5fault simulates" not in caplog.text
+    # a run this ur5fault simulates otherwise than the stored run (its identity differs, as a hold campaign's after
+    # the grip schedule changed): re-simulated with a warning, not drawn as if it were the run of its features
+    from ur5fault.campaign import identity
+
+    monkeypatch.setattr(identity.Identities, "identity", lambda self, rc: "another")
+    caplog.clear()
+    CampaignResult.load(out).time_series([a])
+    assert f"{a} stored under other settings than this ur5fault simulates them with" in caplog.text
 
 
 def test_status_says_when_the_manifest_is_gone_or_unreadable(tmp_path, done):

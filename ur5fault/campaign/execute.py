@@ -245,7 +245,7 @@ def _earlier_version(out: Path, camp: Campaign, stray: Sequence[str]) -> str | N
         return None
     manifest, _ = read_manifest(out)
     data = manifest.get("campaign_data")
-    if not isinstance(data, dict):
+    if not isinstance(data, dict) or manifest.get("name") != camp.name:  # another campaign's: _other_campaign's case
         return None
     try:
         earlier = build_campaign(data, "manifest.json", str(manifest.get("campaign_text", "")), None, out,

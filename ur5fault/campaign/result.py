@@ -160,7 +160,7 @@ class CampaignResult:
     def _resimulate(self, run_ids: list[str]) -> dict[str, pd.DataFrame]:
         from ..sim.engine import DEFAULT_MODEL_PATH
         from .execute import plan_batches, run_batch
-        from .identity import file_sha256
+        from .identity import Identities, file_sha256
         from .spec import build_campaign
 
         text = str(self.manifest.get("campaign_text", ""))
@@ -173,6 +173,15 @@ class CampaignResult:
             _log.warning("%s was run with ur5fault %s and model %s; re-simulating with %s and model %s may not give "
                          "the same runs", self.out, then[0], str(then[1])[:12], now[0], now[1][:12])
         by_id = {rc.run_id: rc for rc in camp.runs}
+        # a run this ur5fault simulates otherwise than the stored one (e.g. a trajectory's grip schedule changed):
+        # its features were computed from another run than the series about to be drawn
+        recorded, ids = recorded_run_identities(self.out / "features.parquet"), Identities(camp)
+        other = [r for r in run_ids if recorded.get(r) and recorded[r] != ids.identity(by_id[r])]
+        if other:
+            _log.warning("%s: %s stored under other settings than this ur5fault simulates them with (the run's "
+                         "identity differs); the re-simulated time series may not be the run its features were "
+                         "computed from: `ur5fault campaign run` with --replace-changed simulates them again",
+                         self.out, ", ".join(other))
         _log.info("re-simulating %d run(s) whose time series were not saved: %s", len(run_ids), ", ".join(run_ids))
         got: dict[str, pd.DataFrame] = {}
         with tempfile.TemporaryDirectory() as tmp:

@@ -228,9 +228,13 @@ def models_folder(folder: str | Path) -> Path:
 def check_saved_inputs(folder: str | Path, features: pd.DataFrame, where: str) -> None:
     """:func:`check_inputs` of ``features`` against the schema in ``folder`` (as :func:`models_folder` takes it)
     before the classifiers are loaded (about 30 s for the diagnostics campaign's): a campaign without their inputs
-    is refused at once.  A schema this cannot read is left to :func:`load_models`, which refuses it."""
+    is refused at once.  A schema of another format, or one this cannot read, is left to :func:`load_models`, which
+    refuses it with its own reason."""
     schema = read_json_stored(models_folder(folder) / SCHEMA_FILE, RESAVE)
-    if isinstance(schema, dict) and isinstance(schema.get("inputs"), list):
+    if not isinstance(schema, dict) or schema.get("schema_format", 1) != SCHEMA_FORMAT:
+        return  # another format's inputs are not this version's: load_models says so
+    inputs = schema.get("inputs")
+    if isinstance(inputs, list) and all(isinstance(c, dict) and isinstance(c.get("name"), str) for c in inputs):
         check_inputs(features, schema, where)
 
 
@@ -327,5 +331,5 @@ def check_inputs(features: pd.DataFrame, schema: dict[str, Any], where: str) -> 
     if missing:
         raise ConfigFileError(f"{where}: lacks {len(missing)} input column(s) of the saved classifiers "
                               f"({', '.join(missing[:5])}{', ...' if len(missing) > 5 else ''}; feature set "
-                              f"{schema['feature_set']!r})")
+                              f"{schema.get('feature_set')!r})")
     return names

@@ -104,9 +104,10 @@ def markdown(baseline: Baseline, entries: Sequence[dict[str, Any]], figs: Sequen
         for j in range(N_JOINTS):
             lines.append(f"| {ch} | {JOINT_NAMES[j]} | " + " | ".join(f"{c:.3g}" for c in baseline.scale[i, j])
                          + f" | {mult[j]:.2f} |")
-    lines += ["", "| log | verdict | changes | events |", "| --- | --- | --- | --- |"]
+    lines += ["", "| log | verdict | changes | events | events not seen on |", "| --- | --- | --- | --- | --- |"]
     for e in entries:
-        lines.append(f"| {e['log']} | {e['verdict']} | {len(e['changes'])} | {len(e['events'])} |")
+        lines.append(f"| {e['log']} | {e['verdict']} | {len(e['changes'])} | {len(e['events'])} | "
+                     f"{', '.join(e.get('events_not_seen', ())) or '-'} |")
     for k, (e, fig) in enumerate(zip(entries, figs)):
         lines += ["", f"## {e['log']}: {e['verdict']}", ""]
         lines += [f"- changed: {sentence(c)}" for c in e["changes"]]

@@ -252,12 +252,12 @@ def assess(baseline: Baseline, obs: Observed, channels: Sequence[str] = DEFAULT_
     verdict = "changed" if changes else "anomaly" if events else "consistent"
     typical = {c: np.nanmedian(np.where(judged[:, None], lim, np.nan), axis=0) if judged.any()
                else np.full(N_JOINTS, np.nan) for c, lim in lims.items()}
-    peak = moved_peak(obs)
+    blind = _blind(typical, moved_peak(obs))  # the joints whose events are not seen: named and noted
     return {"log": obs.name, "verdict": verdict, "changes": changes, "events": events,
             "event_limit_median": {c: {JOINT_NAMES[j]: float(v[j]) for j in range(N_JOINTS)}
                                    for c, v in typical.items()},
-            "events_not_seen": unseen(typical, peak),
-            "notes": blind_joints(typical, peak) + weak_change_test(baseline, block_judged, block_share)
+            "events_not_seen": _unseen_names(blind),
+            "notes": _blind_notes(blind) + weak_change_test(baseline, block_judged, block_share)
             + still_note(obs)
             + ([] if baseline.motion_max is None else motion_notes(baseline.motion_max, obs))
             + ([] if baseline.payloads_kg is None else payload_notes(baseline.payloads_kg, obs))}
@@ -302,10 +302,15 @@ def blind_joints(typical: dict[str, NDArray], current_peak_A: NDArray | None = N
     second holds where the first cannot: when several joints' limits are far out, their median is too (two baseline
     runs of other tasks put the base, shoulder and elbow at 9-55 A on a log drawing 2-5 A, and only the shoulder
     was named)."""
+    return _blind_notes(_blind(typical, current_peak_A))
+
+
+def _blind_notes(rows: list[tuple[str, int, float, str]]) -> list[str]:
+    """:func:`blind_joints`' notes of the rows of :func:`_blind`."""
     return [f"{JOINT_NAMES[j]}: its {c} events are judged against a limit of {v:.3g} {UNITS[c]} at this log's "
             f"motion, {why}: the baseline runs do not tell its spread (they hardly move it, or disagree); an event "
             "smaller than that is not seen there: give baseline runs that move it as this log does"
-            for c, j, v, why in _blind(typical, current_peak_A)]
+            for c, j, v, why in rows]
 
 
 def _blind(typical: dict[str, NDArray], current_peak_A: NDArray | None) -> list[tuple[str, int, float, str]]:
@@ -331,4 +336,8 @@ def _blind(typical: dict[str, NDArray], current_peak_A: NDArray | None) -> list[
 def unseen(typical: dict[str, NDArray], current_peak_A: NDArray | None = None) -> list[str]:
     """``"joint channel"`` of each joint whose events :func:`blind_joints` says are not seen: a verdict of
     "consistent" says nothing of them (``monitor.json``'s ``events_not_seen``, the console line)."""
-    return [f"{JOINT_NAMES[j]} {c}" for c, j, _, _ in _blind(typical, current_peak_A)]
+    return _unseen_names(_blind(typical, current_peak_A))
+
+
+def _unseen_names(rows: list[tuple[str, int, float, str]]) -> list[str]:
+    return [f"{JOINT_NAMES[j]} {c}" for c, j, _, _ in rows]
