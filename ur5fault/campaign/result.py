@@ -149,7 +149,7 @@ class CampaignResult:
         missing = [r for r in ids if r not in self._series]
         if missing:
             try:
-                self._series.update(self._resimulate(missing))
+                self._series.update(self._resimulate(missing, identities))
             except StoredResultError:
                 raise
             except Ur5FaultError as exc:  # not the user's input now: the stored campaign cannot be run again
@@ -157,7 +157,8 @@ class CampaignResult:
                                         f"simulated again: {exc}") from exc
         return {r: self._series[r] for r in ids}
 
-    def _resimulate(self, run_ids: list[str]) -> dict[str, pd.DataFrame]:
+    def _resimulate(self, run_ids: list[str], recorded: dict[str, str]) -> dict[str, pd.DataFrame]:
+        """Simulate ``run_ids`` again; ``recorded``: run_id -> identity as the feature table records them."""
         from ..sim.engine import DEFAULT_MODEL_PATH
         from .execute import plan_batches, run_batch
         from .identity import Identities, file_sha256
@@ -175,7 +176,7 @@ class CampaignResult:
         by_id = {rc.run_id: rc for rc in camp.runs}
         # a run this ur5fault simulates otherwise than the stored one (e.g. a trajectory's grip schedule changed):
         # its features were computed from another run than the series about to be drawn
-        recorded, ids = recorded_run_identities(self.out / "features.parquet"), Identities(camp)
+        ids = Identities(camp)
         other = [r for r in run_ids if recorded.get(r) and recorded[r] != ids.identity(by_id[r])]
         if other:
             _log.warning("%s: %s stored under other settings than this ur5fault simulates them with (the run's "
