@@ -425,6 +425,14 @@ def test_wrong_feature_gets_a_did_you_mean(two, capsys):
 
     assert main(["plot", str(two.out), "--feature", "tcp_dev_max_m"]) == 2
     assert "unknown feature 'tcp_dev_max_m' (did you mean 'tcp_dev_max_mm'" in capsys.readouterr().err
+    # a name with no near miss: the ~400 features were listed in one line that filled the screen; now the first
+    # MAX_LISTED / 2 and how many more
+    from ur5fault.errors import MAX_LISTED
+
+    assert main(["plot", str(two.out), "--feature", "nonsense"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and err.endswith(" more)"), err
+    assert err.split("; valid: ")[1].count(", ") == MAX_LISTED // 2, err
 
 
 def test_plot_default_folder_with_a_file_in_the_way(tmp_path, two, capsys):
