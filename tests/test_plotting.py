@@ -19,7 +19,14 @@ from ur5fault import RunSpec, Simulator, make_effect, pick_and_place
 from ur5fault.campaign import CampaignResult, load_campaign, run_campaign
 from ur5fault.campaign.summary import effect_sweep, severity_table, tcp_table
 from ur5fault.errors import ConfigFileError, ParameterError, UnknownNameError
-from ur5fault.plotting import campaign_figures, fig3_tcp_deviation, plot_campaign, run_figure, severity_figure
+from ur5fault.plotting import (
+    campaign_figures,
+    drawn_and_failed,
+    fig3_tcp_deviation,
+    plot_campaign,
+    run_figure,
+    severity_figure,
+)
 
 PACKAGE = Path(__file__).resolve().parents[1] / "ur5fault"
 
@@ -418,6 +425,14 @@ def test_wrong_feature_gets_a_did_you_mean(two, capsys):
 
     assert main(["plot", str(two.out), "--feature", "tcp_dev_max_m"]) == 2
     assert "unknown feature 'tcp_dev_max_m' (did you mean 'tcp_dev_max_mm'" in capsys.readouterr().err
+    # a name with no near miss: the ~400 features were listed in one line that filled the screen; now the first
+    # MAX_LISTED / 2 and how many more
+    from ur5fault.errors import MAX_LISTED
+
+    assert main(["plot", str(two.out), "--feature", "nonsense"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and err.endswith(" more)"), err
+    assert err.split("; valid: ")[1].count(", ") == MAX_LISTED // 2, err
 
 
 def test_plot_default_folder_with_a_file_in_the_way(tmp_path, two, capsys):
@@ -487,6 +502,43 @@ def test_figures_not_redrawn_are_said_to_be_an_earlier_plots(tmp_path, two, caps
     assert any(line.startswith("replaced ") and "severity_" in line for line in out), out  # what could be drawn was
     stale = sorted(line for line in out if line.endswith("from an earlier plot, not redrawn now"))
     assert [s.split("/")[-1].split(".png")[0][:4] for s in stale] == ["fig3", "fig4"], out
+
+
+def test_an_effect_whose_feature_is_nan_in_all_its_runs_gets_a_line_not_a_blank_figure(tmp_path):
+    """A sampled diagnostics campaign simulates a healthy twin for backlash runs only (`twins: [backlash]`), so the
+    default feature tcp_dev_max_mm is NaN on every other fault's runs: `plot` wrote 12 empty figures (axes 0-1, no
+    data) and said "wrote" of each. Now such an effect gets one line saying why, and the others their figures."""
+    feats = pd.DataFrame({
+        "run_id": ["a", "b", "c", "d", "h"], "status": ["ok"] * 5,
+        "fault": ["backlash", "backlash", "torque_constant", "torque_constant", "healthy"],
+        "fault_joint": [2, 2, 3, 3, 0], "backlash_deg": [0.1, 0.2, np.nan, np.nan, np.nan],
+        "torque_constant_scale": [np.nan, np.nan, 0.8, 0.9, np.nan],
+        "tcp_dev_max_mm": [1.0, 2.0, np.nan, np.nan, 0.0], "twin_run_id": ["h", "h", "", "", ""],
+    })
+    manifest = {"name": "x", "threshold_mm": 0.5, "swept_keys": ["backlash.backlash_deg", "torque_constant.scale"]}
+    figs, messages = drawn_and_failed(CampaignResult(tmp_path, feats, manifest), skip=("fig3_", "fig4_"))[:2]
+    assert sorted(figs) == ["heatmap_backlash_tcp_dev_max_mm", "severity_backlash_tcp_dev_max_mm"]
+    assert messages == ["no figure for effect 'torque_constant': tcp_dev_max_mm is missing (NaN) in all 2 of its runs "
+                        "(the TCP deviation is measured against a healthy twin, which a sampled campaign simulates "
+                        "only for the fault kinds of its sample's `twins` key); choose another --feature, e.g. "
+                        "current_spike_max_A"]
+
+
+def test_the_paper_figures_of_a_sampled_campaign_say_what_they_need(tmp_path):
+    """In a sampled campaign each backlash run has its own motion, conditions and twin: the paper figures kept the
+    largest group of one twin (one run) and said "no backlash run at 0.1 deg (levels: 0.3177)" and "no backlash
+    run on joint 2" of a campaign with 11 backlash runs, one on joint 2. Now once: what the figures need."""
+    feats = pd.DataFrame({
+        "run_id": ["a", "b", "c", "t1", "t2", "t3"], "status": ["ok"] * 6,
+        "fault": ["backlash"] * 3 + ["healthy"] * 3, "fault_joint": [1, 2, 3, 0, 0, 0],
+        "backlash_deg": [0.05, 0.1, 0.3, np.nan, np.nan, np.nan], "tcp_dev_max_mm": [1.0, 2.0, 3.0, 0, 0, 0],
+        "twin_run_id": ["t1", "t2", "t3", "", "", ""],
+    })
+    manifest = {"name": "x", "threshold_mm": 0.5, "swept_keys": ["backlash.backlash_deg"]}
+    messages = drawn_and_failed(CampaignResult(tmp_path, feats, manifest))[1]
+    assert messages == [f"{tmp_path}: no Fig. 3 or Fig. 4: they need backlash runs of several sizes or joints under "
+                        "one condition (one healthy twin shared, as `ur5fault campaign run paper` makes); this "
+                        "campaign's 3 backlash run(s) each have their own"]
 
 
 def test_sampled_sizes_are_points_not_a_line_through_other_motions(two):

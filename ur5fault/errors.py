@@ -35,14 +35,21 @@ class ParameterError(Ur5FaultError, ValueError):
     """A parameter has a wrong type or a value outside its valid range."""
 
 
+#: names an unknown-name error lists in full; above it, the first half of them and how many more (a campaign's
+#: feature table has about 400 health features: the line filled a screen)
+MAX_LISTED = 60
+
+
 class UnknownNameError(Ur5FaultError, KeyError):
     """A name (joint, effect, YAML key, trajectory) does not exist."""
 
     def __init__(self, kind: str, name: object, choices: Iterable[str], where: str = "") -> None:
         self.kind, self.name, self.choices = kind, name, sorted(choices)
         loc = f"{where}: " if where else ""
+        listed = self.choices if len(self.choices) <= MAX_LISTED else [
+            *self.choices[:MAX_LISTED // 2], f"... ({len(self.choices) - MAX_LISTED // 2} more)"]
         super().__init__(f"{loc}unknown {kind} {name!r}{did_you_mean(name, self.choices)}; valid: "
-                         f"{', '.join(self.choices)}")
+                         f"{', '.join(listed)}")
 
 
 class ConfigFileError(Ur5FaultError, ValueError):

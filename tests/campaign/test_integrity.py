@@ -459,3 +459,22 @@ def test_a_feature_table_without_its_checksum_is_refused_where_status_calls_it_b
             read(out)
     run_campaign(load_campaign(tiny(tmp_path)), out, jobs=1, progress=False, note=None)
     assert status(out)["sound"] is True and len(CampaignResult.load(out).features) == 3
+
+
+def test_the_recorded_campaign_is_rebuilt_from_its_data_or_an_older_manifests_text(done):
+    """One path rebuilds the campaign a manifest records (the edited-campaign scan, verify, a re-simulation): from
+    the validated mapping, or from the YAML text of a manifest written before the mapping was recorded; None where
+    it holds neither; a campaign this ur5fault cannot validate raises its one line."""
+    import json
+
+    from ur5fault.campaign.manifest import recorded_campaign
+    from ur5fault.errors import Ur5FaultError
+
+    manifest = json.loads((done / "out" / "manifest.json").read_text())
+    camp = recorded_campaign(manifest)
+    assert [rc.run_id for rc in camp.runs] == [rc.run_id for rc in load_campaign(tiny(done)).runs]
+    older = {k: v for k, v in manifest.items() if k != "campaign_data"}
+    assert [rc.run_id for rc in recorded_campaign(older).runs] == [rc.run_id for rc in camp.runs]
+    assert recorded_campaign({"name": "x"}) is None
+    with pytest.raises(Ur5FaultError, match="manifest.json"):
+        recorded_campaign({**manifest, "campaign_data": {**manifest["campaign_data"], "duration_s": -1}})

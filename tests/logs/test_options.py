@@ -291,6 +291,21 @@ def test_diagnose_refuses_an_unknown_payload_before_any_work(tmp_path, capsys):
     assert rc == 2 and len(err) == 1 and err[0].endswith("needs its position (0 0 0 for a bare flange)"), err
 
 
+@pytest.mark.parametrize("command", ["diagnose", "monitor"])
+def test_a_misspelt_log_is_said_missing_before_its_payload(tmp_path, capsys, command):
+    """`diagnose nonexist.csv --format rtde ...` without a payload said the payload was unknown, not that the file
+    was not there (a newcomer probe): a path that is no file is said first."""
+    extra = (["--detector", str(tmp_path / "nothing")] if command == "diagnose" else
+             ["--baseline", str(tmp_path / "b.yaml"), "--baseline-logs", str(RUN2)])
+    (tmp_path / "b.yaml").write_text("params: {}\n")
+    rc = main([command, str(tmp_path / "nonexist.csv"), "--format", "rtde", *extra, "--out", str(tmp_path / "o")])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 2 and len(err) == 1 and err[0].endswith("nonexist.csv: no such file"), err
+    rc = main([command, str(tmp_path), "--format", "rtde", *extra, "--out", str(tmp_path / "o")])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 2 and len(err) == 1 and err[0].endswith(f"{tmp_path}: not a file"), err
+
+
 @pytest.mark.parametrize("which", ["judged", "baseline"])
 def test_monitor_refuses_hold_out_in_a_manifest(tmp_path, capsys, which):
     """monitor judges every log it is given and builds its baseline from every baseline log: a manifest's hold_out

@@ -237,3 +237,26 @@ def test_a_failed_replay_says_what_its_status_means():
     assert stop.startswith(f"protective stop: the simulated arm fell more than {PROTECTIVE_STOP_RAD:g} rad behind the "
                            "log's targets") and "--payload-kg" in stop
     assert replayed("diverged").failure.startswith("diverged: the simulation ran away")
+
+
+def test_a_log_stated_at_0_kg_carries_a_payload_effect():
+    """A log stated at 0 kg held nothing (the grip followed the stated mass), so the discrepancy library's payload
+    and payload_com candidates replayed exactly as the baseline on every 0 kg log: a tool the statement left out
+    could not be named a payload, only a link mass. Now the grip is the log's (throughout, or its own schedule),
+    the mass the replay's: the 0 kg replay is the same as with no grip, and a payload effect changes the
+    shoulder_lift current by what a 1 kg mass on the flange weighs."""
+    from ur5fault.sim.trajectories.base import Trajectory
+
+    log = _log(payload_kg=0.0)
+    traj = log.to_trajectory()
+    assert traj.payload_gripped_at_start and traj.payload_events == ()
+    over = {"tcp_offset_m": [0.0, 0.0, 0.12], "joint_temperature_C": [30.0] * 6}
+    not_held = Trajectory(traj.name, traj.setpoint_period_s, traj.q_set_rad, (), False, 0.0)
+    plain = Simulator(load_params(overrides=over)).run(not_held, [RunSpec("x", 7)], log_period_s=PERIOD_S)
+    rp = LogReplay(log, seed=7)
+    bare, heavy = rp.run([(), (make_effect("payload", mass_kg=1.0),)])
+    np.testing.assert_array_equal(bare.current_A, plain["i_FB_A"][0])
+    # 1 kg at about 0.5 m from the shoulder_lift axis (home pose, arm out): ~4.9 N·m of gravity at the joint,
+    # ~0.36 A of motor current at the model's 0.135 N·m/A x 101
+    dI = np.abs(np.mean(heavy.current_A[:, 1] - bare.current_A[:, 1]))
+    assert 0.2 < dI < 0.6, dI

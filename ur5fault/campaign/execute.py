@@ -46,9 +46,9 @@ from .identity import DRIVE, STEPPER, Identities, first_difference
 from .identity import run_effects as _effects_of
 from .labels import assign_splits, refresh_labels, row_labels
 from .limits import check_limits, estimate
-from .manifest import build_manifest
+from .manifest import build_manifest, recorded_campaign
 from .runs import CampaignRun
-from .spec import Campaign, build_campaign
+from .spec import Campaign
 from .store import (
     SUBFOLDERS,
     BadRunFilesError,
@@ -244,19 +244,19 @@ def _earlier_version(out: Path, camp: Campaign, stray: Sequence[str]) -> str | N
     if not stray:
         return None
     manifest, _ = read_manifest(out)
-    data = manifest.get("campaign_data")
-    if not isinstance(data, dict) or manifest.get("name") != camp.name:  # another campaign's: _other_campaign's case
+    if manifest.get("name") != camp.name:  # another campaign's: _other_campaign's case
         return None
     try:
-        earlier = build_campaign(data, "manifest.json", str(manifest.get("campaign_text", "")), None, out,
-                                 model_effects=None)
+        earlier = recorded_campaign(manifest, out)
     except Ur5FaultError:
+        return None
+    if earlier is None:
         return None
     stored = {Path(name).stem for name in stray}
     lost = [rc.run_id for rc in earlier.runs if rc.run_id in stored]
     if not lost:
         return None
-    why = (first_difference(data, dict(camp.data), was="the folder's manifest")
+    why = (first_difference(dict(earlier.data), dict(camp.data), was="the folder's manifest")
            or f"run {lost[0]} of the folder's manifest is not a run of this campaign")
     return f"{why}; {len(lost)} of its stored run(s) are not runs of this campaign"
 

@@ -77,3 +77,22 @@ def build_manifest(camp: Campaign, ids: Identities, features, state: str, backen
     if features is not None:
         m["status_counts"] = {str(k): int(v) for k, v in features["status"].value_counts().items()}
     return m
+
+
+def recorded_campaign(manifest: Mapping[str, Any], out: str | Path | None = None) -> Campaign | None:
+    """The campaign a folder's manifest records, rebuilt and validated by this ur5fault (the one place that does:
+    the scan of an edited campaign, ``campaign verify`` and a re-simulation for ``plot`` / ``show --campaign``).
+
+    From its validated mapping ``campaign_data``, else (older manifests) its YAML text ``campaign_text``; None
+    where it holds neither. A campaign that does not validate raises its own one-line error (Ur5FaultError)."""
+    from ..util import yamlsafe
+    from .spec import build_campaign
+
+    text = manifest.get("campaign_text")
+    text = text if isinstance(text, str) else ""
+    data = manifest.get("campaign_data")
+    if not isinstance(data, dict):
+        if not text.strip():
+            return None
+        data = yamlsafe.loads(text, "manifest.json: campaign_text")
+    return build_campaign(data, "manifest.json", text, None, out, model_effects=None)

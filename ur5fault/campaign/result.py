@@ -16,7 +16,7 @@ import pandas as pd
 
 from ..errors import ConfigFileError, StoredResultError, UnknownNameError, Ur5FaultError
 from ..sim.effects import REGISTRY
-from ..util import provenance, yamlsafe
+from ..util import provenance
 from ..util.io import read_json_stored, read_parquet_stored
 from .store import (
     REBUILD_FEATURES,
@@ -162,12 +162,12 @@ class CampaignResult:
         from ..sim.engine import DEFAULT_MODEL_PATH
         from .execute import plan_batches, run_batch
         from .identity import Identities, file_sha256
-        from .spec import build_campaign
+        from .manifest import recorded_campaign
 
-        text = str(self.manifest.get("campaign_text", ""))
-        data = self.manifest.get("campaign_data")  # the validated mapping (older manifests: the text)
-        camp = build_campaign(data if isinstance(data, dict) else yamlsafe.loads(text, "manifest"), "manifest", text,
-                              model_effects=None)
+        camp = recorded_campaign(self.manifest, self.out)
+        if camp is None:
+            raise ConfigFileError(f"{self.out}: manifest.json does not record its campaign; its runs cannot be "
+                                  "simulated again")
         then = (self.manifest.get("ur5fault_version"), self.manifest.get("model_sha256"))
         now = (provenance.package_version(), file_sha256(DEFAULT_MODEL_PATH))
         if then != now:

@@ -11,7 +11,8 @@ from ..errors import ConfigFileError, Ur5FaultError
 from ..util.io import TEMP_GLOB
 from ..util.lock import lock_holder
 from .identity import Identities, digest
-from .spec import Campaign, build_campaign
+from .manifest import recorded_campaign
+from .spec import Campaign
 from .store import (
     REBUILD_FEATURES,
     SUBFOLDERS,
@@ -142,16 +143,13 @@ def status(out: Path) -> dict[str, Any]:
                                                 rerun=None if damaged else rerun_command(manifest, out))
         return info
     camp = None
-    data = manifest.get("campaign_data")
-    if isinstance(data, dict):
-        try:
-            camp = build_campaign(data, "manifest.json", str(manifest.get("campaign_text", "")), None, out,
-                                  model_effects=None)
-        except Ur5FaultError as exc:
-            info["campaign_error"] = str(exc)
-            manifest_todo = manifest_todo or ("manifest.json's campaign does not validate with this ur5fault (the "
-                                              f"runs were checked for soundness only): {REWRITE_MANIFEST}")
-    else:
+    try:
+        camp = recorded_campaign(manifest, out)
+    except Ur5FaultError as exc:
+        info["campaign_error"] = str(exc)
+        manifest_todo = manifest_todo or ("manifest.json's campaign does not validate with this ur5fault (the "
+                                          f"runs were checked for soundness only): {REWRITE_MANIFEST}")
+    if camp is None and "campaign_error" not in info:
         info["campaign_error"] = "manifest.json absent or without the campaign: files checked for soundness only"
         if manifest and not damaged:  # readable, but it does not say which campaign the runs are
             manifest_todo = manifest_todo or f"manifest.json does not record its campaign: {REWRITE_MANIFEST}"

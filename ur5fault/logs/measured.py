@@ -115,17 +115,21 @@ class MeasuredLog:
 
     def to_trajectory(self, name: str | None = None) -> Trajectory:
         """The log's target positions as a setpoint stream, the payload held where :attr:`payload_held` says
-        (a grip or release between two samples placed half-way between them), else throughout."""
+        (a grip or release between two samples placed half-way between them), else throughout.
+
+        The grip schedule is the log's, the mass the replay's: a log stated at 0 kg is held throughout too (the
+        gripped mass is 0 kg, so its replay is unchanged), so that a replay with a payload effect (the
+        discrepancy library's ``payload`` and ``payload_com`` candidates: a tool the log's statement left out)
+        carries that mass; before, a 0 kg log held nothing and those candidates changed nothing."""
         self.require_payload()
         if self.payload_held is None:
-            return Trajectory(name or self.source, self.period_s, self.q_target_rad, (), self.payload_kg > 0,
-                              self.payload_kg)
+            return Trajectory(name or self.source, self.period_s, self.q_target_rad, (), True, self.payload_kg)
         held = np.asarray(self.payload_held, bool)
         t = self.t_s - self.t_s[0]
         change = np.flatnonzero(held[1:] != held[:-1]) + 1
         events = tuple((float(0.5 * (t[k - 1] + t[k])), bool(held[k])) for k in change)
-        return Trajectory(name or self.source, self.period_s, self.q_target_rad, events,
-                          bool(held[0]) and self.payload_kg > 0, self.payload_kg)
+        return Trajectory(name or self.source, self.period_s, self.q_target_rad, events, bool(held[0]),
+                          self.payload_kg)
 
     def window(self, t0_s: float, t1_s: float) -> MeasuredLog:
         """The part of the log with ``t0 <= t < t1`` (times relative to the log start), time re-zeroed."""

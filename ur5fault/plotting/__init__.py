@@ -46,6 +46,14 @@ def _heatmap_stem(effect: str, feature: str) -> str:
     return f"heatmap_{effect}_{feature}"
 
 
+def _missing_note(effect: str, feature: str, n_runs: int) -> str:
+    """Why an effect gets no figure of ``feature``: the feature is NaN in all its runs."""
+    why = (" (the TCP deviation is measured against a healthy twin, which a sampled campaign simulates only for the "
+           "fault kinds of its sample's `twins` key)" if feature.startswith("tcp_dev_") else "")
+    return (f"no figure for effect '{effect}': {feature} is missing (NaN) in all {n_runs} of its runs{why}; choose "
+            "another --feature, e.g. current_spike_max_A")
+
+
 def figure_stems(result: CampaignResult, feature: str = "tcp_dev_max_mm") -> list[str]:
     """The file stems of the figures :func:`drawn_and_failed` would draw of ``result``, without drawing them (from
     its swept effects): what ``ur5fault plot`` would write, checked for earlier files before any work."""
@@ -96,10 +104,14 @@ def drawn_and_failed(result: CampaignResult, feature: str = "tcp_dev_max_mm", sk
                 figures[name] = draw()
             except StoredResultError as exc:  # its runs can be neither read nor simulated again
                 failures.append(str(exc))
-            except Ur5FaultError as exc:  # the campaign holds no run the figure needs
-                messages.append(str(exc))
+            except Ur5FaultError as exc:  # the campaign holds no run the figure needs (said once for both)
+                if str(exc) not in messages:
+                    messages.append(str(exc))
     healthy = result.features[(result.features["fault"] == HEALTHY) & (result.features["status"] == "ok")]
     for effect, sweep in sweeps.items():
+        if not np.isfinite(joint_feature(sweep.rows, feature)).any():  # blank axes, written as if drawn
+            messages.append(_missing_note(effect, feature, len(sweep.rows)))
+            continue
         figures[_severity_stem(effect, feature)] = severity_figure(sweep, feature, healthy=healthy,
                                                                   threshold_mm=result.threshold_mm)
         if sweep.per_joint:

@@ -46,8 +46,12 @@ def _backlash_rows(result: CampaignResult) -> pd.DataFrame:
     if isinstance(sweep, str):
         raise ParameterError(f"{result.out}: no backlash figure: {sweep}")
     rows = sweep.rows
-    twin = rows["twin_run_id"].value_counts().index[0]  # one condition group
-    return rows[rows["twin_run_id"] == twin]
+    counts = rows["twin_run_id"].value_counts()
+    if counts.iloc[0] < 2 <= len(rows):  # sampled: each backlash run on its own motion and conditions, its own twin
+        raise ParameterError(f"{result.out}: no Fig. 3 or Fig. 4: they need backlash runs of several sizes or joints "
+                             f"under one condition (one healthy twin shared, as `ur5fault campaign run paper` makes); "
+                             f"this campaign's {len(rows)} backlash run(s) each have their own")
+    return rows[rows["twin_run_id"] == counts.index[0]]  # one condition group
 
 
 def tcp_deviation_mm(run: pd.DataFrame, twin: pd.DataFrame) -> np.ndarray:

@@ -13,11 +13,12 @@ def register(sub) -> None:
     b = sub.add_parser("benchmark", help="train baseline classifiers on a campaign's train split, report on its test "
                                          "split (needs scikit-learn and skops: pip install 'scikit-learn>=1.3' "
                                          "'skops>=0.10', or the wheel's [ml] extra)",
-                       **examples("ur5fault campaign run diagnostics_reduced    # 320 labelled runs",
+                       **examples("ur5fault campaign run diagnostics_reduced    # 320 labelled runs, 407 with twins",
                                   "ur5fault benchmark results/diagnostics_reduced    # -> "
                                   "results/diagnostics_reduced/benchmark/",
                                   "ur5fault benchmark results/diagnostics --test results/diagnostics_other_motions    "
-                                  "# saved classifiers on motions never trained on (make diagnostics first)"))
+                                  "# the classifiers the benchmark of results/diagnostics saved, on motions never "
+                                  "trained on (both campaigns run first)"))
     b.add_argument("dir", help="campaign output folder (with features.parquet), e.g. results/diagnostics")
     b.add_argument("--out", help="report folder (default: DIR/benchmark)")
     b.add_argument("--replace", action="store_true",
