@@ -27,7 +27,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ...errors import ConfigFileError
-from ...util.io import checksum_path, verify_checksum, write_json_atomic
+from ...util.io import OutputError, check_writable, checksum_path, verify_checksum, write_json_atomic
 from . import twin_boundary as tb
 
 _log = logging.getLogger(__name__)
@@ -76,6 +76,10 @@ class RadiusCache:
     def __init__(self, path: str | Path) -> None:
         self.path = Path(path)
         self.entries: dict[str, float] = {}
+        try:  # before any ray is simulated: a folder or an unwritable place fails now, not at the first write
+            check_writable(self.path)
+        except OutputError as exc:
+            raise OutputError(f"{exc}; give --twin-cache a file this user may read and write") from None
         try:
             raw = self.path.read_bytes() if self.path.is_file() else None
         except OSError as exc:
