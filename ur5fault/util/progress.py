@@ -167,13 +167,13 @@ def fraction_callback(pbar) -> Callable[[float], None]:
 
 
 class CampaignProgress:
-    """Reports finished runs of a campaign: to a bar (:func:`bar`), to a callback ``(done, total, eta_s)``, or
-    nowhere."""
+    """Reports finished runs of a campaign (``unit``: what it counts, a life campaign's units): to a bar
+    (:func:`bar`), to a callback ``(done, total, eta_s)``, or nowhere."""
 
-    def __init__(self, progress: bool | Callable[[int, int, float], None], total: int) -> None:
+    def __init__(self, progress: bool | Callable[[int, int, float], None], total: int, unit: str = "run") -> None:
         self.total = total
         self.callback = progress if callable(progress) else None
-        self.bar = None if self.callback else bar(total, "campaign", "run", enabled=bool(progress))
+        self.bar = None if self.callback else bar(total, "campaign", unit, enabled=bool(progress))
         self.start_done: int | None = None
 
     def __call__(self, done: int, elapsed_s: float) -> None:
@@ -197,5 +197,6 @@ class CampaignProgress:
             self.bar.close()
 
 
-def campaign_progress(progress: bool | Callable[[int, int, float], None], total: int) -> CampaignProgress:
-    return CampaignProgress(progress, total)
+def campaign_progress(progress: bool | Callable[[int, int, float], None], total: int,
+                      unit: str = "run") -> CampaignProgress:
+    return CampaignProgress(progress, total, unit)

@@ -124,3 +124,11 @@ def test_the_start_line_of_a_new_fleet_says_how_large_it_can_grow(tmp_path):
     start = [s for s in said if s.startswith("life campaign tiny:")]
     assert len(start) == 1 and start[0].endswith(bound.split(": ", 1)[1]), said
     assert f"{steps:.3g} physics steps" in start[0]
+
+
+def test_the_progress_bar_of_a_fleet_counts_units(tmp_path, capsys):
+    """The bar said `campaign: 1/30 runs (3 %)` while counting finished units (the start line's "up to 1260 runs"
+    counts inspections): it says units."""
+    run_life(build_life(TINY, "tiny"), tmp_path, jobs=1, progress=True, note=lambda s: None, max_rounds=0)
+    lines = capsys.readouterr().err.splitlines()
+    assert lines and lines[-1].startswith("campaign: 0/3 units (0 %)"), lines

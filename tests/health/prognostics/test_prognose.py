@@ -146,3 +146,25 @@ def test_a_gap_in_the_failure_feature_is_named_not_blamed_on_the_fleet_size(tmp_
         assert main(["prognose", str(fleet), "--out", str(tmp_path / f"b_{col}")]) == 2
         err = capsys.readouterr().err.strip().splitlines()
         assert len(err) == 1 and f"the fleet's record {col} is missing (NaN) or infinite in 2 inspection(s)" in err[0]
+
+
+def test_the_resume_advice_for_an_unfinished_life_campaign_carries_yes_where_campaign_run_asks_it(tmp_path, capsys):
+    """`prognose` on an unfinished prognostics_small campaign advised `ur5fault campaign run
+    .../prognostics_small.yaml --out life1` without --yes, which `campaign run` refuses for that fleet (over 1000
+    runs): the advice is `campaign status`'s command, --yes in it exactly where the fleet needs it."""
+    from importlib.resources import files
+
+    import yaml
+
+    from tiny_fleet import TINY
+
+    small = files("ur5fault") / "campaigns" / "prognostics_small.yaml"
+    for data, file, yes in ((yaml.safe_load(small.read_text()), str(small), True), (TINY, "tiny.yaml", False)):
+        life = tmp_path / data["name"]
+        life.mkdir()
+        (life / "manifest.json").write_text(json.dumps({"name": data["name"], "kind": "life", "state": "running",
+                                                        "campaign_file": file, "campaign_data": data}))
+        assert main(["prognose", str(life), "--out", str(tmp_path / "o")]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        command = f"`ur5fault campaign run {file} --out {life}{' --yes' if yes else ''}`"
+        assert len(err) == 1 and f"resume it with {command}" in err[0], err

@@ -142,3 +142,23 @@ def test_prognose_stopped_partway_resumes_from_its_cache_to_the_uninterrupted_re
     assert sum(sizes) == again["simulated"] == n_rays - done and again["hits"] == whole["hits"] + done
     pd.testing.assert_frame_equal(pd.read_parquet(tmp_path / "bench" / "predictions_twin.parquet"),
                                   pd.read_parquet(tmp_path / "whole" / "predictions_twin.parquet"))
+
+
+@pytest.mark.parametrize("kind", ["folder", "unwritable"])
+def test_prognose_refuses_a_cache_it_cannot_write_before_simulating_anything(monkeypatch, tmp_path, capsys, kind):
+    def never(*args, **kwargs):
+        raise AssertionError("simulated before the cache path was checked")
+
+    monkeypatch.setattr(TB, "failure_radii", never)
+    fleet = _fleet(tmp_path)
+    if kind == "folder":
+        cache = tmp_path / "cache"
+        cache.mkdir()
+    else:  # under a file: no file can be made there, whoever runs the test (a read-only folder does not stop root)
+        (tmp_path / "plain").write_text("")
+        cache = tmp_path / "plain" / "c.json"
+    assert main(["prognose", str(fleet), "--twin", "--twin-friction", "law", "--twin-cache", str(cache),
+                 "--out", str(tmp_path / "bench")]) != 0
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and str(cache) in err and "--twin-cache" in err
+    assert not (tmp_path / "bench" / "metrics.json").exists()

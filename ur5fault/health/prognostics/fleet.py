@@ -97,7 +97,7 @@ def _run_locked(camp, out: Path, n_jobs: int, client, progress, say, max_rounds,
         + ("" if finished or kept else f"; {bound.split(': ', 1)[-1]}"))  # how long the whole fleet can take
     write_json_atomic(out / "manifest.json", _manifest(camp, ids, "running", backend, n_jobs, t0, None),
                       checksum=True)
-    report = campaign_progress(progress, len(camp.units))
+    report = campaign_progress(progress, len(camp.units), "unit")  # it counts finished units, not runs
     report(len(finished), 0.0)
     rounds = 0
     try:

@@ -56,9 +56,14 @@ def _what_is_there(folder: Path) -> str:
     if m.get("kind") != "life":
         return (f"{folder} holds the fault campaign {name!r}, not a life campaign; run one into another folder "
                 "(`ur5fault campaign run prognostics --out NEW_DIR --yes`)")
+    from ...campaign.verify import rerun_command
+
+    # the command `campaign status` advises, --yes in it exactly where `campaign run` asks it of this fleet
+    again = rerun_command(m, folder)
+    how = (f"`{again}`" if again else f"`ur5fault campaign run {campaign} --out {folder}` (with --yes for a fleet "
+           "that could take over 1000 runs or 2e9 steps)")
     return (f"the life campaign {name!r} in {folder} has not finished (state {m.get('state', '?')!r}): resume it "
-            f"with `ur5fault campaign run {campaign} --out {folder}` (with --yes for a fleet that could take over 1000 "
-            f"runs or 2e9 steps; `ur5fault campaign status {folder}` shows how far it got)")
+            f"with {how} (`ur5fault campaign status {folder}` shows how far it got)")
 
 
 def check_recorded(folder: Path, df: pd.DataFrame, failure: Failure) -> None:

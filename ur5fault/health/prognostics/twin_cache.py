@@ -27,7 +27,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ...errors import ConfigFileError
-from ...util.io import checksum_path, verify_checksum, write_json_atomic
+from ...util.io import OutputError, check_writable, checksum_path, verify_checksum, write_json_atomic
 from . import twin_boundary as tb
 
 _log = logging.getLogger(__name__)
@@ -76,6 +76,14 @@ class RadiusCache:
     def __init__(self, path: str | Path) -> None:
         self.path = Path(path)
         self.entries: dict[str, float] = {}
+        # before any ray is simulated: a folder or an unwritable place fails now, not at the first write
+        again = "give --twin-cache a file this user may read and write"
+        if self.path.is_dir():
+            raise OutputError(f"{self.path}: is a folder; {again}")
+        try:
+            check_writable(self.path)
+        except OutputError as exc:
+            raise OutputError(f"{exc}; {again}") from None
         try:
             raw = self.path.read_bytes() if self.path.is_file() else None
         except OSError as exc:
