@@ -37,7 +37,7 @@ class ParameterError(Ur5FaultError, ValueError):
 
 #: names an unknown-name error lists in full; above it, the first half of them and how many more (a campaign's
 #: feature table has about 400 health features: the line filled a screen)
-MAX_LISTED = 60
+MAX_LISTED = 80
 
 
 class UnknownNameError(Ur5FaultError, KeyError):

@@ -63,3 +63,6 @@ def test_a_payload_finding_says_the_stated_payload_is_contradicted():
     f = Finding(c, theta, np.array([0.05]), SimpleNamespace(z=40.0, delta_bic=-300.0))
     text = sentence(f)
     assert "mass_kg 1.849 kg" in text and "where 3 kg was stated: check the payload given (--payload-kg" in text, text
+    # model.yaml leaves the job's payload out (a 0 kg robot's tool found this way did not reach monitor's baseline)
+    assert "model.yaml does not hold it (a payload is the job's): with model.yaml on this job's logs state " \
+           "--payload-kg 1.85" in text, text

@@ -60,8 +60,15 @@ def figure_stems(result: CampaignResult, feature: str = "tcp_dev_max_mm") -> lis
     sweeps, _ = result.sweeps()
     stems = [FIG3_STEM, FIG4_STEM] if "backlash" in sweeps else []
     for effect, sweep in sweeps.items():
+        if not _drawable(sweep, feature):  # no figure (drawn_and_failed says why): none to replace either
+            continue
         stems += [_severity_stem(effect, feature)] + ([_heatmap_stem(effect, feature)] if sweep.per_joint else [])
     return stems
+
+
+def _drawable(sweep, feature: str) -> bool:
+    """Whether ``feature`` has a value in any of the sweep's runs (else its figures would be blank axes)."""
+    return bool(np.isfinite(joint_feature(sweep.rows, feature)).any())
 
 
 def campaign_figures(result: CampaignResult, feature: str = "tcp_dev_max_mm") -> tuple[dict[str, Figure], list[str]]:
@@ -109,7 +116,7 @@ def drawn_and_failed(result: CampaignResult, feature: str = "tcp_dev_max_mm", sk
                     messages.append(str(exc))
     healthy = result.features[(result.features["fault"] == HEALTHY) & (result.features["status"] == "ok")]
     for effect, sweep in sweeps.items():
-        if not np.isfinite(joint_feature(sweep.rows, feature)).any():  # blank axes, written as if drawn
+        if not _drawable(sweep, feature):  # blank axes, written as if drawn
             messages.append(_missing_note(effect, feature, len(sweep.rows)))
             continue
         figures[_severity_stem(effect, feature)] = severity_figure(sweep, feature, healthy=healthy,

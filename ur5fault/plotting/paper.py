@@ -46,12 +46,18 @@ def _backlash_rows(result: CampaignResult) -> pd.DataFrame:
     if isinstance(sweep, str):
         raise ParameterError(f"{result.out}: no backlash figure: {sweep}")
     rows = sweep.rows
+    rows = rows[rows["twin_run_id"].fillna("").astype(str) != ""]  # a run without a twin has no TCP deviation
+    if rows.empty:
+        raise ParameterError(f"{result.out}: no Fig. 3 or Fig. 4: no backlash run has a healthy twin (a sampled "
+                             "campaign's `twins` key leaves backlash out)")
     counts = rows["twin_run_id"].value_counts()
-    if counts.iloc[0] < 2 <= len(rows):  # sampled: each backlash run on its own motion and conditions, its own twin
+    data = result.manifest.get("campaign_data")
+    sampled = isinstance(data, dict) and "sample" in data
+    if sampled and counts.iloc[0] < 2 <= len(rows):  # each backlash run on its own motion and conditions, own twin
         raise ParameterError(f"{result.out}: no Fig. 3 or Fig. 4: they need backlash runs of several sizes or joints "
                              f"under one condition (one healthy twin shared, as `ur5fault campaign run paper` makes); "
-                             f"this campaign's {len(rows)} backlash run(s) each have their own")
-    return rows[rows["twin_run_id"] == counts.index[0]]  # one condition group
+                             f"this sampled campaign's {len(rows)} backlash run(s) each have their own")
+    return rows[rows["twin_run_id"] == counts.index[0]]  # one condition group (a grid: the largest)
 
 
 def tcp_deviation_mm(run: pd.DataFrame, twin: pd.DataFrame) -> np.ndarray:

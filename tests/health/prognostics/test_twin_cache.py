@@ -162,3 +162,21 @@ def test_prognose_refuses_a_cache_it_cannot_write_before_simulating_anything(mon
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and str(cache) in err and "--twin-cache" in err
     assert not (tmp_path / "bench" / "metrics.json").exists()
+
+
+def test_a_complete_cache_is_read_where_it_cannot_be_written(monkeypatch, tmp_path):
+    """The writability check comes before the first ray is simulated, not when the cache is opened: a cache that
+    already holds every radius, in a read-only place, is read as before (it is never written then)."""
+    cache = RadiusCache(tmp_path / "c.json")
+    cache.entries = {"a": 0.1, "b": 0.2}
+
+    def read_only(path):
+        raise TC.OutputError(f"{path}: read-only")
+
+    monkeypatch.setattr(TC, "check_writable", read_only)
+    monkeypatch.setattr(TB, "failure_radii", lambda *a, **k: [0.3])
+    monkeypatch.setattr(cache, "_keys", lambda setup, rays: ["a", "b"])
+    np.testing.assert_array_equal(cache.radii(None, ["r1", "r2"]), [0.1, 0.2])
+    monkeypatch.setattr(cache, "_keys", lambda setup, rays: ["a", "z"])
+    with pytest.raises(TC.OutputError, match=r"read-only; give --twin-cache a file this user may read and write"):
+        cache.radii(None, ["r1", "r2"])

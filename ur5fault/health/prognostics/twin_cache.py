@@ -70,20 +70,18 @@ def _cache_shaped(raw: bytes) -> bool:
     return isinstance(data, dict) and set(data) == {"version", "radii"} and isinstance(data["radii"], dict)
 
 
+_AGAIN = "give --twin-cache a file this user may read and write"
+
+
 class RadiusCache:
     """Radii by key in one JSON file (``path``); :meth:`radii` looks up, simulates the rest and saves."""
 
     def __init__(self, path: str | Path) -> None:
         self.path = Path(path)
         self.entries: dict[str, float] = {}
-        # before any ray is simulated: a folder or an unwritable place fails now, not at the first write
-        again = "give --twin-cache a file this user may read and write"
-        if self.path.is_dir():
-            raise OutputError(f"{self.path}: is a folder; {again}")
-        try:
-            check_writable(self.path)
-        except OutputError as exc:
-            raise OutputError(f"{exc}; {again}") from None
+        if self.path.is_dir():  # never a cache: said now, before any ray is simulated
+            raise OutputError(f"{self.path}: is a folder; {_AGAIN}")
+        self._writable = False  # checked before the first ray is simulated (:meth:`radii`), not at its write
         try:
             raw = self.path.read_bytes() if self.path.is_file() else None
         except OSError as exc:
@@ -125,6 +123,12 @@ class RadiusCache:
         keys = self._keys(setup, rays)
         todo = [i for i, k in enumerate(keys) if k not in self.entries]
         self.hits += len(rays) - len(todo)
+        if todo and not self._writable:  # a complete cache in a read-only place is read, never written
+            try:
+                check_writable(self.path)
+            except OutputError as exc:
+                raise OutputError(f"{exc}; {_AGAIN}") from None
+            self._writable = True
         for group in _groups(rays, todo):
             new = tb.failure_radii(setup, [rays[i] for i in group], progress)
             self.entries.update({keys[i]: float(v) for i, v in zip(group, new, strict=True)})
