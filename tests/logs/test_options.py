@@ -294,7 +294,8 @@ def test_diagnose_refuses_an_unknown_payload_before_any_work(tmp_path, capsys):
 @pytest.mark.parametrize("command", ["diagnose", "monitor"])
 def test_a_misspelt_log_is_said_missing_before_its_payload(tmp_path, capsys, command):
     """`diagnose nonexist.csv --format rtde ...` without a payload said the payload was unknown, not that the file
-    was not there (a newcomer probe): a path that is no file is said first."""
+    was not there (a newcomer probe): a log the payload check would refuse is said missing first (a missing log
+    with its payload stated is the reader's to say, after the output folder's check: tests/test_outputs.py)."""
     extra = (["--detector", str(tmp_path / "nothing")] if command == "diagnose" else
              ["--baseline", str(tmp_path / "b.yaml"), "--baseline-logs", str(RUN2)])
     (tmp_path / "b.yaml").write_text("params: {}\n")

@@ -21,16 +21,17 @@ from .same_samples import refuse_same_samples
 def refuse_unknown_payload(entries: Sequence[LogEntry]) -> None:
     """For a command that does not fit a payload: :func:`read_entry`'s refusals of a log whose payload is unknown, or
     (an rtde log's, which the file does not carry) stated without its position, said from the options alone, before
-    any log is read or model loaded (they came after seconds of work). A path that is no file is said first (a
-    newcomer's misspelt log was told to state its payload)."""
+    any log is read or model loaded (they came after seconds of work). A log that would be refused so and is no file
+    is said to be none instead (a newcomer's misspelt log was told to state its payload); other missing logs are
+    the readers' to say, after the commands' checks of their output folder."""
     for e in entries:
+        unknown = e.payload_unknown
+        if not (unknown or (e.fmt == "rtde" and e.tcp_offset_m is None)):
+            continue
         if not Path(e.path).is_file():
             raise LogFormatError(f"{e.path}: " + ("not a file" if Path(e.path).exists() else "no such file"))
-    for e in entries:
-        if e.payload_unknown:
-            raise ParameterError(_unknown_payload(str(e.path)))
-        if e.fmt == "rtde" and e.tcp_offset_m is None:
-            raise ParameterError(_no_position(str(e.path), allow_unknown=False))
+        raise ParameterError(_unknown_payload(str(e.path)) if unknown else _no_position(str(e.path),
+                                                                                        allow_unknown=False))
 
 
 def _unknown_payload(src: str) -> str:
