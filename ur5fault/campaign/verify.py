@@ -149,10 +149,11 @@ def status(out: Path) -> dict[str, Any]:
         info["campaign_error"] = str(exc)
         manifest_todo = manifest_todo or ("manifest.json's campaign does not validate with this ur5fault (the "
                                           f"runs were checked for soundness only): {REWRITE_MANIFEST}")
-    if camp is None and "campaign_error" not in info:
-        info["campaign_error"] = "manifest.json absent or without the campaign: files checked for soundness only"
-        if manifest and not damaged:  # readable, but it does not say which campaign the runs are
-            manifest_todo = manifest_todo or f"manifest.json does not record its campaign: {REWRITE_MANIFEST}"
+    else:
+        if camp is None:
+            info["campaign_error"] = "manifest.json absent or without the campaign: files checked for soundness only"
+            if manifest and not damaged:  # readable, but it does not say which campaign the runs are
+                manifest_todo = manifest_todo or f"manifest.json does not record its campaign: {REWRITE_MANIFEST}"
     problems: list[str] = []
     if camp is not None:
         ids = Identities(camp)

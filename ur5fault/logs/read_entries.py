@@ -14,7 +14,7 @@ from ..errors import LogFormatError, ParameterError
 from .measured import UNKNOWN_PAYLOAD, MeasuredLog
 from .options import LogEntry, log_entries
 from .plausible import MinLength
-from .readers import read_log
+from .readers import check_log_file, read_log
 from .same_samples import refuse_same_samples
 
 
@@ -28,8 +28,7 @@ def refuse_unknown_payload(entries: Sequence[LogEntry]) -> None:
         unknown = e.payload_unknown
         if not (unknown or (e.fmt == "rtde" and e.tcp_offset_m is None)):
             continue
-        if not Path(e.path).is_file():
-            raise LogFormatError(f"{e.path}: " + ("not a file" if Path(e.path).exists() else "no such file"))
+        check_log_file(e.path)
         raise ParameterError(_unknown_payload(str(e.path)) if unknown else _no_position(str(e.path),
                                                                                         allow_unknown=False))
 

@@ -298,6 +298,16 @@ def _sim_metadata(schema, src: str) -> dict:
 READERS = {"nist": read_nist, "rtde": read_rtde, "sim": read_sim}
 
 
+def check_log_file(path: str | Path) -> Path:
+    """``path`` as a Path when it is a file; else one line: no such file, or not a file."""
+    p = Path(path)
+    if not p.exists():
+        raise LogFormatError(f"{p}: no such file")
+    if not p.is_file():
+        raise LogFormatError(f"{p}: not a file")
+    return p
+
+
 def read_log(path: str | Path, fmt: str, length: plausible.MinLength | None = None, **kwargs) -> MeasuredLog:
     """Read a log in one of the formats of :data:`READERS` (``nist``, ``rtde``, ``sim``); ``payload_kg`` and
     ``tcp_offset_m`` are for ``rtde`` only (the other formats carry their own) and are refused elsewhere;
@@ -311,9 +321,5 @@ def read_log(path: str | Path, fmt: str, length: plausible.MinLength | None = No
     unknown = set(kwargs) - {"payload_kg", "tcp_offset_m"}
     if unknown:
         raise ParameterError(f"read_log: unknown option {sorted(unknown)[0]!r} (payload_kg, tcp_offset_m)")
-    p = Path(path)
-    if not p.exists():
-        raise LogFormatError(f"{p}: no such file")
-    if not p.is_file():
-        raise LogFormatError(f"{p}: not a file")
+    p = check_log_file(path)
     return READERS[fmt](p, length=length, **{k: v for k, v in kwargs.items() if v is not None})
