@@ -66,3 +66,13 @@ def test_a_payload_finding_says_the_stated_payload_is_contradicted():
     # model.yaml leaves the job's payload out (a 0 kg robot's tool found this way did not reach monitor's baseline)
     assert "model.yaml does not hold it (a payload is the job's): with model.yaml on this job's logs state " \
            "--payload-kg 1.85" in text, text
+    assert "centre of mass" not in text, text
+    # stated at 0 kg: the library's centre-of-mass candidates moved nothing (no mass to move), so the finding sits at
+    # the stated tool point; omitting the payload fits both (on the nine Kufieta runs wrist_2 0.88 -> 0.64 x UR's
+    # model held out, docs/validation.md)
+    c0 = LibraryCandidate("payload", None, param="mass_kg", x0=0.0, probe=0.5)
+    f0 = Finding(c0, np.array([(1.6 - c0.value(np.array([0.0]))) / (c0.value(np.array([1.0])) - c0.value(
+        np.array([0.0])))]), np.array([0.05]), SimpleNamespace(z=40.0, delta_bic=-300.0))
+    text = sentence(f0)
+    assert ("where 0 kg was stated: check the payload given (--payload-kg, a manifest's payload_kg), or omit it to "
+            "have it fitted with its centre of mass (omit --tcp-offset-m too)") in text, text

@@ -294,6 +294,30 @@ def test_saved_classifiers_round_trip_and_score_another_campaign(tmp_path):
         other_dir / "benchmark_transfer" / "report.md").read_text()
 
 
+def test_classifiers_saved_under_out_are_scored_with_models_and_a_foreign_training_set_is_said(tmp_path, capsys):
+    """`benchmark DIR --out REP` saves its classifiers in REP; `--test` read only DIR/benchmark (a newcomer probe):
+    `--models REP` scores them.  Classifiers trained on another campaign than DIR are said (their training-set hash
+    differs), and --models without --test is one line."""
+    train_dir, other_dir, rep = tmp_path / "train", tmp_path / "other", tmp_path / "rep"
+    for d, df in ((train_dir, with_twin(synthetic())), (other_dir, with_twin(synthetic(n_groups=6, seed=7), seed=8))):
+        d.mkdir()
+        df.to_parquet(d / "features.parquet")
+    assert main(["benchmark", str(train_dir), "--features", "twin", "--out", str(rep), "--quiet"]) == 0
+    capsys.readouterr()
+    assert main(["benchmark", str(train_dir), "--test", str(other_dir), "--quiet"]) == 2
+    assert "no saved classifiers" in capsys.readouterr().err
+    assert main(["benchmark", str(train_dir), "--test", str(other_dir), "--models", str(rep), "--quiet"]) == 0
+    out, err = capsys.readouterr()
+    assert f"{other_dir / 'benchmark_transfer'}/report.md" in out and "not trained on" not in err, err
+    # the same classifiers with another campaign as DIR: scored, and said
+    assert main(["benchmark", str(other_dir), "--test", str(train_dir), "--models", str(rep), "--quiet"]) == 0
+    err = capsys.readouterr().err
+    assert f"{rep}: its classifiers were not trained on {other_dir}'s training runs" in err, err
+    assert main(["benchmark", str(train_dir), "--models", str(rep)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--models names the saved classifiers --test scores" in err, err
+
+
 def test_benchmark_refuses_no_worker(tmp_path, capsys):
     assert main(["benchmark", str(tmp_path), "--jobs", "0"]) == 2
     err = capsys.readouterr().err

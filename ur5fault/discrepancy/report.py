@@ -71,7 +71,10 @@ def sentence(f: Finding) -> str:
                 f"({a:.4g}..{b:.4g})")
         if (c.effect, c.param) == ("payload", "mass_kg"):  # the job's, stated by the user: which the log contradicts
             text += (f", where {c.x0:g} kg was stated: check the payload given (--payload-kg, a manifest's "
-                     "payload_kg), or omit it to have it fitted; model.yaml does not hold it (a payload is the "
+                     "payload_kg), or omit it to have it fitted"
+                     + (" with its centre of mass (omit --tcp-offset-m too), which a fit about 0 kg stated cannot "
+                        "place: this one holds it at the stated tool point" if c.x0 == 0 else "")
+                     + "; model.yaml does not hold it (a payload is the "
                      f"job's): with model.yaml on this job's logs state --payload-kg {c.value(f.theta):.3g}")
     else:
         text = _term_text(c, amp, lo, hi)

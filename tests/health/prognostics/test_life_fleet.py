@@ -65,6 +65,34 @@ def test_a_changed_wear_law_is_not_mistaken_for_stored_inspections(tmp_path):
     assert m["state"] == "running"
 
 
+@pytest.mark.slow
+def test_an_edited_life_campaign_that_drops_units_is_refused_and_a_split_edit_is_said(tmp_path):
+    """A life campaign edited and run into its folder: fewer units would leave stored units behind and replace
+    the table without them (refused, naming the first difference, until --replace-changed); a split seed edited
+    keeps every stored inspection and says so, and that prognose's earlier report is of the earlier table."""
+    camp = build_life(TINY, "tiny")
+    assert run_life(camp, tmp_path, jobs=1, progress=False, note=None)["state"] == "complete"
+    (tmp_path / "benchmark").mkdir()
+    fewer = build_life({**TINY, "life": {**TINY["life"], "units": 2}}, "tiny")
+    with pytest.raises(CampaignChangedError, match=r"another version of life campaign 'tiny' \(life.units: 3 in "
+                                                   r"the folder's manifest, 2 now; 1 stored unit\(s\) \(u00002\)"):
+        run_life(fewer, tmp_path, jobs=1, progress=False, note=None)
+    resplit = build_life({**TINY, "split": {**TINY["split"], "seed": 1}}, "tiny")
+    said = []
+    m = run_life(resplit, tmp_path, jobs=1, progress=False, note=said.append)
+    assert m["state"] == "complete" and m["split"]["seed"] == 1
+    assert any("another version of life campaign 'tiny' (split.seed: 0 in the folder's manifest, 1 now)" in s
+               for s in said), said
+    assert any("0 to run" in s for s in said), said  # the split is no input of an inspection: nothing simulated
+    assert any(s.endswith("reports on the earlier version's inspections: run `ur5fault prognose "
+                          f"{tmp_path}` again") for s in said), said
+    said.clear()
+    run_life(resplit, tmp_path, jobs=1, progress=False, note=said.append)  # the same campaign again: no note
+    assert not any("another version" in s or "earlier version" in s for s in said), said
+    m = run_life(fewer, tmp_path, jobs=1, progress=False, note=said.append, replace_changed=True)
+    assert m["n_units"] == 2 and any("left as strays: --replace-changed" in s for s in said), said
+
+
 def test_a_second_writer_is_refused(tmp_path):
     camp = build_life(TINY, "tiny")
     with Lock(tmp_path), pytest.raises(FolderLockedError):

@@ -214,3 +214,18 @@ def test_prognose_twin_learns_the_rise_by_default_and_runs_the_law_when_asked(mo
     else:
         assert fr["source"] == "law" and fr["learned"] is None and set(ran) == {8.0}
         assert "of the wear law" in report
+    assert "the twin ran the packaged model, the fleet's own (--model: another)" in report
+
+
+def test_the_report_names_the_model_the_twin_ran(monkeypatch, tmp_path):
+    """`prognose --twin --model OVERLAY`: metrics.json recorded the overlay, report.md did not say which model the
+    twin ran (a newcomer probe)."""
+    monkeypatch.setattr(TB, "_criteria", lambda setup, traj, pts, done=None: np.array(
+        [0.5 * s * (ray.direction[1] + 5 * ray.direction[2]) for ray, s in pts]))
+    ov = tmp_path / "ov.yaml"
+    ov.write_text("effects: [{effect: current_sensor_offset, joint: 1, offset_A: 0.05}]\n")
+    out = tmp_path / "bench"
+    assert main(["prognose", str(_fleet_dir(tmp_path)), "--out", str(out), "--twin", "--model", str(ov)]) == 0
+    report = (out / "report.md").read_text()
+    said = report.split("the twin ran a model overlay (--model): parameter groups none; effects ")[1]
+    assert said.startswith("current_sensor_offset") and "0.05" in said.split(")")[0], said[:200]

@@ -31,9 +31,12 @@ def register(sub) -> None:
                    help="classifier inputs: the paper's health features, the twin residual features or both "
                         "(default: both when the campaign has twin residuals, else paper)")
     b.add_argument("--test", metavar="OTHER_DIR",
-                   help="score the classifiers saved in DIR/benchmark/models on every run of this other campaign "
-                        "folder, without retraining (report in OTHER_DIR/benchmark_transfer unless --out; "
+                   help="score the classifiers saved in DIR/benchmark/models (or --models) on every run of this other "
+                        "campaign folder, without retraining (report in OTHER_DIR/benchmark_transfer unless --out; "
                         "default: train and score on DIR's own split)")
+    b.add_argument("--models", metavar="REPORT_DIR",
+                   help="with --test: the report folder the classifiers were saved in, when the benchmark that "
+                        "trained them was given --out (default: DIR/benchmark)")
     b.add_argument("--jobs", type=int, help="worker processes for the feature sets' comparison, run beside the "
                                             "main training (default: all cores available; 1: one after the other)")
     b.add_argument("--quiet", action="store_true", help="no progress (a bar on a terminal, plain lines in a log)")
@@ -56,7 +59,7 @@ def cmd_benchmark(args: argparse.Namespace) -> int:
                              "their own inputs: use one of them")
     jobs, _ = effective_jobs(args.jobs)  # the campaigns' rule: at least 1, at most the cores available
     m = run_benchmark(args.dir, args.out, seed=args.seed, shuffle_labels=args.shuffle_labels,
-                      feature_set=args.features, test_dir=args.test,
+                      feature_set=args.features, test_dir=args.test, models_dir=args.models,
                       jobs=jobs, replace=args.replace,
                       progress=not args.quiet)  # the report folder checked before any training
     for note in m.get("notes", []):

@@ -24,7 +24,7 @@ from .evaluation import evaluate
 from .models import Models
 from .predictions import FILE as PREDICTIONS_FILE
 from .report import write_report
-from .saved import MODELS_DIR, check_saved_inputs, load_models, save_models, unverified_notes
+from .saved import MODELS_DIR, check_saved_inputs, load_models, save_models, training_hash, unverified_notes
 from .transfer import against_training_split, mean_run_duration_s, refuse_training_runs, setup_notes
 
 RESULT_FILES = ("report.md", "metrics.json", PREDICTIONS_FILE, MODELS_DIR)
@@ -32,7 +32,8 @@ RESULT_FILES = ("report.md", "metrics.json", PREDICTIONS_FILE, MODELS_DIR)
 
 def run_benchmark(campaign_dir: str | Path, out: str | Path | None = None, *, seed: int = 0,
                   shuffle_labels: bool = False, feature_set: str | None = None, test_dir: str | Path | None = None,
-                  compare: bool = True, jobs: int = 1, replace: bool = True, progress: bool = False) -> dict[str, Any]:
+                  models_dir: str | Path | None = None, compare: bool = True, jobs: int = 1, replace: bool = True,
+                  progress: bool = False) -> dict[str, Any]:
     """``ur5fault benchmark``: evaluate a campaign folder and write ``report.md``, ``metrics.json``, the figures
     and the trained classifiers (``models/``) into ``out`` (default ``<campaign_dir>/benchmark``); return the
     metrics, with ``out`` and ``replaced`` (whether they replaced an earlier result there), which the file has not.
@@ -41,6 +42,8 @@ def run_benchmark(campaign_dir: str | Path, out: str | Path | None = None, *, se
         feature_set: the inputs (default: ``both`` when the table has twin residual features, else ``paper``).
         test_dir: score the classifiers saved by an earlier ``ur5fault benchmark campaign_dir`` on every run of
             this other campaign folder, without retraining (default ``out``: ``<test_dir>/benchmark_transfer``).
+        models_dir: the report folder those classifiers were saved in (default ``<campaign_dir>/benchmark``; the
+            ``out`` of the benchmark that trained them); only with ``test_dir``.
         compare: when no ``feature_set`` is chosen, also score every feature set (and its shuffled-label
             control) and add the table.
         jobs: worker processes for the comparison's evaluations, run while this process trains and scores the
@@ -57,6 +60,10 @@ def run_benchmark(campaign_dir: str | Path, out: str | Path | None = None, *, se
         out_dir = (Path(test_dir) if Path(test_dir).is_dir() else Path(test_dir).parent) / "benchmark_transfer"
     else:
         out_dir = base / ("benchmark_shuffled" if shuffle_labels else "benchmark")
+    if models_dir is not None and test_dir is None:
+        raise ParameterError("--models names the saved classifiers --test scores; without --test the benchmark trains "
+                             "new ones: give --test OTHER_DIR, or leave --models out")
+    saved_dir = Path(models_dir) if models_dir is not None else base / "benchmark"
     refuse_life_folder(campaign_dir)  # said before a word on --out, where prognose writes its report too
     check_new_output(out_dir, folder=True, results=RESULT_FILES, replace=replace)  # before reading or training
     features = load_features(campaign_dir)
@@ -67,7 +74,7 @@ def run_benchmark(campaign_dir: str | Path, out: str | Path | None = None, *, se
         test_dir = Path(test_dir)
         other = load_features(test_dir)  # there, a campaign's feature table (not a life campaign's folder)
         refuse_time_series(other, f"--test {test_dir}: ")
-        check_saved_inputs(base / "benchmark", other, str(test_dir))  # classifiers there, with these inputs
+        check_saved_inputs(saved_dir, other, str(test_dir))  # classifiers there, with these inputs
         refuse_training_runs(features, other, campaign_dir, test_dir)
     thr = PAPER_TCP_MM
     manifest = campaign_dir / "manifest.json"
@@ -85,11 +92,13 @@ def run_benchmark(campaign_dir: str | Path, out: str | Path | None = None, *, se
         feature_set = "both" if has_twin_features(features) else "paper"
     if test_dir is not None:
         with _Stages(progress, "scoring the saved classifiers", "writing the report") as bar:
-            saved = load_models(base / "benchmark")
+            saved = load_models(saved_dir)
             metrics, figures = evaluate(features, seed=seed, threshold_mm=thr, source=str(test_dir), saved=saved,
                                         test_features=other, with_importance=False)
             metrics.pop("_models")
-            metrics["notes"] = unverified_notes(base / "benchmark") + setup_notes(saved[1], test_dir, other)
+            metrics["notes"] = (unverified_notes(saved_dir) + _other_training_set(features, saved[1], campaign_dir,
+                                                                                  saved_dir)
+                                + setup_notes(saved[1], test_dir, other))
             if saved[0].joint_kind is not None:  # how far apart, against the motions drawn (transfer.py)
                 metrics["transfer"] = against_training_split(features, other, saved, seed, str(test_dir))
             bar.next()
@@ -231,3 +240,22 @@ def summary(m: dict[str, Any]) -> dict[str, Any]:
 
 
 __all__ = ["RESULT_FILES", "compare_feature_sets", "run_benchmark", "summary"]
+
+
+def _other_training_set(features: pd.DataFrame, schema: dict[str, Any], campaign_dir: Path, saved_dir: Path
+                        ) -> list[str]:
+    """A note when the classifiers saved in ``saved_dir`` were not trained on ``campaign_dir``'s training split (their
+    training-set hash differs: another campaign's report, or the campaign run again since): their scores on the
+    other campaign stand, but the comparison with ``campaign_dir``'s test split is not against their own."""
+    try:
+        ds = load_dataset(features, schema["feature_set"])
+        ds = dataclasses.replace(ds, inputs=tuple(c["name"] for c in schema["inputs"]))
+        same = training_hash(ds) == schema.get("training_set_sha256")
+    except (ConfigFileError, KeyError, TypeError):
+        same = False
+    if same:
+        return []
+    return [f"{saved_dir}: its classifiers were not trained on {campaign_dir}'s training runs (the training-set hash "
+            "differs: another campaign's report, or the campaign run again since): their scores on the other campaign "
+            f"stand, the comparison with {campaign_dir}'s test split is not against their own; give the campaign they "
+            "were trained on"]

@@ -20,7 +20,8 @@ from contextlib import closing
 from pathlib import Path
 from typing import Any
 
-from ...campaign.store import CampaignChangedError
+from ...campaign.identity import first_difference
+from ...campaign.store import CampaignChangedError, read_manifest
 from ...campaign.workers import check_backend, dask_client, dispatch, note_stderr
 from ...util.io import check_writable, remove_stale_temporaries, write_json_atomic
 from ...util.lock import Lock
@@ -89,6 +90,16 @@ def _run_locked(camp, out: Path, n_jobs: int, client, progress, say, max_rounds,
         raise CampaignChangedError(
             f"{out / where}: made under other settings ({why}); {len(changed)} unit(s) differ from this "
             "life campaign: use another --out, or --replace-changed to simulate them again")
+    earlier, lost = _earlier_version(out, camp)
+    if lost and not replace_changed:
+        raise CampaignChangedError(
+            f"{out}: holds the results of another version of life campaign {camp.name!r} ({earlier}; {lost}): use "
+            "another --out, or --replace-changed to run this campaign there (the earlier version's inspection files "
+            "are then left as strays)")
+    if earlier:
+        say(f"{out}: its manifest records another version of life campaign {camp.name!r} ({earlier}"
+            + (f"; {lost}, left as strays: --replace-changed" if lost else "") + "); the stored inspections of "
+            "this campaign's units are kept where their identity matches")
     for _, state, why, where in unusable[:5]:
         say(f"{out / where}: {why or state}; simulating the unit again from there")
     kept = sum(k + 1 for k in finished.values()) + sum(j.inspection for j in pending.values())  # stored, verified
@@ -131,7 +142,27 @@ def _run_locked(camp, out: Path, n_jobs: int, client, progress, say, max_rounds,
     df = consolidate_life(out, ids, finished)
     manifest = _manifest(camp, ids, "complete", backend, n_jobs, t0, df)
     write_json_atomic(out / "manifest.json", manifest, checksum=True)
+    if earlier and (out / "benchmark").is_dir():  # prognose's default report folder, made from the earlier table
+        say(f"{out / 'benchmark'}: reports on the earlier version's inspections: run `ur5fault prognose {out}` "
+            "again")
     return manifest
+
+
+def _earlier_version(out: Path, camp: LifeCampaign) -> tuple[str | None, str | None]:
+    """How the life campaign recorded in ``out``'s manifest differs from ``camp`` (its first difference; None:
+    the same campaign, or no life campaign of that name recorded) and which stored units ``camp`` lacks (``"N
+    stored unit(s) ... are not units of this campaign"``; None: none is lost, e.g. a split seed or more units)."""
+    manifest, _ = read_manifest(out)
+    if manifest.get("kind") != "life" or manifest.get("name") != camp.name or "campaign_data" not in manifest:
+        return None, None
+    why = first_difference(manifest["campaign_data"], camp.data, was="the folder's manifest")
+    ours = {u.unit_id for u in camp.units}
+    stray = sorted({p.name.split("_i")[0] for p in (out / "runs").glob("u*_i*.parquet")} - ours)
+    if why is None and not stray:
+        return None, None
+    lost = (f"{len(stray)} stored unit(s) ({', '.join(stray[:3])}{', ...' if len(stray) > 3 else ''}) are not "
+            "units of this campaign") if stray else None
+    return why or "its units", lost
 
 
 def _manifest(camp: LifeCampaign, ids: LifeIdentities, state: str, backend: str, jobs: int, t0: float,

@@ -13,6 +13,15 @@ def _f(v: Any, fmt: str = ".3g") -> str:
     return "-" if v is None or (isinstance(v, float) and not math.isfinite(v)) else format(v, fmt)
 
 
+def _twin_model(model: dict[str, Any] | None) -> str:
+    """Which model the twin ran (``--model``): the packaged one, or an overlay's parameters and effects."""
+    if not model:
+        return "the twin ran the packaged model, the fleet's own (--model: another)"
+    params = ", ".join(sorted(model.get("params", {}))) or "none"
+    effects = "; ".join(model.get("effects", [])) or "none"
+    return f"the twin ran a model overlay (--model): parameter groups {params}; effects {effects}"
+
+
 def markdown(m: dict[str, Any]) -> str:
     d = m["dataset"]
     ipu = d["inspections_per_unit"]
@@ -57,7 +66,7 @@ def markdown(m: dict[str, Any]) -> str:
               "line, the failure boundary simulated by the digital twin along the unit's direction of growth on "
               "its own duty cycle (task, payload, temperature), calibrated on training units"
               + (f" ({tw['calibration']}: --twin-calibration; the friction rise with wear "
-                 f"{_FRICTION_TEXT[tw['friction']['source']]}: --twin-friction)"
+                 f"{_FRICTION_TEXT[tw['friction']['source']]}: --twin-friction; {_twin_model(tw.get('model'))})"
                  if (tw := m["fitted"].get("twin")) else "")
               + ". naive: mean "
               "residual life of the training units that outlived the unit's age.", "",
