@@ -65,7 +65,7 @@ def _percent(n: float, total: float) -> int:
     return min(pct, 99) if n < total else pct
 
 
-def _clock_text(seconds: float) -> str:
+def clock_text(seconds: float) -> str:
     """``0:41``, ``12:05``, ``1:02:03``."""
     s = max(0, round(seconds))
     h, rest = divmod(s, 3600)
@@ -91,6 +91,9 @@ class LineBar:
         self.written = ""
         #: the count is a share of one (:func:`fraction_callback`: simulate's run), written as a percentage alone
         self.fraction = False
+        #: a time left from the rate so far (False where the count's rate says nothing of the rest: a life campaign's
+        #: units finish when they fail, all in the last rounds)
+        self.eta = True
 
     def line(self, final: bool = False) -> str:
         n, total = self.n, self.total
@@ -102,10 +105,10 @@ class LineBar:
             unit = self.unit if self.unit == "it" or self.unit.endswith("s") else self.unit + "s"
             count = f"{_number(n)}/{_number(total)} {unit}" + (f" ({_percent(n, total)} %)" if total else "")
         elapsed = self.clock() - self.start
-        text = f"{self.desc}: {count}, {_clock_text(elapsed)} elapsed"
+        text = f"{self.desc}: {count}, {clock_text(elapsed)} elapsed"
         done = n - self.initial
-        if not final and total and 0 < done and n < total:
-            text += f", about {_clock_text((total - n) * elapsed / done)} left"
+        if self.eta and not final and total and 0 < done and n < total:
+            text += f", about {clock_text((total - n) * elapsed / done)} left"
         return text
 
     def _write(self, final: bool = False) -> None:
@@ -168,20 +171,32 @@ def fraction_callback(pbar) -> Callable[[float], None]:
 
 class CampaignProgress:
     """Reports finished runs of a campaign (``unit``: what it counts, a life campaign's units): to a bar
-    (:func:`bar`), to a callback ``(done, total, eta_s)``, or nowhere."""
+    (:func:`bar`), to a callback ``(done, total, eta_s)``, or nowhere. ``eta=False``: no time left from the rate of
+    the count (the callback gets NaN; :meth:`describe` may say a bound instead)."""
 
-    def __init__(self, progress: bool | Callable[[int, int, float], None], total: int, unit: str = "run") -> None:
-        self.total = total
+    def __init__(self, progress: bool | Callable[[int, int, float], None], total: int, unit: str = "run",
+                 eta: bool = True) -> None:
+        self.total, self.eta = total, eta
         self.callback = progress if callable(progress) else None
-        self.bar = None if self.callback else bar(total, "campaign", unit, enabled=bool(progress))
+        plural = unit if unit.endswith("s") else unit + "s"
+        self.bar = None if self.callback else bar(
+            total, "campaign", unit, enabled=bool(progress),
+            **({} if eta else {"bar_format": "{desc}: {n_fmt}/{total_fmt} " + plural + " |{bar}| {elapsed}"}))
+        if isinstance(self.bar, LineBar):
+            self.bar.eta = eta
         self.start_done: int | None = None
+
+    def describe(self, text: str) -> None:
+        """The bar's description: ``campaign (TEXT)``."""
+        if self.bar is not None:
+            self.bar.set_description(f"campaign ({text})")
 
     def __call__(self, done: int, elapsed_s: float) -> None:
         if self.start_done is None:
             self.start_done = done
         if self.callback is not None:
             new = done - self.start_done
-            eta = (self.total - done) * elapsed_s / new if new > 0 else float("nan")
+            eta = (self.total - done) * elapsed_s / new if new > 0 and self.eta else float("nan")
             self.callback(done, self.total, eta)
         elif self.bar is not None:
             if self.bar.n == 0 and done and self.start_done == done:
@@ -198,5 +213,5 @@ class CampaignProgress:
 
 
 def campaign_progress(progress: bool | Callable[[int, int, float], None], total: int,
-                      unit: str = "run") -> CampaignProgress:
-    return CampaignProgress(progress, total, unit)
+                      unit: str = "run", eta: bool = True) -> CampaignProgress:
+    return CampaignProgress(progress, total, unit, eta)

@@ -3,6 +3,8 @@ to an uninterrupted fleet's (and to one run on another number of processes)."""
 
 from __future__ import annotations
 
+import re
+
 import pandas as pd
 import pytest
 
@@ -160,3 +162,16 @@ def test_the_progress_bar_of_a_fleet_counts_units(tmp_path, capsys):
     run_life(build_life(TINY, "tiny"), tmp_path, jobs=1, progress=True, note=lambda s: None, max_rounds=0)
     lines = capsys.readouterr().err.splitlines()
     assert lines and lines[-1].startswith("campaign: 0/3 units (0 %)"), lines
+
+
+@pytest.mark.slow
+def test_a_fleet_states_a_bound_on_the_rounds_left_not_a_rate(tmp_path, capsys):
+    """Units finish when they fail, mostly in the last rounds, so a time left from the rate of finished units was
+    meaningless (a newcomer probe): no such estimate; each round states how many more rounds there can be (the
+    running unit with the most inspections to go before max_cycles) and the last round's time."""
+    run_life(build_life(TINY, "tiny"), tmp_path, jobs=1, progress=True, note=lambda s: None, max_rounds=2)
+    last = capsys.readouterr().err.splitlines()[-1]
+    # TINY: inspections every 100,000 cycles up to 1,500,000: the next inspection is the third (200,000 cycles), 14
+    # inspections of which fit before max_cycles
+    assert re.match(r"campaign \(round 2 done, 3 units running, at most 14 more round\(s\) of at most \d+:\d\d "
+                    r"each\): 0/3 units \(0 %\), \d+:\d\d elapsed$", last), last

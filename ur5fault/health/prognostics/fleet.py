@@ -15,7 +15,7 @@ import dataclasses
 import json
 import os
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from contextlib import closing
 from pathlib import Path
 from typing import Any
@@ -25,7 +25,7 @@ from ...campaign.store import CampaignChangedError, read_manifest
 from ...campaign.workers import check_backend, dask_client, dispatch, note_stderr
 from ...util.io import check_writable, remove_stale_temporaries, write_json_atomic
 from ...util.lock import Lock
-from ...util.progress import campaign_progress
+from ...util.progress import campaign_progress, clock_text
 from .life_inspection import Job, beyond_model, inspect_batch, next_job, noise_seed
 from .life_resume import log_lengths, resume_state
 from .life_store import SUBFOLDERS, LifeIdentities, consolidate_life, life_stats, write_inspection, write_reference
@@ -108,11 +108,14 @@ def _run_locked(camp, out: Path, n_jobs: int, client, progress, say, max_rounds,
         + ("" if finished or kept else f"; {bound.split(': ', 1)[-1]}"))  # how long the whole fleet can take
     write_json_atomic(out / "manifest.json", _manifest(camp, ids, "running", backend, n_jobs, t0, None),
                       checksum=True)
-    report = campaign_progress(progress, len(camp.units), "unit")  # it counts finished units, not runs
+    # it counts finished units, not runs; a unit finishes when it fails, mostly in the last rounds, so the rate of
+    # finished units says nothing of the time left: each round states a bound instead (_rounds_left)
+    report = campaign_progress(progress, len(camp.units), "unit", eta=False)
     report(len(finished), 0.0)
     rounds = 0
     try:
         while pending and (max_rounds is None or rounds < max_rounds):
+            t_round = time.perf_counter()
             batches = _batches(list(pending.values()), camp.batch_size, n_jobs)
             args = [(camp, b, {j.unit.unit_id: refs[j.unit.unit_id] for j in b},
                      os.getpid() if client is None else None) for b in batches]
@@ -133,6 +136,10 @@ def _run_locked(camp, out: Path, n_jobs: int, client, progress, say, max_rounds,
                             pending[unit] = job
                     report(len(finished), time.perf_counter() - t0)
             rounds += 1
+            if pending:
+                left = _rounds_left(camp, pending.values())
+                report.describe(f"round {rounds} done, {len(pending)} units running, at most {left} more round(s) "
+                                f"of at most {clock_text(time.perf_counter() - t_round)} each")
     finally:
         report.close()
     if pending:
@@ -146,6 +153,12 @@ def _run_locked(camp, out: Path, n_jobs: int, client, progress, say, max_rounds,
         say(f"{out / 'benchmark'}: reports on the earlier version's inspections: run `ur5fault prognose {out}` "
             "again")
     return manifest
+
+
+def _rounds_left(camp: LifeCampaign, pending: Iterable[Job]) -> int:
+    """At most this many more rounds: the running unit with the most inspections to go before max_cycles (a round
+    costs no more than the one before it: units only leave the fleet)."""
+    return max(((camp.max_cycles - j.cycles) // camp.interval_cycles + 1 for j in pending), default=0)
 
 
 def _earlier_version(out: Path, camp: LifeCampaign) -> tuple[str | None, str | None]:
