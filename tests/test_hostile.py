@@ -347,6 +347,17 @@ def test_log_for_discrepancy(fmt, name, content, message, tmp_path, nist_small, 
     _assert_one_line(rc, err, peak, message)
 
 
+def test_a_simulated_run_given_to_identify_is_not_sent_to_a_format_it_lacks(tmp_path, capsys):
+    """identify reads real logs only: a Parquet run of `ur5fault simulate` given to it was told "--format sim
+    reads a run of `ur5fault simulate`", and identify then refused --format sim (a newcomer probe of the wheel)."""
+    log = _write(tmp_path, "run.parquet", b"PAR1" + bytes(200) + b"PAR1")
+    rc, err, peak = _run(["identify", str(log), "--format", "rtde", "--out", str(tmp_path / "p.yaml")], tmp_path,
+                         capsys)
+    _assert_one_line(rc, err, peak, "a Parquet file, a run of `ur5fault simulate`: this command reads nist and rtde "
+                                    "logs, not simulated runs (`ur5fault discrepancy` reads one with --format sim)")
+    assert "--format sim reads" not in err
+
+
 def test_total_steps_above_limit(support_files, capsys, monkeypatch):
     """The 1e12-step limit needs 14 000 hour-long runs; the same check at 1e10 needs 140 (faster to parse)."""
     from ur5fault.campaign import limits

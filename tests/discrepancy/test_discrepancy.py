@@ -119,7 +119,11 @@ def test_outputs_and_overlay_roundtrip(tmp_path):
 
     ov = Overlay.load(tmp_path / "out" / "model.yaml")  # simulate/campaign accept it
     assert ov.effects[0].name == "coulomb_friction"
-    assert (tmp_path / "out" / "report.md").read_text().startswith("# Discrepancy report")
+    report = (tmp_path / "out" / "report.md").read_text()
+    assert report.startswith("# Discrepancy report")
+    # what the run assumed is in the report, not on stderr alone (a newcomer probe of the wheel)
+    assert "## What the log does not say" in report
+    assert all(f"- {a}" in report for a in summ["log_assumptions"]), summ["log_assumptions"]
     assert all(p.exists() for p in paths)
 
 
@@ -150,3 +154,20 @@ def test_log_errors_name_the_problem(tmp_path):
         read_log(bad, "rtde")
     with pytest.raises(LogFormatError, match="no such file"):
         read_log(tmp_path / "nope.csv", "rtde")
+
+
+@pytest.mark.slow
+def test_the_report_says_what_the_log_cannot_show(tmp_path):
+    """The shipped standstill run: the caveat that a gain, a torque constant and an offset read alike at one pose
+    was on stderr and in summary.json only, while report.md named a current offset (a newcomer probe of the wheel)."""
+    from ur5fault.cli import main
+
+    from conftest import KUFIETA_DIR
+
+    out = tmp_path / "out"
+    assert main(["discrepancy", str(KUFIETA_DIR / "Movement_No10_Standstill_WDist.csv.gz"), "--format", "rtde",
+                 "--payload-kg", "0", "--tcp-offset-m", "0", "0", "0", "--max-terms", "0", "--quiet",
+                 "--out", str(out)]) == 0
+    report = (out / "report.md").read_text()
+    said = report.split("## What the log does not say")[1].split("\n## ")[0]
+    assert "the arm stands throughout" in said and "no joint temperatures in the log" in said, said

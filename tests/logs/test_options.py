@@ -356,6 +356,39 @@ def test_a_command_line_option_no_log_takes_is_refused(tmp_path, capsys, manifes
     assert not (tmp_path / "p.yaml").exists()
 
 
+@pytest.mark.parametrize("manifest, message", [
+    ("format: nist\npayload_kg: 3\nlogs:\n  - {NIST}\n",
+     "robot.yaml: payload_kg 3 applies to no log: its logs are nist logs, which carry their own payload and tool "
+     "offset"),
+    ("format: rtde\npayload_kg: 0.5\ntcp_offset_m: [0, 0, 0.2]\nlogs:\n"
+     "  - {{path: {RUN1}, payload_kg: 0, tcp_offset_m: [0, 0, 0]}}\n",
+     "robot.yaml: payload_kg 0.5 applies to no log: every log states its own payload_kg (0); drop it or edit the logs"),
+    ("format: rtde\ntcp_offset_m: [0, 0, 0.2]\nlogs:\n  - {{path: {RUN1}, payload_kg: 0, tcp_offset_m: [0, 0, 0]}}\n",
+     "robot.yaml: tcp_offset_m 0 0 0.2 applies to no log: every log states its own tcp_offset_m (0 0 0)"),
+    ("format: nist\nlogs:\n  - {{path: {RUN1}, format: rtde, payload_kg: 0, tcp_offset_m: [0, 0, 0]}}\n",
+     "robot.yaml: format nist applies to no log: every log states its own format (rtde)"),
+])
+def test_a_manifest_default_no_log_takes_is_refused(tmp_path, capsys, manifest, message):
+    """A default at the top of a manifest that no log takes was dropped without a word (a newcomer probe of the
+    wheel: `payload_kg: 3` over a nist log, which carries its own 0.726 kg, wrote the same overlay as without it),
+    while the same value on the command line or on the log was refused."""
+    m = tmp_path / "robot.yaml"
+    m.write_text(manifest.format(RUN1=RUN1, NIST=NIST_LOG))
+    rc = main(["identify", str(m), "--out", str(tmp_path / "p.yaml")])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 2 and len(err) == 1 and message in err[0], err
+    assert not (tmp_path / "p.yaml").exists()
+
+
+def test_a_manifest_default_some_log_takes_or_every_log_repeats_is_kept(tmp_path):
+    m = tmp_path / "robot.yaml"
+    m.write_text(f"format: rtde\npayload_kg: 0.5\ntcp_offset_m: [0, 0, 0]\nlogs:\n"
+                 f"  - {{path: {RUN1}, payload_kg: 0}}\n  - {RUN2}\n")
+    assert [e.payload_kg for e in log_entries(_args([str(m)]))] == [0, 0.5]  # RUN2 takes the default
+    m.write_text(f"format: rtde\npayload_kg: 0\nlogs:\n  - {{path: {RUN1}, payload_kg: 0, tcp_offset_m: [0, 0, 0]}}\n")
+    assert [e.payload_kg for e in log_entries(_args([str(m)]))] == [0]  # the same as the log's own: harmless
+
+
 def test_a_command_line_option_some_log_takes_or_repeats_is_kept(tmp_path):
     m = tmp_path / "robot.yaml"
     m.write_text(f"format: rtde\nlogs:\n  - {{path: {RUN1}, payload_kg: 0.5, tcp_offset_m: [0, 0, 0]}}\n"

@@ -260,6 +260,10 @@ def _markdown(model: DiscrepancyModel, summ: dict[str, Any], figs: list[Path]) -
     for loc in summ["localisation_before"]:
         lines.append(f"| {loc['signal']} | {loc['joint']} | {loc['rms']:.4g} | {loc['rms_over_noise']:.1f} | "
                      f"{loc['largest_where']} ({loc['rms_by_condition'][loc['largest_where']]:.4g}) |")
+    # what the run assumed beyond the log's data (stderr said it; a reader of the report alone had only the findings,
+    # e.g. an offset named on a run whose arm stands, where a gain and a torque constant read alike)
+    lines += ["", "## What the log does not say (assumed, or what it cannot show)", ""]
+    lines += [f"- {a}" for a in summ["log_assumptions"]] or ["- nothing: the log carries every input the replay takes"]
     lines += ["", "## Payload (the job's, not the robot's: not in model.yaml, nor a finding of its mass or centre of "
               "mass below)", ""]
     lines += [f"- {rec.line()}" for rec in model.payload_.values()]

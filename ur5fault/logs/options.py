@@ -120,10 +120,11 @@ CLI_FLAGS = {attr: flag for attr, flag, _ in CLI_DEFAULTS}
 
 
 def _entry(item: dict, data: dict, args: argparse.Namespace, path: Path, w: str, used: set[str],
-           top: str) -> LogEntry:
+           top: str, top_used: set[str]) -> LogEntry:
     """One log of a manifest (``data``; ``item`` its own options, ``path`` its file): the log's own value of each
-    option, else the manifest's, else the command line's; ``used`` collects the command-line options it took.
-    ``w``: the log's place in the manifest, ``top``: the manifest's, for messages."""
+    option, else the manifest's, else the command line's; ``used`` collects the command-line options it took,
+    ``top_used`` the manifest's defaults. ``w``: the log's place in the manifest, ``top``: the manifest's, for
+    messages."""
     source: dict[str, str] = {}  # where each option's value came from, for its error message
 
     def value(attr: str, key: str):
@@ -132,6 +133,7 @@ def _entry(item: dict, data: dict, args: argparse.Namespace, path: Path, w: str,
             return item[key]
         if key in data:
             source[key] = f"{w}{key} (from {top}{key})"
+            top_used.add(key)
             return data[key]
         used.add(attr)
         source[key] = f"{w}{key} (from {CLI_FLAGS[attr]})"
@@ -195,7 +197,8 @@ def _manifest(path: Path, args: argparse.Namespace, held: Sequence[str], used: s
     logs = data.get("logs")
     if not isinstance(logs, list) or not logs:
         raise ParameterError(f"{where}'logs' must be a list of at least one log ({{path: FILE, ...}} or FILE)")
-    out = []
+    out: list[LogEntry] = []
+    top_used: set[str] = set()
     for k, item in enumerate(logs):
         item = {"path": item} if isinstance(item, str) else item
         w = f"{path.name}: logs[{k}]: "
@@ -208,12 +211,38 @@ def _manifest(path: Path, args: argparse.Namespace, held: Sequence[str], used: s
             raise ParameterError(f"{w}{item['path']}: a manifest cannot list another manifest; list that manifest's "
                                  "logs here, or give it alone")
         file = path.parent / str(item["path"])
-        out.append(_entry(item, data, args, file, w, used, f"{path.name}: "))  # the options first: they need no file
+        out.append(_entry(item, data, args, file, w, used, f"{path.name}: ", top_used))  # the options first: they
+        # need no file
         if not file.exists():
             raise ParameterError(f"{w}{item['path']}: no such file (a log's path is read from the manifest's folder, "
                                  f"{path.parent.resolve()})")
-    return out + [_entry({"hold_out": True}, data, args, Path(p), f"--hold-out {p}: ", used, f"{path.name}: ")
-                  for p in held]
+    out += [_entry({"hold_out": True}, data, args, Path(p), f"--hold-out {p}: ", used, f"{path.name}: ", top_used)
+            for p in held]
+    _refuse_unused_defaults(path, data, out, top_used)
+    return out
+
+
+#: a manifest's defaults of its logs, and the attribute of a log entry each sets
+MANIFEST_DEFAULTS = {"format": "fmt", "payload_kg": "payload_kg", "tcp_offset_m": "tcp_offset_m"}
+
+
+def _refuse_unused_defaults(path: Path, data: dict, entries: Sequence[LogEntry], top_used: set[str]) -> None:
+    """A default at the top of the manifest that no log takes, and that differs from what the logs state, is refused
+    as the command line's is (:func:`log_entries`): it would be dropped without a word (a ``payload_kg`` over nist
+    logs, which carry their own; one over rtde logs that each state theirs)."""
+    for key, attr in MANIFEST_DEFAULTS.items():
+        if key not in data or key in top_used:
+            continue
+        stated = [getattr(e, attr) for e in entries]
+        given = data[key]
+        if all(_same(given, s) for s in stated):
+            continue
+        if key != "format" and not any(e.fmt == "rtde" for e in entries):
+            why = (f"its logs are {', '.join(sorted({e.fmt for e in entries}))} logs, which carry their own payload "
+                   "and tool offset (payload_kg and tcp_offset_m apply to rtde logs, or with payload_kg: unknown)")
+        else:
+            why = f"every log states its own {key} ({', '.join(sorted({_shown(s) for s in stated}))})"
+        raise ParameterError(f"{path.name}: {key} {_shown(given)} applies to no log: {why}; drop it or edit the logs")
 
 
 def _resolve(args: argparse.Namespace) -> tuple[list[LogEntry], set[str], Path | None]:

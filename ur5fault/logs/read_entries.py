@@ -16,6 +16,7 @@ from .options import LogEntry, log_entries
 from .plausible import MinLength
 from .readers import check_log_file, read_log
 from .same_samples import refuse_same_samples
+from .source import PARQUET_HINT
 
 
 def refuse_unknown_payload(entries: Sequence[LogEntry]) -> None:
@@ -108,8 +109,16 @@ def read_log_options(args: argparse.Namespace, *, allow_unknown: bool = False,
     out) is refused (:func:`refuse_same_samples`)."""
     entries = log_entries(args, *others)
     names = names_of([e.path for e in entries])  # among this group's files: a log's name is the same whatever else
-    logs = [(_named(_read_named(e, names[e.path], allow_unknown, length), names[e.path]), e.hold_out)
-            for e in entries]
+    try:
+        logs = [(_named(_read_named(e, names[e.path], allow_unknown, length), names[e.path]), e.hold_out)
+                for e in entries]
+    except LogFormatError as exc:  # a simulated run given to a command that reads none: not "--format sim"
+        formats = getattr(args, "log_formats", ("sim",))
+        if PARQUET_HINT not in str(exc) or "sim" in formats:
+            raise
+        raise LogFormatError(str(exc).replace(PARQUET_HINT, (
+            f"; a Parquet file, a run of `ur5fault simulate`: this command reads {' and '.join(formats)} logs, not "
+            "simulated runs (`ur5fault discrepancy` reads one with --format sim)"))) from None
     fitted, held = [g for g, h in logs if not h], [g for g, h in logs if h]
     refuse_same_samples([(role, fitted), ("held out", held)])
     return fitted, held

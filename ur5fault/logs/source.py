@@ -85,6 +85,11 @@ def _uncompressed_size(path: Path, compressed: bool, sample_len: int) -> int:
     return max(min(isize, MAX_GZIP_RATIO * size), sample_len)
 
 
+#: what a CSV reader says of a Parquet file given for a log (a run of `ur5fault simulate`); a command that reads no
+#: simulated run says it in its place (``read_entries.read_log_options``)
+PARQUET_HINT = "; a Parquet file: --format sim reads a run of `ur5fault simulate`"
+
+
 def sniff(path: Path, src: str) -> CsvLayout:
     """Header, separator and row estimate of a CSV log (plain or gzip), from its first 64 kB."""
     try:
@@ -100,7 +105,7 @@ def sniff(path: Path, src: str) -> CsvLayout:
     if nul >= 0:
         parquet = sample[:4] == b"PAR1"  # e.g. a simulated run written by `ur5fault simulate`
         raise LogFormatError(f"{src}: binary data, not a text log (a NUL byte at offset {nul})"
-                             + ("; a Parquet file: --format sim reads a run of `ur5fault simulate`" if parquet else ""))
+                             + (PARQUET_HINT if parquet else ""))
     cut = sample if not more else sample[: sample.rfind(b"\n") + 1] or sample
     try:
         text = cut.decode("utf-8-sig")
