@@ -285,3 +285,14 @@ def test_the_baseline_notes_are_written_into_the_diagnosis_and_its_report(logs, 
     assert len(said) == 1, d["notes"]
     assert f"- {said[0]}" in (tmp_path / "o" / "report.md").read_text()
 
+
+def test_the_robots_threshold_note_states_the_rule_not_that_a_window_was_flagged(logs, detector, tmp_path):
+    assert main(["diagnose", str(logs["diagnosed"]), "--format", "sim", "--detector", str(detector),
+                 "--baseline-logs", str(logs["healthy_a"]), str(logs["healthy_b"]), "--out", str(tmp_path / "o"),
+                 "--quiet"]) == 0
+    d = json.loads((tmp_path / "o" / "diagnosis.json").read_text())
+    assert d["baseline"]["robot_threshold"] is not None
+    # read beside "0 of N windows flagged" too: a rule windows are flagged by, never "flagged ... too"
+    rule = [n for n in d["notes"] if "the robot's own threshold" in n]
+    assert len(rule) == 1 and rule[0].startswith("a window counts as flagged only where it exceeds the robot's own "
+                                                 "threshold as well as the training runs': "), rule
