@@ -124,7 +124,7 @@ def test_refusals_name_what_the_user_typed(tmp_path):
     out = str(tmp_path / "o")
     _one_line_error(run("identify", str(log), "--format", "rtde", "--payload-kg", "0", "--tcp-offset-m", "0", "0",
                         "0", "--out", str(tmp_path / "p.yaml")),
-                    "log.csv: 1 sample; at least 250 are needed")  # 'Time' is the time column: names match in any case
+                    "log.csv: 0 s and 1 sample; fitting needs at least 5 s and 250 samples")  # 'Time': any case
     _one_line_error(run("discrepancy", str(log), "--format", "rtde", "--payload-kg", "-1", "--tcp-offset-m", "0",
                         "0", "0", "--out", out), "--payload-kg = -1.0 is out of range [0, 5] kg")
     _one_line_error(run("discrepancy", str(log), "--format", "rtde", "--payload-kg", "1", "--tcp-offset-m", "0",

@@ -22,11 +22,12 @@ import dataclasses
 import inspect
 import json
 import math
+import re
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from .errors import ParameterError, UnknownNameError
+from .errors import ConfigFileError, ParameterError, UnknownNameError
 from .sim.budget import MAX_DURATION_S, check_memory, sim_bytes
 from .sim.effects import EffectSpec, effect_of, make_effect
 from .sim.params import RobotParams, deep_merge, load_params, read_yaml
@@ -222,6 +223,7 @@ class Overlay:
     def load(cls, path: str | Path) -> Overlay:
         path = Path(path)
         check_whole(path, "run the command that wrote it")  # a discrepancy's model.yaml: one file of a set
+        refuse_json_overlay(path)
         return cls.from_data(read_yaml(path), path.name)
 
     @classmethod
@@ -231,6 +233,40 @@ class Overlay:
         params = check_mapping(data.get("params"), f"{where}: params")
         load_params(overrides=dict(params), where=f"{where}: params")  # validate now, with key paths
         return cls(dict(params), parse_effects(data.get("effects"), f"{where}: effects"))
+
+
+#: where a model overlay comes from, said when another file is given for one
+OVERLAY_FROM = "--baseline and --model take the model overlay YAML (model.yaml of discrepancy, or identify's)"
+
+
+def refuse_json_overlay(path: Path) -> None:
+    """Refuse in one line a JSON file (suffix ``.json`` or text starting with ``{``) given where a model overlay
+    YAML is expected, saying what it is and where it goes: a monitor's ``baseline.json`` (1.7 MB, refused as too
+    large for a YAML file before) goes to ``--baseline-stats``. A JSON mapping of overlay keys only is valid YAML
+    and an overlay: read as before; unreadable files and text that is no JSON are left to the YAML reader."""
+    from .util.yamlsafe import MAX_BYTES
+
+    try:
+        size = path.stat().st_size
+        with path.open("rb") as fh:
+            head = fh.read(4096).lstrip(b"\xef\xbb\xbf \t\r\n")
+    except OSError:
+        return
+    if path.suffix.lower() != ".json" and not head.startswith(b"{"):
+        return
+    if head.startswith(b"{") and re.search(rb'"format"\s*:\s*"ur5fault-monitor-baseline', head[:400]):
+        raise ConfigFileError(f"{path}: a monitor baseline (baseline.json): give it to --baseline-stats; "
+                              f"{OVERLAY_FROM}")
+    if size > MAX_BYTES:
+        raise ConfigFileError(f"{path}: a JSON file of {size} bytes, not a model overlay; {OVERLAY_FROM}")
+    try:
+        data = json.loads(path.read_bytes().decode("utf-8-sig"))
+    except (OSError, ValueError):
+        return  # no JSON (a YAML flow mapping): the YAML reader's message
+    if not isinstance(data, dict) or not set(data) <= set(OVERLAY_KEYS):
+        keys = (f"keys {', '.join(map(str, list(data)[:5]))}" if isinstance(data, dict) and data else
+                f"a {type(data).__name__}")
+        raise ConfigFileError(f"{path}: a JSON file ({keys}), not a model overlay; {OVERLAY_FROM}")
 
 
 @dataclasses.dataclass(frozen=True)

@@ -248,3 +248,51 @@ def test_a_detector_without_a_training_reference_is_refused_with_a_baseline(logs
     rc, err = _run(["diagnose", str(logs["diagnosed"]), "--format", "sim", "--detector", str(old),
                     "--baseline-logs", str(logs["healthy_a"]), "--out", str(tmp_path / "o")], capsys)
     assert rc == 2 and "no campaign feature table" in err and len(err.splitlines()) == 1
+
+
+class _Log:
+    """A stand-in of a MeasuredLog for the baseline notes: its source, target at rest, payload and assumptions."""
+
+    def __init__(self, source: str, rest_target: str | None, payload_kg: float | None, notes: tuple[str, ...] = ()):
+        self.source, self.rest_target, self.payload_kg, self._notes = source, rest_target, payload_kg, notes
+
+    def assumptions(self, temperature_C) -> list[str]:
+        return list(self._notes)
+
+
+def test_the_baseline_notes_name_two_controllers_and_a_payload_outside_the_baselines():
+    from ur5fault.health.diagnosis.cli import baseline_notes
+
+    nist = _Log("nist.csv.gz", "setpoint", 0.726)
+    kufieta = [_Log(f"k{i}.csv", "reading", 0.0, ("temperature not logged",)) for i in range(2)]
+    notes = baseline_notes(nist, kufieta, None)
+    assert notes[0] == "baseline temperature not logged"  # said once for both logs
+    assert len(notes) == 3
+    assert "logs of two controllers, likely two robots" in notes[1]
+    assert notes[2].startswith("carries 0.726 kg, the baseline runs 0 kg: ")
+    same = _Log("k9.csv", "reading", 0.0)
+    assert baseline_notes(same, kufieta, None) == ["baseline temperature not logged"]
+
+
+def test_the_baseline_notes_are_written_into_the_diagnosis_and_its_report(logs, detector, tmp_path):
+    light = tmp_path / "light.parquet"  # the baseline logs carry the default 2 kg
+    assert main(["simulate", "--duration-s", str(LOG_S), "--seed", "8", "--payload-kg", "0", "--out",
+                 str(light)]) == 0
+    assert main(["diagnose", str(light), "--format", "sim", "--detector", str(detector), "--baseline-logs",
+                 str(logs["healthy_a"]), str(logs["healthy_b"]), "--out", str(tmp_path / "o"), "--quiet"]) == 0
+    d = json.loads((tmp_path / "o" / "diagnosis.json").read_text())
+    said = [n for n in d["notes"] if n.startswith("carries 0 kg, the baseline runs 2 kg: ")]
+    assert len(said) == 1, d["notes"]
+    assert f"- {said[0]}" in (tmp_path / "o" / "report.md").read_text()
+
+
+def test_the_robots_threshold_note_states_the_rule_not_that_a_window_was_flagged(logs, detector, tmp_path):
+    assert main(["diagnose", str(logs["diagnosed"]), "--format", "sim", "--detector", str(detector),
+                 "--baseline-logs", str(logs["healthy_a"]), str(logs["healthy_b"]), "--out", str(tmp_path / "o"),
+                 "--quiet"]) == 0
+    d = json.loads((tmp_path / "o" / "diagnosis.json").read_text())
+    assert d["baseline"]["robot_threshold"] is not None
+    # read beside "0 of N windows flagged" too: a rule windows are flagged by, never "flagged ... too"
+    rule = [n for n in d["notes"] if "the robot's own threshold" in n]
+    assert len(rule) == 1 and rule[0].startswith("a window counts as flagged only where it exceeds the robot's own "
+                                                 "threshold as well as the training runs': "), rule

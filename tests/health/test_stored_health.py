@@ -144,6 +144,21 @@ def test_a_changed_monitor_baseline_is_refused_before_it_is_parsed(tmp_path):
         Baseline.load(p)
 
 
+def test_a_json_without_a_format_is_not_a_monitor_baseline_not_one_of_another_version(tmp_path):
+    """A discrepancy's summary.json given to --baseline-stats was called a baseline of another version
+    (format None); the version wording is kept for a baseline of another format."""
+    from ur5fault.health.monitoring.baseline import Baseline
+
+    summary = write_json_atomic(tmp_path / "summary.json", {"log": "x.csv", "joints": {}})
+    for data, where in ((json.loads(summary.read_text()), "summary.json"), ([1, 2], "list.json")):
+        with pytest.raises(ParameterError) as exc:
+            Baseline.from_json(data, where)
+        assert str(exc.value) == (f"{where}: not a monitor baseline (no format key): give --baseline-stats the "
+                                  "baseline.json `ur5fault monitor --baseline-logs` writes")
+    with pytest.raises(ParameterError, match=r"not a monitor baseline of this version \(format 9, expected"):
+        Baseline.from_json({"format": 9}, "old.json")
+
+
 def test_the_monitor_writes_its_baseline_with_a_checksum(tmp_path, monkeypatch):
     from ur5fault.health.monitoring import report
 

@@ -274,3 +274,11 @@ def test_an_identified_value_outside_its_range_is_named_and_not_written():
                                              r"-2.02 is out of range \[0, 500\] N\*m; --model would refuse the "
                                              r"overlay, so nothing is written$"):
         ident([0.2, 0.2, 0.2, 0.2, -0.2, 0.2]).to_yaml(p)
+
+
+def test_a_log_of_two_rows_is_refused_as_too_short_not_as_a_dead_sensor(tmp_path):
+    """A 2-row RTDE log was refused as "current ... reads -0.955011 A in every row: a dead sensor"."""
+    log = _kufieta(tmp_path, "Movement_No8_Singularity_Free_1.csv.gz", edit=lambda df: df.head(2))
+    with pytest.raises(LogFormatError, match=r"Free_1.csv.gz: 0.0\d+ s and 2 samples; fitting needs at least 5 s and "
+                                             r"250 samples$"):
+        read_log(log, "rtde", payload_kg=0.0, tcp_offset_m=(0, 0, 0))

@@ -337,6 +337,17 @@ def check_temperature_units(src: str, temperature_C: NDArray | None) -> None:
                              f"{lo:g}..{hi:g} degC the model takes: {hint}")
 
 
+def check_enough_rows(src: str, t: NDArray, length: MinLength | None = None) -> None:
+    """At least ``length.samples`` rows (default :data:`FIT_LENGTH`), before any check of what the rows hold: a log
+    of two rows is refused as too short, not as a current that never changes; said as :func:`check_sampling` says a
+    log too short (which then checks the length in seconds too)."""
+    length = length or FIT_LENGTH
+    if t.size < length.samples:
+        duration = float(t[-1] - t[0]) if t.size else 0.0
+        raise LogFormatError(f"{src}: {duration:.3g} s and {t.size} sample{'' if t.size == 1 else 's'}; "
+                             f"{length.why}")
+
+
 def check_current_alive(src: str, current_A: NDArray) -> None:
     """Each joint's recorded current takes more than one value over the log (not for simulated logs, whose
     sensor noise may be switched off)."""

@@ -72,6 +72,7 @@ def _assemble(src: str, t: NDArray, required: Mapping[str, NDArray], optional: M
     plausible.check_increasing(src, t)
     opt["temperature"] = regular.unrecorded_temperature(src, opt["temperature"], notes)
     plausible.check_temperature_units(src, opt["temperature"])
+    plausible.check_enough_rows(src, t, length)  # too few rows: said as such, not as what they hold
     plausible.check_current_alive(src, req["actual_current"])
     plausible.check_range(src, req["actual_q"], t, opt["actual_qd"], declared)
     plausible.check_sampling(src, t, length)

@@ -184,7 +184,8 @@ def diagnose(log: MeasuredLog, detector_dir: str | Path, params_overrides: dict 
         notes.append("the baseline carries no threshold of its own (a single window cannot be held out against "
                      "another), so windows are flagged at the training runs' 5 % point alone")
     elif robot is not None:
-        notes.append(f"flagged above the robot's own threshold too: read off its {robot.n} baseline windows, each "
+        notes.append(f"a window counts as flagged only where it exceeds the robot's own threshold as well as the "
+                     f"training runs': the robot's is read off its {robot.n} baseline windows, each "
                      f"scored against a baseline of the others ({len(robot.groups)} groups); a healthy window like "
                      f"them exceeds it with probability {robot.false_alarm_bound:.2g}"
                      + ("" if robot.rank <= robot.n else

@@ -35,6 +35,19 @@ def register(sub) -> None:
     d.set_defaults(func=cmd_diagnose)
 
 
+def baseline_notes(log, healthy, temperature_C) -> list[str]:
+    """The notes on the baseline logs ``healthy`` of the diagnosed ``log`` (:class:`~ur5fault.logs.MeasuredLog`):
+    what they assume, logs of two controllers (the robot's threshold would be read off another robot's logs) and a
+    payload outside theirs (as ``ur5fault monitor`` says it: :func:`~ur5fault.health.monitoring.coverage.
+    payload_kg_notes`); printed and written into ``diagnosis.json``'s notes and ``report.md``."""
+    from ...logs.measured import controllers_note
+    from ..monitoring.coverage import payload_kg_notes
+
+    return ([f"baseline {n}" for n in dict.fromkeys(n for g in healthy for n in g.assumptions(temperature_C))]
+            + controllers_note([(g.source, g.rest_target) for g in (log, *healthy)])
+            + payload_kg_notes([g.payload_kg for g in healthy], log.payload_kg))
+
+
 def cmd_diagnose(args: argparse.Namespace) -> int:
     import sys
     from pathlib import Path
@@ -42,7 +55,6 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
     from ...config import Overlay
     from ...errors import ParameterError
     from ...logs.length import check_files_length, check_logs_length
-    from ...logs.measured import controllers_note
     from ...logs.options import log_entries, refuse_hold_out
     from ...logs.read_entries import read_entry, refuse_unknown_payload
     from ...logs.same_samples import refuse_same_samples
@@ -94,14 +106,13 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
     check_logs_length([log, *healthy], "diagnose")
     refuse_same_samples([("diagnosed", [log]), ("a baseline log", healthy)])  # a copy under another name too
     refuse_log_owned(params, effects, [log, *healthy])  # another tool: before the logs' notes
-    if healthy:  # what the baseline logs assume (the diagnosed log's notes come with its diagnosis)
+    base_notes = []
+    if healthy:  # what the baseline logs assume (the diagnosed log's own notes come with its diagnosis)
         from ...sim.params import load_params
 
-        temps = load_params(overrides=params).joint_temperature_C
-        for line in dict.fromkeys(n for g in healthy for n in g.assumptions(temps)):
-            print(f"note: baseline {line}", file=sys.stderr)
-        for line in controllers_note([(g.source, g.rest_target) for g in (log, *healthy)]):
-            print(f"note: {line}", file=sys.stderr)  # its threshold would be read off another robot's logs
+        base_notes = baseline_notes(log, healthy, load_params(overrides=params).joint_temperature_C)
+        for line in base_notes:
+            print(f"note: {line}", file=sys.stderr)
     with progress.bar(len(healthy) + 1, "diagnose: logs replayed", "log", enabled=not args.quiet) as pbar:
         baseline = robot_baseline(healthy, args.detector, params, effects) if healthy else None
         pbar.update(len(healthy))
@@ -109,6 +120,7 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
         pbar.update(1)
     for n in d["notes"]:
         print(f"note: {n}", file=sys.stderr)
+    d["notes"] = [*base_notes, *d["notes"]]  # every note printed is in diagnosis.json and report.md too
     earlier = present(Path(args.out) / name for name in results)  # with --replace: said as replaced
     with result_folder(args.out, results, args.replace) as out:  # one set: a stop between files is marked
         paths = write_diagnosis(d, out)

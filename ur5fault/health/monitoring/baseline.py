@@ -162,6 +162,9 @@ class Baseline:
     @classmethod
     def from_json(cls, data: Any, where: str) -> Baseline:
         """Read a ``baseline.json`` written by :meth:`to_json`; anything else is refused with one line."""
+        if not isinstance(data, dict) or "format" not in data:  # another file (a discrepancy's summary.json)
+            raise ParameterError(f"{where}: not a monitor baseline (no format key): give --baseline-stats the "
+                                 "baseline.json `ur5fault monitor --baseline-logs` writes")
         try:
             if data.get("format") != FORMAT:
                 raise ParameterError(f"{where}: not a monitor baseline of this version (format "

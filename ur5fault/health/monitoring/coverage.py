@@ -104,13 +104,19 @@ def motion_notes(limit: NDArray, obs: Observed) -> list[str]:
 def payload_notes(payloads_kg: Sequence[float | None], obs: Observed) -> list[str]:
     """A note when ``obs``'s stated payload lies outside the baseline runs' (``payloads_kg``) by more than
     :data:`PAYLOAD_TOL_KG`."""
+    return payload_kg_notes(payloads_kg, obs.payload_kg)
+
+
+def payload_kg_notes(payloads_kg: Sequence[float | None], payload_kg: float | None) -> list[str]:
+    """:func:`payload_notes` of a log stating ``payload_kg`` (also ``ur5fault diagnose``'s, against its baseline
+    logs)."""
     known = [p for p in payloads_kg if p is not None]
-    if obs.payload_kg is None or not known:
+    if payload_kg is None or not known:
         return []
     lo, hi = min(known), max(known)
-    if lo - PAYLOAD_TOL_KG <= obs.payload_kg <= hi + PAYLOAD_TOL_KG:
+    if lo - PAYLOAD_TOL_KG <= payload_kg <= hi + PAYLOAD_TOL_KG:
         return []
     held = f"{lo:g} kg" if lo == hi else f"{lo:g}-{hi:g} kg"
-    return [f"carries {obs.payload_kg:g} kg, the baseline runs {held}: a model error that grows with the load (a "
+    return [f"carries {payload_kg:g} kg, the baseline runs {held}: a model error that grows with the load (a "
             "torque-constant, current-gain or mass error) shows here as a change the baseline runs could not show; "
             "check the stated payload, or give baseline runs with this payload"]
