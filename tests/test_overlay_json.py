@@ -9,7 +9,7 @@ import json
 import pytest
 
 from ur5fault.config import Overlay
-from ur5fault.errors import ConfigFileError
+from ur5fault.errors import ConfigFileError, UnknownNameError
 from ur5fault.util.yamlsafe import MAX_BYTES
 
 GOES = "--baseline and --model take the model overlay YAML (model.yaml of discrepancy, or identify's)"
@@ -48,6 +48,14 @@ def test_another_json_is_named_as_json_and_a_json_overlay_still_loads(tmp_path):
     ok = tmp_path / "overlay.json"  # JSON is YAML: an overlay written as JSON is read as before
     ok.write_text(json.dumps({"params": {}, "effects": []}))
     assert Overlay.load(ok) == Overlay({}, ())
+    typo = tmp_path / "typo.json"  # an overlay as JSON with a misspelt key: the YAML reader's "did you mean"
+    typo.write_text(json.dumps({"params": {}, "effect": []}))
+    with pytest.raises(UnknownNameError, match=r"typo.json: unknown key 'effect' \(did you mean 'effects'\?\)"):
+        Overlay.load(typo)
+    null = tmp_path / "null.json"
+    null.write_text("null")
+    with pytest.raises(ConfigFileError, match=r"null.json: a JSON file \(null\), not a model overlay"):
+        Overlay.load(null)
     flow = tmp_path / "flow.yaml"  # a YAML flow mapping, no JSON: the YAML reader's
     flow.write_text("{params: {}, effects: []}\n")
     assert Overlay.load(flow) == Overlay({}, ())

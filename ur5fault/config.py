@@ -263,10 +263,12 @@ def refuse_json_overlay(path: Path) -> None:
         data = json.loads(path.read_bytes().decode("utf-8-sig"))
     except (OSError, ValueError):
         return  # no JSON (a YAML flow mapping): the YAML reader's message
-    if not isinstance(data, dict) or not set(data) <= set(OVERLAY_KEYS):
-        keys = (f"keys {', '.join(map(str, list(data)[:5]))}" if isinstance(data, dict) and data else
-                f"a {type(data).__name__}")
-        raise ConfigFileError(f"{path}: a JSON file ({keys}), not a model overlay; {OVERLAY_FROM}")
+    if isinstance(data, dict) and set(data) & set(OVERLAY_KEYS):
+        return  # an overlay written as JSON, perhaps with a misspelt key: the YAML reader names it ("did you mean")
+    if not isinstance(data, dict) or data:
+        what = (f"keys {', '.join(map(str, list(data)[:5]))}" if isinstance(data, dict) else
+                "null" if data is None else f"a {type(data).__name__}")
+        raise ConfigFileError(f"{path}: a JSON file ({what}), not a model overlay; {OVERLAY_FROM}")
 
 
 @dataclasses.dataclass(frozen=True)

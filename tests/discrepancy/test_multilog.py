@@ -69,6 +69,10 @@ def test_per_log_summary_scores_each_log_on_its_own_rows(windows):
     assert [s["per_log"][k]["role"] for k in ("a.csv", "b.csv", "c.csv")] == ["fit", "fit", "held_out"]
     for key in ("rms_before", "rms_after", "rms_fit_before", "named", "rms_controller_model_current_A"):
         assert key in s  # today's keys kept
+    # what each log assumes, each named by its own log (the joint axis named them "a.csv + b.csv + c.csv")
+    params = model.replay_.params
+    assert s["log_assumptions"] == list(dict.fromkeys(
+        n for g in (a, b, c) for n in g.assumptions(params.joint_temperature_C))), s["log_assumptions"]
     # by hand: the held-out log replayed alone under the (empty) model
     rc = LogReplay(c, seed=WORKFLOW_SEED)
     sim = rc.run([()], c.t_s.size - 1)[0].y

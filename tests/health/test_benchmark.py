@@ -294,10 +294,11 @@ def test_saved_classifiers_round_trip_and_score_another_campaign(tmp_path):
         other_dir / "benchmark_transfer" / "report.md").read_text()
 
 
-def test_classifiers_saved_under_out_are_scored_with_models_and_a_foreign_training_set_is_said(tmp_path, capsys):
+def test_classifiers_saved_under_out_are_scored_with_models_and_a_foreign_training_set_is_refused(tmp_path, capsys):
     """`benchmark DIR --out REP` saves its classifiers in REP; `--test` read only DIR/benchmark (a newcomer probe):
-    `--models REP` scores them.  Classifiers trained on another campaign than DIR are said (their training-set hash
-    differs), and --models without --test is one line."""
+    `--models REP` scores them.  Classifiers given with --models that were not trained on DIR are refused; those in
+    DIR/benchmark of a campaign run again since are said (their training-set hash differs); --models without
+    --test is one line."""
     train_dir, other_dir, rep = tmp_path / "train", tmp_path / "other", tmp_path / "rep"
     for d, df in ((train_dir, with_twin(synthetic())), (other_dir, with_twin(synthetic(n_groups=6, seed=7), seed=8))):
         d.mkdir()
@@ -309,10 +310,19 @@ def test_classifiers_saved_under_out_are_scored_with_models_and_a_foreign_traini
     assert main(["benchmark", str(train_dir), "--test", str(other_dir), "--models", str(rep), "--quiet"]) == 0
     out, err = capsys.readouterr()
     assert f"{other_dir / 'benchmark_transfer'}/report.md" in out and "not trained on" not in err, err
-    # the same classifiers with another campaign as DIR: scored, and said
-    assert main(["benchmark", str(other_dir), "--test", str(train_dir), "--models", str(rep), "--quiet"]) == 0
+    # the same classifiers with another campaign as DIR: refused (DIR's split cannot tell which runs of --test they
+    # were trained on: here their own training campaign, which they would score as if held out; a review's find)
+    assert main(["benchmark", str(other_dir), "--test", str(train_dir), "--models", str(rep), "--quiet"]) == 2
     err = capsys.readouterr().err
-    assert f"{rep}: its classifiers were not trained on {other_dir}'s training runs" in err, err
+    assert err.count("\n") == 1 and f"{rep}: its classifiers were not trained on {other_dir}'s training runs" in err
+    # the default folder of a campaign run again since its benchmark: scored, and said
+    import shutil
+
+    shutil.copytree(rep, train_dir / "benchmark")
+    with_twin(synthetic(seed=3)).to_parquet(train_dir / "features.parquet")
+    assert main(["benchmark", str(train_dir), "--test", str(other_dir), "--quiet", "--out", str(tmp_path / "t2")]) == 0
+    err = capsys.readouterr().err
+    assert f"{train_dir / 'benchmark'}: its classifiers were not trained on {train_dir}'s training runs" in err, err
     assert main(["benchmark", str(train_dir), "--models", str(rep)]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "--models names the saved classifiers --test scores" in err, err

@@ -269,7 +269,7 @@ def test_the_baseline_notes_name_two_controllers_and_a_payload_outside_the_basel
     assert notes[0] == "baseline temperature not logged"  # said once for both logs
     assert len(notes) == 3
     assert "logs of two controllers, likely two robots" in notes[1]
-    assert notes[2].startswith("carries 0.726 kg, the baseline runs 0 kg: ")
+    assert notes[2].startswith("nist.csv.gz carries 0.726 kg, the baseline runs 0 kg: ")
     same = _Log("k9.csv", "reading", 0.0)
     assert baseline_notes(same, kufieta, None) == ["baseline temperature not logged"]
 
@@ -281,7 +281,7 @@ def test_the_baseline_notes_are_written_into_the_diagnosis_and_its_report(logs, 
     assert main(["diagnose", str(light), "--format", "sim", "--detector", str(detector), "--baseline-logs",
                  str(logs["healthy_a"]), str(logs["healthy_b"]), "--out", str(tmp_path / "o"), "--quiet"]) == 0
     d = json.loads((tmp_path / "o" / "diagnosis.json").read_text())
-    said = [n for n in d["notes"] if n.startswith("carries 0 kg, the baseline runs 2 kg: ")]
+    said = [n for n in d["notes"] if n.startswith("light.parquet carries 0 kg, the baseline runs 2 kg: ")]
     assert len(said) == 1, d["notes"]
     assert f"- {said[0]}" in (tmp_path / "o" / "report.md").read_text()
 

@@ -359,7 +359,8 @@ def test_a_command_line_option_no_log_takes_is_refused(tmp_path, capsys, manifes
 @pytest.mark.parametrize("manifest, message", [
     ("format: nist\npayload_kg: 3\nlogs:\n  - {NIST}\n",
      "robot.yaml: payload_kg 3 applies to no log: its logs are nist logs, which carry their own payload and tool "
-     "offset"),
+     "offset (a manifest's top-level payload_kg and tcp_offset_m are defaults of rtde logs; state payload_kg: "
+     "unknown on a log to have its payload fitted)"),
     ("format: rtde\npayload_kg: 0.5\ntcp_offset_m: [0, 0, 0.2]\nlogs:\n"
      "  - {{path: {RUN1}, payload_kg: 0, tcp_offset_m: [0, 0, 0]}}\n",
      "robot.yaml: payload_kg 0.5 applies to no log: every log states its own payload_kg (0); drop it or edit the logs"),
@@ -387,6 +388,11 @@ def test_a_manifest_default_some_log_takes_or_every_log_repeats_is_kept(tmp_path
     assert [e.payload_kg for e in log_entries(_args([str(m)]))] == [0, 0.5]  # RUN2 takes the default
     m.write_text(f"format: rtde\npayload_kg: 0\nlogs:\n  - {{path: {RUN1}, payload_kg: 0, tcp_offset_m: [0, 0, 0]}}\n")
     assert [e.payload_kg for e in log_entries(_args([str(m)]))] == [0]  # the same as the log's own: harmless
+    # null at the top is no default (a review's find: refused as "the log's own applies to no log"), and the case of
+    # 'unknown' does not matter
+    m.write_text(f"format: rtde\ntcp_offset_m: null\npayload_kg: Unknown\nlogs:\n"
+                 f"  - {{path: {RUN1}, payload_kg: unknown, tcp_offset_m: [0, 0, 0]}}\n")
+    assert [(e.payload_kg, e.tcp_offset_m) for e in log_entries(_args([str(m)]))] == [("unknown", (0, 0, 0))]
 
 
 def test_a_command_line_option_some_log_takes_or_repeats_is_kept(tmp_path):

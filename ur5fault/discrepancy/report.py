@@ -182,7 +182,9 @@ def summary(model: DiscrepancyModel, bare_step_us: float | None = None) -> dict[
     rp = model.replay_
     out = {
         "log": rp.log.source,
-        "log_assumptions": rp.log.assumptions(rp.params.joint_temperature_C),
+        # each log's own (several logs: the joint axis has no temperatures if one log lacks them, nor one pose)
+        "log_assumptions": list(dict.fromkeys(a for r in getattr(rp, "replays", [rp])
+                                              for a in r.log.assumptions(rp.params.joint_temperature_C))),
         "named": [sentence(f) for f in model.findings_ if f.kept],
         "findings": [finding_json(f) for f in model.findings_],
         "dropped": [f"{sentence(f)}: {f.reason}" for f in model.dropped_],

@@ -231,15 +231,17 @@ def _refuse_unused_defaults(path: Path, data: dict, entries: Sequence[LogEntry],
     as the command line's is (:func:`log_entries`): it would be dropped without a word (a ``payload_kg`` over nist
     logs, which carry their own; one over rtde logs that each state theirs)."""
     for key, attr in MANIFEST_DEFAULTS.items():
-        if key not in data or key in top_used:
+        given = data.get(key)
+        if given is None or key in top_used:  # absent, or null: no default (as the command line's None)
             continue
+        given = given.strip().lower() if isinstance(given, str) else given
         stated = [getattr(e, attr) for e in entries]
-        given = data[key]
         if all(_same(given, s) for s in stated):
             continue
         if key != "format" and not any(e.fmt == "rtde" for e in entries):
             why = (f"its logs are {', '.join(sorted({e.fmt for e in entries}))} logs, which carry their own payload "
-                   "and tool offset (payload_kg and tcp_offset_m apply to rtde logs, or with payload_kg: unknown)")
+                   "and tool offset (a manifest's top-level payload_kg and tcp_offset_m are defaults of rtde logs; "
+                   "state payload_kg: unknown on a log to have its payload fitted)")
         else:
             why = f"every log states its own {key} ({', '.join(sorted({_shown(s) for s in stated}))})"
         raise ParameterError(f"{path.name}: {key} {_shown(given)} applies to no log: {why}; drop it or edit the logs")

@@ -87,12 +87,17 @@ def test_an_edited_life_campaign_that_drops_units_is_refused_and_a_split_edit_is
                for s in said), said
     assert any("0 to run" in s for s in said), said  # the split is no input of an inspection: nothing simulated
     assert any(s.endswith("reports on the earlier version's inspections: run `ur5fault prognose "
-                          f"{tmp_path}` again") for s in said), said
+                          f"{tmp_path}` again once this campaign is complete") for s in said), said
     said.clear()
     run_life(resplit, tmp_path, jobs=1, progress=False, note=said.append)  # the same campaign again: no note
     assert not any("another version" in s or "earlier version" in s for s in said), said
     m = run_life(fewer, tmp_path, jobs=1, progress=False, note=said.append, replace_changed=True)
     assert m["n_units"] == 2 and any("left as strays: --replace-changed" in s for s in said), said
+    # that campaign run again (a resume, the command a stopped run prints): the strays its --replace-changed left are
+    # not another version's loss (a review found every rerun refused)
+    said.clear()
+    assert run_life(fewer, tmp_path, jobs=1, progress=False, note=said.append)["n_units"] == 2
+    assert not any("another version" in s or "earlier version" in s for s in said), said
 
 
 def test_a_second_writer_is_refused(tmp_path):
@@ -175,3 +180,6 @@ def test_a_fleet_states_a_bound_on_the_rounds_left_not_a_rate(tmp_path, capsys):
     # inspections of which fit before max_cycles
     assert re.match(r"campaign \(round 2 done, 3 units running, at most 14 more round\(s\) of at most \d+:\d\d "
                     r"each\): 0/3 units \(0 %\), \d+:\d\d elapsed$", last), last
+    run_life(build_life(TINY, "tiny"), tmp_path, jobs=1, progress=True, note=lambda s: None)  # resumed to the end
+    last = capsys.readouterr().err.splitlines()[-1]
+    assert re.match(r"campaign \(round \d+ done, every unit finished\): 3/3 units \(100 %\)", last), last

@@ -45,7 +45,7 @@ def baseline_notes(log, healthy, temperature_C) -> list[str]:
 
     return ([f"baseline {n}" for n in dict.fromkeys(n for g in healthy for n in g.assumptions(temperature_C))]
             + controllers_note([(g.source, g.rest_target) for g in (log, *healthy)])
-            + payload_kg_notes([g.payload_kg for g in healthy], log.payload_kg))
+            + [f"{log.source} {n}" for n in payload_kg_notes([g.payload_kg for g in healthy], log.payload_kg)])
 
 
 def cmd_diagnose(args: argparse.Namespace) -> int:

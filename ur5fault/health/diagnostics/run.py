@@ -93,12 +93,16 @@ def run_benchmark(campaign_dir: str | Path, out: str | Path | None = None, *, se
     if test_dir is not None:
         with _Stages(progress, "scoring the saved classifiers", "writing the report") as bar:
             saved = load_models(saved_dir)
+            foreign = _other_training_set(features, saved[1], campaign_dir, saved_dir)
+            if foreign and models_dir is not None:  # classifiers of another campaign: DIR's split cannot tell which
+                # runs of OTHER they were trained on (scored on their own training runs, they look perfect)
+                raise ConfigFileError(f"{saved_dir}: its classifiers were not trained on {campaign_dir}'s training "
+                                      "runs (the training-set hash differs): give the campaign they were trained on "
+                                      "as DIR, which --test's runs are checked against")
             metrics, figures = evaluate(features, seed=seed, threshold_mm=thr, source=str(test_dir), saved=saved,
                                         test_features=other, with_importance=False)
             metrics.pop("_models")
-            metrics["notes"] = (unverified_notes(saved_dir) + _other_training_set(features, saved[1], campaign_dir,
-                                                                                  saved_dir)
-                                + setup_notes(saved[1], test_dir, other))
+            metrics["notes"] = unverified_notes(saved_dir) + foreign + setup_notes(saved[1], test_dir, other)
             if saved[0].joint_kind is not None:  # how far apart, against the motions drawn (transfer.py)
                 metrics["transfer"] = against_training_split(features, other, saved, seed, str(test_dir))
             bar.next()

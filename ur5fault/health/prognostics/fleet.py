@@ -100,6 +100,10 @@ def _run_locked(camp, out: Path, n_jobs: int, client, progress, say, max_rounds,
         say(f"{out}: its manifest records another version of life campaign {camp.name!r} ({earlier}"
             + (f"; {lost}, left as strays: --replace-changed" if lost else "") + "); the stored inspections of "
             "this campaign's units are kept where their identity matches")
+        if (out / "benchmark").is_dir():  # prognose's default report folder, made from the earlier table (said now:
+            # the manifest written below records this version, so a resumed run no longer sees the edit)
+            say(f"{out / 'benchmark'}: reports on the earlier version's inspections: run `ur5fault prognose {out}` "
+                "again once this campaign is complete")
     for _, state, why, where in unusable[:5]:
         say(f"{out / where}: {why or state}; simulating the unit again from there")
     kept = sum(k + 1 for k in finished.values()) + sum(j.inspection for j in pending.values())  # stored, verified
@@ -136,10 +140,10 @@ def _run_locked(camp, out: Path, n_jobs: int, client, progress, say, max_rounds,
                             pending[unit] = job
                     report(len(finished), time.perf_counter() - t0)
             rounds += 1
-            if pending:
-                left = _rounds_left(camp, pending.values())
-                report.describe(f"round {rounds} done, {len(pending)} units running, at most {left} more round(s) "
-                                f"of at most {clock_text(time.perf_counter() - t_round)} each")
+            left = _rounds_left(camp, pending.values())
+            report.describe(f"round {rounds} done, {len(pending)} units running, at most {left} more round(s) of at "
+                            f"most {clock_text(time.perf_counter() - t_round)} each" if pending else
+                            f"round {rounds} done, every unit finished")
     finally:
         report.close()
     if pending:
@@ -149,9 +153,6 @@ def _run_locked(camp, out: Path, n_jobs: int, client, progress, say, max_rounds,
     df = consolidate_life(out, ids, finished)
     manifest = _manifest(camp, ids, "complete", backend, n_jobs, t0, df)
     write_json_atomic(out / "manifest.json", manifest, checksum=True)
-    if earlier and (out / "benchmark").is_dir():  # prognose's default report folder, made from the earlier table
-        say(f"{out / 'benchmark'}: reports on the earlier version's inspections: run `ur5fault prognose {out}` "
-            "again")
     return manifest
 
 
@@ -164,18 +165,19 @@ def _rounds_left(camp: LifeCampaign, pending: Iterable[Job]) -> int:
 def _earlier_version(out: Path, camp: LifeCampaign) -> tuple[str | None, str | None]:
     """How the life campaign recorded in ``out``'s manifest differs from ``camp`` (its first difference; None:
     the same campaign, or no life campaign of that name recorded) and which stored units ``camp`` lacks (``"N
-    stored unit(s) ... are not units of this campaign"``; None: none is lost, e.g. a split seed or more units)."""
+    stored unit(s) ... are not units of this campaign"``; None: none is lost, e.g. a split seed or more units, or the
+    campaign is the one recorded: strays an earlier ``--replace-changed`` left are not lost again)."""
     manifest, _ = read_manifest(out)
     if manifest.get("kind") != "life" or manifest.get("name") != camp.name or "campaign_data" not in manifest:
         return None, None
     why = first_difference(manifest["campaign_data"], camp.data, was="the folder's manifest")
+    if why is None:  # the campaign the folder records (strays there were left by an earlier --replace-changed)
+        return None, None
     ours = {u.unit_id for u in camp.units}
     stray = sorted({p.name.split("_i")[0] for p in (out / "runs").glob("u*_i*.parquet")} - ours)
-    if why is None and not stray:
-        return None, None
     lost = (f"{len(stray)} stored unit(s) ({', '.join(stray[:3])}{', ...' if len(stray) > 3 else ''}) are not "
             "units of this campaign") if stray else None
-    return why or "its units", lost
+    return why, lost
 
 
 def _manifest(camp: LifeCampaign, ids: LifeIdentities, state: str, backend: str, jobs: int, t0: float,
