@@ -72,9 +72,9 @@ def _assemble(src: str, t: NDArray, required: Mapping[str, NDArray], optional: M
     plausible.check_increasing(src, t)
     opt["temperature"] = regular.unrecorded_temperature(src, opt["temperature"], notes)
     plausible.check_temperature_units(src, opt["temperature"])
-    plausible.check_enough_rows(src, t, length)  # too few rows: said as such, not as what they hold
+    plausible.check_range(src, req["actual_q"], t, opt["actual_qd"], declared)  # a value no joint takes: any length
+    plausible.check_enough_rows(src, t, length)  # too few rows: said as such, not as a current that never changes
     plausible.check_current_alive(src, req["actual_current"])
-    plausible.check_range(src, req["actual_q"], t, opt["actual_qd"], declared)
     plausible.check_sampling(src, t, length)
     plausible.check_units(src, t, req["target_q"], opt["target_qd"], labels[0], declared)
     plausible.check_units(src, t, req["actual_q"], opt["actual_qd"], labels[1], declared)
